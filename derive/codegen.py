@@ -1,0 +1,213 @@
+"""Turn SymPy expressions into plain, vectorised NumPy modules through jinja2 templates.
+
+One :class:`GeneratedFunction` is one Python function: an explicit, ordered argument list
+(never ``free_symbols``, whose order changes between runs), one or more matrix outputs, and one
+common-subexpression pass over all of its outputs together.  Every emitted file carries a header
+naming its generator and a hash of the generator's inputs, and the operation counts before and
+after common-subexpression elimination.
+"""
+from __future__ import annotations
+
+import hashlib
+import logging
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import jinja2
+import sympy as sp
+from sympy.printing.numpy import NumPyPrinter
+
+from derive.symbols import describe
+
+LOG = logging.getLogger(__name__)
+
+DERIVE_DIR = Path(__file__).resolve().parent
+TEMPLATE_DIR = DERIVE_DIR / "templates"
+
+
+class _Printer(NumPyPrinter):
+    """NumPy printer that writes ``1/x**2`` rather than ``x**(-2.0)``."""
+
+    def _print_Pow(self, expr, rational=False):
+        base, exp = expr.as_base_exp()
+        if exp.is_Integer and exp.is_negative:
+            if exp == -1:
+                return f"1/{self.parenthesize(base, 1000)}"
+            return f"1/{self.parenthesize(base, 1000)}**{int(-exp)}"
+        return super()._print_Pow(expr, rational=rational)
+
+
+def print_numpy(expr: sp.Expr) -> str:
+    """Print one expression as NumPy source (functions as ``numpy.name``)."""
+    return _Printer({"fully_qualified_modules": True, "allow_unknown_functions": False}).doprint(expr)
+
+
+@dataclass
+class Output:
+    """One output of a generated function.
+
+    Parameters
+    ----------
+    name : str
+        Python name of the returned array.
+    expr : sympy.Expr or sympy.Matrix
+        A scalar gives an array of the broadcast input shape; an ``n x m`` matrix gives
+        ``(..., n, m)``; a matrix declared with ``vector=True`` (``n x 1``) gives ``(..., n)``.
+    doc : str
+        One-line description, with unit in brackets.
+    vector : bool
+        Emit an ``n x 1`` matrix as a vector of shape ``(..., n)``.
+    """
+
+    name: str
+    expr: sp.Expr | sp.MatrixBase
+    doc: str
+    vector: bool = False
+
+    def entries(self) -> list[tuple[tuple[int, ...], sp.Expr]]:
+        if not isinstance(self.expr, sp.MatrixBase):
+            return [((), sp.sympify(self.expr))]
+        rows, cols = self.expr.shape
+        if self.vector:
+            if cols != 1:
+                raise ValueError(f"output {self.name}: vector output needs one column")
+            return [((i,), self.expr[i, 0]) for i in range(rows)]
+        return [((i, j), self.expr[i, j]) for i in range(rows) for j in range(cols)]
+
+    @property
+    def shape_suffix(self) -> tuple[int, ...]:
+        if not isinstance(self.expr, sp.MatrixBase):
+            return ()
+        rows, cols = self.expr.shape
+        return (rows,) if self.vector else (rows, cols)
+
+
+@dataclass
+class GeneratedFunction:
+    """A function to emit: ordered arguments, outputs, and a numpydoc summary."""
+
+    name: str
+    args: list[sp.Symbol]
+    outputs: list[Output]
+    summary: str
+    notes: str = ""
+
+    def check(self) -> None:
+        """Refuse expressions that use a symbol not in the argument list."""
+        names = [a.name for a in self.args]
+        if len(set(names)) != len(names):
+            raise ValueError(f"{self.name}: repeated argument")
+        allowed = set(self.args)
+        for out in self.outputs:
+            for _, e in out.entries():
+                extra = e.free_symbols - allowed
+                if extra:
+                    raise ValueError(
+                        f"{self.name}: output {out.name} uses {sorted(map(str, extra))}, "
+                        "which are not arguments"
+                    )
+
+
+@dataclass
+class GeneratedModule:
+    """A module of generated functions, written to ``generated/<name>.py``."""
+
+    name: str
+    summary: str
+    functions: list[GeneratedFunction]
+    description: str = ""
+    extra_source: str = field(default="")
+
+
+@dataclass
+class _Rendered:
+    name: str
+    args: list[dict]
+    outputs: list[dict]
+    summary: str
+    notes: str
+    assignments: list[tuple[str, str]]
+    ops_before: int
+    ops_after: int
+
+
+def _render_function(fn: GeneratedFunction) -> _Rendered:
+    fn.check()
+    flat: list[sp.Expr] = []
+    for out in fn.outputs:
+        flat.extend(e for _, e in out.entries())
+    ops_before = int(sum(sp.count_ops(e) for e in flat))
+    replacements, reduced = sp.cse(flat, symbols=sp.numbered_symbols("_x"), order="canonical")
+    ops_after = int(sum(sp.count_ops(r) for _, r in replacements) + sum(sp.count_ops(e) for e in reduced))
+    assignments = [(str(lhs), print_numpy(rhs)) for lhs, rhs in replacements]
+    outputs = []
+    k = 0
+    for out in fn.outputs:
+        entries = []
+        for index, _ in out.entries():
+            entries.append({"index": index, "source": print_numpy(reduced[k])})
+            k += 1
+        outputs.append(
+            {
+                "name": out.name,
+                "doc": out.doc,
+                "suffix": out.shape_suffix,
+                "entries": entries,
+            }
+        )
+    args = []
+    for a in fn.args:
+        info = describe(a.name)
+        args.append({"name": a.name, "description": info.description, "unit": info.unit})
+    return _Rendered(fn.name, args, outputs, fn.summary, fn.notes, assignments, ops_before, ops_after)
+
+
+def inputs_hash() -> str:
+    """SHA-256 of every file the generator reads: derive/ sources and templates, and SymPy's version."""
+    h = hashlib.sha256()
+    h.update(f"sympy {sp.__version__}\n".encode())
+    for path in sorted(DERIVE_DIR.rglob("*")):
+        if path.is_file() and path.suffix in {".py", ".jinja"} and "__pycache__" not in path.parts:
+            h.update(str(path.relative_to(DERIVE_DIR)).encode())
+            h.update(b"\0")
+            h.update(path.read_bytes())
+            h.update(b"\0")
+    return h.hexdigest()
+
+
+def _environment() -> jinja2.Environment:
+    env = jinja2.Environment(
+        loader=jinja2.FileSystemLoader(str(TEMPLATE_DIR)),
+        undefined=jinja2.StrictUndefined,
+        keep_trailing_newline=True,
+        trim_blocks=True,
+        lstrip_blocks=True,
+    )
+    env.filters["index"] = lambda idx: ", ".join(str(i) for i in idx)
+    env.filters["shape"] = lambda suffix: "".join(f", {n}" for n in suffix)
+    return env
+
+
+def render_module(module: GeneratedModule, generator: str, digest: str) -> tuple[str, dict[str, tuple[int, int]]]:
+    """Render one module to source text; also return ``{function: (ops_before, ops_after)}``."""
+    rendered = [_render_function(f) for f in module.functions]
+    text = _environment().get_template("module.py.jinja").render(
+        module=module,
+        functions=rendered,
+        generator=generator,
+        digest=digest,
+        sympy_version=sp.__version__,
+    )
+    counts = {r.name: (r.ops_before, r.ops_after) for r in rendered}
+    return text, counts
+
+
+def write_if_changed(path: Path, text: str) -> bool:
+    """Write ``text`` to ``path`` only when it differs; return whether it was written."""
+    if path.exists() and path.read_text(encoding="utf-8") == text:
+        return False
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_suffix(path.suffix + ".tmp")
+    tmp.write_text(text, encoding="utf-8")
+    tmp.replace(path)
+    return True

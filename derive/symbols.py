@@ -1,0 +1,174 @@
+"""The one table of symbols: every symbol bikerider derives with, its description and its unit.
+
+Each entry is ``name: (description, unit, latex, positive)``.  ``name`` is the Python identifier
+used in generated code and in input files.  Tests check that every argument of every generated
+function is described here with a non-empty description and unit.  Angles are in radians
+everywhere past the input boundary.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cache
+
+import sympy as sp
+
+
+@dataclass(frozen=True)
+class SymbolInfo:
+    """Description of one symbol."""
+
+    name: str
+    description: str
+    unit: str
+    latex: str
+    positive: bool
+
+
+_TABLE: dict[str, tuple[str, str, str, bool]] = {
+    # --- Benchmark parameters (Meijaard et al. 2007, Table 1) -------------------------------
+    "w": ("wheelbase", "m", "w", True),
+    "c": ("trail", "m", "c", False),
+    "lam": ("steer axis tilt from vertical (pi/2 - head tube angle)", "rad", r"\lambda", False),
+    "g": ("acceleration due to gravity", "m/s^2", "g", True),
+    "rR": ("rear wheel radius", "m", "r_R", True),
+    "mR": ("rear wheel mass", "kg", "m_R", True),
+    "IRxx": ("rear wheel moment of inertia about a diameter", "kg m^2", "I_{Rxx}", True),
+    "IRyy": ("rear wheel moment of inertia about its axle", "kg m^2", "I_{Ryy}", True),
+    "xB": ("rear body (frame and rider) centre of mass, x", "m", "x_B", False),
+    "zB": ("rear body (frame and rider) centre of mass, z (down positive)", "m", "z_B", False),
+    "mB": ("rear body (frame and rider) mass", "kg", "m_B", True),
+    "IBxx": ("rear body moment of inertia about x through its centre of mass", "kg m^2", "I_{Bxx}", True),
+    "IByy": ("rear body moment of inertia about y through its centre of mass", "kg m^2", "I_{Byy}", True),
+    "IBzz": ("rear body moment of inertia about z through its centre of mass", "kg m^2", "I_{Bzz}", True),
+    "IBxz": ("rear body product of inertia (tensor entry xz)", "kg m^2", "I_{Bxz}", False),
+    "xH": ("handlebar and fork centre of mass, x", "m", "x_H", False),
+    "zH": ("handlebar and fork centre of mass, z (down positive)", "m", "z_H", False),
+    "mH": ("handlebar and fork mass", "kg", "m_H", True),
+    "IHxx": ("handlebar and fork moment of inertia about x", "kg m^2", "I_{Hxx}", True),
+    "IHyy": ("handlebar and fork moment of inertia about y", "kg m^2", "I_{Hyy}", True),
+    "IHzz": ("handlebar and fork moment of inertia about z", "kg m^2", "I_{Hzz}", True),
+    "IHxz": ("handlebar and fork product of inertia (tensor entry xz)", "kg m^2", "I_{Hxz}", False),
+    "rF": ("front wheel radius", "m", "r_F", True),
+    "mF": ("front wheel mass", "kg", "m_F", True),
+    "IFxx": ("front wheel moment of inertia about a diameter", "kg m^2", "I_{Fxx}", True),
+    "IFyy": ("front wheel moment of inertia about its axle", "kg m^2", "I_{Fyy}", True),
+    # --- Bicycle geometry (Moore et al. 2009, Table 1) ---------------------------------------
+    "h_bb": ("bottom bracket height", "m", "h_{bb}", True),
+    "l_cs": ("chain stay length", "m", "l_{cs}", True),
+    "l_f": ("fork length", "m", "l_f", True),
+    "w_fh": ("front hub width", "m", "w_{fh}", True),
+    "l_hb": ("handlebar length", "m", "l_{hb}", True),
+    "lam_ht": ("head tube angle from the ground", "rad", r"\lambda_{ht}", True),
+    "w_rh": ("rear hub width", "m", "w_{rh}", True),
+    "l_sp": ("seat post length", "m", "l_{sp}", True),
+    "lam_st": ("seat tube angle from the ground", "rad", r"\lambda_{st}", True),
+    "l_st": ("seat tube length", "m", "l_{st}", True),
+    "l_s": ("stem length", "m", "l_s", True),
+    # --- Bicycle bodies measured separately (Moore et al. 2009, Tables 2-6) ----------------
+    "mBf": ("rear frame mass (without rider)", "kg", "m_{Bf}", True),
+    "xBf": ("rear frame centre of mass, x", "m", "x_{Bf}", False),
+    "zBf": ("rear frame centre of mass, z (down positive)", "m", "z_{Bf}", False),
+    "IBfxx": ("rear frame moment of inertia about x", "kg m^2", "I_{Bfxx}", True),
+    "IBfyy": ("rear frame moment of inertia about y", "kg m^2", "I_{Bfyy}", True),
+    "IBfzz": ("rear frame moment of inertia about z", "kg m^2", "I_{Bfzz}", True),
+    "IBfxz": ("rear frame product of inertia (tensor entry xz)", "kg m^2", "I_{Bfxz}", False),
+    # --- Pendulums (Moore et al. 2009, Eqs. 1-7) -------------------------------------------
+    "k_t": ("torsional pendulum stiffness", "N m/rad", "k", True),
+    "T": ("oscillation period", "s", "T", True),
+    "alpha": ("pendulum axis angle from the ground, rotating up from +x", "rad", r"\alpha", False),
+    "l_p": ("compound pendulum length (pivot to wheel centre)", "m", "l", True),
+    "m_p": ("mass of the body on the pendulum", "kg", "m", True),
+    "Ixx": ("moment of inertia about x", "kg m^2", "I_{xx}", True),
+    "Izz": ("moment of inertia about z", "kg m^2", "I_{zz}", True),
+    "Ixz": ("product of inertia (tensor entry xz)", "kg m^2", "I_{xz}", False),
+    # --- Rider (Moore et al. 2009, Tables 7 and 8) -----------------------------------------
+    "mBr": ("rider mass", "kg", "m_{Br}", True),
+    "c_ch": ("chest circumference", "m", "c_{ch}", True),
+    "lam_fl": ("forward lean angle (seat to head centre, from the ground)", "rad", r"\lambda_{fl}", True),
+    "c_h": ("head circumference", "m", "c_h", True),
+    "l_hh": ("hip joint to hip joint", "m", "l_{hh}", True),
+    "c_la": ("lower arm circumference", "m", "c_{la}", True),
+    "l_la": ("lower arm length (elbow to hand centre)", "m", "l_{la}", True),
+    "c_ll": ("lower leg circumference", "m", "c_{ll}", True),
+    "l_ll": ("lower leg length (floor to knee)", "m", "l_{ll}", True),
+    "l_ss": ("shoulder to shoulder", "m", "l_{ss}", True),
+    "l_to": ("torso length (hips to shoulders)", "m", "l_{to}", True),
+    "c_ua": ("upper arm circumference", "m", "c_{ua}", True),
+    "l_ua": ("upper arm length (shoulder to elbow)", "m", "l_{ua}", True),
+    "c_ul": ("upper leg circumference", "m", "c_{ul}", True),
+    "l_ul": ("upper leg length (knee to hip)", "m", "l_{ul}", True),
+    "f_h": ("head mass fraction of rider mass", "1", "f_h", True),
+    "f_la": ("lower arm mass fraction (each)", "1", "f_{la}", True),
+    "f_ll": ("lower leg mass fraction (each)", "1", "f_{ll}", True),
+    "f_to": ("torso mass fraction", "1", "f_{to}", True),
+    "f_ua": ("upper arm mass fraction (each)", "1", "f_{ua}", True),
+    "f_ul": ("upper leg mass fraction (each)", "1", "f_{ul}", True),
+    # --- Rider model results -----------------------------------------------------------------
+    "xBr": ("rider centre of mass, x", "m", "x_{Br}", False),
+    "zBr": ("rider centre of mass, z (down positive)", "m", "z_{Br}", False),
+    "IBrxx": ("rider moment of inertia about x", "kg m^2", "I_{Brxx}", True),
+    "IBryy": ("rider moment of inertia about y", "kg m^2", "I_{Bryy}", True),
+    "IBrzz": ("rider moment of inertia about z", "kg m^2", "I_{Brzz}", True),
+    "IBrxz": ("rider product of inertia (tensor entry xz)", "kg m^2", "I_{Brxz}", False),
+    # --- Benchmark model ---------------------------------------------------------------------
+    "v": ("forward speed", "m/s", "v", False),
+    "u": ("forward speed squared", "m^2/s^2", "u", False),
+}
+
+_MATRIX_UNITS = {
+    "M": ("mass matrix", ("kg m^2", "kg m^2", "kg m^2", "kg m^2")),
+    "C1": ("speed-proportional damping-like matrix", ("kg m", "kg m", "kg m", "kg m")),
+    "K0": ("gravity-proportional stiffness matrix, per unit g", ("kg m", "kg m", "kg m", "kg m")),
+    "K2": ("speed-squared-proportional stiffness matrix", ("kg", "kg", "kg", "kg")),
+}
+_COORDS = ("phi", "delta")
+_COORD_WORDS = {"phi": "roll", "delta": "steer"}
+for _m, (_what, _units) in _MATRIX_UNITS.items():
+    for _i, _a in enumerate(_COORDS):
+        for _j, _b in enumerate(_COORDS):
+            _TABLE[f"{_m}_{_a}{_b}"] = (
+                f"{_what}, entry ({_COORD_WORDS[_a]} equation, {_COORD_WORDS[_b]} coordinate)",
+                _units[2 * _i + _j],
+                rf"{_m}_{{\{_a}\{_b}}}",
+                False,
+            )
+
+
+def describe(name: str) -> SymbolInfo:
+    """Return the table entry of ``name``; raise ``KeyError`` naming it when absent."""
+    try:
+        description, unit, latex, positive = _TABLE[name]
+    except KeyError:
+        raise KeyError(f"symbol {name!r} has no entry in derive/symbols.py") from None
+    return SymbolInfo(name, description, unit, latex, positive)
+
+
+@cache
+def sym(name: str) -> sp.Symbol:
+    """The SymPy symbol of ``name`` (real; positive where the table says so)."""
+    info = describe(name)
+    if info.positive:
+        return sp.Symbol(name, positive=True)
+    return sp.Symbol(name, real=True)
+
+
+def syms(names: str) -> list[sp.Symbol]:
+    """Symbols for a whitespace-separated list of names, in that order."""
+    return [sym(n) for n in names.split()]
+
+
+def all_symbols() -> dict[str, SymbolInfo]:
+    """Every table entry, by name, in table order."""
+    return {name: describe(name) for name in _TABLE}
+
+
+def latex_names() -> dict[sp.Symbol, str]:
+    """Mapping for ``sympy.latex(..., symbol_names=...)``."""
+    return {sym(n): describe(n).latex for n in _TABLE}
+
+
+BENCHMARK_NAMES = (
+    "w c lam g rR mR IRxx IRyy xB zB mB IBxx IByy IBzz IBxz "
+    "xH zH mH IHxx IHyy IHzz IHxz rF mF IFxx IFyy"
+).split()
+"""The benchmark parameters in Meijaard et al. (2007) Table 1 order."""
