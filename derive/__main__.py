@@ -15,6 +15,9 @@ LOG = logging.getLogger("derive")
 
 #: Derivation modules, in emission order.  Each has ``build() -> GeneratedModule``.
 DERIVATIONS = (
+    "derive.pendulum",
+    "derive.rider_model",
+    "derive.combination",
     "derive.benchmark_model",
 )
 

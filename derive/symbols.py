@@ -81,6 +81,12 @@ _TABLE: dict[str, tuple[str, str, str, bool]] = {
     "Ixx": ("moment of inertia about x", "kg m^2", "I_{xx}", True),
     "Izz": ("moment of inertia about z", "kg m^2", "I_{zz}", True),
     "Ixz": ("product of inertia (tensor entry xz)", "kg m^2", "I_{xz}", False),
+    "T_1": ("torsional period in orientation 1", "s", "T_1", True),
+    "T_2": ("torsional period in orientation 2", "s", "T_2", True),
+    "T_3": ("torsional period in orientation 3", "s", "T_3", True),
+    "alpha_1": ("pendulum axis angle of orientation 1", "rad", r"\alpha_1", False),
+    "alpha_2": ("pendulum axis angle of orientation 2", "rad", r"\alpha_2", False),
+    "alpha_3": ("pendulum axis angle of orientation 3", "rad", r"\alpha_3", False),
     # --- Rider (Moore et al. 2009, Tables 7 and 8) -----------------------------------------
     "mBr": ("rider mass", "kg", "m_{Br}", True),
     "c_ch": ("chest circumference", "m", "c_{ch}", True),

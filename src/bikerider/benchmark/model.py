@@ -1,0 +1,186 @@
+"""The linear Whipple model ``M q'' + v C1 q' + (g K0 + v^2 K2) q = f`` and its eigen-analysis.
+
+Mode labels, per speed (Meijaard et al. 2007, section 6):
+
+* castor: the real eigenvalue with the most negative real part;
+* weave: the complex-conjugate pair when there is one; when all four eigenvalues are real
+  (below the speed ``v_d`` where the weave pair is born), the two largest, which merge at ``v_d``;
+* capsize: the remaining real eigenvalue.
+
+When two complex pairs exist (possible for models with added effects, not for the Whipple model
+of a real bicycle) the pair with the larger imaginary part is weave and the other pair is labelled
+``"other"``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from bikerider.benchmark.parameters import BenchmarkParameters
+from bikerider.errors import InputError
+from bikerider.generated import benchmark_model as gen
+
+MATRIX_NAMES = ("M", "C1", "K0", "K2")
+_COORDS = ("phi", "delta")
+_CANONICAL_ARGS = (
+    "w c lam rR mR IRxx IRyy xB zB mB IBxx IBzz IBxz xH zH mH IHxx IHzz IHxz rF mF IFxx IFyy".split()
+)
+MODES = ("weave", "weave", "capsize", "castor")
+"""Label order of the four eigenvalues returned by :meth:`WhippleModel.eigenvalues`."""
+
+
+def matrix_entries(M, C1, K0, K2) -> dict[str, np.ndarray]:
+    """Keyword arguments ``M_phiphi, ..., K2_deltadelta`` for the generated matrix-level functions."""
+    out = {}
+    for name, mat in zip(MATRIX_NAMES, (M, C1, K0, K2)):
+        mat = np.asarray(mat, dtype=float)
+        for i, a in enumerate(_COORDS):
+            for j, b in enumerate(_COORDS):
+                out[f"{name}_{a}{b}"] = mat[..., i, j]
+    return out
+
+
+@dataclass(frozen=True)
+class CriticalSpeeds:
+    """Weave (Hopf) and capsize speeds in m/s; ``None`` where none exists at positive speed."""
+
+    weave: float | None
+    capsize: float | None
+    weave_frequency: float | None
+    """Angular frequency of the weave pair at the weave speed [rad/s]."""
+
+    @property
+    def stable_range(self) -> tuple[float, float] | None:
+        """``(weave, capsize)`` when the model is self-stable between them."""
+        if self.weave is not None and self.capsize is not None and self.weave < self.capsize:
+            return (self.weave, self.capsize)
+        return None
+
+
+@dataclass(frozen=True)
+class ModalEigenvalues:
+    """Eigenvalues at each speed, ordered ``weave (+imag), weave (-imag), capsize, castor``."""
+
+    speeds: np.ndarray
+    values: np.ndarray
+    labels: np.ndarray
+
+    def mode(self, name: str) -> np.ndarray:
+        """Eigenvalues labelled ``name`` at each speed (``weave`` gives the positive-imaginary one)."""
+        index = MODES.index(name)
+        return self.values[:, index]
+
+
+class WhippleModel:
+    """Canonical matrices and their dynamics.
+
+    Parameters
+    ----------
+    M, C1, K0, K2 : array_like, shape (2, 2)
+        The canonical matrices (K0 per unit g).
+    g : float
+        Acceleration due to gravity [m/s^2].
+    """
+
+    def __init__(self, M, C1, K0, K2, g: float = 9.81):
+        mats = [np.array(m, dtype=float) for m in (M, C1, K0, K2)]
+        for name, m in zip(MATRIX_NAMES, mats):
+            if m.shape != (2, 2):
+                raise InputError(name, m.shape, "a 2x2 matrix")
+            if not np.all(np.isfinite(m)):
+                raise InputError(name, m.tolist(), "finite entries")
+        det_m = np.linalg.det(mats[0])
+        if not (mats[0][0, 0] > 0 and det_m > 1e-12 * np.abs(mats[0]).max() ** 2):
+            raise InputError("M", mats[0].tolist(), "a positive definite mass matrix (the model is singular otherwise)")
+        self.M, self.C1, self.K0, self.K2 = mats
+        self.g = float(g)
+
+    @classmethod
+    def from_parameters(cls, parameters: BenchmarkParameters) -> "WhippleModel":
+        """Build from benchmark parameters (Meijaard et al. 2007, Appendix A)."""
+        v = parameters.values
+        M, C1, K0, K2 = gen.canonical_matrices(**{k: v[k] for k in _CANONICAL_ARGS})
+        return cls(M, C1, K0, K2, v["g"])  # type: ignore[arg-type]
+
+    # -- matrices ---------------------------------------------------------------------------
+    def _entries(self) -> dict[str, np.ndarray]:
+        return matrix_entries(self.M, self.C1, self.K0, self.K2)
+
+    def state_matrix(self, speeds) -> np.ndarray:
+        """State matrices ``(..., 4, 4)`` for ``x = [phi, delta, phi', delta']``."""
+        return gen.state_matrix(**self._entries(), g=self.g, v=np.asarray(speeds, dtype=float))
+
+    def characteristic_coefficients(self, speeds) -> np.ndarray:
+        """``(..., 5)`` coefficients ``[a4, a3, a2, a1, a0]`` of the characteristic polynomial."""
+        return gen.characteristic_coefficients(**self._entries(), g=self.g, v=np.asarray(speeds, dtype=float))
+
+    # -- eigenvalues -----------------------------------------------------------------------
+    def eigenvalues(self, speeds) -> ModalEigenvalues:
+        """Eigenvalues at each speed with mode labels (see the module docstring)."""
+        speeds = np.atleast_1d(np.asarray(speeds, dtype=float))
+        if speeds.ndim != 1 or not np.all(np.isfinite(speeds)):
+            raise InputError("speeds", speeds.tolist(), "a one-dimensional array of finite speeds")
+        raw = np.linalg.eigvals(self.state_matrix(speeds))
+        values, labels = label_modes(raw)
+        return ModalEigenvalues(speeds, values, labels)
+
+    # -- critical speeds ---------------------------------------------------------------------
+    def critical_speeds(self) -> CriticalSpeeds:
+        """Weave and capsize speeds from the closed-form conditions (no scan over speed).
+
+        Capsize: the smallest positive root of ``det(g K0 + v^2 K2) = 0``.  Weave: the smallest
+        positive root of the third Hurwitz determinant (a quadratic in ``v^2``) at which the
+        crossing frequency ``omega^2 = a1/a3`` is positive.
+        """
+        capsize_c, weave_c, a1_c, a3_c = gen.critical_speed_polynomials(**self._entries(), g=self.g)
+        capsize_u = _positive_real_roots(capsize_c)
+        capsize = float(np.sqrt(capsize_u[0])) if capsize_u.size else None
+        weave = frequency = None
+        for u in _positive_real_roots(weave_c):
+            a1, a3 = np.polyval(a1_c, u), np.polyval(a3_c, u)
+            if a3 != 0 and a1 / a3 > 0:
+                weave, frequency = float(np.sqrt(u)), float(np.sqrt(a1 / a3))
+                break
+        return CriticalSpeeds(weave, capsize, frequency)
+
+
+def _positive_real_roots(coefficients: np.ndarray) -> np.ndarray:
+    """Sorted positive real roots of a polynomial (highest power first); scale-aware."""
+    c = np.asarray(coefficients, dtype=float)
+    scale = np.abs(c).max()
+    if scale == 0:
+        return np.empty(0)
+    c = c / scale
+    nonzero = np.flatnonzero(np.abs(c) > 1e-14)
+    if nonzero.size == 0:
+        return np.empty(0)
+    roots = np.roots(c[nonzero[0]:])
+    real = roots[np.abs(roots.imag) <= 1e-9 * np.maximum(1.0, np.abs(roots.real))].real
+    return np.sort(real[real > 0])
+
+
+def label_modes(raw: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Order ``(n, 4)`` eigenvalues as weave(+), weave(-), capsize, castor; return labels too."""
+    n = raw.shape[0]
+    values = np.empty((n, 4), dtype=complex)
+    labels = np.empty((n, 4), dtype=object)
+    for k in range(n):
+        ev = raw[k]
+        tol = 1e-9 * max(1.0, float(np.abs(ev).max()))
+        is_complex = np.abs(ev.imag) > tol
+        complex_ev = ev[is_complex & (ev.imag > 0)]
+        real_ev = np.sort(ev[~is_complex].real)
+        if complex_ev.size == 0:
+            # all real: the two largest are the weave pair before it is born (v < v_d)
+            values[k] = [real_ev[3], real_ev[2], real_ev[1], real_ev[0]]
+            labels[k] = ["weave", "weave", "capsize", "castor"]
+        elif complex_ev.size == 1:
+            w = complex_ev[0]
+            values[k] = [w, np.conj(w), real_ev[1], real_ev[0]]
+            labels[k] = ["weave", "weave", "capsize", "castor"]
+        else:
+            pair = complex_ev[np.argsort(-complex_ev.imag)]
+            values[k] = [pair[0], np.conj(pair[0]), pair[1], np.conj(pair[1])]
+            labels[k] = ["weave", "weave", "other", "other"]
+    return values, labels

@@ -1,0 +1,114 @@
+"""The 26 benchmark values (Meijaard et al. 2007, Table 1; 25 parameters plus gravity)."""
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from bikerider.errors import InputError
+from bikerider.inertia import check_inertia_tensor
+from bikerider.quantity import Quantity
+
+BENCHMARK_NAMES: tuple[str, ...] = (
+    "w", "c", "lam", "g", "rR", "mR", "IRxx", "IRyy", "xB", "zB", "mB", "IBxx", "IByy", "IBzz", "IBxz",
+    "xH", "zH", "mH", "IHxx", "IHyy", "IHzz", "IHxz", "rF", "mF", "IFxx", "IFyy",
+)
+"""Names in the order of Meijaard et al. (2007), Table 1."""
+
+OPTIONAL_NAMES = frozenset({"IByy", "IHyy"})
+"""Values the linear model does not need; ``None`` when the inputs do not determine them."""
+
+_POSITIVE = ("w", "g", "rR", "mR", "IRxx", "IRyy", "mB", "mH", "rF", "mF", "IFxx", "IFyy")
+
+
+@dataclass(frozen=True)
+class BenchmarkParameters:
+    """The benchmark values in SI units, with standard uncertainties.
+
+    Attributes
+    ----------
+    values : dict
+        Name to value; ``None`` for ``IByy``/``IHyy`` when not determined.
+    sigmas : dict
+        Name to standard uncertainty (0 when unknown).
+    source : str or None
+        Where the values came from, for error messages.
+    """
+
+    values: dict[str, float | None]
+    sigmas: dict[str, float] = field(default_factory=dict)
+    source: str | None = None
+
+    @classmethod
+    def from_mapping(cls, mapping: Mapping[str, object], source: str | None = None) -> "BenchmarkParameters":
+        """Build from a mapping of names to numbers or :class:`Quantity`; validate.
+
+        Raises
+        ------
+        InputError
+            A missing or unknown name, a non-finite value, a non-positive mass, length or wheel
+            inertia, an impossible steer axis tilt, or an impossible inertia tensor.
+        """
+        unknown = sorted(set(mapping) - set(BENCHMARK_NAMES))
+        if unknown:
+            raise InputError(unknown[0], mapping[unknown[0]], f"one of the benchmark names {', '.join(BENCHMARK_NAMES)}", source)
+        values: dict[str, float | None] = {}
+        sigmas: dict[str, float] = {}
+        for name in BENCHMARK_NAMES:
+            if name not in mapping or mapping[name] is None:
+                if name in OPTIONAL_NAMES:
+                    values[name], sigmas[name] = None, 0.0
+                    continue
+                if name == "g":
+                    values[name], sigmas[name] = 9.81, 0.0
+                    continue
+                raise InputError(name, "missing", "a value (all 25 benchmark parameters are needed)", source)
+            raw = mapping[name]
+            q = raw if isinstance(raw, Quantity) else Quantity(float(raw))  # type: ignore[arg-type]
+            if not math.isfinite(q.value):
+                raise InputError(name, q.value, "a finite number", source)
+            values[name], sigmas[name] = q.value, q.sigma
+        params = cls(values, sigmas, source)
+        params.validate()
+        return params
+
+    def validate(self) -> None:
+        """Raise :class:`InputError` for values no real bicycle can have."""
+        v, src = self.values, self.source
+        for name in _POSITIVE:
+            if v[name] <= 0:  # type: ignore[operator]
+                raise InputError(name, v[name], "a positive value", src)
+        if not -math.pi / 2 < v["lam"] < math.pi / 2:  # type: ignore[operator]
+            raise InputError("lam", v["lam"], "a steer axis tilt between -pi/2 and pi/2 rad", src)
+        for body in ("B", "H"):
+            yy = v[f"I{body}yy"]
+            tensor = np.array(
+                [
+                    [v[f"I{body}xx"], 0.0, v[f"I{body}xz"]],
+                    [0.0, np.nan if yy is None else yy, 0.0],
+                    [v[f"I{body}xz"], 0.0, v[f"I{body}zz"]],
+                ],
+                dtype=float,
+            )
+            check_inertia_tensor(f"I{body} (I{body}xx, I{body}yy, I{body}zz, I{body}xz)", tensor, src)
+        for wheel in ("R", "F"):
+            if 2 * v[f"I{wheel}xx"] < v[f"I{wheel}yy"] * (1 - 1e-9):  # type: ignore[operator]
+                raise InputError(
+                    f"I{wheel}yy", v[f"I{wheel}yy"],
+                    f"at most 2*I{wheel}xx = {2 * v[f'I{wheel}xx']:.6g} (triangle inequality of a symmetric wheel)", src,
+                )
+
+    def __getitem__(self, name: str) -> float | None:
+        return self.values[name]
+
+    def with_values(self, **changes: float) -> "BenchmarkParameters":
+        """A validated copy with some values replaced."""
+        merged = {**{k: Quantity(x, self.sigmas.get(k, 0.0)) if x is not None else None for k, x in self.values.items()}}
+        merged.update(changes)
+        return BenchmarkParameters.from_mapping(merged, self.source)
+
+    def as_dict(self) -> dict[str, float | None]:
+        """Name to value, in Table 1 order (``None`` where not determined)."""
+        return {name: self.values[name] for name in BENCHMARK_NAMES}

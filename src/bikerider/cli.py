@@ -1,0 +1,59 @@
+"""The ``bikerider`` command line.
+
+Each subcommand lives in ``bikerider/commands/<name>.py`` with ``add_parser(subparsers)`` and
+``run(args) -> int``.  Command modules import nothing heavy at module level, so ``--help`` and
+start-up stay fast; they import NumPy, SciPy or matplotlib inside ``run``.
+"""
+from __future__ import annotations
+
+import argparse
+import importlib
+import logging
+import sys
+
+from bikerider import __version__
+from bikerider.errors import BikeriderError
+
+COMMANDS = ("estimate", "benchmark")
+"""Subcommand modules under ``bikerider.commands``, in the order ``--help`` lists them."""
+
+LOG = logging.getLogger("bikerider")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="bikerider",
+        description=(
+            "Estimate the physical properties of a bicycle and its seated rider (Moore et al. 2009), "
+            "the linear Whipple model they give (Meijaard et al. 2007), and where real bicycles "
+            "depart from it."
+        ),
+    )
+    parser.add_argument("--version", action="version", version=f"bikerider {__version__}")
+    parser.add_argument("-v", "--verbose", action="count", default=0, help="log more (repeat for debug)")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    for name in COMMANDS:
+        importlib.import_module(f"bikerider.commands.{name}").add_parser(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the command line; return the exit status (0 ok, 2 bad input or failed fit)."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    level = logging.WARNING - 10 * min(args.verbose, 2)
+    logging.basicConfig(level=level, format="bikerider: %(levelname)s: %(message)s")
+    try:
+        return int(args.run(args) or 0)
+    except BikeriderError as exc:
+        print(f"bikerider {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:
+        print(f"bikerider {args.command}: error: {exc.strerror or exc}: {exc.filename or ''}".rstrip(": "), file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

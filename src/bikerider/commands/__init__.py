@@ -1,0 +1,1 @@
+"""Subcommands of the ``bikerider`` command line, one module each."""
