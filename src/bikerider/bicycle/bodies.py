@@ -1,0 +1,96 @@
+"""The bicycle reduced to what the method needs: geometry and the four bodies' mass properties.
+
+Every reader (the project's TOML files, BicycleParameters ``<Name>Measured.txt`` files) produces a
+:class:`BicycleBodies`; the estimate pipeline takes it from there.  Names are those of the symbol
+table (``derive/symbols.py``); angles are in radians.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from bikerider.errors import InputError
+from bikerider.inertia import check_inertia_tensor
+from bikerider.quantity import Quantity
+
+BODY_NAMES: tuple[str, ...] = (
+    "w", "c", "lam_ht", "g",
+    "rR", "mR", "IRxx", "IRyy",
+    "rF", "mF", "IFxx", "IFyy",
+    "mBf", "xBf", "zBf", "IBfxx", "IBfzz", "IBfxz",
+    "mH", "xH", "zH", "IHxx", "IHzz", "IHxz",
+)
+"""Needed for the benchmark parameters of the bicycle (with or without a rider)."""
+
+OPTIONAL_BODY_NAMES: tuple[str, ...] = ("IBfyy", "IHyy")
+"""Not needed by the linear model; reported when measured."""
+
+SEATING_NAMES: tuple[str, ...] = (
+    "h_bb", "l_cs", "l_f", "w_fh", "l_hb", "w_rh", "l_sp", "lam_st", "l_st", "l_s",
+)
+"""The rest of Table 1: needed only to seat the paper's rider model on the bicycle."""
+
+_POSITIVE = {"w", "g", "rR", "mR", "IRxx", "IRyy", "rF", "mF", "IFxx", "IFyy", "mBf", "mH",
+             "IBfyy", "IHyy", "h_bb", "l_cs", "l_f", "w_fh", "l_hb", "w_rh", "l_sp", "l_st", "l_s"}
+_ANGLES = {"lam_ht": (0.0, math.pi), "lam_st": (0.0, math.pi)}
+
+
+@dataclass(frozen=True)
+class BicycleBodies:
+    """Geometry and mass properties of the four rigid bodies of a bicycle.
+
+    Attributes
+    ----------
+    values : dict of str to Quantity
+        Every name in :data:`BODY_NAMES`, optionally those in :data:`OPTIONAL_BODY_NAMES` and
+        :data:`SEATING_NAMES`.
+    source : str
+        Where the values came from (a file name), for messages.
+    name : str
+        A human name for the bicycle.
+    """
+
+    values: dict[str, Quantity]
+    source: str = "<memory>"
+    name: str = "bicycle"
+    notes: list[str] = field(default_factory=list)
+
+    def __post_init__(self) -> None:
+        self.validate()
+
+    def validate(self) -> None:
+        """Raise :class:`InputError` on a missing required value or an impossible one."""
+        for key in BODY_NAMES:
+            if key not in self.values:
+                raise InputError(key, "missing", "a value: the benchmark model needs it", self.source)
+        for key, q in self.values.items():
+            if key in _POSITIVE and not q.value > 0:
+                raise InputError(key, q.value, "a positive value", self.source)
+            if key in _ANGLES:
+                low, high = _ANGLES[key]
+                if not low < q.value < high:
+                    raise InputError(f"{key}_deg", math.degrees(q.value), "an angle between 0 and 180 degrees", self.source)
+        for body in ("Bf", "H"):
+            yy = self.values.get(f"I{body}yy")
+            tensor = np.array([
+                [self[f"I{body}xx"], 0.0, self[f"I{body}xz"]],
+                [0.0, np.nan if yy is None else yy.value, 0.0],
+                [self[f"I{body}xz"], 0.0, self[f"I{body}zz"]],
+            ])
+            check_inertia_tensor(f"I{body} (I{body}xx, I{body}yy, I{body}zz, I{body}xz)", tensor, self.source)
+
+    def __getitem__(self, key: str) -> float:
+        return self.values[key].value
+
+    def get(self, key: str) -> Quantity | None:
+        return self.values.get(key)
+
+    @property
+    def can_seat_rider(self) -> bool:
+        """Whether every seating measurement (Table 1) is present."""
+        return all(k in self.values for k in SEATING_NAMES)
+
+    def missing_seating(self) -> list[str]:
+        return [k for k in SEATING_NAMES if k not in self.values]
