@@ -1,0 +1,98 @@
+"""Moments of inertia from pendulum periods (Moore et al. 2009, Eqs. 1-7), with uncertainty.
+
+Wraps ``bikerider.generated.pendulum``; uncertainties are propagated at first order.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from bikerider.errors import InputError
+from bikerider.generated import pendulum as gen
+from bikerider.quantity import Quantity, propagate_first_order
+
+#: Below this |determinant| of Eq. 6 (which is 2 sin(a1-a2) sin(a1-a3) sin(a2-a3)) the
+#: orientations do not determine the tensor: two axes are within about a degree of each other.
+SINGULAR_DETERMINANT = 1e-3
+
+
+def _check_period(name: str, period: Quantity, source: str | None) -> None:
+    if not period.value > 0:
+        raise InputError(name, period.value, "a positive period in seconds", source)
+
+
+def torsional_inertia(k_t: Quantity, period: Quantity, name: str = "period", source: str | None = None) -> Quantity:
+    """Eq. 1: ``J = k T^2 / (4 pi^2)``."""
+    _check_period(name, period, source)
+    if not k_t.value > 0:
+        raise InputError("k_t", k_t.value, "a positive torsional stiffness in N m/rad", source)
+    return propagate_first_order(lambda k, t: gen.torsional_inertia(k_t=k, T=t), [k_t, period])[0]
+
+
+def compound_inertia(period: Quantity, mass: Quantity, length: Quantity, g: Quantity,
+                     name: str = "compound_period", source: str | None = None) -> Quantity:
+    """Eq. 7: ``I = (T / 2 pi)^2 m g l - m l^2`` about the wheel axle."""
+    _check_period(name, period, source)
+    if not length.value > 0:
+        raise InputError("pendulum_length", length.value, "a positive pendulum length in metres", source)
+    value = float(gen.compound_inertia(T=period.value, m_p=mass.value, g=g.value, l_p=length.value))
+    if not value > 0:
+        shortest = 2 * math.pi * math.sqrt(length.value / g.value)
+        raise InputError(name, period.value,
+                         f"more than {shortest:.4f} s, the period of a point mass on a {length.value} m pendulum "
+                         "(a shorter period gives a negative moment of inertia)", source)
+    return propagate_first_order(
+        lambda t, m, l, gg: gen.compound_inertia(T=t, m_p=m, g=gg, l_p=l), [period, mass, length, g]
+    )[0]
+
+
+def _solve_orientations(k, *periods_and_angles):
+    n = len(periods_and_angles) // 2
+    periods = np.asarray(periods_and_angles[:n])
+    angles = np.asarray(periods_and_angles[n:])
+    if n == 3:
+        inertia, _ = gen.inertia_from_three_orientations(
+            k_t=k, T_1=periods[0], T_2=periods[1], T_3=periods[2],
+            alpha_1=angles[0], alpha_2=angles[1], alpha_3=angles[2],
+        )
+        return inertia
+    rows = gen.orientation_row(alpha=angles)
+    J = gen.torsional_inertia(k_t=k, T=periods)
+    solution, *_ = np.linalg.lstsq(rows, J, rcond=None)
+    return solution
+
+
+def inertia_from_orientations(k_t: Quantity, periods: list[Quantity], angles: list[Quantity],
+                              body: str, source: str | None = None) -> tuple[Quantity, Quantity, Quantity]:
+    """Eqs. 2-6: ``(Ixx, Ixz, Izz)`` (benchmark convention) from torsional periods at three or more
+    pendulum-axis angles (radians); least squares for more than three.
+
+    Raises
+    ------
+    InputError
+        Fewer than three orientations, mismatched lists, non-positive periods, or angles that leave
+        Eq. 6 singular (two axes that coincide modulo 180 degrees).
+    """
+    if len(periods) != len(angles):
+        raise InputError(f"{body}.inertia", f"{len(periods)} periods, {len(angles)} angles",
+                         "one pendulum angle per period", source)
+    if len(periods) < 3:
+        raise InputError(f"{body}.inertia.periods", len(periods),
+                         "at least three pendulum orientations (Eq. 6 has three unknowns)", source)
+    for i, p in enumerate(periods):
+        _check_period(f"{body}.inertia.periods[{i}]", p, source)
+    a = np.array([q.value for q in angles])
+    if len(angles) == 3:
+        det = abs(2 * np.sin(a[0] - a[1]) * np.sin(a[0] - a[2]) * np.sin(a[1] - a[2]))
+    else:
+        rows = gen.orientation_row(alpha=a)
+        det = np.linalg.svd(rows, compute_uv=False)[-1]
+    if det < SINGULAR_DETERMINANT:
+        shown = ", ".join(f"{math.degrees(x):.1f}" for x in a)
+        raise InputError(
+            f"{body}.inertia.alpha_deg", f"[{shown}]",
+            "three pendulum axes that differ pairwise by more than a few degrees modulo 180 "
+            "(these leave Eq. 6 singular: two axes coincide)", source,
+        )
+    return tuple(propagate_first_order(_solve_orientations, [k_t, *periods, *angles]))  # type: ignore[return-value]

@@ -1,0 +1,81 @@
+"""Text and JSON renderings of model results, shared by the ``estimate`` and ``benchmark`` commands."""
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from bikerider.benchmark import BENCHMARK_NAMES, BenchmarkParameters, ModalEigenvalues, WhippleModel
+from bikerider.errors import InputError
+
+DEFAULT_SPEEDS = "0:10:11"
+
+
+def parse_speeds(text: str) -> np.ndarray:
+    """``START:STOP:N`` (inclusive, N points) to an array of speeds in m/s."""
+    parts = text.split(":")
+    try:
+        if len(parts) != 3:
+            raise ValueError
+        start, stop, n = float(parts[0]), float(parts[1]), int(parts[2])
+    except ValueError:
+        raise InputError("--speeds", text, "START:STOP:N, e.g. 0:10:101 (m/s, N points)") from None
+    if not (math.isfinite(start) and math.isfinite(stop)) or n < 1 or n > 1_000_000 or start < 0 or stop < start:
+        raise InputError("--speeds", text, "0 <= START <= STOP (finite, m/s) and 1 <= N <= 1000000")
+    return np.linspace(start, stop, n)
+
+
+def model_json(parameters: BenchmarkParameters, model: WhippleModel, eig: ModalEigenvalues) -> dict[str, Any]:
+    """The ``benchmark``, ``matrices``, ``speeds`` and ``eigenvalues`` keys of ``--json``."""
+    speeds = model.critical_speeds()
+    return {
+        "benchmark": parameters.as_dict(),
+        "matrices": {name: getattr(model, name).tolist() for name in ("M", "C1", "K0", "K2")},
+        "speeds": {"weave": speeds.weave, "capsize": speeds.capsize},
+        "eigenvalues": {
+            "speeds": eig.speeds.tolist(),
+            "modes": ["weave", "weave", "capsize", "castor"],
+            "values": [[[float(z.real), float(z.imag)] for z in row] for row in eig.values],
+            "labels": eig.labels.tolist(),
+        },
+    }
+
+
+def _matrix_text(name: str, m: np.ndarray) -> list[str]:
+    return [f"  {name:3s} = [[{m[0, 0]:12.6f} {m[0, 1]:12.6f}]", f"         [{m[1, 0]:12.6f} {m[1, 1]:12.6f}]]"]
+
+
+def model_text(parameters: BenchmarkParameters, model: WhippleModel, eig: ModalEigenvalues) -> str:
+    """Readable text: parameters, matrices, critical speeds, eigenvalue table."""
+    lines = ["Benchmark parameters (Meijaard et al. 2007, Table 1 names; SI units)"]
+    for name in BENCHMARK_NAMES:
+        value, sigma = parameters.values[name], parameters.sigmas.get(name, 0.0)
+        shown = "not determined" if value is None else (f"{value:.6g}" + (f" +/- {sigma:.2g}" if sigma else ""))
+        lines.append(f"  {name:5s} {shown}")
+    lines.append("")
+    lines.append("Canonical matrices: M q'' + v C1 q' + (g K0 + v^2 K2) q = f, q = [roll, steer]")
+    for name in ("M", "C1", "K0", "K2"):
+        lines.extend(_matrix_text(name, getattr(model, name)))
+    speeds = model.critical_speeds()
+    lines.append("")
+    lines.append(f"Weave speed   {_speed(speeds.weave)}")
+    lines.append(f"Capsize speed {_speed(speeds.capsize)}")
+    if speeds.stable_range:
+        lines.append(f"Self-stable from {speeds.stable_range[0]:.4f} to {speeds.stable_range[1]:.4f} m/s")
+    else:
+        lines.append("No self-stable speed range")
+    lines.append("")
+    lines.append("Eigenvalues [1/s] against speed")
+    lines.append(f"  {'v [m/s]':>8s} {'weave':>26s} {'capsize':>12s} {'castor':>12s}")
+    for v, row, labels in zip(eig.speeds, eig.values, eig.labels):
+        if labels[2] == "other":
+            lines.append(f"  {v:8.3f} two complex pairs: {row[0]:.4f}, {row[2]:.4f}")
+            continue
+        weave = f"{row[0].real:.4f} +/- {abs(row[0].imag):.4f}i" if row[0].imag else f"{row[0].real:.4f}, {row[1].real:.4f}"
+        lines.append(f"  {v:8.3f} {weave:>26s} {row[2].real:12.4f} {row[3].real:12.4f}")
+    return "\n".join(lines)
+
+
+def _speed(v: float | None) -> str:
+    return "none at positive speed" if v is None else f"{v:.4f} m/s"

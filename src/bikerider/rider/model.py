@@ -1,0 +1,127 @@
+"""Seat the rider on the bicycle: grid points, closure checks, mass properties.
+
+Wraps ``bikerider.generated.rider_model`` (derived in ``derive/rider_model.py``).  Before any
+generated function runs, the closures' preconditions are checked so that an impossible rider gets
+a message naming the measurement and the distance needed, never a NaN.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from bikerider.bicycle.bodies import BicycleBodies
+from bikerider.errors import InputError, ReachError
+from bikerider.generated import rider_model as gen
+from bikerider.inertia import check_inertia_tensor
+from bikerider.rider.measurements import RiderMeasurements
+
+_GEOMETRY = ("h_bb", "l_cs", "l_f", "w_fh", "rF", "l_hb", "lam_ht", "w_rh", "rR", "l_sp", "lam_st", "l_st", "l_s", "c", "w")
+_PLACEMENT = ("l_hh", "l_la", "l_ll", "l_ss", "l_to", "l_ua", "l_ul", "lam_fl", "c_h")
+_SEGMENTS = ("mBr", "c_ch", "c_la", "c_ll", "c_ua", "c_ul")
+_HUB_WIDTHS = ("w_rh", "w_fh")  # place grid points only; no segment depends on them
+
+SEGMENT_LINES: tuple[tuple[str, int, int], ...] = (
+    ("torso", 13, 15), ("right lower leg", 26, 28), ("left lower leg", 27, 29),
+    ("right upper leg", 28, 30), ("left upper leg", 29, 31), ("right upper arm", 21, 23),
+    ("left upper arm", 22, 24), ("right lower arm", 19, 23), ("left lower arm", 20, 24),
+)
+"""Segments drawn as lines between grid points (1-based); the head is a sphere at point 25."""
+
+
+@dataclass(frozen=True)
+class RiderModel:
+    """The seated rider: grid points and mass properties in the benchmark frame.
+
+    Attributes
+    ----------
+    grid_points : ndarray, shape (31, 3)
+        Grid points 1..31 (row ``i`` is point ``i + 1``) [m].
+    mass : float
+        Rider mass [kg].
+    com : ndarray, shape (3,)
+        Centre of mass (Eq. 8) [m].
+    inertia : ndarray, shape (3, 3)
+        Inertia tensor about the centre of mass (Eq. 14) [kg m^2].
+    """
+
+    grid_points: np.ndarray
+    mass: float
+    com: np.ndarray
+    inertia: np.ndarray
+
+
+def model_arguments(bicycle: BicycleBodies, rider: RiderMeasurements) -> dict[str, float]:
+    """Keyword arguments of the generated rider functions."""
+    missing = bicycle.missing_seating()
+    if missing:
+        raise InputError(
+            missing[0], "missing",
+            "a value: seating the rider model needs every Table 1 measurement "
+            f"(missing: {', '.join(missing)})", bicycle.source,
+        )
+    args = {k: bicycle[k] for k in _GEOMETRY}
+    args.update({k: rider[k] for k in _PLACEMENT + _SEGMENTS})
+    args.update(rider.fractions)
+    return args
+
+
+def check_closures(args: dict[str, float], bicycle_source: str, rider_source: str) -> None:
+    """Raise a clear error when the skeleton cannot be built for these measurements."""
+    if args["l_cs"] <= abs(args["rR"] - args["h_bb"]):
+        raise InputError("l_cs", args["l_cs"],
+                         f"more than |rR - h_bb| = {abs(args['rR'] - args['h_bb']):.3f} m (chain stay must reach the bottom bracket)",
+                         bicycle_source)
+    fork_offset = args["rF"] * math.cos(args["lam_ht"]) - args["c"] * math.sin(args["lam_ht"])
+    if args["l_f"] <= abs(fork_offset):
+        raise InputError("l_f", args["l_f"], f"more than the fork offset |f_o| = {abs(fork_offset):.3f} m", bicycle_source)
+    reach_args = {k: args[k] for k in _GEOMETRY + _PLACEMENT if k not in _HUB_WIDTHS}
+    leg_span, leg_len, arm_span, arm_len = (float(x) for x in gen.limb_reach(**reach_args))
+    points = gen.grid_points(**{k: args[k] for k in _GEOMETRY + _PLACEMENT})
+    # Preconditions of the branch rule (derive/rider_model.py): hip above the pedal axis,
+    # shoulder behind the hand.
+    hip, foot, shoulder, hand = points[12], points[4], points[20], points[18]
+    if not hip[2] < foot[2]:
+        raise InputError("l_sp", args["l_sp"], "a seat above the pedal axis (the hip must be higher than the bottom bracket)", bicycle_source)
+    if leg_span > leg_len:
+        raise ReachError(
+            "l_ll + l_ul", round(leg_len, 4),
+            f"at least {leg_span:.3f} m, the distance from the hip (top of the seat) to the pedal axis: "
+            f"the legs are {leg_span - leg_len:.3f} m too short to reach the pedals "
+            "(lower the seat post l_sp or check l_ll and l_ul)", rider_source,
+        )
+    if leg_span < abs(args["l_ll"] - args["l_ul"]):
+        raise ReachError("|l_ll - l_ul|", round(abs(args["l_ll"] - args["l_ul"]), 4),
+                         f"at most {leg_span:.3f} m, the hip to pedal-axis distance (the knee cannot close)", rider_source)
+    if not shoulder[0] < hand[0]:
+        raise InputError("lam_fl_deg", math.degrees(args["lam_fl"]),
+                         "a forward lean that keeps the shoulders behind the hands", rider_source)
+    if arm_span > arm_len:
+        raise ReachError(
+            "l_ua + l_la", round(arm_len, 4),
+            f"at least {arm_span:.3f} m, the distance from the shoulder to the handlebar grip: "
+            f"the arms are {arm_span - arm_len:.3f} m too short to reach the grips "
+            "(check l_ua, l_la, l_to, lam_fl, or the stem and handlebar lengths)", rider_source,
+        )
+    if arm_span < abs(args["l_ua"] - args["l_la"]):
+        raise ReachError("|l_ua - l_la|", round(abs(args["l_ua"] - args["l_la"]), 4),
+                         f"at most {arm_span:.3f} m, the shoulder to grip distance (the elbow cannot close)", rider_source)
+
+
+def seat_rider(bicycle: BicycleBodies, rider: RiderMeasurements) -> RiderModel:
+    """Build the seated rider model on ``bicycle``.
+
+    Raises
+    ------
+    InputError, ReachError
+        Missing seating measurements, a rider whose legs or arms cannot reach pedals or grips,
+        or a skeleton the branch rule does not cover.
+    """
+    args = model_arguments(bicycle, rider)
+    check_closures(args, bicycle.source, rider.source)
+    points = gen.grid_points(**{k: args[k] for k in _GEOMETRY + _PLACEMENT})
+    mass_args = {k: v for k, v in args.items() if k not in _HUB_WIDTHS}
+    mass, com, inertia = gen.rider_mass_properties(**mass_args)
+    check_inertia_tensor("rider inertia", inertia, rider.source)
+    return RiderModel(np.asarray(points), float(mass), np.asarray(com), np.asarray(inertia))
