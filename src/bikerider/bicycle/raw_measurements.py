@@ -1,0 +1,523 @@
+"""Reduce a BicycleParameters ``<Name>Measured.txt`` file to :class:`BicycleBodies`.
+
+The chain, each step in its own module:
+
+1. wheel radii from the distance rolled in a number of turns, and the frame geometry either from
+   wheelbase, head tube angle and fork offset or from the heights-and-diameters measurements
+   (:mod:`bikerider.bicycle.measured_geometry`);
+2. the torsional pendulum stiffness from the calibration rod (mass ``mP``, diameter ``dP``,
+   length ``lP``, period ``TtP1``);
+3. centres of mass of the rear frame ``B`` and the handlebar/fork ``H`` (or, measured apart, the
+   handlebar ``G`` and the fork ``S``) from the hanging angles ``alphaXi`` and distances ``aXi``
+   (:mod:`bikerider.bicycle.hanging_lines`);
+4. wheel moments ``IRxx``/``IFxx`` from one torsional period each, in-plane inertia of B, H (or G
+   and S) from the torsional periods ``TtXi`` at the hanging orientations (Eq. 6, least squares for
+   more than three), and ``I_yy`` of wheels and bodies from compound-pendulum periods ``TcX1``
+   (Eq. 7) about the wheel axle (``B``, ``H``, ``S``) or the handlebar reference point (``G``);
+5. ``G`` and ``S`` combined into ``H`` (mass, centre of mass, parallel axis);
+6. seating measurements when the file has them (:mod:`bikerider.bicycle.seating`).
+
+Units are those of BicycleParameters: metres, kilograms, seconds; ``gamma`` and ``alphaXi`` in
+degrees; ``lamst`` in radians.
+
+Uncertainty.  The whole chain is one function of the file's values; every output's standard
+uncertainty is propagated from every input's at first order by a numerical Jacobian
+(:mod:`bikerider.bicycle.propagation`), so shared inputs (stiffness, steer axis tilt) are handled
+consistently.
+
+Checks (on the nominal values).  A missing field raises :class:`InputError` naming it and saying
+what it is for.  Periods, masses and lengths must be positive.  Repeated trials of a period (comma
+separated in the file) must agree: any trial more than :data:`PERIOD_TRIAL_TOLERANCE` (relative)
+from the median is an error, since it points at a mislabelled trial or a slipping clamp, not at
+random timing error; agreement within that is absorbed into the uncertainty (see
+:mod:`bikerider.io.name_value_file`).  Hanging lines that miss their common point by more than the
+line tolerance raise :class:`FitError`; orientations that leave Eq. 6 singular raise
+:class:`InputError`.
+"""
+from __future__ import annotations
+
+import logging
+import math
+import re
+import statistics
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from bikerider.bicycle import measured_geometry as geo
+from bikerider.bicycle import seating
+from bikerider.bicycle.bodies import BicycleBodies
+from bikerider.bicycle.hanging_lines import (
+    DEFAULT_LINE_TOLERANCE, LineIntersection, check_lines_meet, intersect_lines, line_from_hanging,
+    mean_of_pairwise_intersections,
+)
+from bikerider.bicycle.propagation import propagate
+from bikerider.errors import InputError
+from bikerider.generated import combination as gen_combination
+from bikerider.generated import pendulum as gen_pendulum
+from bikerider.inertia import check_inertia_tensor
+from bikerider.io.name_value_file import NameValueFile, read_name_value_file
+from bikerider.quantity import Quantity
+
+LOG = logging.getLogger(__name__)
+
+#: A repeated period trial further than this (relative) from the trials' median is an error.
+PERIOD_TRIAL_TOLERANCE = 0.01
+
+#: Below this |determinant| of Eq. 6 for three orientations (``2 sin(b1-b2) sin(b1-b3) sin(b2-b3)``),
+#: or this smallest singular value for more, the pendulum axes nearly coincide and the in-plane
+#: inertia is not determined.
+SINGULAR_ORIENTATIONS = 1e-3
+
+BODIES = {
+    "B": "rear frame",
+    "H": "handlebar and fork",
+    "G": "handlebar (measured apart from the fork)",
+    "S": "fork (measured apart from the handlebar)",
+}
+_REFERENCE = {"B": "rear wheel centre", "H": "front wheel centre", "S": "front wheel centre",
+              "G": "handlebar reference point"}
+
+FIELD_PURPOSES: dict[str, str] = {
+    "dF": "distance rolled by the front wheel in nF turns, for its radius rF",
+    "nF": "number of front wheel turns rolled over dF, for its radius rF",
+    "dR": "distance rolled by the rear wheel in nR turns, for its radius rR",
+    "nR": "number of rear wheel turns rolled over dR, for its radius rR",
+    "mR": "rear wheel mass",
+    "mF": "front wheel mass",
+    "mB": "rear frame mass",
+    "mH": "handlebar and fork mass",
+    "mG": "handlebar mass (fork measured apart)",
+    "mS": "fork mass (handlebar measured apart)",
+    "g": "acceleration due to gravity, for the compound pendulum inertias",
+    "lF": "front wheel compound pendulum length (pivot to wheel centre), for IFyy",
+    "lR": "rear wheel compound pendulum length (pivot to wheel centre), for IRyy",
+    "TcF1": "front wheel compound pendulum period, for IFyy",
+    "TcR1": "rear wheel compound pendulum period, for IRyy",
+    "TtF1": "front wheel torsional pendulum period, for IFxx",
+    "TtR1": "rear wheel torsional pendulum period, for IRxx",
+    "mP": "calibration rod mass, for the torsional pendulum stiffness",
+    "dP": "calibration rod diameter, for the torsional pendulum stiffness",
+    "lP": "calibration rod length, for the torsional pendulum stiffness",
+    "TtP1": "calibration rod torsional period, for the torsional pendulum stiffness",
+    "w": "wheelbase",
+    "gamma": "head tube angle from the ground in degrees (with w and f)",
+    "f": "fork offset (with w and gamma), for the trail",
+    **{f"h{i}": "a height of the heights-and-diameters frame geometry (steer axis tilt, wheelbase, trail)"
+       for i in range(1, 6)},
+    **{f"d{i}": "a diameter of the heights-and-diameters frame geometry (steer axis tilt, wheelbase, trail)"
+       for i in range(1, 5)},
+    "d": "the axle distance of the heights-and-diameters frame geometry (steer axis tilt, wheelbase, trail)",
+    "h6": "height of the front axle top, for the handlebar reference point (fork measured apart)",
+    "h7": "height of the handlebar reference circle top, for the handlebar reference point",
+    "d5": "front axle diameter, for the handlebar reference point",
+    "d6": "handlebar reference circle diameter, for the handlebar reference point",
+    "l": "outer distance from front axle to handlebar reference circle, for the handlebar reference point",
+}
+
+_WHEELS = ("dF", "nF", "dR", "nR", "mR", "mF", "g", "lF", "lR", "TcF1", "TcR1", "TtF1", "TtR1")
+_ROD = ("mP", "dP", "lP", "TtP1")
+_WHEELBASE_GEOMETRY = ("w", "gamma", "f")
+_HEIGHTS_GEOMETRY = ("h1", "h2", "h3", "h4", "h5", "d1", "d2", "d3", "d4", "d")
+_HANDLEBAR_REFERENCE = ("h6", "h7", "d5", "d6", "l")
+_POSITIVE = ("dF", "nF", "dR", "nR", "mR", "mF", "mB", "mH", "mG", "mS", "g", "lF", "lR", "mP", "dP", "lP", "w")
+_INDEXED = re.compile(r"^(alpha|a|Tt|Tc)([BHGS])(\d+)$")
+_KNOWN_EXTRAS = {"xcl", "zcl", "ds1", "ds3"}
+"""Names BicycleParameters files carry that the benchmark bodies do not use (lateral force point,
+extra frame distances); listed in the notes, not errors."""
+
+
+@dataclass(frozen=True)
+class MeasuredLayout:
+    """What a Measured file contains: which geometry, which bodies and their orientations."""
+
+    geometry: str
+    """``"wheelbase"`` (w, gamma, f) or ``"heights"`` (h1..h5, d1..d4, d)."""
+    split_fork: bool
+    """Handlebar G and fork S measured apart (combined into H)."""
+    orientations: dict[str, tuple[int, ...]]
+    """Orientation numbers of each hung body (``B``, ``H`` or ``G`` and ``S``)."""
+    compound: dict[str, bool]
+    """Whether the body's compound-pendulum period ``TcX1`` is there (for its I_yy)."""
+    seating: bool
+    """Whether every BicycleParameters seating measurement is there."""
+
+
+@dataclass(frozen=True)
+class MeasuredReduction:
+    """The result of reducing a Measured file.
+
+    Attributes
+    ----------
+    bodies : BicycleBodies
+        The four bodies and geometry, each value with its propagated uncertainty.
+    extras : dict of str to Quantity
+        Intermediate values: ``k_t`` (pendulum stiffness), ``lam`` (steer axis tilt), fork offset
+        ``f``, and for a split fork the handlebar ``G`` and fork ``S`` bodies (``mG, xG, zG, IGxx,
+        IGxz, IGzz, IGyy`` and the same for ``S``).
+    lines : dict of str to LineIntersection
+        The centre-of-mass line fit of each hung body, with its residual.
+    layout : MeasuredLayout
+    notes : list of str
+        Fields ignored, values not determined.
+    """
+
+    bodies: BicycleBodies
+    extras: dict[str, Quantity]
+    lines: dict[str, LineIntersection]
+    layout: MeasuredLayout
+    notes: list[str] = field(default_factory=list)
+
+
+def _purpose(name: str) -> str:
+    match = _INDEXED.match(name)
+    if match:
+        kind, body, index = match.groups()
+        what = BODIES[body]
+        return {
+            "alpha": f"hanging angle of the {what} in orientation {index} (degrees, steer axis from the horizontal)",
+            "a": f"distance from the pendulum axis to the {_REFERENCE[body]} with the {what} hung in orientation {index}",
+            "Tt": f"torsional pendulum period of the {what} in orientation {index}",
+            "Tc": f"compound pendulum period of the {what}, for its I_yy",
+        }[kind]
+    return FIELD_PURPOSES.get(name, "a measurement of the bicycle")
+
+
+def _require(values: Mapping[str, Quantity], names, source: str) -> None:
+    for name in names:
+        if name not in values:
+            raise InputError(name, "missing", f"a value: {_purpose(name)}", source)
+
+
+def detect_layout(values: Mapping[str, Quantity], source: str = "<memory>") -> MeasuredLayout:
+    """Find out which measurements a file holds and check that each set is complete.
+
+    Raises
+    ------
+    InputError
+        A required field is missing (the message names it and what it is for), or a body was hung
+        in fewer than three orientations.
+    """
+    _require(values, _WHEELS + _ROD + ("mB",), source)
+    if "w" in values or not any(k in values for k in _HEIGHTS_GEOMETRY):
+        geometry = "wheelbase"
+        _require(values, _WHEELBASE_GEOMETRY, source)
+    else:
+        geometry = "heights"
+        _require(values, _HEIGHTS_GEOMETRY, source)
+    split = any(k in values for k in ("mG", "mS")) or any(
+        (m := _INDEXED.match(k)) is not None and m.group(2) in "GS" for k in values)
+    hung = ("B", "G", "S") if split else ("B", "H")
+    _require(values, [f"m{b}" for b in hung[1:]], source)
+    if split:
+        _require(values, _HANDLEBAR_REFERENCE, source)
+    orientations: dict[str, tuple[int, ...]] = {}
+    for body in hung:
+        indices: set[int] = set()
+        for key in values:
+            match = _INDEXED.match(key)
+            if match and match.group(2) == body and match.group(1) in ("alpha", "a", "Tt"):
+                indices.add(int(match.group(3)))
+        ordered = tuple(sorted(indices))
+        for i in ordered:
+            _require(values, (f"alpha{body}{i}", f"a{body}{i}", f"Tt{body}{i}"), source)
+        if len(ordered) < 3:
+            missing = next(i for i in range(1, 4) if i not in indices)
+            raise InputError(
+                f"alpha{body}{missing}", "missing",
+                f"a value: the {BODIES[body]} must be hung in at least three orientations (alpha{body}i, "
+                f"a{body}i, Tt{body}i) to locate its centre of mass and in-plane inertia; "
+                f"found {len(ordered)}", source,
+            )
+        orientations[body] = ordered
+    compound = {body: f"Tc{body}1" in values for body in hung}
+    return MeasuredLayout(geometry, split, orientations, compound, all(k in values for k in seating.MEASURED_NAMES))
+
+
+def _check_values(values: Mapping[str, Quantity], layout: MeasuredLayout, source: NameValueFile | str,
+                  repeats: Mapping[str, tuple[Quantity, ...]]) -> None:
+    where = source.where if isinstance(source, NameValueFile) else (lambda name: str(source))
+    for name in _POSITIVE:
+        if name in values and not values[name].value > 0:
+            raise InputError(name, values[name].value, f"a positive value ({_purpose(name)})", where(name))
+    for name, q in values.items():
+        if name.startswith(("Tt", "Tc")) and not q.value > 0:
+            raise InputError(name, q.value, f"a positive period in seconds ({_purpose(name)})", where(name))
+    for name, trials in repeats.items():
+        if not name.startswith(("Tt", "Tc")) or len(trials) < 2:
+            continue
+        median = statistics.median(t.value for t in trials)
+        worst = max(trials, key=lambda t: abs(t.value - median))
+        if abs(worst.value - median) > PERIOD_TRIAL_TOLERANCE * median:
+            shown = ", ".join(f"{t.value:.6g}" for t in trials)
+            raise InputError(
+                name, f"[{shown}] s",
+                f"repeated trials within {PERIOD_TRIAL_TOLERANCE:.0%} of their median {median:.6g} s "
+                f"(trial {worst.value:.6g} s is {abs(worst.value - median) / median:.1%} off: a trial of "
+                "another orientation or body, or a slipping clamp?)", where(name),
+            )
+
+
+def _centre_of_mass(body: str, x: Mapping[str, float], indices, lam: float, reference, method: str):
+    normals, offsets, betas = [], [], []
+    for i in indices:
+        beta = lam - math.radians(x[f"alpha{body}{i}"])
+        normal, offset = line_from_hanging(beta, x[f"a{body}{i}"], reference)
+        normals.append(normal)
+        offsets.append(offset)
+        betas.append(beta)
+    normals_a, offsets_a = np.array(normals), np.array(offsets)
+    fit = intersect_lines(normals_a, offsets_a)
+    point = fit.point if method == "least_squares" else mean_of_pairwise_intersections(normals_a, offsets_a)
+    return point, fit, np.array(betas)
+
+
+def _in_plane_inertia(body: str, k_t: float, periods: np.ndarray, betas: np.ndarray, check: bool,
+                      source: str) -> np.ndarray:
+    if len(periods) == 3:
+        inertia, det = gen_pendulum.inertia_from_three_orientations(
+            k_t=k_t, T_1=periods[0], T_2=periods[1], T_3=periods[2],
+            alpha_1=betas[0], alpha_2=betas[1], alpha_3=betas[2],
+        )
+        measure = abs(float(det))
+    else:
+        rows = gen_pendulum.orientation_row(alpha=betas)
+        measure = float(np.linalg.svd(rows, compute_uv=False)[-1])
+        inertia, *_ = np.linalg.lstsq(rows, gen_pendulum.torsional_inertia(k_t=k_t, T=periods), rcond=None)
+    if check and measure < SINGULAR_ORIENTATIONS:
+        shown = ", ".join(f"{math.degrees(b) % 180:.1f}" for b in betas)
+        raise InputError(
+            f"alpha{body}", f"pendulum axes at [{shown}] deg from +x",
+            f"orientations of the {BODIES[body]} whose pendulum axes differ pairwise by more than a few "
+            f"degrees modulo 180 (Eq. 6 is singular for these: determinant {measure:.2g})", source,
+        )
+    return np.asarray(inertia, dtype=float)
+
+
+def _compound(body_name: str, period: float, mass: float, g: float, length: float, check: bool, source: str) -> float:
+    value = float(gen_pendulum.compound_inertia(T=period, m_p=mass, g=g, l_p=length))
+    if check and not value > 0:
+        shortest = 2 * math.pi * math.sqrt(length / g)
+        raise InputError(
+            body_name, period,
+            f"a compound pendulum period above {shortest:.4f} s, that of a point mass {length:.4f} m "
+            "from the pivot (a shorter one gives a negative moment of inertia)", source,
+        )
+    return value
+
+
+def evaluate_measured(x: Mapping[str, float], layout: MeasuredLayout, *, com_method: str = "least_squares",
+                      check: bool = False, line_tolerance: float = DEFAULT_LINE_TOLERANCE,
+                      source: str = "<memory>", lines: dict | None = None) -> dict[str, float]:
+    """The whole reduction on plain floats (no uncertainty).
+
+    Parameters
+    ----------
+    x : mapping of str to float
+        The file's values (BicycleParameters units).
+    layout : MeasuredLayout
+    com_method : {"least_squares", "pairwise_mean"}
+        How to locate a centre of mass from its lines: the least-squares point (ours) or the mean
+        of the pairwise intersections (BicycleParameters').
+    check : bool
+        Raise on lines that do not meet, singular orientations, non-physical results.
+    lines : dict, optional
+        Filled with each body's :class:`LineIntersection`.
+
+    Returns
+    -------
+    dict of str to float
+        BicycleBodies names, seating names when derivable, and the extras of
+        :class:`MeasuredReduction`.  NaN for what the file does not determine.
+    """
+    out: dict[str, float] = {}
+    rF = geo.wheel_radius(x["dF"], x["nF"])
+    rR = geo.wheel_radius(x["dR"], x["nR"])
+    if layout.geometry == "wheelbase":
+        lam = math.radians(90.0 - x["gamma"])
+        w, fork_offset = x["w"], x["f"]
+    else:
+        a, b, c_axis = geo.perpendicular_offsets(
+            tuple(x[k] for k in _HEIGHTS_GEOMETRY[:5]), tuple(x[k] for k in _HEIGHTS_GEOMETRY[5:]))
+        lam = geo.steer_tilt_from_offsets(rF, rR, a, b, c_axis)
+        if check and not math.isfinite(lam):
+            raise InputError("d", x["d"], "heights and diameters that close into a frame: "
+                             f"offsets a = {a:.4f} m, b = {b:.4f} m give no steer axis tilt", source)
+        w, fork_offset = geo.wheelbase_from_offsets(lam, a, b, c_axis), b
+    if check and not 0 < lam < math.pi / 2:
+        raise InputError("gamma" if layout.geometry == "wheelbase" else "h1", math.degrees(math.pi / 2 - lam),
+                         "a head tube angle between 0 and 90 degrees", source)
+    out.update(w=w, c=geo.trail(rF, lam, fork_offset), lam_ht=math.pi / 2 - lam, g=x["g"], rR=rR, rF=rF,
+               lam=lam, f=fork_offset)
+
+    rod = geo.rod_moment_of_inertia(x["mP"], x["dP"], x["lP"])
+    k_t = geo.torsional_stiffness(rod, x["TtP1"])
+    out["k_t"] = k_t
+    for wheel in ("R", "F"):
+        out[f"m{wheel}"] = x[f"m{wheel}"]
+        out[f"I{wheel}xx"] = float(gen_pendulum.torsional_inertia(k_t=k_t, T=x[f"Tt{wheel}1"]))
+        out[f"I{wheel}yy"] = _compound(f"Tc{wheel}1", x[f"Tc{wheel}1"], x[f"m{wheel}"], x["g"], x[f"l{wheel}"], check, source)
+
+    references = {"B": (0.0, -rR), "H": (w, -rF), "S": (w, -rF)}
+    if layout.split_fork:
+        l1, l2 = geo.handlebar_reference_offsets(*(x[k] for k in _HANDLEBAR_REFERENCE))
+        if check and not math.isfinite(l2):
+            raise InputError("l", x["l"], "an axle-to-reference-circle distance longer than the height "
+                             f"difference l1 = {l1:.4f} m", source)
+        references["G"] = geo.handlebar_reference_point(w, rF, lam, l1, l2)
+    for body, indices in layout.orientations.items():
+        point, fit, betas = _centre_of_mass(body, x, indices, lam, references[body], com_method)
+        if check:
+            check_lines_meet(f"the {BODIES[body]} ({body})", fit, line_tolerance, source)
+        if lines is not None:
+            lines[body] = fit
+        periods = np.array([x[f"Tt{body}{i}"] for i in indices])
+        ixx, ixz, izz = _in_plane_inertia(body, k_t, periods, betas, check, source)
+        name = "Bf" if body == "B" else body
+        out.update({f"m{name}": x[f"m{body}"], f"x{name}": point[0], f"z{name}": point[1],
+                    f"I{name}xx": ixx, f"I{name}xz": ixz, f"I{name}zz": izz})
+        yy = math.nan
+        if layout.compound[body]:
+            length = math.hypot(point[0] - references[body][0], point[1] - references[body][1])
+            yy = _compound(f"Tc{body}1", x[f"Tc{body}1"], x[f"m{body}"], x["g"], length, check, source)
+        out[f"I{name}yy"] = yy
+    if layout.split_fork:
+        mH, xH, zH, IH = gen_combination.rear_body(
+            **{f"{p}Bf": out[f"{p}G"] for p in ("m", "x", "z")},
+            **{f"IBf{ax}": out[f"IG{ax}"] for ax in ("xx", "yy", "zz", "xz")},
+            **{f"{p}Br": out[f"{p}S"] for p in ("m", "x", "z")},
+            **{f"IBr{ax}": out[f"IS{ax}"] for ax in ("xx", "yy", "zz", "xz")},
+        )
+        out.update(mH=float(mH), xH=float(xH), zH=float(zH), IHxx=float(IH[0, 0]), IHyy=float(IH[1, 1]),
+                   IHzz=float(IH[2, 2]), IHxz=float(IH[0, 2]))
+    if layout.seating:
+        out.update(seating.seating_from_measured(x, rR=rR, rF=rF, w=w, lam=lam, trail=out["c"]))
+    return out
+
+
+_BODY_OUTPUTS = ("w", "c", "lam_ht", "g", "rR", "mR", "IRxx", "IRyy", "rF", "mF", "IFxx", "IFyy",
+                 "mBf", "xBf", "zBf", "IBfxx", "IBfzz", "IBfxz", "IBfyy",
+                 "mH", "xH", "zH", "IHxx", "IHzz", "IHxz", "IHyy")
+
+
+def reduce_measured(values: Mapping[str, Quantity], *, source: NameValueFile | str = "<memory>",
+                    name: str = "bicycle", line_tolerance: float = DEFAULT_LINE_TOLERANCE,
+                    com_method: str = "least_squares") -> MeasuredReduction:
+    """Reduce BicycleParameters measurements to the bodies, with first-order uncertainties.
+
+    Parameters
+    ----------
+    values : mapping of str to Quantity
+        The Measured file's values (a :class:`NameValueFile` gives messages line numbers).
+    source : NameValueFile or str
+        Where the values came from.
+    name : str
+        Name of the bicycle.
+    line_tolerance : float
+        Largest rms distance [m] of a body's hanging lines from their common point.
+    com_method : {"least_squares", "pairwise_mean"}
+        See :func:`evaluate_measured`.
+
+    Raises
+    ------
+    InputError
+        Missing or impossible measurements (named, with what they are for).
+    FitError
+        Hanging lines that do not meet within ``line_tolerance``.
+    """
+    if com_method not in ("least_squares", "pairwise_mean"):
+        raise ValueError(f"com_method must be 'least_squares' or 'pairwise_mean', not {com_method!r}")
+    label = source.path if isinstance(source, NameValueFile) else str(source)
+    repeats = ({k: e.repeats for k, e in source.entries.items()} if isinstance(source, NameValueFile) else {})
+    layout = detect_layout(values, label)
+    _check_values(values, layout, source, repeats)
+    nominal = {k: q.value for k, q in values.items()}
+    lines: dict[str, LineIntersection] = {}
+    evaluate_measured(nominal, layout, com_method=com_method, check=True, line_tolerance=line_tolerance,
+                      source=label, lines=lines)
+    used = {k: q for k, q in values.items() if k not in _KNOWN_EXTRAS}
+    result = propagate(lambda x: evaluate_measured(x, layout, com_method=com_method), used)
+    notes = _notes(values, layout)
+    body_values = {k: result[k] for k in _BODY_OUTPUTS if math.isfinite(result[k].value)}
+    if layout.seating:
+        problem = seating.seating_problem({k: q.value for k, q in result.items()}, result["rR"].value)
+        if problem is None:
+            body_values.update({k: result[k] for k in seating.SEATING_OUTPUTS})
+            notes.append(seating.NOTE)
+        else:
+            notes.append(f"seating measurements not usable: {problem}")
+    _drop_inconsistent_yy(body_values, notes, label)
+    extras = {k: q for k, q in result.items() if k not in body_values and math.isfinite(q.value)}
+    bodies = BicycleBodies(body_values, source=label, name=name, notes=notes)
+    return MeasuredReduction(bodies, extras, lines, layout, notes)
+
+
+def _drop_inconsistent_yy(body_values: dict[str, Quantity], notes: list[str], source: str) -> None:
+    """Leave out an ``I_yy`` that breaks the triangle inequality with the in-plane moments.
+
+    ``IBfyy`` and ``IHyy`` come from a compound pendulum, the in-plane moments from the torsional
+    pendulum; when they cannot belong to one body the linear model (which does not use ``I_yy``)
+    is still served, and the value stays in :attr:`MeasuredReduction.extras` with a note.
+    """
+    for body in ("Bf", "H"):
+        yy = body_values.get(f"I{body}yy")
+        if yy is None:
+            continue
+        tensor = np.array([[body_values[f"I{body}xx"].value, 0.0, body_values[f"I{body}xz"].value],
+                           [0.0, yy.value, 0.0],
+                           [body_values[f"I{body}xz"].value, 0.0, body_values[f"I{body}zz"].value]])
+        try:
+            check_inertia_tensor(f"I{body}", tensor, source)
+        except InputError as exc:
+            del body_values[f"I{body}yy"]
+            message = (f"I{body}yy = {yy} (compound pendulum) left out of the bodies: it cannot belong "
+                       f"to one body with the torsional-pendulum I{body}xx, I{body}xz, I{body}zz ({exc})")
+            LOG.warning("%s", message)
+            notes.append(message)
+
+
+def _notes(values: Mapping[str, Quantity], layout: MeasuredLayout) -> list[str]:
+    notes = []
+    if not layout.compound.get("B", False):
+        notes.append("TcB1 missing: the rear frame's IBfyy is not determined (the linear model does not need it)")
+    if not layout.split_fork and not layout.compound.get("H", False):
+        notes.append("TcH1 missing: IHyy is not determined (the linear model does not need it)")
+    if layout.split_fork and not (layout.compound["G"] and layout.compound["S"]):
+        notes.append("TcG1 or TcS1 missing: IHyy is not determined (the linear model does not need it)")
+    if layout.split_fork:
+        ignored_h = sorted(k for k in values if k == "mH" or ((m := _INDEXED.match(k)) and m.group(2) == "H"))
+        if ignored_h:
+            notes.append("fork and handlebar measured apart; ignored the combined-body fields " + ", ".join(ignored_h))
+    present = [k for k in seating.MEASURED_NAMES if k in values]
+    if present and not layout.seating:
+        missing = [k for k in seating.MEASURED_NAMES if k not in values]
+        notes.append("seating measurements incomplete (missing " + ", ".join(missing) + "): the rider cannot be seated")
+    extras = sorted(k for k in values if k in _KNOWN_EXTRAS)
+    if extras:
+        notes.append("not used by the benchmark bodies: " + ", ".join(extras))
+    return notes
+
+
+def read_measured_file(path: str | Path, *, line_tolerance: float = DEFAULT_LINE_TOLERANCE,
+                       com_method: str = "least_squares") -> MeasuredReduction:
+    """Read and reduce a ``<Name>Measured.txt`` file (see :func:`reduce_measured`).
+
+    The bicycle is named after the file (``BrowserMeasured.txt`` gives ``Browser``).
+    """
+    data = read_name_value_file(path)
+    stem = Path(path).stem
+    name = stem[: -len("Measured")] if stem.endswith("Measured") and len(stem) > len("Measured") else stem
+    return reduce_measured(data, source=data, name=name, line_tolerance=line_tolerance, com_method=com_method)
+
+
+def load_measured_bicycle(path: str | Path) -> BicycleBodies:
+    """The :class:`BicycleBodies` of a ``<Name>Measured.txt`` file."""
+    return read_measured_file(path).bodies
+
+
+__all__ = [
+    "BODIES", "FIELD_PURPOSES", "PERIOD_TRIAL_TOLERANCE", "MeasuredLayout", "MeasuredReduction",
+    "detect_layout", "evaluate_measured", "load_measured_bicycle", "read_measured_file", "reduce_measured",
+]

@@ -1,0 +1,1 @@
+"""Readers of input files: the project's TOML, BicycleParameters ``name = value+/-sigma`` files."""

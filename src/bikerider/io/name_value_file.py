@@ -1,0 +1,201 @@
+"""Reader of ``name = value+/-sigma`` text files (the BicycleParameters format).
+
+One entry a line::
+
+    # a comment line
+    mR = 3.11+/-0.02            # trailing comments are allowed too
+    g = 9.81 +/- 0.01
+    nF = 13                     # no uncertainty: sigma = 0
+    dF = 21.078+/-0.001, 21.086+/-0.001, 21.090+/-0.001
+
+Blank lines and lines whose first non-blank character is ``#`` are skipped; ``±`` may stand for
+``+/-``.  A name appears at most once in a file.
+
+Repeated measurements
+---------------------
+Comma-separated values are repeats of one measurement.  Their value is the plain mean
+``m = sum(x_i) / n`` (as BicycleParameters takes it), and its standard uncertainty is the larger of
+
+* the stated uncertainties carried through the mean, ``sqrt(sum(sigma_i^2)) / n``, and
+* the standard error of the scatter, ``s / sqrt(n)`` with ``s`` the sample standard deviation.
+
+The first is what the mean would have if the stated sigmas were the whole story; the second is what
+the repeats themselves show.  Taking the larger never lets a scatter beyond the stated sigmas go
+unreported (BicycleParameters keeps only the first, which is why its uncertainties on averaged
+values can be smaller than ours).  The individual repeats stay available
+(:attr:`NameValueEntry.repeats`) for callers that apply a rule of their own, such as the
+period-trial check of :mod:`bikerider.bicycle.raw_measurements`.
+"""
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+from bikerider.errors import FileFormatError
+from bikerider.quantity import Quantity
+
+_NUMBER = r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?"
+_VALUE = re.compile(rf"^\s*({_NUMBER})\s*(?:(?:\+/-|±)\s*({_NUMBER}))?\s*$")
+_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+
+
+@dataclass(frozen=True)
+class NameValueEntry:
+    """One line of a name-value file.
+
+    Attributes
+    ----------
+    name : str
+        The name left of ``=``.
+    value : Quantity
+        The value; the mean of the repeats when there are several (see the module docstring).
+    repeats : tuple of Quantity
+        Every comma-separated value as written.
+    line : int
+        Line number (1-based) in the file, for messages.
+    """
+
+    name: str
+    value: Quantity
+    repeats: tuple[Quantity, ...]
+    line: int
+
+
+@dataclass(frozen=True)
+class NameValueFile(Mapping[str, Quantity]):
+    """The entries of one file; maps each name to its :class:`Quantity`.
+
+    Attributes
+    ----------
+    path : str
+        The file read (or a label for text parsed from memory).
+    entries : dict of str to NameValueEntry
+        Every entry in file order.
+    """
+
+    path: str
+    entries: dict[str, NameValueEntry]
+
+    def __getitem__(self, name: str) -> Quantity:
+        return self.entries[name].value
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self.entries)
+
+    def __len__(self) -> int:
+        return len(self.entries)
+
+    def where(self, name: str) -> str:
+        """``"path:line"`` of an entry, or the path alone when the name is not in the file."""
+        entry = self.entries.get(name)
+        return f"{self.path}:{entry.line}" if entry else self.path
+
+    def as_dict(self) -> dict[str, Quantity]:
+        """A plain dict of name to :class:`Quantity`."""
+        return {name: entry.value for name, entry in self.entries.items()}
+
+
+def mean_of_repeats(repeats: list[Quantity] | tuple[Quantity, ...]) -> Quantity:
+    """Combine repeats of one measurement into a mean and its standard uncertainty.
+
+    The uncertainty is ``max(sqrt(sum(sigma_i^2)) / n, s / sqrt(n))`` (see the module docstring).
+
+    Parameters
+    ----------
+    repeats : sequence of Quantity
+        At least one repeat.
+
+    Returns
+    -------
+    Quantity
+    """
+    n = len(repeats)
+    if n == 0:
+        raise ValueError("mean_of_repeats needs at least one value")
+    if n == 1:
+        return repeats[0]
+    mean = math.fsum(q.value for q in repeats) / n
+    stated = math.sqrt(math.fsum(q.sigma**2 for q in repeats)) / n
+    sample_sd = math.sqrt(math.fsum((q.value - mean) ** 2 for q in repeats) / (n - 1))
+    return Quantity(mean, max(stated, sample_sd / math.sqrt(n)))
+
+
+def _parse_value(text: str, path: str, line: int, name: str) -> Quantity:
+    match = _VALUE.match(text)
+    if not match:
+        raise FileFormatError(
+            path, f"{name}: cannot read {text.strip()!r} as a number or 'value+/-sigma'", line
+        )
+    value = float(match.group(1))
+    sigma = float(match.group(2)) if match.group(2) is not None else 0.0
+    if not (math.isfinite(value) and math.isfinite(sigma)):
+        raise FileFormatError(path, f"{name}: {text.strip()!r} is not a finite number", line)
+    if sigma < 0:
+        raise FileFormatError(path, f"{name}: uncertainty {sigma:g} is negative; expected sigma >= 0", line)
+    return Quantity(value, sigma)
+
+
+def parse_name_value_text(text: str, path: str = "<text>") -> NameValueFile:
+    """Parse the text of a name-value file.
+
+    Parameters
+    ----------
+    text : str
+        The whole file.
+    path : str
+        Name used in messages.
+
+    Raises
+    ------
+    FileFormatError
+        A line that is not ``name = value[+/-sigma][, ...]``, a bad name, a number that cannot be
+        read, a negative uncertainty or a name given twice; the message names the line.
+    """
+    entries: dict[str, NameValueEntry] = {}
+    for number, raw in enumerate(text.splitlines(), start=1):
+        content = raw.split("#", 1)[0].strip()
+        if not content:
+            continue
+        if "=" not in content:
+            raise FileFormatError(path, f"expected 'name = value+/-sigma', got {raw.strip()!r}", number)
+        name, _, rhs = content.partition("=")
+        name = name.strip()
+        if not _NAME.match(name):
+            raise FileFormatError(path, f"{name!r} is not a name (letters, digits and _, not starting with a digit)", number)
+        if not rhs.strip():
+            raise FileFormatError(path, f"{name}: no value after '='", number)
+        if name in entries:
+            raise FileFormatError(path, f"{name} is given twice (first on line {entries[name].line})", number)
+        repeats = tuple(_parse_value(part, path, number, name) for part in rhs.split(","))
+        entries[name] = NameValueEntry(name, mean_of_repeats(repeats), repeats, number)
+    return NameValueFile(path, entries)
+
+
+def read_name_value_file(path: str | Path) -> NameValueFile:
+    """Read a ``name = value+/-sigma`` file (UTF-8, an optional byte-order mark allowed).
+
+    Raises
+    ------
+    FileFormatError
+        The file is not UTF-8 text (the message gives the line of the first bad byte) or a line
+        cannot be read (see :func:`parse_name_value_text`).
+    OSError
+        The file cannot be opened.
+    """
+    path = Path(path)
+    data = path.read_bytes()
+    try:
+        text = data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        line = data.count(b"\n", 0, exc.start) + 1
+        raise FileFormatError(
+            path, f"not UTF-8 text (byte 0x{data[exc.start]:02x} at offset {exc.start}); "
+            "save the file as UTF-8 or plain ASCII", line,
+        ) from None
+    if "\x00" in text:
+        raise FileFormatError(path, "contains NUL bytes: a binary file, not a name = value text file",
+                              text.count("\n", 0, text.index("\x00")) + 1)
+    return parse_name_value_text(text, str(path))
