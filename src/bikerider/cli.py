@@ -14,7 +14,7 @@ import sys
 from bikerider import __version__
 from bikerider.errors import BikeriderError
 
-COMMANDS = ("estimate", "benchmark")
+COMMANDS = ("estimate", "benchmark", "period", "batch")
 """Subcommand modules under ``bikerider.commands``, in the order ``--help`` lists them."""
 
 LOG = logging.getLogger("bikerider")
