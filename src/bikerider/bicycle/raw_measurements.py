@@ -55,6 +55,7 @@ from bikerider.bicycle.hanging_lines import (
 )
 from bikerider.bicycle.propagation import propagate
 from bikerider.errors import InputError
+from bikerider.fitting import PERIOD_TRIAL_TOLERANCE
 from bikerider.generated import combination as gen_combination
 from bikerider.generated import pendulum as gen_pendulum
 from bikerider.inertia import check_inertia_tensor
@@ -63,8 +64,6 @@ from bikerider.quantity import Quantity
 
 LOG = logging.getLogger(__name__)
 
-#: A repeated period trial further than this (relative) from the trials' median is an error.
-PERIOD_TRIAL_TOLERANCE = 0.01
 
 #: Below this |determinant| of Eq. 6 for three orientations (``2 sin(b1-b2) sin(b1-b3) sin(b2-b3)``),
 #: or this smallest singular value for more, the pendulum axes nearly coincide and the in-plane
@@ -470,11 +469,13 @@ def _drop_inconsistent_yy(body_values: dict[str, Quantity], notes: list[str], so
                            [body_values[f"I{body}xz"].value, 0.0, body_values[f"I{body}zz"].value]])
         try:
             check_inertia_tensor(f"I{body}", tensor, source)
-        except InputError as exc:
+        except InputError:
             del body_values[f"I{body}yy"]
-            message = (f"I{body}yy = {yy} (compound pendulum) left out of the bodies: it cannot belong "
-                       f"to one body with the torsional-pendulum I{body}xx, I{body}xz, I{body}zz ({exc})")
-            LOG.warning("%s", message)
+            principal = ", ".join(f"{p:.4g}" for p in np.linalg.eigvalsh(tensor))
+            message = (f"I{body}yy = {yy} (compound pendulum) left out: with the torsional-pendulum "
+                       f"I{body}xx, I{body}xz, I{body}zz its principal moments {principal} break the triangle "
+                       "inequality (the linear model does not use it)")
+            LOG.info("%s: %s", source, message)
             notes.append(message)
 
 

@@ -48,9 +48,8 @@ SEATING_OUTPUTS: tuple[str, ...] = ("h_bb", "l_cs", "l_f", "l_hb", "lam_st", "l_
 HAND_OUTPUTS: tuple[str, ...] = ("x_hand", "z_hand")
 """The grip position in the benchmark frame [m] (an extra, for plots and checks)."""
 
-NOTE = ("seating: l_s and l_hb are the equivalent stem and handlebar lengths that put the paper's "
-        "hands on the grips located by LhbF/LhbR; l_f is the front wheel centre to top of head tube "
-        "distance (it drops out of every rider output); hub widths w_fh, w_rh are not measured")
+NOTE = ("seating: l_s and l_hb are equivalent lengths that put the model's hands on the grips "
+        "(LhbF, LhbR); l_f drops out of the rider model; hub widths w_fh, w_rh not measured")
 
 
 def grip_position(w: float, rF: float, rR: float, whb: float, LhbF: float, LhbR: float) -> tuple[float, float]:

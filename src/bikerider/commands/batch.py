@@ -1,0 +1,232 @@
+"""``bikerider batch``: every bicycle of a BicycleParameters data folder in one table.
+
+For each ``bicycles/<Name>/`` the raw measurements ``RawData/<Name>Measured.txt`` are reduced
+(bicycle alone, no rider); when that file is missing or lacks the measurements the reduction needs,
+``Parameters/<Name>Benchmark.txt`` is read instead.  Any other error in a raw file is reported as a
+failure of that bicycle, not papered over with the Parameters file.  The table holds the 26
+benchmark values and the weave and capsize speeds; a bicycle that fails is listed with its error
+and the others still finish.  Input files are only read; outputs are written atomically.
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import sys
+import tempfile
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+PROGRESS_AFTER = 1.0
+"""Seconds after which progress lines appear on stderr."""
+
+
+def add_parser(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "batch", help="benchmark values and critical speeds of every bicycle in a BicycleParameters folder",
+        description="Run every bicycle of a BicycleParameters data folder (bicycles/*/RawData/*Measured.txt, "
+        "else bicycles/*/Parameters/*Benchmark.txt) and tabulate the 26 benchmark values with the weave "
+        "and capsize speeds. Exit status 1 when some bicycle failed (the table still lists the others).",
+    )
+    parser.add_argument("directory", type=Path, metavar="DIR",
+                        help="a BicycleParameters data folder (holding bicycles/) or its bicycles/ folder")
+    parser.add_argument("--out", metavar="PREFIX", help="write PREFIX.csv and PREFIX.txt (else print the table)")
+    parser.set_defaults(run=run)
+
+
+@dataclass
+class BatchRow:
+    """One bicycle's outcome."""
+
+    name: str
+    source: str = ""
+    """``"raw"`` or ``"parameters"`` (what the values come from); empty on failure."""
+    path: str = ""
+    values: dict[str, float | None] = field(default_factory=dict)
+    sigmas: dict[str, float] = field(default_factory=dict)
+    weave: float | None = None
+    capsize: float | None = None
+    error: str = ""
+    notes: list[str] = field(default_factory=list)
+
+
+def bicycle_folders(directory: Path) -> list[Path]:
+    """The bicycle folders under ``directory`` (or ``directory/bicycles``), sorted by name."""
+    from bikerider.errors import InputError
+
+    root = directory / "bicycles" if (directory / "bicycles").is_dir() else directory
+    if not root.is_dir():
+        raise InputError("DIR", str(directory), "a BicycleParameters data folder (with bicycles/<Name>/ inside)")
+    folders = sorted(p for p in root.iterdir() if p.is_dir() and ((p / "RawData").is_dir() or (p / "Parameters").is_dir()))
+    if not folders:
+        raise InputError("DIR", str(directory), "a folder with bicycles/<Name>/RawData or bicycles/<Name>/Parameters inside")
+    return folders
+
+
+def input_files(folder: Path) -> tuple[Path | None, Path | None]:
+    """``(Measured file, Benchmark file)`` of one bicycle folder; ``None`` where absent."""
+    name = folder.name
+    measured = folder / "RawData" / f"{name}Measured.txt"
+    benchmark = folder / "Parameters" / f"{name}Benchmark.txt"
+    return (measured if measured.is_file() else None, benchmark if benchmark.is_file() else None)
+
+
+def _raw_is_incomplete(error: Exception) -> bool:
+    from bikerider.errors import InputError
+
+    return isinstance(error, InputError) and error.value == "missing"
+
+
+def process_bicycle(folder: Path) -> BatchRow:
+    """Benchmark values and critical speeds of one bicycle folder (never raises for bad data)."""
+    from bikerider.benchmark import WhippleModel
+    from bikerider.bicycle.raw_measurements import read_measured_file
+    from bikerider.bicycle.to_benchmark import bicycle_benchmark_parameters
+    from bikerider.errors import BikeriderError
+    from bikerider.io.bicycleparameters import read_benchmark_file
+
+    row = BatchRow(folder.name)
+    measured, benchmark = input_files(folder)
+    parameters = None
+    try:
+        if measured is not None:
+            try:
+                reduction = read_measured_file(measured)
+                parameters = bicycle_benchmark_parameters(reduction.bodies)
+                row.source, row.path, row.notes = "raw", str(measured), list(reduction.notes)
+            except BikeriderError as exc:
+                if not (_raw_is_incomplete(exc) and benchmark is not None):
+                    raise
+                row.notes.append(f"raw data not usable ({exc}); values from the Parameters file")
+        if parameters is None:
+            if benchmark is None:
+                row.error = "no RawData/<Name>Measured.txt or Parameters/<Name>Benchmark.txt"
+                return row
+            read = read_benchmark_file(benchmark)
+            parameters = read.parameters
+            row.source, row.path = "parameters", str(benchmark)
+            row.notes.extend(read.notes)
+        row.values, row.sigmas = parameters.as_dict(), dict(parameters.sigmas)
+        speeds = WhippleModel.from_parameters(parameters).critical_speeds()
+        row.weave, row.capsize = speeds.weave, speeds.capsize
+    except (BikeriderError, OSError) as exc:
+        row.error = str(exc)
+        row.source = ""
+    return row
+
+
+def run_batch(directory: Path, progress=None) -> list[BatchRow]:
+    """Process every bicycle folder; ``progress(i, n, name)`` is called before each."""
+    folders = bicycle_folders(directory)
+    rows = []
+    for i, folder in enumerate(folders, start=1):
+        if progress is not None:
+            progress(i, len(folders), folder.name)
+        rows.append(process_bicycle(folder))
+    return rows
+
+
+def _number(value: float | None, digits: int = 6) -> str:
+    return "" if value is None or not math.isfinite(value) else f"{value:.{digits}g}"
+
+
+def csv_text(rows: list[BatchRow]) -> str:
+    """One line per bicycle: name, source, each benchmark value and its sigma, speeds, error."""
+    import csv
+    import io
+
+    from bikerider.benchmark import BENCHMARK_NAMES
+
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    header = ["bicycle", "source"]
+    for name in BENCHMARK_NAMES:
+        header += [name, f"{name}_sigma"]
+    writer.writerow(header + ["weave_speed", "capsize_speed", "error"])
+    for row in rows:
+        line = [row.name, row.source]
+        for name in BENCHMARK_NAMES:
+            line += [_number(row.values.get(name), 10), _number(row.sigmas.get(name) if row.values.get(name) is not None else None, 3)]
+        writer.writerow(line + [_number(row.weave, 8), _number(row.capsize, 8), row.error])
+    return buffer.getvalue()
+
+
+def text_table(rows: list[BatchRow]) -> str:
+    """Parameters down, bicycles across, aligned; failures and notes listed below."""
+    from bikerider.benchmark import BENCHMARK_NAMES
+
+    done = [r for r in rows if not r.error]
+    lines = []
+    if done:
+        labels = ["", "source"] + list(BENCHMARK_NAMES) + ["weave [m/s]", "capsize [m/s]"]
+        columns = [labels]
+        for row in done:
+            cells = [row.name, row.source]
+            cells += [_number(row.values.get(n), 5) or "-" for n in BENCHMARK_NAMES]
+            cells += [_number(row.weave, 4) or "none", _number(row.capsize, 4) or "none"]
+            columns.append(cells)
+        widths = [max(len(c) for c in col) for col in columns]
+        for k in range(len(labels)):
+            first = columns[0][k].ljust(widths[0])
+            rest = "  ".join(col[k].rjust(width) for col, width in zip(columns[1:], widths[1:]))
+            lines.append(f"{first}  {rest}".rstrip())
+    failed = [r for r in rows if r.error]
+    if failed:
+        lines.append("")
+        lines.append("failed:")
+        lines.extend(f"  {r.name}: {r.error}" for r in failed)
+    noted = [r for r in done if r.notes]
+    if noted:
+        lines.append("")
+        lines.append("notes:")
+        for r in noted:
+            lines.extend(f"  {r.name}: {note}" for note in r.notes)
+    return "\n".join(lines) + "\n"
+
+
+def write_atomically(path: Path, text: str) -> None:
+    """Write ``text`` to a temporary file beside ``path``, then rename it over ``path``."""
+    path = Path(path)
+    handle, temporary = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(handle, "w", encoding="utf-8", newline="") as stream:
+            stream.write(text)
+        os.replace(temporary, path)
+    finally:
+        if os.path.exists(temporary):
+            os.unlink(temporary)
+
+
+def run(args: argparse.Namespace) -> int:
+    from bikerider.errors import InputError
+
+    started = time.monotonic()
+
+    def progress(i: int, n: int, name: str) -> None:
+        if time.monotonic() - started > PROGRESS_AFTER:
+            print(f"batch: [{i}/{n}] {name}", file=sys.stderr, flush=True)
+
+    targets: list[Path] = []
+    if args.out:
+        prefix = Path(args.out)
+        if not prefix.parent.is_dir():
+            raise InputError("--out", args.out, f"a prefix in an existing folder ({prefix.parent} does not exist)")
+        targets = [prefix.with_name(prefix.name + ".csv"), prefix.with_name(prefix.name + ".txt")]
+        inputs = {p.resolve() for folder in bicycle_folders(args.directory) for p in input_files(folder) if p}
+        for target in targets:
+            if target.resolve() in inputs:
+                raise InputError("--out", args.out, f"a prefix that does not overwrite the input file {target}")
+    rows = run_batch(args.directory, progress)
+    table = text_table(rows)
+    if targets:
+        write_atomically(targets[0], csv_text(rows))
+        write_atomically(targets[1], table)
+        print(f"wrote {targets[0]} and {targets[1]}", file=sys.stderr)
+    sys.stdout.write(table)
+    if time.monotonic() - started > PROGRESS_AFTER:
+        print(f"batch: done, {len(rows)} bicycles in {time.monotonic() - started:.1f} s", file=sys.stderr)
+    failed = [r.name for r in rows if r.error]
+    for name in failed:
+        print(f"bikerider batch: {name} failed (see the table)", file=sys.stderr)
+    return 1 if failed else 0

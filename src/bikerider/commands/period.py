@@ -1,0 +1,90 @@
+"""``bikerider period``: the period of a pendulum (or any damped oscillation) from rate-gyro records.
+
+Each CSV file is one trial (columns time and angular rate, see ``docs/period.md``); the trials'
+periods are combined into one value with an uncertainty that holds both the fits' standard errors
+and the scatter between trials.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+
+def add_parser(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "period", help="fit damped oscillations to rate records and report the period",
+        description="Fit y = offset + exp(-sigma t)(A sin(omega_d t) + B cos(omega_d t)) to each CSV "
+        "(columns time and rate; see docs/period.md) and combine the trials' periods.",
+    )
+    parser.add_argument("files", nargs="+", type=Path, metavar="FILE.csv", help="one trial per file")
+    parser.add_argument("--plot", type=Path, metavar="PNG", help="write a plot of data and fits")
+    parser.add_argument("--json", action="store_true", help="print the results as JSON")
+    parser.add_argument("--drift", action="store_true", help="also fit a linear drift of the rate")
+    parser.set_defaults(run=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from bikerider.fitting.damped_oscillation import fit_damped_oscillation, period_from_trials
+    from bikerider.fitting.signal_csv import read_signal_csv
+    from bikerider.errors import FitError
+
+    records, fits = [], []
+    for path in args.files:
+        time, rate = read_signal_csv(path)
+        try:
+            fit = fit_damped_oscillation(time, rate, drift=args.drift)
+        except FitError as exc:
+            raise FitError(f"{path}: {exc}") from None
+        records.append((path, time, rate))
+        fits.append(fit)
+    combined = period_from_trials(fits, names=[str(p) for p in args.files])
+    if args.plot:
+        _plot(args.plot, records, fits)
+    if args.json:
+        json.dump({
+            "period": combined.period, "sigma": combined.sigma, "scatter": combined.scatter,
+            "trials": [{"file": str(p), **f.as_dict()} for (p, _, _), f in zip(records, fits)],
+        }, sys.stdout, indent=2)
+        print()
+        return 0
+    for (path, _, _), fit in zip(records, fits):
+        print(f"{path}: T = {fit.period:.6f} +/- {fit.period_se:.2g} s, zeta = {fit.zeta:.4g} +/- {fit.zeta_se:.2g}, "
+              f"eigenvalue = {fit.eigenvalue.real:.4g} +/- {fit.eigenvalue.imag:.5g}i 1/s, "
+              f"residual rms = {fit.residual_rms:.3g} ({fit.n_samples} samples)")
+    print(f"period = {combined.period:.6f} +/- {combined.sigma:.2g} s "
+          f"({combined.n_trials} trial{'s' if combined.n_trials > 1 else ''}, scatter {combined.scatter:.2g} s)")
+    return 0
+
+
+def _plot(target: Path, records, fits) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    fig, axes = plt.subplots(len(records), 1, figsize=(8, 2.6 * len(records)), squeeze=False)
+    for ax, (path, time, rate), fit in zip(axes[:, 0], records, fits):
+        ax.plot(time, rate, ".", ms=2, color="0.5", label="data")
+        fine = np.linspace(time[0], time[-1], max(2000, 10 * time.size))
+        ax.plot(fine, fit.evaluate(fine), "-", lw=1, color="C0",
+                label=f"fit: T = {fit.period:.5f} s, zeta = {fit.zeta:.3g}")
+        ax.set_title(path.name, fontsize=9)
+        ax.set_xlabel("time [s]")
+        ax.set_ylabel("rate")
+        ax.legend(fontsize=8, loc="upper right")
+    fig.tight_layout()
+    target = Path(target)
+    handle, temporary = tempfile.mkstemp(dir=target.parent if str(target.parent) else ".", suffix=".png")
+    os.close(handle)
+    try:
+        fig.savefig(temporary, format="png", dpi=120)
+        os.replace(temporary, target)
+    finally:
+        plt.close(fig)
+        if os.path.exists(temporary):
+            os.unlink(temporary)

@@ -1,0 +1,287 @@
+"""BicycleParameters data files: ``<Name>Benchmark.txt``, ``<Rider><Bike>Benchmark.txt`` (a lumped
+rider) and ``<Name>Measured.txt``; and a format detector for the ``estimate`` command.
+
+Benchmark files hold the 25 benchmark parameters and ``g`` as ``name = value+/-sigma``.  Some carry
+more, handled so:
+
+* ``yB``, ``yH`` (lateral centre of mass): must be 0 within :data:`LATERAL_TOLERANCE` (the
+  benchmark bodies are symmetric about the XZ plane); dropped.
+* ``IRzz``, ``IFzz`` (wheel moment about z): must equal ``IRxx``/``IFxx`` within their
+  uncertainties or 1e-9 relative (the benchmark's wheels are axisymmetric); dropped.
+* ``mG, xG, zG, IGxx, IGxz, IGyy, IGzz`` and the same for ``S`` (handlebar and fork measured apart,
+  as in BicycleParameters' Rigid): kept in :attr:`BenchmarkFile.extras`; the file's ``H`` values
+  are the combined body the benchmark uses.
+* ``IByy``/``IHyy`` that break the triangle inequality with the body's in-plane moments (BicycleParameters'
+  own Browser, Fisher and Yellow files do: their compound-pendulum ``I_yy`` cannot belong to one
+  body with their torsional-pendulum ``Ixx, Ixz, Izz``) are left out, with a note: the linear
+  model does not use them.
+* flywheel entries (``mD``, ``IDxx``, ...) and anything else: an error, since silently dropping a
+  body would give a wrong model.
+
+A lumped rider file gives the rider as one rigid body (``mB, xB, yB, zB, IBxx, IBxz, IByy, IBzz``,
+benchmark frame, ``IBxz`` the tensor entry); :func:`merge_rider` combines it with the bicycle's rear
+body as the paper does (Eqs. 15-16, generated ``combination.rear_body``).
+"""
+from __future__ import annotations
+
+import logging
+import math
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from bikerider.benchmark.parameters import BENCHMARK_NAMES, BenchmarkParameters
+from bikerider.bicycle.bodies import BicycleBodies
+from bikerider.errors import FileFormatError, InputError
+from bikerider.inertia import check_inertia_tensor
+from bikerider.io.name_value_file import NameValueFile, parse_name_value_text, read_name_value_file
+from bikerider.quantity import Quantity
+
+LOG = logging.getLogger(__name__)
+
+#: Largest lateral centre-of-mass offset [m] accepted (and dropped) for a body of the symmetric model.
+LATERAL_TOLERANCE = 1e-3
+
+SPLIT_FORK_NAMES = tuple(f"{p}{b}" for b in "GS" for p in ("m", "x", "z")) + tuple(
+    f"I{b}{ax}" for b in "GS" for ax in ("xx", "xz", "yy", "zz"))
+"""Handlebar (G) and fork (S) measured apart: kept as extras."""
+
+LUMPED_RIDER_NAMES = ("mB", "xB", "yB", "zB", "IBxx", "IBxz", "IByy", "IBzz")
+"""Names of a lumped rider file."""
+
+FORMATS = ("toml", "measured", "benchmark", "lumped_rider")
+
+_MEASURED_MARKERS = re.compile(r"^(Tt|Tc|alpha|a)[A-Z]\d+$|^(dF|dR|nF|nR|mP|dP|lP|lF|lR|gamma|h\d|d\d|LhbF|LhbR|lamst|whb|lcs|hbb|lsp|lst)$")
+_FLYWHEEL = re.compile(r"^(m|x|z|I)D")
+
+
+@dataclass(frozen=True)
+class BenchmarkFile:
+    """A BicycleParameters benchmark file, read.
+
+    Attributes
+    ----------
+    parameters : BenchmarkParameters
+    extras : dict of str to Quantity
+        Entries beyond the benchmark's (split handlebar and fork), and any ``I_yy`` left out.
+    notes : list of str
+        What was dropped or left out, and why.
+    """
+
+    parameters: BenchmarkParameters
+    extras: dict[str, Quantity] = field(default_factory=dict)
+    notes: list[str] = field(default_factory=list)
+
+
+def _tensor_ok(values: dict[str, Quantity], body: str, source: str) -> str | None:
+    tensor = np.array([[values[f"I{body}xx"].value, 0.0, values[f"I{body}xz"].value],
+                       [0.0, values[f"I{body}yy"].value, 0.0],
+                       [values[f"I{body}xz"].value, 0.0, values[f"I{body}zz"].value]])
+    try:
+        check_inertia_tensor(f"I{body}", tensor, source)
+    except InputError:
+        principal = ", ".join(f"{p:.4g}" for p in np.linalg.eigvalsh(tensor))
+        return (f"with I{body}xx, I{body}xz, I{body}zz its principal moments {principal} break the "
+                "triangle inequality")
+    return None
+
+
+def benchmark_from_values(data: NameValueFile) -> BenchmarkFile:
+    """Build :class:`BenchmarkFile` from a parsed benchmark file (see the module docstring).
+
+    Raises
+    ------
+    InputError
+        A missing benchmark parameter, an unknown or flywheel entry, a lateral centre of mass or a
+        non-axisymmetric wheel, or values no bicycle can have.
+    """
+    values = data.as_dict()
+    mapping: dict[str, Quantity] = {}
+    extras: dict[str, Quantity] = {}
+    notes: list[str] = []
+    for name, q in values.items():
+        where = data.where(name)
+        if name in BENCHMARK_NAMES:
+            mapping[name] = q
+        elif name in SPLIT_FORK_NAMES:
+            extras[name] = q
+        elif name in ("yB", "yH"):
+            if abs(q.value) > LATERAL_TOLERANCE:
+                raise InputError(name, q.value, f"0 within {LATERAL_TOLERANCE} m: the benchmark bodies are "
+                                 "symmetric about the bicycle's XZ plane", where)
+            notes.append(f"{name} = {q.value:g} m dropped (the benchmark bodies lie in the XZ plane)")
+        elif name in ("IRzz", "IFzz"):
+            xx = values.get(f"I{name[1]}xx")
+            if xx is not None:
+                allowed = max(math.hypot(q.sigma, xx.sigma), 1e-9 * abs(xx.value))
+                if abs(q.value - xx.value) > allowed:
+                    raise InputError(name, q.value, f"equal to I{name[1]}xx = {xx.value:g}: the benchmark's wheels "
+                                     "are axisymmetric", where)
+            notes.append(f"{name} dropped (equal to I{name[1]}xx for the benchmark's axisymmetric wheel)")
+        elif _FLYWHEEL.match(name):
+            raise InputError(name, q.value, "no flywheel body: the Whipple benchmark model has four bodies "
+                             "(R, B, H, F), and leaving the flywheel out would give a wrong model", where)
+        else:
+            raise InputError(name, q.value, "a benchmark parameter (" + ", ".join(BENCHMARK_NAMES)
+                             + ") or a known BicycleParameters extra (yB, yH, IRzz, IFzz, G and S bodies)", where)
+    for body in ("B", "H"):
+        if all(f"I{body}{ax}" in mapping for ax in ("xx", "yy", "zz", "xz")):
+            problem = _tensor_ok(mapping, body, data.path)
+            if problem:
+                yy = mapping.pop(f"I{body}yy")
+                extras[f"I{body}yy"] = yy
+                message = f"I{body}yy = {yy} left out: {problem} (the linear model does not use it)"
+                LOG.info("%s: %s", data.path, message)
+                notes.append(message)
+    missing = [n for n in BENCHMARK_NAMES if n not in mapping and n not in ("IByy", "IHyy", "g")]
+    if missing:
+        raise InputError(missing[0], "missing", "a value: a benchmark file needs all 25 parameters "
+                         f"(missing: {', '.join(missing)})", data.path)
+    return BenchmarkFile(BenchmarkParameters.from_mapping(mapping, source=data.path), extras, notes)
+
+
+def read_benchmark_file(path: str | Path) -> BenchmarkFile:
+    """Read a BicycleParameters ``<Name>Benchmark.txt``."""
+    return benchmark_from_values(read_name_value_file(path))
+
+
+def read_lumped_rider(path: str | Path):
+    """Read a BicycleParameters lumped rider file (``riders/<Rider>/Parameters/<Rider><Bike>Benchmark.txt``).
+
+    Returns
+    -------
+    bikerider.bicycle.to_benchmark.LumpedRider
+
+    Raises
+    ------
+    InputError
+        A missing or unknown entry, or a lateral centre of mass beyond :data:`LATERAL_TOLERANCE`.
+    """
+    from bikerider.bicycle.to_benchmark import LumpedRider
+
+    data = read_name_value_file(path)
+    values = data.as_dict()
+    for name in values:
+        if name not in LUMPED_RIDER_NAMES:
+            raise InputError(name, values[name].value, "one of the lumped rider entries " + ", ".join(LUMPED_RIDER_NAMES),
+                             data.where(name))
+    y = values.get("yB", Quantity(0.0))
+    if abs(y.value) > LATERAL_TOLERANCE:
+        raise InputError("yB", y.value, f"0 within {LATERAL_TOLERANCE} m: a rider centred on the bicycle's XZ plane",
+                         data.where("yB"))
+    renamed = {f"{name[:-1]}Br" if name in ("mB", "xB", "zB") else name.replace("IB", "IBr"): q
+               for name, q in values.items() if name != "yB"}
+    stem = Path(path).stem
+    return LumpedRider(renamed, source=str(path), name=stem[:-len("Benchmark")] if stem.endswith("Benchmark") else stem)
+
+
+def merge_rider(bicycle: BicycleBodies | BenchmarkParameters, rider) -> BenchmarkParameters:
+    """Benchmark parameters with the lumped ``rider`` merged into the rear body (Eqs. 15-16).
+
+    Parameters
+    ----------
+    bicycle : BicycleBodies or BenchmarkParameters
+        For benchmark parameters, their rear body B is taken as the rear frame.
+    rider : bikerider.bicycle.to_benchmark.LumpedRider
+    """
+    from bikerider.bicycle.to_benchmark import bicycle_benchmark_parameters
+
+    if isinstance(bicycle, BicycleBodies):
+        return bicycle_benchmark_parameters(bicycle, rider)
+    return bicycle_benchmark_parameters(bodies_from_benchmark(bicycle), rider)
+
+
+def bodies_from_benchmark(parameters: BenchmarkParameters) -> BicycleBodies:
+    """The benchmark parameters read back as :class:`BicycleBodies` (rear body B as the frame)."""
+    v, s = parameters.values, parameters.sigmas
+    renames = {"mB": "mBf", "xB": "xBf", "zB": "zBf", "IBxx": "IBfxx", "IBzz": "IBfzz", "IBxz": "IBfxz", "IByy": "IBfyy"}
+    values: dict[str, Quantity] = {}
+    for name in BENCHMARK_NAMES:
+        if v[name] is None:
+            continue
+        values[renames.get(name, name)] = Quantity(float(v[name]), s.get(name, 0.0))  # type: ignore[arg-type]
+    lam = values.pop("lam")
+    values["lam_ht"] = Quantity(math.pi / 2 - lam.value, lam.sigma)
+    return BicycleBodies(values, source=parameters.source or "<memory>")
+
+
+def detect_format(path: str | Path) -> str:
+    """Which kind of input file ``path`` is: ``"toml"``, ``"measured"``, ``"benchmark"`` or ``"lumped_rider"``.
+
+    A ``.toml`` suffix means the project's TOML format.  Otherwise the file is read as
+    ``name = value`` lines and told apart by its names: raw measurements (periods ``Tt*``/``Tc*``,
+    hanging angles, rolled distances, seating measurements) make a Measured file; the benchmark
+    parameters (``w``, ``c``, ``lam``, ...) a Benchmark file; only ``mB, xB, yB, zB, IBxx, IBxz,
+    IByy, IBzz`` a lumped rider.
+
+    Raises
+    ------
+    FileFormatError
+        A file that is none of these (the message says what was found).
+    """
+    path = Path(path)
+    if path.suffix.lower() == ".toml":
+        return "toml"
+    try:
+        data = read_name_value_file(path)
+    except FileFormatError as exc:
+        import tomllib
+
+        try:
+            tomllib.loads(path.read_text(encoding="utf-8"))
+        except (tomllib.TOMLDecodeError, UnicodeDecodeError):
+            raise exc from None
+        return "toml"
+    names = set(data)
+    if not names:
+        raise FileFormatError(path, "no 'name = value' entries: not a BicycleParameters file")
+    if any(_MEASURED_MARKERS.match(n) for n in names):
+        return "measured"
+    if names <= set(LUMPED_RIDER_NAMES) and "w" not in names:
+        return "lumped_rider"
+    if names & {"w", "c", "lam", "rR", "rF"}:
+        return "benchmark"
+    raise FileFormatError(
+        path, "cannot tell the kind of file: expected raw measurements (e.g. TtP1, dF, alphaB1), "
+        "benchmark parameters (w, c, lam, ...) or a lumped rider (mB, xB, zB, IBxx, ...); found "
+        + ", ".join(sorted(names)[:8]))
+
+
+def load_bicycle_file(path: str | Path) -> BicycleBodies | BenchmarkParameters:
+    """Load a bicycle from any supported file.
+
+    Returns
+    -------
+    BicycleBodies
+        For a project TOML file or a BicycleParameters Measured file (raw measurements reduced,
+        seating measurements included when the file has them).
+    BenchmarkParameters
+        For a BicycleParameters Benchmark file.
+
+    Raises
+    ------
+    FileFormatError
+        A lumped rider file (not a bicycle) or an unrecognised file.
+    """
+    kind = detect_format(path)
+    if kind == "toml":
+        from bikerider.io.toml_input import load_bicycle_toml
+
+        return load_bicycle_toml(path)
+    if kind == "measured":
+        from bikerider.bicycle.raw_measurements import load_measured_bicycle
+
+        return load_measured_bicycle(path)
+    if kind == "benchmark":
+        return read_benchmark_file(path).parameters
+    raise FileFormatError(path, "this is a lumped rider file (mB, xB, zB, IBxx, ...), not a bicycle; "
+                          "give it as the rider")
+
+
+__all__ = [
+    "BenchmarkFile", "FORMATS", "LATERAL_TOLERANCE", "benchmark_from_values", "bodies_from_benchmark",
+    "detect_format", "load_bicycle_file", "merge_rider", "parse_name_value_text", "read_benchmark_file",
+    "read_lumped_rider",
+]
