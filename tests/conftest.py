@@ -1,0 +1,33 @@
+"""Shared fixtures."""
+from __future__ import annotations
+
+import json
+import logging
+from pathlib import Path
+
+import pytest
+
+DATA = Path(__file__).parent / "data"
+
+
+@pytest.fixture(scope="session")
+def meijaard2007() -> dict:
+    """Meijaard, Papadopoulos, Ruina, Schwab (2007), Proc. R. Soc. A 463:1955 - the project's copy of
+    shared/reference/meijaard2007.json (parameters Table 1, matrices sec. 5, Table 2 eigenvalues)."""
+    return json.loads((DATA / "meijaard2007.json").read_text())
+
+
+@pytest.fixture(scope="session")
+def benchmark_values(meijaard2007) -> dict[str, float]:
+    values = dict(meijaard2007["parameters"]["values"])
+    values["lam"] = values.pop("lambda")
+    return values
+
+
+@pytest.fixture(scope="session")
+def paper_result():
+    """The method on the paper's own bicycle and rider."""
+    from bikerider.estimate import estimate_default
+
+    logging.getLogger("bikerider").setLevel(logging.ERROR)
+    return estimate_default()

@@ -1,0 +1,68 @@
+"""The command line: estimate and benchmark, text, JSON and figures."""
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from bikerider.cli import main
+
+DATA = Path(__file__).parent / "data"
+NAMES = ["w", "c", "lam", "g", "rR", "mR", "IRxx", "IRyy", "xB", "zB", "mB", "IBxx", "IByy", "IBzz", "IBxz",
+         "xH", "zH", "mH", "IHxx", "IHyy", "IHzz", "IHxz", "rF", "mF", "IFxx", "IFyy"]
+
+
+def test_estimate_json_default(capsys):
+    assert main(["estimate", "--json", "--speeds", "0:10:21"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert list(out["benchmark"]) == NAMES
+    assert out["benchmark"]["IByy"] is None and out["benchmark"]["IHyy"] is None
+    assert set(out["matrices"]) == {"M", "C1", "K0", "K2"}
+    assert out["speeds"]["weave"] == pytest.approx(5.6615, abs=1e-4)
+    assert out["speeds"]["capsize"] == pytest.approx(8.3581, abs=1e-4)
+    assert len(out["eigenvalues"]["speeds"]) == 21
+    assert all(len(row) == 4 and all(len(z) == 2 for z in row) for row in out["eigenvalues"]["values"])
+    assert out["rider"]["mass"] == pytest.approx(72.0)
+    assert sorted(out["rider"]["grid_points"], key=int) == [str(i) for i in range(1, 32)]
+    assert len(out["rider"]["inertia"]) == 3
+
+
+def test_estimate_text_and_plots(tmp_path, capsys):
+    assert main(["estimate", "--plot", str(tmp_path)]) == 0
+    text = capsys.readouterr().out
+    assert "Weave speed" in text and "Capsize speed" in text and "IBxz" in text
+    for name in ("eigenvalues.png", "side_view.png"):
+        assert (tmp_path / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_benchmark_on_bicycleparameters_text(capsys):
+    # The Meijaard benchmark bicycle in BicycleParameters' name = value+/-sigma layout.
+    assert main(["benchmark", str(DATA / "BenchmarkBenchmark.txt"), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["speeds"]["weave"] == pytest.approx(4.29238253634111, abs=1e-10)  # Meijaard 2007 Table 2a
+
+
+def test_bad_speeds_and_missing_file_exit_2(capsys):
+    assert main(["estimate", "--speeds", "10:0:5"]) == 2
+    assert "--speeds" in capsys.readouterr().err
+    assert main(["benchmark", "no_such_file.txt"]) == 2
+    assert "no_such_file.txt" in capsys.readouterr().err
+
+
+def test_reach_error_from_command_line(tmp_path, capsys):
+    from bikerider.estimate import default_files
+
+    _, rider = default_files()
+    bad = tmp_path / "short.toml"
+    bad.write_text(rider.read_text().replace("l_ll = 0.46", "l_ll = 0.20"))
+    assert main(["estimate", "--rider", str(bad)]) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and "too short to reach the pedals" in err
+
+
+def test_console_script_help_runs():
+    result = subprocess.run([sys.executable, "-m", "bikerider", "estimate", "--help"], capture_output=True, text=True)
+    assert result.returncode == 0 and "--bicycle" in result.stdout
