@@ -6,6 +6,10 @@ The command line prints ``BikeriderError`` messages without a traceback and exit
 from __future__ import annotations
 
 
+MISSING = "missing"
+"""The value shown for a required measurement that was not given."""
+
+
 class BikeriderError(Exception):
     """Base class of every error bikerider raises on purpose."""
 
@@ -52,4 +56,6 @@ class FitError(BikeriderError):
 def _show(value: object) -> str:
     if isinstance(value, float):
         return f"{value:.6g}"
+    if value == MISSING:
+        return MISSING
     return repr(value) if isinstance(value, str) else str(value)

@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from bikerider.errors import InputError
+from bikerider.errors import MISSING, InputError
 from bikerider.inertia import check_inertia_tensor
 from bikerider.quantity import Quantity
 
@@ -67,7 +67,7 @@ class BenchmarkParameters:
                 if name == "g":
                     values[name], sigmas[name] = 9.81, 0.0
                     continue
-                raise InputError(name, "missing", "a value (all 25 benchmark parameters are needed)", source)
+                raise InputError(name, MISSING, "a value (all 25 benchmark parameters are needed)", source)
             raw = mapping[name]
             q = raw if isinstance(raw, Quantity) else Quantity(float(raw))  # type: ignore[arg-type]
             if not math.isfinite(q.value):

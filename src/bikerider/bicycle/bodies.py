@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from bikerider.errors import InputError
+from bikerider.errors import MISSING, InputError
 from bikerider.inertia import check_inertia_tensor
 from bikerider.quantity import Quantity
 
@@ -64,7 +64,7 @@ class BicycleBodies:
         """Raise :class:`InputError` on a missing required value or an impossible one."""
         for key in BODY_NAMES:
             if key not in self.values:
-                raise InputError(key, "missing", "a value: the benchmark model needs it", self.source)
+                raise InputError(key, MISSING, "a value: the benchmark model needs it", self.source)
         for key, q in self.values.items():
             if key in _POSITIVE and not q.value > 0:
                 raise InputError(key, q.value, "a positive value", self.source)

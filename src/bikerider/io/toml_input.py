@@ -7,13 +7,14 @@ and rider as examples.  Files are only read, never written.
 from __future__ import annotations
 
 import math
+import re
 import tomllib
 from pathlib import Path
 from typing import Any
 
 from bikerider.bicycle import pendulum
 from bikerider.bicycle.bodies import SEATING_NAMES, BicycleBodies
-from bikerider.errors import FileFormatError, InputError
+from bikerider.errors import MISSING, FileFormatError, InputError
 from bikerider.quantity import Quantity, parse_quantity
 from bikerider.rider.measurements import DEFAULT_MASS_FRACTIONS, RiderMeasurements
 
@@ -39,8 +40,15 @@ def read_toml(path: str | Path) -> dict[str, Any]:
     try:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        line = getattr(exc, "lineno", None)
-        raise FileFormatError(path, f"not valid TOML: {getattr(exc, 'msg', exc)}", line) from None
+        # Python 3.11's tomllib gives the position only in the message: "... (at line 2, column 5)".
+        match = re.search(r"\(at line (\d+), column (\d+)\)", str(exc))
+        line = int(match.group(1)) if match else None
+        message = re.sub(r"\s*\(at line \d+, column \d+\)", "", str(exc))
+        raise FileFormatError(path, f"not valid TOML: {message}", line) from None
+
+
+def _join(section: str, key: str) -> str:
+    return f"{section}.{key}" if section else key
 
 
 class _Section:
@@ -51,7 +59,7 @@ class _Section:
             raise InputError(name, data, "a table", source)
         unknown = sorted(set(data) - allowed)
         if unknown:
-            raise InputError(f"{name}.{unknown[0]}", data[unknown[0]], f"one of the keys {', '.join(sorted(allowed))}", source)
+            raise InputError(_join(name, unknown[0]), data[unknown[0]], f"one of the keys {', '.join(sorted(allowed))}", source)
         self.data, self.name, self.source = data, name, source
 
     def has(self, key: str) -> bool:
@@ -60,20 +68,20 @@ class _Section:
     def quantity(self, key: str, required: bool = True, scale: float = 1.0) -> Quantity | None:
         if key not in self.data:
             if required:
-                raise InputError(f"{self.name}.{key}", "missing", "a value", self.source)
+                raise InputError(_join(self.name, key), MISSING, "a value", self.source)
             return None
-        return parse_quantity(self.data[key], f"{self.name}.{key}", self.source).scaled(scale)
+        return parse_quantity(self.data[key], _join(self.name, key), self.source).scaled(scale)
 
     def section(self, key: str, allowed: set[str]) -> "_Section":
         if key not in self.data:
-            raise InputError(f"{self.name}.{key}", "missing", "a table", self.source)
-        return _Section(self.data[key], f"{self.name}.{key}", self.source, allowed)
+            raise InputError(_join(self.name, key), MISSING, "a table", self.source)
+        return _Section(self.data[key], _join(self.name, key), self.source, allowed)
 
     def quantities(self, key: str, scale: float = 1.0) -> list[Quantity]:
         items = self.data.get(key)
         if not isinstance(items, list):
-            raise InputError(f"{self.name}.{key}", items, "a list of values", self.source)
-        return [parse_quantity(x, f"{self.name}.{key}[{i}]", self.source).scaled(scale) for i, x in enumerate(items)]
+            raise InputError(_join(self.name, key), items, "a list of values", self.source)
+        return [parse_quantity(x, f"{_join(self.name, key)}[{i}]", self.source).scaled(scale) for i, x in enumerate(items)]
 
 
 def _wheel(section: _Section, k_t: Quantity | None, g: Quantity, prefix: str) -> dict[str, Quantity]:
@@ -126,7 +134,7 @@ def load_bicycle_toml(path: str | Path) -> BicycleBodies:
     """Read a bicycle TOML file (see ``docs/input_format.md``) into :class:`BicycleBodies`."""
     source = str(path)
     data = read_toml(path)
-    top = _Section(data, "file", source,
+    top = _Section(data, "", source,
                    {"bicycle", "environment", "geometry", "torsional_pendulum", "rear_wheel", "front_wheel",
                     "rear_frame", "handlebar_fork"})
     meta = data.get("bicycle", {})
@@ -158,7 +166,7 @@ def load_rider_toml(path: str | Path) -> RiderMeasurements:
     """Read a rider TOML file (see ``docs/input_format.md``) into :class:`RiderMeasurements`."""
     source = str(path)
     data = read_toml(path)
-    top = _Section(data, "file", source, {"rider", "measurements", "mass_fractions"})
+    top = _Section(data, "", source, {"rider", "measurements", "mass_fractions"})
     rider = top.section("rider", {"name", "mass", "source"})
     values = {"mBr": rider.quantity("mass")}
     measurements = top.section("measurements", set(_RIDER_KEYS) | {"lam_fl_deg"})

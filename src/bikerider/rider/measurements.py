@@ -4,7 +4,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from bikerider.errors import InputError
+from bikerider.errors import MISSING, InputError
 from bikerider.quantity import Quantity
 
 RIDER_NAMES: tuple[str, ...] = (
@@ -43,7 +43,7 @@ class RiderMeasurements:
     def __post_init__(self) -> None:
         for key in RIDER_NAMES:
             if key not in self.values:
-                raise InputError(key, "missing", "a value: the rider model needs all 14 measurements and the mass", self.source)
+                raise InputError(key, MISSING, "a value: the rider model needs all 14 measurements and the mass", self.source)
             q = self.values[key]
             if key == "lam_fl":
                 if not 0 < q.value < math.pi:

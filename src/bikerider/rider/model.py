@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from bikerider.bicycle.bodies import BicycleBodies
-from bikerider.errors import InputError, ReachError
+from bikerider.errors import MISSING, InputError, ReachError
 from bikerider.generated import rider_model as gen
 from bikerider.inertia import check_inertia_tensor
 from bikerider.rider.measurements import RiderMeasurements
@@ -57,7 +57,7 @@ def model_arguments(bicycle: BicycleBodies, rider: RiderMeasurements) -> dict[st
     missing = bicycle.missing_seating()
     if missing:
         raise InputError(
-            missing[0], "missing",
+            missing[0], MISSING,
             "a value: seating the rider model needs every Table 1 measurement "
             f"(missing: {', '.join(missing)})", bicycle.source,
         )
@@ -78,12 +78,6 @@ def check_closures(args: dict[str, float], bicycle_source: str, rider_source: st
         raise InputError("l_f", args["l_f"], f"more than the fork offset |f_o| = {abs(fork_offset):.3f} m", bicycle_source)
     reach_args = {k: args[k] for k in _GEOMETRY + _PLACEMENT if k not in _HUB_WIDTHS}
     leg_span, leg_len, arm_span, arm_len = (float(x) for x in gen.limb_reach(**reach_args))
-    points = gen.grid_points(**{k: args[k] for k in _GEOMETRY + _PLACEMENT})
-    # Preconditions of the branch rule (derive/rider_model.py): hip above the pedal axis,
-    # shoulder behind the hand.
-    hip, foot, shoulder, hand = points[12], points[4], points[20], points[18]
-    if not hip[2] < foot[2]:
-        raise InputError("l_sp", args["l_sp"], "a seat above the pedal axis (the hip must be higher than the bottom bracket)", bicycle_source)
     if leg_span > leg_len:
         raise ReachError(
             "l_ll + l_ul", round(leg_len, 4),
@@ -94,9 +88,6 @@ def check_closures(args: dict[str, float], bicycle_source: str, rider_source: st
     if leg_span < abs(args["l_ll"] - args["l_ul"]):
         raise ReachError("|l_ll - l_ul|", round(abs(args["l_ll"] - args["l_ul"]), 4),
                          f"at most {leg_span:.3f} m, the hip to pedal-axis distance (the knee cannot close)", rider_source)
-    if not shoulder[0] < hand[0]:
-        raise InputError("lam_fl_deg", math.degrees(args["lam_fl"]),
-                         "a forward lean that keeps the shoulders behind the hands", rider_source)
     if arm_span > arm_len:
         raise ReachError(
             "l_ua + l_la", round(arm_len, 4),
@@ -107,6 +98,15 @@ def check_closures(args: dict[str, float], bicycle_source: str, rider_source: st
     if arm_span < abs(args["l_ua"] - args["l_la"]):
         raise ReachError("|l_ua - l_la|", round(abs(args["l_ua"] - args["l_la"]), 4),
                          f"at most {arm_span:.3f} m, the shoulder to grip distance (the elbow cannot close)", rider_source)
+    points = gen.grid_points(**{k: args[k] for k in _GEOMETRY + _PLACEMENT})
+    # Preconditions of the branch rule (derive/rider_model.py): hip above the pedal axis,
+    # shoulder behind the hand.
+    hip, foot, shoulder, hand = points[12], points[4], points[20], points[18]
+    if not hip[2] < foot[2]:
+        raise InputError("l_sp", args["l_sp"], "a seat above the pedal axis (the hip must be higher than the bottom bracket)", bicycle_source)
+    if not shoulder[0] < hand[0]:
+        raise InputError("lam_fl_deg", math.degrees(args["lam_fl"]),
+                         "a forward lean that keeps the shoulders behind the hands", rider_source)
 
 
 def seat_rider(bicycle: BicycleBodies, rider: RiderMeasurements) -> RiderModel:
