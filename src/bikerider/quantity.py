@@ -67,24 +67,3 @@ def parse_quantity(raw: object, name: str, source: str | None = None) -> Quantit
         raise InputError(f"{name} uncertainty", sigma, "a finite, non-negative standard uncertainty", source)
     return Quantity(value, sigma)
 
-
-def propagate_first_order(function, inputs: "list[Quantity]", relative_step: float = 1e-6) -> "list[Quantity]":
-    """First-order (linear) propagation of independent input uncertainties through ``function``.
-
-    ``function`` takes the input values as floats and returns a sequence of floats; the Jacobian
-    is taken by central differences.  Returns one :class:`Quantity` per output.
-    """
-    import numpy as np
-
-    x = np.array([q.value for q in inputs], dtype=float)
-    sigma = np.array([q.sigma for q in inputs], dtype=float)
-    y = np.atleast_1d(np.asarray(function(*x), dtype=float))
-    variance = np.zeros_like(y)
-    for i in np.flatnonzero(sigma > 0):
-        h = relative_step * max(abs(x[i]), sigma[i], 1e-12)
-        up, down = x.copy(), x.copy()
-        up[i] += h
-        down[i] -= h
-        dy = (np.atleast_1d(function(*up)) - np.atleast_1d(function(*down))) / (2 * h)
-        variance += (dy * sigma[i]) ** 2
-    return [Quantity(float(v), float(s)) for v, s in zip(y, np.sqrt(variance))]

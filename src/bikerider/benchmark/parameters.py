@@ -103,12 +103,6 @@ class BenchmarkParameters:
     def __getitem__(self, name: str) -> float | None:
         return self.values[name]
 
-    def with_values(self, **changes: float) -> "BenchmarkParameters":
-        """A validated copy with some values replaced."""
-        merged = {**{k: Quantity(x, self.sigmas.get(k, 0.0)) if x is not None else None for k, x in self.values.items()}}
-        merged.update(changes)
-        return BenchmarkParameters.from_mapping(merged, self.source)
-
     def as_dict(self) -> dict[str, float | None]:
         """Name to value, in Table 1 order (``None`` where not determined)."""
         return {name: self.values[name] for name in BENCHMARK_NAMES}

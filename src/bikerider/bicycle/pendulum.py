@@ -10,7 +10,8 @@ import numpy as np
 
 from bikerider.errors import InputError
 from bikerider.generated import pendulum as gen
-from bikerider.quantity import Quantity, propagate_first_order
+from bikerider.bicycle.propagation import propagate
+from bikerider.quantity import Quantity
 
 #: Below this |determinant| of Eq. 6 (which is 2 sin(a1-a2) sin(a1-a3) sin(a2-a3)) the
 #: orientations do not determine the tensor: two axes are within about a degree of each other.
@@ -27,7 +28,8 @@ def torsional_inertia(k_t: Quantity, period: Quantity, name: str = "period", sou
     _check_period(name, period, source)
     if not k_t.value > 0:
         raise InputError("k_t", k_t.value, "a positive torsional stiffness in N m/rad", source)
-    return propagate_first_order(lambda k, t: gen.torsional_inertia(k_t=k, T=t), [k_t, period])[0]
+    out = propagate(lambda x: {"J": float(gen.torsional_inertia(k_t=x["k_t"], T=x["T"]))}, {"k_t": k_t, "T": period})
+    return out["J"]
 
 
 def compound_inertia(period: Quantity, mass: Quantity, length: Quantity, g: Quantity,
@@ -42,25 +44,25 @@ def compound_inertia(period: Quantity, mass: Quantity, length: Quantity, g: Quan
         raise InputError(name, period.value,
                          f"more than {shortest:.4f} s, the period of a point mass on a {length.value} m pendulum "
                          "(a shorter period gives a negative moment of inertia)", source)
-    return propagate_first_order(
-        lambda t, m, l, gg: gen.compound_inertia(T=t, m_p=m, g=gg, l_p=l), [period, mass, length, g]
-    )[0]
+    out = propagate(lambda x: {"I": float(gen.compound_inertia(**x))},
+                    {"T": period, "m_p": mass, "g": g, "l_p": length})
+    return out["I"]
 
 
-def _solve_orientations(k, *periods_and_angles):
-    n = len(periods_and_angles) // 2
-    periods = np.asarray(periods_and_angles[:n])
-    angles = np.asarray(periods_and_angles[n:])
+def _solve_orientations(values: dict[str, float]) -> dict[str, float]:
+    n = sum(1 for key in values if key.startswith("T_"))
+    k = values["k_t"]
+    periods = np.array([values[f"T_{i}"] for i in range(n)])
+    angles = np.array([values[f"alpha_{i}"] for i in range(n)])
     if n == 3:
         inertia, _ = gen.inertia_from_three_orientations(
             k_t=k, T_1=periods[0], T_2=periods[1], T_3=periods[2],
             alpha_1=angles[0], alpha_2=angles[1], alpha_3=angles[2],
         )
-        return inertia
-    rows = gen.orientation_row(alpha=angles)
-    J = gen.torsional_inertia(k_t=k, T=periods)
-    solution, *_ = np.linalg.lstsq(rows, J, rcond=None)
-    return solution
+    else:
+        rows = gen.orientation_row(alpha=angles)
+        inertia, *_ = np.linalg.lstsq(rows, gen.torsional_inertia(k_t=k, T=periods), rcond=None)
+    return {"Ixx": float(inertia[0]), "Ixz": float(inertia[1]), "Izz": float(inertia[2])}
 
 
 def inertia_from_orientations(k_t: Quantity, periods: list[Quantity], angles: list[Quantity],
@@ -95,4 +97,6 @@ def inertia_from_orientations(k_t: Quantity, periods: list[Quantity], angles: li
             "three pendulum axes that differ pairwise by more than a few degrees modulo 180 "
             "(these leave Eq. 6 singular: two axes coincide)", source,
         )
-    return tuple(propagate_first_order(_solve_orientations, [k_t, *periods, *angles]))  # type: ignore[return-value]
+    inputs = {"k_t": k_t, **{f"T_{i}": p for i, p in enumerate(periods)}, **{f"alpha_{i}": a for i, a in enumerate(angles)}}
+    out = propagate(_solve_orientations, inputs)
+    return out["Ixx"], out["Ixz"], out["Izz"]
