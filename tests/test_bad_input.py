@@ -129,3 +129,35 @@ def test_input_files_are_not_written(paper, tmp_path):
     before = bicycle_path.read_bytes(), rider_path.read_bytes()
     estimate(*paper)
     assert (bicycle_path.read_bytes(), rider_path.read_bytes()) == before
+
+
+def _bicycle_with_com_lines(tmp_path, lines: str):
+    bicycle_path, _ = default_files()
+    text = bicycle_path.read_text().replace(
+        'com = { x = "0.25 +/- 0.02", z = "-0.62 +/- 0.02" }', f"com = {{ lines = [{lines}] }}"
+    )
+    path = tmp_path / "lines.toml"
+    path.write_text(text)
+    return load_bicycle_toml(path)
+
+
+def test_centre_of_mass_from_hanging_lines(tmp_path):
+    # Three lines through (0.25, -0.62) at 41, 81 and 150 degrees (the paper's Table 4 angles).
+    lines = ", ".join(
+        f'{{ point = [{0.25 + 0.3 * math.cos(math.radians(a))}, {-0.62 - 0.3 * math.sin(math.radians(a))}], '
+        f'angle_deg = "{a} +/- 1" }}'
+        for a in (41, 81, 150)
+    )
+    bicycle = _bicycle_with_com_lines(tmp_path, lines)
+    assert bicycle["xBf"] == pytest.approx(0.25, abs=1e-12)
+    assert bicycle["zBf"] == pytest.approx(-0.62, abs=1e-12)
+    assert 0 < bicycle.get("xBf").sigma < 0.02  # one degree on lines 0.3 m from the point
+
+
+def test_hanging_lines_that_do_not_meet(tmp_path):
+    from bikerider.errors import FitError
+
+    lines = ('{ point = [0.25, -0.62], angle_deg = 41 }, { point = [0.25, -0.62], angle_deg = 81 }, '
+             '{ point = [0.45, -0.62], angle_deg = 150 }')
+    with pytest.raises(FitError, match=r"rear_frame.com.*do not meet"):
+        _bicycle_with_com_lines(tmp_path, lines)
