@@ -9,12 +9,13 @@ from __future__ import annotations
 import argparse
 import importlib
 import logging
+import os
 import sys
 
 from bikerider import __version__
 from bikerider.errors import BikeriderError
 
-COMMANDS = ("estimate", "benchmark", "period", "batch")
+COMMANDS = ("estimate", "benchmark", "period", "batch", "sensitivity")
 """Subcommand modules under ``bikerider.commands``, in the order ``--help`` lists them."""
 
 LOG = logging.getLogger("bikerider")
@@ -48,6 +49,10 @@ def main(argv: list[str] | None = None) -> int:
     except BikeriderError as exc:
         print(f"bikerider {args.command}: error: {exc}", file=sys.stderr)
         return 2
+    except BrokenPipeError:
+        # The reader went away (``bikerider estimate | head``): not an error; silence the flush at exit.
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
     except OSError as exc:
         print(f"bikerider {args.command}: error: {exc.strerror or exc}: {exc.filename or ''}".rstrip(": "), file=sys.stderr)
         return 2
