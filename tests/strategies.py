@@ -1,0 +1,174 @@
+"""Hypothesis strategies: random but physical bicycles, riders and benchmark parameter sets.
+
+Each strategy perturbs a published starting point within physical ranges:
+
+* :func:`bicycles` and :func:`riders` perturb the paper's 2008 Batavus Browser and 72 kg rider
+  (``src/bikerider/data/paper/*.toml``, read with :mod:`bikerider.io.toml_input`);
+* :func:`benchmark_mappings` perturbs the Meijaard et al. (2007) benchmark bicycle
+  (``tests/data/meijaard2007.json``, Table 1).
+
+Inertia tensors are perturbed by a rotation in the XZ plane and a positive scale, which keeps them
+symmetric, positive definite and within the triangle inequality by construction; a given ``I_yy``
+is drawn between the bounds the in-plane principal moments allow.  :func:`seated_pairs` draws a
+bicycle and a rider and rejects (``hypothesis.reject``) the pairs the project itself refuses with
+:class:`bikerider.errors.ReachError`.
+"""
+from __future__ import annotations
+
+import functools
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+from hypothesis import strategies as st
+from hypothesis import reject
+
+from bikerider.bicycle.bodies import BicycleBodies
+from bikerider.errors import ReachError
+from bikerider.quantity import Quantity
+from bikerider.rider.measurements import DEFAULT_MASS_FRACTIONS, FRACTION_COUNTS, RiderMeasurements
+
+DATA = Path(__file__).parent / "data"
+
+BICYCLE_LENGTHS = ("w", "rR", "rF", "h_bb", "l_cs", "l_f", "w_fh", "l_hb", "w_rh", "l_sp", "l_st", "l_s")
+RIDER_LENGTHS = ("c_ch", "c_h", "l_hh", "c_la", "l_la", "c_ll", "l_ll", "l_ss", "l_to", "c_ua", "l_ua", "c_ul", "l_ul")
+
+
+@functools.lru_cache(maxsize=1)
+def paper_inputs() -> tuple[BicycleBodies, RiderMeasurements]:
+    """The paper's bicycle and rider, read from the package's own TOML files."""
+    from bikerider.estimate import default_files
+    from bikerider.io.toml_input import load_bicycle_toml, load_rider_toml
+
+    bicycle_path, rider_path = default_files()
+    return load_bicycle_toml(bicycle_path), load_rider_toml(rider_path)
+
+
+@functools.lru_cache(maxsize=1)
+def meijaard_values() -> dict[str, float]:
+    """Meijaard et al. (2007) Table 1, with ``lam`` for the JSON's ``lambda``."""
+    values = dict(json.loads((DATA / "meijaard2007.json").read_text())["parameters"]["values"])
+    values["lam"] = values.pop("lambda")
+    return values
+
+
+def factor(low: float, high: float) -> st.SearchStrategy[float]:
+    return st.floats(low, high, allow_nan=False, allow_infinity=False)
+
+
+def rotate_xz(xx: float, zz: float, xz: float, angle: float, scale: float) -> tuple[float, float, float]:
+    """The xz block of an inertia tensor seen in axes turned by ``angle`` about y, times ``scale``."""
+    c, s = math.cos(angle), math.sin(angle)
+    rotation = np.array([[c, -s], [s, c]])
+    block = rotation @ np.array([[xx, xz], [xz, zz]]) @ rotation.T * scale
+    return float(block[0, 0]), float(block[1, 1]), float(0.5 * (block[0, 1] + block[1, 0]))
+
+
+def yy_between(xx: float, zz: float, xz: float, t: float) -> float:
+    """An ``I_yy`` a fraction ``t`` of the way between the triangle-inequality bounds of the xz block."""
+    p = np.linalg.eigvalsh(np.array([[xx, xz], [xz, zz]]))
+    low, high = p[1] - p[0], p[1] + p[0]
+    return float(low + t * (high - low))
+
+
+@st.composite
+def tensor_perturbation(draw) -> tuple[float, float, float | None]:
+    """``(angle, scale, yy_fraction or None)`` for :func:`rotate_xz` and :func:`yy_between`."""
+    angle = draw(factor(-0.5, 0.5))
+    scale = draw(factor(0.6, 1.5))
+    yy = draw(st.one_of(st.none(), factor(0.05, 0.95)))
+    return angle, scale, yy
+
+
+@st.composite
+def bicycles(draw) -> BicycleBodies:
+    """The paper's Browser with every length, angle, mass and inertia perturbed physically."""
+    base, _ = paper_inputs()
+    v = {k: q.value for k, q in base.values.items()}
+    out = dict(v)
+    for key in BICYCLE_LENGTHS:
+        out[key] = v[key] * draw(factor(0.92, 1.08))
+    out["c"] = draw(factor(0.02, 0.10))
+    out["lam_ht"] = v["lam_ht"] + math.radians(draw(factor(-4.0, 4.0)))
+    out["lam_st"] = v["lam_st"] + math.radians(draw(factor(-4.0, 4.0)))
+    for key in ("mR", "mF", "mBf", "mH"):
+        out[key] = v[key] * draw(factor(0.6, 1.5))
+    for wheel in ("R", "F"):
+        out[f"I{wheel}xx"] = v[f"I{wheel}xx"] * draw(factor(0.6, 1.5))
+        out[f"I{wheel}yy"] = out[f"I{wheel}xx"] * draw(factor(1.1, 1.98))
+    for body in ("Bf", "H"):
+        out[f"x{body}"] = v[f"x{body}"] + draw(factor(-0.05, 0.05))
+        out[f"z{body}"] = v[f"z{body}"] + draw(factor(-0.05, 0.05))
+        angle, scale, yy = draw(tensor_perturbation())
+        xx, zz, xz = rotate_xz(v[f"I{body}xx"], v[f"I{body}zz"], v[f"I{body}xz"], angle, scale)
+        out.update({f"I{body}xx": xx, f"I{body}zz": zz, f"I{body}xz": xz})
+        if yy is not None:
+            out[f"I{body}yy"] = yy_between(xx, zz, xz, yy)
+    return BicycleBodies({k: Quantity(x) for k, x in out.items()}, "<hypothesis bicycle>", "perturbed Browser")
+
+
+@st.composite
+def mass_fractions(draw) -> dict[str, float]:
+    """Table 8's fractions, each scaled by up to 15 %, renormalised to sum to one."""
+    raw = {k: f * draw(factor(0.85, 1.15)) for k, f in DEFAULT_MASS_FRACTIONS.items()}
+    total = sum(FRACTION_COUNTS[k] * f for k, f in raw.items())
+    return {k: f / total for k, f in raw.items()}
+
+
+@st.composite
+def riders(draw) -> RiderMeasurements:
+    """The paper's rider with every measurement, the mass and the fractions perturbed."""
+    _, base = paper_inputs()
+    values = {k: Quantity(q.value * draw(factor(0.92, 1.08))) for k, q in base.values.items()
+              if k in RIDER_LENGTHS}
+    values["mBr"] = Quantity(draw(factor(45.0, 120.0)))
+    values["lam_fl"] = Quantity(math.radians(draw(factor(65.0, 90.0))))
+    return RiderMeasurements(values, draw(mass_fractions()), "<hypothesis rider>", "perturbed rider")
+
+
+@st.composite
+def seated_pairs(draw):
+    """``(bicycle, rider, rider_model)``; pairs the project refuses with ReachError are rejected."""
+    from bikerider.rider.model import seat_rider
+
+    bicycle, rider = draw(bicycles()), draw(riders())
+    try:
+        model = seat_rider(bicycle, rider)
+    except ReachError:
+        reject()
+    return bicycle, rider, model
+
+
+@st.composite
+def benchmark_mappings(draw) -> dict[str, float]:
+    """Meijaard's benchmark bicycle perturbed within physical ranges (a plain name -> value dict)."""
+    v = meijaard_values()
+    out = dict(v)
+    for key in ("w", "rR", "rF"):
+        out[key] = v[key] * draw(factor(0.8, 1.25))
+    out["c"] = draw(factor(0.02, 0.15))
+    out["lam"] = draw(factor(0.05, 0.5))
+    for key in ("mR", "mB", "mH", "mF"):
+        out[key] = v[key] * draw(factor(0.5, 1.5))
+    for key in ("xB", "zB", "xH", "zH"):
+        out[key] = v[key] * draw(factor(0.85, 1.15))
+    for wheel in ("R", "F"):
+        out[f"I{wheel}xx"] = v[f"I{wheel}xx"] * draw(factor(0.5, 1.5))
+        out[f"I{wheel}yy"] = out[f"I{wheel}xx"] * draw(factor(1.2, 1.98))
+    for body in ("B", "H"):
+        angle, scale, yy = draw(tensor_perturbation())
+        xx, zz, xz = rotate_xz(v[f"I{body}xx"], v[f"I{body}zz"], v[f"I{body}xz"], angle, scale)
+        out.update({f"I{body}xx": xx, f"I{body}zz": zz, f"I{body}xz": xz,
+                    f"I{body}yy": yy_between(xx, zz, xz, 0.5 if yy is None else yy)})
+    return out
+
+
+@st.composite
+def inertia_tensors(draw) -> np.ndarray:
+    """A physical 3x3 tensor symmetric about the XZ plane (principal moments obeying the triangle inequality)."""
+    a = draw(factor(0.05, 3.0))
+    b = a * draw(factor(0.05, 1.0))
+    xx, zz, xz = rotate_xz(a, b, 0.0, draw(factor(-math.pi, math.pi)), 1.0)
+    yy = yy_between(xx, zz, xz, draw(factor(0.02, 0.98)))
+    return np.array([[xx, 0.0, xz], [0.0, yy, 0.0], [xz, 0.0, zz]])
