@@ -19,6 +19,7 @@ DERIVATIONS = (
     "derive.rider_model",
     "derive.combination",
     "derive.benchmark_model",
+    "derive.gap_effects",
 )
 
 GENERATOR = "python -m derive"

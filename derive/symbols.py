@@ -119,6 +119,30 @@ _TABLE: dict[str, tuple[str, str, str, bool]] = {
     # --- Benchmark model ---------------------------------------------------------------------
     "v": ("forward speed", "m/s", "v", False),
     "u": ("forward speed squared", "m^2/s^2", "u", False),
+    # --- Sim-to-real gap: candidate unmodelled effects (derive/gap_effects.py) -----------
+    "I_steer": ("added moment of inertia about the steer axis, carried by the front frame", "kg m^2",
+                r"I_{s}", False),
+    "c_steer": ("viscous steer damping between front and rear frame", "N m s/rad", r"c_{s}", False),
+    "k_steer": ("steer stiffness between front and rear frame", "N m/rad", r"k_{s}", False),
+    "m_arm": ("mass of the rider's arms that moves with the handlebar (both arms)", "kg", r"m_{a}", False),
+    "x_grip": ("handlebar grip position, x", "m", r"x_{g}", False),
+    "z_grip": ("handlebar grip position, z (down positive)", "m", r"z_{g}", False),
+    "b_grip": ("half the distance between the two grips", "m", r"b_{g}", False),
+    "k_arm": ("passive arm stiffness about the steer axis (handlebar to upper body)", "N m/rad", r"k_{a}", False),
+    "c_arm": ("passive arm damping about the steer axis (handlebar to upper body)", "N m s/rad", r"c_{a}", False),
+    "m_u": ("rider upper-body mass (leans about the hip axis)", "kg", r"m_{U}", False),
+    "x_u": ("rider upper-body centre of mass, x", "m", r"x_{U}", False),
+    "z_u": ("rider upper-body centre of mass, z (down positive)", "m", r"z_{U}", False),
+    "IUxx": ("rider upper-body moment of inertia about x through its centre of mass", "kg m^2", r"I_{Uxx}", False),
+    "IUxz": ("rider upper-body product of inertia (tensor entry xz)", "kg m^2", r"I_{Uxz}", False),
+    "IUzz": ("rider upper-body moment of inertia about z through its centre of mass", "kg m^2", r"I_{Uzz}", False),
+    "z_lean": ("height coordinate of the upper-body lean (hip) axis, z (down positive)", "m", r"z_{h}", False),
+    "k_lean": ("passive upper-body lean stiffness", "N m/rad", r"k_{l}", False),
+    "c_lean": ("passive upper-body lean damping", "N m s/rad", r"c_{l}", False),
+    "c_alpha": ("tyre cornering stiffness per unit normal load", "1/rad", r"C_{\alpha}", False),
+    "c_gamma": ("tyre camber stiffness per unit normal load", "1/rad", r"C_{\gamma}", False),
+    "sigma_t": ("tyre relaxation length", "m", r"\sigma", False),
+    "t_p": ("tyre pneumatic trail", "m", r"t_{p}", False),
 }
 
 _MATRIX_UNITS = {
