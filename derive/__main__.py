@@ -3,7 +3,6 @@ from __future__ import annotations
 
 import argparse
 import importlib
-import json
 import logging
 import sys
 import time
@@ -20,6 +19,7 @@ DERIVATIONS = (
     "derive.combination",
     "derive.benchmark_model",
     "derive.gap_effects",
+    "derive.sensitivities",
 )
 
 GENERATOR = "python -m derive"
@@ -56,7 +56,6 @@ def main(argv: list[str] | None = None) -> int:
     counts = generate(args.out)
     total = sum(after for module in counts.values() for _, after in module.values())
     LOG.info("generated %d modules (%d operations after CSE) in %.1f s", len(counts), total, time.perf_counter() - start)
-    json.dumps(counts)
     return 0
 
 

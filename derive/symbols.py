@@ -143,7 +143,19 @@ _TABLE: dict[str, tuple[str, str, str, bool]] = {
     "c_gamma": ("tyre camber stiffness per unit normal load", "1/rad", r"C_{\gamma}", False),
     "sigma_t": ("tyre relaxation length", "m", r"\sigma", False),
     "t_p": ("tyre pneumatic trail", "m", r"t_{p}", False),
+    # --- Sensitivities (derive/sensitivities.py) ------------------------------------------
+    "mBr_sum": ("rider mass as the sum of its segment masses (mBr times the sum of the fractions)", "kg",
+                r"\sum m_i", True),
+    "v_weave": ("weave speed: the weave pair crosses the imaginary axis", "m/s", "v_w", True),
+    "v_capsize": ("capsize speed: the capsize eigenvalue crosses zero", "m/s", "v_c", True),
 }
+for _k in range(5):
+    _TABLE[f"a{_k}"] = (f"coefficient of s^{_k} in the characteristic polynomial", f"kg^2 m^4 s^{_k - 4}", f"a_{_k}", False)
+for _k, _where in {5: "pedal axis", 13: "hip", 14: "knee", 15: "shoulder line", 19: "hand",
+                   23: "elbow", 25: "head centre"}.items():
+    for _axis in "XZ":
+        _TABLE[f"r{_axis}{_k}"] = (f"rider grid point {_k} ({_where}), {_axis} coordinate", "m",
+                                   f"r_{{{_axis}{_k}}}", False)
 
 _MATRIX_UNITS = {
     "M": ("mass matrix", ("kg m^2", "kg m^2", "kg m^2", "kg m^2")),

@@ -1,0 +1,117 @@
+"""``bikerider sensitivity OUTPUT [--wrt INPUT]``: closed-form sensitivities and uncertainty ranking."""
+from __future__ import annotations
+
+import argparse
+
+EPILOG = """\
+OUTPUT is a benchmark parameter (w, c, lam, xB, IBxx, ...), a matrix entry (M_phidelta, K2_deltadelta,
+...), weave_speed, capsize_speed, a rider quantity (xBr, zBr, IBrxx, ...), a pendulum result (IBfxz,
+IFyy, ...) or a characteristic coefficient a0..a4 (with --speed).
+
+INPUT is any input name: Table 1 geometry (h_bb, lam_ht, ...), masses (mR, mBf, ...), centres of mass
+(xBf, zH, ...), pendulum measurements (k_t, T_Bf1..3, alpha_Bf1..3, T_Rxx, T_Fxx, T_Fyy, l_pF), rider
+measurements (l_ll, c_ch, mBr, lam_fl, f_to, ...), or an intermediate quantity (IFyy, xB, M_phiphi).
+
+Default inputs: the paper's Batavus Browser and rider (bikerider/data/paper/*.toml) with the paper's
+stated accuracies (Tables 1-6) and, for the rider, whose accuracy the paper does not state, assumed
+sigmas (0.01 m, 1 deg, 0.1 kg; --no-rider-sigmas makes them exact).
+"""
+
+
+def add_parser(subparsers) -> None:
+    p = subparsers.add_parser(
+        "sensitivity",
+        help="closed-form sensitivities, uncertainty ranking and Monte Carlo check",
+        description=(
+            "With --wrt: print d OUTPUT / d INPUT in closed form (SymPy; --latex for LaTeX) and its value. "
+            "Without: rank every input by its share of OUTPUT's first-order variance, with elasticities "
+            "(p/y) dy/dp."
+        ),
+        epilog=EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    p.add_argument("output", metavar="OUTPUT", help="the quantity whose sensitivity to print")
+    p.add_argument("--wrt", metavar="INPUT", help="print the closed-form derivative with respect to INPUT")
+    p.add_argument("--latex", action="store_true", help="print expressions as LaTeX")
+    p.add_argument("--full", action="store_true", help="print long expressions in full")
+    src = p.add_mutually_exclusive_group()
+    src.add_argument("--inputs", metavar="FILE",
+                     help="name = value+/-sigma file of chain inputs (e.g. a BicycleParameters Benchmark.txt)")
+    src.add_argument("--bicycle", metavar="TOML", help="bicycle TOML file (with --rider)")
+    p.add_argument("--rider", metavar="TOML", help="rider TOML file (with --bicycle)")
+    p.add_argument("--no-rider-sigmas", action="store_true",
+                   help="do not assume sigmas for rider measurements given without one")
+    p.add_argument("--speed", metavar="V", type=float, help="speed [m/s] for the characteristic coefficients a0..a4")
+    p.add_argument("--top", metavar="N", type=int, default=None, help="show only the N largest contributions")
+    p.add_argument("--monte-carlo", metavar="N", type=int, default=None,
+                   help="also draw N input sets and compare the first-order sigma with the Monte Carlo one")
+    p.add_argument("--seed", metavar="S", type=int, default=0, help="random seed for --monte-carlo (default 0)")
+    p.set_defaults(run=run)
+
+
+def _inputs(args: argparse.Namespace):
+    from bikerider.errors import InputError
+    from bikerider.uncertainty import inputs as inp
+
+    if args.rider and not args.bicycle:
+        raise InputError("--rider", args.rider, "a --bicycle file to go with it")
+    if args.inputs:
+        from bikerider.io.name_value_file import read_name_value_file
+
+        data = read_name_value_file(args.inputs)
+        quantities = {}
+        for name, q in data.as_dict().items():
+            if name.endswith("_deg"):
+                quantities[name[:-4]] = q.scaled(inp.DEG)
+            else:
+                quantities[name] = q
+        sources = {n: f"stated: {args.inputs}" if q.sigma else "exact (no sigma given)" for n, q in quantities.items()}
+        return inp.InputSet(quantities, sources, str(args.inputs))
+    if args.bicycle:
+        if not args.rider:
+            raise InputError("--bicycle", args.bicycle, "a --rider file to go with it")
+        quantities = inp.raw_inputs_from_toml(args.bicycle, args.rider)
+        sources = {n: f"stated: {args.bicycle}" if q.sigma else "exact (no sigma given)" for n, q in quantities.items()}
+        if not args.no_rider_sigmas:
+            quantities = inp.with_assumed_rider_sigmas(quantities, sources)
+        return inp.InputSet(quantities, sources, f"{args.bicycle} + {args.rider}")
+    return inp.paper_inputs(assume_rider_sigmas=not args.no_rider_sigmas)
+
+
+def run(args: argparse.Namespace) -> int:
+    from bikerider.errors import InputError
+    from bikerider.quantity import Quantity
+    from bikerider.uncertainty import names, text
+    from bikerider.uncertainty.chain import Chain, prepare_values
+    from bikerider.uncertainty.montecarlo import compare, monte_carlo
+    from bikerider.uncertainty.propagation import propagate
+    from bikerider.uncertainty.symbolic import sensitivity_expression
+
+    input_set = _inputs(args)
+    quantities = dict(input_set.quantities)
+    if args.speed is not None:
+        quantities["v"] = Quantity(args.speed)
+    result = propagate(quantities, sources=input_set.sources)
+    known = set(result.output_names) | set(result.input_names)
+    output = names.check_name(args.output, known, "OUTPUT")
+    print(f"Inputs: {input_set.name}")
+    if args.wrt:
+        expr = sensitivity_expression(output, args.wrt, quantities)
+        values = prepare_values(quantities)
+        point = {k: float(v) for k, v in Chain(values).evaluate(values).items()}
+        value = expr.evaluate(point)
+        print(f"d {output} / d {expr.wrt}\n")
+        print(text.expression_text(expr, value, latex=args.latex, full=args.full))
+        y = point.get(output)
+        x = point.get(expr.wrt)
+        if y and x is not None and y == y:
+            print(f"elasticity (x/y) dy/dx: {x / y * value:.4g}")
+    else:
+        if output in result.input_names:
+            raise InputError("OUTPUT", args.output, "a computed quantity, not one of the inputs")
+        print(text.ranking_text(result, output, args.top))
+    if args.monte_carlo is not None:
+        mc = monte_carlo(quantities, args.monte_carlo, outputs=[output], seed=args.seed)
+        print(f"\nMonte Carlo, {args.monte_carlo} input sets (seed {args.seed}):")
+        print(text.table(text.COMPARISON_HEADER, text.comparison_rows(compare(result, mc, quantities))))
+    return 0
