@@ -60,7 +60,7 @@ def bicycle_folders(directory: Path) -> list[Path]:
         raise InputError("DIR", str(directory), "a BicycleParameters data folder (with bicycles/<Name>/ inside)")
     folders = sorted(p for p in root.iterdir() if p.is_dir() and ((p / "RawData").is_dir() or (p / "Parameters").is_dir()))
     if not folders:
-        raise InputError("DIR", str(directory), "a folder with bicycles/<Name>/RawData or bicycles/<Name>/Parameters inside")
+        raise InputError("DIR", str(directory), "a BicycleParameters data folder with bicycles/<Name>/RawData or bicycles/<Name>/Parameters inside")
     return folders
 
 
