@@ -53,7 +53,7 @@ def run(args: argparse.Namespace) -> int:
         return 0
     for (path, _, _), fit in zip(records, fits):
         print(f"{path}: T = {fit.period:.6f} +/- {fit.period_se:.2g} s, zeta = {fit.zeta:.4g} +/- {fit.zeta_se:.2g}, "
-              f"eigenvalue = {fit.eigenvalue.real:.4g} +/- {fit.eigenvalue.imag:.5g}i 1/s, "
+              f"eigenvalues s = {fit.eigenvalue.real:.4g} +/- {fit.eigenvalue.imag:.5g}i 1/s, "
               f"residual rms = {fit.residual_rms:.3g} ({fit.n_samples} samples)")
     print(f"period = {combined.period:.6f} +/- {combined.sigma:.2g} s "
           f"({combined.n_trials} trial{'s' if combined.n_trials > 1 else ''}, scatter {combined.scatter:.2g} s)")
