@@ -217,3 +217,11 @@ def test_bad_speeds_are_named(benchmark_model):
     with pytest.raises(InputError) as info:
         eigenvalues_from_polynomial(benchmark_model, [1.0, np.inf])
     assert info.value.name == "speeds"
+
+
+def test_overflowing_matrices_are_an_error_not_nan(benchmark_model):
+    huge = WhippleModel(benchmark_model.M * 1e120, benchmark_model.C1 * 1e120, benchmark_model.K0 * 1e120,
+                        benchmark_model.K2 * 1e120, g=benchmark_model.g)
+    with pytest.raises(InputError) as info:
+        critical_speeds_from_polynomial(huge)
+    assert "too large" in str(info.value)

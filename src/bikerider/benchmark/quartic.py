@@ -346,6 +346,9 @@ def critical_speeds_from_polynomial(model) -> CriticalSpeeds:
     microseconds, where the generated NumPy expressions cost a quarter of a millisecond on scalars.
     """
     polys = speed_polynomials(model.M, model.C1, model.K0, model.K2, model.g)
+    if not all(math.isfinite(x) for coefficients in polys.values() for x in coefficients):
+        raise InputError("M, C1, K0, K2", "entries too large for floating point",
+                         "matrices whose critical-speed polynomials are finite", getattr(model, "source", None))
     capsize_u = positive_real_roots(*polys["capsize"])
     capsize = math.sqrt(capsize_u[0]) if capsize_u else None
     weave = frequency = None
