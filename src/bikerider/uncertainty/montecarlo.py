@@ -29,6 +29,8 @@ from bikerider.uncertainty.chain import Chain, prepare_values
 from bikerider.uncertainty.propagation import UncertaintyResult
 
 DEFAULT_OUTPUTS = ("v_weave", "v_capsize")
+MISSING_LIMIT = 0.005
+"""A fraction of samples without a value above which it is named as a cause of disagreement."""
 CHUNK = 20_000
 """Samples evaluated together; bounds the generated functions' temporaries (about 60 MB)."""
 
@@ -170,8 +172,8 @@ def compare(result: UncertaintyResult, mc: MonteCarloResult, quantities: Mapping
 def _diagnose(name: str, fo: float | None, mc: MonteCarloResult, quantities: Mapping[str, Quantity]) -> str:
     parts = []
     missing = mc.n - mc.valid[name]
-    if missing:
-        causes = ", ".join(f"{k} {v}" for k, v in mc.failures.items())
+    causes = ", ".join(f"{k} {v}" for k, v in mc.failures.items())
+    if missing >= MISSING_LIMIT * mc.n:
         parts.append(f"{missing / mc.n:.2%} of samples have no value ({causes}): the chain is near a limit "
                      "(a limb closure at full stretch or a root that vanishes), where no linearisation holds")
     terms = curvature(quantities, name)
@@ -191,4 +193,6 @@ def _diagnose(name: str, fo: float | None, mc: MonteCarloResult, quantities: Map
     skew = mc.skewness.get(name, 0.0)
     if math.isfinite(skew) and abs(skew) > 0.3:
         parts.append(f"the samples are skewed (skewness {skew:+.2f})")
+    if 0 < missing < MISSING_LIMIT * mc.n:
+        parts.append(f"({missing / mc.n:.2%} of samples have no value: {causes})")
     return "; ".join(parts) if parts else "sampling noise or higher-order terms (no single cause found)"
