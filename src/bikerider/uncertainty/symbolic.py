@@ -215,6 +215,7 @@ class _Deriver:
         self.order: list[str] = []
         self.conditions: list[tuple[str, sp.Expr]] = []
         self._depends: dict[tuple[str, str | None], bool] = {}
+        self.zero: set[str] = set()
 
     def depends(self, node: str, fixed: str | None = None) -> bool:
         key = (node, fixed)
@@ -238,6 +239,8 @@ class _Deriver:
         if not self.depends(node, fixed):
             return sp.Integer(0)
         lhs = derivative_symbol(node, self.wrt)
+        if node in self.zero:
+            return sp.Integer(0)
         if node in self.steps:
             return lhs
         self.steps[node] = sp.Integer(0)  # placeholder while the inputs' steps are built
@@ -259,8 +262,10 @@ class _Deriver:
                 if inner is not None and node in inner.inputs and not inner.solves:
                     dF_dv += partial * inner.exprs[i].diff(_symbol(node, inner))
                 if self.depends(i, node):
-                    numerator += _tidy(partial) * self.build(i, node)
-            self.steps[node] = -numerator / _tidy(dF_dv)
+                    numerator += _tidy(_in_outputs(partial, stage)) * self.build(i, node)
+            if numerator == 0:
+                return self._is_zero(node)
+            self.steps[node] = -numerator / _tidy(_in_outputs(dF_dv, stage))
             self.order.append(node)
         else:
             total = sp.Integer(0)
@@ -269,10 +274,29 @@ class _Deriver:
                     continue
                 partial = expr.diff(_symbol(i, stage))
                 if partial != 0:
-                    total += _tidy(partial) * self.build(i, fixed)
+                    total += _tidy(_in_outputs(partial, stage)) * self.build(i, fixed)
+            if total == 0:
+                return self._is_zero(node)
             self.steps[node] = total
             self.order.append(node)
         return lhs
+
+
+    def _is_zero(self, node: str) -> sp.Integer:
+        """Record that ``node`` does not depend on ``wrt`` after all (its partials cancel)."""
+        del self.steps[node]
+        self.zero.add(node)
+        return sp.Integer(0)
+
+
+def _in_outputs(expr: sp.Expr, stage: SymbolicStage) -> sp.Expr:
+    """Write the stage's own small output expressions back as their symbols (e.g. x_B)."""
+    if stage.solves is not None:
+        return expr
+    small = [(name, e) for name, e in stage.exprs.items() if not e.is_Symbol and sp.count_ops(e) <= 30]
+    for name, e in sorted(small, key=lambda item: -sp.count_ops(item[1])):  # largest first
+        expr = expr.subs(e, node_symbol(name, bool(e.is_positive)))
+    return expr
 
 
 def _closed_form(steps: list[tuple[sp.Symbol, sp.Expr]]) -> tuple[sp.Expr | None, int]:

@@ -107,7 +107,7 @@ def expression_text(expr: SensitivityExpression, value: float | None, latex: boo
     eq = " = "
     for node, F in expr.conditions:
         lhs = f"F_{{{names.latex(node)}}}" if latex else f"F[{node}]"
-        lines.append(f"{lhs}{eq}{_print(F, latex, symbol_names, full)}    (the {node} is a root of F = 0)")
+        lines.append(f"{lhs}{eq}{_print(F, latex, symbol_names, full)}    ({node} is a root of F = 0)")
     if expr.conditions:
         lines.append("")
     if expr.closed_form is not None:
