@@ -23,7 +23,10 @@ def check_inertia_tensor(name: str, tensor: np.ndarray, source: str | None = Non
         raise InputError(name, t.tolist(), "finite moments and products of inertia", source)
     if not np.allclose(t[np.isfinite(t)], t.T[np.isfinite(t)], rtol=1e-12, atol=1e-12):
         raise InputError(name, t.tolist(), "a symmetric tensor", source)
-    if xz[0, 0] <= 0 or xz[1, 1] <= 0 or xz[0, 0] * xz[1, 1] - xz[0, 1] ** 2 <= 0:
+    # The checks below are scale invariant; on the tensor over its largest entry they cannot overflow.
+    scale = float(np.abs(t[np.isfinite(t)]).max()) or 1.0
+    b = xz / scale
+    if b[0, 0] <= 0 or b[1, 1] <= 0 or b[0, 0] * b[1, 1] - b[0, 1] ** 2 <= 0:
         raise InputError(
             name,
             f"Ixx={xz[0, 0]:.6g}, Izz={xz[1, 1]:.6g}, Ixz={xz[0, 1]:.6g}",
@@ -31,11 +34,12 @@ def check_inertia_tensor(name: str, tensor: np.ndarray, source: str | None = Non
             source,
         )
     if np.isfinite(t[1, 1]):
-        principal = np.linalg.eigvalsh(t)
-        if principal[0] <= 0:
+        unit = np.linalg.eigvalsh(t / scale)
+        principal = unit * scale
+        if unit[0] <= 0:
             raise InputError(name, principal.tolist(), "positive principal moments of inertia", source)
-        slack = TRIANGLE_TOLERANCE * principal.sum()
-        if principal[2] > principal[0] + principal[1] + slack:
+        slack = TRIANGLE_TOLERANCE * unit.sum()
+        if unit[2] > unit[0] + unit[1] + slack:
             raise InputError(
                 name,
                 f"principal moments {principal[0]:.6g}, {principal[1]:.6g}, {principal[2]:.6g}",

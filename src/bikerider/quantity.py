@@ -67,3 +67,39 @@ def parse_quantity(raw: object, name: str, source: str | None = None) -> Quantit
         raise InputError(f"{name} uncertainty", sigma, "a finite, non-negative standard uncertainty", source)
     return Quantity(value, sigma)
 
+
+
+#: Unit slips worth suggesting when a value is too large for its SI unit: (factor to SI, unit).
+UNIT_SLIPS: dict[str, tuple[tuple[float, str], ...]] = {
+    "m": ((1e-3, "mm"), (1e-2, "cm")),
+    "kg": ((1e-3, "g"),),
+    "s": ((1e-3, "ms"),),
+    "m/s^2": ((1e-2, "cm/s^2"),),
+}
+
+
+def check_magnitude(name: str, value: float, limit: float, unit: str, source: str | None = None) -> None:
+    """Raise :class:`InputError` when ``|value|`` exceeds ``limit`` (in the SI ``unit``).
+
+    The limits are far beyond any bicycle or rider, so a value above one is a unit slip (a
+    wheelbase in millimetres) or a typing error; the message suggests the slip when dividing by
+    it gives a plausible value.
+    """
+    if abs(value) <= limit:
+        return
+    if not math.isfinite(value):
+        raise InputError(name, value, "a finite number", source)
+    slips = [(f, u) for f, u in UNIT_SLIPS.get(unit, ()) if abs(value * f) <= limit]
+    hint = f"; if this is in {slips[0][1]}, give {value * slips[0][0]:.6g} {unit}" if slips else ""
+    raise InputError(name, value, f"at most {limit:g} {unit} in magnitude (SI units{hint})", source)
+
+
+def check_degrees(name: str, degrees: float, source: str | None = None) -> None:
+    """Raise :class:`InputError` for an angle under a ``_deg`` key that looks like radians.
+
+    Every angle the method reads in degrees (head tube, seat tube, forward lean) is far above
+    pi degrees on any bicycle or rider; a value in (0, pi] was almost surely given in radians.
+    """
+    if 0 < degrees <= math.pi:
+        raise InputError(name, degrees, f"an angle in degrees ({degrees:g} looks like radians: "
+                         f"{degrees:g} rad = {math.degrees(degrees):.4g} deg)", source)

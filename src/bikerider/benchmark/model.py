@@ -95,13 +95,20 @@ class WhippleModel:
             raise InputError("M", mats[0].tolist(), "a positive definite mass matrix (the model is singular otherwise)")
         self.M, self.C1, self.K0, self.K2 = mats
         self.g = float(g)
+        self.source: str | None = None
+        """Where the parameters came from, for messages (set by :meth:`from_parameters`)."""
 
     @classmethod
     def from_parameters(cls, parameters: BenchmarkParameters) -> "WhippleModel":
         """Build from benchmark parameters (Meijaard et al. 2007, Appendix A)."""
         v = parameters.values
         M, C1, K0, K2 = gen.canonical_matrices(**{k: v[k] for k in _CANONICAL_ARGS})
-        return cls(M, C1, K0, K2, v["g"])  # type: ignore[arg-type]
+        try:
+            model = cls(M, C1, K0, K2, v["g"])  # type: ignore[arg-type]
+        except InputError as exc:  # name the file the parameters came from
+            raise InputError(exc.name, exc.value, exc.expected, parameters.source) from None
+        model.source = parameters.source
+        return model
 
     # -- matrices ---------------------------------------------------------------------------
     def _entries(self) -> dict[str, np.ndarray]:
@@ -121,7 +128,14 @@ class WhippleModel:
         speeds = np.atleast_1d(np.asarray(speeds, dtype=float))
         if speeds.ndim != 1 or not np.all(np.isfinite(speeds)):
             raise InputError("speeds", speeds.tolist(), "a one-dimensional array of finite speeds")
-        raw = np.linalg.eigvals(self.state_matrix(speeds))
+        with np.errstate(over="ignore", invalid="ignore"):
+            state = self.state_matrix(speeds)
+        finite = np.all(np.isfinite(state), axis=(-2, -1))
+        if not np.all(finite):
+            raise InputError("speeds", float(speeds[~finite][0]),
+                             "a speed at which the state matrix is finite (the model's matrices, or the speed, "
+                             "are too large for floating point there)", self.source)
+        raw = np.linalg.eigvals(state)
         values, labels = label_modes(raw)
         return ModalEigenvalues(speeds, values, labels)
 
@@ -133,7 +147,11 @@ class WhippleModel:
         positive root of the third Hurwitz determinant (a quadratic in ``v^2``) at which the
         crossing frequency ``omega^2 = a1/a3`` is positive.
         """
-        capsize_c, weave_c, a1_c, a3_c = gen.critical_speed_polynomials(**self._entries(), g=self.g)
+        with np.errstate(over="ignore", invalid="ignore"):
+            capsize_c, weave_c, a1_c, a3_c = gen.critical_speed_polynomials(**self._entries(), g=self.g)
+        if not all(np.all(np.isfinite(c)) for c in (capsize_c, weave_c, a1_c, a3_c)):
+            raise InputError("M, C1, K0, K2", "entries too large for floating point",
+                             "matrices whose critical-speed polynomials are finite", self.source)
         capsize_u = _positive_real_roots(capsize_c)
         capsize = float(np.sqrt(capsize_u[0])) if capsize_u.size else None
         weave = frequency = None

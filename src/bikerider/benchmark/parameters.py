@@ -10,7 +10,7 @@ import numpy as np
 
 from bikerider.errors import MISSING, InputError
 from bikerider.inertia import check_inertia_tensor
-from bikerider.quantity import Quantity
+from bikerider.quantity import Quantity, check_magnitude
 
 BENCHMARK_NAMES: tuple[str, ...] = (
     "w", "c", "lam", "g", "rR", "mR", "IRxx", "IRyy", "xB", "zB", "mB", "IBxx", "IByy", "IBzz", "IBxz",
@@ -24,6 +24,13 @@ OPTIONAL_NAMES = frozenset({"IByy", "IHyy"})
 LOG = logging.getLogger(__name__)
 
 _POSITIVE = ("w", "g", "rR", "mR", "IRxx", "IRyy", "mB", "mH", "rF", "mF", "IFxx", "IFyy")
+_LIMITS: dict[str, tuple[float, str]] = {
+    "w": (5.0, "m"), "c": (1.0, "m"), "rR": (3.0, "m"), "rF": (3.0, "m"), "g": (100.0, "m/s^2"),
+    **{k: (5.0, "m") for k in ("xB", "zB", "xH", "zH")},
+    **{k: (1000.0, "kg") for k in ("mR", "mB", "mH", "mF")},
+    **{k: (1e4, "kg m^2") for k in BENCHMARK_NAMES if k.startswith("I")},
+}
+"""Largest plausible magnitudes (the rear body may hold riders): a larger value is a unit slip."""
 
 
 @dataclass(frozen=True)
@@ -83,8 +90,20 @@ class BenchmarkParameters:
         for name in _POSITIVE:
             if v[name] <= 0:  # type: ignore[operator]
                 raise InputError(name, v[name], "a positive value", src)
+        for name, (limit, unit) in _LIMITS.items():
+            if v[name] is not None:
+                check_magnitude(name, v[name], limit, unit, src)  # type: ignore[arg-type]
+        for name in ("w", "rR", "rF"):  # the model divides by these
+            if v[name] < 1e-3:  # type: ignore[operator]
+                raise InputError(name, v[name], "at least 0.001 m (SI units: a length in metres)", src)
         if not -math.pi / 2 < v["lam"] < math.pi / 2:  # type: ignore[operator]
-            raise InputError("lam", v["lam"], "a steer axis tilt between -pi/2 and pi/2 rad", src)
+            hint = (f" ({v['lam']:g} looks like degrees: give lam_deg = {v['lam']:g} in a TOML file, "
+                    f"or {math.radians(v['lam']):.6g} rad)" if abs(v["lam"]) <= 90 else "")  # type: ignore[arg-type]
+            raise InputError("lam", v["lam"], f"a steer axis tilt between -pi/2 and pi/2 rad{hint}", src)
+        for name in ("zB", "zH"):
+            if not v[name] < 0:  # type: ignore[operator]
+                raise InputError(name, v[name], "a negative value: z points down in the benchmark frame, so a "
+                                 "centre of mass above the ground has z < 0", src)
         for body in ("B", "H"):
             yy = v[f"I{body}yy"]
             tensor = np.array(

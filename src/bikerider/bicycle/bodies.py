@@ -13,7 +13,7 @@ import numpy as np
 
 from bikerider.errors import MISSING, InputError
 from bikerider.inertia import check_inertia_tensor
-from bikerider.quantity import Quantity
+from bikerider.quantity import Quantity, check_degrees, check_magnitude
 
 BODY_NAMES: tuple[str, ...] = (
     "w", "c", "lam_ht", "g",
@@ -35,6 +35,15 @@ SEATING_NAMES: tuple[str, ...] = (
 _POSITIVE = {"w", "g", "rR", "mR", "IRxx", "IRyy", "rF", "mF", "IFxx", "IFyy", "mBf", "mH",
              "IBfyy", "IHyy", "h_bb", "l_cs", "l_f", "w_fh", "l_hb", "w_rh", "l_sp", "l_st", "l_s"}
 _ANGLES = {"lam_ht": (0.0, math.pi), "lam_st": (0.0, math.pi)}
+_LIMITS: dict[str, tuple[float, str]] = {
+    "w": (5.0, "m"), "c": (1.0, "m"), "g": (100.0, "m/s^2"),
+    **{k: (3.0, "m") for k in ("rR", "rF", "h_bb", "l_cs", "l_f", "w_fh", "l_hb", "w_rh", "l_sp", "l_st", "l_s")},
+    **{k: (5.0, "m") for k in ("xBf", "zBf", "xH", "zH")},
+    **{k: (500.0, "kg") for k in ("mR", "mF", "mBf", "mH")},
+    **{f"I{b}{a}": (1e4, "kg m^2") for b in ("R", "F") for a in ("xx", "yy")},
+    **{f"I{b}{a}": (1e4, "kg m^2") for b in ("Bf", "H") for a in ("xx", "yy", "zz", "xz")},
+}
+"""Largest plausible magnitudes: far beyond any bicycle, so a larger value is a unit slip."""
 
 
 @dataclass(frozen=True)
@@ -72,6 +81,15 @@ class BicycleBodies:
                 low, high = _ANGLES[key]
                 if not low < q.value < high:
                     raise InputError(f"{key}_deg", math.degrees(q.value), "an angle between 0 and 180 degrees", self.source)
+                check_degrees(f"{key}_deg", math.degrees(q.value), self.source)
+            if key in _LIMITS:
+                check_magnitude(key, q.value, *_LIMITS[key], self.source)
+            if key in ("w", "rR", "rF") and not q.value >= 1e-3:  # the model divides by these
+                raise InputError(key, q.value, "at least 0.001 m (SI units: a length in metres)", self.source)
+        for key in ("zBf", "zH"):
+            if not self[key] < 0:
+                raise InputError(key, self[key], "a negative value: z points down in the benchmark frame, so a "
+                                 "centre of mass above the ground has z < 0", self.source)
         for body in ("Bf", "H"):
             yy = self.values.get(f"I{body}yy")
             tensor = np.array([

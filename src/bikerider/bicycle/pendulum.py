@@ -11,7 +11,7 @@ import numpy as np
 from bikerider.errors import InputError
 from bikerider.generated import pendulum as gen
 from bikerider.bicycle.propagation import propagate
-from bikerider.quantity import Quantity
+from bikerider.quantity import Quantity, check_magnitude
 
 #: Below this |determinant| of Eq. 6 (which is 2 sin(a1-a2) sin(a1-a3) sin(a2-a3)) the
 #: orientations do not determine the tensor: two axes are within about a degree of each other.
@@ -21,13 +21,21 @@ SINGULAR_DETERMINANT = 1e-3
 def _check_period(name: str, period: Quantity, source: str | None) -> None:
     if not period.value > 0:
         raise InputError(name, period.value, "a positive period in seconds", source)
+    check_magnitude(name, period.value, 100.0, "s", source)
+    check_magnitude(f"{name} uncertainty", period.sigma, 100.0, "s", source)
+
+
+def _check_stiffness(k_t: Quantity, source: str | None) -> None:
+    if not k_t.value > 0:
+        raise InputError("k_t", k_t.value, "a positive torsional stiffness in N m/rad", source)
+    check_magnitude("k_t", k_t.value, 1e6, "N m/rad", source)
+    check_magnitude("k_t uncertainty", k_t.sigma, 1e6, "N m/rad", source)
 
 
 def torsional_inertia(k_t: Quantity, period: Quantity, name: str = "period", source: str | None = None) -> Quantity:
     """Eq. 1: ``J = k T^2 / (4 pi^2)``."""
     _check_period(name, period, source)
-    if not k_t.value > 0:
-        raise InputError("k_t", k_t.value, "a positive torsional stiffness in N m/rad", source)
+    _check_stiffness(k_t, source)
     out = propagate(lambda x: {"J": float(gen.torsional_inertia(k_t=x["k_t"], T=x["T"]))}, {"k_t": k_t, "T": period})
     return out["J"]
 
@@ -38,6 +46,13 @@ def compound_inertia(period: Quantity, mass: Quantity, length: Quantity, g: Quan
     _check_period(name, period, source)
     if not length.value > 0:
         raise InputError("pendulum_length", length.value, "a positive pendulum length in metres", source)
+    check_magnitude("pendulum_length", length.value, 10.0, "m", source)
+    if not mass.value > 0:
+        raise InputError("mass", mass.value, "a positive mass in kg (of the body on the compound pendulum)", source)
+    check_magnitude("mass", mass.value, 500.0, "kg", source)
+    if not g.value > 0:
+        raise InputError("g", g.value, "a positive acceleration due to gravity in m/s^2", source)
+    check_magnitude("g", g.value, 100.0, "m/s^2", source)
     value = float(gen.compound_inertia(T=period.value, m_p=mass.value, g=g.value, l_p=length.value))
     if not value > 0:
         shortest = 2 * math.pi * math.sqrt(length.value / g.value)
@@ -84,6 +99,7 @@ def inertia_from_orientations(k_t: Quantity, periods: list[Quantity], angles: li
                          "at least three pendulum orientations (Eq. 6 has three unknowns)", source)
     for i, p in enumerate(periods):
         _check_period(f"{body}.inertia.periods[{i}]", p, source)
+    _check_stiffness(k_t, source)
     a = np.array([q.value for q in angles])
     if len(angles) == 3:
         det = abs(2 * np.sin(a[0] - a[1]) * np.sin(a[0] - a[2]) * np.sin(a[1] - a[2]))

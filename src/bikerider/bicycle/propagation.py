@@ -46,6 +46,7 @@ def propagate(function: Callable[[dict[str, float]], dict[str, float]],
         for key in centre:
             slope = (up[key] - down[key]) / (2 * step)
             if math.isfinite(slope):
-                variance[key] += (slope * q.sigma) ** 2
+                term = slope * q.sigma  # float products overflow to inf; ** 2 would raise OverflowError
+                variance[key] += term * term
     return {key: Quantity(value, math.sqrt(variance[key]) if math.isfinite(value) else 0.0)
             for key, value in centre.items()}

@@ -60,7 +60,7 @@ from bikerider.generated import combination as gen_combination
 from bikerider.generated import pendulum as gen_pendulum
 from bikerider.inertia import check_inertia_tensor
 from bikerider.io.name_value_file import NameValueFile, read_name_value_file
-from bikerider.quantity import Quantity
+from bikerider.quantity import Quantity, check_degrees, check_magnitude
 
 LOG = logging.getLogger(__name__)
 
@@ -235,15 +235,40 @@ def detect_layout(values: Mapping[str, Quantity], source: str = "<memory>") -> M
     return MeasuredLayout(geometry, split, orientations, compound, all(k in values for k in seating.MEASURED_NAMES))
 
 
+def _raw_limit(name: str) -> tuple[float, str]:
+    """Largest plausible magnitude of a Measured-file value, in its BicycleParameters unit."""
+    if name.startswith(("Tt", "Tc")):
+        return 100.0, "s"
+    if name.startswith("alpha") or name == "gamma":
+        return 360.0, "deg"
+    if name == "lamst":
+        return 2 * math.pi, "rad"
+    if name in ("nF", "nR"):
+        return 1000.0, "turns"
+    if name in ("dF", "dR"):
+        return 1000.0, "m"
+    if name == "g":
+        return 100.0, "m/s^2"
+    if re.match(r"^m[A-Z]$", name):
+        return 500.0, "kg"
+    return 10.0, "m"  # every other value of a Measured file is a length
+
+
 def _check_values(values: Mapping[str, Quantity], layout: MeasuredLayout, source: NameValueFile | str,
                   repeats: Mapping[str, tuple[Quantity, ...]]) -> None:
     where = source.where if isinstance(source, NameValueFile) else (lambda name: str(source))
+    for name, q in values.items():
+        check_magnitude(name, q.value, *_raw_limit(name), where(name))
+        check_magnitude(f"{name} uncertainty", q.sigma, *_raw_limit(name), where(name))
+    if "gamma" in values:
+        check_degrees("gamma", values["gamma"].value, where("gamma"))
     for name in _POSITIVE:
         if name in values and not values[name].value > 0:
             raise InputError(name, values[name].value, f"a positive value ({_purpose(name)})", where(name))
     for name, q in values.items():
-        if name.startswith(("Tt", "Tc")) and not q.value > 0:
-            raise InputError(name, q.value, f"a positive period in seconds ({_purpose(name)})", where(name))
+        if name.startswith(("Tt", "Tc")) and not q.value > 1e-3:  # 1 ms: below, squares underflow
+            raise InputError(name, q.value, f"a positive period in seconds, above 0.001 s ({_purpose(name)})",
+                             where(name))
     for name, trials in repeats.items():
         if not name.startswith(("Tt", "Tc")) or len(trials) < 2:
             continue

@@ -170,7 +170,11 @@ def parse_name_value_text(text: str, path: str = "<text>") -> NameValueFile:
         if name in entries:
             raise FileFormatError(path, f"{name} is given twice (first on line {entries[name].line})", number)
         repeats = tuple(_parse_value(part, path, number, name) for part in rhs.split(","))
-        entries[name] = NameValueEntry(name, mean_of_repeats(repeats), repeats, number)
+        try:
+            mean = mean_of_repeats(repeats)
+        except OverflowError:
+            raise FileFormatError(path, f"{name}: repeated values too large to average", number) from None
+        entries[name] = NameValueEntry(name, mean, repeats, number)
     return NameValueFile(path, entries)
 
 

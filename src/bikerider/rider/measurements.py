@@ -5,7 +5,7 @@ import math
 from dataclasses import dataclass, field
 
 from bikerider.errors import MISSING, InputError
-from bikerider.quantity import Quantity
+from bikerider.quantity import Quantity, check_degrees, check_magnitude
 
 RIDER_NAMES: tuple[str, ...] = (
     "mBr", "c_ch", "lam_fl", "c_h", "l_hh", "c_la", "l_la", "c_ll", "l_ll", "l_ss", "l_to", "c_ua", "l_ua",
@@ -48,8 +48,13 @@ class RiderMeasurements:
             if key == "lam_fl":
                 if not 0 < q.value < math.pi:
                     raise InputError("lam_fl_deg", math.degrees(q.value), "a forward lean angle between 0 and 180 degrees", self.source)
+                check_degrees("lam_fl_deg", math.degrees(q.value), self.source)
             elif not q.value > 0:
                 raise InputError(key, q.value, "a positive value", self.source)
+            elif key == "mBr":
+                check_magnitude(key, q.value, 500.0, "kg", self.source)
+            else:  # a length or a circumference
+                check_magnitude(key, q.value, 3.0, "m", self.source)
         unknown = set(self.fractions) - set(DEFAULT_MASS_FRACTIONS)
         if unknown:
             raise InputError(sorted(unknown)[0], self.fractions[sorted(unknown)[0]],
