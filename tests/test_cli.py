@@ -66,3 +66,40 @@ def test_reach_error_from_command_line(tmp_path, capsys):
 def test_console_script_help_runs():
     result = subprocess.run([sys.executable, "-m", "bikerider", "estimate", "--help"], capture_output=True, text=True)
     assert result.returncode == 0 and "--bicycle" in result.stdout
+
+
+BP = Path(__file__).resolve().parents[1] / "src" / "bikerider" / "data" / "bicycleparameters"
+
+
+def test_estimate_measured_file_with_the_paper_rider_model(capsys):
+    # BicycleParameters' raw Browser measurements carry seating data (lcs, hbb, lsp, lst, lamst,
+    # LhbF, LhbR, whb): the paper's rider model is seated on them; hub widths are not measured.
+    path = BP / "bicycles" / "Browser" / "RawData" / "BrowserMeasured.txt"
+    assert main(["estimate", "--bicycle", str(path), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    for point in ("3", "4", "8", "9"):
+        assert out["rider"]["grid_points"][point] is None
+    assert out["rider"]["grid_points"]["14"] is not None
+    # Same rider, same bicycle model: the rider's centre of mass lands within 5 mm of the lumped
+    # JasonBrowserBenchmark.txt (xB 0.2909, zB -1.1091), which the paper's own code computed.
+    assert out["rider"]["com"][0] == pytest.approx(0.2909, abs=5e-3)
+    assert out["rider"]["com"][2] == pytest.approx(-1.1091, abs=5e-3)
+    assert any("hub widths" in note for note in out["notes"])
+
+
+def test_estimate_with_lumped_rider_and_without_rider(capsys):
+    bicycle = BP / "bicycles" / "Browser" / "RawData" / "BrowserMeasured.txt"
+    rider = BP / "riders" / "Jason" / "Parameters" / "JasonBrowserBenchmark.txt"
+    assert main(["estimate", "--bicycle", str(bicycle), "--rider", str(rider), "--json"]) == 0
+    with_rider = json.loads(capsys.readouterr().out)
+    assert with_rider["rider"]["grid_points"] is None
+    assert with_rider["benchmark"]["mB"] == pytest.approx(9.86 + 72.0)  # Browser frame + Jason
+    assert main(["estimate", "--bicycle", str(bicycle), "--no-rider", "--json"]) == 0
+    alone = json.loads(capsys.readouterr().out)
+    assert alone["rider"] is None and alone["benchmark"]["mB"] == pytest.approx(9.86)
+
+
+def test_rider_model_on_benchmark_parameters_is_refused(capsys):
+    bicycle = BP / "bicycles" / "Fisher" / "Parameters" / "FisherBenchmark.txt"
+    assert main(["estimate", "--bicycle", str(bicycle)]) == 2
+    assert "no geometry to seat the rider model" in capsys.readouterr().err

@@ -12,15 +12,20 @@ import math
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from bikerider.benchmark import BENCHMARK_NAMES, BenchmarkParameters, WhippleModel
 from bikerider.bicycle.bodies import BicycleBodies
+from bikerider.errors import InputError
 from bikerider.generated import combination
 from bikerider.quantity import Quantity
 from bikerider.rider.measurements import RiderMeasurements
 from bikerider.rider.model import RiderModel, seat_rider
+
+if TYPE_CHECKING:
+    from bikerider.bicycle.to_benchmark import LumpedRider
 
 LOG = logging.getLogger(__name__)
 
@@ -42,20 +47,22 @@ class EstimateResult:
 
     Attributes
     ----------
-    bicycle : BicycleBodies
-    rider : RiderMeasurements or None
+    bicycle : BicycleBodies or None
+        None when the bicycle came as benchmark parameters.
+    rider : RiderMeasurements, LumpedRider or None
+        The rider model's measurements, a rider as one rigid body, or no rider.
     rider_model : RiderModel or None
-        Grid points and mass properties of the seated rider.
-    chain_inputs : dict of str to Quantity
-        The inputs of the generated chain, with their uncertainties (for propagation).
+        Grid points and mass properties of the seated rider (rider model only).
+    chain_inputs : dict of str to Quantity or None
+        The inputs of the generated chain, with their uncertainties (rider model only).
     parameters : BenchmarkParameters
     model : WhippleModel
     """
 
-    bicycle: BicycleBodies
-    rider: RiderMeasurements | None
+    bicycle: BicycleBodies | None
+    rider: "RiderMeasurements | LumpedRider | None"
     rider_model: RiderModel | None
-    chain_inputs: dict[str, Quantity]
+    chain_inputs: dict[str, Quantity] | None
     parameters: BenchmarkParameters
     model: WhippleModel
     notes: list[str] = field(default_factory=list)
@@ -99,7 +106,9 @@ def estimate(bicycle: BicycleBodies, rider: RiderMeasurements) -> EstimateResult
     sigmas = {f"I{w}{a}": inputs[f"I{w}{a}"] for w in "RF" for a in ("xx", "yy")}
     mapping = {k: (Quantity(v, sigmas[k].sigma) if k in sigmas and v is not None else v) for k, v in values.items()}
     params = BenchmarkParameters.from_mapping(mapping, source=f"{bicycle.source} + {rider.source}")
-    notes = []
+    notes = list(bicycle.notes)
+    if rider_model.undetermined_points:
+        notes.append(f"grid points {rider_model.undetermined_points} are not placed: the hub widths were not measured.")
     if values["IByy"] is None:
         notes.append("IByy is not determined: the rear frame's I_yy was not measured.")
     if values["IHyy"] is None:
@@ -120,3 +129,45 @@ def estimate_default() -> EstimateResult:
 
     bicycle_path, rider_path = default_files()
     return estimate(load_bicycle_toml(bicycle_path), load_rider_toml(rider_path))
+
+
+def estimate_from_files(bicycle_path: str | Path | None = None, rider_path: str | Path | None = None,
+                        with_rider: bool = True) -> EstimateResult:
+    """Run the method on files of any supported kind (defaults: the paper's bicycle and rider).
+
+    The bicycle may be a project TOML file, a BicycleParameters ``<Name>Measured.txt`` (raw
+    measurements) or ``<Name>Benchmark.txt`` (benchmark parameters).  The rider may be a project
+    TOML file (the paper's rider model, seated on the bicycle's geometry) or a BicycleParameters
+    lumped rider ``<Rider><Bike>Benchmark.txt`` (one rigid body, merged into the rear frame).
+
+    Raises
+    ------
+    InputError, FileFormatError
+        Unreadable files, or a combination that cannot work (a rider model on a bicycle given only
+        as benchmark parameters, which have no geometry to seat it on).
+    """
+    from bikerider.bicycle.to_benchmark import bicycle_benchmark_parameters
+    from bikerider.io.bicycleparameters import detect_format, load_bicycle_file, merge_rider, read_lumped_rider
+    from bikerider.io.toml_input import load_rider_toml
+
+    default_bicycle, default_rider = default_files()
+    bicycle = load_bicycle_file(bicycle_path or default_bicycle)
+    bodies = bicycle if isinstance(bicycle, BicycleBodies) else None
+    notes = list(bodies.notes) if bodies is not None else []
+    if not with_rider:
+        params = bicycle if isinstance(bicycle, BenchmarkParameters) else bicycle_benchmark_parameters(bicycle)
+        return EstimateResult(bodies, None, None, None, params, WhippleModel.from_parameters(params), notes)
+    rider_file = rider_path or default_rider
+    if detect_format(rider_file) == "lumped_rider":
+        rider = read_lumped_rider(rider_file)
+        params = merge_rider(bicycle, rider)
+        return EstimateResult(bodies, rider, None, None, params, WhippleModel.from_parameters(params), notes)
+    rider_measurements = load_rider_toml(rider_file)
+    if bodies is None:
+        raise InputError(
+            "--rider", str(rider_file),
+            "a lumped rider file (mB, xB, zB, IBxx, ...) or --no-rider: the bicycle was given as benchmark "
+            "parameters, which have no geometry to seat the rider model on",
+            str(bicycle_path),
+        )
+    return estimate(bodies, rider_measurements)

@@ -15,8 +15,14 @@ def add_parser(subparsers) -> None:
             "the paper's 2008 Batavus Browser and 72 kg rider."
         ),
     )
-    p.add_argument("--bicycle", metavar="FILE", help="bicycle file (project TOML); default: the paper's bicycle")
-    p.add_argument("--rider", metavar="FILE", help="rider file (project TOML); default: the paper's rider")
+    p.add_argument("--bicycle", metavar="FILE",
+                   help="bicycle: project TOML, or BicycleParameters <Name>Measured.txt (raw measurements) or "
+                        "<Name>Benchmark.txt; the format is detected. Default: the paper's bicycle")
+    rider = p.add_mutually_exclusive_group()
+    rider.add_argument("--rider", metavar="FILE",
+                       help="rider: project TOML (the paper's rider model, seated on the bicycle) or a "
+                            "BicycleParameters lumped rider <Rider><Bike>Benchmark.txt. Default: the paper's rider")
+    rider.add_argument("--no-rider", action="store_true", help="the bicycle alone")
     p.add_argument("--speeds", metavar="START:STOP:N", default="0:10:11",
                    help="speeds for the eigenvalues, m/s, N points (default 0:10:11)")
     p.add_argument("--json", action="store_true", help="print one JSON object instead of text")
@@ -30,45 +36,64 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
 
     from bikerider import report
-    from bikerider.estimate import default_files, estimate
-    from bikerider.io.toml_input import load_bicycle_toml, load_rider_toml
+    from bikerider.estimate import estimate_from_files
 
-    default_bicycle, default_rider = default_files()
     speeds = report.parse_speeds(args.speeds)
-    bicycle = load_bicycle_toml(args.bicycle or default_bicycle)
-    rider = load_rider_toml(args.rider or default_rider)
-    result = estimate(bicycle, rider)
+    result = estimate_from_files(args.bicycle, args.rider, with_rider=not args.no_rider)
     eig = result.model.eigenvalues(speeds)
     rm = result.rider_model
+    bicycle_name = result.bicycle.name if result.bicycle is not None else str(args.bicycle)
+    rider_name = result.rider.name if result.rider is not None else "no rider"
     if args.plot:
         from bikerider import plotting
 
-        plotting.write_figures(args.plot, result.model, eig, rm.grid_points, title=f"{bicycle.name} + {rider.name}")
+        plotting.write_figures(args.plot, result.model, eig, rm.grid_points if rm else None,
+                               title=f"{bicycle_name} + {rider_name}")
     if args.json:
         out = report.model_json(result.parameters, result.model, eig)
-        out["rider"] = {
-            "mass": rm.mass,
-            "com": rm.com.tolist(),
-            "inertia": rm.inertia.tolist(),
-            "grid_points": {str(i + 1): p.tolist() for i, p in enumerate(rm.grid_points)},
-        }
+        out["rider"] = _rider_json(result)
         out["notes"] = result.notes
         print(json.dumps(out, indent=2, allow_nan=False))
         return 0
     np.set_printoptions(precision=4, suppress=True)
-    print(f"Bicycle: {bicycle.name} ({bicycle.source})")
-    print(f"Rider:   {rider.name} ({rider.source})")
-    print()
-    print("Rider (Moore et al. 2009, Eqs. 8 and 14)")
-    print(f"  mass {rm.mass:.3f} kg")
-    print(f"  centre of mass [x, y, z] = [{rm.com[0]:.4f}, {rm.com[1]:.4f}, {rm.com[2]:.4f}] m")
-    for i, row in enumerate(rm.inertia):
-        label = "  inertia about it =" if i == 0 else "                    "
-        print(f"{label} [{row[0]:9.4f} {row[1]:9.4f} {row[2]:9.4f}] kg m^2")
+    print(f"Bicycle: {bicycle_name}" + (f" ({result.bicycle.source})" if result.bicycle is not None else ""))
+    print(f"Rider:   {rider_name}" + (f" ({result.rider.source})" if result.rider is not None else ""))
+    rider = _rider_json(result)
+    if rider is not None:
+        print()
+        print("Rider (Moore et al. 2009, Eqs. 8 and 14)" if rm else "Rider (one rigid body)")
+        print(f"  mass {rider['mass']:.3f} kg")
+        com = rider["com"]
+        print(f"  centre of mass [x, y, z] = [{com[0]:.4f}, {com[1]:.4f}, {com[2]:.4f}] m")
+        for i, row in enumerate(rider["inertia"]):
+            label = "  inertia about it =" if i == 0 else "                    "
+            shown = " ".join("      n/a" if x is None else f"{x:9.4f}" for x in row)
+            print(f"{label} [{shown}] kg m^2")
     print()
     print(report.model_text(result.parameters, result.model, eig))
     for note in result.notes:
         print(f"Note: {note}")
     if args.plot:
-        print(f"\nFigures written to {args.plot}/eigenvalues.png and {args.plot}/side_view.png")
+        print(f"\nFigures written to {args.plot}/")
     return 0
+
+
+def _rider_json(result) -> dict | None:
+    """The ``rider`` object of ``--json``: the rider model, a lumped rider, or None."""
+    import math
+
+    rm = result.rider_model
+    if rm is not None:
+        points = {str(i + 1): (p.tolist() if all(math.isfinite(x) for x in p) else None)
+                  for i, p in enumerate(rm.grid_points)}
+        return {"mass": rm.mass, "com": rm.com.tolist(), "inertia": rm.inertia.tolist(), "grid_points": points}
+    if result.rider is None:
+        return None
+    v = result.rider.values
+    yy = v["IBryy"].value if "IBryy" in v else None
+    return {
+        "mass": v["mBr"].value,
+        "com": [v["xBr"].value, 0.0, v["zBr"].value],
+        "inertia": [[v["IBrxx"].value, 0.0, v["IBrxz"].value], [0.0, yy, 0.0], [v["IBrxz"].value, 0.0, v["IBrzz"].value]],
+        "grid_points": None,
+    }

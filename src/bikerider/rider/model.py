@@ -37,7 +37,8 @@ class RiderModel:
     Attributes
     ----------
     grid_points : ndarray, shape (31, 3)
-        Grid points 1..31 (row ``i`` is point ``i + 1``) [m].
+        Grid points 1..31 (row ``i`` is point ``i + 1``) [m]; the hub points 3, 4, 8, 9 are NaN
+        when the hub widths were not measured (see :attr:`undetermined_points`).
     mass : float
         Rider mass [kg].
     com : ndarray, shape (3,)
@@ -51,17 +52,26 @@ class RiderModel:
     com: np.ndarray
     inertia: np.ndarray
 
+    @property
+    def undetermined_points(self) -> list[int]:
+        """Grid point numbers (1-based) the inputs do not place."""
+        return [i + 1 for i in range(len(self.grid_points)) if not np.all(np.isfinite(self.grid_points[i]))]
+
 
 def model_arguments(bicycle: BicycleBodies, rider: RiderMeasurements) -> dict[str, float]:
-    """Keyword arguments of the generated rider functions."""
-    missing = bicycle.missing_seating()
+    """Keyword arguments of the generated rider functions.
+
+    The hub widths only place the hub grid points (3, 4, 8, 9); when they were not measured
+    (BicycleParameters files have none) those points are NaN and every other result is unchanged.
+    """
+    missing = [k for k in bicycle.missing_seating() if k not in _HUB_WIDTHS]
     if missing:
         raise InputError(
             missing[0], MISSING,
             "a value: seating the rider model needs every Table 1 measurement "
             f"(missing: {', '.join(missing)})", bicycle.source,
         )
-    args = {k: bicycle[k] for k in _GEOMETRY}
+    args = {k: bicycle[k] if k in bicycle.values else math.nan for k in _GEOMETRY}
     args.update({k: rider[k] for k in _PLACEMENT + _SEGMENTS})
     args.update(rider.fractions)
     return args
