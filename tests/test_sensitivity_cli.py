@@ -74,3 +74,10 @@ def test_bicycle_and_rider_files_without_rider_sigmas(capsys):
     assert "l_to" in rows and " 0.0% " in rows["l_to"]  # rider lengths are exact: no share of the variance
     # the seat tube angle (0.5 deg, Table 1) places the 72 kg rider's hip: it leads x_B
     assert rows["lam_st"].split()[0] == "1"
+
+
+def test_characteristic_coefficients_need_a_speed(capsys):
+    status, _, err = run(capsys, "a0")
+    assert status == 2 and "--speed = missing" in err
+    status, out, _ = run(capsys, "a0", "--speed", "5", "--top", "3")
+    assert status == 0 and "a0 (coefficient of s^0" in out

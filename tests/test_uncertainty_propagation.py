@@ -140,3 +140,13 @@ def test_monte_carlo_is_reproducible_and_chunked(browser):
     b = monte_carlo(browser, 5001, seed=9, keep_samples=True)
     assert a.samples is not None and a.samples["v_weave"].shape == (5001,)
     np.testing.assert_array_equal(a.samples["v_weave"], b.samples["v_weave"])
+
+
+def test_a_bicycle_without_critical_speeds_has_no_speed_sigmas(benchmark_values):
+    """Negative trail (c = -0.08 m on the Meijaard et al. 2007 benchmark): never self-stable."""
+    values = {k: Quantity(v, 0.01 * abs(v)) for k, v in benchmark_values.items()}
+    values["c"] = Quantity(-0.08, 0.001)
+    result = propagate(values)
+    assert result.speeds == {"weave": None, "capsize": None}
+    assert any("no weave speed" in n for n in result.notes)
+    assert result.sigmas["M_phiphi"] is not None and result.sigmas["M_phiphi"] > 0

@@ -70,7 +70,7 @@ def table(header: list[str], rows: list[list[str]], markdown: bool = False) -> s
 
 
 def ranking_text(result: UncertaintyResult, output: str, top: int | None = None, markdown: bool = False) -> str:
-    contributions = [c for c in result.contributions(output) if c.derivative != 0 or c.sigma > 0]
+    contributions = [c for c in result.contributions(output) if c.derivative != 0]
     lines = [output_header(result, output), ""]
     lines.append(table(RANKING_HEADER, ranking_rows(contributions, output, top), markdown))
     leader = next((c for c in contributions if c.share > 0), None)
