@@ -150,3 +150,17 @@ def test_a_bicycle_without_critical_speeds_has_no_speed_sigmas(benchmark_values)
     assert result.speeds == {"weave": None, "capsize": None}
     assert any("no weave speed" in n for n in result.notes)
     assert result.sigmas["M_phiphi"] is not None and result.sigmas["M_phiphi"] > 0
+
+
+def test_benchmark_parameters_object_propagates(browser):
+    """A BenchmarkParameters (what estimate gives for Benchmark.txt bicycles or lumped riders)."""
+    from bikerider.benchmark import BenchmarkParameters
+    from bikerider.uncertainty import benchmark_inputs
+
+    # without IByy/IHyy, which the linear model does not use (left out as undetermined)
+    params = BenchmarkParameters.from_mapping({k: v for k, v in browser.items() if k not in ("IByy", "IHyy")})
+    inputs = benchmark_inputs(params)
+    assert inputs["IBxx"] == browser["IBxx"] and "IByy" not in inputs
+    direct = propagate(browser)
+    via = propagate(inputs)
+    assert via.speeds == pytest.approx(direct.speeds, rel=1e-12)

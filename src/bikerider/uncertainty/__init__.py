@@ -18,7 +18,7 @@ Typical use::
     result.speeds            # {"weave": sigma, "capsize": sigma} in m/s
     result.contributions("v_capsize")[0].name   # the measurement to redo first
 """
-from bikerider.uncertainty.inputs import InputSet, paper_inputs, raw_inputs_from_toml
+from bikerider.uncertainty.inputs import InputSet, benchmark_inputs, paper_inputs, raw_inputs_from_toml
 from bikerider.uncertainty.montecarlo import MonteCarloResult, compare, monte_carlo
 from bikerider.uncertainty.propagation import Contribution, UncertaintyResult, propagate
 
@@ -33,6 +33,6 @@ def __getattr__(name: str):
 
 
 __all__ = [
-    "Contribution", "InputSet", "MonteCarloResult", "SensitivityExpression", "UncertaintyResult",
+    "Contribution", "InputSet", "benchmark_inputs", "MonteCarloResult", "SensitivityExpression", "UncertaintyResult",
     "compare", "monte_carlo", "paper_inputs", "propagate", "raw_inputs_from_toml", "sensitivity_expression",
 ]

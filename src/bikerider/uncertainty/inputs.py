@@ -148,6 +148,13 @@ def raw_inputs_from_toml(bicycle: str | Path, rider: str | Path) -> dict[str, Qu
     return out
 
 
+def benchmark_inputs(parameters) -> dict[str, Quantity]:
+    """The benchmark parameters (a :class:`bikerider.benchmark.BenchmarkParameters`) as chain inputs,
+    each with its sigma; undetermined values (``IByy``/``IHyy`` = None) are left out."""
+    return {name: Quantity(float(value), float(parameters.sigmas.get(name, 0.0)))
+            for name, value in parameters.values.items() if value is not None}
+
+
 def paper_files() -> tuple[Path, Path]:
     """The paper's bicycle and rider files shipped with the package."""
     base = resources.files("bikerider") / "data" / "paper"
