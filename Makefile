@@ -27,7 +27,13 @@ derive: $(STAMP)
 	$(PY) -m derive
 
 ## bench: speed and memory benchmarks against baselines measured in the same run
+## (BicycleParameters goes into its own venv, bench/.venv-baseline; without it the bench says so and goes on)
+BASELINE_VENV := bench/.venv-baseline
 bench: $(STAMP)
+	@test -f $(BASELINE_VENV)/.installed || { $(PYTHON) -m venv $(BASELINE_VENV) \
+	  && $(BASELINE_VENV)/bin/python -m pip install --quiet 'bicycleparameters==1.5.2' \
+	  && touch $(BASELINE_VENV)/.installed; } \
+	  || echo "bench: could not install BicycleParameters into $(BASELINE_VENV); running without that baseline"
 	$(PY) bench/run.py
 
 ## docs: regenerate the documents that scripts produce
