@@ -414,7 +414,11 @@ def tyre_descriptor() -> dict[str, sp.Matrix]:
         A[8 + i, 8 + i] = -1
         A[8 + i, 3:8] = -loads[i] * c_alpha / v * rate_part[i, :]
         A[8 + i, 0:3] = -loads[i] * c_alpha / v * S[i, 2:]
-    return {"E": E.applyfunc(sp.factor_terms), "A": A.applyfunc(sp.factor_terms), "B": B}
+    slip = sp.zeros(2, n)
+    slip[:, 0:3] = S[:, 2:]
+    slip[:, 3:8] = rate_part
+    return {"E": E.applyfunc(sp.factor_terms), "A": A.applyfunc(sp.factor_terms), "B": B,
+            "slip": slip.applyfunc(sp.factor_terms), "loads": loads}
 
 
 # ---------------------------------------------------------------------------------------------
@@ -492,6 +496,16 @@ def build() -> GeneratedModule:
                 "x = [phi, delta, theta, u, r, phid, deltad, thetad, F_R, F_F]; drop theta, thetad and the "
                 "theta equation (rows and columns 2 and 7) for a rigid rider. Needs v > 0."
             ),
+        ),
+        GeneratedFunction(
+            name="tyre_slip_contacts",
+            args=bench + upper + [g, v],
+            outputs=[
+                Output("slip", tyre_eq["slip"], "lateral slip velocity of the rear and front contact per state [mixed]"),
+                Output("loads", tyre_eq["loads"], "static normal loads of the rear and front tyre [N]", vector=True),
+            ],
+            summary="Contact slip velocities (slip @ x) and static tyre loads of the tyre model.",
+            notes="For tyre laws other than the linear one of tyre_slip_descriptor (e.g. in validation).",
         ),
     ]
     return GeneratedModule(

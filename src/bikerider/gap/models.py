@@ -1,0 +1,329 @@
+"""Linear bicycle models with any set of candidate effects: state space, eigenvalues, time response.
+
+One :class:`EffectModel` is the Whipple bicycle (benchmark parameters) plus the effects it is given,
+built from the generated code of ``derive/gap_effects.py``:
+
+* no ``rider_lean`` and no ``tyre_slip``: ``whipple_extended_state_matrices`` (state
+  ``[phi, delta, phid, deltad]``);
+* ``rider_lean``: ``rider_lean_matrices`` (state ``[phi, delta, theta, phid, deltad, thetad]``);
+* ``tyre_slip``: ``tyre_slip_descriptor`` (state ``[phi, delta, (theta,) u, r, phid, deltad,
+  (thetad,) F_R, F_F]``).
+
+Steer inertia, damping, stiffness and the passive arms enter every one of them.  A known control
+law acting during the measurements, steer torque ``T_delta = k_phi phi + k_phid phid + k_delta delta
++ k_deltad deltad`` (benchmark sign convention: positive torque turns the handlebar to positive
+steer), closes the loop in every model alike.
+
+Every parameter value may carry a leading batch shape (e.g. ``(P, 1)``) that broadcasts against
+the speeds, which is how the diagnosis evaluates many parameter sets in one call.
+"""
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from bikerider.errors import InputError
+from bikerider.generated import gap_effects as gen
+
+BENCH_ARGS = tuple("w c lam rR mR IRxx IRyy xB zB mB IBxx IBzz IBxz xH zH mH IHxx IHzz IHxz rF mF IFxx IFyy".split())
+"""Benchmark parameters the linear models depend on (plus ``g``)."""
+UPPER_BODY_KEYS = ("m_u", "x_u", "z_u", "IUxx", "IUxz", "IUzz", "z_lean")
+GRIP_KEYS = ("x_grip", "z_grip", "b_grip")
+STRUCTURAL_KEYS = {
+    "steer_inertia": ("I_steer",),
+    "steer_damping": ("c_steer",),
+    "steer_stiffness": ("k_steer",),
+    "passive_arms": ("m_arm", "k_arm", "c_arm"),
+    "rider_lean": ("k_lean", "c_lean"),
+    "tyre_slip": ("c_alpha", "c_gamma", "sigma_t", "t_p"),
+}
+"""The model parameters of each structural effect (``parameters`` has none of its own)."""
+GAIN_NAMES = ("k_phi", "k_phid", "k_delta", "k_deltad")
+OUTPUT_NAMES = ("phi", "delta", "phid", "deltad")
+
+
+@dataclass(frozen=True)
+class RiderGeometry:
+    """Where the rider's moving parts are: the upper body that can lean and the grips.
+
+    Attributes
+    ----------
+    upper_body : dict or None
+        ``m_u, x_u, z_u, IUxx, IUxz, IUzz, z_lean`` (SI); ``None`` for a riderless bicycle.
+    grips : dict
+        ``x_grip, z_grip, b_grip`` [m].
+    notes : str
+        How the values were obtained.
+    """
+
+    upper_body: dict[str, float] | None
+    grips: dict[str, float]
+    notes: str = ""
+
+    def __post_init__(self):
+        for key in GRIP_KEYS:
+            value = self.grips.get(key)
+            if value is None or not math.isfinite(value):
+                raise InputError(f"grips.{key}", value, "a finite number [m]")
+        if self.grips["b_grip"] <= 0:
+            raise InputError("grips.b_grip", self.grips["b_grip"], "a positive half-width [m]")
+        if self.upper_body is not None:
+            for key in UPPER_BODY_KEYS:
+                value = self.upper_body.get(key)
+                if value is None or not math.isfinite(value):
+                    raise InputError(f"upper_body.{key}", value, "a finite number")
+            if self.upper_body["m_u"] <= 0 or self.upper_body["IUxx"] <= 0 or self.upper_body["IUzz"] <= 0:
+                raise InputError("upper_body", self.upper_body, "a positive mass and positive moments of inertia")
+
+
+@dataclass(frozen=True)
+class Control:
+    """Steer torque ``T_delta = k_phi phi + k_phid phid + k_delta delta + k_deltad deltad``.
+
+    Gains in N m/rad and N m s/rad, benchmark sign convention.
+    """
+
+    k_phi: float = 0.0
+    k_phid: float = 0.0
+    k_delta: float = 0.0
+    k_deltad: float = 0.0
+
+    def __post_init__(self):
+        for name in GAIN_NAMES:
+            value = getattr(self, name)
+            if not isinstance(value, (int, float)) or not math.isfinite(value):
+                raise InputError(name, value, "a finite control gain")
+
+    def as_array(self) -> np.ndarray:
+        return np.array([self.k_phi, self.k_phid, self.k_delta, self.k_deltad], dtype=float)
+
+    @property
+    def is_zero(self) -> bool:
+        return not np.any(self.as_array())
+
+
+@dataclass
+class StateSpace:
+    """``x' = A x + B f`` at each speed, ``f = [T_phi, T_delta]``.
+
+    Attributes
+    ----------
+    A : ndarray, shape (..., S, n, n)
+    B : ndarray, shape (..., S, n, 2)
+    outputs : tuple of int
+        State indices of ``phi, delta, phid, deltad``.
+    states : tuple of str
+    """
+
+    A: np.ndarray
+    B: np.ndarray
+    outputs: tuple[int, int, int, int]
+    states: tuple[str, ...]
+
+    def closed_loop(self, gains: np.ndarray | None) -> np.ndarray:
+        """``A + B[:, 1] k^T C`` for gains of shape ``(4,)`` or ``(..., S, 4)``."""
+        if gains is None:
+            return self.A
+        gains = np.asarray(gains, dtype=float)
+        if not np.any(gains):
+            return self.A
+        n = self.A.shape[-1]
+        row = np.zeros(np.broadcast_shapes(gains.shape[:-1], self.A.shape[:-2]) + (1, n))
+        phi, delta, phid, deltad = self.outputs
+        for k, index in enumerate((phi, phid, delta, deltad)):  # the order of GAIN_NAMES
+            row[..., 0, index] = gains[..., k]
+        return self.A + self.B[..., :, 1:2] @ row
+
+
+def _as_float(value) -> np.ndarray:
+    return np.asarray(value, dtype=float)
+
+
+@dataclass
+class EffectModel:
+    """The Whipple bicycle with a set of candidate effects.
+
+    Parameters
+    ----------
+    values : mapping
+        The benchmark parameters in :data:`BENCH_ARGS` and ``g`` (SI); values may be arrays with a
+        leading batch shape.
+    geometry : RiderGeometry
+    effects : mapping
+        Effect name to ``{parameter: value}`` for the structural effects that are on (see
+        :data:`STRUCTURAL_KEYS`).  Missing parameters of an active effect raise ``InputError``.
+    """
+
+    values: Mapping[str, object]
+    geometry: RiderGeometry
+    effects: Mapping[str, Mapping[str, float]] = field(default_factory=dict)
+
+    def __post_init__(self):
+        missing = [k for k in BENCH_ARGS + ("g",) if k not in self.values]
+        if missing:
+            raise InputError(missing[0], "missing", "a value for every benchmark parameter")
+        for name, params in self.effects.items():
+            if name not in STRUCTURAL_KEYS:
+                raise InputError("effect", name, "one of " + ", ".join(STRUCTURAL_KEYS))
+            for key in STRUCTURAL_KEYS[name]:
+                if key not in params:
+                    raise InputError(f"{name}.{key}", "missing", "a value for every parameter of the effect")
+        if ("rider_lean" in self.effects or "passive_arms" in self.effects) and self.geometry.upper_body is None:
+            name = "rider_lean" if "rider_lean" in self.effects else "passive_arms"
+            raise InputError("effect", name, "a model with a rider (this bicycle has no upper body to move)")
+
+    # -- arguments of the generated functions ------------------------------------------------
+    @property
+    def lean(self) -> bool:
+        return "rider_lean" in self.effects
+
+    @property
+    def tyre(self) -> bool:
+        return "tyre_slip" in self.effects
+
+    def _extra(self, key: str, default: float = 0.0):
+        for params in self.effects.values():
+            if key in params:
+                return _as_float(params[key])
+        return default
+
+    def _args(self) -> dict[str, object]:
+        args: dict[str, object] = {k: _as_float(self.values[k]) for k in BENCH_ARGS}
+        args["g"] = _as_float(self.values["g"])
+        for key in ("I_steer", "c_steer", "k_steer", "m_arm", "k_arm", "c_arm"):
+            args[key] = self._extra(key)
+        args.update({k: float(v) for k, v in self.geometry.grips.items()})
+        return args
+
+    def _upper(self) -> dict[str, float]:
+        if self.geometry.upper_body is not None:
+            return dict(self.geometry.upper_body)
+        # No rider: a massless placeholder; its equation is removed with theta.
+        return {"m_u": 0.0, "x_u": 0.0, "z_u": -1.0, "IUxx": 0.0, "IUxz": 0.0, "IUzz": 0.0, "z_lean": -0.5}
+
+    # -- state space ---------------------------------------------------------------------------
+    def state_space(self, speeds) -> StateSpace:
+        """State-space matrices at each speed (shape ``(..., S, n, n)``).
+
+        Raises
+        ------
+        InputError
+            A speed that is not finite and positive (the tyre model divides by it; no model here is
+            meant for standing still).
+        """
+        speeds = _as_float(speeds)
+        if speeds.ndim != 1 or speeds.size == 0 or not np.all(np.isfinite(speeds)) or np.any(speeds <= 0):
+            raise InputError("speeds", speeds.tolist(), "a one-dimensional array of finite, positive speeds [m/s]")
+        args = self._args()
+        if not self.lean and not self.tyre:
+            A, B = gen.whipple_extended_state_matrices(**args, v=speeds)
+            return StateSpace(A, B, (0, 1, 2, 3), ("phi", "delta", "phid", "deltad"))
+        lean_args = dict(args, **self._upper(),
+                         k_lean=self._extra("k_lean", 1.0), c_lean=self._extra("c_lean", 0.0))
+        if not self.tyre:
+            M, C, K = gen.rider_lean_matrices(**lean_args, v=speeds)
+            n = 3
+            Minv_K = np.linalg.solve(M, K)
+            Minv_C = np.linalg.solve(M, C)
+            forces = np.zeros(M.shape[:-2] + (3, 2))
+            forces[..., 0, 0] = 1.0
+            forces[..., 1, 1] = 1.0
+            Minv_B = np.linalg.solve(M, forces)
+            shape = M.shape[:-2]
+            A = np.zeros(shape + (2 * n, 2 * n))
+            A[..., :n, n:] = np.eye(n)
+            A[..., n:, :n] = -Minv_K
+            A[..., n:, n:] = -Minv_C
+            B = np.zeros(shape + (2 * n, 2))
+            B[..., n:, :] = Minv_B
+            return StateSpace(A, B, (0, 1, 3, 4), ("phi", "delta", "theta", "phid", "deltad", "thetad"))
+        tyre_args = dict(lean_args, **{k: self._extra(k) for k in STRUCTURAL_KEYS["tyre_slip"]})
+        E, Ad, Bd = gen.tyre_slip_descriptor(**tyre_args, v=speeds)
+        names = gen_state_names()
+        if not self.lean:
+            keep = [0, 1, 3, 4, 5, 6, 8, 9]
+            E = E[..., keep, :][..., :, keep]
+            Ad = Ad[..., keep, :][..., :, keep]
+            Bd = Bd[..., keep, :]
+            names = tuple(names[k] for k in keep)
+            outputs = (0, 1, 4, 5)
+        else:
+            outputs = (0, 1, 5, 6)
+        return StateSpace(np.linalg.solve(E, Ad), np.linalg.solve(E, Bd), outputs, names)
+
+    # -- analyses --------------------------------------------------------------------------------
+    def eigenvalues(self, speeds, gains=None) -> np.ndarray:
+        """Closed-loop eigenvalues ``(..., S, n)`` at each speed (gains ``(4,)`` or ``(S, 4)``)."""
+        ss = self.state_space(speeds)
+        return np.linalg.eigvals(ss.closed_loop(gains))
+
+    def dynamic_stiffness(self, speeds, omegas) -> np.ndarray:
+        """Open-loop ``D(i omega) = G(i omega)^-1``, ``G`` from ``[T_phi, T_delta]`` to ``[phi, delta]``.
+
+        Returns ``(..., S, F, 2, 2)``: the 2x2 dynamic stiffness the roll and steer coordinates
+        show with every other degree of freedom free.  For the two-degree-of-freedom models it is
+        ``M s^2 + C s + K`` at ``s = i omega``.
+        """
+        ss = self.state_space(speeds)
+        omegas = _as_float(omegas)
+        n = ss.A.shape[-1]
+        s = 1j * omegas[:, None, None]
+        A = ss.A[..., None, :, :]
+        B = ss.B[..., None, :, :]
+        resolvent_B = np.linalg.solve(s * np.eye(n) - A, B.astype(complex))
+        G = resolvent_B[..., list(ss.outputs[:2]), :]
+        return np.linalg.inv(G)
+
+    def simulate(self, speed: float, time, *, initial: Mapping[str, float] | None = None,
+                 gains=None) -> dict[str, np.ndarray]:
+        """Free response from an initial state (e.g. a roll-rate kick), exact for the linear model.
+
+        Parameters
+        ----------
+        speed : float
+        time : array_like
+            Increasing sample times starting at 0 [s].
+        initial : mapping, optional
+            Initial values of ``phi, delta, phid, deltad`` (default ``phid = 0.5`` rad/s).
+        gains : array_like, optional
+            Control gains ``[k_phi, k_phid, k_delta, k_deltad]``.
+
+        Returns
+        -------
+        dict
+            ``time`` and ``phi, delta, phid, deltad`` at the sample times.
+        """
+        from scipy.linalg import expm
+
+        time = _as_float(time)
+        if time.ndim != 1 or time.size < 2 or not np.all(np.isfinite(time)) or np.any(np.diff(time) <= 0):
+            raise InputError("time", time[:5].tolist(), "increasing finite sample times")
+        ss = self.state_space([speed])
+        A = ss.closed_loop(None if gains is None else np.asarray(gains, float))[0]
+        x0 = np.zeros(A.shape[0])
+        for name, value in (initial or {"phid": 0.5}).items():
+            if name not in OUTPUT_NAMES:
+                raise InputError("initial", name, "one of " + ", ".join(OUTPUT_NAMES))
+            x0[ss.outputs[OUTPUT_NAMES.index(name)]] = float(value)
+        states = np.empty((time.size, x0.size))
+        states[0] = x0
+        x = x0
+        steps: dict[float, np.ndarray] = {}
+        for k in range(1, time.size):
+            dt = round(float(time[k] - time[k - 1]), 12)
+            if dt not in steps:
+                steps[dt] = expm(A * dt)
+            x = steps[dt] @ x
+            states[k] = x
+        out = {"time": time.copy()}
+        for name, index in zip(OUTPUT_NAMES, ss.outputs):
+            out[name] = states[:, index].real
+        return out
+
+
+def gen_state_names() -> tuple[str, ...]:
+    """State names of the generated tyre model (with lean)."""
+    return ("phi", "delta", "theta", "u", "r", "phid", "deltad", "thetad", "F_R", "F_F")

@@ -1,0 +1,473 @@
+"""Validation of the gap diagnosis with the effect withheld.
+
+"Measured" data are generated from a richer truth with an implementation that shares nothing with
+the candidate models but the benchmark parameters' meaning, and the diagnosis runs on them blind
+(it sees only the nominal model file and the measured eigenvalues):
+
+* the truth's equations are assembled here by hand: the Whipple matrices from Meijaard et al.
+  (2007) Appendix A (``generated.benchmark_model``, not the Lagrangian of the candidates), an upper
+  body coupled through hand-derived Newton-Euler terms, arm masses moved from the rear body to the
+  handlebar with the parallel-axis theorem, added steer inertia as a change of the front frame's
+  inertia tensor; the tyre truth uses the contact kinematics of the tyre model but its own tyre law
+  (saturating, ``F = mu N tanh(c_alpha alpha / mu)``) with relaxation in time;
+* the effects are nonlinear where nature is: Coulomb steer friction beside viscous, cubic springs,
+  the gravity moment of the leaning upper body as ``sin(theta)``, saturating tyres;
+* every run is a time-domain simulation (:func:`scipy.integrate.solve_ivp`) of a perturbation
+  (random roll-rate and steer-rate kick), with gyro noise on the roll rate and noise on the speed
+  reading, and the weave eigenvalue is extracted from the noisy roll rate by
+  :func:`bikerider.gap.extraction.weave_eigenvalue`, as from a real run;
+* the truth's benchmark parameters differ from the nominal ones by a random draw within their
+  stated uncertainty, and the rider's geometry differs from the diagnosis's default (upper body
+  45 % of the rider's mass instead of 50 %, hip axis 5 cm lower, grips 8 cm higher and 2 cm wider).
+
+The shrinkage the diagnosis predicts (held-out, on the data it has) is compared with the shrinkage
+the selected effects achieve on a fresh data set from the same truth (new kicks, noise, speeds).
+"""
+from __future__ import annotations
+
+import logging
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from bikerider.errors import FitError
+from bikerider.gap.data import CanonicalData, EigenvalueData
+from bikerider.gap.model_input import GapModelInput
+from bikerider.gap.models import BENCH_ARGS
+
+LOG = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class Truth:
+    """A hidden truth: which effects, with which values (truth-side names, SI)."""
+
+    name: str
+    effects: tuple[str, ...]
+    values: dict[str, float]
+    description: str
+
+
+TRUTHS: dict[str, Truth] = {t.name: t for t in (
+    Truth("null", (), {}, "parameter error within the stated uncertainty only"),
+    Truth("steer_damping", ("steer_damping",), {"c_steer": 0.3, "T_coulomb": 0.05},
+          "viscous 0.3 N m s/rad and Coulomb 0.05 N m steer friction"),
+    Truth("steer_inertia", ("steer_inertia",), {"I_steer": 0.2},
+          "0.2 kg m^2 about the steer axis added to the front frame's inertia tensor"),
+    Truth("steer_stiffness", ("steer_stiffness",), {"k_steer": 6.0, "k3_steer": 20.0},
+          "steer spring 6 N m/rad plus 20 N m/rad^3 cubic"),
+    Truth("passive_arms", ("passive_arms",), {"m_arm": 2.5, "k_arm": 4.0, "c_arm": 1.5},
+          "2.5 kg of arms at the grips, 4 N m/rad and 1.5 N m s/rad about the steer axis"),
+    Truth("rider_lean", ("rider_lean",), {"k_lean": 128.0, "c_lean": 50.0, "k3_lean": 200.0},
+          "upper body leaning on 128 N m/rad (+200 N m/rad^3) and 50 N m s/rad (Moore 2012 values)"),
+    Truth("tyre_slip", ("tyre_slip",), {"c_alpha": 13.0, "c_gamma": 0.8, "sigma_t": 0.2, "t_p": 0.02, "mu": 1.0},
+          "tyres 13/rad cornering, 0.8/rad camber, 0.2 m relaxation, 20 mm pneumatic trail, saturating at mu = 1"),
+    Truth("steer_damping+tyre_slip", ("steer_damping", "tyre_slip"),
+          {"c_steer": 0.3, "T_coulomb": 0.05, "c_alpha": 13.0, "c_gamma": 0.8, "sigma_t": 0.2, "t_p": 0.02, "mu": 1.0},
+          "the steer friction and the tyres above together"),
+    Truth("rider_lean+steer_damping", ("rider_lean", "steer_damping"),
+          {"k_lean": 128.0, "c_lean": 50.0, "k3_lean": 200.0, "c_steer": 0.3, "T_coulomb": 0.05},
+          "the leaning upper body and the steer friction above together"),
+    Truth("strong_steer_damping", ("steer_damping",), {"c_steer": 0.5, "T_coulomb": 0.1},
+          "viscous 0.5 N m s/rad and Coulomb 0.1 N m steer friction"),
+)}
+
+TRUTH_GEOMETRY = {"upper_mass_fraction": 0.45, "hip_shift": 0.05, "grip_rise": 0.08, "grip_widen": 0.02}
+"""How the truth's rider differs from the diagnosis's default geometry (see the module docstring)."""
+
+
+@dataclass(frozen=True)
+class Session:
+    """One group of runs: speeds [m/s] and the known control gains."""
+
+    group: str
+    speeds: tuple[float, ...]
+    gains: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
+
+
+@dataclass(frozen=True)
+class Protocol:
+    """How the runs are made and measured."""
+
+    sessions: tuple[Session, ...]
+    duration: float = 6.0
+    rate: float = 100.0
+    start: float = 0.3
+    gyro_noise: float = 0.01
+    speed_noise: float = 0.03
+    speed_jitter: float = 0.1
+
+
+CONTROL = (0.0, 5.0, -2.0, -0.5)
+"""Known stabilising control of the low-speed session (k_phi, k_phid, k_delta, k_deltad)."""
+
+FULL = Protocol((
+    Session("day1", (5.5, 6.2, 6.9, 7.6, 8.3, 9.0)),
+    Session("day2", (5.7, 6.4, 7.1, 7.8, 8.5, 9.2)),
+    Session("day3-controlled", (4.0, 4.7, 5.4, 6.1, 6.8, 7.5), CONTROL),
+))
+"""The documented protocol: three sessions of six runs (18 measured weave eigenvalues)."""
+
+QUICK = Protocol((
+    Session("day1", (5.5, 6.7, 7.9, 9.0)),
+    Session("day2", (5.8, 7.0, 8.2, 9.2)),
+    Session("day3-controlled", (4.0, 5.2, 6.4, 7.5), CONTROL),
+))
+"""A reduced protocol for the unit test: three sessions of four runs."""
+
+
+# ---------------------------------------------------------------------------------------------
+# The truth's equations, assembled independently of the candidate models.
+# ---------------------------------------------------------------------------------------------
+class TruthSimulator:
+    """Time-domain simulation of a hidden truth.
+
+    Parameters
+    ----------
+    model : GapModelInput
+        The nominal model (the truth perturbs it).
+    truth : Truth
+    rng : numpy.random.Generator
+        Draws the parameter error.
+    """
+
+    def __init__(self, model: GapModelInput, truth: Truth, rng: np.random.Generator):
+        self.truth = truth
+        values, sigmas = model.parameters.values, model.parameters.sigmas
+        self.values = {k: float(values[k]) for k in BENCH_ARGS + ("g",)}  # type: ignore[arg-type]
+        for k in BENCH_ARGS:
+            if sigmas.get(k, 0.0) > 0:
+                self.values[k] += sigmas[k] * float(rng.standard_normal())
+        self.geometry = _truth_geometry(model)
+        self.g = self.values["g"]
+
+    # -- ingredients ---------------------------------------------------------------------------
+    def _benchmark_values(self) -> dict[str, float]:
+        v = dict(self.values)
+        t = self.truth.values
+        if "I_steer" in t:
+            lam = v["lam"]
+            s, c = math.sin(lam), math.cos(lam)
+            v["IHxx"] += t["I_steer"] * s * s
+            v["IHzz"] += t["I_steer"] * c * c
+            v["IHxz"] += t["I_steer"] * s * c
+        if "m_arm" in t:
+            v = _move_arms(v, t["m_arm"], self.geometry["grips"])
+        return v
+
+    def canonical(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        from bikerider.generated import benchmark_model as bm
+
+        v = self._benchmark_values()
+        return bm.canonical_matrices(**{k: v[k] for k in BENCH_ARGS})
+
+    def _lean_terms(self, speed: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Hand-derived coupling of an upper body leaning about a longitudinal hip axis.
+
+        Newton-Euler with the yaw rate ``psi' = (c delta' + v delta) cos(lam) / w`` of the rolling
+        bicycle: the upper body's lateral acceleration ``v psi' + x psi'' - z phi'' + h theta''``
+        and roll acceleration ``phi'' + theta''`` give its equation and its reactions on the roll
+        and (through the front contact force, factor ``c cos(lam) / w``) steer equations.
+        """
+        v = self.values
+        u = self.geometry["upper"]
+        m, x, z, Ixx, Ixz = u["m_u"], u["x_u"], u["z_u"], u["IUxx"], u["IUxz"]
+        h = u["z_lean"] - z  # height of the upper body's centre above the hip axis
+        nu1 = v["c"] * math.cos(v["lam"]) / v["w"]
+        nu0 = math.cos(v["lam"]) / v["w"]
+        M = np.zeros((3, 3))
+        C = np.zeros((3, 3))
+        K = np.zeros((3, 3))
+        M[0, 2] = M[2, 0] = Ixx - m * z * h
+        M[2, 2] = Ixx + m * h * h
+        M[1, 2] = M[2, 1] = nu1 * (Ixz + m * x * h)
+        C[2, 1] = speed * (m * h * (nu1 + x * nu0) + Ixz * nu0)
+        K[2, 1] = speed**2 * m * h * nu0
+        K[0, 2] = -self.g * m * h
+        return M, C, K
+
+    # -- right-hand sides -------------------------------------------------------------------------
+    def rhs(self, speed: float, gains) -> tuple[callable, int, tuple[int, int, int, int]]:
+        """``(f(t, x), n_states, (phi, delta, phid, deltad) indices)`` for one speed."""
+        t = self.truth.values
+        gains = np.asarray(gains, dtype=float)
+        c_s, T_c = t.get("c_steer", 0.0), t.get("T_coulomb", 0.0)
+        k_s, k3_s = t.get("k_steer", 0.0), t.get("k3_steer", 0.0)
+        k_a, c_a = t.get("k_arm", 0.0), t.get("c_arm", 0.0)
+
+        def steer_torque(phi, delta, phid, deltad):
+            control = gains @ np.array([phi, phid, delta, deltad])
+            passive = -(c_s + c_a) * deltad - T_c * math.tanh(deltad / 0.02) - (k_s + k_a) * delta - k3_s * delta**3
+            return control + passive
+
+        if "tyre_slip" in self.truth.effects:
+            return self._tyre_rhs(speed, steer_torque)
+        M2, C1, K0, K2 = self.canonical()
+        lean = "rider_lean" in self.truth.effects
+        n = 3 if lean else 2
+        M = np.zeros((n, n))
+        C = np.zeros((n, n))
+        K = np.zeros((n, n))
+        M[:2, :2], C[:2, :2], K[:2, :2] = M2, speed * C1, self.g * K0 + speed**2 * K2
+        if lean:
+            Ml, Cl, Kl = self._lean_terms(speed)
+            M += Ml
+            C += Cl
+            K += Kl
+            m_u, h = self.geometry["upper"]["m_u"], self.geometry["upper"]["z_lean"] - self.geometry["upper"]["z_u"]
+            k_l, c_l, k3_l = t["k_lean"], t["c_lean"], t.get("k3_lean", 0.0)
+        Minv = np.linalg.inv(M)
+
+        def f(_, x):
+            q, qd = x[:n], x[n:]
+            forces = -C @ qd - K @ q
+            forces[1] += steer_torque(q[0], q[1], qd[0], qd[1])
+            if lean:
+                theta = q[2]
+                # K[2, :] holds no gravity: the upper body's gravity moment and spring enter in full
+                forces[2] += self.g * m_u * h * math.sin(q[0] + theta)
+                forces[2] += -k_l * theta - k3_l * theta**3 - c_l * qd[2]
+            return np.concatenate([qd, Minv @ forces])
+
+        return f, 2 * n, (0, 1, n, n + 1)
+
+    def _tyre_rhs(self, speed: float, steer_torque):
+        from bikerider.generated import gap_effects as gen
+
+        t = self.truth.values
+        v = dict(self._benchmark_values())
+        upper = {"m_u": 0.0, "x_u": 0.0, "z_u": -1.0, "IUxx": 0.0, "IUxz": 0.0, "IUzz": 0.0, "z_lean": -0.5}
+        bench = {k: v[k] for k in BENCH_ARGS}
+        zero = {"k_lean": 1.0, "c_lean": 0.0, "I_steer": 0.0, "c_steer": 0.0, "k_steer": 0.0, "m_arm": 0.0,
+                "k_arm": 0.0, "c_arm": 0.0, **{k: 0.3 for k in ("x_grip", "z_grip", "b_grip")}}
+        E, A, _ = gen.tyre_slip_descriptor(**bench, **upper, **zero, c_alpha=t["c_alpha"], c_gamma=t["c_gamma"],
+                                           sigma_t=t["sigma_t"], t_p=t["t_p"], g=self.g, v=speed)
+        slip, loads = gen.tyre_slip_contacts(**bench, **upper, g=self.g, v=speed)
+        keep = [0, 1, 3, 4, 5, 6, 8, 9]
+        E, A, slip = E[np.ix_(keep, keep)], A[np.ix_(keep, keep)], slip[:, keep]
+        mech = slice(0, 6)
+        Einv = np.linalg.inv(E[mech, mech])
+        A_mech = A[mech, :]
+        mu, c_alpha, sigma = t["mu"], t["c_alpha"], t["sigma_t"]
+
+        def f(_, x):
+            rhs = A_mech @ x
+            rhs[5] += steer_torque(x[0], x[1], x[4], x[5])  # the steer equation
+            xd = np.empty_like(x)
+            xd[mech] = Einv @ rhs
+            alpha = -(slip @ x) / speed
+            target = mu * loads * np.tanh(c_alpha * alpha / mu)
+            xd[6:] = speed / sigma * (target - x[6:])
+            return xd
+
+        return f, 8, (0, 1, 4, 5)
+
+    def run(self, speed: float, gains, kick: tuple[float, float], duration: float, rate: float):
+        """Simulate a kick ``(phid, deltad)`` at ``speed``; return sample times and roll rate."""
+        from scipy.integrate import solve_ivp
+
+        f, n, idx = self.rhs(speed, gains)
+        x0 = np.zeros(n)
+        x0[idx[2]], x0[idx[3]] = kick
+        times = np.arange(0.0, duration, 1.0 / rate)
+
+        def fall(_, x):
+            return abs(x[idx[0]]) - 0.5
+
+        fall.terminal = True
+        sol = solve_ivp(f, (0.0, duration), x0, t_eval=times, method="LSODA", rtol=1e-8, atol=1e-10, events=fall)
+        return sol.t, sol.y[idx[2]]
+
+
+def _truth_geometry(model: GapModelInput) -> dict:
+    """The truth's rider: the default geometry moved as :data:`TRUTH_GEOMETRY` says."""
+    grips = dict(model.geometry.grips)
+    grips["z_grip"] -= TRUTH_GEOMETRY["grip_rise"]
+    grips["b_grip"] += TRUTH_GEOMETRY["grip_widen"]
+    upper = None
+    if model.geometry.upper_body is not None:
+        upper = dict(model.geometry.upper_body)
+        if model.rider is not None:
+            scale = TRUTH_GEOMETRY["upper_mass_fraction"] * model.rider["mass"] / upper["m_u"]
+            for key in ("m_u", "IUxx", "IUxz", "IUzz"):
+                upper[key] *= scale
+        upper["z_lean"] += TRUTH_GEOMETRY["hip_shift"]
+    return {"grips": grips, "upper": upper}
+
+
+def _move_arms(v: dict[str, float], m_arm: float, grips: dict[str, float]) -> dict[str, float]:
+    """Move two point masses ``m_arm / 2`` at the grips from the rear body to the front frame."""
+    out = dict(v)
+    xg, zg, bg = grips["x_grip"], grips["z_grip"], grips["b_grip"]
+
+    def combine(m, x, z, Ixx, Ixz, Izz, dm, sign):
+        m2 = m + sign * dm
+        x2 = (m * x + sign * dm * xg) / m2
+        z2 = (m * z + sign * dm * zg) / m2
+        # inertia about the new centre: parallel-axis theorem for both bodies, two symmetric points
+        Ixx2 = Ixx + m * (z - z2) ** 2 + sign * dm * ((zg - z2) ** 2 + bg**2)
+        Izz2 = Izz + m * (x - x2) ** 2 + sign * dm * ((xg - x2) ** 2 + bg**2)
+        Ixz2 = Ixz - m * (x - x2) * (z - z2) - sign * dm * (xg - x2) * (zg - z2)
+        return m2, x2, z2, Ixx2, Ixz2, Izz2
+
+    out["mB"], out["xB"], out["zB"], out["IBxx"], out["IBxz"], out["IBzz"] = combine(
+        v["mB"], v["xB"], v["zB"], v["IBxx"], v["IBxz"], v["IBzz"], m_arm, -1)
+    out["mH"], out["xH"], out["zH"], out["IHxx"], out["IHxz"], out["IHzz"] = combine(
+        v["mH"], v["xH"], v["zH"], v["IHxx"], v["IHxz"], v["IHzz"], m_arm, +1)
+    return out
+
+
+# ---------------------------------------------------------------------------------------------
+# Measuring, diagnosing, scoring
+# ---------------------------------------------------------------------------------------------
+def measure(simulator: TruthSimulator, protocol: Protocol, rng: np.random.Generator) -> tuple[EigenvalueData, list[str]]:
+    """Run every session of the protocol and extract the weave eigenvalues as from real runs."""
+    from bikerider.gap.extraction import weave_eigenvalue
+
+    rows = {k: [] for k in ("speed", "value", "rs", "is", "group", "gains")}
+    notes = []
+    for session in protocol.sessions:
+        for nominal_speed in session.speeds:
+            speed = nominal_speed + protocol.speed_jitter * float(rng.uniform(-1, 1))
+            kick = (float(rng.choice([-1, 1]) * rng.uniform(0.2, 0.4)), float(rng.uniform(-0.8, 0.8)))
+            t, roll_rate = simulator.run(speed, session.gains, kick, protocol.duration, protocol.rate)
+            y = roll_rate + protocol.gyro_noise * rng.standard_normal(roll_rate.size)
+            keep = t >= protocol.start
+            try:
+                est = weave_eigenvalue(t[keep], y[keep])
+            except FitError as exc:
+                notes.append(f"{session.group} {speed:.2f} m/s: no weave fitted ({exc})")
+                continue
+            rows["speed"].append(speed + protocol.speed_noise * float(rng.standard_normal()))
+            rows["value"].append(complex(est.eigenvalue.real, abs(est.eigenvalue.imag)))
+            rows["rs"].append(est.real_sigma)
+            rows["is"].append(est.imag_sigma)
+            rows["group"].append(session.group)
+            rows["gains"].append(session.gains)
+    n = len(rows["speed"])
+    data = EigenvalueData(np.array(rows["speed"]), np.array(rows["value"], complex), np.array(rows["rs"]),
+                          np.array(rows["is"]), np.full(n, protocol.speed_noise), ["weave"] * n, rows["group"],
+                          np.array(rows["gains"], float).reshape(n, 4), [f"simulated run {k + 1}" for k in range(n)])
+    return data, notes
+
+
+@dataclass
+class CaseResult:
+    """One blind diagnosis of one hidden truth."""
+
+    truth: str
+    hidden: tuple[str, ...]
+    seed: int
+    verdict: str
+    ranking: list[str]
+    ties_with_first: list[str]
+    selected: list[str]
+    predicted_shrink: float | None
+    actual_shrink: float | None
+    n_measured: int
+    seconds: float
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def top(self) -> str:
+        """The predicted label: the first-ranked effect for a structural verdict, else the verdict."""
+        if self.verdict != "structural" or not self.ranking:
+            return self.verdict
+        return self.ranking[0]
+
+    @property
+    def correct(self) -> bool:
+        """Null: no structural verdict.  Effect: structural verdict and a hidden effect ranked first."""
+        if not self.hidden:
+            return self.verdict != "structural"
+        return self.verdict == "structural" and bool(self.ranking) and self.ranking[0] in self.hidden
+
+
+def run_case(model: GapModelInput, truth_name: str, seed: int, protocol: Protocol = FULL) -> CaseResult:
+    """Generate data from one truth, diagnose it blind, and score the predicted shrinkage."""
+    from bikerider.gap.diagnosis import Diagnosis, gap_shrink
+    from bikerider.gap.fit import GapProblem
+
+    start = time.perf_counter()
+    truth = TRUTHS[truth_name]
+    rng = np.random.default_rng(seed)
+    simulator = TruthSimulator(model, truth, rng)
+    data, notes = measure(simulator, protocol, rng)
+    empty = CanonicalData([], np.empty(0), np.empty(0), [], {}, [])
+    diagnosis = Diagnosis(model, data, empty)
+    result = diagnosis.as_dict()
+    ranking = [r["effect"] for r in result["ranking"]]
+    ties = result["ranking"][0]["tied_with"] if result["ranking"] else []
+    predicted = actual = None
+    if diagnosis.selected and result["how_far"] is not None:
+        predicted = result["how_far"]["shrink"]
+        fresh, _ = measure(simulator, protocol, np.random.default_rng(seed + 10_000))
+        test = GapProblem(model, fresh, empty)
+        fitted = diagnosis.problem.fitted_model(diagnosis.selected_fit)
+        z_before = test.z(test.baseline)
+        z_after = test.z(test.predictor.predict(fitted))
+        actual = gap_shrink(z_before, z_after)
+    return CaseResult(truth_name, truth.effects, seed, result["verdict"], ranking, ties, list(diagnosis.selected),
+                      predicted, actual, len(data), time.perf_counter() - start, notes + result["notes"])
+
+
+@dataclass
+class SuiteResult:
+    """Scores over many cases."""
+
+    cases: list[CaseResult]
+
+    @property
+    def effect_cases(self) -> list[CaseResult]:
+        return [c for c in self.cases if c.hidden]
+
+    @property
+    def null_cases(self) -> list[CaseResult]:
+        return [c for c in self.cases if not c.hidden]
+
+    @property
+    def first_rate(self) -> tuple[int, int]:
+        """(hidden effect ranked first with a structural verdict, effect cases)."""
+        cases = self.effect_cases
+        return sum(c.correct for c in cases), len(cases)
+
+    @property
+    def false_alarms(self) -> tuple[int, int]:
+        """(null cases with a structural verdict, null cases)."""
+        cases = self.null_cases
+        return sum(c.verdict == "structural" for c in cases), len(cases)
+
+    @property
+    def shrink_errors(self) -> np.ndarray:
+        """Predicted minus actual shrinkage, for every case with a selection."""
+        return np.array([c.predicted_shrink - c.actual_shrink for c in self.cases
+                         if c.predicted_shrink is not None and c.actual_shrink is not None])
+
+    def confusion(self) -> tuple[list[str], list[str], np.ndarray]:
+        """Rows: truths; columns: predicted labels (first-ranked effect, or the verdict)."""
+        rows = list(dict.fromkeys(c.truth for c in self.cases))
+        cols = list(dict.fromkeys(["none", "parameters"] + [c.top for c in self.cases]))
+        table = np.zeros((len(rows), len(cols)), int)
+        for c in self.cases:
+            table[rows.index(c.truth), cols.index(c.top)] += 1
+        return rows, cols, table
+
+
+def run_suite(model: GapModelInput, cases: list[tuple[str, int]], protocol: Protocol = FULL) -> SuiteResult:
+    """Run :func:`run_case` for every ``(truth, seed)``."""
+    results = []
+    for truth, seed in cases:
+        result = run_case(model, truth, seed, protocol)
+        LOG.info("%s seed %d: verdict %s, first %s (%.1f s)", truth, seed, result.verdict,
+                 result.ranking[:1], result.seconds)
+        results.append(result)
+    return SuiteResult(results)
+
+
+FULL_CASES = ([(name, 100 + k) for k, name in enumerate(
+    ["steer_damping", "steer_inertia", "steer_stiffness", "passive_arms", "rider_lean", "tyre_slip",
+     "steer_damping+tyre_slip", "rider_lean+steer_damping", "strong_steer_damping", "passive_arms"])]
+    + [("null", 200 + k) for k in range(10)])
+"""The documented case set: ten effect cases and ten null cases."""
