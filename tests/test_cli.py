@@ -26,6 +26,12 @@ def test_estimate_json_default(capsys):
     assert len(out["eigenvalues"]["speeds"]) == 21
     assert all(len(row) == 4 and all(len(z) == 2 for z in row) for row in out["eigenvalues"]["values"])
     assert out["rider"]["mass"] == pytest.approx(72.0)
+    # First-order uncertainty from the paper's stated accuracies: the front wheel's compound
+    # pendulum period (1.37 +/- 0.06 s) dominates both critical speeds (docs/sensitivity.md).
+    assert set(out["uncertainty"]["benchmark"]) == set(NAMES)
+    assert out["uncertainty"]["benchmark"]["w"] == pytest.approx(0.002)  # Table 1: +/- 0.002 m
+    assert 0.3 < out["uncertainty"]["speeds"]["weave"] < 1.0
+    assert 0.5 < out["uncertainty"]["speeds"]["capsize"] < 2.0
     assert sorted(out["rider"]["grid_points"], key=int) == [str(i) for i in range(1, 32)]
     assert len(out["rider"]["inertia"]) == 3
 

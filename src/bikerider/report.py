@@ -46,8 +46,9 @@ def _matrix_text(name: str, m: np.ndarray) -> list[str]:
     return [f"  {name:3s} = [[{m[0, 0]:12.6f} {m[0, 1]:12.6f}]", f"         [{m[1, 0]:12.6f} {m[1, 1]:12.6f}]]"]
 
 
-def model_text(parameters: BenchmarkParameters, model: WhippleModel, eig: ModalEigenvalues) -> str:
-    """Readable text: parameters, matrices, critical speeds, eigenvalue table."""
+def model_text(parameters: BenchmarkParameters, model: WhippleModel, eig: ModalEigenvalues,
+               speed_sigmas: dict[str, float | None] | None = None) -> str:
+    """Readable text: parameters (with sigmas), matrices, critical speeds, eigenvalue table."""
     lines = ["Benchmark parameters (Meijaard et al. 2007, Table 1 names; SI units)"]
     for name in BENCHMARK_NAMES:
         value, sigma = parameters.values[name], parameters.sigmas.get(name, 0.0)
@@ -59,8 +60,9 @@ def model_text(parameters: BenchmarkParameters, model: WhippleModel, eig: ModalE
         lines.extend(_matrix_text(name, getattr(model, name)))
     speeds = model.critical_speeds()
     lines.append("")
-    lines.append(f"Weave speed   {_speed(speeds.weave)}")
-    lines.append(f"Capsize speed {_speed(speeds.capsize)}")
+    sig = speed_sigmas or {}
+    lines.append(f"Weave speed   {_speed(speeds.weave, sig.get('weave'))}")
+    lines.append(f"Capsize speed {_speed(speeds.capsize, sig.get('capsize'))}")
     if speeds.stable_range:
         lines.append(f"Self-stable from {speeds.stable_range[0]:.4f} to {speeds.stable_range[1]:.4f} m/s")
     else:
@@ -77,5 +79,7 @@ def model_text(parameters: BenchmarkParameters, model: WhippleModel, eig: ModalE
     return "\n".join(lines)
 
 
-def _speed(v: float | None) -> str:
-    return "none at positive speed" if v is None else f"{v:.4f} m/s"
+def _speed(v: float | None, sigma: float | None = None) -> str:
+    if v is None:
+        return "none at positive speed"
+    return f"{v:.4f} +/- {sigma:.2g} m/s (first order)" if sigma else f"{v:.4f} m/s"

@@ -65,6 +65,13 @@ class BicycleBodies:
     source: str = "<memory>"
     name: str = "bicycle"
     notes: list[str] = field(default_factory=list)
+    raw_inputs: dict[str, Quantity] = field(default_factory=dict)
+    """Measurements before their reduction to ``values`` (pendulum periods, axis angles, the pendulum
+    stiffness and length), keyed by the input names of the sensitivity chain (``derive/sensitivities.py``:
+    ``k_t``, ``T_Rxx``, ``T_Fyy``, ``l_pF``, ``T_Bf1``, ``alpha_Bf1``, ...), so that uncertainty
+    propagation keeps the correlations the reductions create."""
+    reduced: tuple[str, ...] = ()
+    """Names of ``values`` computed from ``raw_inputs``."""
 
     def __post_init__(self) -> None:
         self.validate()
@@ -84,6 +91,7 @@ class BicycleBodies:
                 check_degrees(f"{key}_deg", math.degrees(q.value), self.source)
             if key in _LIMITS:
                 check_magnitude(key, q.value, *_LIMITS[key], self.source)
+                check_magnitude(f"{key} uncertainty", q.sigma, *_LIMITS[key], self.source)
             if key in ("w", "rR", "rF") and not q.value >= 1e-3:  # the model divides by these
                 raise InputError(key, q.value, "at least 0.001 m (SI units: a length in metres)", self.source)
         for key in ("zBf", "zH"):

@@ -35,11 +35,16 @@ def run(args: argparse.Namespace) -> int:
 
     import numpy as np
 
+    from dataclasses import replace
+
     from bikerider import report
-    from bikerider.estimate import estimate_from_files
+    from bikerider.estimate import estimate_from_files, estimate_uncertainty
 
     speeds = report.parse_speeds(args.speeds)
     result = estimate_from_files(args.bicycle, args.rider, with_rider=not args.no_rider)
+    uncertainty = estimate_uncertainty(result)
+    sigmas = {k: v for k, v in uncertainty.benchmark.items() if v is not None}
+    parameters = replace(result.parameters, sigmas={**result.parameters.sigmas, **sigmas})
     eig = result.model.eigenvalues(speeds)
     rm = result.rider_model
     bicycle_name = result.bicycle.name if result.bicycle is not None else str(args.bicycle)
@@ -50,7 +55,9 @@ def run(args: argparse.Namespace) -> int:
         plotting.write_figures(args.plot, result.model, eig, rm.grid_points if rm else None,
                                title=f"{bicycle_name} + {rider_name}")
     if args.json:
-        out = report.model_json(result.parameters, result.model, eig)
+        out = report.model_json(parameters, result.model, eig)
+        out["uncertainty"] = {"benchmark": uncertainty.benchmark, "speeds": uncertainty.speeds,
+                              "method": "first-order propagation of the uncertainties stated in the input files"}
         out["rider"] = _rider_json(result)
         out["notes"] = result.notes
         print(json.dumps(out, indent=2, allow_nan=False))
@@ -70,7 +77,7 @@ def run(args: argparse.Namespace) -> int:
             shown = " ".join("      n/a" if x is None else f"{x:9.4f}" for x in row)
             print(f"{label} [{shown}] kg m^2")
     print()
-    print(report.model_text(result.parameters, result.model, eig))
+    print(report.model_text(parameters, result.model, eig, uncertainty.speeds))
     for note in result.notes:
         print(f"Note: {note}")
     if args.plot:

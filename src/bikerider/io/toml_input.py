@@ -87,7 +87,8 @@ class _Section:
         return [parse_quantity(x, f"{_join(self.name, key)}[{i}]", self.source).scaled(scale) for i, x in enumerate(items)]
 
 
-def _wheel(section: _Section, k_t: Quantity | None, g: Quantity, prefix: str) -> dict[str, Quantity]:
+def _wheel(section: _Section, k_t: Quantity | None, g: Quantity, prefix: str,
+           raw: dict[str, Quantity]) -> dict[str, Quantity]:
     mass = section.quantity("mass")
     out = {f"m{prefix}": mass}
     source = section.source
@@ -96,15 +97,17 @@ def _wheel(section: _Section, k_t: Quantity | None, g: Quantity, prefix: str) ->
         sub = section.section("Ixx", {"torsional_period"})
         if k_t is None:
             raise InputError("torsional_pendulum.k_t", "missing", "the pendulum stiffness, to reduce torsional periods", source)
-        out[f"I{prefix}xx"] = pendulum.torsional_inertia(k_t, sub.quantity("torsional_period"), f"{sub.name}.torsional_period", source)
+        raw[f"T_{prefix}xx"] = sub.quantity("torsional_period")  # type: ignore[assignment]
+        out[f"I{prefix}xx"] = pendulum.torsional_inertia(k_t, raw[f"T_{prefix}xx"], f"{sub.name}.torsional_period", source)
     else:
         out[f"I{prefix}xx"] = section.quantity("Ixx")  # type: ignore[assignment]
     # I_yy: given, or from a compound pendulum (Eq. 7).
     if isinstance(section.data.get("Iyy"), dict) and "compound_period" in section.data["Iyy"]:
         sub = section.section("Iyy", {"compound_period", "pendulum_length"})
+        raw[f"T_{prefix}yy"] = sub.quantity("compound_period")  # type: ignore[assignment]
+        raw[f"l_p{prefix}"] = sub.quantity("pendulum_length")  # type: ignore[assignment]
         out[f"I{prefix}yy"] = pendulum.compound_inertia(
-            sub.quantity("compound_period"), mass, sub.quantity("pendulum_length"), g,  # type: ignore[arg-type]
-            f"{sub.name}.compound_period", source,
+            raw[f"T_{prefix}yy"], mass, raw[f"l_p{prefix}"], g, f"{sub.name}.compound_period", source,
         )
     else:
         out[f"I{prefix}yy"] = section.quantity("Iyy")  # type: ignore[assignment]
@@ -143,7 +146,7 @@ def _com_from_lines(com: _Section) -> tuple[Quantity, Quantity]:
     return out["x"], out["z"]
 
 
-def _frame(section: _Section, k_t: Quantity | None, prefix: str) -> dict[str, Quantity]:
+def _frame(section: _Section, k_t: Quantity | None, prefix: str, raw: dict[str, Quantity]) -> dict[str, Quantity]:
     out = {f"m{prefix}": section.quantity("mass")}
     com = section.section("com", {"x", "z", "lines"})
     if com.has("lines"):
@@ -155,9 +158,11 @@ def _frame(section: _Section, k_t: Quantity | None, prefix: str) -> dict[str, Qu
         sub = section.section("inertia", {"periods", "alpha_deg", "Iyy"})
         if k_t is None:
             raise InputError("torsional_pendulum.k_t", "missing", "the pendulum stiffness, to reduce torsional periods", section.source)
-        Ixx, Ixz, Izz = pendulum.inertia_from_orientations(
-            k_t, sub.quantities("periods"), sub.quantities("alpha_deg", DEG), section.name, section.source
-        )
+        periods, angles = sub.quantities("periods"), sub.quantities("alpha_deg", DEG)
+        Ixx, Ixz, Izz = pendulum.inertia_from_orientations(k_t, periods, angles, section.name, section.source)
+        if len(periods) == 3:  # the closed form of Eq. 6 the sensitivities differentiate
+            for i, (period, angle) in enumerate(zip(periods, angles), start=1):
+                raw[f"T_{prefix}{i}"], raw[f"alpha_{prefix}{i}"] = period, angle
     else:
         sub = section.section("inertia", {"Ixx", "Ixz", "Izz", "Iyy"})
         Ixx, Ixz, Izz = sub.quantity("Ixx"), sub.quantity("Ixz"), sub.quantity("Izz")  # type: ignore[assignment]
@@ -193,11 +198,29 @@ def load_bicycle_toml(path: str | Path) -> BicycleBodies:
     k_t = None
     if top.has("torsional_pendulum"):
         k_t = top.section("torsional_pendulum", {"k_t"}).quantity("k_t")
-    values.update(_wheel(top.section("rear_wheel", {"mass", "Ixx", "Iyy"}), k_t, g, "R"))
-    values.update(_wheel(top.section("front_wheel", {"mass", "Ixx", "Iyy"}), k_t, g, "F"))
-    values.update(_frame(top.section("rear_frame", {"mass", "com", "inertia"}), k_t, "Bf"))
-    values.update(_frame(top.section("handlebar_fork", {"mass", "com", "inertia"}), k_t, "H"))
-    return BicycleBodies(values, source, str(name))
+    raw: dict[str, Quantity] = {}
+    values.update(_wheel(top.section("rear_wheel", {"mass", "Ixx", "Iyy"}), k_t, g, "R", raw))
+    values.update(_wheel(top.section("front_wheel", {"mass", "Ixx", "Iyy"}), k_t, g, "F", raw))
+    values.update(_frame(top.section("rear_frame", {"mass", "com", "inertia"}), k_t, "Bf", raw))
+    values.update(_frame(top.section("handlebar_fork", {"mass", "com", "inertia"}), k_t, "H", raw))
+    reduced = _reduced_names(raw)
+    if raw and k_t is not None:
+        raw["k_t"] = k_t
+    return BicycleBodies(values, source, str(name), raw_inputs=raw, reduced=reduced)
+
+
+def _reduced_names(raw: dict[str, Quantity]) -> tuple[str, ...]:
+    """The values computed from the raw measurements in ``raw``."""
+    names = []
+    for w in ("R", "F"):
+        if f"T_{w}xx" in raw:
+            names.append(f"I{w}xx")
+        if f"T_{w}yy" in raw:
+            names.append(f"I{w}yy")
+    for b in ("Bf", "H"):
+        if f"T_{b}1" in raw:
+            names += [f"I{b}xx", f"I{b}xz", f"I{b}zz"]
+    return tuple(names)
 
 
 def load_rider_toml(path: str | Path) -> RiderMeasurements:
