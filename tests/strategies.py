@@ -15,9 +15,13 @@ bicycle and a rider and rejects (``hypothesis.reject``) the pairs the project it
 """
 from __future__ import annotations
 
+import contextlib
 import functools
+import io
 import json
 import math
+import re
+from collections.abc import Iterable
 from pathlib import Path
 
 import numpy as np
@@ -172,3 +176,124 @@ def inertia_tensors(draw) -> np.ndarray:
     xx, zz, xz = rotate_xz(a, b, 0.0, draw(factor(-math.pi, math.pi)), 1.0)
     yy = yy_between(xx, zz, xz, draw(factor(0.02, 0.98)))
     return np.array([[xx, 0.0, xz], [0.0, yy, 0.0], [xz, 0.0, zz]])
+
+
+# =============================================================================================
+# Hostile input (tests/test_fuzz_*.py): byte-level mutations of valid input files, and the
+# contract every reader must keep on them.  A reader either returns values that are all finite
+# (or None where a value is documented as not determined), or raises a BikeriderError whose
+# message names the file.  Any other exception - a NumPy or Python traceback - breaks it, and so
+# does any RuntimeWarning, which pytest turns into an error (filterwarnings = error::RuntimeWarning).
+# =============================================================================================
+
+BAD_NUMBERS = (
+    "nan", "NaN", "inf", "-inf", "1e308", "-1e308", "1e-308", "1e400", "-1", "0", "-0.5", "1120", "1e6",
+    "abc", "true", "", "1,2", "+/-", "1+/-nan", "1 +/- 1e308", "1+/--1", "0x10", "1_000", "٣", "1e", "--1",
+)
+"""Replacements for one number: non-finite, huge, tiny, negative, zero, unit slips, not numbers."""
+
+_NUMBER = re.compile(rb"-?\d+\.?\d*(?:[eE][+-]?\d+)?")
+
+MUTATIONS = ("number", "number", "number", "truncate", "byte", "delete_line", "duplicate_line",
+             "swap_lines", "junk_line", "not_utf8")
+
+
+@st.composite
+def mutated(draw, data: bytes) -> tuple[str, bytes]:
+    """``(description, mutated bytes)`` of ``data``: one hostile change."""
+    kind = draw(st.sampled_from(MUTATIONS))
+    lines = data.split(b"\n")
+    if kind == "number":
+        candidates = [i for i, line in enumerate(lines) if _NUMBER.search(line.split(b"#")[0])]
+        i = draw(st.sampled_from(candidates))
+        code, hash_, comment = lines[i].partition(b"#")
+        matches = list(_NUMBER.finditer(code))
+        m = matches[draw(st.integers(0, len(matches) - 1))]
+        bad = draw(st.sampled_from(BAD_NUMBERS)).encode()
+        lines[i] = code[:m.start()] + bad + code[m.end():] + hash_ + comment
+        return f"line {i + 1}: {m.group().decode()} -> {bad.decode()!r}", b"\n".join(lines)
+    if kind == "truncate":
+        k = draw(st.integers(0, len(data) - 1))
+        return f"truncated at byte {k}", data[:k]
+    if kind == "byte":
+        k = draw(st.integers(0, len(data) - 1))
+        b = draw(st.integers(0, 255))
+        return f"byte {k} -> {b:#x}", data[:k] + bytes([b]) + data[k + 1:]
+    if kind == "not_utf8":
+        k = draw(st.integers(0, len(data)))
+        return f"\\xff\\xfe at byte {k}", data[:k] + b"\xff\xfe" + data[k:]
+    i = draw(st.integers(0, len(lines) - 1))
+    if kind == "delete_line":
+        return f"line {i + 1} deleted", b"\n".join(lines[:i] + lines[i + 1:])
+    if kind == "duplicate_line":
+        return f"line {i + 1} doubled", b"\n".join(lines[:i + 1] + lines[i:])
+    if kind == "swap_lines":
+        j = draw(st.integers(0, len(lines) - 1))
+        lines[i], lines[j] = lines[j], lines[i]
+        return f"lines {i + 1} and {j + 1} swapped", b"\n".join(lines)
+    junk = draw(st.text(max_size=40)).encode("utf-8", "surrogatepass")
+    return f"junk line {junk!r} before line {i + 1}", b"\n".join(lines[:i] + [junk] + lines[i:])
+
+
+def finite_numbers(value: object) -> Iterable[float]:
+    """Every float (or int) inside nested dicts, lists, tuples and dataclass-like ``values`` maps."""
+    if isinstance(value, bool) or value is None or isinstance(value, str):
+        return
+    if isinstance(value, (int, float)):
+        yield float(value)
+    elif isinstance(value, dict):
+        for v in value.values():
+            yield from finite_numbers(v)
+    elif isinstance(value, (list, tuple)):
+        for v in value:
+            yield from finite_numbers(v)
+    elif hasattr(value, "value") and hasattr(value, "sigma"):  # Quantity
+        yield float(value.value)
+        yield float(value.sigma)
+    elif hasattr(value, "tolist"):
+        yield from finite_numbers(value.tolist())
+    elif isinstance(value, complex):
+        yield value.real
+        yield value.imag
+
+
+def assert_all_finite(value: object, what: str) -> None:
+    bad = [x for x in finite_numbers(value) if not math.isfinite(x)]
+    assert not bad, f"{what}: non-finite numbers {bad[:5]} reached the output"
+
+
+def assert_names_file(exc: BaseException, *paths: Path) -> None:
+    """The message names one of ``paths`` (by its full path as given, or at least its name)."""
+    message = str(exc)
+    assert any(str(p) in message or p.name in message for p in paths), (
+        f"error does not name the file ({', '.join(p.name for p in paths)}): {message}")
+    assert "Traceback" not in message
+
+
+def run_cli(argv: list[str]) -> tuple[int, str, str]:
+    """``bikerider.cli.main(argv)`` with stdout and stderr captured; argparse exits become codes."""
+    from bikerider.cli import main
+
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        try:
+            code = main(argv)
+        except SystemExit as exc:  # argparse: usage errors exit 2, --help and --version exit 0
+            code = exc.code if isinstance(exc.code, int) else 2
+    return code, out.getvalue(), err.getvalue()
+
+
+def check_json_output(stdout: str, what: str) -> object:
+    """Parse ``--json`` output; every number must be finite (``null`` for what is not determined)."""
+    data = json.loads(stdout, parse_constant=lambda name: math.nan)  # NaN/Infinity would be caught below
+    assert_all_finite(data, what)
+    return data
+
+
+def signal_csv(period: float = 1.37, decay: float = 0.3, seconds: float = 6.0) -> bytes:
+    """A rate-gyro record of a damped oscillation with a little noise, as the period command reads it."""
+    t = np.arange(0, seconds, 0.01)
+    omega = 2 * np.pi / period
+    rate = 0.02 + np.exp(-decay * t) * (1.2 * np.sin(omega * t) + 0.3 * np.cos(omega * t))
+    rate += np.random.default_rng(7).normal(0, 0.005, t.size)
+    return ("time [s],rate [rad/s]\n" + "".join(f"{a:.3f},{b:.6f}\n" for a, b in zip(t, rate))).encode()

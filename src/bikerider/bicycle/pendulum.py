@@ -47,12 +47,15 @@ def compound_inertia(period: Quantity, mass: Quantity, length: Quantity, g: Quan
     if not length.value > 0:
         raise InputError("pendulum_length", length.value, "a positive pendulum length in metres", source)
     check_magnitude("pendulum_length", length.value, 10.0, "m", source)
+    check_magnitude("pendulum_length uncertainty", length.sigma, 10.0, "m", source)
     if not mass.value > 0:
         raise InputError("mass", mass.value, "a positive mass in kg (of the body on the compound pendulum)", source)
     check_magnitude("mass", mass.value, 500.0, "kg", source)
+    check_magnitude("mass uncertainty", mass.sigma, 500.0, "kg", source)
     if not g.value > 0:
         raise InputError("g", g.value, "a positive acceleration due to gravity in m/s^2", source)
     check_magnitude("g", g.value, 100.0, "m/s^2", source)
+    check_magnitude("g uncertainty", g.sigma, 100.0, "m/s^2", source)
     value = float(gen.compound_inertia(T=period.value, m_p=mass.value, g=g.value, l_p=length.value))
     if not value > 0:
         shortest = 2 * math.pi * math.sqrt(length.value / g.value)

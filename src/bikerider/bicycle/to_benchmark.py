@@ -16,10 +16,16 @@ from bikerider.bicycle.bodies import BicycleBodies
 from bikerider.bicycle.propagation import propagate
 from bikerider.errors import InputError
 from bikerider.generated import combination as gen_combination
-from bikerider.quantity import Quantity
+from bikerider.quantity import Quantity, check_magnitude
 
 RIDER_BODY_NAMES: tuple[str, ...] = ("mBr", "xBr", "zBr", "IBrxx", "IBryy", "IBrzz", "IBrxz")
 """A rigid rider: mass, centre of mass and inertia tensor (benchmark frame, tensor entry Ixz)."""
+
+_LIMITS: dict[str, tuple[float, str]] = {
+    "mBr": (500.0, "kg"), "xBr": (5.0, "m"), "zBr": (5.0, "m"),
+    **{k: (1e4, "kg m^2") for k in ("IBrxx", "IBryy", "IBrzz", "IBrxz")},
+}
+"""Largest plausible magnitudes of a rigid rider: a larger value is a unit slip."""
 
 _PASS_THROUGH = ("w", "c", "g", "rR", "mR", "IRxx", "IRyy", "xH", "zH", "mH", "IHxx", "IHzz", "IHxz",
                  "rF", "mF", "IFxx", "IFyy")
@@ -50,6 +56,13 @@ class LumpedRider:
         for key in ("mBr", "IBrxx", "IBrzz", "IBryy"):
             if key in self.values and not self.values[key].value > 0:
                 raise InputError(key, self.values[key].value, "a positive value", self.source)
+        for key, (limit, unit) in _LIMITS.items():
+            if key in self.values:
+                check_magnitude(key, self.values[key].value, limit, unit, self.source)
+                check_magnitude(f"{key} uncertainty", self.values[key].sigma, limit, unit, self.source)
+        if not self.values["zBr"].value < 0:
+            raise InputError("zBr", self.values["zBr"].value, "a negative value: z points down in the benchmark "
+                             "frame, so a centre of mass above the ground has z < 0", self.source)
         xx, zz, xz = (self.values[k].value for k in ("IBrxx", "IBrzz", "IBrxz"))
         if xx * zz - xz**2 <= 0:
             raise InputError("IBrxz", xz, f"|IBrxz| < sqrt(IBrxx * IBrzz) = {math.sqrt(xx * zz):.6g} "

@@ -195,6 +195,10 @@ def _jacobian(p: np.ndarray, t: np.ndarray, drift: bool) -> np.ndarray:
     return np.column_stack(columns)
 
 
+#: Largest magnitude of a time or signal value the fit accepts (its squares must stay finite).
+MAX_MAGNITUDE = 1e100
+
+
 def _check_samples(time: np.ndarray, signal: np.ndarray) -> None:
     if time.ndim != 1 or signal.ndim != 1 or time.shape != signal.shape:
         raise FitError(f"time and signal must be one-dimensional and of equal length (got shapes "
@@ -206,6 +210,11 @@ def _check_samples(time: np.ndarray, signal: np.ndarray) -> None:
     if not np.all(np.isfinite(signal)):
         bad = int(np.flatnonzero(~np.isfinite(signal))[0])
         raise FitError(f"signal has non-finite values (first at sample {bad + 1}, t = {time[bad]:g} s)")
+    for name, values in (("time", time), ("signal", signal)):
+        largest = float(np.abs(values).max())
+        if largest > MAX_MAGNITUDE:  # squares in the fit would overflow
+            raise FitError(f"{name} has values up to {largest:.3g}: too large to fit (at most {MAX_MAGNITUDE:g}; "
+                           "rescale it or check the column)")
     steps = np.diff(time)
     if np.any(steps <= 0):
         bad = int(np.flatnonzero(steps <= 0)[0])

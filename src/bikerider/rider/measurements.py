@@ -51,10 +51,10 @@ class RiderMeasurements:
                 check_degrees("lam_fl_deg", math.degrees(q.value), self.source)
             elif not q.value > 0:
                 raise InputError(key, q.value, "a positive value", self.source)
-            elif key == "mBr":
-                check_magnitude(key, q.value, 500.0, "kg", self.source)
-            else:  # a length or a circumference
-                check_magnitude(key, q.value, 3.0, "m", self.source)
+            else:  # the mass, or a length or circumference
+                limit, unit = (500.0, "kg") if key == "mBr" else (3.0, "m")
+                check_magnitude(key, q.value, limit, unit, self.source)
+                check_magnitude(f"{key} uncertainty", q.sigma, limit, unit, self.source)
         unknown = set(self.fractions) - set(DEFAULT_MASS_FRACTIONS)
         if unknown:
             raise InputError(sorted(unknown)[0], self.fractions[sorted(unknown)[0]],

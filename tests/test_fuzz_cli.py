@@ -1,0 +1,128 @@
+"""Hostile input through the command line: mutated files and random argument lists.
+
+Contract (bikerider.cli.main): exit status 0 (or 1 for a batch in which some bicycle failed) with
+finite output, or 2 with a one-line message on stderr naming the offending file, option or value;
+argparse usage errors also exit 2.  Never a traceback, never NaN or infinity in ``--json`` output.
+"""
+from __future__ import annotations
+
+import shutil
+from importlib import resources
+from pathlib import Path
+
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from bikerider.estimate import default_files
+
+from strategies import check_json_output, mutated, run_cli, signal_csv
+
+FUZZ = settings(max_examples=40, deadline=None,
+                suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+BP = Path(str(resources.files("bikerider") / "data" / "bicycleparameters"))
+BICYCLE_TOML, RIDER_TOML = default_files()
+TESTS = Path(__file__).parent
+
+
+def _assert_clean(code: int, out: str, err: str, path: Path | None, json_wanted: bool, allowed=(0, 2)) -> None:
+    assert code in allowed, f"exit {code}: {err}"
+    assert "Traceback" not in err and "Traceback" not in out
+    if code == 2 and path is not None:
+        assert str(path) in err or path.name in err, f"message does not name {path.name}: {err}"
+    if code != 0:
+        assert err.strip(), "a failure without a message"
+        assert len(err.strip().splitlines()) <= 3, f"more than a short message: {err}"
+    elif json_wanted:
+        check_json_output(out, "--json output")
+
+
+@FUZZ
+@given(st.data(), st.sampled_from(["bicycle", "rider"]))
+def test_estimate_with_a_mutated_file(tmp_path_factory, data, which):
+    base = BICYCLE_TOML if which == "bicycle" else RIDER_TOML
+    what, text = data.draw(mutated(base.read_bytes()))
+    path = tmp_path_factory.mktemp("cli") / f"{which}.toml"
+    path.write_bytes(text)
+    code, out, err = run_cli(["estimate", "--json", f"--{which}", str(path)])
+    # A rider who cannot reach is named by the rider file even when the bicycle file changed.
+    if code == 2 and which == "bicycle" and str(RIDER_TOML) in err:
+        path = RIDER_TOML
+    _assert_clean(code, out, err, path, json_wanted=True)
+
+
+@FUZZ
+@given(st.data())
+def test_benchmark_with_a_mutated_file(tmp_path_factory, data):
+    what, text = data.draw(mutated((TESTS / "data" / "BenchmarkBenchmark.txt").read_bytes()))
+    path = tmp_path_factory.mktemp("cli") / "BenchmarkBenchmark.txt"
+    path.write_bytes(text)
+    code, out, err = run_cli(["benchmark", "--json", str(path), "--speeds", "0:12:7"])
+    _assert_clean(code, out, err, path, json_wanted=True)
+
+
+@FUZZ
+@given(st.data())
+def test_period_with_a_mutated_record(tmp_path_factory, data):
+    what, text = data.draw(mutated(signal_csv()))
+    path = tmp_path_factory.mktemp("cli") / "trial.csv"
+    path.write_bytes(text)
+    code, out, err = run_cli(["period", "--json", str(path)])
+    _assert_clean(code, out, err, path, json_wanted=True)
+
+
+@settings(max_examples=15, deadline=None,
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+@given(st.data(), st.sampled_from(["Browser", "Fisher", "Rigid", "Yellow"]))
+def test_batch_with_one_mutated_measured_file(tmp_path_factory, data, name):
+    root = tmp_path_factory.mktemp("cli") / "bp"
+    shutil.copytree(BP / "bicycles", root / "bicycles")
+    target = root / "bicycles" / name / "RawData" / f"{name}Measured.txt"
+    what, text = data.draw(mutated(target.read_bytes()))
+    target.write_bytes(text)
+    code, out, err = run_cli(["batch", str(root)])
+    _assert_clean(code, out, err, None, json_wanted=False, allowed=(0, 1))
+    if code == 1:  # the bad bicycle is reported, naming its file, and every other one finished
+        assert f"{name}: " in out and f"{name}Measured.txt" in out
+        others = [n for n in ("Benchmark", "Browser", "Browserins", "Fisher", "Rigid", "Silver", "Yellow") if n != name]
+        header = out.splitlines()[0].split()
+        assert header == others
+
+
+# ------------------------------------------------------------------------------------------
+# Random argument lists
+# ------------------------------------------------------------------------------------------
+def _token_pool(tmp: Path) -> list[str]:
+    nan_file = tmp / "nan.toml"
+    nan_file.write_text("[benchmark]\nw = nan\n")
+    binary = tmp / "binary.txt"
+    binary.write_bytes(bytes(range(256)))
+    return [
+        "estimate", "benchmark", "period", "batch", "sensitivity", "--json", "--bicycle", "--rider", "--no-rider",
+        "--speeds", "--plot", "--out", "--drift", "--wrt", "--inputs", "--top", "--speed", "--latex",
+        "-v", "--help", "--version", "0:10:11", "10:0:5", "0:1e308:3", "nan:1:3", "0:10:-1", "a:b:c", "0:10",
+        "5", "-1", "nan", "inf", "1e400", "", "w", "weave_speed", "capsize_speed", "IBxx", "l_ll", "mBr",
+        str(BICYCLE_TOML), str(RIDER_TOML), str(TESTS / "data" / "BenchmarkBenchmark.txt"),
+        str(BP), str(BP / "bicycles" / "Browser" / "RawData" / "BrowserMeasured.txt"),
+        str(BP / "riders" / "Jason" / "Parameters" / "JasonBrowserBenchmark.txt"),
+        str(tmp / "missing.toml"), str(tmp), str(nan_file), str(binary), str(tmp / "out" / "x"),
+        "\udcff", "é", "--", "-",
+    ]
+
+
+@settings(max_examples=150, deadline=None,
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+@given(st.data())
+def test_random_argument_lists(tmp_path_factory, data):
+    tmp = tmp_path_factory.mktemp("argv")
+    pool = _token_pool(tmp)
+    argv = data.draw(st.lists(st.sampled_from(pool), max_size=6))
+    if argv and argv[0] not in ("-v", "--help", "--version") and data.draw(st.booleans()):
+        argv = [data.draw(st.sampled_from(["estimate", "benchmark", "period", "batch", "sensitivity"]))] + argv
+    # Keep a run short: a Monte Carlo check or a huge speed grid is not what is being tested here.
+    code, out, err = run_cli(argv)
+    assert code in (0, 1, 2), f"{argv}: exit {code}: {err}"
+    assert "Traceback" not in err and "Traceback" not in out, argv
+    if code == 2:
+        assert err.strip(), f"{argv}: exit 2 without a message"
+    if code == 0 and "--json" in argv and "--help" not in argv and "--version" not in argv and out.strip():
+        check_json_output(out, " ".join(argv))

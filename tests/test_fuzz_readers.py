@@ -1,0 +1,263 @@
+"""Hostile input for every reader: one random mutation of a valid file at a time.
+
+Mutations (tests/strategies.py ``mutated``): a number replaced by NaN, infinity, a huge, tiny,
+negative or zero value, a unit slip or text; truncation; a changed byte; deleted, doubled,
+swapped or junk lines; bytes that are not UTF-8.  Each reader, and the chain behind it, must either
+give finite results or raise a BikeriderError that names the file; never another exception and
+never a RuntimeWarning (an error under this project's pytest settings).
+"""
+from __future__ import annotations
+
+import math
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from bikerider.benchmark import WhippleModel
+from bikerider.errors import BikeriderError
+from bikerider.estimate import default_files, estimate
+
+from strategies import assert_all_finite, assert_names_file, meijaard_values, mutated, signal_csv
+
+FUZZ = settings(max_examples=60, deadline=None,
+                suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+BP = Path(str(resources.files("bikerider") / "data" / "bicycleparameters"))
+BICYCLE_TOML, RIDER_TOML = default_files()
+TESTS = Path(__file__).parent
+
+
+def _write(tmp_path: Path, name: str, data: bytes) -> Path:
+    path = tmp_path / name
+    path.write_bytes(data)
+    return path
+
+
+def _check_model(model: WhippleModel, what: str) -> None:
+    eig = model.eigenvalues(np.linspace(0, 10, 6))
+    assert_all_finite(eig.values, f"{what} eigenvalues")
+    speeds = model.critical_speeds()
+    for v in (speeds.weave, speeds.capsize, speeds.weave_frequency):
+        assert v is None or math.isfinite(v), what
+
+
+# ------------------------------------------------------------------------------------------
+# The project's TOML files
+# ------------------------------------------------------------------------------------------
+@FUZZ
+@given(st.data())
+def test_bicycle_toml(tmp_path_factory, data):
+    from bikerider.io.toml_input import load_bicycle_toml, load_rider_toml
+
+    what, text = data.draw(mutated(BICYCLE_TOML.read_bytes()))
+    path = _write(tmp_path_factory.mktemp("fuzz"), "bicycle.toml", text)
+    try:
+        bicycle = load_bicycle_toml(path)
+        assert_all_finite(bicycle.values, what)
+        result = estimate(bicycle, load_rider_toml(RIDER_TOML))
+    except BikeriderError as exc:
+        assert_names_file(exc, path, RIDER_TOML)  # a rider who cannot reach is named by the rider file
+        return
+    assert_all_finite(result.parameters.values, what)
+    _check_model(result.model, what)
+
+
+@FUZZ
+@given(st.data())
+def test_rider_toml(tmp_path_factory, data):
+    from bikerider.io.toml_input import load_bicycle_toml, load_rider_toml
+
+    what, text = data.draw(mutated(RIDER_TOML.read_bytes()))
+    path = _write(tmp_path_factory.mktemp("fuzz"), "rider.toml", text)
+    try:
+        rider = load_rider_toml(path)
+        assert_all_finite(rider.values, what)
+        result = estimate(load_bicycle_toml(BICYCLE_TOML), rider)
+    except BikeriderError as exc:
+        assert_names_file(exc, path)
+        return
+    assert_all_finite(result.parameters.values, what)
+    assert_all_finite(result.rider_model.inertia, what)
+    _check_model(result.model, what)
+
+
+def _benchmark_toml() -> bytes:
+    lines = ["# Meijaard et al. (2007) Table 1", "[benchmark]"]
+    lines += [f"{k} = {v!r}" for k, v in meijaard_values().items()]
+    return ("\n".join(lines) + "\n").encode()
+
+
+@FUZZ
+@given(st.data())
+def test_benchmark_toml(tmp_path_factory, data):
+    from bikerider.io.benchmark_file import load_benchmark_parameters
+
+    what, text = data.draw(mutated(_benchmark_toml()))
+    path = _write(tmp_path_factory.mktemp("fuzz"), "benchmark.toml", text)
+    try:
+        params = load_benchmark_parameters(path)
+        model = WhippleModel.from_parameters(params)
+    except BikeriderError as exc:
+        assert_names_file(exc, path)
+        return
+    assert_all_finite(params.values, what)
+    _check_model(model, what)
+
+
+# ------------------------------------------------------------------------------------------
+# name = value+/-sigma files (BicycleParameters)
+# ------------------------------------------------------------------------------------------
+@FUZZ
+@given(st.data())
+def test_benchmark_text(tmp_path_factory, data):
+    from bikerider.io.benchmark_file import load_benchmark_parameters
+
+    what, text = data.draw(mutated((TESTS / "data" / "BenchmarkBenchmark.txt").read_bytes()))
+    path = _write(tmp_path_factory.mktemp("fuzz"), "BenchmarkBenchmark.txt", text)
+    try:
+        params = load_benchmark_parameters(path)
+        model = WhippleModel.from_parameters(params)
+    except BikeriderError as exc:
+        assert_names_file(exc, path)
+        return
+    assert_all_finite(params.values, what)
+    _check_model(model, what)
+
+
+@FUZZ
+@given(st.data(), st.sampled_from(["Browser", "Fisher", "Yellow", "Silver"]))
+def test_bicycleparameters_benchmark_file(tmp_path_factory, data, name):
+    from bikerider.io.bicycleparameters import read_benchmark_file
+
+    base = BP / "bicycles" / name / "Parameters" / f"{name}Benchmark.txt"
+    what, text = data.draw(mutated(base.read_bytes()))
+    path = _write(tmp_path_factory.mktemp("fuzz"), base.name, text)
+    try:
+        read = read_benchmark_file(path)
+        model = WhippleModel.from_parameters(read.parameters)
+    except BikeriderError as exc:
+        assert_names_file(exc, path)
+        return
+    assert_all_finite(read.parameters.values, what)
+    assert_all_finite(read.extras, what)
+    _check_model(model, what)
+
+
+@FUZZ
+@given(st.data(), st.sampled_from(["Browser", "Browserins", "Fisher", "Rigid", "Yellow"]))
+def test_measured_file(tmp_path_factory, data, name):
+    from bikerider.bicycle.raw_measurements import read_measured_file
+    from bikerider.bicycle.to_benchmark import bicycle_benchmark_parameters
+
+    base = BP / "bicycles" / name / "RawData" / f"{name}Measured.txt"
+    what, text = data.draw(mutated(base.read_bytes()))
+    path = _write(tmp_path_factory.mktemp("fuzz"), base.name, text)
+    try:
+        reduction = read_measured_file(path)
+        params = bicycle_benchmark_parameters(reduction.bodies)
+        model = WhippleModel.from_parameters(params)
+    except BikeriderError as exc:
+        assert_names_file(exc, path)
+        return
+    assert_all_finite(reduction.bodies.values, what)
+    assert_all_finite(params.values, what)
+    _check_model(model, what)
+
+
+@FUZZ
+@given(st.data())
+def test_lumped_rider_file(tmp_path_factory, data):
+    from bikerider.io.bicycleparameters import merge_rider, read_benchmark_file, read_lumped_rider
+
+    base = BP / "riders" / "Jason" / "Parameters" / "JasonBrowserBenchmark.txt"
+    what, text = data.draw(mutated(base.read_bytes()))
+    path = _write(tmp_path_factory.mktemp("fuzz"), base.name, text)
+    bicycle = read_benchmark_file(BP / "bicycles" / "Browser" / "Parameters" / "BrowserBenchmark.txt").parameters
+    try:
+        rider = read_lumped_rider(path)
+        params = merge_rider(bicycle, rider)
+        model = WhippleModel.from_parameters(params)
+    except BikeriderError as exc:
+        assert_names_file(exc, path)
+        return
+    assert_all_finite(rider.values, what)
+    assert_all_finite(params.values, what)
+    _check_model(model, what)
+
+
+@settings(max_examples=150, deadline=None)
+@given(st.binary(max_size=300))
+def test_name_value_reader_on_arbitrary_bytes(tmp_path_factory, raw):
+    from bikerider.io.name_value_file import read_name_value_file
+
+    path = _write(tmp_path_factory.mktemp("fuzz"), "values.txt", raw)
+    try:
+        values = read_name_value_file(path)
+    except BikeriderError as exc:
+        assert_names_file(exc, path)
+        return
+    assert_all_finite(values.as_dict(), repr(raw))
+
+
+# ------------------------------------------------------------------------------------------
+# Rate records of the period command
+# ------------------------------------------------------------------------------------------
+@FUZZ
+@given(st.data())
+def test_signal_csv_and_fit(tmp_path_factory, data):
+    from bikerider.fitting.damped_oscillation import fit_damped_oscillation
+    from bikerider.fitting.signal_csv import read_signal_csv
+
+    what, text = data.draw(mutated(signal_csv()))
+    path = _write(tmp_path_factory.mktemp("fuzz"), "trial.csv", text)
+    try:
+        time, rate = read_signal_csv(path)
+    except BikeriderError as exc:
+        assert_names_file(exc, path)
+        return
+    assert_all_finite([time, rate], what)
+    try:
+        fit = fit_damped_oscillation(time, rate)
+    except BikeriderError:
+        return  # the period command adds the file name to fit errors (tested through the CLI)
+    assert_all_finite(fit.as_dict(), what)
+
+
+# ------------------------------------------------------------------------------------------
+# Files that are not what they claim: empty, binary, huge, a folder
+# ------------------------------------------------------------------------------------------
+HUGE = b"w = 1.02\n" + b"# padding " * 200_000 + b"\n" + b"x" * 2_000_000
+
+
+@pytest.mark.parametrize("content", [b"", b"\x00" * 64, bytes(range(256)), b"\xef\xbb\xbf", HUGE],
+                         ids=["empty", "nul", "all-bytes", "bom-only", "huge"])
+@pytest.mark.parametrize("reader", ["bicycle_toml", "rider_toml", "benchmark_toml", "benchmark_text",
+                                    "measured", "lumped_rider", "signal_csv"])
+def test_readers_on_files_that_are_not_input(tmp_path, content, reader):
+    from bikerider.bicycle.raw_measurements import read_measured_file
+    from bikerider.fitting.signal_csv import read_signal_csv
+    from bikerider.io.benchmark_file import load_benchmark_parameters
+    from bikerider.io.bicycleparameters import read_lumped_rider
+    from bikerider.io.toml_input import load_bicycle_toml, load_rider_toml
+
+    readers = {
+        "bicycle_toml": (load_bicycle_toml, "b.toml"), "rider_toml": (load_rider_toml, "r.toml"),
+        "benchmark_toml": (load_benchmark_parameters, "p.toml"), "benchmark_text": (load_benchmark_parameters, "p.txt"),
+        "measured": (read_measured_file, "XMeasured.txt"), "lumped_rider": (read_lumped_rider, "JXBenchmark.txt"),
+        "signal_csv": (read_signal_csv, "t.csv"),
+    }
+    function, name = readers[reader]
+    path = _write(tmp_path, name, content)
+    with pytest.raises(BikeriderError) as info:
+        function(path)
+    assert_names_file(info.value, path)
+    # A folder or a missing file in place of a file: a clear error too (FileFormatError or OSError
+    # the CLI reports), never a traceback from deep inside.
+    folder = tmp_path / ("dir_" + name)
+    folder.mkdir()
+    with pytest.raises((BikeriderError, OSError)) as info:
+        function(folder)
+    assert folder.name in str(info.value)
