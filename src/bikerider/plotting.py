@@ -2,7 +2,6 @@
 (the paper's Fig. 4).  matplotlib is imported here only, with the non-interactive Agg backend."""
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import numpy as np
@@ -23,9 +22,9 @@ def _pyplot():
 
 def _save(fig, path: Path) -> None:
     """Write atomically: a partial figure never replaces a good one."""
-    tmp = path.with_name(path.name + ".tmp")
-    fig.savefig(tmp, dpi=120, format="png")
-    os.replace(tmp, path)
+    from bikerider.io.atomic import atomic_write_bytes, figure_bytes
+
+    atomic_write_bytes(path, figure_bytes(fig, dpi=120, format="png"))
 
 
 def eigenvalue_figure(model: WhippleModel, eig: ModalEigenvalues, title: str = ""):

@@ -8,9 +8,7 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import sys
-import tempfile
 from pathlib import Path
 
 
@@ -78,13 +76,9 @@ def _plot(target: Path, records, fits) -> None:
         ax.set_ylabel("rate")
         ax.legend(fontsize=8, loc="upper right")
     fig.tight_layout()
-    target = Path(target)
-    handle, temporary = tempfile.mkstemp(dir=target.parent if str(target.parent) else ".", suffix=".png")
-    os.close(handle)
+    from bikerider.io.atomic import atomic_write_bytes, figure_bytes
+
     try:
-        fig.savefig(temporary, format="png", dpi=120)
-        os.replace(temporary, target)
+        atomic_write_bytes(Path(target), figure_bytes(fig, format="png", dpi=120))
     finally:
         plt.close(fig)
-        if os.path.exists(temporary):
-            os.unlink(temporary)
