@@ -90,7 +90,7 @@ def check_magnitude(name: str, value: float, limit: float, unit: str, source: st
     if not math.isfinite(value):
         raise InputError(name, value, "a finite number", source)
     slips = [(f, u) for f, u in UNIT_SLIPS.get(unit, ()) if abs(value * f) <= limit]
-    hint = f"; if this is in {slips[0][1]}, give {value * slips[0][0]:.6g} {unit}" if slips else ""
+    hint = "".join(f"; if this is in {u}, give {value * f:.6g} {unit}" for f, u in slips)
     raise InputError(name, value, f"at most {limit:g} {unit} in magnitude (SI units{hint})", source)
 
 
