@@ -47,12 +47,18 @@ def discover(only: list[str] | None) -> list[str]:
     return ordered
 
 
+DESCRIPTIONS: dict[str, str] = {}
+"""Module docstrings of the modules run, for the document's "what is measured" section."""
+
+
 def run_module(name: str, ctx: Context) -> tuple[list[Row], str]:
     """Rows of one module, or its script output; failures become a row saying so."""
     try:
         module = importlib.import_module(f"bench_{name}")
     except Exception as exc:  # noqa: BLE001 - a broken module must not stop the others
         return [Row(name, f"could not import bench_{name}.py: {exc}", met=None)], ""
+    if module.__doc__:
+        DESCRIPTIONS[name] = module.__doc__.strip()
     if not hasattr(module, "run"):
         proc = subprocess.run([sys.executable, str(BENCH / f"bench_{name}.py")], capture_output=True, text=True,
                               cwd=str(ROOT), timeout=1800)
@@ -118,6 +124,10 @@ def document(command: str, facts: dict[str, str], rows: list[Row], extra: str, s
     ]
     if extra:
         parts += ["## Other benchmarks", "", extra, ""]
+    if DESCRIPTIONS:
+        parts += ["## What each benchmark measures", ""]
+        for name, doc in DESCRIPTIONS.items():
+            parts += [f"### bench/bench_{name}.py", "", doc, ""]
     return "\n".join(parts)
 
 

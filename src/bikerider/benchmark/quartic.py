@@ -111,18 +111,48 @@ def _real_quadratic(b: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, ...]:
     return np.where(real, t, half_b), im, np.where(real, other, half_b), -im
 
 
+def _small_real_root(z: np.ndarray, size: np.ndarray, b0: np.ndarray) -> np.ndarray:
+    """Recompute a lone small real root from Vieta's product ``z1 z2 z3 z4 = b0``.
+
+    The depressed form loses the relative accuracy of a root much smaller than the others (the
+    capsize eigenvalue near the capsize speed); the product of the other three does not.
+    ``size`` is ``|z|``; it is updated in place for the recomputed roots.
+    """
+    k = size.argmin(axis=0)
+    cols = np.arange(z.shape[1])
+    smallest_size = size[k, cols]
+    size[k, cols] = np.inf
+    next_size = size.min(axis=0)
+    size[k, cols] = smallest_size
+    candidate = (z.imag[k, cols] == 0) & (smallest_size < 0.1 * next_size)
+    if not candidate.any():
+        return z
+    j = np.flatnonzero(candidate)
+    kj = k[j]
+    # the product of the other three roots (never divided by the inaccurate small one)
+    others = np.ones(len(j), dtype=complex)
+    for i in range(4):
+        others *= np.where(kj == i, 1.0, z[i, j])
+    ok = others.real != 0
+    j, kj = j[ok], kj[ok]
+    better = b0[j] / others.real[ok]
+    z = z.copy()
+    z[kj, j] = better
+    size[kj, j] = np.abs(better)
+    return z
+
+
 def _horner(z: np.ndarray, b3, b2, b1, b0) -> np.ndarray:
     return (((z + b3) * z + b2) * z + b1) * z + b0
 
 
-def _polish(z: np.ndarray, b3, b2, b1, b0) -> np.ndarray:
+def _polish(z: np.ndarray, a: np.ndarray, b3, b2, b1, b0) -> np.ndarray:
     """Guarded Newton steps on the scaled monic quartic; ``z`` is ``(4, n)``, coefficients ``(n,)``.
 
     Only the columns holding a root whose backward error exceeds :data:`_BACKWARD` are polished.
     A step is taken only where it lowers the residual and moves the root by less than half the
-    distance to its nearest neighbour.
+    distance to its nearest neighbour.  ``a`` is ``|z|``.
     """
-    a = np.abs(z)
     bound = (((a + np.abs(b3)) * a + np.abs(b2)) * a + np.abs(b1)) * a + np.abs(b0)
     p = _horner(z, b3, b2, b1, b0)
     bound *= _BACKWARD
@@ -215,7 +245,9 @@ def _solve(c: np.ndarray) -> np.ndarray:
     z = np.empty((4,) + s.shape, dtype=complex)
     z.real[:2], z.real[2:] = re1 - e, re2 - e
     z.imag[:2], z.imag[2:] = im1, im2
-    z = _polish(z, b3, b2, b1, b0)
+    size = np.abs(z)
+    z = _small_real_root(z, size, b0)
+    z = _polish(z, size, b3, b2, b1, b0)
     return (z * sigma).T.reshape(shape + (4,))
 
 
@@ -230,27 +262,35 @@ def label_roots(raw: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """
     raw = np.asarray(raw, dtype=complex)
     n = raw.shape[0]
-    tol = 1e-9 * np.maximum(1.0, np.abs(raw).max(axis=-1, keepdims=True))
-    is_complex = np.abs(raw.imag) > tol
-    upper = is_complex & (raw.imag > 0)
-    lower = is_complex & ~upper
+    size = np.abs(raw)
+    largest = size.max(axis=-1, keepdims=True)
+    imag = raw.imag
+    is_complex = np.abs(imag) > 1e-9 * np.maximum(1.0, largest)
+    upper = is_complex & (imag > 0)
     # Order: upper-half-plane roots by falling imaginary part, then real roots by falling real
-    # part, then the lower-half-plane roots (replaced by the conjugates below).
-    # One float key: group offset (upper 0, real 1, lower 2) times a span wider than any value.
-    span = 4.0 * (float(np.abs(raw).max(initial=0.0)) + 1.0)
-    key = np.where(upper, -raw.imag, np.where(lower, 2 * span, span - raw.real))
-    order = np.argsort(key, axis=-1, kind="stable")
-    s = np.take_along_axis(np.where(is_complex, raw, raw.real + 0j), order, axis=-1)
+    # part, then the lower-half-plane roots (replaced by the conjugates below).  One float key:
+    # a group offset times a span wider than any value.
+    span = 4.0 * (float(largest.max(initial=0.0)) + 1.0)
+    key = np.where(upper, -imag, np.where(is_complex, 2 * span, span - raw.real))
+    order = np.argsort(key, axis=-1)
+    rows = np.arange(n)[:, None]
+    s = np.where(is_complex, raw, raw.real)[rows, order]
     pairs = upper.sum(axis=-1)
     values = np.empty((n, 4), dtype=complex)
     values[:, 0] = s[:, 0]
-    values[:, 1] = np.where(pairs == 0, s[:, 1], np.conj(s[:, 0]))
-    values[:, 2] = np.where(pairs == 0, s[:, 2], s[:, 1])
-    values[:, 3] = np.where(pairs == 0, s[:, 3], np.where(pairs == 1, s[:, 2], np.conj(s[:, 1])))
+    one_or_two = pairs > 0
+    values[:, 1] = np.where(one_or_two, np.conj(s[:, 0]), s[:, 1])
+    values[:, 2] = np.where(one_or_two, s[:, 1], s[:, 2])
+    values[:, 3] = np.where(pairs == 2, np.conj(s[:, 1]), np.where(pairs == 1, s[:, 2], s[:, 3]))
     labels = np.empty((n, 4), dtype=object)
-    labels[:] = MODES
-    labels[pairs == 2, 2:] = "other"
+    labels[:] = _MODES
+    two = pairs == 2
+    if two.any():
+        labels[two, 2:] = "other"
     return values, labels
+
+
+_MODES = np.array(MODES, dtype=object)
 
 
 def eigenvalues_from_polynomial(model, speeds) -> ModalEigenvalues:
