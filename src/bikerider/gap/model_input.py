@@ -95,8 +95,11 @@ def _table_numbers(table: object, name: str, keys: tuple[str, ...], source: str)
     return out
 
 
-def load_model(path: str | Path, rider_path: str | Path | None = None) -> GapModelInput:
+def load_model(path: str | Path, rider_path: str | Path | None = None, *, rider_rel_sigma: float = 0.0) -> GapModelInput:
     """Read the model file (and a lumped rider); build the default geometry where none is given.
+
+    ``rider_rel_sigma`` gives the lumped rider's values a relative standard uncertainty where its
+    file states none (BicycleParameters rider files state none).
 
     Raises
     ------
@@ -128,7 +131,7 @@ def load_model(path: str | Path, rider_path: str | Path | None = None) -> GapMod
     if rider_path is not None:
         if rider is not None:
             raise InputError("rider", str(rider_path), "one rider: the model file already has a [rider] table", source)
-        parameters, rider = _merge_rider(parameters, Path(rider_path))
+        parameters, rider = _merge_rider(parameters, Path(rider_path), rider_rel_sigma)
     if rider is not None and not (rider["mass"] > 0 and rider["mass"] < float(parameters["mB"])):  # type: ignore[operator]
         raise InputError("rider.mass", rider["mass"], f"a positive mass below the rear body's {parameters['mB']} kg", source)
     geometry = default_geometry(parameters, rider)
@@ -162,12 +165,19 @@ def _benchmark_from_toml(data: dict, path: Path) -> BenchmarkParameters:
     return BenchmarkParameters.from_mapping(values, str(path))
 
 
-def _merge_rider(parameters: BenchmarkParameters, rider_path: Path) -> tuple[BenchmarkParameters, dict[str, float]]:
+def _merge_rider(parameters: BenchmarkParameters, rider_path: Path,
+                 rel_sigma: float = 0.0) -> tuple[BenchmarkParameters, dict[str, float]]:
+    from dataclasses import replace
+
     from bikerider.io.bicycleparameters import merge_rider, read_lumped_rider
+    from bikerider.quantity import Quantity
 
     if not rider_path.exists():
         raise FileFormatError(rider_path, "no such file")
     lumped = read_lumped_rider(rider_path)
+    if rel_sigma > 0:
+        lumped = replace(lumped, values={k: q if q.sigma > 0 else Quantity(q.value, rel_sigma * abs(q.value))
+                                         for k, q in lumped.values.items()})
     values = {k: q.value for k, q in lumped.values.items()}
     rider = {"mass": values["mBr"], "x": values["xBr"], "z": values["zBr"], "Ixx": values["IBrxx"],
              "Ixz": values["IBrxz"], "Izz": values["IBrzz"]}

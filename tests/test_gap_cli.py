@@ -1,0 +1,68 @@
+"""``bikerider gap`` end to end: JSON contract, text, report files, errors."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+import bikerider
+from bikerider.cli import main
+
+DATA = Path(bikerider.__file__).parent / "data"
+BP = DATA / "bicycleparameters"
+MODEL = ["--model", str(BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt"),
+         "--rider", str(BP / "riders/Jason/Parameters/JasonRigidBenchmark.txt")]
+EXAMPLE = str(DATA / "gap_examples" / "eigenvalues.csv")
+FEW = ["--effects", "parameters,steer_damping,steer_inertia"]
+
+
+def test_json_has_the_documented_keys_and_finds_the_hidden_damping(capsys):
+    # the example data hide a steer friction (docs/scripts/gap_examples.py)
+    assert main(["gap", *MODEL, "--data", EXAMPLE, *FEW, "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["verdict"] == "structural"
+    assert {"test", "map"} <= set(out["gap"])
+    first = out["ranking"][0]
+    assert first["effect"] == "steer_damping"
+    for key in ("effect", "parameters", "heldout_error_before", "heldout_error_after", "shrink", "plausible"):
+        assert key in first
+    assert "steer_damping" in out["selected"]
+    assert out["how_far"]["heldout_error_after"] < out["how_far"]["heldout_error_before"]
+
+
+def test_text_and_report(tmp_path, capsys):
+    report = tmp_path / "rep"
+    assert main(["gap", *MODEL, "--data", EXAMPLE, *FEW, "--report", str(report)]) == 0
+    text = capsys.readouterr().out
+    assert "Verdict: structural" in text and "Which" in text and "Selected:" in text
+    md = (report / "report.md").read_text()
+    for name in ("eigenvalues.png", "gap_map.png", "ranking.png", "effects.png", "time_response.png"):
+        assert (report / name).stat().st_size > 1000
+        assert name in md
+
+
+def test_kooijman_run_52_shows_no_gap(capsys):
+    # Kooijman et al. (2008): their model fits the measured weave eigenvalue -1.16 +/- 5.44i of run 52
+    assert main(["gap", "--model", str(DATA / "gap/kooijman2008_bicycle.toml"),
+                 "--data", str(DATA / "gap/kooijman2008_run52.csv"), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["verdict"] == "none"
+    assert set(out["not_applicable"]) == {"passive_arms", "rider_lean"}
+
+
+def test_bad_data_exits_2_naming_file_and_line(tmp_path, capsys):
+    bad = tmp_path / "bad.csv"
+    bad.write_text("speed,real,imag\n4.0,-0.5,3\n-2,1,1\n")
+    assert main(["gap", *MODEL, "--data", str(bad)]) == 2
+    err = capsys.readouterr().err
+    assert f"{bad}:3" in err and "speed = -2" in err and "Traceback" not in err
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--effects", "wobble"], "effect = 'wobble'"),
+    (["--rider-rel-sigma", "-1"], "--rider-rel-sigma"),
+])
+def test_bad_options_exit_2(capsys, args, message):
+    assert main(["gap", *MODEL, "--data", EXAMPLE, *args]) == 2
+    assert message in capsys.readouterr().err
