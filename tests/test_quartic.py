@@ -225,3 +225,21 @@ def test_overflowing_matrices_are_an_error_not_nan(benchmark_model):
     with pytest.raises(InputError) as info:
         critical_speeds_from_polynomial(huge)
     assert "too large" in str(info.value)
+
+
+def test_factored_labelling_equals_the_general_one():
+    # eigenvalues_from_polynomial labels the roots from the pairing of its two quadratic factors;
+    # on quartics of every kind (four real roots, one pair, two pairs) that must equal label_roots.
+    from bikerider.benchmark.quartic import _factored_roots, _label_factored
+
+    rng = np.random.default_rng(11)
+    roots = separated_roots(rng, 600)
+    coefficients = np.array([np.poly(r).real for r in roots])
+    with np.errstate(all="ignore"):  # as eigenvalues_from_polynomial calls them
+        factored = _factored_roots(coefficients)
+        values, labels = _label_factored(factored)
+    expected_values, expected_labels = label_roots(factored.T)
+    scale = np.abs(expected_values).max(axis=1, keepdims=True)
+    assert (np.abs(values - expected_values) / scale).max() < 1e-14
+    np.testing.assert_array_equal(labels, expected_labels)
+    assert {"other", "castor"} <= set(labels.ravel())  # every case was exercised

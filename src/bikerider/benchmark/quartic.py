@@ -213,12 +213,14 @@ def quartic_roots(coefficients) -> np.ndarray:
 def _roots(c: np.ndarray) -> np.ndarray:
     """Unsorted roots of checked coefficients ``(..., 5)``."""
     with np.errstate(all="ignore"):  # divisions by zero are masked by np.where
-        return _solve(c)
+        return _factored_roots(c.reshape(-1, 5)).T.reshape(c.shape[:-1] + (4,))
 
 
-def _solve(c: np.ndarray) -> np.ndarray:
-    shape = c.shape[:-1]
-    flat = c.reshape(-1, 5).T
+def _factored_roots(c: np.ndarray) -> np.ndarray:
+    """Roots ``(4, n)`` of coefficients ``(n, 5)`` in the order of the two quadratic factors:
+    rows 0-1 and rows 2-3 are each a conjugate pair (row 0 / row 2 with either sign of the
+    imaginary part) or two real roots."""
+    flat = c.T
     monic = flat[1:] / flat[0]
     # Scale x = sigma z so that the roots are of order one (a Fujiwara-type bound).
     a = np.abs(monic)
@@ -243,12 +245,12 @@ def _solve(c: np.ndarray) -> np.ndarray:
     h = np.where(np.isfinite(h), h, 0.0)
     re1, im1, re2, im2 = _real_quadratic(np.stack([-s, s]), np.stack([m + h, m - h]))
     z = np.empty((4,) + s.shape, dtype=complex)
-    z.real[:2], z.real[2:] = re1 - e, re2 - e
-    z.imag[:2], z.imag[2:] = im1, im2
+    z.real[0::2], z.real[1::2] = re1 - e, re2 - e  # rows 0-1: first factor, 2-3: second
+    z.imag[0::2], z.imag[1::2] = im1, im2
     size = np.abs(z)
     z = _small_real_root(z, size, b0)
     z = _polish(z, size, b3, b2, b1, b0)
-    return (z * sigma).T.reshape(shape + (4,))
+    return z * sigma
 
 
 # -- eigenvalues ---------------------------------------------------------------------------------
@@ -315,9 +317,57 @@ def eigenvalues_from_polynomial(model, speeds) -> ModalEigenvalues:
     speeds = np.atleast_1d(np.asarray(speeds, dtype=float))
     if speeds.ndim != 1 or not np.all(np.isfinite(speeds)):
         raise InputError("speeds", speeds.tolist(), "a one-dimensional array of finite speeds")
-    roots = _roots(_check_coefficients(model.characteristic_coefficients(speeds)))
-    values, labels = label_roots(roots)
+    coefficients = _check_coefficients(model.characteristic_coefficients(speeds))
+    with np.errstate(all="ignore"):  # divisions by zero are masked by np.where
+        values, labels = _label_factored(_factored_roots(coefficients))
     return ModalEigenvalues(speeds, values, labels)
+
+
+def _sort4_descending(a, b, c, d):
+    """Four real arrays sorted elementwise, largest first (a sorting network)."""
+    a, b = np.maximum(a, b), np.minimum(a, b)
+    c, d = np.maximum(c, d), np.minimum(c, d)
+    a, c = np.maximum(a, c), np.minimum(a, c)
+    b, d = np.maximum(b, d), np.minimum(b, d)
+    b, c = np.maximum(b, c), np.minimum(b, c)
+    return a, b, c, d
+
+
+def _label_factored(z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`label_roots` for the ``(4, n)`` factor-ordered roots of :func:`_factored_roots`.
+
+    The same rules; the pairing the two quadratic factors give saves the general sort.
+    """
+    n = z.shape[1]
+    tol = 1e-9 * np.maximum(1.0, np.abs(z).max(axis=0))
+    pair_a = np.abs(z[0].imag) > tol
+    pair_b = np.abs(z[2].imag) > tol
+    up_a = np.where(z[0].imag > 0, z[0], z[1])
+    up_b = np.where(z[2].imag > 0, z[2], z[3])
+    pairs = pair_a.astype(int) + pair_b
+    # no pair: four real roots, largest first
+    r0, r1, r2, r3 = _sort4_descending(z[0].real, z[1].real, z[2].real, z[3].real)
+    # one pair: the pair, then the larger and the smaller of the other factor's real roots
+    pair = np.where(pair_a, up_a, up_b)
+    x1 = np.where(pair_a, z[2].real, z[0].real)
+    x2 = np.where(pair_a, z[3].real, z[1].real)
+    big, small = np.maximum(x1, x2), np.minimum(x1, x2)
+    # two pairs: the one with the larger imaginary part first
+    a_first = up_a.imag >= up_b.imag
+    first = np.where(a_first, up_a, up_b)
+    second = np.where(a_first, up_b, up_a)
+    none, one = pairs == 0, pairs == 1
+    values = np.empty((n, 4), dtype=complex)
+    values[:, 0] = np.where(none, r0, np.where(one, pair, first))
+    values[:, 1] = np.where(none, r1, np.conj(values[:, 0]))
+    values[:, 2] = np.where(none, r2, np.where(one, big, second))
+    values[:, 3] = np.where(none, r3, np.where(one, small, np.conj(second)))
+    labels = np.empty((n, 4), dtype=object)
+    labels[:] = _MODES
+    two = pairs == 2
+    if two.any():
+        labels[two, 2:] = "other"
+    return values, labels
 
 
 # -- critical speeds -----------------------------------------------------------------------------
