@@ -128,6 +128,45 @@ def critical_speed_polynomials() -> dict[str, list[sp.Expr]]:
     return out
 
 
+def discriminant_polynomial() -> list[sp.Expr]:
+    """The discriminant of the characteristic quartic in ``s``, as a polynomial in ``u = v^2``.
+
+    The discriminant vanishes where two eigenvalues coincide; the smallest positive root where the
+    two largest real eigenvalues merge into a complex pair is the speed ``v_d`` at which the weave
+    mode is born (Meijaard et al. 2007, section 6).  It is even in ``v``: the characteristic
+    polynomial at ``-v`` is that at ``v`` with ``s -> -s``, which negates every root and leaves
+    their squared differences unchanged.  The coefficients ``a_i`` have degree ``4 - i`` in ``v``
+    and the discriminant is isobaric of weight 12, so the result has degree at most 6 in ``u``.
+
+    To keep the expressions small the discriminant of a generic quartic is expanded in the
+    coefficients of the ``a_i`` as polynomials in ``v`` (nine placeholders), and those are put back
+    unexpanded; common-subexpression elimination then computes each once.
+
+    Returns
+    -------
+    list of sympy.Expr
+        Coefficients in ``u``, highest power first.
+    """
+    v, u, s = sym("v"), sym("u"), sp.Symbol("s")
+    generic = sp.symbols("A4 A3 A2 A1 A0")
+    discriminant = sp.discriminant(sum(a * s ** (4 - i) for i, a in enumerate(generic)), s)
+    placeholders: dict[sp.Symbol, sp.Expr] = {}
+    in_v: dict[sp.Symbol, sp.Expr] = {}
+    for i, (name, coefficient) in enumerate(zip(generic, characteristic_coefficients())):
+        poly = sp.Poly(coefficient, v)
+        terms = sp.Integer(0)
+        for (k,), part in zip(poly.monoms(), poly.coeffs()):
+            c = sp.Symbol(f"c_{4 - i}_{k}")
+            placeholders[c] = part
+            terms += c * v**k
+        in_v[name] = terms
+    expanded = sp.Poly(sp.expand(discriminant.subs(in_v)), v)
+    if any(k % 2 for (k,) in expanded.monoms()):
+        raise ValueError("the discriminant is not even in v")
+    coefficients = sp.Poly(expanded.as_expr().subs(v, sp.sqrt(u)), u).all_coeffs()
+    return [cf.subs(placeholders) for cf in coefficients]
+
+
 def state_matrix() -> sp.Matrix:
     """First-order state matrix for ``x = [phi, delta, phi', delta']``."""
     g, v = sym("g"), sym("v")
@@ -207,6 +246,23 @@ def build() -> GeneratedModule:
             ),
         ),
     ]
+    functions.append(
+        GeneratedFunction(
+            name="discriminant_polynomial",
+            args=entry_args + [g],
+            outputs=[
+                Output("discriminant", _padded(discriminant_polynomial(), 7),
+                       "coefficients in u = v^2 of the discriminant of the characteristic quartic in s, "
+                       "highest first", vector=True),
+            ],
+            summary="The discriminant of the characteristic polynomial in s, as a polynomial in u = v^2.",
+            notes=(
+                "Its positive roots are the speeds at which two eigenvalues coincide; the smallest at "
+                "which the two largest real eigenvalues merge into the weave pair is v_d "
+                "(WhippleModel.weave_birth_speed)."
+            ),
+        )
+    )
     return GeneratedModule(
         name="benchmark_model",
         summary="Linear Whipple bicycle model: canonical matrices, characteristic polynomial, critical speeds.",

@@ -22,7 +22,7 @@ from bikerider.errors import InputError
 from bikerider.generated import combination
 from bikerider.quantity import Quantity
 from bikerider.rider.measurements import RiderMeasurements
-from bikerider.rider.model import RiderModel, seat_rider
+from bikerider.rider.model import RiderModel, model_arguments, seat_rider, straight_limb_lengths
 
 if TYPE_CHECKING:
     from bikerider.bicycle.to_benchmark import LumpedRider
@@ -82,6 +82,9 @@ def chain_inputs(bicycle: BicycleBodies, rider: RiderMeasurements) -> dict[str, 
         out[name] = rider.values[name]
     for name in CHAIN_FRACTION_NAMES:
         out[name] = Quantity(rider.fractions[name])
+    # A limb exactly at its limit of reach: the lengths that keep its closure real (as seat_rider).
+    for name, value in straight_limb_lengths(model_arguments(bicycle, rider)).items():
+        out[name] = Quantity(value, out[name].sigma)
     return out
 
 

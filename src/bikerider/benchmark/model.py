@@ -162,6 +162,41 @@ class WhippleModel:
                 break
         return CriticalSpeeds(weave, capsize, frequency)
 
+    def weave_birth_speed(self) -> float | None:
+        """The speed ``v_d`` at which the weave pair is born from two real eigenvalues [m/s].
+
+        The discriminant of the characteristic quartic vanishes wherever two eigenvalues coincide;
+        as a polynomial in ``u = v^2`` it is the generated ``discriminant_polynomial`` (derived in
+        ``derive/benchmark_model.py``).  ``v_d`` is the smallest of its positive roots at which the
+        two eigenvalues with the largest real parts are real just below and a complex pair just
+        above (Meijaard et al. 2007, section 6; the other two
+        may be real or a complex pair of their own).  ``None`` when there is no such speed.
+        """
+        with np.errstate(over="ignore", invalid="ignore"):
+            coefficients = np.asarray(gen.discriminant_polynomial(**self._entries(), g=self.g), dtype=float)
+        if not np.all(np.isfinite(coefficients)):
+            raise InputError("M, C1, K0, K2", "entries too large for floating point",
+                             "matrices whose characteristic discriminant is finite", self.source)
+        slope = np.polyder(coefficients)
+        for u in _positive_real_roots(coefficients):
+            for _ in range(3):  # Newton steps: the root of a simple zero to full precision
+                step = np.polyval(coefficients, u) / np.polyval(slope, u) if np.polyval(slope, u) else 0.0
+                if not np.isfinite(step) or abs(step) > 1e-6 * u:
+                    break
+                u -= step
+            if self._pair_born_at(float(np.sqrt(u))):
+                return float(np.sqrt(u))
+        return None
+
+    def _pair_born_at(self, speed: float, relative: float = 1e-6) -> bool:
+        """Whether the two eigenvalues with the largest real parts are real just below ``speed`` and
+        a complex pair just above (the other two may be real or complex on either side)."""
+        below, above = np.linalg.eigvals(self.state_matrix(np.array([speed * (1 - relative), speed * (1 + relative)])))
+        tol = 1e-9 * max(1.0, float(np.abs(above).max()))
+        top_below = below[np.argsort(-below.real)][:2]
+        top_above = above[np.argsort(-above.real)][:2]
+        return bool(np.all(np.abs(top_below.imag) <= tol) and np.all(np.abs(top_above.imag) > tol))
+
 
 def _positive_real_roots(coefficients: np.ndarray) -> np.ndarray:
     """Sorted positive real roots of a polynomial (highest power first); scale-aware."""

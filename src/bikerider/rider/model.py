@@ -22,6 +22,20 @@ _PLACEMENT = ("l_hh", "l_la", "l_ll", "l_ss", "l_to", "l_ua", "l_ul", "lam_fl", 
 _SEGMENTS = ("mBr", "c_ch", "c_la", "c_ll", "c_ua", "c_ul")
 _HUB_WIDTHS = ("w_rh", "w_fh")  # place grid points only; no segment depends on them
 
+STRAIGHT_LIMB_TOLERANCE = 1e-12
+"""A limb whose span (hip to pedal axis, shoulder to grip) is within this relative distance of its
+length is straight: accepted, with the knee or elbow on the line through the limb's ends.  The
+reach check and the closure compute the span along different rounding paths; without the slack,
+an exactly straight limb could give the square root of a negative rounding error (NaN)."""
+
+_STRAIGHT_MARGIN = 1e-14
+"""A straight limb's two lengths are scaled to sum to ``span * (1 + margin)``, which keeps the
+closure real; the joint then lies within about ``span * sqrt(2 margin)`` (1e-7 of the span) of the
+line through the limb's ends."""
+
+_LIMB_LENGTHS = (("l_ll", "l_ul"), ("l_ua", "l_la"))
+"""Legs then arms, the order of ``limb_reach``."""
+
 SEGMENT_LINES: tuple[tuple[str, int, int], ...] = (
     ("torso", 13, 15), ("right lower leg", 26, 28), ("left lower leg", 27, 29),
     ("right upper leg", 28, 30), ("left upper leg", 29, 31), ("right upper arm", 21, 23),
@@ -88,27 +102,27 @@ def check_closures(args: dict[str, float], bicycle_source: str, rider_source: st
         raise InputError("l_f", args["l_f"], f"more than the fork offset |f_o| = {abs(fork_offset):.3f} m", bicycle_source)
     reach_args = {k: args[k] for k in _GEOMETRY + _PLACEMENT if k not in _HUB_WIDTHS}
     leg_span, leg_len, arm_span, arm_len = (float(x) for x in gen.limb_reach(**reach_args))
-    if leg_span > leg_len:
+    if leg_span > leg_len * (1 + STRAIGHT_LIMB_TOLERANCE):
         raise ReachError(
             "l_ll + l_ul", round(leg_len, 4),
             f"at least {leg_span:.3f} m, the distance from the hip (top of the seat) to the pedal axis: "
             f"the legs are {leg_span - leg_len:.3f} m too short to reach the pedals "
             "(lower the seat post l_sp or check l_ll and l_ul)", rider_source,
         )
-    if leg_span < abs(args["l_ll"] - args["l_ul"]):
+    if leg_span <= abs(args["l_ll"] - args["l_ul"]) * (1 + STRAIGHT_LIMB_TOLERANCE):
         raise ReachError("|l_ll - l_ul|", round(abs(args["l_ll"] - args["l_ul"]), 4),
                          f"at most {leg_span:.3f} m, the hip to pedal-axis distance (the knee cannot close)", rider_source)
-    if arm_span > arm_len:
+    if arm_span > arm_len * (1 + STRAIGHT_LIMB_TOLERANCE):
         raise ReachError(
             "l_ua + l_la", round(arm_len, 4),
             f"at least {arm_span:.3f} m, the distance from the shoulder to the handlebar grip: "
             f"the arms are {arm_span - arm_len:.3f} m too short to reach the grips "
             "(check l_ua, l_la, l_to, lam_fl, or the stem and handlebar lengths)", rider_source,
         )
-    if arm_span < abs(args["l_ua"] - args["l_la"]):
+    if arm_span <= abs(args["l_ua"] - args["l_la"]) * (1 + STRAIGHT_LIMB_TOLERANCE):
         raise ReachError("|l_ua - l_la|", round(abs(args["l_ua"] - args["l_la"]), 4),
                          f"at most {arm_span:.3f} m, the shoulder to grip distance (the elbow cannot close)", rider_source)
-    points = gen.grid_points(**{k: args[k] for k in _GEOMETRY + _PLACEMENT})
+    points = gen.grid_points(**{**{k: args[k] for k in _GEOMETRY + _PLACEMENT}, **straight_limb_lengths(args)})
     # Preconditions of the branch rule (derive/rider_model.py): hip above the pedal axis,
     # shoulder behind the hand.
     hip, foot, shoulder, hand = points[12], points[4], points[20], points[18]
@@ -117,6 +131,22 @@ def check_closures(args: dict[str, float], bicycle_source: str, rider_source: st
     if not shoulder[0] < hand[0]:
         raise InputError("lam_fl_deg", math.degrees(args["lam_fl"]),
                          "a forward lean that keeps the shoulders behind the hands", rider_source)
+
+
+def straight_limb_lengths(args: dict[str, float]) -> dict[str, float]:
+    """Limb lengths to use for limbs that are straight within :data:`STRAIGHT_LIMB_TOLERANCE`.
+
+    Returns an empty dict when no limb is at its limit of reach; otherwise, for each straight limb,
+    its two lengths scaled to sum to ``span * (1 + 1e-14)`` (see :data:`_STRAIGHT_MARGIN`).
+    """
+    reach_args = {k: args[k] for k in _GEOMETRY + _PLACEMENT if k not in _HUB_WIDTHS}
+    reach = [float(x) for x in gen.limb_reach(**reach_args)]
+    out: dict[str, float] = {}
+    for (a, b), span, length in zip(_LIMB_LENGTHS, reach[0::2], reach[1::2]):
+        if abs(span - length) <= STRAIGHT_LIMB_TOLERANCE * span:
+            scale = span * (1 + _STRAIGHT_MARGIN) / length
+            out[a], out[b] = args[a] * scale, args[b] * scale
+    return out
 
 
 def seat_rider(bicycle: BicycleBodies, rider: RiderMeasurements) -> RiderModel:
@@ -130,6 +160,7 @@ def seat_rider(bicycle: BicycleBodies, rider: RiderMeasurements) -> RiderModel:
     """
     args = model_arguments(bicycle, rider)
     check_closures(args, bicycle.source, rider.source)
+    args.update(straight_limb_lengths(args))
     points = gen.grid_points(**{k: args[k] for k in _GEOMETRY + _PLACEMENT})
     mass_args = {k: v for k, v in args.items() if k not in _HUB_WIDTHS}
     mass, com, inertia = gen.rider_mass_properties(**mass_args)
