@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from common import Context, Row, fmt_time, measure, ratio_text
+from common import Context, Row, fmt_time, measure_together, ratio_text
 
 GOAL_SECONDS = 100e-6
 GRID = 1000
@@ -75,13 +75,16 @@ def run(ctx: Context) -> list[Row]:
 
     params, origin = bicycle_parameters(ctx)
     model = WhippleModel.from_parameters(params)
-    ours = measure(lambda: critical_speeds_from_polynomial(model), ctx.repeats)
-    current = measure(lambda: model.critical_speeds(), ctx.repeats)
     grid = np.linspace(0.0, 10.0, GRID)
-    numpy_t = measure(lambda: scan(model, grid), ctx.repeats)
     lam = lambdified_polynomials()
     values = [float(x) for x in matrix_entries(model.M, model.C1, model.K0, model.K2).values()] + [model.g]
-    sympy_t = measure(lambda: lam(values), ctx.repeats)
+    t = measure_together({
+        "ours": lambda: critical_speeds_from_polynomial(model),
+        "current": lambda: model.critical_speeds(),
+        "numpy": lambda: scan(model, grid),
+        "sympy": lambda: lam(values),
+    }, ctx.repeats)
+    ours, current, numpy_t, sympy_t = t["ours"], t["current"], t["numpy"], t["sympy"]
 
     exact = critical_speeds_from_polynomial(model)
     reference = model.critical_speeds()

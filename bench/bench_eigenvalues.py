@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from common import Context, Row, fmt_time, measure, ratio_text
+from common import Context, Row, fmt_time, measure_together, ratio_text
 
 SPEEDS = 1000
 GOAL_BP, GOAL_NUMPY, GOAL_ACCURACY = 30.0, 3.0, 1e-10
@@ -70,12 +70,15 @@ def run(ctx: Context) -> list[Row]:
     params, origin = bicycle_parameters(ctx)
     model = WhippleModel.from_parameters(params)
     speeds = np.linspace(0.0, 10.0, SPEEDS)
-    ours = measure(lambda: eigenvalues_from_polynomial(model, speeds), ctx.repeats)
-    current = measure(lambda: model.eigenvalues(speeds), ctx.repeats)
-    numpy_t = measure(lambda: np.linalg.eigvals(model.state_matrix(speeds)), ctx.repeats)
     lam = lambdified_state_matrix()
     entries = list(matrix_entries(model.M, model.C1, model.K0, model.K2).values()) + [model.g]
-    sympy_t = measure(lambda: np.linalg.eigvals(lam(entries, speeds)), ctx.repeats)
+    t = measure_together({
+        "ours": lambda: eigenvalues_from_polynomial(model, speeds),
+        "current": lambda: model.eigenvalues(speeds),
+        "numpy": lambda: np.linalg.eigvals(model.state_matrix(speeds)),
+        "sympy": lambda: np.linalg.eigvals(lam(entries, speeds)),
+    }, ctx.repeats)
+    ours, current, numpy_t, sympy_t = t["ours"], t["current"], t["numpy"], t["sympy"]
 
     result = eigenvalues_from_polynomial(model, speeds)
     reference = model.eigenvalues(speeds)

@@ -128,6 +128,33 @@ def measure(fn: Callable[[], object], repeats: int = 7, min_sample: float = MIN_
     return Timing(statistics.median(samples), repeats, loops)
 
 
+def measure_together(fns: dict[str, Callable[[], object]], repeats: int = 7,
+                     min_sample: float = MIN_SAMPLE) -> dict[str, Timing]:
+    """:func:`measure` for several functions, their timed loops interleaved round by round, so a
+    change in the machine's load during the run affects all of them alike."""
+    loops = {}
+    for name, fn in fns.items():
+        fn()
+        n = 1
+        while True:
+            start = time.perf_counter()
+            for _ in range(n):
+                fn()
+            elapsed = time.perf_counter() - start
+            if elapsed >= min_sample or n >= 1_000_000:
+                break
+            n *= max(2, min(10, int(min_sample / max(elapsed, 1e-9)) + 1))
+        loops[name] = n
+    samples: dict[str, list[float]] = {name: [] for name in fns}
+    for _ in range(repeats):
+        for name, fn in fns.items():
+            start = time.perf_counter()
+            for _ in range(loops[name]):
+                fn()
+            samples[name].append((time.perf_counter() - start) / loops[name])
+    return {name: Timing(statistics.median(samples[name]), repeats, loops[name]) for name in fns}
+
+
 def ratio_text(baseline: float, ours: float) -> str:
     return f"{baseline / ours:.1f}x" if ours > 0 and baseline == baseline else "n/a"
 
