@@ -3,7 +3,8 @@
 Timing.  :func:`measure` calls a function in loops long enough to read a clock well (at least
 :data:`MIN_SAMPLE` seconds a loop), repeats that, and reports the median time per call over the
 repeats (with the repeat and loop counts).  Baselines and bikerider are always measured in the
-same run, one after the other, so a busy machine slows both.
+same run; :func:`measure_together` interleaves their timed loops round by round, so a change of
+load during the run slows all of them alike.
 
 BicycleParameters cannot share the project's virtual environment (it pins its own dependencies),
 so it lives in ``bench/.venv-baseline`` (``make bench`` creates it) and runs in a subprocess,
