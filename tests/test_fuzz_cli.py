@@ -126,3 +126,36 @@ def test_random_argument_lists(tmp_path_factory, data):
         assert err.strip(), f"{argv}: exit 2 without a message"
     if code == 0 and "--json" in argv and "--help" not in argv and "--version" not in argv and out.strip():
         check_json_output(out, " ".join(argv))
+
+
+@settings(max_examples=20, deadline=None,
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+@given(st.data(), st.sampled_from(["inputs", "bicycle", "rider"]))
+def test_sensitivity_with_a_mutated_file(tmp_path_factory, data, which):
+    bases = {"inputs": TESTS / "data" / "BenchmarkBenchmark.txt", "bicycle": BICYCLE_TOML, "rider": RIDER_TOML}
+    what, text = data.draw(mutated(bases[which].read_bytes()))
+    path = tmp_path_factory.mktemp("cli") / bases[which].name
+    path.write_bytes(text)
+    files = {"bicycle": str(BICYCLE_TOML), "rider": str(RIDER_TOML), which: str(path)}
+    argv = (["sensitivity", "weave_speed", "--inputs", files["inputs"]] if which == "inputs" else
+            ["sensitivity", "capsize_speed", "--bicycle", files["bicycle"], "--rider", files["rider"], "--top", "3"])
+    code, out, err = run_cli(argv)
+    if code == 2 and which == "bicycle" and str(RIDER_TOML) in err:
+        path = RIDER_TOML  # a rider who cannot reach is named by the rider file
+    _assert_clean(code, out, err, path, json_wanted=False)
+    if code == 0:
+        assert "nan" not in out.lower().replace("nanometre", ""), out
+        assert " inf" not in out.lower(), out
+
+
+@settings(max_examples=8, deadline=None,
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+@given(st.data())
+def test_gap_with_a_mutated_eigenvalue_file(tmp_path_factory, data):
+    gap = Path(str(resources.files("bikerider") / "data" / "gap"))
+    what, text = data.draw(mutated((gap / "kooijman2008_run52.csv").read_bytes()))
+    path = tmp_path_factory.mktemp("cli") / "run52.csv"
+    path.write_bytes(text)
+    code, out, err = run_cli(["gap", "--model", str(gap / "kooijman2008_bicycle.toml"), "--data", str(path),
+                              "--effects", "parameters,steer_damping", "--json"])
+    _assert_clean(code, out, err, path, json_wanted=True)

@@ -261,3 +261,64 @@ def test_readers_on_files_that_are_not_input(tmp_path, content, reader):
     with pytest.raises((BikeriderError, OSError)) as info:
         function(folder)
     assert folder.name in str(info.value)
+
+
+# ------------------------------------------------------------------------------------------
+# Data of the gap diagnosis
+# ------------------------------------------------------------------------------------------
+GAP = Path(str(resources.files("bikerider") / "data"))
+GAP_FILES = {
+    "eigenvalues": GAP / "gap_examples" / "eigenvalues.csv",
+    "canonical": GAP / "gap_examples" / "canonical.csv",
+    "control": GAP / "gap_examples" / "control.toml",
+    "model": GAP / "gap" / "kooijman2008_bicycle.toml",
+}
+
+
+def _gap_read(kind: str, path: Path):
+    from bikerider.gap import data as gap_data
+    from bikerider.gap.model_input import load_model
+
+    if kind == "eigenvalues":
+        d = gap_data.read_eigenvalues(path)
+        return [d.speed, d.value, d.real_sigma, d.imag_sigma, d.speed_sigma, d.gains]
+    if kind == "canonical":
+        d = gap_data.read_canonical(path)
+        return [d.value, d.sigma, list(d.speed_range.values())]
+    if kind == "control":
+        return gap_data.read_control(path)
+    model = load_model(path)
+    return model.parameters.values
+
+
+@FUZZ
+@given(st.data(), st.sampled_from(sorted(GAP_FILES)))
+def test_gap_data_readers(tmp_path_factory, data, kind):
+    base = GAP_FILES[kind]
+    what, text = data.draw(mutated(base.read_bytes()))
+    path = _write(tmp_path_factory.mktemp("fuzz"), base.name, text)
+    try:
+        values = _gap_read(kind, path)
+    except BikeriderError as exc:
+        assert_names_file(exc, path)
+        return
+    assert_all_finite(values, f"{kind}: {what}")
+
+
+@settings(max_examples=25, deadline=None,
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+@given(st.data())
+def test_gap_perturbation_run(tmp_path_factory, data):
+    from bikerider.gap import data as gap_data
+
+    base = GAP / "gap_examples" / "perturbation_run.csv"
+    what, text = data.draw(mutated(base.read_bytes()))
+    path = _write(tmp_path_factory.mktemp("fuzz"), base.name, text)
+    try:
+        run = gap_data.read_perturbation(path)
+    except BikeriderError as exc:
+        assert_names_file(exc, path)
+        return
+    e = run.eigenvalues
+    assert_all_finite([e.speed, e.value, e.real_sigma, e.imag_sigma, e.speed_sigma], what)
+    assert_all_finite([run.time, run.signals], what)

@@ -93,7 +93,12 @@ def run(args: argparse.Namespace) -> int:
     quantities = dict(input_set.quantities)
     if args.speed is not None:
         quantities["v"] = Quantity(args.speed)
-    result = propagate(quantities, sources=input_set.sources)
+    try:
+        result = propagate(quantities, sources=input_set.sources)
+    except InputError as exc:  # a value missing from, or wrong in, the input files: name them
+        if exc.source is not None:
+            raise
+        raise InputError(exc.name, exc.value, exc.expected, input_set.name) from None
     known = set(result.output_names) | set(result.input_names)
     output = names.check_name(args.output, known, "OUTPUT")
     print(f"Inputs: {input_set.name}")

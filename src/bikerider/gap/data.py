@@ -183,6 +183,10 @@ def _read_table(path: str | Path) -> _Table:
     return _Table(path, columns, rows, meta)
 
 
+MAX_MAGNITUDE = 1e6
+"""Largest magnitude of a number in a data file (speeds in m/s, eigenvalues in 1/s, times in s, gains)."""
+
+
 def _number(table: _Table, line: int, column: str, raw: str, *, positive: bool = False,
             nonnegative: bool = False, optional: bool = False) -> float:
     if raw == "":
@@ -195,6 +199,9 @@ def _number(table: _Table, line: int, column: str, raw: str, *, positive: bool =
         raise FileFormatError(table.path, f"{column} = {raw!r}: expected a number", line) from None
     if not math.isfinite(value):
         raise FileFormatError(table.path, f"{column} = {raw}: expected a finite number", line)
+    if abs(value) > MAX_MAGNITUDE:  # no speed, eigenvalue, gain or time of a bicycle test; overflows later
+        raise FileFormatError(table.path, f"{column} = {raw}: expected a magnitude of at most {MAX_MAGNITUDE:g} "
+                              "(check the units and the column)", line)
     if positive and not value > 0:
         raise FileFormatError(table.path, f"{column} = {raw}: expected a positive number", line)
     if nonnegative and value < 0:
