@@ -262,6 +262,9 @@ def read_eigenvalues(path: str | Path, gains=None) -> EigenvalueData:
         rs = get("real_sigma", positive=True, optional=True) if "real_sigma" in cols else math.nan
         is_ = get("imag_sigma", positive=True, optional=True) if "imag_sigma" in cols else math.nan
         ss = get("speed_sigma", nonnegative=True, optional=True) if "speed_sigma" in cols else math.nan
+        if ss >= speed:  # the diagnosis evaluates the model at speed +/- speed_sigma
+            raise FileFormatError(table.path, f"speed_sigma = {ss:g}: expected a standard uncertainty below the "
+                                  f"speed ({speed:g} m/s)", line)
         mode = cells[cols["mode"]].strip().lower() if "mode" in cols and cells[cols["mode"]].strip() else (
             "weave" if imag != 0 else "auto")
         if mode not in MODES and mode != "auto":
@@ -338,6 +341,9 @@ def read_perturbation(path: str | Path, speed: float | None = None, gains=None,
     meta_sigma = _meta_number(table, "speed_sigma", nonnegative=True)
     if meta_sigma is not None:
         v_sigma = max(v_sigma, meta_sigma)
+    if v_sigma >= v:  # the diagnosis evaluates the model at speed +/- its uncertainty
+        raise FileFormatError(table.path, f"speed {v:g} m/s with uncertainty {v_sigma:g} m/s: expected an "
+                              "uncertainty below the speed (a run whose speed varies this much has no one weave eigenvalue)")
     fits: dict[str, object] = {}
     try:
         fits["roll_rate"] = weave_eigenvalue(data["time"], data["roll_rate"])
