@@ -51,6 +51,8 @@ TIE_P = 0.05
 MAX_SELECTED = 3
 """Most effects the greedy selection adds."""
 N_SPEED_BANDS = 3
+UNPREDICTED_Z = 1e3
+"""Normalised residual given to a held-out point the fitted model cannot predict (singular model)."""
 
 
 @dataclass
@@ -243,7 +245,9 @@ class Diagnosis:
         for name, held in self.folds:
             fit = p.fit(effects, ~held)
             fits.append(fit)
-            z_after[held] = p.z(p.predict_fit(fit))[held]
+            z_fold = p.z(p.predict_fit(fit))[held]
+            # a model that cannot be evaluated (singular) predicts nothing: count it as far off
+            z_after[held] = np.where(np.isfinite(z_fold), z_fold, UNPREDICTED_Z)
             folds.append({"fold": name, "n": int(held.sum()), "error_before": rms(z_before[held]),
                           "error_after": rms(z_after[held]), "fitted": _named_values(fit)})
         held_any = np.any([h for _, h in self.folds], axis=0)

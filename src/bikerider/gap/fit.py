@@ -16,7 +16,8 @@ Fits.  A set of effects is fitted by bounded nonlinear least squares
 square root of data plus model variance for structural effects (the parameter uncertainty is a
 nuisance they must live with); when ``parameters`` is in the set the benchmark parameters
 themselves move, ``p = p0 + u sigma_p`` with the prior residuals ``u`` appended, and ``w`` holds the
-data variance alone.  Starts are the best of a grid over each fitted parameter's literature range;
+data variance alone.  Starts are the best of a grid over each fitted parameter's literature range (at most
+:data:`MAX_STARTS` points);
 the Jacobian is a forward difference evaluated for all parameters in one batched model call.
 Standard errors come from ``(J^T J)^-1``, scaled by the reduced chi-square when that exceeds one;
 95 % intervals are +-1.96 standard errors, clipped to the bounds.
@@ -38,6 +39,8 @@ from bikerider.gap.models import BENCH_ARGS, STRUCTURAL_KEYS, EffectModel
 from bikerider.gap.predict import Predictor
 
 LOG = logging.getLogger(__name__)
+MAX_STARTS = 32
+"""Most grid points tried as starting values of one fit (a fixed random subset beyond that)."""
 _BAD = 1e3
 """Residual assigned to every observation when a model cannot be evaluated (singular matrices)."""
 
@@ -209,7 +212,17 @@ class GapProblem:
                 lay.units.append(p.unit)
                 lo, hi = p.literature
                 grids.append(sorted({float(np.clip(x, *p.bounds)) for x in (lo, 0.5 * (lo + hi), hi, p.start)}))
-        lay.starts = list(itertools.product(*grids)) if grids else [()]
+        if not grids:
+            lay.starts = [()]
+            return lay
+        mids = tuple(g[len(g) // 2] for g in grids)
+        total = math.prod(len(g) for g in grids)
+        if total <= MAX_STARTS:
+            lay.starts = list(itertools.product(*grids))
+        else:  # a fixed random subset of the grid, and the middle of every range
+            rng = np.random.default_rng(0)
+            picks = {tuple(int(rng.integers(len(g))) for g in grids) for _ in range(4 * MAX_STARTS)}
+            lay.starts = [mids] + [tuple(g[i] for g, i in zip(grids, pick)) for pick in sorted(picks)][: MAX_STARTS - 1]
         return lay
 
     def configure(self, lay: _Layout, x: np.ndarray) -> tuple[dict[str, object], dict[str, dict[str, object]]]:

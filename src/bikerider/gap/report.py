@@ -187,7 +187,7 @@ def plot_gap_map(result: dict, path: Path) -> None:
         for j in range(len(cols)):
             if np.isfinite(table[i, j]):
                 ax.text(j, i, f"{table[i, j]:.1f}", ha="center", va="center", fontsize=7)
-    fig.colorbar(im, ax=ax, label="sign(measured - model) x RMS z")
+    fig.colorbar(im, ax=ax, label="signed RMS z")
     ax.set_title("Gap map: residuals in units of the combined uncertainty", fontsize=9)
     fig.tight_layout()
     fig.savefig(path, dpi=110)

@@ -277,7 +277,7 @@ class TruthSimulator:
             return abs(x[idx[0]]) - 0.5
 
         fall.terminal = True
-        sol = solve_ivp(f, (0.0, duration), x0, t_eval=times, method="LSODA", rtol=1e-8, atol=1e-10, events=fall)
+        sol = solve_ivp(f, (0.0, duration), x0, t_eval=times, method="LSODA", rtol=1e-6, atol=1e-8, events=fall)
         return sol.t, sol.y[idx[2]]
 
 
