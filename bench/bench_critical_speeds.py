@@ -2,11 +2,11 @@
 
 Measured on the bicycle of item 1 (Browser + Jason):
 
-* bikerider: ``bikerider.benchmark.quartic.critical_speeds_from_polynomial`` - the closed-form
-  conditions (capsize ``det(g K0 + v^2 K2) = 0``, weave: third Hurwitz determinant, quadratics in
-  ``v^2``) on Python floats;
-* bikerider ``WhippleModel.critical_speeds`` as it is today (generated polynomials on NumPy
-  scalars, ``numpy.roots``);
+* bikerider: ``WhippleModel.critical_speeds`` - the closed-form conditions (capsize
+  ``det(g K0 + v^2 K2) = 0``, weave: third Hurwitz determinant, quadratics in ``v^2``) from the
+  generated plain-float ``critical_speed_polynomials_scalar``;
+* bikerider's generated NumPy ``critical_speed_polynomials`` on 0-d arrays with ``numpy.roots``
+  (what a batch path costs on one bicycle);
 * NumPy scan: ``eigvals`` of the state matrices on a 1000-point grid 0-10 m/s, sign changes
   interpolated linearly (what a user without the closed form does; 0.01 m/s grid);
 * BicycleParameters scan: the same with ``Bicycle.eig`` (it has no critical-speed function);
@@ -69,7 +69,7 @@ def lambdified_polynomials():
 def run(ctx: Context) -> list[Row]:
     from bikerider.benchmark import WhippleModel
     from bikerider.benchmark.model import matrix_entries
-    from bikerider.benchmark.quartic import critical_speeds_from_polynomial
+    from bikerider.generated import benchmark_model as gen
 
     from bench_eigenvalues import bicycle_parameters
 
@@ -78,27 +78,31 @@ def run(ctx: Context) -> list[Row]:
     grid = np.linspace(0.0, 10.0, GRID)
     lam = lambdified_polynomials()
     values = [float(x) for x in matrix_entries(model.M, model.C1, model.K0, model.K2).values()] + [model.g]
+    entries = matrix_entries(model.M, model.C1, model.K0, model.K2)
+
+    def numpy_polynomials():
+        capsize_c, weave_c, _, _ = gen.critical_speed_polynomials(**entries, g=model.g)
+        return np.roots(capsize_c[np.abs(capsize_c) > 0]), np.roots(weave_c)
+
     t = measure_together({
-        "ours": lambda: critical_speeds_from_polynomial(model),
-        "current": lambda: model.critical_speeds(),
+        "ours": lambda: model.critical_speeds(),
+        "current": numpy_polynomials,
         "numpy": lambda: scan(model, grid),
         "sympy": lambda: lam(values),
     }, ctx.repeats)
     ours, current, numpy_t, sympy_t = t["ours"], t["current"], t["numpy"], t["sympy"]
 
-    exact = critical_speeds_from_polynomial(model)
-    reference = model.critical_speeds()
+    exact = model.critical_speeds()
     scanned = scan(model, grid)
     notes = [f"model: Browser + Jason, {origin}",
-             f"bikerider: weave {exact.weave:.10f} m/s, capsize {exact.capsize:.10f} m/s "
-             f"(WhippleModel.critical_speeds: {reference.weave:.10f}, {reference.capsize:.10f})",
+             f"bikerider: weave {exact.weave:.10f} m/s, capsize {exact.capsize:.10f} m/s",
              f"numpy scan ({GRID} speeds): weave {scanned[0]:.6f}, capsize {scanned[1]:.6f} m/s",
              f"sympy.lambdify: weave {lam(values)[0]:.10f}, capsize {lam(values)[1]:.10f} m/s"]
-    baselines = [("bikerider WhippleModel.critical_speeds (generated polynomials, np.roots)", current.text()),
+    baselines = [("bikerider generated NumPy polynomials on 0-d arrays + np.roots", current.text()),
                  (f"numpy eigvals scan, {GRID} speeds", numpy_t.text()),
                  ("sympy.lambdify (no CSE) polynomials + np.roots", sympy_t.text())]
     ratios = [f"{ratio_text(numpy_t.median, ours.median)} vs numpy scan",
-              f"{ratio_text(current.median, ours.median)} vs critical_speeds()",
+              f"{ratio_text(current.median, ours.median)} vs NumPy polynomials",
               f"{ratio_text(sympy_t.median, ours.median)} vs lambdify"]
     bp = ctx.bp("scan", n=GRID, repeats=ctx.repeats)
     if "error" in bp:

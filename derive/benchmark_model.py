@@ -202,6 +202,7 @@ def build() -> GeneratedModule:
                 Output("K2", mats["K2"], "speed stiffness matrix K2, multiplied by v^2 [kg]"),
             ],
             summary="Canonical matrices M, C1, K0, K2 of the linear Whipple model from the benchmark parameters.",
+            scalar=True,
             notes="Meijaard et al. (2007), Appendix A. Rows and columns are [roll, steer].",
         ),
         GeneratedFunction(
@@ -239,6 +240,7 @@ def build() -> GeneratedModule:
                        "coefficients in u of a3/v, highest first", vector=True),
             ],
             summary="Polynomials in u = v^2 whose positive roots are the capsize and weave speeds.",
+            scalar=True,
             notes=(
                 "Capsize: det(g K0 + u K2) = 0. Weave (Hopf): the third Hurwitz determinant "
                 "a3 a2 a1 - a4 a1^2 - a0 a3^2 vanishes, with crossing frequency "

@@ -16,6 +16,7 @@ from pathlib import Path
 import jinja2
 import sympy as sp
 from sympy.printing.numpy import NumPyPrinter
+from sympy.printing.pycode import PythonCodePrinter
 
 from derive.symbols import describe
 
@@ -25,21 +26,38 @@ DERIVE_DIR = Path(__file__).resolve().parent
 TEMPLATE_DIR = DERIVE_DIR / "templates"
 
 
+def _reciprocal_power(printer, expr) -> str | None:
+    """``1/x`` or ``1/x**n`` for a negative integer power, else None (the printer's own form)."""
+    base, exp = expr.as_base_exp()
+    if exp.is_Integer and exp.is_negative:
+        if exp == -1:
+            return f"1/{printer.parenthesize(base, 1000)}"
+        return f"1/{printer.parenthesize(base, 1000)}**{int(-exp)}"
+    return None
+
+
 class _Printer(NumPyPrinter):
     """NumPy printer that writes ``1/x**2`` rather than ``x**(-2.0)``."""
 
     def _print_Pow(self, expr, rational=False):
-        base, exp = expr.as_base_exp()
-        if exp.is_Integer and exp.is_negative:
-            if exp == -1:
-                return f"1/{self.parenthesize(base, 1000)}"
-            return f"1/{self.parenthesize(base, 1000)}**{int(-exp)}"
-        return super()._print_Pow(expr, rational=rational)
+        return _reciprocal_power(self, expr) or super()._print_Pow(expr, rational=rational)
+
+
+class _ScalarPrinter(PythonCodePrinter):
+    """Plain-Python printer (``math.name``) with the same ``1/x**2`` form."""
+
+    def _print_Pow(self, expr, rational=False):
+        return _reciprocal_power(self, expr) or super()._print_Pow(expr, rational=rational)
 
 
 def print_numpy(expr: sp.Expr) -> str:
     """Print one expression as NumPy source (functions as ``numpy.name``)."""
     return _Printer({"fully_qualified_modules": True, "allow_unknown_functions": False}).doprint(expr)
+
+
+def print_scalar(expr: sp.Expr) -> str:
+    """Print one expression as plain Python on floats (functions as ``math.name``)."""
+    return _ScalarPrinter({"fully_qualified_modules": True, "allow_unknown_functions": False}).doprint(expr)
 
 
 @dataclass
@@ -91,6 +109,9 @@ class GeneratedFunction:
     outputs: list[Output]
     summary: str
     notes: str = ""
+    scalar: bool = False
+    """Also emit ``<name>_scalar``: the same expressions on Python floats with ``math`` (no arrays),
+    for single-bicycle calls where NumPy's per-operation overhead dominates."""
 
     def check(self) -> None:
         """Refuse expressions that use a symbol not in the argument list."""
@@ -129,6 +150,7 @@ class _Rendered:
     assignments: list[tuple[str, str]]
     ops_before: int
     ops_after: int
+    scalar: dict | None
 
 
 def _render_function(fn: GeneratedFunction) -> _Rendered:
@@ -140,6 +162,12 @@ def _render_function(fn: GeneratedFunction) -> _Rendered:
     replacements, reduced = sp.cse(flat, symbols=sp.numbered_symbols("_x"), order="canonical")
     ops_after = int(sum(sp.count_ops(r) for _, r in replacements) + sum(sp.count_ops(e) for e in reduced))
     assignments = [(str(lhs), print_numpy(rhs)) for lhs, rhs in replacements]
+    scalar = None
+    if fn.scalar:
+        scalar = {
+            "assignments": [(str(lhs), print_scalar(rhs)) for lhs, rhs in replacements],
+            "returns": _scalar_returns(fn.outputs, [print_scalar(e) for e in reduced]),
+        }
     outputs = []
     k = 0
     for out in fn.outputs:
@@ -159,7 +187,27 @@ def _render_function(fn: GeneratedFunction) -> _Rendered:
     for a in fn.args:
         info = describe(a.name)
         args.append({"name": a.name, "description": info.description, "unit": info.unit})
-    return _Rendered(fn.name, args, outputs, fn.summary, fn.notes, assignments, ops_before, ops_after)
+    return _Rendered(fn.name, args, outputs, fn.summary, fn.notes, assignments, ops_before, ops_after, scalar)
+
+
+def _scalar_returns(outputs: list[Output], sources: list[str]) -> list[str]:
+    """Each output as a Python literal: a float, a tuple, or a tuple of row tuples."""
+    returns, k = [], 0
+    for out in outputs:
+        suffix = out.shape_suffix
+        n = 1
+        for size in suffix:
+            n *= size
+        flat = sources[k:k + n]
+        k += n
+        if not suffix:
+            returns.append(flat[0])
+        elif len(suffix) == 1:
+            returns.append("(" + ", ".join(flat) + ",)")
+        else:
+            rows = [flat[i * suffix[1]:(i + 1) * suffix[1]] for i in range(suffix[0])]
+            returns.append("(" + ", ".join("(" + ", ".join(r) + ",)" for r in rows) + ",)")
+    return returns
 
 
 def inputs_hash() -> str:
@@ -194,6 +242,8 @@ def render_module(module: GeneratedModule, generator: str, digest: str) -> tuple
     text = _environment().get_template("module.py.jinja").render(
         module=module,
         functions=rendered,
+        uses_math=any(r.scalar for r in rendered),
+        exports=[name for r in rendered for name in ((r.name, f"{r.name}_scalar") if r.scalar else (r.name,))],
         generator=generator,
         digest=digest,
         sympy_version=sp.__version__,

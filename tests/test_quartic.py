@@ -11,10 +11,8 @@ import numpy as np
 import pytest
 
 from bikerider.benchmark import BenchmarkParameters, WhippleModel
-from bikerider.benchmark.quartic import (
-    critical_speeds_from_polynomial, eigenvalues_from_polynomial, label_roots, positive_real_roots,
-    quartic_roots, speed_polynomials,
-)
+from bikerider.benchmark.model import positive_real_roots
+from bikerider.benchmark.quartic import eigenvalues_from_polynomial, label_roots, quartic_roots
 from bikerider.errors import InputError
 from bikerider.generated import benchmark_model as gen
 
@@ -161,33 +159,38 @@ def _random_models(benchmark_model: WhippleModel, n: int, spread: float, seed: i
     return out
 
 
-def test_speed_polynomials_equal_the_generated_ones(benchmark_model):
+def test_scalar_speed_polynomials_equal_the_generated_numpy_ones(benchmark_model):
+    # The plain-float variant the code generator emits must be the same expressions.
     for model in [benchmark_model] + _random_models(benchmark_model, 50, 0.3, 1):
-        ours = speed_polynomials(model.M, model.C1, model.K0, model.K2, model.g)
-        entries = {f"{n}_{a}{b}": m[i, j] for n, m in zip(("M", "C1", "K0", "K2"), (model.M, model.C1, model.K0, model.K2))
+        entries = {f"{n}_{a}{b}": float(m[i, j])
+                   for n, m in zip(("M", "C1", "K0", "K2"), (model.M, model.C1, model.K0, model.K2))
                    for i, a in enumerate(("phi", "delta")) for j, b in enumerate(("phi", "delta"))}
-        generated = gen.critical_speed_polynomials(**entries, g=model.g)
-        for name, reference in zip(("capsize", "weave", "a1_over_v", "a3_over_v"), generated):
-            scale = np.abs(reference).max()
-            np.testing.assert_allclose(ours[name], reference, rtol=0, atol=1e-12 * scale, err_msg=name)
+        scalar = gen.critical_speed_polynomials_scalar(**entries, g=model.g)
+        vectorised = gen.critical_speed_polynomials(**entries, g=model.g)
+        for ours, reference in zip(scalar, vectorised):
+            np.testing.assert_allclose(ours, reference, rtol=0, atol=1e-13 * np.abs(reference).max())
 
 
-def test_critical_speeds_match_the_model(benchmark_model, meijaard2007):
-    # Meijaard et al. 2007, Table 2(a): v_w = 4.29238253634111, v_c = 6.02426201538837 m/s.
-    speeds = critical_speeds_from_polynomial(benchmark_model)
-    assert speeds.weave == pytest.approx(meijaard2007["speeds_table2a"]["v_w"]["value"], rel=1e-10)
-    assert speeds.capsize == pytest.approx(meijaard2007["speeds_table2a"]["v_c"]["value"], rel=1e-10)
-    found_none = 0
-    for model in _random_models(benchmark_model, 200, 0.4, 2):
-        ours, reference = critical_speeds_from_polynomial(model), model.critical_speeds()
-        for field in ("weave", "capsize", "weave_frequency"):
-            a, b = getattr(ours, field), getattr(reference, field)
-            assert (a is None) == (b is None), field
-            if a is None:
-                found_none += 1
-            else:
-                assert a == pytest.approx(b, rel=1e-9), field
-    assert found_none > 0  # the perturbations reach models without a weave or capsize speed
+def test_critical_speeds_are_eigenvalue_crossings(benchmark_model):
+    # Independent of the Hurwitz polynomials and of mode labels: just above and below each critical
+    # speed, the number of eigenvalues with a positive real part changes by one at capsize (a real
+    # root crosses zero) and by two at weave (a complex pair crosses the imaginary axis).
+    def unstable(model, v):
+        return int(np.sum(model.eigenvalues([v]).values.real > 0))
+
+    checked = found_none = 0
+    for model in _random_models(benchmark_model, 120, 0.4, 2):
+        speeds = model.critical_speeds()
+        if speeds.weave is None or speeds.capsize is None:
+            found_none += 1
+            continue
+        eps = 1e-5 * max(speeds.weave, speeds.capsize)
+        if abs(speeds.weave - speeds.capsize) < 100 * eps:
+            continue
+        assert abs(unstable(model, speeds.capsize + eps) - unstable(model, speeds.capsize - eps)) == 1
+        assert abs(unstable(model, speeds.weave + eps) - unstable(model, speeds.weave - eps)) == 2
+        checked += 1
+    assert checked > 20 and found_none > 0  # 24 of the 120 draws have both, well apart
 
 
 def test_positive_real_roots_edge_cases():
@@ -223,7 +226,7 @@ def test_overflowing_matrices_are_an_error_not_nan(benchmark_model):
     huge = WhippleModel(benchmark_model.M * 1e120, benchmark_model.C1 * 1e120, benchmark_model.K0 * 1e120,
                         benchmark_model.K2 * 1e120, g=benchmark_model.g)
     with pytest.raises(InputError) as info:
-        critical_speeds_from_polynomial(huge)
+        huge.critical_speeds()
     assert "too large" in str(info.value)
 
 

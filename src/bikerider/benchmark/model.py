@@ -13,6 +13,7 @@ of a real bicycle) the pair with the larger imaginary part is weave and the othe
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -147,18 +148,21 @@ class WhippleModel:
         positive root of the third Hurwitz determinant (a quadratic in ``v^2``) at which the
         crossing frequency ``omega^2 = a1/a3`` is positive.
         """
-        with np.errstate(over="ignore", invalid="ignore"):
-            capsize_c, weave_c, a1_c, a3_c = gen.critical_speed_polynomials(**self._entries(), g=self.g)
-        if not all(np.all(np.isfinite(c)) for c in (capsize_c, weave_c, a1_c, a3_c)):
+        entries = {k: float(v) for k, v in self._entries().items()}
+        try:
+            capsize_c, weave_c, (b1, b0), (_, alpha) = gen.critical_speed_polynomials_scalar(**entries, g=self.g)
+        except OverflowError:
+            capsize_c = weave_c = (math.inf,)
+        if not all(math.isfinite(c) for c in (*capsize_c, *weave_c)):
             raise InputError("M, C1, K0, K2", "entries too large for floating point",
                              "matrices whose critical-speed polynomials are finite", self.source)
-        capsize_u = _positive_real_roots(capsize_c)
-        capsize = float(np.sqrt(capsize_u[0])) if capsize_u.size else None
+        capsize_u = positive_real_roots(*capsize_c)
+        capsize = math.sqrt(capsize_u[0]) if capsize_u else None
         weave = frequency = None
-        for u in _positive_real_roots(weave_c):
-            a1, a3 = np.polyval(a1_c, u), np.polyval(a3_c, u)
-            if a3 != 0 and a1 / a3 > 0:
-                weave, frequency = float(np.sqrt(u)), float(np.sqrt(a1 / a3))
+        for u in positive_real_roots(*weave_c):
+            a1_over_v = b1 * u + b0  # a1/v and a3/v = alpha at u: omega^2 = a1/a3
+            if alpha != 0 and a1_over_v / alpha > 0:
+                weave, frequency = math.sqrt(u), math.sqrt(a1_over_v / alpha)
                 break
         return CriticalSpeeds(weave, capsize, frequency)
 
@@ -178,7 +182,7 @@ class WhippleModel:
             raise InputError("M, C1, K0, K2", "entries too large for floating point",
                              "matrices whose characteristic discriminant is finite", self.source)
         slope = np.polyder(coefficients)
-        for u in _positive_real_roots(coefficients):
+        for u in polynomial_positive_real_roots(coefficients):
             for _ in range(3):  # Newton steps: the root of a simple zero to full precision
                 step = np.polyval(coefficients, u) / np.polyval(slope, u) if np.polyval(slope, u) else 0.0
                 if not np.isfinite(step) or abs(step) > 1e-6 * u:
@@ -198,18 +202,53 @@ class WhippleModel:
         return bool(np.all(np.abs(top_below.imag) <= tol) and np.all(np.abs(top_above.imag) > tol))
 
 
-def _positive_real_roots(coefficients: np.ndarray) -> np.ndarray:
-    """Sorted positive real roots of a polynomial (highest power first); scale-aware."""
+_ZERO = 1e-14
+"""Polynomial coefficients below this fraction of the largest are zero."""
+_IMAG = 1e-9
+"""A complex root pair with imaginary part below ``_IMAG * max(1, |real part|)`` is a double real root."""
+
+
+def positive_real_roots(c2: float, c1: float, c0: float) -> list[float]:
+    """Sorted positive real roots of ``c2 u^2 + c1 u + c0`` on floats, scale-aware.
+
+    Coefficients below ``1e-14`` of the largest count as zero; a complex pair whose imaginary part
+    is below ``1e-9 max(1, |real part|)`` counts as a double real root (round-off can split a
+    double root into such a pair).
+    """
+    scale = max(abs(c2), abs(c1), abs(c0))
+    if scale == 0:
+        return []
+    a, b, c = c2 / scale, c1 / scale, c0 / scale
+    if abs(a) <= _ZERO:
+        if abs(b) <= _ZERO:
+            return []
+        roots = [-c / b]
+    else:
+        disc = b * b - 4 * a * c
+        if disc >= 0:
+            q = -0.5 * (b + math.copysign(math.sqrt(disc), b))
+            roots = [q / a, c / q] if q != 0 else [0.0, 0.0]
+        else:
+            re = -b / (2 * a)
+            if math.sqrt(-disc) / (2 * abs(a)) > _IMAG * max(1.0, abs(re)):
+                return []
+            roots = [re, re]
+    return sorted(u for u in roots if u > 0)
+
+
+def polynomial_positive_real_roots(coefficients: np.ndarray) -> np.ndarray:
+    """Sorted positive real roots of a polynomial of any degree (highest power first), with the
+    tolerances of :func:`positive_real_roots`."""
     c = np.asarray(coefficients, dtype=float)
     scale = np.abs(c).max()
     if scale == 0:
         return np.empty(0)
     c = c / scale
-    nonzero = np.flatnonzero(np.abs(c) > 1e-14)
+    nonzero = np.flatnonzero(np.abs(c) > _ZERO)
     if nonzero.size == 0:
         return np.empty(0)
     roots = np.roots(c[nonzero[0]:])
-    real = roots[np.abs(roots.imag) <= 1e-9 * np.maximum(1.0, np.abs(roots.real))].real
+    real = roots[np.abs(roots.imag) <= _IMAG * np.maximum(1.0, np.abs(roots.real))].real
     return np.sort(real[real > 0])
 
 

@@ -3,8 +3,8 @@
 The Whipple model's eigenvalues at speed ``v`` are the roots of the quartic
 ``a4 s^4 + a3 s^3 + a2 s^2 + a1 s + a0`` whose coefficients the generated
 ``benchmark_model.characteristic_coefficients`` gives for any batch of speeds.  This module solves
-that quartic in closed form for a whole batch at once, and finds the weave and capsize speeds from
-the same polynomial in plain floating point, which is what makes both fast.
+that quartic in closed form for a whole batch at once.  (The weave and capsize speeds come from the
+generated plain-float ``critical_speed_polynomials_scalar``; see ``WhippleModel.critical_speeds``.)
 
 :func:`quartic_roots`
     Ferrari's method (resolvent cubic, factor into two quadratics, each solved by the stable
@@ -14,9 +14,6 @@ the same polynomial in plain floating point, which is what makes both fast.
 :func:`eigenvalues_from_polynomial`
     The same result as :meth:`bikerider.benchmark.WhippleModel.eigenvalues` (values and mode
     labels, the rules of :func:`bikerider.benchmark.model.label_modes`), without ``eigvals``.
-:func:`critical_speeds_from_polynomial`
-    The same result as :meth:`bikerider.benchmark.WhippleModel.critical_speeds`, on Python floats.
-
 Accuracy.  For simple roots the result agrees with ``numpy.linalg.eigvals`` of the state matrix to
 about ``1e-13`` relative to ``max(1, |root|)`` (the tests hold it to ``1e-10`` over random quartics
 and the benchmark bicycle at 1000 speeds).  A root of multiplicity two is ill-conditioned for any
@@ -25,24 +22,13 @@ floating-point method: a relative perturbation ``eps`` of the coefficients moves
 merge, this solver and ``eigvals`` therefore each place the two roots within about ``1e-8`` of the
 true double root (and may disagree on whether the pair is real or complex by that much), while
 the pair's mean is accurate to ``1e-12``; the tests check exactly these bounds.
-
-Critical speeds.  With ``u = v^2`` and, for 2x2 matrices, ``det(X + Y) = det X + det Y + mix(X, Y)``
-where ``mix(X, Y) = X00 Y11 + Y00 X11 - X01 Y10 - Y01 X10``, the characteristic polynomial of
-``M s^2 + v C1 s + g K0 + u K2`` has ``a4 = det M``, ``a3 = v mix(M, C1)``,
-``a2 = mix(M, g K0) + u (det C1 + mix(M, K2))``, ``a1 = v (mix(C1, g K0) + u mix(C1, K2))`` and
-``a0 = det(g K0) + u mix(g K0, K2) + u^2 det K2``.  Capsize is the smallest positive root of
-``a0(u)``; weave that of the third Hurwitz determinant over ``v^2``,
-``(a3/v) a2 (a1/v) - a4 (a1/v)^2 - a0 (a3/v)^2``, with crossing frequency ``omega^2 = a1/a3 > 0``
-(the conditions ``derive/benchmark_model.py`` derives symbolically; the tests check that these
-coefficients equal the generated ``critical_speed_polynomials`` ones).
 """
 from __future__ import annotations
 
-import math
 
 import numpy as np
 
-from bikerider.benchmark.model import MODES, CriticalSpeeds, ModalEigenvalues
+from bikerider.benchmark.model import MODES, ModalEigenvalues
 from bikerider.errors import InputError
 
 NEWTON_STEPS = 2
@@ -370,88 +356,4 @@ def _label_factored(z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return values, labels
 
 
-# -- critical speeds -----------------------------------------------------------------------------
-def _det(X) -> float:
-    return X[0][0] * X[1][1] - X[0][1] * X[1][0]
-
-
-def _mix(X, Y) -> float:
-    return X[0][0] * Y[1][1] + Y[0][0] * X[1][1] - X[0][1] * Y[1][0] - Y[0][1] * X[1][0]
-
-
-def speed_polynomials(M, C1, K0, K2, g: float) -> dict[str, tuple[float, ...]]:
-    """Coefficients in ``u = v^2`` (highest first) of the critical-speed conditions, as floats.
-
-    Returns ``capsize`` (3), ``weave`` (3), ``a1_over_v`` (2) and ``a3_over_v`` (2): the layout
-    of the generated ``critical_speed_polynomials``.
-    """
-    M, C, K2 = (np.asarray(x, dtype=float).tolist() for x in (M, C1, K2))
-    K = [[g * k for k in row] for row in np.asarray(K0, dtype=float).tolist()]
-    a4 = _det(M)
-    alpha = _mix(M, C)  # a3 / v
-    a2_0, a2_1 = _mix(M, K), _det(C) + _mix(M, K2)
-    b0, b1 = _mix(C, K), _mix(C, K2)  # a1 / v
-    d0, d1, d2 = _det(K), _mix(K, K2), _det(K2)  # a0
-    alpha2 = alpha * alpha
-    weave = (
-        alpha * a2_1 * b1 - a4 * b1 * b1 - alpha2 * d2,
-        alpha * (a2_0 * b1 + a2_1 * b0) - 2 * a4 * b0 * b1 - alpha2 * d1,
-        alpha * a2_0 * b0 - a4 * b0 * b0 - alpha2 * d0,
-    )
-    return {"capsize": (d2, d1, d0), "weave": weave, "a1_over_v": (b1, b0), "a3_over_v": (0.0, alpha)}
-
-
-def positive_real_roots(c2: float, c1: float, c0: float) -> list[float]:
-    """Sorted positive real roots of ``c2 u^2 + c1 u + c0``, scale-aware, on floats.
-
-    Coefficients below ``1e-14`` of the largest are zero; a complex pair whose imaginary part is
-    below ``1e-9 max(1, |real part|)`` counts as a double real root (the rules of
-    ``WhippleModel.critical_speeds``).
-    """
-    scale = max(abs(c2), abs(c1), abs(c0))
-    if scale == 0:
-        return []
-    a, b, c = c2 / scale, c1 / scale, c0 / scale
-    if abs(a) <= _ZERO:
-        if abs(b) <= _ZERO:
-            return []
-        roots = [-c / b]
-    else:
-        disc = b * b - 4 * a * c
-        if disc >= 0:
-            q = -0.5 * (b + math.copysign(math.sqrt(disc), b))
-            roots = [q / a, c / q] if q != 0 else [0.0, 0.0]
-        else:
-            re = -b / (2 * a)
-            if math.sqrt(-disc) / (2 * abs(a)) > _IMAG * max(1.0, abs(re)):
-                return []
-            roots = [re, re]
-    return sorted(u for u in roots if u > 0)
-
-
-def critical_speeds_from_polynomial(model) -> CriticalSpeeds:
-    """Weave and capsize speeds of ``model``, as :meth:`WhippleModel.critical_speeds` gives them.
-
-    The same conditions (see the module docstring), evaluated on Python floats: a few
-    microseconds, where the generated NumPy expressions cost a quarter of a millisecond on scalars.
-    """
-    polys = speed_polynomials(model.M, model.C1, model.K0, model.K2, model.g)
-    if not all(math.isfinite(x) for coefficients in polys.values() for x in coefficients):
-        raise InputError("M, C1, K0, K2", "entries too large for floating point",
-                         "matrices whose critical-speed polynomials are finite", getattr(model, "source", None))
-    capsize_u = positive_real_roots(*polys["capsize"])
-    capsize = math.sqrt(capsize_u[0]) if capsize_u else None
-    weave = frequency = None
-    (b1, b0), alpha = polys["a1_over_v"], polys["a3_over_v"][1]
-    for u in positive_real_roots(*polys["weave"]):
-        a1 = b1 * u + b0
-        if alpha != 0 and a1 / alpha > 0:
-            weave, frequency = math.sqrt(u), math.sqrt(a1 / alpha)
-            break
-    return CriticalSpeeds(weave, capsize, frequency)
-
-
-__all__ = [
-    "critical_speeds_from_polynomial", "eigenvalues_from_polynomial", "label_roots", "positive_real_roots",
-    "quartic_roots", "speed_polynomials",
-]
+__all__ = ["eigenvalues_from_polynomial", "label_roots", "quartic_roots"]
