@@ -159,7 +159,8 @@ def seat_rider(bicycle: BicycleBodies, rider: RiderMeasurements) -> RiderModel:
         or a skeleton the branch rule does not cover.
     """
     args = model_arguments(bicycle, rider)
-    check_closures(args, bicycle.source, rider.source)
+    # Reach depends on both files (seat, stem and handlebar on the bicycle; limbs on the rider).
+    check_closures(args, bicycle.source, f"{rider.source} seated on {bicycle.source}")
     args.update(straight_limb_lengths(args))
     points = gen.grid_points(**{k: args[k] for k in _GEOMETRY + _PLACEMENT})
     mass_args = {k: v for k, v in args.items() if k not in _HUB_WIDTHS}
