@@ -128,10 +128,7 @@ def default_files() -> tuple[Path, Path]:
 
 def estimate_default() -> EstimateResult:
     """The method on the paper's own data (the 2008 Batavus Browser and the 72 kg rider)."""
-    from bikerider.io.toml_input import load_bicycle_toml, load_rider_toml
-
-    bicycle_path, rider_path = default_files()
-    return estimate(load_bicycle_toml(bicycle_path), load_rider_toml(rider_path))
+    return estimate_from_files()
 
 
 def estimate_from_files(bicycle_path: str | Path | None = None, rider_path: str | Path | None = None,
