@@ -340,9 +340,6 @@ def test_gap_speed_uncertainty_larger_than_the_speed_is_refused(tmp_path):
         read_perturbation(_write(tmp_path, "run7.csv", run.encode()))
 
 
-@pytest.mark.xfail(strict=True, reason="gap/fit.py (being written) steps the speed by max(speed_sigma, 1e-3): "
-                   "a measured speed below 1 mm/s with a speed_sigma makes it evaluate the model at a negative "
-                   "speed, an InputError 'speeds' that names no file")
 def test_gap_with_a_crawling_speed_names_the_file(tmp_path):
     path = _write(tmp_path, "run.csv", b"speed,real,imag,speed_sigma,group\n0.0005,-1.16,5.44,0.0001,run52\n")
     code, out, err = run_cli(["gap", "--model", str(GAP / "gap" / "kooijman2008_bicycle.toml"), "--data", str(path),

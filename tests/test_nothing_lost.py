@@ -168,9 +168,6 @@ def test_writing_into_a_missing_folder_is_a_clear_error(tmp_path):
     assert code == 2 and "missing.csv" in err and "Traceback" not in err
 
 
-@pytest.mark.xfail(strict=True, reason="gap/report.py (being written by the gap engineer) saves figures with "
-                   "fig.savefig(path) and report.md with write_text: a failure mid-write leaves a partial "
-                   "file; it should use bikerider.io.atomic")
 def test_a_gap_report_that_fails_midway_leaves_the_old_report(tmp_path, monkeypatch):
     import matplotlib.figure
 

@@ -13,7 +13,7 @@ one more mode::
 
 by Levenberg-Marquardt, started from a least-squares scan over frequency, decay and
 ``lambda_c`` (the FFT peak can be the slow mode's leakage) and from the plain fit.  The two-mode fit
-is kept when it converges to a distinct real mode, holds a full cycle, shows an oscillation ten
+is kept when it converges to a distinct real mode within :data:`EXTRA_MODE_RANGE`, holds a full cycle, shows an oscillation ten
 standard errors above zero and (if the plain fit succeeded) lowers the residual sum of squares
 significantly (F-test at 1 %); otherwise the plain fit stands.  Standard errors are scaled up by
 ``sqrt((1 + rho) / (1 - rho))`` with ``rho`` the lag-one autocorrelation of the residuals: a fit
@@ -64,6 +64,9 @@ SCAN_DECAYS = np.linspace(-1.0, 4.0, 8)
 """Decay rates scanned for the starting value [1/s]."""
 SCAN_MODES = (-3.0, -1.5, -0.7, -0.3, -0.1, 0.1, 0.3, 0.6, 1.0, 1.5)
 """Real eigenvalues of the extra (capsize) mode scanned for the starting value [1/s]."""
+EXTRA_MODE_RANGE = (-6.0, 2.0)
+"""Real eigenvalues accepted for the extra mode [1/s]: a bicycle's capsize mode lies well inside;
+outside it the exponential merely fits the noise at one end of the record."""
 PLAIN_START_MODES = (-1.5, -0.3, 0.3)
 """Extra-mode eigenvalues tried when the two-mode fit starts from the plain fit [1/s]."""
 MIN_AMPLITUDE_SIGNIFICANCE = 10.0
@@ -211,6 +214,8 @@ def _accept_two_mode(res, n: int, tau: np.ndarray):
     rss = 2 * res.cost
     if not (omega > 0 and abs(lam + sigma) > 0.05 * max(abs(sigma), 0.1) and c != 0):
         return None
+    if not EXTRA_MODE_RANGE[0] < lam < EXTRA_MODE_RANGE[1]:
+        return None  # not a capsize mode: an exponential fitted to the record's ends
     if omega * (tau[-1] - tau[0]) < 2 * math.pi:  # less than one cycle in the record
         return None
     s2 = rss / (n - 7)

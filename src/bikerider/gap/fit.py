@@ -156,7 +156,8 @@ class GapProblem:
         out = np.zeros(len(self.obs))
         if not len(eigen) or not np.any(eigen.speed_sigma > 0):
             return out
-        h = np.maximum(eigen.speed_sigma, 1e-3)
+        # the step: the speed uncertainty, at least 1 mm/s, at most half the speed (never a negative speed)
+        h = np.minimum(np.maximum(eigen.speed_sigma, 1e-3), 0.5 * eigen.speed)
         base = EffectModel(self.nominal, self.geometry)
         slopes = []
         for sign in (1, -1):

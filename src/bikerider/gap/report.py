@@ -29,6 +29,17 @@ import numpy as np
 from bikerider.gap.effects import EFFECTS
 
 
+def _save(fig, path: Path) -> None:
+    """Write a figure atomically (a failed render leaves the previous file) and close it."""
+    from bikerider.io.atomic import atomic_write_bytes, figure_bytes
+
+    plt = _pyplot()
+    try:
+        atomic_write_bytes(path, figure_bytes(fig, dpi=110, format="png"))
+    finally:
+        plt.close(fig)
+
+
 def _pyplot():
     import matplotlib
 
@@ -164,8 +175,7 @@ def plot_eigenvalues(diagnosis, path: Path) -> None:
     axes[0].legend(fontsize=7)
     fig.suptitle("Measured (points) and predicted weave eigenvalues: nominal (dashed), selected effects (solid)", fontsize=9)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    _save(fig, path)
 
 
 def plot_gap_map(result: dict, path: Path) -> None:
@@ -190,8 +200,7 @@ def plot_gap_map(result: dict, path: Path) -> None:
     fig.colorbar(im, ax=ax, label="signed RMS z")
     ax.set_title("Gap map: residuals in units of the combined uncertainty", fontsize=9)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    _save(fig, path)
 
 
 def plot_ranking(result: dict, path: Path) -> None:
@@ -213,8 +222,7 @@ def plot_ranking(result: dict, path: Path) -> None:
     ax.legend(fontsize=7)
     ax.set_title("Candidates fitted on training folds, scored on held-out folds (orange: implausible values)", fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    _save(fig, path)
 
 
 def plot_effects(diagnosis, path: Path) -> None:
@@ -241,8 +249,7 @@ def plot_effects(diagnosis, path: Path) -> None:
     axes[0].legend(fontsize=7)
     fig.suptitle("Every candidate fitted to all the data, on its own", fontsize=9)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    _save(fig, path)
 
 
 def plot_time_response(diagnosis, path: Path) -> None:
@@ -264,8 +271,7 @@ def plot_time_response(diagnosis, path: Path) -> None:
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    _save(fig, path)
 
 
 def plot_canonical(diagnosis, path: Path) -> None:
@@ -291,8 +297,7 @@ def plot_canonical(diagnosis, path: Path) -> None:
     ax.legend(fontsize=7)
     ax.set_title("Identified canonical entries and what each model's identification would give", fontsize=9)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    _save(fig, path)
 
 
 def plot_effect(model, speeds, path: Path, *, gains=None, speed: float | None = None, title: str = "") -> None:
@@ -320,8 +325,7 @@ def plot_effect(model, speeds, path: Path, *, gains=None, speed: float | None = 
     axes[1].grid(alpha=0.3)
     fig.suptitle(title, fontsize=9)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    _save(fig, path)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -356,6 +360,8 @@ def write_report(diagnosis, folder: str | Path, title: str = "Sim-to-real gap di
     md += [""]
     for name, caption in figures:
         md += [f"## {caption}", "", f"![{caption}]({name})", ""]
+    from bikerider.io.atomic import atomic_write_text
+
     path = folder / "report.md"
-    path.write_text("\n".join(md), encoding="utf-8")
+    atomic_write_text(path, "\n".join(md))
     return path

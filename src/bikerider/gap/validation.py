@@ -369,6 +369,8 @@ class CaseResult:
     n_measured: int
     seconds: float
     notes: list[str] = field(default_factory=list)
+    first_parameters: dict[str, float] = field(default_factory=dict)
+    """Fitted values of the first-ranked effect (structural parameters only)."""
 
     @property
     def top(self) -> str:
@@ -409,8 +411,10 @@ def run_case(model: GapModelInput, truth_name: str, seed: int, protocol: Protoco
         z_before = test.z(test.baseline)
         z_after = test.z(test.predictor.predict(fitted))
         actual = gap_shrink(z_before, z_after)
+    first = {k: v["value"] for k, v in result["ranking"][0]["parameters"].items()
+             if not k.startswith("parameters.")} if result["ranking"] else {}
     return CaseResult(truth_name, truth.effects, seed, result["verdict"], ranking, ties, list(diagnosis.selected),
-                      predicted, actual, len(data), time.perf_counter() - start, notes + result["notes"])
+                      predicted, actual, len(data), time.perf_counter() - start, notes + result["notes"], first)
 
 
 @dataclass
