@@ -1,8 +1,8 @@
 """Gap diagnosis: ~20 measured weave eigenvalues in 3 groups, every candidate effect.
 
 Measured on the Davis instrumented bicycle with rider Jason: 21 runs (three sessions of seven,
-one under a known control) simulated by :mod:`bikerider.gap.validation` with a hidden steer friction
-and tyre slip (the worst case: the greedy selection fits and cross-validates pairs and triples),
+one under a known control) simulated by :mod:`bikerider.gap.validation` with a hidden leaning upper
+body and steer friction (two effects: the greedy selection fits and cross-validates pairs and triples),
 weave eigenvalues fitted from the noisy roll rates.  Timed: :class:`bikerider.gap.diagnosis.Diagnosis`
 (gap map, parameter fit, seven candidates on three held-out folds, greedy selection, full-data fits)
 and ``as_dict``.  Goal: at most 30 s on 2 cores.  Run alone: ``.venv/bin/python bench/bench_gap.py``.
@@ -32,7 +32,7 @@ def workload():
         V.Session("day3-controlled", (4.0, 4.6, 5.2, 5.8, 6.4, 7.0, 7.6), V.CONTROL),
     ))
     rng = np.random.default_rng(2024)
-    truth = V.TruthSimulator(model, V.TRUTHS["steer_damping+tyre_slip"], rng)
+    truth = V.TruthSimulator(model, V.TRUTHS["rider_lean+steer_damping"], rng)
     data, _ = V.measure(truth, protocol, rng)
     return model, data, CanonicalData([], np.empty(0), np.empty(0), [], {}, [])
 
