@@ -206,3 +206,14 @@ def test_default_rider_geometry_from_the_davis_bicycle_and_jason():
     assert upper["m_u"] == pytest.approx(0.5 * 83.5)
     assert upper["z_lean"] - upper["z_u"] == pytest.approx(0.3)
     assert model.parameters["mB"] == pytest.approx(22.9 + 83.5)
+
+
+def test_each_effect_can_be_plotted_on_its_own(bench, geometry, tmp_path):
+    from bikerider.gap.report import plot_effect
+
+    values = dict(bench, g=9.81)
+    for name, params in {"rider_lean": {"k_lean": 128.0, "c_lean": 50.0},
+                         "tyre_slip": {"c_alpha": 13.0, "c_gamma": 0.8, "sigma_t": 0.2, "t_p": 0.02}}.items():
+        path = tmp_path / f"{name}.png"
+        plot_effect(EffectModel(values, geometry, {name: params}), np.linspace(1, 8, 15), path, title=name)
+        assert path.read_bytes()[:4] == b"\x89PNG" and path.stat().st_size > 5000
