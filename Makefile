@@ -36,9 +36,12 @@ bench: $(STAMP)
 	  || echo "bench: could not install BicycleParameters into $(BASELINE_VENV); running without that baseline"
 	$(PY) bench/run.py
 
-## docs: regenerate the documents that scripts produce
+## docs: regenerate the documents that scripts produce (the gap validation takes a few minutes)
 docs: $(STAMP)
 	$(PY) docs/scripts/reproduction.py
+	$(PY) docs/scripts/sensitivity_report.py
+	$(PY) docs/scripts/gap_real_data.py
+	$(PY) docs/scripts/gap_validation.py
 
 clean:
 	rm -rf $(VENV) build *.egg-info src/*.egg-info .pytest_cache
