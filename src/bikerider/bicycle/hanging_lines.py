@@ -4,7 +4,9 @@ A body hung from the torsional pendulum has its centre of mass on the (vertical)
 Each orientation gives one line in the body's plane of symmetry; the centre of mass is where the
 lines meet.  With three or more lines, measured with error, they do not meet in one point: we take
 the point that minimises the sum of squared perpendicular distances to the lines and report how
-far the lines are from it.
+far the lines are from it.  :func:`least_squares_point` and :func:`pairwise_mean_point` work on
+whole batches of line sets at once (closed-form 2 x 2 solutions, no per-set solver call), which is
+what lets the raw-measurement reduction evaluate every point of its numerical Jacobian in one call.
 
 Line convention.  In the bicycle's XZ plane (x forward, z down) a line is written in normal form
 ``n . p = d`` with the unit normal ``n = (sin(beta), cos(beta))`` and ``beta`` the angle of the
@@ -62,6 +64,62 @@ def line_from_hanging(beta: float, offset: float, reference: tuple[float, float]
     return normal, float(normal @ np.asarray(reference, dtype=float) - offset)
 
 
+#: Smallest over largest singular value of the line normals below which the lines count as parallel.
+PARALLEL_CONDITIONING = 1e-3
+
+_PARALLEL = "the hanging lines are parallel: the orientations do not locate the centre of mass"
+
+
+def least_squares_point(sin: np.ndarray, cos: np.ndarray, distances: np.ndarray, axis: int = -1):
+    """Least-squares meeting points of batches of lines ``sin x + cos z = d``, in closed form.
+
+    The normal equations of ``min |N p - d|`` (``N`` the unit normals ``(sin, cos)`` as rows) are a
+    2 x 2 system, solved by Cramer's rule.  With unit normals ``N^T N`` has trace ``m`` (the number
+    of lines), so its eigenvalues, the squared singular values of ``N``, follow from its
+    determinant alone.
+
+    Parameters
+    ----------
+    sin, cos, distances : ndarray
+        Normals and distances of the lines, the lines along ``axis``, any other batch axes.
+    axis : int
+        The axis of the lines.
+
+    Returns
+    -------
+    x, z : ndarray
+        The points, without the lines axis; not finite where the lines are parallel.
+    conditioning : ndarray
+        Smallest over largest singular value of ``N`` (0 for parallel lines), without the lines axis.
+    """
+    ss = (sin * sin).sum(axis=axis)
+    cc = (cos * cos).sum(axis=axis)
+    sc = (sin * cos).sum(axis=axis)
+    sd = (sin * distances).sum(axis=axis)
+    cd = (cos * distances).sum(axis=axis)
+    det = ss * cc - sc * sc
+    trace = ss + cc
+    with np.errstate(divide="ignore", invalid="ignore"):
+        root = np.sqrt(np.maximum(trace * trace - 4 * det, 0.0))
+        return ((cc * sd - sc * cd) / det, (ss * cd - sc * sd) / det,
+                np.sqrt(np.maximum(trace - root, 0.0) / (trace + root)))
+
+
+def pairwise_mean_point(sin: np.ndarray, cos: np.ndarray, distances: np.ndarray, axis: int = -1):
+    """The mean of the intersection points of every pair of lines, for batches of lines (the lines
+    along ``axis``; each pair solved by Cramer's rule).  Returns ``x, z`` without the lines axis.
+
+    This is how BicycleParameters locates a centre of mass; it is not the least-squares point
+    (a pair of nearly parallel lines pulls it far).  Kept to reproduce BicycleParameters' values.
+    """
+    first, second = (list(index) for index in zip(*itertools.combinations(range(distances.shape[axis]), 2)))
+    s1, c1, d1 = (np.take(a, first, axis=axis) for a in (sin, cos, distances))
+    s2, c2, d2 = (np.take(a, second, axis=axis) for a in (sin, cos, distances))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        det = s1 * c2 - s2 * c1
+        return ((d1 * c2 - d2 * c1) / det).mean(axis=axis), ((s1 * d2 - s2 * d1) / det).mean(axis=axis)
+
+
 def intersect_lines(normals: np.ndarray, distances: np.ndarray) -> LineIntersection:
     """Least-squares meeting point of lines ``normals[i] . p = distances[i]`` (unit normals).
 
@@ -74,25 +132,26 @@ def intersect_lines(normals: np.ndarray, distances: np.ndarray) -> LineIntersect
     distances = np.asarray(distances, dtype=float)
     if normals.shape[0] < 2:
         raise FitError(f"need at least two lines to locate a centre of mass, got {normals.shape[0]}")
-    singular = np.linalg.svd(normals, compute_uv=False)
-    if singular[-1] < 1e-3 * singular[0]:
-        raise FitError("the hanging lines are parallel: the orientations do not locate the centre of mass")
-    point, *_ = np.linalg.lstsq(normals, distances, rcond=None)
+    x, z, conditioning = least_squares_point(normals[:, 0], normals[:, 1], distances)
+    check_not_parallel(conditioning)
+    point = np.array([x, z])
     miss = normals @ point - distances
     return LineIntersection(point, miss, float(np.sqrt(np.mean(miss**2))))
 
 
-def mean_of_pairwise_intersections(normals: np.ndarray, distances: np.ndarray) -> np.ndarray:
-    """The mean of the intersection points of every pair of lines.
+def check_not_parallel(conditioning: np.ndarray) -> None:
+    """Raise :class:`FitError` when any of a batch of line sets is (nearly) parallel
+    (``conditioning`` from :func:`least_squares_point`)."""
+    if not np.all(conditioning >= PARALLEL_CONDITIONING):
+        raise FitError(_PARALLEL)
 
-    This is how BicycleParameters locates a centre of mass; it is not the least-squares point
-    (a pair of nearly parallel lines pulls it far).  Kept to reproduce BicycleParameters' values.
-    """
+
+def mean_of_pairwise_intersections(normals: np.ndarray, distances: np.ndarray) -> np.ndarray:
+    """The mean of the intersection points of every pair of lines ``normals[i] . p = distances[i]``
+    (see :func:`pairwise_mean_point`), as ``(x, z)``."""
     normals = np.asarray(normals, dtype=float)
-    distances = np.asarray(distances, dtype=float)
-    points = [np.linalg.solve(normals[[i, j]], distances[[i, j]])
-              for i, j in itertools.combinations(range(len(distances)), 2)]
-    return np.mean(points, axis=0)
+    x, z = pairwise_mean_point(normals[:, 0], normals[:, 1], np.asarray(distances, dtype=float))
+    return np.array([x, z])
 
 
 def check_lines_meet(body: str, fit: LineIntersection, tolerance: float, source: str | None = None) -> None:

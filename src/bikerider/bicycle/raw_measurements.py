@@ -23,7 +23,9 @@ degrees; ``lamst`` in radians.
 Uncertainty.  The whole chain is one function of the file's values; every output's standard
 uncertainty is propagated from every input's at first order by a numerical Jacobian
 (:mod:`bikerider.bicycle.propagation`), so shared inputs (stiffness, steer axis tilt) are handled
-consistently.
+consistently.  The chain is written with NumPy on arrays of points, so the nominal point and all
+``2 k + 1`` perturbed points of the Jacobian go through it in one call (:func:`evaluate_measured`);
+bodies hung in the same number of orientations are reduced together.
 
 Checks (on the nominal values).  A missing field raises :class:`InputError` naming it and saying
 what it is for.  Periods, masses and lengths must be positive.  Repeated trials of a period (comma
@@ -36,6 +38,7 @@ line tolerance raise :class:`FitError`; orientations that leave Eq. 6 singular r
 """
 from __future__ import annotations
 
+import functools
 import logging
 import math
 import re
@@ -50,11 +53,11 @@ from bikerider.bicycle import measured_geometry as geo
 from bikerider.bicycle import seating
 from bikerider.bicycle.bodies import BicycleBodies
 from bikerider.bicycle.hanging_lines import (
-    DEFAULT_LINE_TOLERANCE, LineIntersection, check_lines_meet, intersect_lines, line_from_hanging,
-    mean_of_pairwise_intersections,
+    DEFAULT_LINE_TOLERANCE, LineIntersection, check_lines_meet, check_not_parallel,
+    least_squares_point, pairwise_mean_point,
 )
 from bikerider.bicycle.propagation import propagate
-from bikerider.errors import InputError
+from bikerider.errors import FitError, InputError
 from bikerider.fitting import PERIOD_TRIAL_TOLERANCE
 from bikerider.generated import combination as gen_combination
 from bikerider.generated import pendulum as gen_pendulum
@@ -206,19 +209,22 @@ def detect_layout(values: Mapping[str, Quantity], source: str = "<memory>") -> M
     else:
         geometry = "heights"
         _require(values, _HEIGHTS_GEOMETRY, source)
-    split = any(k in values for k in ("mG", "mS")) or any(
-        (m := _INDEXED.match(k)) is not None and m.group(2) in "GS" for k in values)
+    hung_in: dict[str, set[int]] = {}  # orientations of each body with an angle, distance or period
+    split = "mG" in values or "mS" in values
+    for key in values:
+        match = _INDEXED.match(key)
+        if match:
+            kind, body, index = match.groups()
+            split = split or body in "GS"
+            if kind != "Tc":
+                hung_in.setdefault(body, set()).add(int(index))
     hung = ("B", "G", "S") if split else ("B", "H")
     _require(values, [f"m{b}" for b in hung[1:]], source)
     if split:
         _require(values, _HANDLEBAR_REFERENCE, source)
     orientations: dict[str, tuple[int, ...]] = {}
     for body in hung:
-        indices: set[int] = set()
-        for key in values:
-            match = _INDEXED.match(key)
-            if match and match.group(2) == body and match.group(1) in ("alpha", "a", "Tt"):
-                indices.add(int(match.group(3)))
+        indices = hung_in.get(body, set())
         ordered = tuple(sorted(indices))
         for i in ordered:
             _require(values, (f"alpha{body}{i}", f"a{body}{i}", f"Tt{body}{i}"), source)
@@ -235,6 +241,7 @@ def detect_layout(values: Mapping[str, Quantity], source: str = "<memory>") -> M
     return MeasuredLayout(geometry, split, orientations, compound, all(k in values for k in seating.MEASURED_NAMES))
 
 
+@functools.lru_cache(maxsize=1024)
 def _raw_limit(name: str) -> tuple[float, str]:
     """Largest plausible magnitude of a Measured-file value, in its BicycleParameters unit."""
     if name.startswith(("Tt", "Tc")):
@@ -258,8 +265,10 @@ def _check_values(values: Mapping[str, Quantity], layout: MeasuredLayout, source
                   repeats: Mapping[str, tuple[Quantity, ...]]) -> None:
     where = source.where if isinstance(source, NameValueFile) else (lambda name: str(source))
     for name, q in values.items():
-        check_magnitude(name, q.value, *_raw_limit(name), where(name))
-        check_magnitude(f"{name} uncertainty", q.sigma, *_raw_limit(name), where(name))
+        limit, unit = _raw_limit(name)
+        if not (abs(q.value) <= limit and abs(q.sigma) <= limit):  # check_magnitude passes these
+            check_magnitude(name, q.value, limit, unit, where(name))
+            check_magnitude(f"{name} uncertainty", q.sigma, limit, unit, where(name))
     if "gamma" in values:
         check_degrees("gamma", values["gamma"].value, where("gamma"))
     for name in _POSITIVE:
@@ -284,129 +293,203 @@ def _check_values(values: Mapping[str, Quantity], layout: MeasuredLayout, source
             )
 
 
-def _centre_of_mass(body: str, x: Mapping[str, float], indices, lam: float, reference, method: str):
-    normals, offsets, betas = [], [], []
-    for i in indices:
-        beta = lam - math.radians(x[f"alpha{body}{i}"])
-        normal, offset = line_from_hanging(beta, x[f"a{body}{i}"], reference)
-        normals.append(normal)
-        offsets.append(offset)
-        betas.append(beta)
-    normals_a, offsets_a = np.array(normals), np.array(offsets)
-    fit = intersect_lines(normals_a, offsets_a)
-    point = fit.point if method == "least_squares" else mean_of_pairwise_intersections(normals_a, offsets_a)
-    return point, fit, np.array(betas)
+def _first(value) -> float:
+    """The value at the first point of a batch (the nominal point; see :func:`evaluate_measured`)."""
+    return float(value[0]) if np.ndim(value) else float(value)
 
 
-def _in_plane_inertia(body: str, k_t: float, periods: np.ndarray, betas: np.ndarray, check: bool,
-                      source: str) -> np.ndarray:
-    if len(periods) == 3:
-        inertia, det = gen_pendulum.inertia_from_three_orientations(
-            k_t=k_t, T_1=periods[0], T_2=periods[1], T_3=periods[2],
-            alpha_1=betas[0], alpha_2=betas[1], alpha_3=betas[2],
-        )
-        measure = abs(float(det))
-    else:
-        rows = gen_pendulum.orientation_row(alpha=betas)
-        measure = float(np.linalg.svd(rows, compute_uv=False)[-1])
-        inertia, *_ = np.linalg.lstsq(rows, gen_pendulum.torsional_inertia(k_t=k_t, T=periods), rcond=None)
-    if check and measure < SINGULAR_ORIENTATIONS:
-        shown = ", ".join(f"{math.degrees(b) % 180:.1f}" for b in betas)
+@dataclass
+class _Hung:
+    """One hung body at every point of a batch (see :func:`_hang`)."""
+
+    x: np.ndarray
+    z: np.ndarray
+    inertia: np.ndarray
+    """``[Ixx, Ixz, Izz]`` at every point, shape (points, 3)."""
+    fit: LineIntersection
+    """The least-squares line fit at the first point."""
+    conditioning: np.ndarray
+    """Of the lines at every point (:func:`~bikerider.bicycle.hanging_lines.least_squares_point`)."""
+    betas: np.ndarray
+    """Pendulum axis angles at the first point [rad]."""
+    singularity: float
+    """|determinant| of Eq. 6 (three orientations) or the smallest singular value of its rows (more),
+    at the first point; ``inf`` when not computed."""
+    yy: np.ndarray | float = math.nan
+    length: float = math.nan
+    """Compound pendulum length at the first point."""
+
+
+def _hang(x: Mapping[str, np.ndarray], layout: MeasuredLayout, lam: np.ndarray, k_t: np.ndarray,
+          references: dict, com_method: str, check: bool) -> dict[str, _Hung]:
+    """Centres of mass (hanging lines), in-plane inertia (Eq. 6) and I_yy (Eq. 7) of every hung body.
+
+    Bodies hung in the same number of orientations are reduced together: arrays are (orientations,
+    bodies, points), so each step is one array operation for them all and every point.
+    """
+    groups: dict[int, list[str]] = {}
+    for body, indices in layout.orientations.items():
+        groups.setdefault(len(indices), []).append(body)
+    hung: dict[str, _Hung] = {}
+    for m, bodies in groups.items():
+        names = [list(zip(bodies, slot)) for slot in zip(*(layout.orientations[b] for b in bodies))]
+
+        def gather(prefix: str, names=names) -> np.ndarray:
+            return np.array([[x[f"{prefix}{b}{i}"] for b, i in row] for row in names])
+
+        betas = lam - np.radians(gather("alpha"))
+        sin, cos = np.sin(betas), np.cos(betas)
+        ref_x = np.array([references[b][0] for b in bodies])
+        ref_z = np.array([references[b][1] for b in bodies])
+        offsets = sin * ref_x + cos * ref_z - gather("a")
+        ls_x, ls_z, conditioning = least_squares_point(sin, cos, offsets, axis=0)
+        px, pz = (ls_x, ls_z) if com_method == "least_squares" else pairwise_mean_point(sin, cos, offsets, axis=0)
+        periods = gather("Tt")
+        if m == 3:
+            inertia, det = gen_pendulum.inertia_from_three_orientations(
+                k_t=k_t, T_1=periods[0], T_2=periods[1], T_3=periods[2],
+                alpha_1=betas[0], alpha_2=betas[1], alpha_3=betas[2])  # (bodies, points, 3)
+            singularity = np.abs(det[:, 0])
+        else:  # least squares, one small SVD per point
+            rows = np.moveaxis(gen_pendulum.orientation_row(alpha=betas), 0, 2)  # (bodies, points, m, 3)
+            moments = np.moveaxis(gen_pendulum.torsional_inertia(k_t=k_t, T=periods), 0, 2)[..., None]
+            inertia = (np.linalg.pinv(rows) @ moments)[..., 0]
+            singularity = (np.linalg.svd(rows[:, 0], compute_uv=False)[:, -1] if check
+                           else np.full(len(bodies), math.inf))
+        # The line fit at the first (nominal) point, for the check and the report.
+        sin0, cos0, offsets0 = sin[:, :, 0].T.tolist(), cos[:, :, 0].T.tolist(), offsets[:, :, 0].T.tolist()
+        for j, body in enumerate(bodies):
+            x0, z0 = float(ls_x[j, 0]), float(ls_z[j, 0])
+            miss = [s_ * x0 + c_ * z0 - d_ for s_, c_, d_ in zip(sin0[j], cos0[j], offsets0[j])]
+            fit = LineIntersection(np.array([x0, z0]), np.array(miss), math.sqrt(math.fsum(d * d for d in miss) / m))
+            hung[body] = _Hung(px[j], pz[j], inertia[j], fit, conditioning[j], betas[:, j, 0], float(singularity[j]))
+    compound = [b for b in layout.orientations if layout.compound[b]]
+    if compound:
+        lengths = np.array([np.hypot(hung[b].x - references[b][0], hung[b].z - references[b][1]) for b in compound])
+        yy = gen_pendulum.compound_inertia(T=np.array([x[f"Tc{b}1"] for b in compound]),
+                                           m_p=np.array([x[f"m{b}"] for b in compound]), g=x["g"], l_p=lengths)
+        for j, body in enumerate(compound):
+            hung[body].yy, hung[body].length = yy[j], float(lengths[j, 0])
+    return {body: hung[body] for body in layout.orientations}
+
+
+def _check_hung(body: str, hung: _Hung, x: Mapping[str, np.ndarray], check: bool, line_tolerance: float,
+                source: str) -> None:
+    """The checks of one hung body, in the order of the reduction's steps."""
+    check_not_parallel(hung.conditioning)
+    if not check:
+        return
+    check_lines_meet(f"the {BODIES[body]} ({body})", hung.fit, line_tolerance, source)
+    if not (math.isfinite(hung.x[0]) and math.isfinite(hung.z[0])):
+        raise FitError(f"{source}: the hanging lines are parallel: two lines of the {BODIES[body]} ({body}) "
+                       "meet nowhere, so the mean of their pairwise intersections is not defined")
+    if hung.singularity < SINGULAR_ORIENTATIONS:
+        shown = ", ".join(f"{math.degrees(b) % 180:.1f}" for b in hung.betas)
         raise InputError(
             f"alpha{body}", f"pendulum axes at [{shown}] deg from +x",
             f"orientations of the {BODIES[body]} whose pendulum axes differ pairwise by more than a few "
-            f"degrees modulo 180 (Eq. 6 is singular for these: determinant {measure:.2g})", source,
+            f"degrees modulo 180 (Eq. 6 is singular for these: determinant {hung.singularity:.2g})", source,
         )
-    return np.asarray(inertia, dtype=float)
+    if np.ndim(hung.yy):
+        _check_compound(f"Tc{body}1", hung.yy, x[f"Tc{body}1"], hung.length, x["g"], source)
 
 
-def _compound(body_name: str, period: float, mass: float, g: float, length: float, check: bool, source: str) -> float:
-    value = float(gen_pendulum.compound_inertia(T=period, m_p=mass, g=g, l_p=length))
-    if check and not value > 0:
-        shortest = 2 * math.pi * math.sqrt(length / g)
+def _check_compound(name: str, inertia: np.ndarray, period: np.ndarray, length: float, g: np.ndarray,
+                    source: str) -> None:
+    """A compound pendulum period too short for its length gives a negative I_yy: name it."""
+    if not inertia[0] > 0:
+        shortest = 2 * math.pi * math.sqrt(length / g[0])
         raise InputError(
-            body_name, period,
+            name, float(period[0]),
             f"a compound pendulum period above {shortest:.4f} s, that of a point mass {length:.4f} m "
             "from the pivot (a shorter one gives a negative moment of inertia)", source,
         )
-    return value
 
 
 def evaluate_measured(x: Mapping[str, float], layout: MeasuredLayout, *, com_method: str = "least_squares",
                       check: bool = False, line_tolerance: float = DEFAULT_LINE_TOLERANCE,
-                      source: str = "<memory>", lines: dict | None = None) -> dict[str, float]:
-    """The whole reduction on plain floats (no uncertainty).
+                      source: str = "<memory>", lines: dict | None = None) -> dict:
+    """The whole reduction, without uncertainty, at one point or at a batch of points.
 
     Parameters
     ----------
-    x : mapping of str to float
-        The file's values (BicycleParameters units).
+    x : mapping of str to float, or of str to 1-D array
+        The file's values (BicycleParameters units): floats for one point, or arrays of equal
+        length for a batch of points (as :func:`bikerider.bicycle.propagation.propagate` passes
+        with ``vectorized=True``, nominal point first).
     layout : MeasuredLayout
     com_method : {"least_squares", "pairwise_mean"}
         How to locate a centre of mass from its lines: the least-squares point (ours) or the mean
         of the pairwise intersections (BicycleParameters').
     check : bool
-        Raise on lines that do not meet, singular orientations, non-physical results.
+        Raise on lines that do not meet, singular orientations, non-physical results at the first
+        point.  Nearly parallel hanging lines raise :class:`FitError` at any point.
     lines : dict, optional
-        Filled with each body's :class:`LineIntersection`.
+        Filled with each body's :class:`LineIntersection` at the first point.
 
     Returns
     -------
-    dict of str to float
+    dict of str to float, or of str to array
         BicycleBodies names, seating names when derivable, and the extras of
-        :class:`MeasuredReduction`.  NaN for what the file does not determine.
+        :class:`MeasuredReduction`: floats for one point, arrays over the batch for a batch.
+        NaN for what the file does not determine.
     """
-    out: dict[str, float] = {}
+    batch = np.ndim(next(iter(x.values()))) > 0
+    points = x if batch else {k: np.array([v], dtype=float) for k, v in x.items()}
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        out = _evaluate(points, layout, com_method, check, line_tolerance, source, lines)
+    if batch:
+        return out
+    return {k: float(v[0]) for k, v in out.items()}
+
+
+def _evaluate(x: Mapping[str, np.ndarray], layout: MeasuredLayout, com_method: str, check: bool,
+              line_tolerance: float, source: str, lines: dict | None) -> dict[str, np.ndarray]:
     rF = geo.wheel_radius(x["dF"], x["nF"])
     rR = geo.wheel_radius(x["dR"], x["nR"])
     if layout.geometry == "wheelbase":
-        lam = math.radians(90.0 - x["gamma"])
+        lam = np.radians(90.0 - x["gamma"])
         w, fork_offset = x["w"], x["f"]
     else:
         a, b, c_axis = geo.perpendicular_offsets(
             tuple(x[k] for k in _HEIGHTS_GEOMETRY[:5]), tuple(x[k] for k in _HEIGHTS_GEOMETRY[5:]))
         lam = geo.steer_tilt_from_offsets(rF, rR, a, b, c_axis)
-        if check and not math.isfinite(lam):
-            raise InputError("d", x["d"], "heights and diameters that close into a frame: "
-                             f"offsets a = {a:.4f} m, b = {b:.4f} m give no steer axis tilt", source)
+        if check and not math.isfinite(lam[0]):
+            raise InputError("d", _first(x["d"]), "heights and diameters that close into a frame: "
+                             f"offsets a = {_first(a):.4f} m, b = {_first(b):.4f} m give no steer axis tilt", source)
         w, fork_offset = geo.wheelbase_from_offsets(lam, a, b, c_axis), b
-    if check and not 0 < lam < math.pi / 2:
-        raise InputError("gamma" if layout.geometry == "wheelbase" else "h1", math.degrees(math.pi / 2 - lam),
+    if check and not 0 < lam[0] < math.pi / 2:
+        raise InputError("gamma" if layout.geometry == "wheelbase" else "h1", math.degrees(math.pi / 2 - lam[0]),
                          "a head tube angle between 0 and 90 degrees", source)
-    out.update(w=w, c=geo.trail(rF, lam, fork_offset), lam_ht=math.pi / 2 - lam, g=x["g"], rR=rR, rF=rF,
-               lam=lam, f=fork_offset)
+    out = {"w": w, "c": geo.trail(rF, lam, fork_offset), "lam_ht": np.pi / 2 - lam, "g": x["g"], "rR": rR, "rF": rF,
+           "lam": lam, "f": fork_offset}
 
-    rod = geo.rod_moment_of_inertia(x["mP"], x["dP"], x["lP"])
-    k_t = geo.torsional_stiffness(rod, x["TtP1"])
+    k_t = geo.torsional_stiffness(geo.rod_moment_of_inertia(x["mP"], x["dP"], x["lP"]), x["TtP1"])
     out["k_t"] = k_t
-    for wheel in ("R", "F"):
-        out[f"m{wheel}"] = x[f"m{wheel}"]
-        out[f"I{wheel}xx"] = float(gen_pendulum.torsional_inertia(k_t=k_t, T=x[f"Tt{wheel}1"]))
-        out[f"I{wheel}yy"] = _compound(f"Tc{wheel}1", x[f"Tc{wheel}1"], x[f"m{wheel}"], x["g"], x[f"l{wheel}"], check, source)
+    wheel_xx = gen_pendulum.torsional_inertia(k_t=k_t, T=np.array([x["TtR1"], x["TtF1"]]))
+    wheel_yy = gen_pendulum.compound_inertia(T=np.array([x["TcR1"], x["TcF1"]]), m_p=np.array([x["mR"], x["mF"]]),
+                                             g=x["g"], l_p=np.array([x["lR"], x["lF"]]))
+    for j, wheel in enumerate(("R", "F")):
+        if check:
+            _check_compound(f"Tc{wheel}1", wheel_yy[j], x[f"Tc{wheel}1"], float(x[f"l{wheel}"][0]), x["g"], source)
+        out.update({f"m{wheel}": x[f"m{wheel}"], f"I{wheel}xx": wheel_xx[j], f"I{wheel}yy": wheel_yy[j]})
 
-    references = {"B": (0.0, -rR), "H": (w, -rF), "S": (w, -rF)}
+    references = {"B": (np.zeros_like(rR), -rR), "H": (w, -rF), "S": (w, -rF)}
     if layout.split_fork:
         l1, l2 = geo.handlebar_reference_offsets(*(x[k] for k in _HANDLEBAR_REFERENCE))
-        if check and not math.isfinite(l2):
-            raise InputError("l", x["l"], "an axle-to-reference-circle distance longer than the height "
-                             f"difference l1 = {l1:.4f} m", source)
+        if check and not math.isfinite(l2[0]):
+            raise InputError("l", _first(x["l"]), "an axle-to-reference-circle distance longer than the height "
+                             f"difference l1 = {_first(l1):.4f} m", source)
         references["G"] = geo.handlebar_reference_point(w, rF, lam, l1, l2)
-    for body, indices in layout.orientations.items():
-        point, fit, betas = _centre_of_mass(body, x, indices, lam, references[body], com_method)
-        if check:
-            check_lines_meet(f"the {BODIES[body]} ({body})", fit, line_tolerance, source)
+    nan = np.full_like(lam, math.nan)
+    for body, hung in _hang(x, layout, lam, k_t, references, com_method, check).items():
+        _check_hung(body, hung, x, check, line_tolerance, source)
         if lines is not None:
-            lines[body] = fit
-        periods = np.array([x[f"Tt{body}{i}"] for i in indices])
-        ixx, ixz, izz = _in_plane_inertia(body, k_t, periods, betas, check, source)
+            lines[body] = hung.fit
         name = "Bf" if body == "B" else body
-        out.update({f"m{name}": x[f"m{body}"], f"x{name}": point[0], f"z{name}": point[1],
-                    f"I{name}xx": ixx, f"I{name}xz": ixz, f"I{name}zz": izz})
-        yy = math.nan
-        if layout.compound[body]:
-            length = math.hypot(point[0] - references[body][0], point[1] - references[body][1])
-            yy = _compound(f"Tc{body}1", x[f"Tc{body}1"], x[f"m{body}"], x["g"], length, check, source)
-        out[f"I{name}yy"] = yy
+        out.update({f"m{name}": x[f"m{body}"], f"x{name}": hung.x, f"z{name}": hung.z,
+                    f"I{name}xx": hung.inertia[:, 0], f"I{name}xz": hung.inertia[:, 1], f"I{name}zz": hung.inertia[:, 2],
+                    f"I{name}yy": hung.yy if np.ndim(hung.yy) else nan})
     if layout.split_fork:
         mH, xH, zH, IH = gen_combination.rear_body(
             **{f"{p}Bf": out[f"{p}G"] for p in ("m", "x", "z")},
@@ -414,8 +497,7 @@ def evaluate_measured(x: Mapping[str, float], layout: MeasuredLayout, *, com_met
             **{f"{p}Br": out[f"{p}S"] for p in ("m", "x", "z")},
             **{f"IBr{ax}": out[f"IS{ax}"] for ax in ("xx", "yy", "zz", "xz")},
         )
-        out.update(mH=float(mH), xH=float(xH), zH=float(zH), IHxx=float(IH[0, 0]), IHyy=float(IH[1, 1]),
-                   IHzz=float(IH[2, 2]), IHxz=float(IH[0, 2]))
+        out.update(mH=mH, xH=xH, zH=zH, IHxx=IH[..., 0, 0], IHyy=IH[..., 1, 1], IHzz=IH[..., 2, 2], IHxz=IH[..., 0, 2])
     if layout.seating:
         out.update(seating.seating_from_measured(x, rR=rR, rF=rF, w=w, lam=lam, trail=out["c"]))
     return out
@@ -455,14 +537,15 @@ def reduce_measured(values: Mapping[str, Quantity], *, source: NameValueFile | s
         raise ValueError(f"com_method must be 'least_squares' or 'pairwise_mean', not {com_method!r}")
     label = source.path if isinstance(source, NameValueFile) else str(source)
     repeats = ({k: e.repeats for k, e in source.entries.items()} if isinstance(source, NameValueFile) else {})
+    values = values.as_dict() if isinstance(values, NameValueFile) else dict(values)  # fast lookups
     layout = detect_layout(values, label)
     _check_values(values, layout, source, repeats)
-    nominal = {k: q.value for k, q in values.items()}
     lines: dict[str, LineIntersection] = {}
-    evaluate_measured(nominal, layout, com_method=com_method, check=True, line_tolerance=line_tolerance,
-                      source=label, lines=lines)
     used = {k: q for k, q in values.items() if k not in _KNOWN_EXTRAS}
-    result = propagate(lambda x: evaluate_measured(x, layout, com_method=com_method), used)
+    # One batched pass over the nominal point (checked) and every perturbed point of the Jacobian.
+    result = propagate(lambda x: evaluate_measured(x, layout, com_method=com_method, check=True,
+                                                   line_tolerance=line_tolerance, source=label, lines=lines),
+                       used, vectorized=True)
     notes = _notes(values, layout)
     body_values = {k: result[k] for k in _BODY_OUTPUTS if math.isfinite(result[k].value)}
     if layout.seating:
@@ -489,12 +572,18 @@ def _drop_inconsistent_yy(body_values: dict[str, Quantity], notes: list[str], so
         yy = body_values.get(f"I{body}yy")
         if yy is None:
             continue
-        tensor = np.array([[body_values[f"I{body}xx"].value, 0.0, body_values[f"I{body}xz"].value],
-                           [0.0, yy.value, 0.0],
-                           [body_values[f"I{body}xz"].value, 0.0, body_values[f"I{body}zz"].value]])
-        try:
-            check_inertia_tensor(f"I{body}", tensor, source)
-        except InputError:
+        xx, xz, zz = (body_values[f"I{body}{axes}"].value for axes in ("xx", "xz", "zz"))
+        tensor = np.array([[xx, 0.0, xz], [0.0, yy.value, 0.0], [xz, 0.0, zz]])
+        verdict = _triangle_verdict(xx, xz, zz, yy.value)
+        if verdict is None:  # close to a limit: let the full check decide
+            try:
+                check_inertia_tensor(f"I{body}", tensor, source)
+                consistent = True
+            except InputError:
+                consistent = False
+        else:
+            consistent = verdict > 0
+        if not consistent:
             del body_values[f"I{body}yy"]
             principal = ", ".join(f"{p:.4g}" for p in np.linalg.eigvalsh(tensor))
             message = (f"I{body}yy = {yy} (compound pendulum) left out: with the torsional-pendulum "
@@ -502,6 +591,29 @@ def _drop_inconsistent_yy(body_values: dict[str, Quantity], notes: list[str], so
                        "inequality (the linear model does not use it)")
             LOG.info("%s: %s", source, message)
             notes.append(message)
+
+
+#: Relative margin beyond which :func:`_triangle_verdict` decides without the full tensor check.
+_CLEAR_MARGIN = 1e-6
+
+
+def _triangle_verdict(xx: float, xz: float, zz: float, yy: float) -> float | None:
+    """Whether a tensor with in-plane moments ``xx, xz, zz`` and ``yy`` clearly passes (+1) or
+    clearly fails (-1) :func:`~bikerider.inertia.check_inertia_tensor`; ``None`` when it is within
+    :data:`_CLEAR_MARGIN` of a limit (then the full check decides).
+
+    ``y`` is a principal axis, so the principal moments are ``yy`` and those of the xz block,
+    ``(xx + zz) / 2 -+ hypot((xx - zz) / 2, xz)``.  Deciding the clear cases in closed form spares
+    the eigenvalue solver and the raised error on every reduction.
+    """
+    if not (xx > 0 and zz > 0 and yy > 0 and xx * zz - xz * xz > _CLEAR_MARGIN * xx * zz):
+        return None
+    half_sum, radius = 0.5 * (xx + zz), math.hypot(0.5 * (xx - zz), xz)
+    low, mid, high = sorted((half_sum - radius, half_sum + radius, yy))
+    margin = (low + mid - high) / (low + mid + high)
+    if abs(margin) <= _CLEAR_MARGIN:
+        return None
+    return math.copysign(1.0, margin)
 
 
 def _notes(values: Mapping[str, Quantity], layout: MeasuredLayout) -> list[str]:

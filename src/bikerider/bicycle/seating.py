@@ -39,6 +39,10 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 
+import numpy as np
+
+from bikerider.bicycle.measured_geometry import sqrt_or_nan
+
 MEASURED_NAMES: tuple[str, ...] = ("lcs", "hbb", "lsp", "lst", "lamst", "whb", "LhbF", "LhbR")
 """BicycleParameters' seating measurements."""
 
@@ -52,37 +56,33 @@ NOTE = ("seating: l_s and l_hb are equivalent lengths that put the model's hands
         "(LhbF, LhbR); l_f drops out of the rider model; hub widths w_fh, w_rh not measured")
 
 
-def grip_position(w: float, rF: float, rR: float, whb: float, LhbF: float, LhbR: float) -> tuple[float, float]:
+def grip_position(w, rF, rR, whb, LhbF, LhbR):
     """``(x, z)`` of a handlebar grip from its distances to the wheel centres (NaN if none).
 
     The in-plane distances are the 3-D ones with the grip's ``whb/2`` lateral offset removed; of
-    the two intersections of the circles about the wheel centres the upper one is taken.
+    the two intersections of the circles about the wheel centres the upper one is taken.  Every
+    argument is a float or an array of points (they broadcast).
     """
     half = 0.5 * whb
-    if LhbF <= half or LhbR <= half:
-        return math.nan, math.nan
-    front, rear = math.sqrt(LhbF**2 - half**2), math.sqrt(LhbR**2 - half**2)
+    front = sqrt_or_nan(np.where(LhbF > half, LhbF**2 - half**2, np.nan))
+    rear = sqrt_or_nan(np.where(LhbR > half, LhbR**2 - half**2, np.nan))
     ex, ez = w, rR - rF  # rear centre (0, -rR) to front centre (w, -rF)
-    span = math.hypot(ex, ez)
+    span = np.hypot(ex, ez)
     along = (rear**2 - front**2 + span**2) / (2 * span)
-    square = rear**2 - along**2
-    if square < 0:
-        return math.nan, math.nan
+    height = sqrt_or_nan(rear**2 - along**2)
     ex, ez = ex / span, ez / span
-    height = math.sqrt(square)
     # normal (ez, -ex) points up (-z) for a roughly horizontal centre line
     return along * ex + height * ez, -rR + along * ez - height * ex
 
 
-def seating_from_measured(x: Mapping[str, float], *, rR: float, rF: float, w: float, lam: float,
-                          trail: float) -> dict[str, float]:
+def seating_from_measured(x: Mapping[str, float], *, rR, rF, w, lam, trail) -> dict[str, float]:
     """The paper's seating measurements from BicycleParameters' (see the module docstring).
 
     Parameters
     ----------
     x : mapping
-        Must hold :data:`MEASURED_NAMES`.
-    rR, rF, w, lam, trail : float
+        Must hold :data:`MEASURED_NAMES`; floats or arrays of points.
+    rR, rF, w, lam, trail : float or ndarray
         Wheel radii, wheelbase, steer axis tilt (from the vertical) and trail of the bicycle.
 
     Returns
@@ -92,13 +92,13 @@ def seating_from_measured(x: Mapping[str, float], *, rR: float, rF: float, w: fl
         ``l_s`` or ``l_hb`` may come out negative (grips below the top of the seat tube, or ahead of
         the stem top); the caller decides.
     """
-    lam_ht = math.pi / 2 - lam
     x_hand, z_hand = grip_position(w, rF, rR, x["whb"], x["LhbF"], x["LhbR"])
-    z10 = -x["hbb"] - x["lst"] * math.sin(x["lamst"])
-    x12 = w + trail + z10 * math.tan(lam)  # steer axis (through the ground at w + c) at height z10
-    l_s = (z10 - z_hand) / math.sin(lam_ht)
-    l_hb = x12 - l_s * math.cos(lam_ht) - x_hand
-    l_f = math.hypot(x12 - w, z10 + rF)
+    z10 = -x["hbb"] - x["lst"] * np.sin(x["lamst"])
+    x12 = w + trail + z10 * np.tan(lam)  # steer axis (through the ground at w + c) at height z10
+    lam_ht = np.pi / 2 - lam
+    l_s = (z10 - z_hand) / np.sin(lam_ht)
+    l_hb = x12 - l_s * np.cos(lam_ht) - x_hand
+    l_f = np.hypot(x12 - w, z10 + rF)
     return {
         "h_bb": x["hbb"], "l_cs": x["lcs"], "l_sp": x["lsp"], "l_st": x["lst"], "lam_st": x["lamst"],
         "l_s": l_s, "l_hb": l_hb, "l_f": l_f, "x_hand": x_hand, "z_hand": z_hand,

@@ -4,12 +4,15 @@ The benchmark's rear body B is the rear frame Bf, or the rear frame and a rigid 
 as the paper does (Moore et al. 2009, Eqs. 15-16 with the parallel axis theorem, Eq. 13), via the
 generated ``combination.rear_body``.  The steer axis tilt is ``lam = pi/2 - lam_ht``; wheels and
 the handlebar/fork pass through.  Uncertainties are propagated at first order
-(:mod:`bikerider.bicycle.propagation`), treating the bodies' values as independent.
+(:mod:`bikerider.bicycle.propagation`, all points of the Jacobian in one batched call), treating the
+bodies' values as independent.
 """
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+
+import numpy as np
 
 from bikerider.benchmark.parameters import BENCHMARK_NAMES, BenchmarkParameters
 from bikerider.bicycle.bodies import BicycleBodies
@@ -69,20 +72,25 @@ class LumpedRider:
                              "(a positive definite inertia tensor)", self.source)
 
 
-def _combine(values: dict[str, float], with_rider: bool) -> dict[str, float]:
+_FRAME = ("mBf", "xBf", "zBf", "IBfxx", "IBfyy", "IBfzz", "IBfxz")
+_USED = (*_PASS_THROUGH, "lam_ht", "IHyy", *_FRAME, *RIDER_BODY_NAMES)
+"""Every value :func:`_combine` reads (seating values, for one, do not enter the benchmark values)."""
+
+
+def _combine(values: dict, with_rider: bool) -> dict:
+    """The benchmark values from the bodies' values: floats, or 1-D arrays of points (they broadcast)."""
     out = {name: values[name] for name in _PASS_THROUGH}
-    out["lam"] = math.pi / 2 - values["lam_ht"]
+    out["lam"] = np.pi / 2 - values["lam_ht"]
     out["IHyy"] = values.get("IHyy", math.nan)
-    frame = {"mBf": values["mBf"], "xBf": values["xBf"], "zBf": values["zBf"], "IBfxx": values["IBfxx"],
-             "IBfyy": values.get("IBfyy", math.nan), "IBfzz": values["IBfzz"], "IBfxz": values["IBfxz"]}
+    frame = {name: values[name] for name in _FRAME if name != "IBfyy"}
+    frame["IBfyy"] = values.get("IBfyy", math.nan)
     if not with_rider:
         out.update(mB=frame["mBf"], xB=frame["xBf"], zB=frame["zBf"], IBxx=frame["IBfxx"], IByy=frame["IBfyy"],
                    IBzz=frame["IBfzz"], IBxz=frame["IBfxz"])
         return out
     rider = {k: values.get(k, math.nan) for k in RIDER_BODY_NAMES}
     mB, xB, zB, IB = gen_combination.rear_body(**frame, **rider)
-    out.update(mB=float(mB), xB=float(xB), zB=float(zB), IBxx=float(IB[0, 0]), IByy=float(IB[1, 1]),
-               IBzz=float(IB[2, 2]), IBxz=float(IB[0, 2]))
+    out.update(mB=mB, xB=xB, zB=zB, IBxx=IB[..., 0, 0], IByy=IB[..., 1, 1], IBzz=IB[..., 2, 2], IBxz=IB[..., 0, 2])
     return out
 
 
@@ -101,10 +109,10 @@ def bicycle_benchmark_parameters(bodies: BicycleBodies, rider_body: LumpedRider 
         With first-order standard uncertainties; ``IByy``/``IHyy`` are ``None`` when not
         determined.
     """
-    inputs = dict(bodies.values)
+    inputs = {k: q for k, q in bodies.values.items() if k in _USED}
     if rider_body is not None:
         inputs.update(rider_body.values)
-    result = propagate(lambda x: _combine(x, rider_body is not None), inputs)
+    result = propagate(lambda x: _combine(x, rider_body is not None), inputs, vectorized=True)
     mapping: dict[str, Quantity | None] = {}
     for name in BENCHMARK_NAMES:
         q = result[name]
