@@ -56,6 +56,7 @@ def _inputs(args: argparse.Namespace):
     if args.rider and not args.bicycle:
         raise InputError("--rider", args.rider, "a --bicycle file to go with it")
     if args.inputs:
+        from bikerider.benchmark import BENCHMARK_NAMES, BenchmarkParameters
         from bikerider.io.name_value_file import read_name_value_file
 
         data = read_name_value_file(args.inputs)
@@ -65,6 +66,9 @@ def _inputs(args: argparse.Namespace):
                 quantities[name[:-4]] = q.scaled(inp.DEG)
             else:
                 quantities[name] = q
+        if set(quantities) <= set(BENCHMARK_NAMES):
+            # Benchmark parameters: refuse what no bicycle can have, as `bikerider benchmark` does.
+            BenchmarkParameters.from_mapping(quantities, str(args.inputs))
         sources = {n: f"stated: {args.inputs}" if q.sigma else "exact (no sigma given)" for n, q in quantities.items()}
         return inp.InputSet(quantities, sources, str(args.inputs))
     if args.bicycle:
