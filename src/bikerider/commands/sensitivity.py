@@ -56,7 +56,8 @@ def _inputs(args: argparse.Namespace):
     if args.rider and not args.bicycle:
         raise InputError("--rider", args.rider, "a --bicycle file to go with it")
     if args.inputs:
-        from bikerider.benchmark import BENCHMARK_NAMES, BenchmarkParameters
+        from bikerider.benchmark import BENCHMARK_NAMES
+        from bikerider.io.bicycleparameters import benchmark_from_values
         from bikerider.io.name_value_file import read_name_value_file
 
         data = read_name_value_file(args.inputs)
@@ -67,8 +68,9 @@ def _inputs(args: argparse.Namespace):
             else:
                 quantities[name] = q
         if set(quantities) <= set(BENCHMARK_NAMES):
-            # Benchmark parameters: refuse what no bicycle can have, as `bikerider benchmark` does.
-            BenchmarkParameters.from_mapping(quantities, str(args.inputs))
+            # Benchmark parameters: read and checked as `bikerider benchmark` reads them (refusing
+            # what no bicycle can have, leaving out an impossible I_yy the model does not use).
+            quantities = inp.benchmark_inputs(benchmark_from_values(data).parameters)
         sources = {n: f"stated: {args.inputs}" if q.sigma else "exact (no sigma given)" for n, q in quantities.items()}
         return inp.InputSet(quantities, sources, str(args.inputs))
     if args.bicycle:
