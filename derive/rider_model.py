@@ -33,7 +33,7 @@ from dataclasses import dataclass
 import sympy as sp
 
 from derive.codegen import GeneratedFunction, GeneratedModule, Output
-from derive.symbols import sym, syms
+from derive.symbols import syms
 
 GEOMETRY_ARGS = "h_bb l_cs l_f w_fh rF l_hb lam_ht w_rh rR l_sp lam_st l_st l_s c w"
 """The 15 bicycle measurements of Table 1, in the paper's order."""

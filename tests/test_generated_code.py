@@ -19,7 +19,7 @@ from derive import benchmark_model as d_benchmark  # noqa: E402
 from derive import combination as d_combination  # noqa: E402
 from derive import pendulum as d_pendulum  # noqa: E402
 from derive import rider_model as d_rider  # noqa: E402
-from derive.symbols import all_symbols  # noqa: E402
+from derive.symbols import all_symbols, sym  # noqa: E402
 
 GENERATED = ROOT / "generated"
 
@@ -126,7 +126,7 @@ def test_rider_model_equals_symbolic(paper_result):
     mass, com, inertia = d_rider.rider_mass_properties(points)
     values = model_arguments(paper_result.bicycle, paper_result.rider)
     names = list(inspect.signature(gen.rider_mass_properties).parameters)
-    args = [d_rider.sym(n) for n in names]
+    args = [sym(n) for n in names]
     _check_against_symbolic(gen.rider_mass_properties, args, [mass, com, inertia], values, SHAPES)
 
 
@@ -144,7 +144,7 @@ def test_pendulum_three_orientations_equal_symbolic():
 
     solution, det = d_pendulum.three_orientation_solution()
     names = list(inspect.signature(gen.inertia_from_three_orientations).parameters)
-    args = [d_pendulum.sym(n) for n in names]
+    args = [sym(n) for n in names]
     values = dict(k_t=5.01, T_1=3.6, T_2=3.4, T_3=2.5, alpha_1=0.7, alpha_2=1.4, alpha_3=2.6)
     _check_against_symbolic(gen.inertia_from_three_orientations, args, [solution, det], values, SHAPES)
 

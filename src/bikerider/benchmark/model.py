@@ -126,9 +126,7 @@ class WhippleModel:
     # -- eigenvalues -----------------------------------------------------------------------
     def eigenvalues(self, speeds) -> ModalEigenvalues:
         """Eigenvalues at each speed with mode labels (see the module docstring)."""
-        speeds = np.atleast_1d(np.asarray(speeds, dtype=float))
-        if speeds.ndim != 1 or not np.all(np.isfinite(speeds)):
-            raise InputError("speeds", speeds.tolist(), "a one-dimensional array of finite speeds")
+        speeds = check_speeds(speeds)
         with np.errstate(over="ignore", invalid="ignore"):
             state = self.state_matrix(speeds)
         finite = np.all(np.isfinite(state), axis=(-2, -1))
@@ -250,6 +248,17 @@ def polynomial_positive_real_roots(coefficients: np.ndarray) -> np.ndarray:
     roots = np.roots(c[nonzero[0]:])
     real = roots[np.abs(roots.imag) <= _IMAG * np.maximum(1.0, np.abs(roots.real))].real
     return np.sort(real[real > 0])
+
+
+def check_speeds(speeds) -> np.ndarray:
+    """Speeds as a one-dimensional float array; :class:`InputError` unless all are finite."""
+    try:
+        out = np.atleast_1d(np.asarray(speeds, dtype=float))
+    except (TypeError, ValueError):
+        raise InputError("speeds", speeds, "a one-dimensional array of finite speeds") from None
+    if out.ndim != 1 or not np.all(np.isfinite(out)):
+        raise InputError("speeds", out.tolist(), "a one-dimensional array of finite speeds")
+    return out
 
 
 def label_modes(raw: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

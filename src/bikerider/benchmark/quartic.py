@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from bikerider.benchmark.model import MODES, ModalEigenvalues
+from bikerider.benchmark.model import MODES, ModalEigenvalues, check_speeds
 from bikerider.errors import InputError
 
 NEWTON_STEPS = 2
@@ -300,9 +300,7 @@ def eigenvalues_from_polynomial(model, speeds) -> ModalEigenvalues:
     InputError
         Speeds that are not a one-dimensional array of finite numbers.
     """
-    speeds = np.atleast_1d(np.asarray(speeds, dtype=float))
-    if speeds.ndim != 1 or not np.all(np.isfinite(speeds)):
-        raise InputError("speeds", speeds.tolist(), "a one-dimensional array of finite speeds")
+    speeds = check_speeds(speeds)
     coefficients = _check_coefficients(model.characteristic_coefficients(speeds))
     with np.errstate(all="ignore"):  # divisions by zero are masked by np.where
         values, labels = _label_factored(_factored_roots(coefficients))

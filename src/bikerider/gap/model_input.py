@@ -18,7 +18,6 @@ handlebar-and-fork centre of mass, 0.29 m either side of the bicycle's plane.
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -108,7 +107,7 @@ def load_model(path: str | Path, rider_path: str | Path | None = None, *, rider_
     InputError
         A missing or impossible value (names the file, the key and what was expected).
     """
-    from bikerider.io.benchmark_file import load_benchmark_parameters
+    from bikerider.io.benchmark_file import load_benchmark_parameters, parameters_from_table
 
     path = Path(path)
     if not path.exists():
@@ -124,7 +123,7 @@ def load_model(path: str | Path, rider_path: str | Path | None = None, *, rider_
             raise InputError("benchmark", "missing", "a [benchmark] table when the file also has "
                              + ", ".join(f"[{k}]" for k in extra), source)
         tables = extra
-        parameters = _benchmark_from_toml(data, path)
+        parameters = parameters_from_table(data.get("benchmark", data), source)
     else:
         parameters = load_benchmark_parameters(path)
     rider = _table_numbers(tables["rider"], "rider", RIDER_KEYS, source) if "rider" in tables else None
@@ -142,27 +141,6 @@ def load_model(path: str | Path, rider_path: str | Path | None = None, *, rider_
         geometry = RiderGeometry(geometry.upper_body, _table_numbers(tables["grips"], "grips", GRIP_KEYS, source),
                                  geometry.notes + "; grips from the model file")
     return GapModelInput(parameters, geometry, rider, source + (f" + rider {rider_path}" if rider_path else ""))
-
-
-def _benchmark_from_toml(data: dict, path: Path) -> BenchmarkParameters:
-    from bikerider.benchmark import BENCHMARK_NAMES
-    from bikerider.quantity import Quantity
-
-    table = data.get("benchmark", data)
-    if not isinstance(table, dict):
-        raise InputError("benchmark", table, "a table of benchmark parameters", str(path))
-    values: dict[str, Quantity] = {}
-    for key, raw in table.items():
-        if key in ("name", "source", "notes"):
-            continue
-        if key == "lam_deg":
-            values["lam"] = parse_quantity(raw, key, str(path)).scaled(math.pi / 180)
-        elif key in BENCHMARK_NAMES:
-            values[key] = parse_quantity(raw, key, str(path))
-        else:
-            raise InputError(key, raw, "one of the benchmark names " + ", ".join(BENCHMARK_NAMES) + " (or lam_deg)",
-                             str(path))
-    return BenchmarkParameters.from_mapping(values, str(path))
 
 
 def _merge_rider(parameters: BenchmarkParameters, rider_path: Path,

@@ -22,20 +22,25 @@ def load_benchmark_parameters(path: str | Path) -> BenchmarkParameters:
         from bikerider.io.toml_input import read_toml
 
         data = read_toml(path)
-        table = data.get("benchmark", data)
-        if not isinstance(table, dict):
-            raise InputError("benchmark", table, "a table of benchmark parameters", str(path))
-        values: dict[str, Quantity] = {}
-        for key, raw in table.items():
-            if key in ("name", "source"):
-                continue
-            if key == "lam_deg":
-                values["lam"] = parse_quantity(raw, key, str(path)).scaled(math.pi / 180)
-            elif key in BENCHMARK_NAMES:
-                values[key] = parse_quantity(raw, key, str(path))
-            else:
-                raise InputError(key, raw, f"one of the benchmark names {', '.join(BENCHMARK_NAMES)} (or lam_deg)", str(path))
-        return BenchmarkParameters.from_mapping(values, str(path))
+        return parameters_from_table(data.get("benchmark", data), str(path))
     from bikerider.io.bicycleparameters import read_benchmark_file
 
     return read_benchmark_file(path).parameters
+
+
+def parameters_from_table(table: object, source: str) -> BenchmarkParameters:
+    """Benchmark parameters from a TOML table of Meijaard names (``lam_deg`` may replace ``lam``;
+    ``name``, ``source`` and ``notes`` are descriptive and skipped)."""
+    if not isinstance(table, dict):
+        raise InputError("benchmark", table, "a table of benchmark parameters", source)
+    values: dict[str, Quantity] = {}
+    for key, raw in table.items():
+        if key in ("name", "source", "notes"):
+            continue
+        if key == "lam_deg":
+            values["lam"] = parse_quantity(raw, key, source).scaled(math.pi / 180)
+        elif key in BENCHMARK_NAMES:
+            values[key] = parse_quantity(raw, key, source)
+        else:
+            raise InputError(key, raw, f"one of the benchmark names {', '.join(BENCHMARK_NAMES)} (or lam_deg)", source)
+    return BenchmarkParameters.from_mapping(values, source)

@@ -18,8 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bikerider.benchmark.model import MODES, label_modes
-from bikerider.errors import InputError
+from bikerider.benchmark.model import MODES, check_speeds, label_modes
 from bikerider.generated import benchmark_model as gen_model
 from bikerider.generated import sensitivities as gen
 from bikerider.uncertainty.stages import ENTRIES
@@ -60,9 +59,7 @@ def eigen_sensitivity(entries: dict[str, float], g: float, speeds) -> EigenSensi
     InputError
         Speeds that are not a one-dimensional array of finite numbers.
     """
-    speeds = np.atleast_1d(np.asarray(speeds, dtype=float))
-    if speeds.ndim != 1 or not np.all(np.isfinite(speeds)):
-        raise InputError("speeds", speeds.tolist(), "a one-dimensional array of finite speeds")
+    speeds = check_speeds(speeds)
     kw = {k: np.asarray(entries[k], dtype=float) for k in ENTRIES}
     A = gen_model.state_matrix(**kw, g=g, v=speeds)
     raw, X = np.linalg.eig(A)
