@@ -246,3 +246,12 @@ def test_factored_labelling_equals_the_general_one():
     assert (np.abs(values - expected_values) / scale).max() < 1e-14
     np.testing.assert_array_equal(labels, expected_labels)
     assert {"other", "castor"} <= set(labels.ravel())  # every case was exercised
+
+
+def test_model_eigenvalues_quartic_method_equals_eigvals(benchmark_model):
+    speeds = np.linspace(1.0, 10.0, 50)  # away from v_d = 0.684 m/s, where roots are double
+    fast, reference = benchmark_model.eigenvalues(speeds, method="quartic"), benchmark_model.eigenvalues(speeds)
+    assert (fast.labels == reference.labels).all()
+    assert np.abs(fast.values - reference.values).max() < 1e-10
+    with pytest.raises(InputError, match="method"):
+        benchmark_model.eigenvalues(speeds, method="fast")

@@ -124,8 +124,26 @@ class WhippleModel:
         return gen.characteristic_coefficients(**self._entries(), g=self.g, v=np.asarray(speeds, dtype=float))
 
     # -- eigenvalues -----------------------------------------------------------------------
-    def eigenvalues(self, speeds) -> ModalEigenvalues:
-        """Eigenvalues at each speed with mode labels (see the module docstring)."""
+    def eigenvalues(self, speeds, method: str = "eigvals") -> ModalEigenvalues:
+        """Eigenvalues at each speed with mode labels (see the module docstring).
+
+        Parameters
+        ----------
+        speeds : array_like, shape (n,)
+            Speeds [m/s].
+        method : {"eigvals", "quartic"}
+            ``"eigvals"``: ``numpy.linalg.eigvals`` of the state matrices (the reference).
+            ``"quartic"``: the generated characteristic polynomial solved in closed form for all
+            speeds at once (:mod:`bikerider.benchmark.quartic`), many times faster; equal to
+            ``"eigvals"`` within about 1e-13 except at a double root (near ``v_d``), where each
+            root of the pair is good to about 1e-8.
+        """
+        if method == "quartic":
+            from bikerider.benchmark.quartic import eigenvalues_from_polynomial
+
+            return eigenvalues_from_polynomial(self, speeds)
+        if method != "eigvals":
+            raise InputError("method", method, 'either "eigvals" or "quartic"')
         speeds = check_speeds(speeds)
         with np.errstate(over="ignore", invalid="ignore"):
             state = self.state_matrix(speeds)
