@@ -91,7 +91,7 @@ class BenchmarkParameters:
             if v[name] <= 0:  # type: ignore[operator]
                 raise InputError(name, v[name], "a positive value", src)
         for name, (limit, unit) in _LIMITS.items():
-            if v[name] is not None:
+            if v[name] is not None and not abs(v[name]) <= limit:  # type: ignore[arg-type]
                 check_magnitude(name, v[name], limit, unit, src)  # type: ignore[arg-type]
         for name in ("w", "rR", "rF"):  # the model divides by these
             if v[name] < 1e-3:  # type: ignore[operator]

@@ -89,9 +89,10 @@ class BicycleBodies:
                 if not low < q.value < high:
                     raise InputError(f"{key}_deg", math.degrees(q.value), "an angle between 0 and 180 degrees", self.source)
                 check_degrees(f"{key}_deg", math.degrees(q.value), self.source)
-            if key in _LIMITS:
-                check_magnitude(key, q.value, *_LIMITS[key], self.source)
-                check_magnitude(f"{key} uncertainty", q.sigma, *_LIMITS[key], self.source)
+            limit = _LIMITS.get(key)
+            if limit is not None and not (abs(q.value) <= limit[0] and abs(q.sigma) <= limit[0]):
+                check_magnitude(key, q.value, *limit, self.source)  # these pass only what is within the limit
+                check_magnitude(f"{key} uncertainty", q.sigma, *limit, self.source)
             if key in ("w", "rR", "rF") and not q.value >= 1e-3:  # the model divides by these
                 raise InputError(key, q.value, "at least 0.001 m (SI units: a length in metres)", self.source)
         for key in ("zBf", "zH"):

@@ -60,7 +60,8 @@ class LumpedRider:
             if key in self.values and not self.values[key].value > 0:
                 raise InputError(key, self.values[key].value, "a positive value", self.source)
         for key, (limit, unit) in _LIMITS.items():
-            if key in self.values:
+            q = self.values.get(key)
+            if q is not None and not (abs(q.value) <= limit and abs(q.sigma) <= limit):  # else both pass
                 check_magnitude(key, self.values[key].value, limit, unit, self.source)
                 check_magnitude(f"{key} uncertainty", self.values[key].sigma, limit, unit, self.source)
         if not self.values["zBr"].value < 0:

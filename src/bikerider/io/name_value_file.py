@@ -40,9 +40,13 @@ from bikerider.quantity import Quantity
 _NUMBER = r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?"
 _VALUE = re.compile(rf"^\s*({_NUMBER})\s*(?:(?:\+/-|±)\s*({_NUMBER}))?\s*$")
 _NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+_SIMPLE_LINE = re.compile(rf"\s*([A-Za-z_][A-Za-z0-9_]*)\s*=\s*({_NUMBER})\s*(?:(?:\+/-|±)\s*({_NUMBER}))?\s*")
+"""The common line, one ``name = value[+/-sigma]`` without comment or repeats, read in one match.
+Whatever it matches the general path would read the same way; anything else (and any value that
+would raise) goes through the general path."""
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, init=False)
 class NameValueEntry:
     """One line of a name-value file.
 
@@ -62,6 +66,14 @@ class NameValueEntry:
     value: Quantity
     repeats: tuple[Quantity, ...]
     line: int
+
+    def __init__(self, name: str, value: Quantity, repeats: tuple[Quantity, ...], line: int) -> None:
+        # The frozen dataclass __init__, without its four object.__setattr__ calls (one entry a line).
+        fields = self.__dict__
+        fields["name"] = name
+        fields["value"] = value
+        fields["repeats"] = repeats
+        fields["line"] = line
 
 
 @dataclass(frozen=True)
@@ -155,7 +167,18 @@ def parse_name_value_text(text: str, path: str = "<text>") -> NameValueFile:
         read, a negative uncertainty or a name given twice; the message names the line.
     """
     entries: dict[str, NameValueEntry] = {}
+    simple = _SIMPLE_LINE.fullmatch
+    isfinite = math.isfinite
     for number, raw in enumerate(text.splitlines(), start=1):
+        match = simple(raw)
+        if match is not None:
+            name, value_text, sigma_text = match.groups()
+            value = float(value_text)
+            sigma = 0.0 if sigma_text is None else float(sigma_text)
+            if name not in entries and sigma >= 0 and isfinite(value) and isfinite(sigma):
+                quantity = Quantity(value, sigma)
+                entries[name] = NameValueEntry(name, quantity, (quantity,), number)
+                continue
         content = raw.split("#", 1)[0].strip()
         if not content:
             continue
