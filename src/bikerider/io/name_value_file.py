@@ -40,9 +40,10 @@ from bikerider.quantity import Quantity
 _NUMBER = r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?"
 _VALUE = re.compile(rf"^\s*({_NUMBER})\s*(?:(?:\+/-|±)\s*({_NUMBER}))?\s*$")
 _NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
-_SIMPLE_LINE = re.compile(rf"\s*([A-Za-z_][A-Za-z0-9_]*)\s*=\s*({_NUMBER})\s*(?:(?:\+/-|±)\s*({_NUMBER}))?\s*")
+_SIMPLE_LINE = re.compile(r"\s*([A-Za-z_]\w*)\s*=\s*([-+.\deE]+)\s*(?:(?:\+/-|±)\s*([-+.\deE]+))?\s*", re.ASCII)
 """The common line, one ``name = value[+/-sigma]`` without comment or repeats, read in one match.
-Whatever it matches the general path would read the same way; anything else (and any value that
+Over these characters ``float`` accepts exactly the strings ``_NUMBER`` matches, so what it reads
+the general path reads the same way; anything else (a number ``float`` rejects, any value that
 would raise) goes through the general path."""
 
 
@@ -173,8 +174,11 @@ def parse_name_value_text(text: str, path: str = "<text>") -> NameValueFile:
         match = simple(raw)
         if match is not None:
             name, value_text, sigma_text = match.groups()
-            value = float(value_text)
-            sigma = 0.0 if sigma_text is None else float(sigma_text)
+            try:
+                value = float(value_text)
+                sigma = 0.0 if sigma_text is None else float(sigma_text)
+            except ValueError:
+                value = sigma = math.nan  # not a number: the general path says so
             if name not in entries and sigma >= 0 and isfinite(value) and isfinite(sigma):
                 quantity = Quantity(value, sigma)
                 entries[name] = NameValueEntry(name, quantity, (quantity,), number)
