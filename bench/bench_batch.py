@@ -26,7 +26,7 @@ import sys
 
 import numpy as np
 
-from common import BENCH, ROOT, Context, Row, fmt_time, measure, ratio_text
+from common import BENCH, ROOT, Context, Row, measure, ratio_text
 
 N = 100_000
 GOAL_RATE, GOAL_MEMORY = 100_000, 2**30

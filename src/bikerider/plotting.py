@@ -64,7 +64,7 @@ def side_view_figure(grid_points: np.ndarray, title: str = ""):
     plt = _pyplot()
     p = np.asarray(grid_points)
     fig, ax = plt.subplots(figsize=(6, 6))
-    for radius_point, centre in ((1, 2), (6, 7)):
+    for centre in (2, 7):  # wheel centres; each wheel touches the ground (z = 0)
         r = abs(p[centre - 1, 2])
         ax.add_patch(plt.Circle((p[centre - 1, 0], -p[centre - 1, 2]), r, fill=False, color="0.4"))
     frame = [(2, 5), (5, 10), (10, 2), (10, 12), (12, 11), (11, 7), (10, 13), (12, 16), (16, 17), (17, 19)]
