@@ -270,12 +270,7 @@ def label_roots(raw: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     values[:, 1] = np.where(one_or_two, np.conj(s[:, 0]), s[:, 1])
     values[:, 2] = np.where(one_or_two, s[:, 1], s[:, 2])
     values[:, 3] = np.where(pairs == 2, np.conj(s[:, 1]), np.where(pairs == 1, s[:, 2], s[:, 3]))
-    labels = np.empty((n, 4), dtype=object)
-    labels[:] = _MODES
-    two = pairs == 2
-    if two.any():
-        labels[two, 2:] = "other"
-    return values, labels
+    return values, _mode_labels(pairs)
 
 
 _MODES = np.array(MODES, dtype=object)
@@ -346,12 +341,15 @@ def _label_factored(z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     values[:, 1] = np.where(none, r1, np.conj(values[:, 0]))
     values[:, 2] = np.where(none, r2, np.where(one, big, second))
     values[:, 3] = np.where(none, r3, np.where(one, small, np.conj(second)))
-    labels = np.empty((n, 4), dtype=object)
+    return values, _mode_labels(pairs)
+
+
+def _mode_labels(pairs: np.ndarray) -> np.ndarray:
+    """Labels in the order weave, weave, capsize, castor; "other" for the second of two complex pairs."""
+    labels = np.empty((pairs.shape[0], 4), dtype=object)
     labels[:] = _MODES
-    two = pairs == 2
-    if two.any():
-        labels[two, 2:] = "other"
-    return values, labels
+    labels[pairs == 2, 2:] = "other"
+    return labels
 
 
 __all__ = ["eigenvalues_from_polynomial", "label_roots", "quartic_roots"]
