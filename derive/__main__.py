@@ -17,6 +17,7 @@ DERIVATIONS = (
     "derive.pendulum",
     "derive.rider_model",
     "derive.combination",
+    "derive.measured_reduction",
     "derive.benchmark_model",
     "derive.gap_effects",
     "derive.sensitivities",

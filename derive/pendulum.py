@@ -12,6 +12,8 @@ tensors the paper prints in Table 5 are tensor entries (benchmark convention).
 """
 from __future__ import annotations
 
+from functools import cache
+
 import sympy as sp
 
 from derive.codegen import GeneratedFunction, GeneratedModule, Output
@@ -39,8 +41,10 @@ def orientation_row(alpha: sp.Expr) -> sp.Matrix:
     return sp.Matrix([[J.coeff(Ixx), J.coeff(Ixz), J.coeff(Izz)]])
 
 
+@cache
 def three_orientation_solution() -> tuple[sp.Matrix, sp.Expr]:
-    """Eq. 6 solved in closed form for exactly three orientations; also its determinant."""
+    """Eq. 6 solved in closed form for exactly three orientations; also its determinant (cached:
+    the trigonometric simplification takes seconds and two derivations use it)."""
     k_t = sym("k_t")
     periods = syms("T_1 T_2 T_3")
     angles = syms("alpha_1 alpha_2 alpha_3")

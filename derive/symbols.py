@@ -149,6 +149,44 @@ _TABLE: dict[str, tuple[str, str, str, bool]] = {
     "v_weave": ("weave speed: the weave pair crosses the imaginary axis", "m/s", "v_w", True),
     "v_capsize": ("capsize speed: the capsize eigenvalue crosses zero", "m/s", "v_c", True),
 }
+# --- BicycleParameters Measured-file fields (derive/measured_reduction.py; angles in radians) ---
+_BODY_WORDS = {"B": "rear frame", "H": "handlebar and fork"}
+_MEASURED: dict[str, tuple[str, str, str, bool]] = {
+    "dF": ("distance rolled by the front wheel in nF turns", "m", "d_F", True),
+    "nF": ("number of front wheel turns rolled over dF", "1", "n_F", True),
+    "dR": ("distance rolled by the rear wheel in nR turns", "m", "d_R", True),
+    "nR": ("number of rear wheel turns rolled over dR", "1", "n_R", True),
+    "lF": ("front wheel compound pendulum length (pivot to wheel centre)", "m", "l_F", True),
+    "lR": ("rear wheel compound pendulum length (pivot to wheel centre)", "m", "l_R", True),
+    "TcF1": ("front wheel compound pendulum period", "s", "T_{cF}", True),
+    "TcR1": ("rear wheel compound pendulum period", "s", "T_{cR}", True),
+    "TtF1": ("front wheel torsional pendulum period", "s", "T_{tF}", True),
+    "TtR1": ("rear wheel torsional pendulum period", "s", "T_{tR}", True),
+    "mP": ("calibration rod mass", "kg", "m_P", True),
+    "dP": ("calibration rod diameter", "m", "d_P", True),
+    "lP": ("calibration rod length", "m", "l_P", True),
+    "TtP1": ("calibration rod torsional pendulum period", "s", "T_{tP}", True),
+    "f": ("fork offset (perpendicular distance of the front wheel centre from the steer axis)", "m", "f", False),
+    "TcB1": ("rear frame compound pendulum period (about the rear wheel axle)", "s", "T_{cB}", True),
+    "TcH1": ("handlebar and fork compound pendulum period (about the front wheel axle)", "s", "T_{cH}", True),
+    "whb": ("handlebar width between the two grips", "m", "w_{hb}", True),
+    "LhbF": ("distance from the front wheel centre to a handlebar grip", "m", "L_{hbF}", True),
+    "LhbR": ("distance from the rear wheel centre to a handlebar grip", "m", "L_{hbR}", True),
+}
+for _body, _word in _BODY_WORDS.items():
+    for _i in (1, 2, 3):
+        _MEASURED[f"alpha{_body}{_i}"] = (
+            f"hanging angle of the {_word} in orientation {_i}: steer axis from the photograph's horizontal",
+            "rad", rf"\alpha_{{{_body}{_i}}}", False)
+        _MEASURED[f"a{_body}{_i}"] = (
+            f"distance from the pendulum axis to the {_word}'s reference point in orientation {_i}",
+            "m", f"a_{{{_body}{_i}}}", False)
+        _MEASURED[f"Tt{_body}{_i}"] = (f"torsional pendulum period of the {_word} in orientation {_i}", "s",
+                                       f"T_{{t{_body}{_i}}}", True)
+_TABLE.update(_MEASURED)
+for _name in (*_MEASURED, "w", "g", "mR", "mF", "mH", "mBf", "lam_ht", "l_cs", "h_bb", "l_sp", "l_st", "lam_st"):
+    _description, _unit, _latex, _ = _TABLE[_name]
+    _TABLE[f"sigma_{_name}"] = (f"standard uncertainty of the {_description}", _unit, rf"\sigma_{{{_latex}}}", False)
 for _k in range(5):
     _TABLE[f"a{_k}"] = (f"coefficient of s^{_k} in the characteristic polynomial", f"kg^2 m^4 s^{_k - 4}", f"a_{_k}", False)
 for _k, _where in {5: "pedal axis", 13: "hip", 14: "knee", 15: "shoulder line", 19: "hand",

@@ -21,11 +21,15 @@ Units are those of BicycleParameters: metres, kilograms, seconds; ``gamma`` and 
 degrees; ``lamst`` in radians.
 
 Uncertainty.  The whole chain is one function of the file's values; every output's standard
-uncertainty is propagated from every input's at first order by a numerical Jacobian
-(:mod:`bikerider.bicycle.propagation`), so shared inputs (stiffness, steer axis tilt) are handled
-consistently.  The chain is written with NumPy on arrays of points, so the nominal point and all
-``2 k + 1`` perturbed points of the Jacobian go through it in one call (:func:`evaluate_measured`);
-bodies hung in the same number of orientations are reduced together.
+uncertainty is propagated from every input's at first order, so shared inputs (stiffness, steer
+axis tilt) are handled consistently.  For the template's layout (wheelbase geometry, rear frame and
+handlebar/fork each hung in three orientations, all compound periods) the values and exact
+uncertainties come from a generated closed form (:mod:`bikerider.bicycle.closed_form_reduction`)
+whenever every check below passes.  Every other layout, every other centre-of-mass method, and every
+file a check rejects goes through the general route: a numerical Jacobian
+(:mod:`bikerider.bicycle.propagation`) of the chain written with NumPy on arrays of points, the
+nominal point and all ``2 k + 1`` perturbed points in one call (:func:`evaluate_measured`; bodies
+hung in the same number of orientations reduced together), which raises the errors.
 
 Checks (on the nominal values).  A missing field raises :class:`InputError` naming it and saying
 what it is for.  Periods, masses and lengths must be positive.  Repeated trials of a period (comma
@@ -52,10 +56,12 @@ import numpy as np
 from bikerider.bicycle import measured_geometry as geo
 from bikerider.bicycle import seating
 from bikerider.bicycle.bodies import BicycleBodies
+from bikerider.bicycle.closed_form_reduction import reduce_standard_layout
 from bikerider.bicycle.hanging_lines import (
     DEFAULT_LINE_TOLERANCE, LineIntersection, check_lines_meet, check_not_parallel,
     least_squares_point, pairwise_mean_point,
 )
+from bikerider.bicycle.pendulum import SINGULAR_DETERMINANT
 from bikerider.bicycle.propagation import propagate
 from bikerider.errors import FitError, InputError
 from bikerider.fitting import PERIOD_TRIAL_TOLERANCE
@@ -70,8 +76,8 @@ LOG = logging.getLogger(__name__)
 
 #: Below this |determinant| of Eq. 6 for three orientations (``2 sin(b1-b2) sin(b1-b3) sin(b2-b3)``),
 #: or this smallest singular value for more, the pendulum axes nearly coincide and the in-plane
-#: inertia is not determined.
-SINGULAR_ORIENTATIONS = 1e-3
+#: inertia is not determined (the threshold of :mod:`bikerider.bicycle.pendulum`).
+SINGULAR_ORIENTATIONS = SINGULAR_DETERMINANT
 
 BODIES = {
     "B": "rear frame",
@@ -540,12 +546,15 @@ def reduce_measured(values: Mapping[str, Quantity], *, source: NameValueFile | s
     values = values.as_dict() if isinstance(values, NameValueFile) else dict(values)  # fast lookups
     layout = detect_layout(values, label)
     _check_values(values, layout, source, repeats)
-    lines: dict[str, LineIntersection] = {}
-    used = {k: q for k, q in values.items() if k not in _KNOWN_EXTRAS}
-    # One batched pass over the nominal point (checked) and every perturbed point of the Jacobian.
-    result = propagate(lambda x: evaluate_measured(x, layout, com_method=com_method, check=True,
-                                                   line_tolerance=line_tolerance, source=label, lines=lines),
-                       used, vectorized=True)
+    closed_form = reduce_standard_layout(values, layout, line_tolerance) if com_method == "least_squares" else None
+    if closed_form is not None:  # the template's layout, every check passed: exact uncertainties
+        result, lines = closed_form
+    else:  # one batched pass over the nominal point (checked) and every perturbed point of the Jacobian
+        lines = {}
+        used = {k: q for k, q in values.items() if k not in _KNOWN_EXTRAS}
+        result = propagate(lambda x: evaluate_measured(x, layout, com_method=com_method, check=True,
+                                                       line_tolerance=line_tolerance, source=label, lines=lines),
+                           used, vectorized=True)
     notes = _notes(values, layout)
     body_values = {k: result[k] for k in _BODY_OUTPUTS if math.isfinite(result[k].value)}
     if layout.seating:
