@@ -34,7 +34,9 @@ _FILE_NAMES = {"mBf": "mB", "lam_ht": "gamma", "l_cs": "lcs", "h_bb": "hbb", "l_
 """Argument names of the generated function that differ from the file's field names."""
 _DEGREES = frozenset(name for name in gen.ARGS if name == "lam_ht" or name.startswith("alpha"))
 """Arguments the file gives in degrees (converted to radians here, once)."""
-_SEATING = frozenset(("l_cs", "h_bb", "l_sp", "l_st", "lam_st", "whb", "LhbF", "LhbR"))
+_ARGUMENT_FIELDS = tuple((_FILE_NAMES.get(name, name), math.pi / 180 if name in _DEGREES else 1.0)
+                         for name in gen.ARGS)
+"""Each argument's field in the file and the factor to SI."""
 _SEATING_VALUES = ("l_s", "l_hb", "l_f", "x_hand", "z_hand")
 _VALUE_INDEX = {name: i for i, name in enumerate(gen.VALUE_NAMES)}
 _CHECK_INDEX = {name: i for i, name in enumerate(gen.CHECK_NAMES)}
@@ -78,17 +80,14 @@ def reduce_standard_layout(values: Mapping[str, Quantity], layout,
     if not is_standard_layout(layout):
         return None
     arguments, sigmas = [], []
-    for name in gen.ARGS:
-        q = values.get(_FILE_NAMES.get(name, name))
+    for field, factor in _ARGUMENT_FIELDS:
+        q = values.get(field)
         if q is None:  # only seating measurements may be missing (layout.seating is False)
             arguments.append(math.nan)
             sigmas.append(0.0)
-        elif name in _DEGREES:
-            arguments.append(math.radians(q.value))
-            sigmas.append(math.radians(q.sigma))
         else:
-            arguments.append(q.value)
-            sigmas.append(q.sigma)
+            arguments.append(q.value * factor)
+            sigmas.append(q.sigma * factor)
     try:
         computed, uncertainties, checks = gen.standard_layout_scalar(*arguments, *sigmas)
     except (ValueError, ZeroDivisionError, OverflowError):
