@@ -19,10 +19,8 @@ from bikerider.bicycle.hanging_lines import (
     intersect_lines, least_squares_point, mean_of_pairwise_intersections, pairwise_mean_point,
 )
 from bikerider.bicycle.propagation import perturbed_points, propagate
-from bikerider.bicycle.to_benchmark import bicycle_benchmark_parameters
 from bikerider.errors import FitError, InputError
 from bikerider.inertia import check_inertia_tensor
-from bikerider.io.bicycleparameters import read_lumped_rider
 from bikerider.io.name_value_file import read_name_value_file
 from bikerider.quantity import Quantity
 
@@ -108,21 +106,6 @@ def test_reduction_equals_the_pointwise_propagation(name):
         assert q.value == pytest.approx(pointwise[key].value, rel=1e-12, abs=1e-15), key
         # central differences at a relative step of 1e-6 resolve a sigma to about 1e-8
         assert q.sigma == pytest.approx(pointwise[key].sigma, rel=1e-6, abs=1e-15), key
-
-
-def test_merge_with_a_lumped_rider_equals_the_pointwise_propagation():
-    from bikerider.bicycle import to_benchmark
-
-    bodies = rm.read_measured_file(MEASURED["Browser"]).bodies
-    rider = read_lumped_rider(DATA / "riders" / "Jason" / "Parameters" / "JasonBrowserBenchmark.txt")
-    merged = bicycle_benchmark_parameters(bodies, rider)
-    pointwise = propagate(lambda x: to_benchmark._combine(x, True), {**bodies.values, **rider.values})
-    for key, value in merged.values.items():
-        if value is None:
-            assert not math.isfinite(pointwise[key].value), key
-            continue
-        assert value == pytest.approx(pointwise[key].value, rel=1e-12), key
-        assert merged.sigmas[key] == pytest.approx(pointwise[key].sigma, rel=1e-6, abs=1e-15), key
 
 
 def _random_lines(rng, batch, m):

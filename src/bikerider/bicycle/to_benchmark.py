@@ -3,20 +3,26 @@
 The benchmark's rear body B is the rear frame Bf, or the rear frame and a rigid rider Br combined
 as the paper does (Moore et al. 2009, Eqs. 15-16 with the parallel axis theorem, Eq. 13), via the
 generated ``combination.rear_body``.  The steer axis tilt is ``lam = pi/2 - lam_ht``; wheels and
-the handlebar/fork pass through.  Uncertainties are propagated at first order
-(:mod:`bikerider.bicycle.propagation`, all points of the Jacobian in one batched call), treating the
-bodies' values as independent.
+the handlebar/fork pass through.
+
+Uncertainties are first order, treating the bodies' values as independent.  Every value but the
+rear body's passes through with its own sigma (``lam`` takes that of ``lam_ht``: the slope is -1).
+The rear body's sigmas come from the closed-form Jacobian of Eqs. 15-16 (the generated
+``sensitivities.rear_body_jacobian``, the one the uncertainty stages use) at the nominal point:
+``sigma_i = sqrt(sum_j (J_ij sigma_j)^2)``.  That is what
+:func:`bikerider.bicycle.propagation.propagate` approximates by central differences, without its
+``2 k + 1`` evaluations; ``tests/test_to_benchmark.py`` checks the two against each other.
 """
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
 
-from bikerider.benchmark.parameters import BENCHMARK_NAMES, BenchmarkParameters
+from bikerider.benchmark.parameters import BenchmarkParameters
 from bikerider.bicycle.bodies import BicycleBodies
-from bikerider.bicycle.propagation import propagate
 from bikerider.errors import InputError
 from bikerider.generated import combination as gen_combination
 from bikerider.quantity import Quantity, check_magnitude
@@ -74,25 +80,36 @@ class LumpedRider:
 
 
 _FRAME = ("mBf", "xBf", "zBf", "IBfxx", "IBfyy", "IBfzz", "IBfxz")
-_USED = (*_PASS_THROUGH, "lam_ht", "IHyy", *_FRAME, *RIDER_BODY_NAMES)
-"""Every value :func:`_combine` reads (seating values, for one, do not enter the benchmark values)."""
+"""The rear frame; with :data:`RIDER_BODY_NAMES` the arguments of the generated ``rear_body``, in the
+order of the columns of ``rear_body_jacobian``."""
+_REAR_BODY = ("mB", "xB", "zB", "IBxx", "IByy", "IBzz", "IBxz")
+"""Outputs of the rear body, in the order of the rows of ``rear_body_jacobian``."""
 
 
-def _combine(values: dict, with_rider: bool) -> dict:
-    """The benchmark values from the bodies' values: floats, or 1-D arrays of points (they broadcast)."""
-    out = {name: values[name] for name in _PASS_THROUGH}
-    out["lam"] = np.pi / 2 - values["lam_ht"]
-    out["IHyy"] = values.get("IHyy", math.nan)
-    frame = {name: values[name] for name in _FRAME if name != "IBfyy"}
-    frame["IBfyy"] = values.get("IBfyy", math.nan)
-    if not with_rider:
-        out.update(mB=frame["mBf"], xB=frame["xBf"], zB=frame["zBf"], IBxx=frame["IBfxx"], IByy=frame["IBfyy"],
-                   IBzz=frame["IBfzz"], IBxz=frame["IBfxz"])
-        return out
-    rider = {k: values.get(k, math.nan) for k in RIDER_BODY_NAMES}
-    mB, xB, zB, IB = gen_combination.rear_body(**frame, **rider)
-    out.update(mB=mB, xB=xB, zB=zB, IBxx=IB[..., 0, 0], IByy=IB[..., 1, 1], IBzz=IB[..., 2, 2], IBxz=IB[..., 0, 2])
-    return out
+def _rear_body(frame: Mapping[str, Quantity], rider: Mapping[str, Quantity]) -> dict[str, Quantity | None]:
+    """The rear body B of the rear frame in ``frame`` and the rider in ``rider``, with first-order sigmas.
+
+    ``IBfyy`` or ``IBryy`` may be missing: they enter ``IByy`` alone, which is then ``None``; the
+    Jacobian's other rows do not involve them.
+    """
+    from bikerider.generated import sensitivities as gen_sensitivities  # large: imported when a rider is merged
+
+    nominal: dict[str, float] = {}
+    sigma: list[float] = []
+    for names, source in ((_FRAME, frame), (RIDER_BODY_NAMES, rider)):
+        for name in names:
+            q = source.get(name)
+            nominal[name] = math.nan if q is None else q.value
+            sigma.append(q.sigma if q is not None and q.sigma > 0 else 0.0)
+    mB, xB, zB, IB = gen_combination.rear_body(**nominal)
+    jacobian = gen_sensitivities.rear_body_jacobian(**nominal)
+    # As propagate does, a slope that is not finite contributes nothing (none is for real bodies).
+    jacobian = np.where(np.isfinite(jacobian), jacobian, 0.0)
+    variance = (jacobian * jacobian) @ np.square(sigma)
+    rows = IB.tolist()
+    values = (float(mB), float(xB), float(zB), rows[0][0], rows[1][1], rows[2][2], rows[0][2])
+    return {name: Quantity(value, sigma_) if math.isfinite(value) else None
+            for name, value, sigma_ in zip(_REAR_BODY, values, np.sqrt(variance).tolist())}
 
 
 def bicycle_benchmark_parameters(bodies: BicycleBodies, rider_body: LumpedRider | None = None) -> BenchmarkParameters:
@@ -110,12 +127,13 @@ def bicycle_benchmark_parameters(bodies: BicycleBodies, rider_body: LumpedRider 
         With first-order standard uncertainties; ``IByy``/``IHyy`` are ``None`` when not
         determined.
     """
-    inputs = {k: q for k, q in bodies.values.items() if k in _USED}
-    if rider_body is not None:
-        inputs.update(rider_body.values)
-    result = propagate(lambda x: _combine(x, rider_body is not None), inputs, vectorized=True)
-    mapping: dict[str, Quantity | None] = {}
-    for name in BENCHMARK_NAMES:
-        q = result[name]
-        mapping[name] = q if math.isfinite(q.value) else None
+    values = bodies.values
+    mapping: dict[str, Quantity | None] = {name: values[name] for name in _PASS_THROUGH}
+    lam_ht = values["lam_ht"]
+    mapping["lam"] = Quantity(math.pi / 2 - lam_ht.value, lam_ht.sigma)
+    mapping["IHyy"] = values.get("IHyy")
+    if rider_body is None:
+        mapping.update(zip(_REAR_BODY, (values.get(name) for name in _FRAME)))
+    else:
+        mapping.update(_rear_body(values, rider_body.values))
     return BenchmarkParameters.from_mapping(mapping, source=bodies.source)
