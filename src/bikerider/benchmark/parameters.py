@@ -31,6 +31,37 @@ _LIMITS: dict[str, tuple[float, str]] = {
     **{k: (1e4, "kg m^2") for k in BENCHMARK_NAMES if k.startswith("I")},
 }
 """Largest plausible magnitudes (the rear body may hold riders): a larger value is a unit slip."""
+_NAME_SET = frozenset(BENCHMARK_NAMES)
+
+#: Margin, relative to the tensor's largest entry, by which :func:`_clearly_valid_tensor` wants
+#: each test passed (far above the round-off of the few operations either check does).
+_CLEAR_MARGIN = 1e-12
+
+
+def _clearly_valid_tensor(xx: float, yy: float | None, zz: float, xz: float) -> bool:
+    """Whether :func:`bikerider.inertia.check_inertia_tensor` certainly accepts the tensor of a body
+    symmetric about its XZ plane, ``[[xx, 0, xz], [0, yy, 0], [xz, 0, zz]]`` (``yy`` None: not
+    determined, the xz block alone is checked).
+
+    The same tests on the same scaled entries in plain floats (positive definite xz block, positive
+    principal moments, triangle inequality), each passed by :data:`_CLEAR_MARGIN` and the triangle
+    inequality without the full check's slack.  ``False`` means only "not shown here": the caller
+    then runs the full check, which raises with its own message or accepts a borderline tensor.
+    Non-finite entries give ``False`` (every comparison with NaN fails).
+    """
+    if yy is not None and not math.isfinite(yy):
+        return False
+    scale = max(abs(xx), abs(zz), abs(xz), 0.0 if yy is None else abs(yy))
+    if not 0.0 < scale < math.inf:
+        return False
+    b_xx, b_zz, b_xz = xx / scale, zz / scale, xz / scale
+    if not (b_xx > _CLEAR_MARGIN and b_zz > _CLEAR_MARGIN and b_xx * b_zz - b_xz * b_xz > _CLEAR_MARGIN):
+        return False
+    if yy is None:
+        return True
+    mean, radius = (b_xx + b_zz) / 2, math.hypot((b_xx - b_zz) / 2, b_xz)
+    low, middle, high = sorted((mean - radius, yy / scale, mean + radius))
+    return low > _CLEAR_MARGIN and high + _CLEAR_MARGIN <= low + middle
 
 
 @dataclass(frozen=True)
@@ -61,13 +92,15 @@ class BenchmarkParameters:
             A missing or unknown name, a non-finite value, a non-positive mass, length or wheel
             inertia, an impossible steer axis tilt, or an impossible inertia tensor.
         """
-        unknown = sorted(set(mapping) - set(BENCHMARK_NAMES))
-        if unknown:
+        if not _NAME_SET.issuperset(mapping):
+            unknown = sorted(set(mapping) - _NAME_SET)
             raise InputError(unknown[0], mapping[unknown[0]], f"one of the benchmark names {', '.join(BENCHMARK_NAMES)}", source)
         values: dict[str, float | None] = {}
         sigmas: dict[str, float] = {}
+        get, isfinite = mapping.get, math.isfinite
         for name in BENCHMARK_NAMES:
-            if name not in mapping or mapping[name] is None:
+            raw = get(name)
+            if raw is None:
                 if name in OPTIONAL_NAMES:
                     values[name], sigmas[name] = None, 0.0
                     continue
@@ -75,9 +108,8 @@ class BenchmarkParameters:
                     values[name], sigmas[name] = 9.81, 0.0
                     continue
                 raise InputError(name, MISSING, "a value (all 25 benchmark parameters are needed)", source)
-            raw = mapping[name]
             q = raw if isinstance(raw, Quantity) else Quantity(float(raw))  # type: ignore[arg-type]
-            if not math.isfinite(q.value):
+            if not isfinite(q.value):
                 raise InputError(name, q.value, "a finite number", source)
             values[name], sigmas[name] = q.value, q.sigma
         params = cls(values, sigmas, source)
@@ -105,14 +137,11 @@ class BenchmarkParameters:
                 raise InputError(name, v[name], "a negative value: z points down in the benchmark frame, so a "
                                  "centre of mass above the ground has z < 0", src)
         for body in ("B", "H"):
-            yy = v[f"I{body}yy"]
+            xx, yy, zz, xz = v[f"I{body}xx"], v[f"I{body}yy"], v[f"I{body}zz"], v[f"I{body}xz"]
+            if _clearly_valid_tensor(xx, yy, zz, xz):  # type: ignore[arg-type]
+                continue  # what check_inertia_tensor accepts, shown without its array work
             tensor = np.array(
-                [
-                    [v[f"I{body}xx"], 0.0, v[f"I{body}xz"]],
-                    [0.0, np.nan if yy is None else yy, 0.0],
-                    [v[f"I{body}xz"], 0.0, v[f"I{body}zz"]],
-                ],
-                dtype=float,
+                [[xx, 0.0, xz], [0.0, np.nan if yy is None else yy, 0.0], [xz, 0.0, zz]], dtype=float,
             )
             check_inertia_tensor(f"I{body} (I{body}xx, I{body}yy, I{body}zz, I{body}xz)", tensor, src)
         for wheel in ("R", "F"):
