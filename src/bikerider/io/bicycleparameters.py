@@ -28,7 +28,7 @@ import logging
 import math
 import re
 from dataclasses import dataclass, field
-from pathlib import Path
+from pathlib import Path, PurePath
 
 import numpy as np
 
@@ -50,6 +50,10 @@ SPLIT_FORK_NAMES = tuple(f"{p}{b}" for b in "GS" for p in ("m", "x", "z")) + tup
 
 LUMPED_RIDER_NAMES = ("mB", "xB", "yB", "zB", "IBxx", "IBxz", "IByy", "IBzz")
 """Names of a lumped rider file."""
+_LUMPED_RIDER_SET = frozenset(LUMPED_RIDER_NAMES)
+_RIDER_BODY_NAME = {name: f"{name}r" if name in ("mB", "xB", "zB") else name.replace("IB", "IBr")
+                    for name in LUMPED_RIDER_NAMES if name != "yB"}
+"""A lumped rider file's name to the rider's in :data:`bikerider.bicycle.to_benchmark.RIDER_BODY_NAMES`."""
 
 FORMATS = ("toml", "measured", "benchmark", "lumped_rider")
 
@@ -163,17 +167,16 @@ def read_lumped_rider(path: str | Path):
 
     data = read_name_value_file(path)
     values = data.as_dict()
-    for name in values:
-        if name not in LUMPED_RIDER_NAMES:
-            raise InputError(name, values[name].value, "one of the lumped rider entries " + ", ".join(LUMPED_RIDER_NAMES),
-                             data.where(name))
-    y = values.get("yB", Quantity(0.0))
-    if abs(y.value) > LATERAL_TOLERANCE:
+    if not _LUMPED_RIDER_SET.issuperset(values):
+        name = next(name for name in values if name not in _LUMPED_RIDER_SET)  # the first, in file order
+        raise InputError(name, values[name].value, "one of the lumped rider entries " + ", ".join(LUMPED_RIDER_NAMES),
+                         data.where(name))
+    y = values.pop("yB", None)
+    if y is not None and abs(y.value) > LATERAL_TOLERANCE:
         raise InputError("yB", y.value, f"0 within {LATERAL_TOLERANCE} m: a rider centred on the bicycle's XZ plane",
                          data.where("yB"))
-    renamed = {f"{name[:-1]}Br" if name in ("mB", "xB", "zB") else name.replace("IB", "IBr"): q
-               for name, q in values.items() if name != "yB"}
-    stem = Path(path).stem
+    renamed = {_RIDER_BODY_NAME[name]: q for name, q in values.items()}
+    stem = (path if isinstance(path, PurePath) else PurePath(path)).stem
     return LumpedRider(renamed, source=str(path), name=stem[:-len("Benchmark")] if stem.endswith("Benchmark") else stem)
 
 
