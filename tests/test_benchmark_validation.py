@@ -13,10 +13,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from bikerider.benchmark import parameters as bp
 from bikerider.benchmark.parameters import BENCHMARK_NAMES, BenchmarkParameters
 from bikerider.errors import InputError
-from bikerider.inertia import check_inertia_tensor
+from bikerider.inertia import check_inertia_tensor, clearly_valid_plane_symmetric
 from bikerider.io.bicycleparameters import read_benchmark_file
 from bikerider.quantity import Quantity
 
@@ -46,7 +45,7 @@ def test_the_screen_never_accepts_a_tensor_the_full_check_refuses():
         limit = rng.choice([2 * radius, 2 * half])  # lower and upper bound of a valid I_yy
         yy = rng.choice([None, limit * (1 + rng.normal(0, 1e-12)), limit * (1 + rng.normal(0, 1e-8)),
                          limit * rng.uniform(0.5, 1.5)])
-        verdict = bp._clearly_valid_tensor(xx, yy, zz, xz)
+        verdict = clearly_valid_plane_symmetric(xx, yy, zz, xz)
         passes = _full_check_passes(xx, yy, zz, xz)
         assert passes or not verdict, (xx, yy, zz, xz)
         accepted += verdict
@@ -64,14 +63,14 @@ def test_the_screen_never_accepts_a_tensor_the_full_check_refuses():
     ],
 )
 def test_the_screen_leaves_edge_cases_to_the_full_check(xx, yy, zz, xz):
-    assert not bp._clearly_valid_tensor(xx, yy, zz, xz)
+    assert not clearly_valid_plane_symmetric(xx, yy, zz, xz)
 
 
 def test_the_screen_accepts_the_benchmark_bicycle():
     v = read_benchmark_file(BENCHMARK).parameters.values
     for body in ("B", "H"):
-        assert bp._clearly_valid_tensor(v[f"I{body}xx"], v[f"I{body}yy"], v[f"I{body}zz"], v[f"I{body}xz"]), body
-        assert bp._clearly_valid_tensor(v[f"I{body}xx"], None, v[f"I{body}zz"], v[f"I{body}xz"]), body
+        assert clearly_valid_plane_symmetric(v[f"I{body}xx"], v[f"I{body}yy"], v[f"I{body}zz"], v[f"I{body}xz"]), body
+        assert clearly_valid_plane_symmetric(v[f"I{body}xx"], None, v[f"I{body}zz"], v[f"I{body}xz"]), body
 
 
 def _mapping(**changes) -> dict:

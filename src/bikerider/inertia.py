@@ -52,6 +52,48 @@ def check_inertia_tensor(name: str, tensor: np.ndarray, source: str | None = Non
             )
 
 
+#: Margin, relative to the tensor's largest entry, by which :func:`clearly_valid_plane_symmetric`
+#: wants each test passed (far above the round-off of the few operations either check does).
+_CLEAR_MARGIN = 1e-12
+
+
+def clearly_valid_plane_symmetric(xx: float, yy: float | None, zz: float, xz: float) -> bool:
+    """Whether :func:`check_inertia_tensor` certainly accepts the tensor of a body symmetric about
+    its XZ plane, ``[[xx, 0, xz], [0, yy, 0], [xz, 0, zz]]`` (``yy`` None: not determined, the xz
+    block alone is checked).
+
+    The same tests on the same scaled entries in plain floats (positive definite xz block, positive
+    principal moments, triangle inequality), each passed by :data:`_CLEAR_MARGIN` and the triangle
+    inequality without the full check's slack.  ``False`` means only "not shown here": the caller
+    then runs the full check, which raises with its own message or accepts a borderline tensor.
+    Non-finite entries give ``False`` (every comparison with NaN fails).
+    """
+    if yy is not None and not math.isfinite(yy):
+        return False
+    scale = max(abs(xx), abs(zz), abs(xz), 0.0 if yy is None else abs(yy))
+    if not 0.0 < scale < math.inf:
+        return False
+    b_xx, b_zz, b_xz = xx / scale, zz / scale, xz / scale
+    if not (b_xx > _CLEAR_MARGIN and b_zz > _CLEAR_MARGIN and b_xx * b_zz - b_xz * b_xz > _CLEAR_MARGIN):
+        return False
+    if yy is None:
+        return True
+    mean, radius = (b_xx + b_zz) / 2, math.hypot((b_xx - b_zz) / 2, b_xz)
+    low, middle, high = sorted((mean - radius, yy / scale, mean + radius))
+    return low > _CLEAR_MARGIN and high + _CLEAR_MARGIN <= low + middle
+
+
+def check_plane_symmetric_inertia(name: str, xx: float, yy: float | None, zz: float, xz: float,
+                                  source: str | None = None) -> None:
+    """:func:`check_inertia_tensor` of ``[[xx, 0, xz], [0, yy, 0], [xz, 0, zz]]`` (``yy`` None: not
+    determined), with the clear cases decided in plain floats (:func:`clearly_valid_plane_symmetric`)
+    and the rest, with every error message, left to the full check."""
+    if clearly_valid_plane_symmetric(xx, yy, zz, xz):
+        return
+    tensor = np.array([[xx, 0.0, xz], [0.0, math.nan if yy is None else yy, 0.0], [xz, 0.0, zz]], dtype=float)
+    check_inertia_tensor(name, tensor, source)
+
+
 def _principal_moments(t: np.ndarray) -> np.ndarray:
     """Ascending principal moments.  A body symmetric about its XZ plane (zero xy and yz entries,
     every body of the benchmark) has ``I_yy`` and the two moments of its xz block in closed form;

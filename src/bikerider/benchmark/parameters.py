@@ -6,10 +6,9 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
-import numpy as np
 
 from bikerider.errors import MISSING, InputError
-from bikerider.inertia import check_inertia_tensor
+from bikerider.inertia import check_plane_symmetric_inertia
 from bikerider.quantity import Quantity, check_magnitude
 
 BENCHMARK_NAMES: tuple[str, ...] = (
@@ -32,37 +31,6 @@ _LIMITS: dict[str, tuple[float, str]] = {
 }
 """Largest plausible magnitudes (the rear body may hold riders): a larger value is a unit slip."""
 _NAME_SET = frozenset(BENCHMARK_NAMES)
-
-#: Margin, relative to the tensor's largest entry, by which :func:`_clearly_valid_tensor` wants
-#: each test passed (far above the round-off of the few operations either check does).
-_CLEAR_MARGIN = 1e-12
-
-
-def _clearly_valid_tensor(xx: float, yy: float | None, zz: float, xz: float) -> bool:
-    """Whether :func:`bikerider.inertia.check_inertia_tensor` certainly accepts the tensor of a body
-    symmetric about its XZ plane, ``[[xx, 0, xz], [0, yy, 0], [xz, 0, zz]]`` (``yy`` None: not
-    determined, the xz block alone is checked).
-
-    The same tests on the same scaled entries in plain floats (positive definite xz block, positive
-    principal moments, triangle inequality), each passed by :data:`_CLEAR_MARGIN` and the triangle
-    inequality without the full check's slack.  ``False`` means only "not shown here": the caller
-    then runs the full check, which raises with its own message or accepts a borderline tensor.
-    Non-finite entries give ``False`` (every comparison with NaN fails).
-    """
-    if yy is not None and not math.isfinite(yy):
-        return False
-    scale = max(abs(xx), abs(zz), abs(xz), 0.0 if yy is None else abs(yy))
-    if not 0.0 < scale < math.inf:
-        return False
-    b_xx, b_zz, b_xz = xx / scale, zz / scale, xz / scale
-    if not (b_xx > _CLEAR_MARGIN and b_zz > _CLEAR_MARGIN and b_xx * b_zz - b_xz * b_xz > _CLEAR_MARGIN):
-        return False
-    if yy is None:
-        return True
-    mean, radius = (b_xx + b_zz) / 2, math.hypot((b_xx - b_zz) / 2, b_xz)
-    low, middle, high = sorted((mean - radius, yy / scale, mean + radius))
-    return low > _CLEAR_MARGIN and high + _CLEAR_MARGIN <= low + middle
-
 
 @dataclass(frozen=True)
 class BenchmarkParameters:
@@ -137,13 +105,9 @@ class BenchmarkParameters:
                 raise InputError(name, v[name], "a negative value: z points down in the benchmark frame, so a "
                                  "centre of mass above the ground has z < 0", src)
         for body in ("B", "H"):
-            xx, yy, zz, xz = v[f"I{body}xx"], v[f"I{body}yy"], v[f"I{body}zz"], v[f"I{body}xz"]
-            if _clearly_valid_tensor(xx, yy, zz, xz):  # type: ignore[arg-type]
-                continue  # what check_inertia_tensor accepts, shown without its array work
-            tensor = np.array(
-                [[xx, 0.0, xz], [0.0, np.nan if yy is None else yy, 0.0], [xz, 0.0, zz]], dtype=float,
-            )
-            check_inertia_tensor(f"I{body} (I{body}xx, I{body}yy, I{body}zz, I{body}xz)", tensor, src)
+            check_plane_symmetric_inertia(f"I{body} (I{body}xx, I{body}yy, I{body}zz, I{body}xz)",
+                                          v[f"I{body}xx"], v[f"I{body}yy"], v[f"I{body}zz"],  # type: ignore[arg-type]
+                                          v[f"I{body}xz"], src)  # type: ignore[arg-type]
         for wheel in ("R", "F"):
             check_wheel_inertia(wheel, v[f"I{wheel}xx"], v[f"I{wheel}yy"],  # type: ignore[arg-type]
                                 self.sigmas.get(f"I{wheel}xx", 0.0), self.sigmas.get(f"I{wheel}yy", 0.0), src)

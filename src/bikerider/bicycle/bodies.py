@@ -9,10 +9,9 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-import numpy as np
 
 from bikerider.errors import MISSING, InputError
-from bikerider.inertia import check_inertia_tensor
+from bikerider.inertia import check_plane_symmetric_inertia
 from bikerider.quantity import Quantity, check_degrees, check_magnitude
 
 BODY_NAMES: tuple[str, ...] = (
@@ -101,12 +100,9 @@ class BicycleBodies:
                                  "centre of mass above the ground has z < 0", self.source)
         for body in ("Bf", "H"):
             yy = self.values.get(f"I{body}yy")
-            tensor = np.array([
-                [self[f"I{body}xx"], 0.0, self[f"I{body}xz"]],
-                [0.0, np.nan if yy is None else yy.value, 0.0],
-                [self[f"I{body}xz"], 0.0, self[f"I{body}zz"]],
-            ])
-            check_inertia_tensor(f"I{body} (I{body}xx, I{body}yy, I{body}zz, I{body}xz)", tensor, self.source)
+            check_plane_symmetric_inertia(f"I{body} (I{body}xx, I{body}yy, I{body}zz, I{body}xz)", self[f"I{body}xx"],
+                                          None if yy is None else yy.value, self[f"I{body}zz"], self[f"I{body}xz"],
+                                          self.source)
 
     def __getitem__(self, key: str) -> float:
         return self.values[key].value
