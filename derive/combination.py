@@ -78,6 +78,7 @@ def build() -> GeneratedModule:
                     Output("IB", IB, "rear body inertia tensor about its centre of mass [kg m^2]"),
                 ],
                 "Combine the rear frame and the rider into the benchmark rear body B.",
+                scalar=True,  # merging one lumped rider (bikerider.bicycle.to_benchmark)
             ),
             GeneratedFunction(
                 "benchmark_parameters", chain_args,

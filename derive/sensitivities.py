@@ -283,10 +283,12 @@ def _names(symbols: list[sp.Symbol]) -> str:
     return ", ".join(s.name for s in symbols)
 
 
-def _stage_jacobian(name: str, stage: dict[str, list], summary: str, notes: str = "") -> GeneratedFunction:
+def _stage_jacobian(name: str, stage: dict[str, list], summary: str, notes: str = "",
+                    scalar: bool = False) -> GeneratedFunction:
     J = jacobian(sp.Matrix(stage["exprs"]), stage["inputs"])
     doc = f"d[{_names(stage['outputs'])}]/d[{_names(stage['inputs'])}] [SI]"
-    return GeneratedFunction(f"{name}_jacobian", stage["inputs"], [Output("jacobian", J, doc)], summary, notes=notes)
+    return GeneratedFunction(f"{name}_jacobian", stage["inputs"], [Output("jacobian", J, doc)], summary, notes=notes,
+                             scalar=scalar)
 
 
 def build() -> GeneratedModule:
@@ -330,7 +332,8 @@ def build() -> GeneratedModule:
         ]
     functions += [
         _stage_jacobian("rear_body", stages["rear_body"], "Jacobian of the rear body (Eqs. 15-16).",
-                        notes="The argument mBr is the rider's mass as its segments sum it (mBr_sum)."),
+                        notes="The argument mBr is the rider's mass as its segments sum it (mBr_sum).",
+                        scalar=True),  # merging one lumped rider (bikerider.bicycle.to_benchmark)
         _stage_jacobian("canonical", stages["canonical"],
                         "Jacobian of the canonical matrix entries (Meijaard et al. 2007, Appendix A)."),
         _stage_jacobian("characteristic", stages["characteristic"],

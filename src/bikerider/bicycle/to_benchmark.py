@@ -8,7 +8,8 @@ the handlebar/fork pass through.
 Uncertainties are first order, treating the bodies' values as independent.  Every value but the
 rear body's passes through with its own sigma (``lam`` takes that of ``lam_ht``: the slope is -1).
 The rear body's sigmas come from the closed-form Jacobian of Eqs. 15-16 (the generated
-``sensitivities.rear_body_jacobian``, the one the uncertainty stages use) at the nominal point:
+``sensitivities.rear_body_jacobian``, the one the uncertainty stages use; its plain-float twin, as
+for ``rear_body``, since one bicycle is merged at a time) at the nominal point:
 ``sigma_i = sqrt(sum_j (J_ij sigma_j)^2)``.  That is what
 :func:`bikerider.bicycle.propagation.propagate` approximates by central differences, without its
 ``2 k + 1`` evaluations; ``tests/test_to_benchmark.py`` checks the two against each other.
@@ -18,8 +19,6 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
-
-import numpy as np
 
 from bikerider.benchmark.parameters import BenchmarkParameters
 from bikerider.bicycle.bodies import BicycleBodies
@@ -101,15 +100,18 @@ def _rear_body(frame: Mapping[str, Quantity], rider: Mapping[str, Quantity]) -> 
             q = source.get(name)
             nominal[name] = math.nan if q is None else q.value
             sigma.append(q.sigma if q is not None and q.sigma > 0 else 0.0)
-    mB, xB, zB, IB = gen_combination.rear_body(**nominal)
-    jacobian = gen_sensitivities.rear_body_jacobian(**nominal)
-    # As propagate does, a slope that is not finite contributes nothing (none is for real bodies).
-    jacobian = np.where(np.isfinite(jacobian), jacobian, 0.0)
-    variance = (jacobian * jacobian) @ np.square(sigma)
-    rows = IB.tolist()
-    values = (float(mB), float(xB), float(zB), rows[0][0], rows[1][1], rows[2][2], rows[0][2])
-    return {name: Quantity(value, sigma_) if math.isfinite(value) else None
-            for name, value, sigma_ in zip(_REAR_BODY, values, np.sqrt(variance).tolist())}
+    # One bicycle: the plain-float twins of the generated functions (NumPy's per-call overhead
+    # would be most of the time on single values).
+    mB, xB, zB, IB = gen_combination.rear_body_scalar(**nominal)
+    jacobian = gen_sensitivities.rear_body_jacobian_scalar(**nominal)
+    values = (mB, xB, zB, IB[0][0], IB[1][1], IB[2][2], IB[0][2])
+    result: dict[str, Quantity | None] = {}
+    for name, value, row in zip(_REAR_BODY, values, jacobian):
+        # As propagate does, a slope that is not finite contributes nothing (none is for real bodies).
+        terms = [d * s for d, s in zip(row, sigma) if s and math.isfinite(d)]
+        variance = math.fsum(t * t for t in terms)  # t * t, not t ** 2: inf rather than OverflowError
+        result[name] = Quantity(value, math.sqrt(variance)) if math.isfinite(value) else None
+    return result
 
 
 def bicycle_benchmark_parameters(bodies: BicycleBodies, rider_body: LumpedRider | None = None) -> BenchmarkParameters:
