@@ -94,12 +94,17 @@ def check_plane_symmetric_inertia(name: str, xx: float, yy: float | None, zz: fl
     check_inertia_tensor(name, tensor, source)
 
 
+def plane_symmetric_principal_moments(xx: float, yy: float, zz: float, xz: float) -> list[float]:
+    """Ascending principal moments of ``[[xx, 0, xz], [0, yy, 0], [xz, 0, zz]]``: ``yy`` and the two
+    moments of the xz block, ``(xx + zz) / 2 -+ hypot((xx - zz) / 2, xz)``."""
+    mean, radius = (xx + zz) / 2, math.hypot((xx - zz) / 2, xz)
+    return sorted((mean - radius, yy, mean + radius))
+
+
 def _principal_moments(t: np.ndarray) -> np.ndarray:
     """Ascending principal moments.  A body symmetric about its XZ plane (zero xy and yz entries,
-    every body of the benchmark) has ``I_yy`` and the two moments of its xz block in closed form;
-    any other tensor goes to ``eigvalsh``."""
+    every body of the benchmark) has them in closed form; any other tensor goes to ``eigvalsh``."""
     if t[0, 1] == 0 and t[1, 0] == 0 and t[1, 2] == 0 and t[2, 1] == 0:
-        xx, yy, zz, xz = float(t[0, 0]), float(t[1, 1]), float(t[2, 2]), float(t[0, 2])
-        mean, radius = (xx + zz) / 2, math.hypot((xx - zz) / 2, xz)
-        return np.array(sorted((mean - radius, yy, mean + radius)))
+        return np.array(plane_symmetric_principal_moments(float(t[0, 0]), float(t[1, 1]), float(t[2, 2]),
+                                                          float(t[0, 2])))
     return np.linalg.eigvalsh(t)

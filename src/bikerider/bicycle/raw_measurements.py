@@ -67,7 +67,7 @@ from bikerider.errors import FitError, InputError
 from bikerider.fitting import PERIOD_TRIAL_TOLERANCE
 from bikerider.generated import combination as gen_combination
 from bikerider.generated import pendulum as gen_pendulum
-from bikerider.inertia import check_inertia_tensor
+from bikerider.inertia import check_inertia_tensor, plane_symmetric_principal_moments
 from bikerider.io.name_value_file import NameValueFile, read_name_value_file
 from bikerider.quantity import Quantity, check_degrees, check_magnitude
 
@@ -582,11 +582,10 @@ def _drop_inconsistent_yy(body_values: dict[str, Quantity], notes: list[str], so
         if yy is None:
             continue
         xx, xz, zz = (body_values[f"I{body}{axes}"].value for axes in ("xx", "xz", "zz"))
-        tensor = np.array([[xx, 0.0, xz], [0.0, yy.value, 0.0], [xz, 0.0, zz]])
         verdict = _triangle_verdict(xx, xz, zz, yy.value)
         if verdict is None:  # close to a limit: let the full check decide
             try:
-                check_inertia_tensor(f"I{body}", tensor, source)
+                check_inertia_tensor(f"I{body}", np.array([[xx, 0.0, xz], [0.0, yy.value, 0.0], [xz, 0.0, zz]]), source)
                 consistent = True
             except InputError:
                 consistent = False
@@ -594,7 +593,7 @@ def _drop_inconsistent_yy(body_values: dict[str, Quantity], notes: list[str], so
             consistent = verdict > 0
         if not consistent:
             del body_values[f"I{body}yy"]
-            principal = ", ".join(f"{p:.4g}" for p in np.linalg.eigvalsh(tensor))
+            principal = ", ".join(f"{p:.4g}" for p in plane_symmetric_principal_moments(xx, yy.value, zz, xz))
             message = (f"I{body}yy = {yy} (compound pendulum) left out: with the torsional-pendulum "
                        f"I{body}xx, I{body}xz, I{body}zz its principal moments {principal} break the triangle "
                        "inequality (the linear model does not use it)")
@@ -611,14 +610,13 @@ def _triangle_verdict(xx: float, xz: float, zz: float, yy: float) -> float | Non
     clearly fails (-1) :func:`~bikerider.inertia.check_inertia_tensor`; ``None`` when it is within
     :data:`_CLEAR_MARGIN` of a limit (then the full check decides).
 
-    ``y`` is a principal axis, so the principal moments are ``yy`` and those of the xz block,
-    ``(xx + zz) / 2 -+ hypot((xx - zz) / 2, xz)``.  Deciding the clear cases in closed form spares
-    the eigenvalue solver and the raised error on every reduction.
+    ``y`` is a principal axis, so the principal moments are ``yy`` and those of the xz block
+    (:func:`~bikerider.inertia.plane_symmetric_principal_moments`).  Deciding the clear cases in
+    closed form spares the eigenvalue solver and the raised error on every reduction.
     """
     if not (xx > 0 and zz > 0 and yy > 0 and xx * zz - xz * xz > _CLEAR_MARGIN * xx * zz):
         return None
-    half_sum, radius = 0.5 * (xx + zz), math.hypot(0.5 * (xx - zz), xz)
-    low, mid, high = sorted((half_sum - radius, half_sum + radius, yy))
+    low, mid, high = plane_symmetric_principal_moments(xx, yy, zz, xz)
     margin = (low + mid - high) / (low + mid + high)
     if abs(margin) <= _CLEAR_MARGIN:
         return None
