@@ -1,7 +1,8 @@
 """BicycleParameters side of the benchmarks; runs in ``bench/.venv-baseline`` (never imports bikerider).
 
 ``python bench/bp_worker.py TASK 'JSON params'`` times TASK inside this process and prints one line
-of JSON.  Tasks:
+of JSON; ``python bench/bp_worker.py serve`` reads ``TASK JSON`` lines from standard input and
+answers each with one line of JSON (so a benchmark can interleave rounds of both tools).  Tasks:
 
 ``versions``  versions of BicycleParameters and what it runs on.
 ``raw``       ``Bicycle(name, pathToData, forceRawCalc=True)`` then ``add_rider(rider)`` (BicycleParameters
@@ -117,6 +118,15 @@ def scan(params: dict) -> dict:
 
 TASKS = {"versions": versions, "raw": raw, "eig": eig, "scan": scan}
 
+def serve() -> None:
+    for line in sys.stdin:
+        task, _, text = line.strip().partition(" ")
+        print(json.dumps(TASKS[task](json.loads(text) if text else {})), flush=True)
+
+
 if __name__ == "__main__":
-    task, params = sys.argv[1], json.loads(sys.argv[2]) if len(sys.argv) > 2 else {}
-    print(json.dumps(TASKS[task](params)))
+    if sys.argv[1] == "serve":
+        serve()
+    else:
+        task, params = sys.argv[1], json.loads(sys.argv[2]) if len(sys.argv) > 2 else {}
+        print(json.dumps(TASKS[task](params)))

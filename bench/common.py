@@ -4,7 +4,9 @@ Timing.  :func:`measure` calls a function in loops long enough to read a clock w
 :data:`MIN_SAMPLE` seconds a loop), repeats that, and reports the median time per call over the
 repeats (with the repeat and loop counts).  Baselines and bikerider are always measured in the
 same run; :func:`measure_together` interleaves their timed loops round by round, so a change of
-load during the run slows all of them alike.
+load during the run slows all of them alike.  (On a shared virtual machine the speed can change by
+a factor of two from one second to the next; where a ratio is close to its goal, BicycleParameters
+is timed in rounds interleaved with bikerider's too, through :class:`BaselineServer`.)
 
 BicycleParameters cannot share the project's virtual environment (it pins its own dependencies),
 so it lives in ``bench/.venv-baseline`` (``make bench`` creates it) and runs in a subprocess,
@@ -93,6 +95,13 @@ class Context:
             self._bp[key] = run_bp_worker(task, {"data": str(self.bp_data()), **params})
         return self._bp[key]
 
+    def bp_server(self) -> BaselineServer | str:
+        """A running :class:`BaselineServer`, or why there is none."""
+        if not BASELINE_PYTHON.exists():
+            return (f"BicycleParameters baseline not installed ({BASELINE_VENV.relative_to(ROOT)} missing; "
+                    "`make bench` creates it with pip install bicycleparameters)")
+        return BaselineServer(self.bp_data())
+
     def cleanup(self) -> None:
         if self._tmp is not None:
             shutil.rmtree(self._tmp, ignore_errors=True)
@@ -108,8 +117,9 @@ def fmt_time(seconds: float) -> str:
     return f"{seconds / 1e-9:.3g} ns"
 
 
-def measure(fn: Callable[[], object], repeats: int = 7, min_sample: float = MIN_SAMPLE) -> Timing:
-    """Median seconds per call of ``fn`` (one warm-up call first)."""
+def loops_for(fn: Callable[[], object], min_sample: float = MIN_SAMPLE) -> int:
+    """How many calls of ``fn`` one timed loop needs to last at least ``min_sample`` seconds (``fn``
+    is called once first, to warm up)."""
     fn()
     loops = 1
     while True:
@@ -118,41 +128,33 @@ def measure(fn: Callable[[], object], repeats: int = 7, min_sample: float = MIN_
             fn()
         elapsed = time.perf_counter() - start
         if elapsed >= min_sample or loops >= 1_000_000:
-            break
+            return loops
         loops *= max(2, min(10, int(min_sample / max(elapsed, 1e-9)) + 1))
-    samples = [elapsed / loops]
-    for _ in range(repeats - 1):
-        start = time.perf_counter()
-        for _ in range(loops):
-            fn()
-        samples.append((time.perf_counter() - start) / loops)
-    return Timing(statistics.median(samples), repeats, loops)
+
+
+def time_loop(fn: Callable[[], object], loops: int) -> float:
+    """Seconds per call of ``fn`` over one loop of ``loops`` calls."""
+    start = time.perf_counter()
+    for _ in range(loops):
+        fn()
+    return (time.perf_counter() - start) / loops
+
+
+def measure(fn: Callable[[], object], repeats: int = 7, min_sample: float = MIN_SAMPLE) -> Timing:
+    """Median seconds per call of ``fn`` (one warm-up call first)."""
+    loops = loops_for(fn, min_sample)
+    return Timing(statistics.median(time_loop(fn, loops) for _ in range(repeats)), repeats, loops)
 
 
 def measure_together(fns: dict[str, Callable[[], object]], repeats: int = 7,
                      min_sample: float = MIN_SAMPLE) -> dict[str, Timing]:
     """:func:`measure` for several functions, their timed loops interleaved round by round, so a
     change in the machine's load during the run affects all of them alike."""
-    loops = {}
-    for name, fn in fns.items():
-        fn()
-        n = 1
-        while True:
-            start = time.perf_counter()
-            for _ in range(n):
-                fn()
-            elapsed = time.perf_counter() - start
-            if elapsed >= min_sample or n >= 1_000_000:
-                break
-            n *= max(2, min(10, int(min_sample / max(elapsed, 1e-9)) + 1))
-        loops[name] = n
+    loops = {name: loops_for(fn, min_sample) for name, fn in fns.items()}
     samples: dict[str, list[float]] = {name: [] for name in fns}
     for _ in range(repeats):
         for name, fn in fns.items():
-            start = time.perf_counter()
-            for _ in range(loops[name]):
-                fn()
-            samples[name].append((time.perf_counter() - start) / loops[name])
+            samples[name].append(time_loop(fn, loops[name]))
     return {name: Timing(statistics.median(samples[name]), repeats, loops[name]) for name in fns}
 
 
@@ -177,6 +179,45 @@ def run_bp_worker(task: str, params: dict, timeout: float = 600) -> dict:
         return json.loads(proc.stdout.strip().splitlines()[-1])
     except (json.JSONDecodeError, IndexError):
         return {"error": f"BicycleParameters worker printed no JSON ({task})"}
+
+
+class BaselineServer:
+    """``bench/bp_worker.py serve`` kept running, so BicycleParameters can be timed in rounds
+    interleaved with bikerider's (the machine's speed may change between two separate runs).
+
+    Use as a context manager; :meth:`call` sends one task and returns its JSON reply.
+    """
+
+    def __init__(self, data: Path, timeout: float = 600):
+        self.data, self.timeout = data, timeout
+        self.process: subprocess.Popen | None = None
+
+    def __enter__(self) -> "BaselineServer":
+        self.process = subprocess.Popen([str(BASELINE_PYTHON), str(BENCH / "bp_worker.py"), "serve"],
+                                        stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                        text=True, cwd=str(ROOT))
+        return self
+
+    def call(self, task: str, **params) -> dict:
+        assert self.process is not None and self.process.stdin is not None and self.process.stdout is not None
+        self.process.stdin.write(f"{task} {json.dumps({'data': str(self.data), **params})}\n")
+        self.process.stdin.flush()
+        line = self.process.stdout.readline()
+        if not line:
+            tail = (self.process.stderr.read().strip().splitlines() or ["no output"])[-1] if self.process.stderr else ""
+            return {"error": f"BicycleParameters worker stopped ({task}): {tail}"}
+        return json.loads(line)
+
+    def __exit__(self, *exc) -> None:
+        if self.process is not None:
+            self.process.stdin.close()  # type: ignore[union-attr]
+            try:
+                self.process.wait(timeout=self.timeout)
+            except subprocess.TimeoutExpired:
+                self.process.kill()
+            for stream in (self.process.stdout, self.process.stderr):
+                if stream is not None:
+                    stream.close()
 
 
 def cpu_model() -> str:
