@@ -47,7 +47,7 @@ import logging
 import math
 import re
 import statistics
-from collections.abc import Mapping
+from collections.abc import Collection, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -193,7 +193,7 @@ def _purpose(name: str) -> str:
     return FIELD_PURPOSES.get(name, "a measurement of the bicycle")
 
 
-def _require(values: Mapping[str, Quantity], names, source: str) -> None:
+def _require(values: Collection[str], names, source: str) -> None:
     for name in names:
         if name not in values:
             raise InputError(name, "missing", f"a value: {_purpose(name)}", source)
@@ -202,12 +202,28 @@ def _require(values: Mapping[str, Quantity], names, source: str) -> None:
 def detect_layout(values: Mapping[str, Quantity], source: str = "<memory>") -> MeasuredLayout:
     """Find out which measurements a file holds and check that each set is complete.
 
+    The layout depends on the names alone, so complete layouts are remembered by name set (files of
+    one template share it); an incomplete one is looked at afresh, to name ``source`` in the error.
+
     Raises
     ------
     InputError
         A required field is missing (the message names it and what it is for), or a body was hung
         in fewer than three orientations.
     """
+    try:
+        return _layout_of_names(frozenset(values))
+    except InputError:
+        return _detect_layout(values, source)
+
+
+@functools.lru_cache(maxsize=256)
+def _layout_of_names(names: frozenset[str]) -> MeasuredLayout:
+    return _detect_layout(names, "<memory>")
+
+
+def _detect_layout(values: Collection[str], source: str) -> MeasuredLayout:
+    """:func:`detect_layout` on the names (membership and iteration only)."""
     _require(values, _WHEELS + _ROD + ("mB",), source)
     if "w" in values or not any(k in values for k in _HEIGHTS_GEOMETRY):
         geometry = "wheelbase"
