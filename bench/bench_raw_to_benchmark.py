@@ -76,6 +76,9 @@ def run(ctx: Context) -> list[Row]:
             return [Row(item, "-", [], "-", goal, None, notes)]
         for _ in range(rounds):
             reply = server.call("raw", repeats=5)
+            if "error" in reply:
+                notes.append(reply["error"])
+                return [Row(item, "-", [], "-", goal, None, notes)]
             theirs.append(reply["seconds"])
             ours.append(time_loop(bikerider_parameters, loops))
     ratios = sorted(t / o for t, o in zip(theirs, ours))
