@@ -52,7 +52,7 @@ def three_orientation_solution() -> tuple[sp.Matrix, sp.Expr]:
     J = sp.Matrix([k_t * T**2 / (4 * sp.pi**2) for T in periods])
     det = sp.factor(sp.trigsimp(A.det()))
     solution = (A.adjugate() * J / det).applyfunc(sp.trigsimp)
-    return solution, det
+    return sp.ImmutableMatrix(solution), det  # cached: callers must not change it
 
 
 def build() -> GeneratedModule:

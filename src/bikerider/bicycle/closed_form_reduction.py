@@ -52,7 +52,8 @@ def is_standard_layout(layout) -> bool:
 
 def _conditioning(lines_det: float) -> float:
     """Smallest over largest singular value of three unit line normals from the determinant of
-    their normal equations (trace 3; see :func:`~bikerider.bicycle.hanging_lines.least_squares_point`)."""
+    their normal equations: :func:`~bikerider.bicycle.hanging_lines.least_squares_point`'s formula
+    with the trace, 3, known, on one float."""
     root = math.sqrt(max(9.0 - 4.0 * lines_det, 0.0))
     return math.sqrt(max(3.0 - root, 0.0) / (3.0 + root))
 
@@ -92,12 +93,14 @@ def reduce_standard_layout(values: Mapping[str, Quantity], layout,
         computed, uncertainties, checks = gen.standard_layout_scalar(*arguments, *sigmas)
     except (ValueError, ZeroDivisionError, OverflowError):
         return None
-    if not _checks_pass(computed, uncertainties, checks, layout.seating, line_tolerance):
+    lines = _lines(computed, checks)
+    if not _checks_pass(computed, uncertainties, checks, lines, layout.seating, line_tolerance):
         return None
-    return _result(values, computed, uncertainties, layout.seating), _lines(computed, checks)
+    return _result(values, computed, uncertainties, layout.seating), lines
 
 
-def _checks_pass(computed, uncertainties, checks, seating: bool, line_tolerance: float) -> bool:
+def _checks_pass(computed, uncertainties, checks, lines: dict[str, LineIntersection], seating: bool,
+                 line_tolerance: float) -> bool:
     """Every check :func:`~bikerider.bicycle.raw_measurements.evaluate_measured` makes, at the nominal point."""
     n = len(gen.VALUE_NAMES) - (0 if seating else len(_SEATING_VALUES))
     if not math.isfinite(sum(computed[:n]) + sum(uncertainties[:n]) + sum(checks)):
@@ -111,8 +114,7 @@ def _checks_pass(computed, uncertainties, checks, seating: bool, line_tolerance:
             return False
         if abs(checks[_CHECK_INDEX[f"eq6_det_{body}"]]) < SINGULAR_DETERMINANT:
             return False
-        misses = [checks[_CHECK_INDEX[f"miss{body}{i}"]] for i in (1, 2, 3)]
-        if math.sqrt(math.fsum(d * d for d in misses) / 3) > line_tolerance:
+        if lines[body].rms > line_tolerance:
             return False
     return True
 
@@ -139,13 +141,14 @@ def _result(values: Mapping[str, Quantity], computed, uncertainties, seating: bo
         for axes in ("xx", "xz", "zz", "yy"):
             result[f"I{name}{axes}"] = out(f"I{name}{axes}")
     if seating:
-        for name, field in (("h_bb", "hbb"), ("l_cs", "lcs"), ("l_sp", "lsp"), ("l_st", "lst"), ("lam_st", "lamst")):
-            result[name] = values[field]
+        for name in ("h_bb", "l_cs", "l_sp", "l_st", "lam_st"):
+            result[name] = values[_FILE_NAMES[name]]
         result.update({name: out(name) for name in _SEATING_VALUES})
     return result
 
 
 def _lines(computed, checks) -> dict[str, LineIntersection]:
+    """Each body's centre of mass and its signed distances from the body's three hanging lines."""
     lines = {}
     for body, name in (("B", "Bf"), ("H", "H")):
         misses = np.array([checks[_CHECK_INDEX[f"miss{body}{i}"]] for i in (1, 2, 3)])
