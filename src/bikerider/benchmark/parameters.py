@@ -6,7 +6,6 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
-
 from bikerider.errors import MISSING, InputError
 from bikerider.inertia import check_plane_symmetric_inertia
 from bikerider.quantity import Quantity, check_magnitude
@@ -31,6 +30,7 @@ _LIMITS: dict[str, tuple[float, str]] = {
 }
 """Largest plausible magnitudes (the rear body may hold riders): a larger value is a unit slip."""
 _NAME_SET = frozenset(BENCHMARK_NAMES)
+
 
 @dataclass(frozen=True)
 class BenchmarkParameters:

@@ -9,7 +9,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-
 from bikerider.errors import MISSING, InputError
 from bikerider.inertia import check_plane_symmetric_inertia
 from bikerider.quantity import Quantity, check_degrees, check_magnitude
