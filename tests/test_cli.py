@@ -36,6 +36,33 @@ def test_estimate_json_default(capsys):
     assert len(out["rider"]["inertia"]) == 3
 
 
+def test_estimate_json_gives_each_eigenvalue_a_sigma(capsys):
+    """uncertainty.eigenvalues: one entry per speed and mode, in the order of eigenvalues.values
+    (found by the quartic; the sigmas' eigenvalues by eigvals and their own labelling), with the
+    sigmas of the Python API and a condition number that grows near the weave pair's birth."""
+    from bikerider.estimate import estimate_default, estimate_uncertainty
+
+    v_d = estimate_default().model.weave_birth_speed()  # 0.737 m/s for the paper's bicycle and rider
+    just_below = round(0.9999 * v_d, 6)
+    assert main(["estimate", "--json", "--speeds", f"{just_below}:8:4"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    entries = out["uncertainty"]["eigenvalues"]
+    speeds = out["eigenvalues"]["speeds"]
+    assert len(entries) == 4 * len(speeds)
+    expected = estimate_uncertainty(estimate_default(), speeds).eigenvalues
+    for n, v in enumerate(speeds):
+        for k in range(4):
+            entry = entries[4 * n + k]
+            re, im = out["eigenvalues"]["values"][n][k]
+            assert entry["speed"] == v and entry["mode"] == out["eigenvalues"]["labels"][n][k]
+            assert entry["real"] == pytest.approx(re, abs=1e-9) and entry["imag"] == pytest.approx(im, abs=1e-9)
+            assert entry["sigma_real"] == pytest.approx(float(expected.sigma_real[n, k]), rel=1e-12)
+            assert entry["sigma_imag"] == pytest.approx(float(expected.sigma_imag[n, k]), rel=1e-12, abs=1e-15)
+    weave_condition = {entry["speed"]: entry["condition"] for entry in entries[::4]}
+    # just below v_d the two weave roots are about to meet: their first-order sigmas blow up with it
+    assert weave_condition[just_below] > 10 * weave_condition[8.0]
+
+
 def test_estimate_text_and_plots(tmp_path, capsys):
     assert main(["estimate", "--plot", str(tmp_path)]) == 0
     text = capsys.readouterr().out

@@ -173,16 +173,17 @@ def estimate_from_files(bicycle_path: str | Path | None = None, rider_path: str 
     return estimate(bodies, rider_measurements)
 
 
-def estimate_uncertainty(result: EstimateResult):
+def estimate_uncertainty(result: EstimateResult, speeds=None):
     """First-order uncertainty of every output of ``result`` (``bikerider.uncertainty.propagate``).
 
     With the rider model, the inputs are the raw measurements (pendulum periods and angles kept
     unreduced, so their correlations survive); otherwise the benchmark parameters and their sigmas.
-    Only uncertainties the input files state are propagated.
+    Only uncertainties the input files state are propagated.  With ``speeds`` [m/s], the
+    eigenvalues at those speeds get sigmas too (``.eigenvalues``).
     """
     from bikerider.uncertainty import benchmark_inputs, propagate
     from bikerider.uncertainty.inputs import chain_raw_inputs
 
     if result.rider_model is not None:
-        return propagate(chain_raw_inputs(result.bicycle, result.rider))
-    return propagate(benchmark_inputs(result.parameters))
+        return propagate(chain_raw_inputs(result.bicycle, result.rider), speeds=speeds)
+    return propagate(benchmark_inputs(result.parameters), speeds=speeds)

@@ -42,7 +42,7 @@ def run(args: argparse.Namespace) -> int:
 
     speeds = report.parse_speeds(args.speeds)
     result = estimate_from_files(args.bicycle, args.rider, with_rider=not args.no_rider)
-    uncertainty = estimate_uncertainty(result)
+    uncertainty = estimate_uncertainty(result, speeds)
     sigmas = {k: v for k, v in uncertainty.benchmark.items() if v is not None}
     parameters = replace(result.parameters, sigmas={**result.parameters.sigmas, **sigmas})
     eig = result.model.eigenvalues(speeds)
@@ -57,6 +57,7 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         out = report.model_json(parameters, result.model, eig)
         out["uncertainty"] = {"benchmark": uncertainty.benchmark, "speeds": uncertainty.speeds,
+                              "eigenvalues": uncertainty.eigenvalues.as_list(),
                               "method": "first-order propagation of the uncertainties stated in the input files"}
         out["rider"] = _rider_json(result)
         out["notes"] = result.notes
@@ -78,6 +79,7 @@ def run(args: argparse.Namespace) -> int:
             print(f"{label} [{shown}] kg m^2")
     print()
     print(report.model_text(parameters, result.model, eig, uncertainty.speeds))
+    print("  (first-order sigmas of these eigenvalues, with condition numbers: --json, uncertainty.eigenvalues)")
     for note in result.notes:
         print(f"Note: {note}")
     if args.plot:

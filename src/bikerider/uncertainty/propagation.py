@@ -65,17 +65,25 @@ class EigenvalueUncertainty:
     sigma_imag: np.ndarray
 
     def as_list(self) -> list[dict]:
+        """One JSON-ready dict per speed and mode: ``speed, mode, real, imag, sigma_real, sigma_imag,
+        condition``.  A number that is not finite (a sigma at an exactly double eigenvalue, where the
+        first-order formula fails) is ``None``; a large ``condition`` warns of the same nearby."""
         out = []
         s = self.sensitivity
         for n, v in enumerate(s.speeds):
             for k in range(4):
                 out.append({
                     "speed": float(v), "mode": str(s.labels[n, k]),
-                    "real": float(s.values[n, k].real), "imag": float(s.values[n, k].imag),
-                    "sigma_real": float(self.sigma_real[n, k]), "sigma_imag": float(self.sigma_imag[n, k]),
-                    "condition": float(s.condition[n, k]),
+                    "real": _finite(s.values[n, k].real), "imag": _finite(s.values[n, k].imag),
+                    "sigma_real": _finite(self.sigma_real[n, k]), "sigma_imag": _finite(self.sigma_imag[n, k]),
+                    "condition": _finite(s.condition[n, k]),
                 })
         return out
+
+
+def _finite(x: float) -> float | None:
+    x = float(x)
+    return x if math.isfinite(x) else None
 
 
 @dataclass(frozen=True)
