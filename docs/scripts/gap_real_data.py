@@ -39,15 +39,23 @@ def _ranking_table(result) -> list[str]:
         if r["effect"] == "parameters":
             fitted = f"{len(r['parameters'])} shifts"
         else:
-            fitted = ", ".join(f"{k} = {v['value']:.3g} [{v['ci95'][0]:.3g}, {v['ci95'][1]:.3g}] {v['unit']}"
-                               for k, v in r["parameters"].items())
+            fitted = ", ".join(f"{k} = {_shown(v['value'], v['ci95'])} [{_shown(v['ci95'][0], v['ci95'])}, "
+                               f"{_shown(v['ci95'][1], v['ci95'])}] {v['unit']}" for k, v in r["parameters"].items())
         shrink = "-" if r["shrink"] is None else f"{r['shrink']:+.2f}"
         lines.append(f"| {r['rank']} | {r['effect']} | {r['heldout_error_before']:.1f} | {r['heldout_error_after']:.1f} | "
                      f"{shrink} | {'yes' if r['plausible'] else 'no'} | {fitted} | {', '.join(r['tied_with']) or '-'} |")
     return lines
 
 
-def main() -> int:
+def _shown(x: float, ci95) -> str:
+    """``x`` to 3 digits; 0 where it is a billionth of its interval's width or less (an optimiser's
+    round-off at a bound, whose digits change with the last bit of any input)."""
+    width = abs(ci95[1] - ci95[0]) or 1.0
+    return "0" if abs(x) <= 1e-9 * width else f"{x:.3g}"
+
+
+def build() -> str:
+    """The text of docs/gap_real_data.md."""
     from bikerider.gap.model_input import load_model
 
     kooijman = load_model(DATA / "gap" / "kooijman2008_bicycle.toml")
@@ -199,7 +207,11 @@ def main() -> int:
         "Telling them apart needs the runs' time series (or eigenvalues), which are not available here.",
         "",
     ]
-    OUT.write_text("\n".join(lines), encoding="utf-8")
+    return "\n".join(lines)
+
+
+def main() -> int:
+    OUT.write_text(build(), encoding="utf-8")
     print(f"wrote {OUT}")
     return 0
 

@@ -38,13 +38,19 @@ Main findings:
 """
 
 
+OUT = Path(__file__).resolve().parents[1] / "reproduction.md"
+
+
+def build() -> str:
+    """The text of docs/reproduction.md."""
+    rows = reproduction.rows()
+    return HEADER.format(**reproduction.summary(rows)) + reproduction.markdown(rows) + "\n"
+
+
 def main() -> None:
     logging.basicConfig(level=logging.ERROR)
-    rows = reproduction.rows()
-    text = HEADER.format(**reproduction.summary(rows)) + reproduction.markdown(rows) + "\n"
-    out = Path(__file__).resolve().parents[1] / "reproduction.md"
-    out.write_text(text, encoding="utf-8")
-    print(f"wrote {out}")
+    OUT.write_text(build(), encoding="utf-8")
+    print(f"wrote {OUT}")
 
 
 if __name__ == "__main__":
