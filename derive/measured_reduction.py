@@ -78,7 +78,6 @@ class ForwardChain:
     """
 
     def __init__(self, inputs: list[sp.Symbol]):
-        self.inputs = list(inputs)
         self.gradient: dict[sp.Symbol, dict[sp.Symbol, sp.Expr]] = {x: {x: sp.Integer(1)} for x in inputs}
         self.definitions: list[tuple[sp.Symbol, sp.Expr]] = []
         self._expanded: dict[sp.Symbol, sp.Expr] = {}
