@@ -136,3 +136,13 @@ def test_rider_model_on_benchmark_parameters_is_refused(capsys):
     bicycle = BP / "bicycles" / "Fisher" / "Parameters" / "FisherBenchmark.txt"
     assert main(["estimate", "--bicycle", str(bicycle)]) == 2
     assert "no geometry to seat the rider model" in capsys.readouterr().err
+
+
+def test_benchmark_text_shows_a_capsize_castor_pair_as_other(capsys):
+    """A bicycle whose capsize and castor roots meet below the weave speed (tests/test_quartic.py):
+    the table shows the unborn weave pair as weave and the met pair on its own."""
+    assert main(["benchmark", str(DATA / "UnbornWeaveBenchmark.txt"), "--speeds", "0.5:2:2"]) == 0
+    rows = [line for line in capsys.readouterr().out.splitlines() if line.strip().startswith(("0.500", "2.000"))]
+    assert len(rows) == 2
+    assert "other pair" in rows[0] and "+/-" not in rows[0].split("other pair")[0]  # two real weave roots
+    assert "other pair" not in rows[1]

@@ -6,14 +6,16 @@ matrices through ``WhippleModel.eigenvalues``) and from exactly known roots.
 from __future__ import annotations
 
 import itertools
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from bikerider.benchmark import BenchmarkParameters, WhippleModel
-from bikerider.benchmark.model import positive_real_roots
+from bikerider.benchmark.model import label_modes, positive_real_roots
 from bikerider.benchmark.quartic import eigenvalues_from_polynomial, label_roots, quartic_roots
 from bikerider.errors import InputError
+from bikerider.io.bicycleparameters import read_benchmark_file
 from bikerider.generated import benchmark_model as gen
 
 PERMUTATIONS = np.array(list(itertools.permutations(range(4))))
@@ -137,13 +139,40 @@ def test_labels_follow_label_modes_rules():
         [-5.0, 1.0, 2.0, -0.5],              # all real: two largest are weave
         [-5.0, 1 + 2j, 1 - 2j, -0.5],        # one pair
         [1 + 2j, 1 - 2j, -3 + 5j, -3 - 5j],  # two pairs: larger imaginary part is weave
+        [-3 + 0.1j, 1.0, -3 - 0.1j, 2.0],    # one pair below both reals: the reals are the unborn weave
+        [-1 + 2j, -1 - 2j, 0.5, -6.0],       # one pair between the reals (above the weave speed)
     ], dtype=complex)
     values, labels = label_roots(raw)
     np.testing.assert_array_equal(values[0], [2.0, 1.0, -0.5, -5.0])
     np.testing.assert_array_equal(values[1], [1 + 2j, 1 - 2j, -0.5, -5.0])
     np.testing.assert_array_equal(values[2], [-3 + 5j, -3 - 5j, 1 + 2j, 1 - 2j])
-    assert labels[0].tolist() == ["weave", "weave", "capsize", "castor"]
-    assert labels[2].tolist() == ["weave", "weave", "other", "other"]
+    np.testing.assert_array_equal(values[3], [2.0, 1.0, -3 + 0.1j, -3 - 0.1j])
+    np.testing.assert_array_equal(values[4], [-1 + 2j, -1 - 2j, 0.5, -6.0])
+    assert labels[0].tolist() == labels[1].tolist() == labels[4].tolist() == ["weave", "weave", "capsize", "castor"]
+    assert labels[2].tolist() == labels[3].tolist() == ["weave", "weave", "other", "other"]
+    reference_values, reference_labels = label_modes(raw)  # the loop the vectorised rules follow
+    np.testing.assert_array_equal(values, reference_values)
+    np.testing.assert_array_equal(labels, reference_labels)
+
+
+UNBORN_WEAVE = Path(__file__).parent / "data" / "UnbornWeaveBenchmark.txt"
+"""Not a real bicycle: capsize and castor roots that meet before the weave pair is born (see the file)."""
+
+
+def test_capsize_and_castor_meeting_before_the_weave_is_born_are_not_called_weave():
+    model = WhippleModel.from_parameters(read_benchmark_file(UNBORN_WEAVE).parameters)
+    assert model.weave_birth_speed() == pytest.approx(1.6287, abs=1e-4)
+    speeds = np.array([0.5, 2.0])
+    reference, fast = model.eigenvalues(speeds), model.eigenvalues(speeds, method="quartic")
+    assert np.abs(fast.values - reference.values).max() < 1e-10
+    assert (fast.labels == reference.labels).all()
+    below, above = reference.values
+    # at 0.5 m/s: the weave pair still two positive real roots, the other two a complex pair
+    assert reference.labels[0].tolist() == ["weave", "weave", "other", "other"]
+    assert below[0].imag == below[1].imag == 0 and below[0].real > below[1].real > 0
+    assert below[2].imag > 0 and below[2].real < 0
+    # at 2 m/s, past v_d: the usual labels, the weave pair complex
+    assert reference.labels[1].tolist() == ["weave", "weave", "capsize", "castor"] and above[0].imag > 0
 
 
 def _random_models(benchmark_model: WhippleModel, n: int, spread: float, seed: int) -> list[WhippleModel]:

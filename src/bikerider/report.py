@@ -71,10 +71,10 @@ def model_text(parameters: BenchmarkParameters, model: WhippleModel, eig: ModalE
     lines.append("Eigenvalues [1/s] against speed")
     lines.append(f"  {'v [m/s]':>8s} {'weave':>26s} {'capsize':>12s} {'castor':>12s}")
     for v, row, labels in zip(eig.speeds, eig.values, eig.labels):
-        if labels[2] == "other":
-            lines.append(f"  {v:8.3f} two complex pairs: {row[0]:.4f}, {row[2]:.4f}")
-            continue
         weave = f"{row[0].real:.4f} +/- {abs(row[0].imag):.4f}i" if row[0].imag else f"{row[0].real:.4f}, {row[1].real:.4f}"
+        if labels[2] == "other":  # capsize and castor have met, or a second complex pair
+            lines.append(f"  {v:8.3f} {weave:>26s}   other pair {row[2].real:.4f} +/- {abs(row[2].imag):.4f}i")
+            continue
         lines.append(f"  {v:8.3f} {weave:>26s} {row[2].real:12.4f} {row[3].real:12.4f}")
     return "\n".join(lines)
 

@@ -7,9 +7,13 @@ Mode labels, per speed (Meijaard et al. 2007, section 6):
   (below the speed ``v_d`` where the weave pair is born), the two largest, which merge at ``v_d``;
 * capsize: the remaining real eigenvalue.
 
-When two complex pairs exist (possible for models with added effects, not for the Whipple model
-of a real bicycle) the pair with the larger imaginary part is weave and the other pair is labelled
-``"other"``.
+Two cases fall outside these rules and give the label ``"other"``.  When the two most negative
+eigenvalues meet before the weave pair is born (some unusual bicycles, at low speed), their complex
+pair has a real part below both remaining real eigenvalues: those two are the weave pair, not yet
+born, and the pair is ``"other"`` (eigenvalues move continuously, so a pair born below the two other
+roots stays below them until its real part crosses one, which the weave pair's does not do at the
+low speeds where this happens).  When two complex pairs exist, the pair with the larger imaginary
+part is weave and the other ``"other"``.
 """
 from __future__ import annotations
 
@@ -280,7 +284,9 @@ def check_speeds(speeds) -> np.ndarray:
 
 
 def label_modes(raw: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Order ``(n, 4)`` eigenvalues as weave(+), weave(-), capsize, castor; return labels too."""
+    """Order ``(n, 4)`` eigenvalues as weave(+), weave(-), capsize, castor; return labels too (the
+    rules of the module docstring; ``"other"`` replaces capsize and castor where those two form a
+    complex pair)."""
     n = raw.shape[0]
     values = np.empty((n, 4), dtype=complex)
     labels = np.empty((n, 4), dtype=object)
@@ -294,6 +300,11 @@ def label_modes(raw: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
             # all real: the two largest are the weave pair before it is born (v < v_d)
             values[k] = [real_ev[3], real_ev[2], real_ev[1], real_ev[0]]
             labels[k] = ["weave", "weave", "capsize", "castor"]
+        elif complex_ev.size == 1 and complex_ev[0].real < real_ev[0]:
+            # the two most negative roots have met; the two real ones are the weave pair, unborn
+            w = complex_ev[0]
+            values[k] = [real_ev[1], real_ev[0], w, np.conj(w)]
+            labels[k] = ["weave", "weave", "other", "other"]
         elif complex_ev.size == 1:
             w = complex_ev[0]
             values[k] = [w, np.conj(w), real_ev[1], real_ev[0]]

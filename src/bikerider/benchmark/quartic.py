@@ -245,8 +245,10 @@ def label_roots(raw: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
     The rules are those of :func:`bikerider.benchmark.model.label_modes`: a root is complex when
     its imaginary part exceeds ``1e-9 max(1, max |root|)`` of its row; all real - the two largest
-    are the weave pair; one pair - the pair, then the larger and the smaller real root; two pairs -
-    the pair with the larger imaginary part is weave, the other ``"other"``.
+    are the weave pair; one pair - the pair, then the larger and the smaller real root, unless the
+    pair lies below both real roots (the two most negative roots have met: the real ones, largest
+    first, are the unborn weave pair, the pair ``"other"``); two pairs - the pair with the larger
+    imaginary part is weave, the other ``"other"``.
     """
     raw = np.asarray(raw, dtype=complex)
     n = raw.shape[0]
@@ -270,7 +272,9 @@ def label_roots(raw: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     values[:, 1] = np.where(one_or_two, np.conj(s[:, 0]), s[:, 1])
     values[:, 2] = np.where(one_or_two, s[:, 1], s[:, 2])
     values[:, 3] = np.where(pairs == 2, np.conj(s[:, 1]), np.where(pairs == 1, s[:, 2], s[:, 3]))
-    return values, _mode_labels(pairs)
+    low = (pairs == 1) & (s[:, 0].real < s[:, 2].real)  # the pair below both real roots
+    values[low] = np.stack([s[low, 1], s[low, 2], s[low, 0], np.conj(s[low, 0])], axis=-1)
+    return values, _mode_labels(pairs, low)
 
 
 _MODES = np.array(MODES, dtype=object)
@@ -336,19 +340,21 @@ def _label_factored(z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     first = np.where(a_first, up_a, up_b)
     second = np.where(a_first, up_b, up_a)
     none, one = pairs == 0, pairs == 1
+    low = one & (pair.real < small)  # the pair below both real roots: the weave pair is unborn
     values = np.empty((n, 4), dtype=complex)
-    values[:, 0] = np.where(none, r0, np.where(one, pair, first))
-    values[:, 1] = np.where(none, r1, np.conj(values[:, 0]))
-    values[:, 2] = np.where(none, r2, np.where(one, big, second))
-    values[:, 3] = np.where(none, r3, np.where(one, small, np.conj(second)))
-    return values, _mode_labels(pairs)
+    values[:, 0] = np.where(none, r0, np.where(low, big, np.where(one, pair, first)))
+    values[:, 1] = np.where(none, r1, np.where(low, small, np.conj(values[:, 0])))
+    values[:, 2] = np.where(none, r2, np.where(low, pair, np.where(one, big, second)))
+    values[:, 3] = np.where(none, r3, np.where(low, np.conj(pair), np.where(one, small, np.conj(second))))
+    return values, _mode_labels(pairs, low)
 
 
-def _mode_labels(pairs: np.ndarray) -> np.ndarray:
-    """Labels in the order weave, weave, capsize, castor; "other" for the second of two complex pairs."""
+def _mode_labels(pairs: np.ndarray, low: np.ndarray) -> np.ndarray:
+    """Labels in the order weave, weave, capsize, castor; "other" for the second of two complex
+    pairs and for a pair below both real roots (``low``)."""
     labels = np.empty((pairs.shape[0], 4), dtype=object)
     labels[:] = _MODES
-    labels[pairs == 2, 2:] = "other"
+    labels[(pairs == 2) | low, 2:] = "other"
     return labels
 
 
