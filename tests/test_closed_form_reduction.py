@@ -15,6 +15,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from bikerider.bicycle import raw_measurements as rm
 from bikerider.bicycle.closed_form_reduction import is_standard_layout, reduce_standard_layout
@@ -151,3 +153,31 @@ def test_generated_function_broadcasts_over_batches():
             scalar = gen.standard_layout_scalar(*(float(b[index]) for b in batch), *sigmas)
             for array, expected in zip(arrays, scalar):
                 np.testing.assert_allclose(array[index], expected, rtol=1e-12, atol=1e-15)
+
+
+_HANGING = [f"{kind}{body}{i}" for body in "BH" for kind in ("alpha", "a", "Tt") for i in (1, 2, 3)]
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    moves=st.dictionaries(st.sampled_from(_HANGING + ["gamma", "TcB1", "TcH1", "TcR1", "LhbF", "whb", "TtP1"]),
+                          st.floats(-0.5, 0.5), min_size=1, max_size=4),
+)
+def test_the_closed_form_decides_only_what_the_general_route_accepts(moves):
+    """Hanging angles, distances and periods moved far (up to 50 %, angles up to 90 degrees): where the
+    general route raises, the closed form declines; where the closed form answers, the general route
+    agrees with it."""
+    values = _values("Browser")
+    for name, move in moves.items():
+        q = values[name]
+        shifted = q.value + 180 * move if name.startswith("alpha") or name == "gamma" else q.value * (1 + move)
+        values[name] = Quantity(shifted, q.sigma)
+    layout = rm.detect_layout(values)
+    closed = reduce_standard_layout(values, layout, DEFAULT_LINE_TOLERANCE)
+    try:
+        general = _general(values)
+    except (InputError, FitError):
+        assert closed is None
+        return
+    if closed is not None:
+        _assert_same(closed[0], general)
