@@ -32,16 +32,16 @@ def generate(out_dir: Path) -> dict[str, dict[str, tuple[int, int]]]:
     digest = codegen.inputs_hash()
     counts: dict[str, dict[str, tuple[int, int]]] = {}
     out_dir.mkdir(parents=True, exist_ok=True)
-    names = []
+    modules = []
     for dotted in DERIVATIONS:
         start = time.perf_counter()
         module = importlib.import_module(dotted).build()
         text, module_counts = codegen.render_module(module, GENERATOR, digest)
         written = codegen.write_if_changed(out_dir / f"{module.name}.py", text)
         counts[module.name] = module_counts
-        names.append(module.name)
+        modules.append(module)
         LOG.info("%s: %s in %.1f s", module.name, "written" if written else "unchanged", time.perf_counter() - start)
-    extra = importlib.import_module("derive.extras").build(digest, GENERATOR, counts, names)
+    extra = importlib.import_module("derive.extras").build(digest, GENERATOR, counts, modules)
     for filename, text in extra.items():
         codegen.write_if_changed(out_dir / filename, text)
     return counts

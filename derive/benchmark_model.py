@@ -19,7 +19,7 @@ from __future__ import annotations
 import sympy as sp
 
 from derive.codegen import GeneratedFunction, GeneratedModule, Output
-from derive.symbols import sym, syms
+from derive.symbols import BENCHMARK_NAMES, sym, syms
 
 MATRIX_NAMES = ("M", "C1", "K0", "K2")
 COORDS = ("phi", "delta")
@@ -40,10 +40,12 @@ def matrix_entry_args() -> list[sp.Symbol]:
 
 def canonical_matrices() -> dict[str, sp.Matrix]:
     """M, C1, K0 (per unit g) and K2 from the benchmark parameters (Meijaard 2007, Appendix A)."""
-    (w, c, lam, rR, mR, IRxx, IRyy, xB, zB, mB, IBxx, IBzz, IBxz,
-     xH, zH, mH, IHxx, IHzz, IHxz, rF, mF, IFxx, IFyy) = syms(
-        "w c lam rR mR IRxx IRyy xB zB mB IBxx IBzz IBxz xH zH mH IHxx IHzz IHxz rF mF IFxx IFyy"
-    )
+    p = {name: sym(name) for name in BENCHMARK_NAMES}
+    w, c, lam = p["w"], p["c"], p["lam"]
+    rR, mR, IRxx, IRyy = p["rR"], p["mR"], p["IRxx"], p["IRyy"]
+    xB, zB, mB, IBxx, IBzz, IBxz = p["xB"], p["zB"], p["mB"], p["IBxx"], p["IBzz"], p["IBxz"]
+    xH, zH, mH, IHxx, IHzz, IHxz = p["xH"], p["zH"], p["mH"], p["IHxx"], p["IHzz"], p["IHxz"]
+    rF, mF, IFxx, IFyy = p["rF"], p["mF"], p["IFxx"], p["IFyy"]
     # Whole bicycle (A1-A6); the wheels are symmetric, so IRzz = IRxx and IFzz = IFxx.
     mT = mR + mB + mH + mF
     xT = (xB * mB + xH * mH + w * mF) / mT
@@ -80,8 +82,16 @@ def canonical_matrices() -> dict[str, sp.Matrix]:
     return {"M": M, "C1": C1, "K0": K0, "K2": K2}
 
 
-CANONICAL_ARGS = "w c lam rR mR IRxx IRyy xB zB mB IBxx IBzz IBxz xH zH mH IHxx IHzz IHxz rF mF IFxx IFyy"
-"""Benchmark parameters the matrices depend on (g multiplies K0 outside; IByy, IHyy do not enter)."""
+def _canonical_args() -> str:
+    used = set().union(*(m.free_symbols for m in canonical_matrices().values()))
+    return " ".join(name for name in BENCHMARK_NAMES if sym(name) in used)
+
+
+CANONICAL_ARGS = _canonical_args()
+"""Benchmark parameters the matrices depend on, in Table 1 order (g multiplies K0 outside; IByy,
+IHyy do not enter): the arguments of ``canonical_matrices`` and of every model built on them."""
+MATRIX_ENTRIES = tuple(s.name for s in matrix_entry_args())
+"""The sixteen matrix entry names, M then C1, K0, K2, each row by row."""
 
 
 def characteristic_polynomial(s: sp.Symbol | None = None) -> tuple[sp.Poly, sp.Symbol]:
@@ -267,6 +277,7 @@ def build() -> GeneratedModule:
     )
     return GeneratedModule(
         name="benchmark_model",
+        names={"MATRIX_NAMES": MATRIX_NAMES, "COORDINATES": COORDS, "MATRIX_ENTRIES": MATRIX_ENTRIES},
         summary="Linear Whipple bicycle model: canonical matrices, characteristic polynomial, critical speeds.",
         description=(
             "Derived in derive/benchmark_model.py from Meijaard, Papadopoulos, Ruina, Schwab (2007),\n"

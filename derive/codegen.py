@@ -75,12 +75,21 @@ class Output:
         One-line description, with unit in brackets.
     vector : bool
         Emit an ``n x 1`` matrix as a vector of shape ``(..., n)``.
+    sparse : bool
+        The plain-float twin returns only the entries that are not identically zero, as one flat
+        tuple in row-major order; :attr:`nonzero` gives their flat indices (the manifest says them).
     """
 
     name: str
     expr: sp.Expr | sp.MatrixBase
     doc: str
     vector: bool = False
+    sparse: bool = False
+
+    @property
+    def nonzero(self) -> tuple[int, ...]:
+        """Flat (row-major) indices of the entries that are not identically zero."""
+        return tuple(k for k, (_, e) in enumerate(self.entries()) if e != 0)
 
     def entries(self) -> list[tuple[tuple[int, ...], sp.Expr]]:
         if not isinstance(self.expr, sp.MatrixBase):
@@ -130,6 +139,55 @@ class GeneratedFunction:
 
 
 @dataclass
+class Stage:
+    """One step of a chain: named inputs to named outputs, with a value and a Jacobian function.
+
+    The runtime's one uncertainty engine (``bikerider.engine``) composes stages by the chain rule;
+    it learns every stage from the manifest (``generated/manifest.py``) that :mod:`derive.extras`
+    writes from these entries, so the graph is never typed again by hand.
+
+    Parameters
+    ----------
+    name : str
+        The stage kind (a key of the manifest's ``STAGES``).
+    inputs : list of sympy.Symbol
+        In the order of the Jacobian's columns; the keyword arguments of both functions.
+    outputs : list of str
+        Local output names, in the order of the Jacobian's rows.
+    value : str
+        ``"module.function"`` computing the outputs.
+    picks : list of (str, tuple of int)
+        For each output, the value function's output holding it and the index into it.
+    jacobian : str
+        ``"module.function"`` returning the ``(..., len(outputs), len(inputs))`` Jacobian.
+    checks : list of (str, str, tuple of int)
+        Quantities the runtime checks (not differentiated): name, value function output, index.
+    """
+
+    name: str
+    inputs: list[sp.Symbol]
+    outputs: list[str]
+    value: str
+    picks: list[tuple[str, tuple[int, ...]]]
+    jacobian: str
+    checks: list[tuple[str, str, tuple[int, ...]]] = field(default_factory=list)
+    exprs: list[sp.Expr] | None = None
+    """The outputs' expressions, when the value function was derived elsewhere: ``derive.extras``
+    checks each pick against them (not written to the manifest)."""
+
+    def entry(self) -> dict:
+        """The manifest entry (plain data: names only)."""
+        return {
+            "inputs": tuple(s.name for s in self.inputs),
+            "outputs": tuple(self.outputs),
+            "value": self.value,
+            "picks": tuple((name, tuple(index)) for name, index in self.picks),
+            "jacobian": self.jacobian,
+            "checks": tuple((name, output, tuple(index)) for name, output, index in self.checks),
+        }
+
+
+@dataclass
 class GeneratedModule:
     """A module of generated functions, written to ``generated/<name>.py``."""
 
@@ -138,6 +196,10 @@ class GeneratedModule:
     functions: list[GeneratedFunction]
     description: str = ""
     extra_source: str = field(default="")
+    stages: list[Stage] = field(default_factory=list)
+    """Stage kinds whose functions this module emits (collected into the manifest)."""
+    names: dict[str, tuple[str, ...]] = field(default_factory=dict)
+    """Named lists of symbols the runtime needs (e.g. ``BENCHMARK_NAMES``), collected into the manifest."""
 
 
 @dataclass
@@ -164,9 +226,12 @@ def _render_function(fn: GeneratedFunction) -> _Rendered:
     assignments = [(str(lhs), print_numpy(rhs)) for lhs, rhs in replacements]
     scalar = None
     if fn.scalar:
+        sparse = [o.name for o in fn.outputs if o.sparse]
         scalar = {
             "assignments": [(str(lhs), print_scalar(rhs)) for lhs, rhs in replacements],
             "returns": _scalar_returns(fn.outputs, [print_scalar(e) for e in reduced]),
+            "sparse": (f"; {', '.join(sparse)} as a flat tuple of the entries that are not identically zero "
+                       "(bikerider.generated.manifest gives their indices)") if sparse else "",
         }
     outputs = []
     k = 0
@@ -200,6 +265,9 @@ def _scalar_returns(outputs: list[Output], sources: list[str]) -> list[str]:
             n *= size
         flat = sources[k:k + n]
         k += n
+        if out.sparse:
+            returns.append("(" + "".join(f"{flat[i]}, " for i in out.nonzero).rstrip(" ") + ")")
+            continue
         if not suffix:
             returns.append(flat[0])
         elif len(suffix) == 1:
@@ -261,3 +329,54 @@ def write_if_changed(path: Path, text: str) -> bool:
     tmp.write_text(text, encoding="utf-8")
     tmp.replace(path)
     return True
+
+
+def jacobian(outputs: list[sp.Expr], args: list[sp.Symbol]) -> sp.Matrix:
+    """``(len(outputs), len(args))`` matrix of partial derivatives."""
+    return sp.Matrix(len(outputs), len(args), lambda i, j: outputs[i].diff(args[j]))
+
+
+def stage_functions(module: str, name: str, inputs: list[sp.Symbol], outputs: dict[str, sp.Expr], summary: str,
+                    checks: dict[str, sp.Expr] | None = None, derivatives: sp.Matrix | None = None,
+                    notes: str = "", scalar: bool = True) -> tuple[list[GeneratedFunction], Stage]:
+    """A stage kind emitted as two functions: ``<name>`` (its outputs as one vector ``values``, and
+    ``checks`` when there are any) and ``<name>_jacobian``, the same and the Jacobian (what a chain
+    rule needs, in one call).
+
+    Parameters
+    ----------
+    module : str
+        The generated module the functions go into.
+    inputs : list of sympy.Symbol
+        Arguments of both functions, in the order of the Jacobian's columns.
+    outputs : dict of str to sympy.Expr
+        Output name to expression, in the order of the Jacobian's rows.
+    checks : dict of str to sympy.Expr, optional
+        Quantities the runtime checks (not differentiated).
+    derivatives : sympy.Matrix, optional
+        The Jacobian, when built more compactly than by differentiating ``outputs`` (e.g. by the
+        chain rule through named intermediates); by default ``jacobian(outputs, inputs)``.
+    scalar : bool
+        Also emit plain-float twins (one bicycle at a time).
+    """
+    checks = checks or {}
+    names = ", ".join(outputs)
+    args = ", ".join(s.name for s in inputs)
+    value_outputs = [Output("values", sp.Matrix(list(outputs.values())), f"[{names}] [SI]", vector=True)]
+    if checks:
+        value_outputs.append(Output("checks", sp.Matrix(list(checks.values())),
+                                    f"[{', '.join(checks)}], for the runtime's checks [SI]", vector=True))
+    matrix = derivatives if derivatives is not None else jacobian(list(outputs.values()), inputs)
+    functions = [
+        GeneratedFunction(name, list(inputs), value_outputs, summary, notes=notes, scalar=scalar),
+        GeneratedFunction(f"{name}_jacobian", list(inputs),
+                          [*value_outputs, Output("jacobian", matrix, f"d[{names}]/d[{args}] [SI]", sparse=True)],
+                          f"{name} and its Jacobian (rows in output order, columns in argument order), with one "
+                          "common-subexpression pass over both.", scalar=scalar),
+    ]
+    stage = Stage(
+        name, list(inputs), list(outputs), f"{module}.{name}", [("values", (i,)) for i in range(len(outputs))],
+        f"{module}.{name}_jacobian", [(check, "checks", (i,)) for i, check in enumerate(checks)],
+        list(outputs.values()),
+    )
+    return functions, stage

@@ -68,6 +68,7 @@ def build() -> GeneratedModule:
         name="combination",
         summary="Rear frame and rider combined into the benchmark rear body; the whole estimate chain.",
         description=__doc__.strip(),
+        names={"BENCHMARK_NAMES": tuple(BENCHMARK_NAMES)},
         functions=[
             GeneratedFunction(
                 "rear_body", syms(FRAME_ARGS) + syms(RIDER_BODY_ARGS),
@@ -81,12 +82,15 @@ def build() -> GeneratedModule:
                 scalar=True,  # merging one lumped rider (bikerider.bicycle.to_benchmark)
             ),
             GeneratedFunction(
-                "benchmark_parameters", chain_args,
+                "estimate_chain", chain_args,
                 [Output("parameters", chain,
                         "the 26 benchmark values in the order " + ", ".join(BENCHMARK_NAMES) + " [SI]",
                         vector=True)],
-                "The whole estimate: bicycle and rider measurements to the benchmark parameters (Table 12).",
-                notes="lam = pi/2 - lam_ht.  IByy is NaN-free only when IBfyy is given.",
+                "The whole estimate in one expression: bicycle and rider measurements to the benchmark "
+                "parameters (Table 12).",
+                notes=("lam = pi/2 - lam_ht.  IByy is NaN-free only when IBfyy is given.  The runtime computes "
+                       "the same chain stage by stage (bikerider.uncertainty.stages); this one-piece form is "
+                       "the tests' independent check of the stages."),
             ),
         ],
     )

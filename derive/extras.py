@@ -1,9 +1,14 @@
-"""Files in ``generated/`` that are not function modules: the package init, the symbol table and
-the operation counts."""
+"""Files in ``generated/`` that are not function modules: the package init, the manifest, the
+symbol table and the operation counts."""
 from __future__ import annotations
 
 import json
+import random
 
+import sympy as sp
+
+from derive import gap_effects
+from derive.codegen import GeneratedFunction, GeneratedModule, Output, Stage
 from derive.symbols import all_symbols
 
 HEADER = (
@@ -11,16 +16,24 @@ HEADER = (
     "# Inputs hash (sha256 of derive/ sources, templates and the SymPy version): {digest}\n"
 )
 
+STATES = {
+    "benchmark_model.state_matrix": ("phi", "delta", "phid", "deltad"),
+    "gap_effects.whipple_extended_state_matrices": ("phi", "delta", "phid", "deltad"),
+    "gap_effects.tyre_slip_descriptor": gap_effects.STATE_NAMES,
+}
+"""The state vector of each generated state-space function (the derivations' docstrings say so)."""
 
-def build(digest: str, generator: str, counts: dict, modules: list[str]) -> dict[str, str]:
-    """Return ``{filename: text}`` for the package init, symbol table and operation counts."""
+
+def build(digest: str, generator: str, counts: dict, modules: list[GeneratedModule]) -> dict[str, str]:
+    """Return ``{filename: text}`` for the package init, manifest, symbol table and operation counts."""
     head = HEADER.format(generator=generator, digest=digest)
     init = head + (
         '"""Generated NumPy functions of bikerider (see derive/ for the derivations).\n\n'
         "Each module depends on NumPy only and can be imported on its own, e.g.\n"
         "``from bikerider.generated.benchmark_model import canonical_matrices``.\n"
+        "``manifest`` says what every function takes and returns.\n"
         '"""\n'
-        f"MODULES = {tuple(modules)!r}\n"
+        f"MODULES = {tuple(m.name for m in modules)!r}\n"
         f'INPUTS_HASH = "{digest}"\n'
     )
     lines = [head, '"""Every symbol: name -> (description, unit, LaTeX)."""', "", "SYMBOLS = {"]
@@ -30,4 +43,95 @@ def build(digest: str, generator: str, counts: dict, modules: list[str]) -> dict
     table = "\n".join(lines) + "\n"
     ops = {m: {f: {"before_cse": b, "after_cse": a} for f, (b, a) in fns.items()} for m, fns in counts.items()}
     ops_text = json.dumps({"inputs_hash": digest, "operation_counts": ops}, indent=2, sort_keys=True) + "\n"
-    return {"__init__.py": init, "symbol_table.py": table, "operation_counts.json": ops_text}
+    return {"__init__.py": init, "manifest.py": head + manifest(modules), "symbol_table.py": table,
+            "operation_counts.json": ops_text}
+
+
+def _shape(output: Output) -> tuple[int, ...]:
+    return tuple(int(n) for n in output.shape_suffix)
+
+
+def manifest(modules: list[GeneratedModule]) -> str:
+    """``generated/manifest.py``: functions, stages, states and named lists, as plain Python data."""
+    functions = {f"{m.name}.{f.name}": f for m in modules for f in m.functions}
+    stages = [stage for m in modules for stage in m.stages]
+    for stage in stages:
+        check_stage(stage, functions)
+    names: dict[str, tuple[str, ...]] = {}
+    for module in modules:
+        for key, value in module.names.items():
+            if key in names and names[key] != tuple(value):
+                raise ValueError(f"two derivations define the list {key} differently")
+            names[key] = tuple(value)
+    out = [
+        '"""The manifest of the generated code, written with it from the same objects.',
+        "",
+        "``FUNCTIONS``: every generated function (``module.function``): its arguments in order, its",
+        "outputs with their shapes after the broadcast batch shape, whether a plain-float",
+        "``<function>_scalar`` twin exists and, for an output the twin returns sparse, the flat indices",
+        "of the entries it returns (``nonzero``).  ``STAGES``: every stage kind the runtime's uncertainty",
+        "engine (``bikerider.engine``) composes: its inputs (the Jacobian's columns), outputs (its",
+        "rows), the value function and where each output sits in what it returns, the Jacobian",
+        "function (its last output; when its others are the value function's, it gives the values",
+        "too), and the quantities the runtime checks.  ``STATES``: the state vector of each",
+        "state-space function.  The named lists below them are symbol lists the runtime needs.",
+        "",
+        "The runtime imports every list of generated argument names from here; none is typed by hand.",
+        '"""',
+        "",
+        "FUNCTIONS = {",
+    ]
+    for key, fn in functions.items():
+        out += [
+            f"    {key!r}: {{",
+            f"        \"args\": {tuple(a.name for a in fn.args)!r},",
+            f"        \"outputs\": {tuple((o.name, _shape(o)) for o in fn.outputs)!r},",
+            f"        \"scalar\": {fn.scalar!r},",
+        ]
+        sparse = {o.name: o.nonzero for o in fn.outputs if o.sparse}
+        if sparse and fn.scalar:
+            out.append(f"        \"nonzero\": {sparse!r},")
+        out.append("    },")
+    out += ["}", "", "STAGES = {"]
+    for stage in stages:
+        out.append(f"    {stage.name!r}: {{")
+        out += [f"        {key!r}: {value!r}," for key, value in stage.entry().items()]
+        out.append("    },")
+    out += ["}", "", "STATES = {"]
+    out += [f"    {key!r}: {tuple(value)!r}," for key, value in STATES.items()]
+    out += ["}"]
+    for key, value in names.items():
+        out += ["", f"{key} = {value!r}"]
+    return "\n".join(out) + "\n"
+
+
+def check_stage(stage: Stage, functions: dict[str, GeneratedFunction]) -> None:
+    """Refuse a stage whose functions do not take its inputs, or whose picks are not its outputs.
+
+    Each pick is compared with the stage's expression at a random rational point (exactly: the
+    two may be written differently, e.g. Eq. 6 as an adjugate or simplified)."""
+    value, jac = functions[stage.value], functions[stage.jacobian]
+    inputs = [s.name for s in stage.inputs]
+    if sorted(a.name for a in value.args) != sorted(inputs):
+        raise ValueError(f"stage {stage.name}: {stage.value} takes {[a.name for a in value.args]}, not {inputs}")
+    if [a.name for a in jac.args] != inputs:
+        raise ValueError(f"stage {stage.name}: {stage.jacobian} takes its arguments in another order")
+    if len(stage.picks) != len(stage.outputs) or jac.outputs[-1].shape_suffix != (len(stage.outputs), len(inputs)):
+        raise ValueError(f"stage {stage.name}: outputs, picks and Jacobian disagree in size")
+    if stage.value != stage.jacobian.removesuffix("_jacobian") and stage.exprs is None:
+        raise ValueError(f"stage {stage.name}: picks from another derivation need the expressions to check")
+    if stage.exprs is None:
+        return
+    rng = random.Random(stage.name)
+    point = {s: sp.Rational(rng.randint(30, 90), 100) * (1 if s.is_positive else rng.choice((-1, 1)))
+             for s in stage.inputs}
+    outputs = {o.name: o for o in value.outputs}
+    for output, (name, index), expr in zip(stage.outputs, stage.picks, stage.exprs):
+        picked = outputs[name].expr
+        if isinstance(picked, sp.MatrixBase):
+            picked = picked[index] if len(index) == 2 else picked[index[0], 0]
+        difference = sp.N((picked - expr).xreplace(point), 30)
+        scale = abs(sp.N(expr.xreplace(point), 30)) + 1
+        if not abs(difference) <= 1e-20 * scale:
+            raise ValueError(f"stage {stage.name}: {stage.value} output {name}{list(index)} is not the stage's "
+                             f"output {output}")

@@ -54,11 +54,12 @@ from functools import cache
 
 import sympy as sp
 
+from derive.benchmark_model import CANONICAL_ARGS
 from derive.codegen import GeneratedFunction, GeneratedModule, Output
 from derive.symbols import sym, syms
 
-BENCHMARK_ARGS = "w c lam rR mR IRxx IRyy xB zB mB IBxx IBzz IBxz xH zH mH IHxx IHzz IHxz rF mF IFxx IFyy"
-"""The benchmark parameters the linear models depend on (as in derive/benchmark_model.py)."""
+BENCHMARK_ARGS = CANONICAL_ARGS
+"""The benchmark parameters the linear models depend on (those of the canonical matrices)."""
 STEER_ARGS = "I_steer c_steer k_steer"
 ARM_ARGS = "m_arm x_grip z_grip b_grip k_arm c_arm"
 UPPER_BODY_ARGS = "m_u x_u z_u IUxx IUxz IUzz z_lean"

@@ -16,7 +16,7 @@ from functools import cache
 
 import sympy as sp
 
-from derive.codegen import GeneratedFunction, GeneratedModule, Output
+from derive.codegen import GeneratedFunction, GeneratedModule, Output, stage_functions
 from derive.symbols import sym, syms
 
 
@@ -55,9 +55,29 @@ def three_orientation_solution() -> tuple[sp.Matrix, sp.Expr]:
     return sp.ImmutableMatrix(solution), det  # cached: callers must not change it
 
 
+def orientation_equation():
+    """Stage: one orientation's row of Eq. 6 and its J (Eq. 1), a row of the least squares that
+    takes more than three orientations."""
+    alpha, k_t, T = syms("alpha k_t T")
+    row = list(orientation_row(alpha))
+    return stage_functions("pendulum", "orientation_equation", [alpha, k_t, T],
+                           {"r_xx": row[0], "r_xz": row[1], "r_zz": row[2], "J": torsional_inertia()},
+                           "One orientation's row of Eq. 6, J = r . [Ixx, Ixz, Izz], with J from Eq. 1.")
+
+
+def line_through_point():
+    """Stage: a pendulum-axis line through a point at an angle, as ``s x + c z = d`` with the unit
+    normal ``(s, c) = (sin(alpha), cos(alpha))``."""
+    alpha, x_p, z_p = syms("alpha x_p z_p")
+    s, c = sp.sin(alpha), sp.cos(alpha)
+    return stage_functions("pendulum", "line_through_point", [alpha, x_p, z_p], {"s": s, "c": c, "d": s * x_p + c * z_p},
+                           "A pendulum-axis line through a point, in normal form s x + c z = d.")
+
+
 def build() -> GeneratedModule:
     k_t, T, m_p, g, l_p, alpha = syms("k_t T m_p g l_p alpha")
     solution, det = three_orientation_solution()
+    stage_parts = [orientation_equation(), line_through_point()]
     return GeneratedModule(
         name="pendulum",
         summary="Moments and products of inertia from torsional and compound pendulum periods.",
@@ -67,17 +87,13 @@ def build() -> GeneratedModule:
                 "torsional_inertia", [k_t, T],
                 [Output("J", torsional_inertia(), "moment of inertia about the pendulum axis [kg m^2]")],
                 "Moment of inertia about a torsional pendulum's axis from its period (Eq. 1).",
+                scalar=True,
             ),
             GeneratedFunction(
                 "compound_inertia", [T, m_p, g, l_p],
                 [Output("Iyy", compound_inertia(), "moment of inertia about the wheel axle [kg m^2]")],
                 "Wheel moment of inertia about its axle from a compound pendulum period (Eq. 7).",
-            ),
-            GeneratedFunction(
-                "orientation_row", [alpha],
-                [Output("row", orientation_row(alpha).T, "coefficients of [Ixx, Ixz, Izz] in J (Eq. 5)",
-                        vector=True)],
-                "One row of Eq. 6: J = row . [Ixx, Ixz, Izz] for a pendulum axis at angle alpha.",
+                scalar=True,
             ),
             GeneratedFunction(
                 "inertia_from_three_orientations",
@@ -90,5 +106,7 @@ def build() -> GeneratedModule:
                 "Eq. 6 solved in closed form for three pendulum orientations.",
                 notes="The determinant vanishes when two angles are equal modulo pi (the same axis).",
             ),
+            *(f for functions, _ in stage_parts for f in functions),
         ],
+        stages=[stage for _, stage in stage_parts],
     )

@@ -239,6 +239,8 @@ def build() -> GeneratedModule:
         name="rider_model",
         summary="Seated rider on the bicycle (Moore et al. 2009): grid points, limb reach, mass properties.",
         description=description,
+        names={"GEOMETRY": tuple(GEOMETRY_ARGS.split()), "RIDER_PLACEMENT": tuple(RIDER_ARGS.split()),
+               "RIDER_SEGMENTS": tuple(SEGMENT_ARGS.split())},
         functions=[
             GeneratedFunction(
                 "grid_points", geometry + placement,

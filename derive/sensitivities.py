@@ -24,17 +24,19 @@ Hurwitz determinant over ``v^2`` (``a1`` and ``a3`` are odd in ``v``).
 
 Every Jacobian is emitted as a NumPy function returning ``(..., n_out, n_in)``, rows in output
 order and columns in argument order.  The stage expressions themselves are also emitted, as
-``srepr`` strings in ``STAGES``, so the runtime can differentiate and print them with SymPy
-without importing ``derive``.
+``srepr`` strings in ``EXPRESSIONS``, so the runtime can differentiate and print them with SymPy
+without importing ``derive``; the stages' names, inputs, outputs and functions go into the
+manifest (``generated/manifest.py``).
 """
 from __future__ import annotations
 
+import itertools
 from functools import cache
 
 import sympy as sp
 
 from derive import benchmark_model, pendulum, rider_model
-from derive.codegen import GeneratedFunction, GeneratedModule, Output
+from derive.codegen import GeneratedFunction, GeneratedModule, Output, Stage, jacobian, stage_functions
 from derive.combination import FRAME_ARGS, RIDER_BODY_ARGS, rear_body
 from derive.symbols import sym, syms
 
@@ -215,11 +217,6 @@ def three_orientation_solution() -> sp.Matrix:
     return A.adjugate() * J / det
 
 
-def jacobian(outputs: sp.Matrix, args: list[sp.Symbol]) -> sp.Matrix:
-    """``(len(outputs), len(args))`` matrix of partial derivatives."""
-    return sp.Matrix(len(outputs), len(args), lambda i, j: outputs[i].diff(args[j]))
-
-
 def stage_table() -> dict[str, dict[str, list]]:
     """Every stage: its inputs, outputs and output expressions (SymPy objects), in chain order."""
     k_t, T, m_p, g, l_p, v = syms("k_t T m_p g l_p v")
@@ -234,8 +231,8 @@ def stage_table() -> dict[str, dict[str, list]]:
     table: dict[str, dict[str, list]] = {
         "three_orientations": {"inputs": [k_t, *syms("T_1 T_2 T_3 alpha_1 alpha_2 alpha_3")],
                                "outputs": syms("Ixx Ixz Izz"), "exprs": list(solution)},
-        "torsional": {"inputs": [k_t, T], "outputs": [sym("Ixx")], "exprs": [pendulum.torsional_inertia()]},
-        "compound": {"inputs": [T, m_p, g, l_p], "outputs": [sym("IFyy")], "exprs": [pendulum.compound_inertia()]},
+        "torsional": {"inputs": [k_t, T], "outputs": [sp.Symbol("J")], "exprs": [pendulum.torsional_inertia()]},
+        "compound": {"inputs": [T, m_p, g, l_p], "outputs": [sp.Symbol("Iyy")], "exprs": [pendulum.compound_inertia()]},
         "grid": {"inputs": grid_args, "outputs": grid_outputs, "exprs": list(coords)},
     }
     for name in CLOSURES:
@@ -259,13 +256,13 @@ def stage_table() -> dict[str, dict[str, list]]:
 
 
 def _stages_source(stages: dict[str, dict[str, list]]) -> str:
-    """``STAGES = {...}``: names and ``srepr`` strings, deterministic text."""
+    """``EXPRESSIONS = {...}``: names and ``srepr`` strings, deterministic text."""
     lines = [
-        "#: Stage expressions for the runtime's symbolic sensitivities:",
-        "#: stage -> (input names, output names, srepr of each output in the inputs).",
-        "#: A condition stage (capsize_condition, weave_condition) gives the expression F whose",
-        "#: root in v is the speed named as its output.",
-        "STAGES = {",
+        "#: Stage expressions for the runtime's symbolic sensitivities (keys: the manifest's stage",
+        "#: kinds): stage -> (input names, output names, srepr of each output in the inputs).",
+        "#: A condition (capsize_condition, weave_condition) gives the expression F whose root in v",
+        "#: is the speed named as its output.",
+        "EXPRESSIONS = {",
     ]
     for name, stage in stages.items():
         lines.append(f"    {name!r}: (")
@@ -287,8 +284,8 @@ def _stage_jacobian(name: str, stage: dict[str, list], summary: str, notes: str 
                     scalar: bool = False) -> GeneratedFunction:
     J = jacobian(sp.Matrix(stage["exprs"]), stage["inputs"])
     doc = f"d[{_names(stage['outputs'])}]/d[{_names(stage['inputs'])}] [SI]"
-    return GeneratedFunction(f"{name}_jacobian", stage["inputs"], [Output("jacobian", J, doc)], summary, notes=notes,
-                             scalar=scalar)
+    return GeneratedFunction(f"{name}_jacobian", stage["inputs"], [Output("jacobian", J, doc, sparse=True)], summary,
+                             notes=notes, scalar=scalar)
 
 
 def build() -> GeneratedModule:
@@ -299,8 +296,9 @@ def build() -> GeneratedModule:
     functions = [
         _stage_jacobian("three_orientations", stages["three_orientations"],
                         "Jacobian of Eq. 6 solved for three orientations (benchmark-convention Ixz)."),
-        _stage_jacobian("torsional", stages["torsional"], "Jacobian of Eq. 1, J = k T^2 / (4 pi^2)."),
-        _stage_jacobian("compound", stages["compound"], "Jacobian of Eq. 7, Iyy = (T / 2 pi)^2 m g l - m l^2."),
+        _stage_jacobian("torsional", stages["torsional"], "Jacobian of Eq. 1, J = k T^2 / (4 pi^2).", scalar=True),
+        _stage_jacobian("compound", stages["compound"], "Jacobian of Eq. 7, Iyy = (T / 2 pi)^2 m g l - m l^2.",
+                        scalar=True),
         GeneratedFunction(
             "grid_coordinates", grid["inputs"],
             [Output("coordinates", sp.Matrix(grid["exprs"]), f"[{_names(grid['outputs'])}] [m]", vector=True)],
@@ -359,10 +357,53 @@ def build() -> GeneratedModule:
             "Jacobian of the state matrix A(v) (x = [phi, delta, phi', delta']), for eigenvalue sensitivities.",
         ),
     ]
+    steer_functions, steer_stage = stage_functions(
+        "sensitivities", "steer_axis", stages["steer_axis"]["inputs"], {"lam": stages["steer_axis"]["exprs"][0]},
+        "Steer axis tilt from the head tube angle, lam = pi/2 - lam_ht.")
+    functions += steer_functions
     return GeneratedModule(
         name="sensitivities",
         summary="Closed-form stage Jacobians of the estimate chain and the implicit critical-speed gradients.",
         description=__doc__.strip(),
         functions=functions,
         extra_source=_stages_source(stages),
+        stages=[*chain_stages(stages), steer_stage],
     )
+
+
+def _entries(output: str, shape: tuple[int, ...]) -> list[tuple[str, tuple[int, ...]]]:
+    """Every entry of a value function's output, row by row."""
+    if not shape:
+        return [(output, ())]
+    return [(output, index) for index in itertools.product(*(range(n) for n in shape))]
+
+
+_VALUES: dict[str, tuple[str, list[tuple[str, tuple[int, ...]]]]] = {
+    "three_orientations": ("pendulum.inertia_from_three_orientations", _entries("inertia", (3,))),
+    "torsional": ("pendulum.torsional_inertia", _entries("J", ())),
+    "compound": ("pendulum.compound_inertia", _entries("Iyy", ())),
+    "grid": ("sensitivities.grid_coordinates", _entries("coordinates", (2 * len(BASE_POINTS),))),
+    "knee": ("sensitivities.knee", _entries("coordinates", (2,))),
+    "elbow": ("sensitivities.elbow", _entries("coordinates", (2,))),
+    "rider_com": ("sensitivities.rider_com", _entries("properties", (3,))),
+    "rider_inertia": ("sensitivities.rider_inertia", _entries("properties", (4,))),
+    "rear_body": ("combination.rear_body", [("mB", ()), ("xB", ()), ("zB", ()), ("IB", (0, 0)), ("IB", (1, 1)),
+                                            ("IB", (2, 2)), ("IB", (0, 2))]),
+    "canonical": ("benchmark_model.canonical_matrices",
+                  [e for name in benchmark_model.MATRIX_NAMES for e in _entries(name, (2, 2))]),
+    "characteristic": ("benchmark_model.characteristic_coefficients", _entries("coefficients", (5,))),
+}
+"""The value function of each stage of the chain and where each output sits in what it returns
+(``derive.extras`` checks every pick against the stage's expression)."""
+_CHECKS = {"three_orientations": [("determinant", "determinant", ())]}
+
+
+def chain_stages(stages: dict[str, dict[str, list]]) -> list[Stage]:
+    """The stages of the estimate chain, for the manifest (the conditions are not stages: the
+    runtime solves them for the speeds and differentiates them implicitly)."""
+    out = []
+    for name, (value, picks) in _VALUES.items():
+        stage = stages[name]
+        out.append(Stage(name, stage["inputs"], [s.name for s in stage["outputs"]], value, picks,
+                         f"sensitivities.{name}_jacobian", _CHECKS.get(name, []), list(stage["exprs"])))
+    return out

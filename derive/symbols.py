@@ -87,6 +87,17 @@ _TABLE: dict[str, tuple[str, str, str, bool]] = {
     "alpha_1": ("pendulum axis angle of orientation 1", "rad", r"\alpha_1", False),
     "alpha_2": ("pendulum axis angle of orientation 2", "rad", r"\alpha_2", False),
     "alpha_3": ("pendulum axis angle of orientation 3", "rad", r"\alpha_3", False),
+    "x_c": ("centre of mass of a hung body, x", "m", "x_c", False),
+    "z_c": ("centre of mass of a hung body, z (down positive)", "m", "z_c", False),
+    "x_p": ("a point of a pendulum-axis line, x", "m", "x_p", False),
+    "z_p": ("a point of a pendulum-axis line, z (down positive)", "m", "z_p", False),
+    # --- A body hung from the torsional pendulum (BicycleParameters' photographs) -----------
+    "hang": ("hanging angle: the upward steer axis from the photograph's horizontal", "rad", r"\alpha_h", False),
+    "off": ("distance from the pendulum axis to the body's reference point, positive to its left in "
+            "the photograph", "m", "a_h", False),
+    "x_ref": ("reference point of a hung body (a wheel centre or the handlebar reference point), x", "m",
+              r"x_{ref}", False),
+    "z_ref": ("reference point of a hung body, z (down positive)", "m", r"z_{ref}", False),
     # --- Rider (Moore et al. 2009, Tables 7 and 8) -----------------------------------------
     "mBr": ("rider mass", "kg", "m_{Br}", True),
     "c_ch": ("chest circumference", "m", "c_{ch}", True),
@@ -150,7 +161,6 @@ _TABLE: dict[str, tuple[str, str, str, bool]] = {
     "v_capsize": ("capsize speed: the capsize eigenvalue crosses zero", "m/s", "v_c", True),
 }
 # --- BicycleParameters Measured-file fields (derive/measured_reduction.py; angles in radians) ---
-_BODY_WORDS = {"B": "rear frame", "H": "handlebar and fork"}
 _MEASURED: dict[str, tuple[str, str, str, bool]] = {
     "dF": ("distance rolled by the front wheel in nF turns", "m", "d_F", True),
     "nF": ("number of front wheel turns rolled over dF", "1", "n_F", True),
@@ -173,7 +183,7 @@ _MEASURED: dict[str, tuple[str, str, str, bool]] = {
     "LhbF": ("distance from the front wheel centre to a handlebar grip", "m", "L_{hbF}", True),
     "LhbR": ("distance from the rear wheel centre to a handlebar grip", "m", "L_{hbR}", True),
 }
-for _body, _word in _BODY_WORDS.items():
+for _body, _word in {"B": "rear frame", "H": "handlebar and fork"}.items():
     for _i in (1, 2, 3):
         _MEASURED[f"alpha{_body}{_i}"] = (
             f"hanging angle of the {_word} in orientation {_i}: steer axis from the photograph's horizontal",
@@ -183,10 +193,41 @@ for _body, _word in _BODY_WORDS.items():
             "m", f"a_{{{_body}{_i}}}", False)
         _MEASURED[f"Tt{_body}{_i}"] = (f"torsional pendulum period of the {_word} in orientation {_i}", "s",
                                        f"T_{{t{_body}{_i}}}", True)
+for _i in (1, 2, 3):
+    _MEASURED[f"hang_{_i}"] = (f"hanging angle in orientation {_i}: the upward steer axis from the photograph's "
+                               "horizontal", "rad", rf"\alpha_{{h{_i}}}", False)
+    _MEASURED[f"off_{_i}"] = (f"distance from the pendulum axis to the reference point in orientation {_i}", "m",
+                              f"a_{{h{_i}}}", False)
+_HEIGHTS = {  # BicycleParameters' frame measured with its steer axis level on a table (see measured_reduction.py)
+    "h1": "height h1 of the heights-and-diameters frame measurement (rear wheel offset from the steer axis)",
+    "h2": "height h2 of the heights-and-diameters frame measurement (rear wheel offset from the steer axis)",
+    "h3": "height h3 of the heights-and-diameters frame measurement (rear wheel offset from the steer axis)",
+    "h4": "height h4 of the heights-and-diameters frame measurement (fork offset)",
+    "h5": "height h5 of the heights-and-diameters frame measurement (fork offset)",
+    "d1": "diameter d1 of the heights-and-diameters frame measurement (rear wheel offset)",
+    "d2": "diameter d2 of the heights-and-diameters frame measurement (rear offset, axis distance)",
+    "d3": "diameter d3 of the heights-and-diameters frame measurement (fork offset, axis distance)",
+    "d4": "diameter d4 of the heights-and-diameters frame measurement (fork offset)",
+    "d": "distance d of the heights-and-diameters frame measurement (along the steer axis)",
+    "h6": "height of the top of the front axle, steer axis level (fork and handlebar measured apart)",
+    "h7": "height of the top of the handlebar reference circle, steer axis level",
+    "d5": "front axle diameter, for the handlebar reference point",
+    "d6": "handlebar reference circle diameter",
+    "l": "outer distance from the front axle to the handlebar reference circle",
+}
+for _name, _description in _HEIGHTS.items():
+    _MEASURED[_name] = (_description, "m", _name, True)
 _TABLE.update(_MEASURED)
-for _name in (*_MEASURED, "w", "g", "mR", "mF", "mH", "mBf", "lam_ht", "l_cs", "h_bb", "l_sp", "l_st", "lam_st"):
-    _description, _unit, _latex, _ = _TABLE[_name]
-    _TABLE[f"sigma_{_name}"] = (f"standard uncertainty of the {_description}", _unit, rf"\sigma_{{{_latex}}}", False)
+# --- Raw pendulum measurements as inputs of the estimate chain (bikerider.uncertainty.stages) ---
+for _body, _word in {"Bf": "rear frame", "H": "handlebar/fork"}.items():
+    for _i in (1, 2, 3):
+        _TABLE[f"T_{_body}{_i}"] = (f"{_word} torsional period, orientation {_i}", "s", f"T_{{{_body},{_i}}}", True)
+        _TABLE[f"alpha_{_body}{_i}"] = (f"{_word} pendulum axis angle, orientation {_i}", "rad",
+                                        rf"\alpha_{{{_body},{_i}}}", False)
+for _w, _wheel in {"R": "rear", "F": "front"}.items():
+    _TABLE[f"T_{_w}xx"] = (f"{_wheel} wheel torsional period about a diameter", "s", f"T_{{{_w}xx}}", True)
+    _TABLE[f"T_{_w}yy"] = (f"{_wheel} wheel compound pendulum period", "s", f"T_{{{_w}yy}}", True)
+    _TABLE[f"l_p{_w}"] = (f"{_wheel} wheel compound pendulum length", "m", f"l_{{p{_w}}}", True)
 for _k in range(5):
     _TABLE[f"a{_k}"] = (f"coefficient of s^{_k} in the characteristic polynomial", f"kg^2 m^4 s^{_k - 4}", f"a_{_k}", False)
 for _k, _where in {5: "pedal axis", 13: "hip", 14: "knee", 15: "shoulder line", 19: "hand",
