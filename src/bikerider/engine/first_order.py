@@ -1,0 +1,110 @@
+"""First-order propagation of standard uncertainties through a chain.
+
+``sigma_y^2 = sum_j (dy/dx_j)^2 sigma_j^2`` over the independent inputs ``x_j`` that carry an
+uncertainty, with ``dy/dx_j`` from :meth:`Chain.gradients` (exact where the stages' Jacobians are).
+Outputs that share an input (every inertia shares the pendulum stiffness, every centre of mass the
+steer axis tilt) get their uncertainty from one derivative of the whole chain rather than from
+stacked independent steps.
+"""
+from __future__ import annotations
+
+import functools
+import math
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from bikerider.engine.chain import Chain, Rows
+from bikerider.engine.stage import Stage
+from bikerider.quantity import Quantity
+
+
+@dataclass(frozen=True)
+class FirstOrder:
+    """Values and first-order derivatives of a chain at one point.
+
+    Attributes
+    ----------
+    nodes : dict
+        The value of every node (inputs, outputs and checks).
+    gradients : dict of str to ndarray
+        ``d node / d wrt`` for every input and output node, shape ``(len(wrt),)``.
+    wrt : tuple of str
+        The inputs differentiated (by default those with a positive uncertainty).
+    sigmas : ndarray
+        Their standard uncertainties.
+    """
+
+    nodes: dict
+    gradients: dict[str, np.ndarray]
+    wrt: tuple[str, ...]
+    sigmas: np.ndarray
+
+    def jacobian(self, names: Sequence[str]) -> np.ndarray:
+        """``(len(names), len(wrt))``: the derivatives of ``names``."""
+        if isinstance(self.gradients, Rows):  # one point: the rows of one matrix
+            return self.gradients.matrix[[self.gradients.index[n] for n in names]]
+        rows = [self.gradients[n] for n in names]
+        try:
+            return np.array(rows, dtype=float).reshape(len(rows), len(self.wrt))
+        except ValueError:  # rows of other shapes: a batch of one point
+            return np.array([np.broadcast_to(row, (len(self.wrt),)) for row in rows], dtype=float)
+
+    def sigma(self, name: str, skip_nonfinite: bool = True) -> float:
+        """First-order standard uncertainty of ``name`` (0 for a node no uncertain input reaches).
+
+        ``skip_nonfinite``: a derivative that is not finite contributes nothing (a slope at a
+        value the inputs do not determine); otherwise the sigma is NaN.
+        """
+        grad = self.gradients.get(name)
+        if grad is None or not len(self.wrt):
+            return 0.0
+        used = self.sigmas > 0
+        terms = np.asarray(grad, dtype=float)[used] * self.sigmas[used]
+        if skip_nonfinite:
+            terms = terms[np.isfinite(terms)]
+        return math.sqrt(math.fsum((terms * terms).tolist()))  # t * t: inf rather than OverflowError
+
+    def quantity(self, name: str) -> Quantity:
+        """``name`` with its sigma; a value that is not finite (not determined) keeps sigma 0."""
+        return self.quantities([name])[name]
+
+    def quantities(self, names: Sequence[str]) -> dict[str, Quantity]:
+        """:meth:`quantity` of each of ``names``, at once."""
+        used = self.sigmas > 0
+        terms = self.jacobian(names)[:, used] * self.sigmas[used]
+        with np.errstate(invalid="ignore", over="ignore"):
+            squares = np.where(np.isfinite(terms), terms * terms, 0.0).tolist()  # a slope not finite: nothing
+        values = [float(self.nodes[name]) for name in names]
+        return {name: Quantity(value, math.sqrt(math.fsum(row)) if math.isfinite(value) else 0.0)
+                for name, value, row in zip(names, values, squares)}
+
+
+@functools.lru_cache(maxsize=256)
+def _chain(stages: tuple[Stage, ...], names: frozenset[str]) -> Chain:
+    """The chain of the same stages for the same input names, built once (one bicycle after another)."""
+    return Chain(stages, names)
+
+
+def first_order(stages: Iterable[Stage], quantities: Mapping[str, Quantity], chain: Chain | None = None,
+                wrt: Sequence[str] | None = None) -> FirstOrder:
+    """Evaluate the stages at the quantities' values and differentiate with respect to ``wrt``
+    (default: every input with a positive uncertainty).  Floats stay floats (plain-float twins
+    for one bicycle); arrays give a batch.  ``chain``: the stages already selected for these
+    inputs (:class:`Chain`), when the caller has them."""
+    chain = chain or _chain(tuple(stages), frozenset(quantities))
+    values = {name: getattr(q, "value", q) for name, q in quantities.items()}
+    wrt = tuple(wrt) if wrt is not None else tuple(name for name, q in quantities.items() if q.sigma > 0)
+    nodes, gradients = chain.gradients(values, wrt)
+    sigmas = np.array([getattr(quantities[name], "sigma", 0.0) for name in wrt], dtype=float)
+    return FirstOrder(nodes, gradients, wrt, sigmas)
+
+
+def propagate(stages: Iterable[Stage], quantities: Mapping[str, Quantity],
+              outputs: Sequence[str] | None = None) -> dict[str, Quantity]:
+    """Every output of the stages (or those named) with its first-order standard uncertainty."""
+    stages = list(stages)
+    result = first_order(stages, quantities)
+    names = outputs if outputs is not None else [o for stage in stages for o in stage.outputs]
+    return result.quantities(names)
