@@ -1,19 +1,8 @@
 """The linear Whipple model ``M q'' + v C1 q' + (g K0 + v^2 K2) q = f`` and its eigen-analysis.
 
-Mode labels, per speed (Meijaard et al. 2007, section 6):
-
-* castor: the real eigenvalue with the most negative real part;
-* weave: the complex-conjugate pair when there is one; when all four eigenvalues are real
-  (below the speed ``v_d`` where the weave pair is born), the two largest, which merge at ``v_d``;
-* capsize: the remaining real eigenvalue.
-
-Two cases fall outside these rules and give the label ``"other"``.  When the two most negative
-eigenvalues meet before the weave pair is born (some unusual bicycles, at low speed), their complex
-pair has a real part below both remaining real eigenvalues: those two are the weave pair, not yet
-born, and the pair is ``"other"`` (eigenvalues move continuously, so a pair born below the two other
-roots stays below them until its real part crosses one, which the weave pair's does not do at the
-low speeds where this happens).  When two complex pairs exist, the pair with the larger imaginary
-part is weave and the other ``"other"``.
+Eigenvalues are labelled weave, capsize and castor by the rules of :mod:`bikerider.benchmark.modes`
+(``"other"`` where they do not apply); the critical speeds are the roots of generated polynomials
+(:mod:`bikerider.benchmark.roots`), found without a scan over speed.
 """
 from __future__ import annotations
 
@@ -22,17 +11,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from bikerider.benchmark.modes import MODES, ModalEigenvalues, check_speeds, label_modes
 from bikerider.benchmark.parameters import BenchmarkParameters
+from bikerider.benchmark.quartic import eigenvalues_from_polynomial
+from bikerider.benchmark.roots import critical_speeds, polynomial_positive_real_roots
+from bikerider.engine import arguments
 from bikerider.errors import InputError
 from bikerider.generated import benchmark_model as gen
+from bikerider.generated.manifest import COORDINATES, MATRIX_NAMES
 
-MATRIX_NAMES = ("M", "C1", "K0", "K2")
-_COORDS = ("phi", "delta")
-_CANONICAL_ARGS = (
-    "w c lam rR mR IRxx IRyy xB zB mB IBxx IBzz IBxz xH zH mH IHxx IHzz IHxz rF mF IFxx IFyy".split()
-)
-MODES = ("weave", "weave", "capsize", "castor")
-"""Label order of the four eigenvalues returned by :meth:`WhippleModel.eigenvalues`."""
+_CANONICAL_ARGS = arguments("benchmark_model.canonical_matrices")
 
 
 def matrix_entries(M, C1, K0, K2) -> dict[str, np.ndarray]:
@@ -40,8 +28,8 @@ def matrix_entries(M, C1, K0, K2) -> dict[str, np.ndarray]:
     out = {}
     for name, mat in zip(MATRIX_NAMES, (M, C1, K0, K2)):
         mat = np.asarray(mat, dtype=float)
-        for i, a in enumerate(_COORDS):
-            for j, b in enumerate(_COORDS):
+        for i, a in enumerate(COORDINATES):
+            for j, b in enumerate(COORDINATES):
                 out[f"{name}_{a}{b}"] = mat[..., i, j]
     return out
 
@@ -61,20 +49,6 @@ class CriticalSpeeds:
         if self.weave is not None and self.capsize is not None and self.weave < self.capsize:
             return (self.weave, self.capsize)
         return None
-
-
-@dataclass(frozen=True)
-class ModalEigenvalues:
-    """Eigenvalues at each speed, ordered ``weave (+imag), weave (-imag), capsize, castor``."""
-
-    speeds: np.ndarray
-    values: np.ndarray
-    labels: np.ndarray
-
-    def mode(self, name: str) -> np.ndarray:
-        """Eigenvalues labelled ``name`` at each speed (``weave`` gives the positive-imaginary one)."""
-        index = MODES.index(name)
-        return self.values[:, index]
 
 
 class WhippleModel:
@@ -143,8 +117,6 @@ class WhippleModel:
             root of the pair is good to about 1e-8.
         """
         if method == "quartic":
-            from bikerider.benchmark.quartic import eigenvalues_from_polynomial
-
             return eigenvalues_from_polynomial(self, speeds)
         if method != "eigvals":
             raise InputError("method", method, 'either "eigvals" or "quartic"')
@@ -170,21 +142,14 @@ class WhippleModel:
         """
         entries = {k: float(v) for k, v in self._entries().items()}
         try:
-            capsize_c, weave_c, (b1, b0), (_, alpha) = gen.critical_speed_polynomials_scalar(**entries, g=self.g)
+            polynomials = gen.critical_speed_polynomials_scalar(**entries, g=self.g)
         except OverflowError:
-            capsize_c = weave_c = (math.inf,)
-        if not all(math.isfinite(c) for c in (*capsize_c, *weave_c)):
+            polynomials = ((math.inf,),) * 4
+        if not all(math.isfinite(c) for c in (*polynomials[0], *polynomials[1])):
             raise InputError("M, C1, K0, K2", "entries too large for floating point",
                              "matrices whose critical-speed polynomials are finite", self.source)
-        capsize_u = positive_real_roots(*capsize_c)
-        capsize = math.sqrt(capsize_u[0]) if capsize_u else None
-        weave = frequency = None
-        for u in positive_real_roots(*weave_c):
-            a1_over_v = b1 * u + b0  # a1/v and a3/v = alpha at u: omega^2 = a1/a3
-            if alpha != 0 and a1_over_v / alpha > 0:
-                weave, frequency = math.sqrt(u), math.sqrt(a1_over_v / alpha)
-                break
-        return CriticalSpeeds(weave, capsize, frequency)
+        weave, capsize, frequency = (float(x) for x in critical_speeds(*polynomials))
+        return CriticalSpeeds(*(x if math.isfinite(x) else None for x in (weave, capsize, frequency)))
 
     def weave_birth_speed(self) -> float | None:
         """The speed ``v_d`` at which the weave pair is born from two real eigenvalues [m/s].
@@ -222,95 +187,5 @@ class WhippleModel:
         return bool(np.all(np.abs(top_below.imag) <= tol) and np.all(np.abs(top_above.imag) > tol))
 
 
-_ZERO = 1e-14
-"""Polynomial coefficients below this fraction of the largest are zero."""
-_IMAG = 1e-9
-"""A complex root pair with imaginary part below ``_IMAG * max(1, |real part|)`` is a double real root."""
-
-
-def positive_real_roots(c2: float, c1: float, c0: float) -> list[float]:
-    """Sorted positive real roots of ``c2 u^2 + c1 u + c0`` on floats, scale-aware.
-
-    Coefficients below ``1e-14`` of the largest count as zero; a complex pair whose imaginary part
-    is below ``1e-9 max(1, |real part|)`` counts as a double real root (round-off can split a
-    double root into such a pair).
-    """
-    scale = max(abs(c2), abs(c1), abs(c0))
-    if scale == 0:
-        return []
-    a, b, c = c2 / scale, c1 / scale, c0 / scale
-    if abs(a) <= _ZERO:
-        if abs(b) <= _ZERO:
-            return []
-        roots = [-c / b]
-    else:
-        disc = b * b - 4 * a * c
-        if disc >= 0:
-            q = -0.5 * (b + math.copysign(math.sqrt(disc), b))
-            roots = [q / a, c / q] if q != 0 else [0.0, 0.0]
-        else:
-            re = -b / (2 * a)
-            if math.sqrt(-disc) / (2 * abs(a)) > _IMAG * max(1.0, abs(re)):
-                return []
-            roots = [re, re]
-    return sorted(u for u in roots if u > 0)
-
-
-def polynomial_positive_real_roots(coefficients: np.ndarray) -> np.ndarray:
-    """Sorted positive real roots of a polynomial of any degree (highest power first), with the
-    tolerances of :func:`positive_real_roots`."""
-    c = np.asarray(coefficients, dtype=float)
-    scale = np.abs(c).max()
-    if scale == 0:
-        return np.empty(0)
-    c = c / scale
-    nonzero = np.flatnonzero(np.abs(c) > _ZERO)
-    if nonzero.size == 0:
-        return np.empty(0)
-    roots = np.roots(c[nonzero[0]:])
-    real = roots[np.abs(roots.imag) <= _IMAG * np.maximum(1.0, np.abs(roots.real))].real
-    return np.sort(real[real > 0])
-
-
-def check_speeds(speeds) -> np.ndarray:
-    """Speeds as a one-dimensional float array; :class:`InputError` unless all are finite."""
-    try:
-        out = np.atleast_1d(np.asarray(speeds, dtype=float))
-    except (TypeError, ValueError):
-        raise InputError("speeds", speeds, "a one-dimensional array of finite speeds") from None
-    if out.ndim != 1 or not np.all(np.isfinite(out)):
-        raise InputError("speeds", out.tolist(), "a one-dimensional array of finite speeds")
-    return out
-
-
-def label_modes(raw: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Order ``(n, 4)`` eigenvalues as weave(+), weave(-), capsize, castor; return labels too (the
-    rules of the module docstring; ``"other"`` replaces capsize and castor where those two form a
-    complex pair)."""
-    n = raw.shape[0]
-    values = np.empty((n, 4), dtype=complex)
-    labels = np.empty((n, 4), dtype=object)
-    for k in range(n):
-        ev = raw[k]
-        tol = 1e-9 * max(1.0, float(np.abs(ev).max()))
-        is_complex = np.abs(ev.imag) > tol
-        complex_ev = ev[is_complex & (ev.imag > 0)]
-        real_ev = np.sort(ev[~is_complex].real)
-        if complex_ev.size == 0:
-            # all real: the two largest are the weave pair before it is born (v < v_d)
-            values[k] = [real_ev[3], real_ev[2], real_ev[1], real_ev[0]]
-            labels[k] = ["weave", "weave", "capsize", "castor"]
-        elif complex_ev.size == 1 and complex_ev[0].real < real_ev[0]:
-            # the two most negative roots have met; the two real ones are the weave pair, unborn
-            w = complex_ev[0]
-            values[k] = [real_ev[1], real_ev[0], w, np.conj(w)]
-            labels[k] = ["weave", "weave", "other", "other"]
-        elif complex_ev.size == 1:
-            w = complex_ev[0]
-            values[k] = [w, np.conj(w), real_ev[1], real_ev[0]]
-            labels[k] = ["weave", "weave", "capsize", "castor"]
-        else:
-            pair = complex_ev[np.argsort(-complex_ev.imag)]
-            values[k] = [pair[0], np.conj(pair[0]), pair[1], np.conj(pair[1])]
-            labels[k] = ["weave", "weave", "other", "other"]
-    return values, labels
+__all__ = ["MODES", "CriticalSpeeds", "ModalEigenvalues", "WhippleModel", "check_speeds", "label_modes",
+           "matrix_entries"]

@@ -7,14 +7,12 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 from bikerider.errors import MISSING, InputError
-from bikerider.inertia import check_plane_symmetric_inertia
-from bikerider.quantity import Quantity, check_magnitude
+from bikerider.generated.manifest import BENCHMARK_NAMES
+from bikerider.inertia import TRIANGLE_TOLERANCE, check_plane_symmetric_inertia
+from bikerider.quantity import DEG, Quantity, check_magnitude
 
-BENCHMARK_NAMES: tuple[str, ...] = (
-    "w", "c", "lam", "g", "rR", "mR", "IRxx", "IRyy", "xB", "zB", "mB", "IBxx", "IByy", "IBzz", "IBxz",
-    "xH", "zH", "mH", "IHxx", "IHyy", "IHzz", "IHxz", "rF", "mF", "IFxx", "IFyy",
-)
-"""Names in the order of Meijaard et al. (2007), Table 1."""
+BENCHMARK_NAMES: tuple[str, ...] = BENCHMARK_NAMES
+"""Names in the order of Meijaard et al. (2007), Table 1 (``derive/symbols.py``)."""
 
 OPTIONAL_NAMES = frozenset({"IByy", "IHyy"})
 """Values the linear model does not need; ``None`` when the inputs do not determine them."""
@@ -98,7 +96,7 @@ class BenchmarkParameters:
                 raise InputError(name, v[name], "at least 0.001 m (SI units: a length in metres)", src)
         if not -math.pi / 2 < v["lam"] < math.pi / 2:  # type: ignore[operator]
             hint = (f" ({v['lam']:g} looks like degrees: give lam_deg = {v['lam']:g} in a TOML file, "
-                    f"or {math.radians(v['lam']):.6g} rad)" if abs(v["lam"]) <= 90 else "")  # type: ignore[arg-type]
+                    f"or {v['lam'] * DEG:.6g} rad)" if abs(v["lam"]) <= 90 else "")  # type: ignore[arg-type]
             raise InputError("lam", v["lam"], f"a steer axis tilt between -pi/2 and pi/2 rad{hint}", src)
         for name in ("zB", "zH"):
             if not v[name] < 0:  # type: ignore[operator]
@@ -128,7 +126,7 @@ def check_wheel_inertia(wheel: str, Ixx: float, Iyy: float, sigma_xx: float, sig
     values are rounded: the paper's I_Ryy = 0.16 with I_Rxx = 0.079); a larger one is an error.
     """
     excess = Iyy - 2 * Ixx
-    if excess <= 1e-9 * Iyy:
+    if excess <= TRIANGLE_TOLERANCE * Iyy:
         return
     allowed = math.hypot(sigma_yy, 2 * sigma_xx)
     message = (f"at most 2*I{wheel}xx = {2 * Ixx:.6g} (triangle inequality of an axisymmetric wheel; "

@@ -13,7 +13,7 @@ generated plain-float ``critical_speed_polynomials_scalar``; see ``WhippleModel.
     than half the distance to its nearest neighbour, so two roots never collapse onto one.
 :func:`eigenvalues_from_polynomial`
     The same result as :meth:`bikerider.benchmark.WhippleModel.eigenvalues` (values and mode
-    labels, the rules of :func:`bikerider.benchmark.model.label_modes`), without ``eigvals``.
+    labels, the rules of :func:`bikerider.benchmark.modes.label_modes`), without ``eigvals``.
 Accuracy.  For simple roots the result agrees with ``numpy.linalg.eigvals`` of the state matrix to
 about ``1e-13`` relative to ``max(1, |root|)`` (the tests hold it to ``1e-10`` over random quartics
 and the benchmark bicycle at 1000 speeds).  A root of multiplicity two is ill-conditioned for any
@@ -25,10 +25,10 @@ the pair's mean is accurate to ``1e-12``; the tests check exactly these bounds.
 """
 from __future__ import annotations
 
-
 import numpy as np
 
-from bikerider.benchmark.model import MODES, ModalEigenvalues, check_speeds
+from bikerider.benchmark.modes import ModalEigenvalues, check_speeds, label_modes
+from bikerider.benchmark.roots import monic_quadratic_roots
 from bikerider.errors import InputError
 
 NEWTON_STEPS = 2
@@ -36,10 +36,6 @@ NEWTON_STEPS = 2
 _BACKWARD = 1e-14
 """Roots whose residual is below this fraction of ``sum |b_k| |z|^k`` (a few rounding units) are
 not polished: Newton cannot improve them."""
-_ZERO = 1e-14
-"""Critical-speed polynomial coefficients below this fraction of the largest are zero."""
-_IMAG = 1e-9
-"""A root whose imaginary part is below this fraction of ``max(1, |real part|)`` is real."""
 
 
 # -- quartic -------------------------------------------------------------------------------------
@@ -83,18 +79,6 @@ def _largest_real_cubic_root(A: np.ndarray, B: np.ndarray, C: np.ndarray) -> np.
     new = t - f / df
     f_new = ((new + A) * new + B) * new + C
     return np.where(np.abs(f_new) < np.abs(f), new, t)
-
-
-def _real_quadratic(b: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, ...]:
-    """Roots of ``y^2 + b y + c`` (real ``b``, ``c``) as ``(re1, im1, re2, im2)``, cancellation-free."""
-    disc = b * b - 4 * c
-    root = np.sqrt(np.abs(disc))
-    real = disc >= 0
-    t = -(b + np.copysign(root, b)) / 2
-    other = np.where(t != 0, c / t, 0.0)
-    half_b = -b / 2
-    im = np.where(real, 0.0, root / 2)
-    return np.where(real, t, half_b), im, np.where(real, other, half_b), -im
 
 
 def _small_real_root(z: np.ndarray, size: np.ndarray, b0: np.ndarray) -> np.ndarray:
@@ -229,7 +213,7 @@ def _factored_roots(c: np.ndarray) -> np.ndarray:
     h2 = np.maximum(m * m - r, 0.0)
     h = np.where(s2 >= h2, q / (2 * s), np.copysign(np.sqrt(h2), q))
     h = np.where(np.isfinite(h), h, 0.0)
-    re1, im1, re2, im2 = _real_quadratic(np.stack([-s, s]), np.stack([m + h, m - h]))
+    re1, im1, re2, im2 = monic_quadratic_roots(np.stack([-s, s]), np.stack([m + h, m - h]))
     z = np.empty((4,) + s.shape, dtype=complex)
     z.real[0::2], z.real[1::2] = re1 - e, re2 - e  # rows 0-1: first factor, 2-3: second
     z.imag[0::2], z.imag[1::2] = im1, im2
@@ -240,59 +224,21 @@ def _factored_roots(c: np.ndarray) -> np.ndarray:
 
 
 # -- eigenvalues ---------------------------------------------------------------------------------
-def label_roots(raw: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Order ``(n, 4)`` eigenvalues as weave(+), weave(-), capsize, castor, vectorised.
-
-    The rules are those of :func:`bikerider.benchmark.model.label_modes`: a root is complex when
-    its imaginary part exceeds ``1e-9 max(1, max |root|)`` of its row; all real - the two largest
-    are the weave pair; one pair - the pair, then the larger and the smaller real root, unless the
-    pair lies below both real roots (the two most negative roots have met: the real ones, largest
-    first, are the unborn weave pair, the pair ``"other"``); two pairs - the pair with the larger
-    imaginary part is weave, the other ``"other"``.
-    """
-    raw = np.asarray(raw, dtype=complex)
-    n = raw.shape[0]
-    size = np.abs(raw)
-    largest = size.max(axis=-1, keepdims=True)
-    imag = raw.imag
-    is_complex = np.abs(imag) > 1e-9 * np.maximum(1.0, largest)
-    upper = is_complex & (imag > 0)
-    # Order: upper-half-plane roots by falling imaginary part, then real roots by falling real
-    # part, then the lower-half-plane roots (replaced by the conjugates below).  One float key:
-    # a group offset times a span wider than any value.
-    span = 4.0 * (float(largest.max(initial=0.0)) + 1.0)
-    key = np.where(upper, -imag, np.where(is_complex, 2 * span, span - raw.real))
-    order = np.argsort(key, axis=-1)
-    rows = np.arange(n)[:, None]
-    s = np.where(is_complex, raw, raw.real)[rows, order]
-    pairs = upper.sum(axis=-1)
-    values = np.empty((n, 4), dtype=complex)
-    values[:, 0] = s[:, 0]
-    one_or_two = pairs > 0
-    values[:, 1] = np.where(one_or_two, np.conj(s[:, 0]), s[:, 1])
-    values[:, 2] = np.where(one_or_two, s[:, 1], s[:, 2])
-    values[:, 3] = np.where(pairs == 2, np.conj(s[:, 1]), np.where(pairs == 1, s[:, 2], s[:, 3]))
-    low = (pairs == 1) & (s[:, 0].real < s[:, 2].real)  # the pair below both real roots
-    values[low] = np.stack([s[low, 1], s[low, 2], s[low, 0], np.conj(s[low, 0])], axis=-1)
-    return values, _mode_labels(pairs, low)
-
-
-_MODES = np.array(MODES, dtype=object)
-
-
 def eigenvalues_from_polynomial(model, speeds) -> ModalEigenvalues:
     """Eigenvalues of ``model`` at each speed, from the characteristic polynomial.
 
     Parameters
     ----------
     model : bikerider.benchmark.WhippleModel
+        Anything with ``characteristic_coefficients(speeds)``.
     speeds : array_like, shape (n,)
         Speeds [m/s].
 
     Returns
     -------
     ModalEigenvalues
-        As :meth:`WhippleModel.eigenvalues` returns (see the module docstring for the accuracy).
+        As :meth:`WhippleModel.eigenvalues` returns (see the module docstring for the accuracy),
+        labelled by :func:`bikerider.benchmark.modes.label_modes`.
 
     Raises
     ------
@@ -302,60 +248,9 @@ def eigenvalues_from_polynomial(model, speeds) -> ModalEigenvalues:
     speeds = check_speeds(speeds)
     coefficients = _check_coefficients(model.characteristic_coefficients(speeds))
     with np.errstate(all="ignore"):  # divisions by zero are masked by np.where
-        values, labels = _label_factored(_factored_roots(coefficients))
+        roots = _factored_roots(coefficients)
+    values, labels = label_modes(roots.T)
     return ModalEigenvalues(speeds, values, labels)
 
 
-def _sort4_descending(a, b, c, d):
-    """Four real arrays sorted elementwise, largest first (a sorting network)."""
-    a, b = np.maximum(a, b), np.minimum(a, b)
-    c, d = np.maximum(c, d), np.minimum(c, d)
-    a, c = np.maximum(a, c), np.minimum(a, c)
-    b, d = np.maximum(b, d), np.minimum(b, d)
-    b, c = np.maximum(b, c), np.minimum(b, c)
-    return a, b, c, d
-
-
-def _label_factored(z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`label_roots` for the ``(4, n)`` factor-ordered roots of :func:`_factored_roots`.
-
-    The same rules; the pairing the two quadratic factors give saves the general sort.
-    """
-    n = z.shape[1]
-    tol = 1e-9 * np.maximum(1.0, np.abs(z).max(axis=0))
-    pair_a = np.abs(z[0].imag) > tol
-    pair_b = np.abs(z[2].imag) > tol
-    up_a = np.where(z[0].imag > 0, z[0], z[1])
-    up_b = np.where(z[2].imag > 0, z[2], z[3])
-    pairs = pair_a.astype(int) + pair_b
-    # no pair: four real roots, largest first
-    r0, r1, r2, r3 = _sort4_descending(z[0].real, z[1].real, z[2].real, z[3].real)
-    # one pair: the pair, then the larger and the smaller of the other factor's real roots
-    pair = np.where(pair_a, up_a, up_b)
-    x1 = np.where(pair_a, z[2].real, z[0].real)
-    x2 = np.where(pair_a, z[3].real, z[1].real)
-    big, small = np.maximum(x1, x2), np.minimum(x1, x2)
-    # two pairs: the one with the larger imaginary part first
-    a_first = up_a.imag >= up_b.imag
-    first = np.where(a_first, up_a, up_b)
-    second = np.where(a_first, up_b, up_a)
-    none, one = pairs == 0, pairs == 1
-    low = one & (pair.real < small)  # the pair below both real roots: the weave pair is unborn
-    values = np.empty((n, 4), dtype=complex)
-    values[:, 0] = np.where(none, r0, np.where(low, big, np.where(one, pair, first)))
-    values[:, 1] = np.where(none, r1, np.where(low, small, np.conj(values[:, 0])))
-    values[:, 2] = np.where(none, r2, np.where(low, pair, np.where(one, big, second)))
-    values[:, 3] = np.where(none, r3, np.where(low, np.conj(pair), np.where(one, small, np.conj(second))))
-    return values, _mode_labels(pairs, low)
-
-
-def _mode_labels(pairs: np.ndarray, low: np.ndarray) -> np.ndarray:
-    """Labels in the order weave, weave, capsize, castor; "other" for the second of two complex
-    pairs and for a pair below both real roots (``low``)."""
-    labels = np.empty((pairs.shape[0], 4), dtype=object)
-    labels[:] = _MODES
-    labels[(pairs == 2) | low, 2:] = "other"
-    return labels
-
-
-__all__ = ["eigenvalues_from_polynomial", "label_roots", "quartic_roots"]
+__all__ = ["eigenvalues_from_polynomial", "quartic_roots"]
