@@ -1,4 +1,17 @@
-"""Checks that an inertia tensor can belong to a real body."""
+"""The one check that an inertia tensor can belong to a real body.
+
+A tensor of a real body is symmetric and positive definite, and its principal moments satisfy the
+triangle inequality: each is at most the sum of the other two (``I_1 + I_2 - I_3 = 2 int x_3^2 dm
+>= 0``).  Tensors computed from measurements carry round-off, so the triangle inequality is allowed
+:data:`TRIANGLE_TOLERANCE` relative to the sum of the principal moments; every check of the project
+(bodies, benchmark parameters, BicycleParameters files, a Measured file's compound-pendulum
+``I_yy``, the rider) goes through :func:`inertia_problem`, so all use that one margin.
+
+Every body of the benchmark is symmetric about its XZ plane: its tensor is
+``[[xx, 0, xz], [0, yy, 0], [xz, 0, zz]]``, ``y`` is a principal axis, and the principal moments are
+``yy`` and those of the xz block in closed form (:func:`plane_symmetric_principal_moments`), so
+the check runs on plain floats.
+"""
 from __future__ import annotations
 
 import math
@@ -7,91 +20,11 @@ import numpy as np
 
 from bikerider.errors import InputError
 
-#: Relative slack for the triangle inequality, for round-off in tensors computed from data.
+#: Relative slack of the triangle inequality (of the sum of the principal moments), for round-off
+#: in tensors computed from data.
 TRIANGLE_TOLERANCE = 1e-9
-
-
-def check_inertia_tensor(name: str, tensor: np.ndarray, source: str | None = None) -> None:
-    """Raise :class:`InputError` unless ``tensor`` is symmetric, positive definite and its
-    principal moments satisfy the triangle inequality (each at most the sum of the other two).
-
-    A tensor with NaN in the yy entry (not measured) is checked in its xz block only.
-    """
-    t = np.asarray(tensor, dtype=float)
-    if t.shape != (3, 3):
-        raise InputError(name, t.shape, "a 3x3 inertia tensor", source)
-    rows = t.tolist()  # nine Python floats: far cheaper than NumPy calls on a 3x3
-    xx, xz, zx, zz = rows[0][0], rows[0][2], rows[2][0], rows[2][2]
-    if not all(math.isfinite(x) for x in (xx, xz, zx, zz)):
-        raise InputError(name, rows, "finite moments and products of inertia", source)
-    finite = [(i, j) for i in range(3) for j in range(3) if math.isfinite(rows[i][j]) and math.isfinite(rows[j][i])]
-    if any(abs(rows[i][j] - rows[j][i]) > 1e-12 + 1e-12 * abs(rows[j][i]) for i, j in finite):
-        raise InputError(name, rows, "a symmetric tensor", source)
-    # The checks below are scale invariant; on the tensor over its largest entry they cannot overflow.
-    scale = max(abs(rows[i][j]) for i in range(3) for j in range(3) if math.isfinite(rows[i][j])) or 1.0
-    b_xx, b_xz, b_zz = xx / scale, xz / scale, zz / scale
-    if b_xx <= 0 or b_zz <= 0 or b_xx * b_zz - b_xz**2 <= 0:
-        raise InputError(
-            name,
-            f"Ixx={xx:.6g}, Izz={zz:.6g}, Ixz={xz:.6g}",
-            "positive moments with Ixx*Izz > Ixz^2 (a positive definite tensor)",
-            source,
-        )
-    if math.isfinite(rows[1][1]):
-        unit = _principal_moments(t / scale)
-        principal = unit * scale
-        if unit[0] <= 0:
-            raise InputError(name, principal.tolist(), "positive principal moments of inertia", source)
-        slack = TRIANGLE_TOLERANCE * unit.sum()
-        if unit[2] > unit[0] + unit[1] + slack:
-            raise InputError(
-                name,
-                f"principal moments {principal[0]:.6g}, {principal[1]:.6g}, {principal[2]:.6g}",
-                "each principal moment at most the sum of the other two (triangle inequality)",
-                source,
-            )
-
-
-#: Margin, relative to the tensor's largest entry, by which :func:`clearly_valid_plane_symmetric`
-#: wants each test passed (far above the round-off of the few operations either check does).
-_CLEAR_MARGIN = 1e-12
-
-
-def clearly_valid_plane_symmetric(xx: float, yy: float | None, zz: float, xz: float) -> bool:
-    """Whether :func:`check_inertia_tensor` certainly accepts the tensor of a body symmetric about
-    its XZ plane, ``[[xx, 0, xz], [0, yy, 0], [xz, 0, zz]]`` (``yy`` None: not determined, the xz
-    block alone is checked).
-
-    The same tests on the same scaled entries in plain floats (positive definite xz block, positive
-    principal moments, triangle inequality), each passed by :data:`_CLEAR_MARGIN` and the triangle
-    inequality without the full check's slack.  ``False`` means only "not shown here": the caller
-    then runs the full check, which raises with its own message or accepts a borderline tensor.
-    Non-finite entries give ``False`` (every comparison with NaN fails).
-    """
-    if yy is not None and not math.isfinite(yy):
-        return False
-    scale = max(abs(xx), abs(zz), abs(xz), 0.0 if yy is None else abs(yy))
-    if not 0.0 < scale < math.inf:
-        return False
-    b_xx, b_zz, b_xz = xx / scale, zz / scale, xz / scale
-    if not (b_xx > _CLEAR_MARGIN and b_zz > _CLEAR_MARGIN and b_xx * b_zz - b_xz * b_xz > _CLEAR_MARGIN):
-        return False
-    if yy is None:
-        return True
-    mean, radius = (b_xx + b_zz) / 2, math.hypot((b_xx - b_zz) / 2, b_xz)
-    low, middle, high = sorted((mean - radius, yy / scale, mean + radius))
-    return low > _CLEAR_MARGIN and high + _CLEAR_MARGIN <= low + middle
-
-
-def check_plane_symmetric_inertia(name: str, xx: float, yy: float | None, zz: float, xz: float,
-                                  source: str | None = None) -> None:
-    """:func:`check_inertia_tensor` of ``[[xx, 0, xz], [0, yy, 0], [xz, 0, zz]]`` (``yy`` None: not
-    determined), with the clear cases decided in plain floats (:func:`clearly_valid_plane_symmetric`)
-    and the rest, with every error message, left to the full check."""
-    if clearly_valid_plane_symmetric(xx, yy, zz, xz):
-        return
-    tensor = np.array([[xx, 0.0, xz], [0.0, math.nan if yy is None else yy, 0.0], [xz, 0.0, zz]], dtype=float)
-    check_inertia_tensor(name, tensor, source)
+#: Largest relative asymmetry ``|t_ij - t_ji|`` accepted (beyond an absolute 1e-12) in a general tensor.
+SYMMETRY_TOLERANCE = 1e-12
 
 
 def plane_symmetric_principal_moments(xx: float, yy: float, zz: float, xz: float) -> list[float]:
@@ -101,10 +34,71 @@ def plane_symmetric_principal_moments(xx: float, yy: float, zz: float, xz: float
     return sorted((mean - radius, yy, mean + radius))
 
 
-def _principal_moments(t: np.ndarray) -> np.ndarray:
-    """Ascending principal moments.  A body symmetric about its XZ plane (zero xy and yz entries,
-    every body of the benchmark) has them in closed form; any other tensor goes to ``eigvalsh``."""
-    if t[0, 1] == 0 and t[1, 0] == 0 and t[1, 2] == 0 and t[2, 1] == 0:
-        return np.array(plane_symmetric_principal_moments(float(t[0, 0]), float(t[1, 1]), float(t[2, 2]),
-                                                          float(t[0, 2])))
-    return np.linalg.eigvalsh(t)
+def inertia_problem(xx: float, yy: float | None, zz: float, xz: float) -> tuple[object, str] | None:
+    """Why a plane-symmetric tensor cannot belong to a real body, or ``None`` when it can.
+
+    ``yy`` None or NaN: not determined, the xz block alone is checked.  Returns ``(value shown,
+    what was expected)`` for an :class:`InputError`.
+    """
+    yy_known = yy is not None and math.isfinite(yy)
+    if not all(math.isfinite(x) for x in (xx, xz, zz)):
+        return [[xx, 0.0, xz], [0.0, yy if yy_known else math.nan, 0.0], [xz, 0.0, zz]], \
+            "finite moments and products of inertia"
+    # The checks below are scale invariant; on the tensor over its largest entry they cannot overflow.
+    scale = max(abs(xx), abs(zz), abs(xz), abs(yy) if yy_known else 0.0) or 1.0
+    b_xx, b_xz, b_zz = xx / scale, xz / scale, zz / scale
+    if b_xx <= 0 or b_zz <= 0 or b_xx * b_zz - b_xz**2 <= 0:
+        return (f"Ixx={xx:.6g}, Izz={zz:.6g}, Ixz={xz:.6g}",
+                "positive moments with Ixx*Izz > Ixz^2 (a positive definite tensor)")
+    if not yy_known:
+        return None
+    unit = plane_symmetric_principal_moments(b_xx, yy / scale, b_zz, b_xz)  # type: ignore[operator]
+    return _principal_problem(unit, scale)
+
+
+def _principal_problem(unit: list[float], scale: float) -> tuple[object, str] | None:
+    """The positivity and triangle checks on ascending principal moments of the scaled tensor."""
+    principal = [p * scale for p in unit]
+    if unit[0] <= 0:
+        return principal, "positive principal moments of inertia"
+    if unit[2] > unit[0] + unit[1] + TRIANGLE_TOLERANCE * math.fsum(unit):
+        return (f"principal moments {principal[0]:.6g}, {principal[1]:.6g}, {principal[2]:.6g}",
+                "each principal moment at most the sum of the other two (triangle inequality)")
+    return None
+
+
+def check_plane_symmetric_inertia(name: str, xx: float, yy: float | None, zz: float, xz: float,
+                                  source: str | None = None) -> None:
+    """Raise :class:`InputError` naming ``name`` unless :func:`inertia_problem` finds nothing."""
+    problem = inertia_problem(xx, yy, zz, xz)
+    if problem is not None:
+        raise InputError(name, problem[0], problem[1], source)
+
+
+def check_inertia_tensor(name: str, tensor: np.ndarray, source: str | None = None) -> None:
+    """Raise :class:`InputError` unless ``tensor`` is symmetric, positive definite and its
+    principal moments satisfy the triangle inequality (each at most the sum of the other two).
+
+    A tensor with NaN in the yy entry (not measured) is checked in its xz block only.  A tensor of
+    a body symmetric about its XZ plane goes to :func:`inertia_problem`; any other to the same
+    rules with ``numpy.linalg.eigvalsh``.
+    """
+    t = np.asarray(tensor, dtype=float)
+    if t.shape != (3, 3):
+        raise InputError(name, t.shape, "a 3x3 inertia tensor", source)
+    rows = t.tolist()  # nine Python floats: far cheaper than NumPy calls on a 3x3
+    xx, xz, zx, zz, yy = rows[0][0], rows[0][2], rows[2][0], rows[2][2], rows[1][1]
+    if not all(math.isfinite(x) for x in (xx, xz, zx, zz)):
+        raise InputError(name, rows, "finite moments and products of inertia", source)
+    finite = [(i, j) for i in range(3) for j in range(3) if math.isfinite(rows[i][j]) and math.isfinite(rows[j][i])]
+    if any(abs(rows[i][j] - rows[j][i]) > 1e-12 + SYMMETRY_TOLERANCE * abs(rows[j][i]) for i, j in finite):
+        raise InputError(name, rows, "a symmetric tensor", source)
+    if rows[0][1] == rows[1][0] == rows[1][2] == rows[2][1] == 0:
+        check_plane_symmetric_inertia(name, xx, yy, zz, xz, source)
+        return
+    problem = inertia_problem(xx, None, zz, xz)  # the xz block first, as for a plane-symmetric body
+    if problem is None and math.isfinite(yy):
+        scale = max(abs(rows[i][j]) for i in range(3) for j in range(3))
+        problem = _principal_problem(np.linalg.eigvalsh(t / scale).tolist(), scale)
+    if problem is not None:
+        raise InputError(name, problem[0], problem[1], source)

@@ -7,6 +7,10 @@ from dataclasses import dataclass
 
 from bikerider.errors import InputError
 
+DEG = math.pi / 180
+"""One degree in radians: angles are given in degrees only at the input boundary and converted there,
+once, by this factor (``math.radians`` multiplies by the same number)."""
+
 _PLUS_MINUS = re.compile(r"^\s*([^\s+/]+(?:[eE][+-]?\d+)?)\s*(?:\+/-|±)\s*(\S+)\s*$")
 
 

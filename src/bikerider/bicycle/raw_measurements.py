@@ -1,35 +1,33 @@
-"""Reduce a BicycleParameters ``<Name>Measured.txt`` file to :class:`BicycleBodies`.
+"""Reduce BicycleParameters raw measurements (a ``<Name>Measured.txt`` file's values) to
+:class:`BicycleBodies`.
 
-The chain, each step in its own module:
+The chain, each step a generated stage (``derive/measured_reduction.py``, where each formula is
+written down) run by the uncertainty engine (:mod:`bikerider.engine`):
 
 1. wheel radii from the distance rolled in a number of turns, and the frame geometry either from
-   wheelbase, head tube angle and fork offset or from the heights-and-diameters measurements
-   (:mod:`bikerider.bicycle.measured_geometry`);
-2. the torsional pendulum stiffness from the calibration rod (mass ``mP``, diameter ``dP``,
-   length ``lP``, period ``TtP1``);
+   wheelbase ``w``, head tube angle ``gamma`` and fork offset ``f``, or from the heights and
+   diameters ``h1..h5``, ``d1..d4``, ``d``;
+2. the torsional pendulum stiffness from the calibration rod (mass ``mP``, diameter ``dP``, length
+   ``lP``, period ``TtP1``);
 3. centres of mass of the rear frame ``B`` and the handlebar/fork ``H`` (or, measured apart, the
-   handlebar ``G`` and the fork ``S``) from the hanging angles ``alphaXi`` and distances ``aXi``
-   (:mod:`bikerider.bicycle.hanging_lines`);
-4. wheel moments ``IRxx``/``IFxx`` from one torsional period each, in-plane inertia of B, H (or G
-   and S) from the torsional periods ``TtXi`` at the hanging orientations (Eq. 6, least squares for
-   more than three), and ``I_yy`` of wheels and bodies from compound-pendulum periods ``TcX1``
-   (Eq. 7) about the wheel axle (``B``, ``H``, ``S``) or the handlebar reference point (``G``);
-5. ``G`` and ``S`` combined into ``H`` (mass, centre of mass, parallel axis);
-6. seating measurements when the file has them (:mod:`bikerider.bicycle.seating`).
+   handlebar ``G`` and the fork ``S``) from the hanging angles ``alphaXi`` and distances ``aXi``, and
+   their in-plane inertia from the torsional periods ``TtXi`` (Eq. 6): in closed form for three
+   orientations, by the numeric least-squares stage (:class:`bikerider.engine.LeastSquaresStage`)
+   for more, or for BicycleParameters' centre-of-mass method (the mean of the pairwise
+   intersections of the lines);
+4. wheel moments ``IRxx``/``IFxx`` from one torsional period each, and ``I_yy`` of wheels and
+   bodies from compound-pendulum periods ``TcX1`` (Eq. 7) about the wheel axle (``B``, ``H``,
+   ``S``) or the handlebar reference point (``G``);
+5. ``G`` and ``S`` combined into ``H`` (mass, centre of mass, parallel axis: the generated
+   ``combination.rear_body``);
+6. the seating measurements when the file has them (see "Seating" below).
 
 Units are those of BicycleParameters: metres, kilograms, seconds; ``gamma`` and ``alphaXi`` in
-degrees; ``lamst`` in radians.
+degrees (converted to radians once, here); ``lamst`` in radians.
 
-Uncertainty.  The whole chain is one function of the file's values; every output's standard
-uncertainty is propagated from every input's at first order, so shared inputs (stiffness, steer
-axis tilt) are handled consistently.  For the template's layout (wheelbase geometry, rear frame and
-handlebar/fork each hung in three orientations, all compound periods) the values and exact
-uncertainties come from a generated closed form (:mod:`bikerider.bicycle.closed_form_reduction`)
-whenever every check below passes.  Every other layout, every other centre-of-mass method, and every
-file a check rejects goes through the general route: a numerical Jacobian
-(:mod:`bikerider.bicycle.propagation`) of the chain written with NumPy on arrays of points, the
-nominal point and all ``2 k + 1`` perturbed points in one call (:func:`evaluate_measured`; bodies
-hung in the same number of orientations reduced together), which raises the errors.
+Uncertainty.  The whole chain is one set of stages: every output's standard uncertainty is
+propagated from every input's at first order with the stages' exact Jacobians, so shared inputs
+(stiffness, steer axis tilt) are handled consistently.
 
 Checks (on the nominal values).  A missing field raises :class:`InputError` naming it and saying
 what it is for.  Periods, masses and lengths must be positive.  Repeated trials of a period (comma
@@ -39,6 +37,46 @@ random timing error; agreement within that is absorbed into the uncertainty (see
 :mod:`bikerider.io.name_value_file`).  Hanging lines that miss their common point by more than the
 line tolerance raise :class:`FitError`; orientations that leave Eq. 6 singular raise
 :class:`InputError`.
+
+Hanging angles.  Each hanging photograph gives ``alpha``, the angle (degrees, counter-clockwise
+seen from the bicycle's right side) of the upward steer-axis direction from the photograph's
+horizontal, and ``a``, the perpendicular distance from the vertical pendulum axis to a reference
+point on the body (a wheel centre or the handlebar reference point), positive when the reference
+point is left of the axis in the photograph.  Turning the photograph back so the bicycle is upright
+carries the vertical axis to the angle ``beta = lam - alpha`` (``lam`` the steer axis tilt; modulo
+180 degrees, which a line does not notice), and "left of the upward axis" becomes the side the
+line's normal ``n = (sin(beta), cos(beta))`` points to, so the line is ``n . p = n . p_ref - a``.
+
+Seating.  BicycleParameters' Measured files describe where a rider sits with eight numbers (used by
+its ``rider.py`` to pose a Yeadon human):
+
+========  ===================================================================================
+``lcs``   chain stay length, rear axle to bottom bracket [m] -- the paper's ``l_cs``
+``hbb``   bottom bracket height above the ground [m] -- ``h_bb``
+``lst``   seat tube length, bottom bracket to top of the seat tube [m] -- ``l_st``
+``lsp``   seat post length, top of the seat tube to the top of the seat [m] -- ``l_sp``
+``lamst`` seat tube angle from the ground, **radians** -- ``lam_st``
+``whb``   handlebar width, between the two grips [m]
+``LhbF``  distance from the front wheel centre (on the mid-plane) to a handlebar grip [m]
+``LhbR``  distance from the rear wheel centre (on the mid-plane) to a handlebar grip [m]
+========  ===================================================================================
+
+The last three come from the closure equations of BicycleParameters' ``rider.py``: the grip lies
+``whb/2`` to the side of the mid-plane, so its in-plane distances from the wheel centres are
+``sqrt(LhbF^2 - (whb/2)^2)`` and ``sqrt(LhbR^2 - (whb/2)^2)``; the grip's ``(x, z)`` is where those
+two circles about ``(w, -rF)`` and ``(0, -rR)`` meet above the wheel centres.  The paper's model
+(Table 10) places the hands differently: from the top of the head tube ``r12`` (the steer axis at
+the height of the top of the seat tube ``r10``) up the head tube by the stem length ``l_s`` to
+``r16``, then back by the handlebar length ``l_hb``.  So the grip position gives the *equivalent*
+stem and handlebar lengths that put the model's hands where the grips are (the generated
+``seating`` stage).  Two differences remain and are documented, not hidden: the model's hands are
+``l_ss/2`` (the rider's half shoulder width) from the mid-plane, not ``whb/2``; and the fork length
+``l_f`` is not measured.  ``l_f`` only places the bottom of the head tube ``r11``, which no segment
+of the rider uses (``r12`` depends only on the steer axis and ``r10``), so it drops out of every
+rider output; we give the distance from the front wheel centre to ``r12`` (a head tube of zero
+length), which always exceeds the fork offset as the model requires.  The hub widths ``w_fh`` and
+``w_rh`` are not measured either; they place only the hub grid points, which no segment uses, and
+are left out.
 """
 from __future__ import annotations
 
@@ -47,37 +85,23 @@ import logging
 import math
 import re
 import statistics
-from collections.abc import Collection, Mapping
+from collections.abc import Callable, Collection, Mapping
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
-from bikerider.bicycle import measured_geometry as geo
-from bikerider.bicycle import seating
 from bikerider.bicycle.bodies import BicycleBodies
-from bikerider.bicycle.closed_form_reduction import reduce_standard_layout
-from bikerider.bicycle.hanging_lines import (
-    DEFAULT_LINE_TOLERANCE, LineIntersection, check_lines_meet, check_not_parallel,
-    least_squares_point, pairwise_mean_point,
+from bikerider.bicycle.pendulum import (
+    DEFAULT_LINE_TOLERANCE, PARALLEL, PARALLEL_CONDITIONING, SINGULAR_DETERMINANT, LineIntersection, check_lines_meet,
 )
-from bikerider.bicycle.pendulum import SINGULAR_DETERMINANT
-from bikerider.bicycle.propagation import propagate
+from bikerider.engine import GeneratedStage, LeastSquaresStage, Stage, arguments, conditioning_2x2, first_order
 from bikerider.errors import FitError, InputError
 from bikerider.fitting import PERIOD_TRIAL_TOLERANCE
-from bikerider.generated import combination as gen_combination
-from bikerider.generated import pendulum as gen_pendulum
-from bikerider.inertia import check_inertia_tensor, plane_symmetric_principal_moments
-from bikerider.io.name_value_file import NameValueFile, read_name_value_file
-from bikerider.quantity import Quantity, check_degrees, check_magnitude
+from bikerider.generated.manifest import STAGES
+from bikerider.inertia import inertia_problem, plane_symmetric_principal_moments
+from bikerider.quantity import DEG, Quantity, check_degrees, check_magnitude
 
 LOG = logging.getLogger(__name__)
-
-
-#: Below this |determinant| of Eq. 6 for three orientations (``2 sin(b1-b2) sin(b1-b3) sin(b2-b3)``),
-#: or this smallest singular value for more, the pendulum axes nearly coincide and the in-plane
-#: inertia is not determined (the threshold of :mod:`bikerider.bicycle.pendulum`).
-SINGULAR_ORIENTATIONS = SINGULAR_DETERMINANT
 
 BODIES = {
     "B": "rear frame",
@@ -128,8 +152,9 @@ FIELD_PURPOSES: dict[str, str] = {
 _WHEELS = ("dF", "nF", "dR", "nR", "mR", "mF", "g", "lF", "lR", "TcF1", "TcR1", "TtF1", "TtR1")
 _ROD = ("mP", "dP", "lP", "TtP1")
 _WHEELBASE_GEOMETRY = ("w", "gamma", "f")
-_HEIGHTS_GEOMETRY = ("h1", "h2", "h3", "h4", "h5", "d1", "d2", "d3", "d4", "d")
-_HANDLEBAR_REFERENCE = ("h6", "h7", "d5", "d6", "l")
+_HEIGHTS_GEOMETRY = tuple(a for a in arguments("measured_reduction.frame_from_heights") if a not in ("rF", "rR"))
+_HANDLEBAR_REFERENCE = tuple(a for a in arguments("measured_reduction.handlebar_reference")
+                             if a not in ("w", "rF", "lam"))
 _POSITIVE = ("dF", "nF", "dR", "nR", "mR", "mF", "mB", "mH", "mG", "mS", "g", "lF", "lR", "mP", "dP", "lP", "w")
 _INDEXED = re.compile(r"^(alpha|a|Tt|Tc)([BHGS])(\d+)$")
 _KNOWN_EXTRAS = {"xcl", "zcl", "ds1", "ds3"}
@@ -260,7 +285,7 @@ def _detect_layout(values: Collection[str], source: str) -> MeasuredLayout:
             )
         orientations[body] = ordered
     compound = {body: f"Tc{body}1" in values for body in hung}
-    return MeasuredLayout(geometry, split, orientations, compound, all(k in values for k in seating.MEASURED_NAMES))
+    return MeasuredLayout(geometry, split, orientations, compound, all(k in values for k in SEATING_FIELDS))
 
 
 @functools.lru_cache(maxsize=1024)
@@ -283,9 +308,8 @@ def _raw_limit(name: str) -> tuple[float, str]:
     return 10.0, "m"  # every other value of a Measured file is a length
 
 
-def _check_values(values: Mapping[str, Quantity], layout: MeasuredLayout, source: NameValueFile | str,
+def _check_values(values: Mapping[str, Quantity], where: Callable[[str], str],
                   repeats: Mapping[str, tuple[Quantity, ...]]) -> None:
-    where = source.where if isinstance(source, NameValueFile) else (lambda name: str(source))
     for name, q in values.items():
         limit, unit = _raw_limit(name)
         if not (abs(q.value) <= limit and abs(q.sigma) <= limit):  # check_magnitude passes these
@@ -315,213 +339,214 @@ def _check_values(values: Mapping[str, Quantity], layout: MeasuredLayout, source
             )
 
 
-def _first(value) -> float:
-    """The value at the first point of a batch (the nominal point; see :func:`evaluate_measured`)."""
-    return float(value[0]) if np.ndim(value) else float(value)
+SEATING_FIELDS: tuple[str, ...] = ("lcs", "hbb", "lsp", "lst", "lamst", "whb", "LhbF", "LhbR")
+"""BicycleParameters' seating measurements (see the module docstring)."""
+
+SEATING_OUTPUTS: tuple[str, ...] = ("h_bb", "l_cs", "l_f", "l_hb", "lam_st", "l_st", "l_s", "l_sp")
+"""The paper's seating measurements (Table 1) derived from them; ``w_fh`` and ``w_rh`` are not."""
+
+HAND_OUTPUTS: tuple[str, ...] = ("x_hand", "z_hand")
+"""The grip position in the benchmark frame [m] (an extra, for plots and checks)."""
+
+SEATING_NOTE = ("seating: l_s and l_hb are equivalent lengths that put the model's hands on the grips "
+                "(LhbF, LhbR); l_f drops out of the rider model; hub widths w_fh, w_rh not measured")
+
+_SEATING_NODES = tuple(a for a in arguments("measured_reduction.seating") if a not in arguments(
+    "measured_reduction.frame_from_wheelbase") and a not in STAGES["frame_from_wheelbase"]["outputs"])
+"""The seating stage's own inputs (``whb, LhbF, LhbR, h_bb, l_st, lam_st``)."""
+NODES = {"gamma": "lam_ht", "mB": "mBf", "lcs": "l_cs", "hbb": "h_bb", "lsp": "l_sp", "lst": "l_st",
+         "lamst": "lam_st"}
+"""The reduction's node names (the symbol table's) of the file's fields that differ from them."""
+_IN_DEGREES = re.compile(r"^(gamma|alpha[A-Z]\d+)$")
+"""Fields the file gives in degrees (their nodes are in radians)."""
 
 
-@dataclass
-class _Hung:
-    """One hung body at every point of a batch (see :func:`_hang`)."""
-
-    x: np.ndarray
-    z: np.ndarray
-    inertia: np.ndarray
-    """``[Ixx, Ixz, Izz]`` at every point, shape (points, 3)."""
-    fit: LineIntersection
-    """The least-squares line fit at the first point."""
-    conditioning: np.ndarray
-    """Of the lines at every point (:func:`~bikerider.bicycle.hanging_lines.least_squares_point`)."""
-    betas: np.ndarray
-    """Pendulum axis angles at the first point [rad]."""
-    singularity: float
-    """|determinant| of Eq. 6 (three orientations) or the smallest singular value of its rows (more),
-    at the first point; ``inf`` when not computed."""
-    yy: np.ndarray | float = math.nan
-    length: float = math.nan
-    """Compound pendulum length at the first point."""
+def _node_name(body: str) -> str:
+    return "Bf" if body == "B" else body
 
 
-def _hang(x: Mapping[str, np.ndarray], layout: MeasuredLayout, lam: np.ndarray, k_t: np.ndarray,
-          references: dict, com_method: str, check: bool) -> dict[str, _Hung]:
-    """Centres of mass (hanging lines), in-plane inertia (Eq. 6) and I_yy (Eq. 7) of every hung body.
+def _layout_key(layout: MeasuredLayout, com_method: str) -> tuple:
+    return (layout.geometry, layout.split_fork, tuple(layout.orientations.items()), tuple(layout.compound.items()),
+            layout.seating, com_method)
 
-    Bodies hung in the same number of orientations are reduced together: arrays are (orientations,
-    bodies, points), so each step is one array operation for them all and every point.
-    """
-    groups: dict[int, list[str]] = {}
+
+def _is_standard(key: tuple) -> bool:
+    """Whether a layout is BicycleParameters' template (the generated ``standard_layout`` stage):
+    wheelbase geometry, the rear frame and handlebar/fork each hung in three orientations with their
+    compound periods, and the least-squares centre of mass."""
+    geometry, split_fork, orientations, compound, _, com_method = key
+    return (geometry == "wheelbase" and not split_fork and orientations == (("B", (1, 2, 3)), ("H", (1, 2, 3)))
+            and compound == (("B", True), ("H", True)) and com_method == "least_squares")
+
+
+@functools.lru_cache(maxsize=64)
+def _stages(key: tuple) -> tuple[Stage, ...]:
+    """The stages of a layout (cached: files of one template share them)."""
+    geometry, split_fork, orientations, compound, seating, com_method = key
+    if _is_standard(key):  # every step in one generated stage: one call for the common layout
+        checks = {f"{body}_{check}": f"{body}.{check}" for body in "BH"
+                  for check in ("miss_1", "miss_2", "miss_3", "lines_det", "eq6_det")}
+        checks.update({f"{body}_l_p": f"{body}.compound.l_p" for body in "BH"})
+        return (GeneratedStage("standard_layout", "standard_layout", checks=checks),)
+    compound = dict(compound)
+    stages: list[Stage] = [
+        GeneratedStage("frame_from_wheelbase" if geometry == "wheelbase" else "frame_from_heights", "frame"),
+        GeneratedStage("wheels"),
+    ]
+    references = {"B": ("x_rear", "z_rear"), "H": ("x_front", "z_front"), "S": ("x_front", "z_front"),
+                  "G": ("x_refG", "z_refG")}
+    if split_fork:
+        stages.append(GeneratedStage("handlebar_reference", "G_reference", outputs={"x_ref": "x_refG",
+                                                                                     "z_ref": "z_refG"}))
+    for body, indices in orientations:
+        name = _node_name(body)
+        x_ref, z_ref = references[body]
+        shared = {"x_ref": x_ref, "z_ref": z_ref}
+        point = _least_squares_point(body, com_method)
+        if len(indices) == 3:
+            hung = {**{f"hang_{k}": f"alpha{body}{i}" for k, i in enumerate(indices, start=1)},
+                    **{f"off_{k}": f"a{body}{i}" for k, i in enumerate(indices, start=1)},
+                    **{f"T_{k}": f"Tt{body}{i}" for k, i in enumerate(indices, start=1)}}
+            stages.append(GeneratedStage("hung_body_3", body, {**shared, **hung},
+                                         {"x": point[0], "z": point[1],
+                                          **{f"I{a}": f"I{name}{a}" for a in ("xx", "xz", "zz")}}))
+        else:
+            lines = [{"hang": f"alpha{body}{i}", "off": f"a{body}{i}", **shared} for i in indices]
+            stages += [
+                LeastSquaresStage(f"{body}.lines", "hanging_line", lines, ("s", "c"), "d", point),
+                LeastSquaresStage(f"{body}.tensor", "hung_orientation_equation",
+                                  [{"hang": f"alpha{body}{i}", "T": f"Tt{body}{i}"} for i in indices],
+                                  ("r_xx", "r_xz", "r_zz"), "J", tuple(f"I{name}{a}" for a in ("xx", "xz", "zz"))),
+            ]
+        if com_method == "pairwise_mean":
+            lines = [{"hang": f"alpha{body}{i}", "off": f"a{body}{i}", **shared} for i in indices]
+            stages.append(LeastSquaresStage(f"{body}.pairwise", "hanging_line", lines, ("s", "c"), "d",
+                                            (f"x{name}", f"z{name}"), method="pairwise_mean"))
+        if compound[body]:
+            stages.append(GeneratedStage("compound_about_point", f"{body}.compound",
+                                         {"T": f"Tc{body}1", "m_p": f"m{name}", "x_c": f"x{name}", "z_c": f"z{name}",
+                                          **shared}, {"Iyy": f"I{name}yy"}))
+    if split_fork:
+        frame = {f"{p}Bf": f"{p}G" for p in ("m", "x", "z")} | {f"IBf{a}": f"IG{a}" for a in ("xx", "yy", "zz", "xz")}
+        rider = {f"{p}Br": f"{p}S" for p in ("m", "x", "z")} | {f"IBr{a}": f"IS{a}" for a in ("xx", "yy", "zz", "xz")}
+        combined = {p: p.replace("B", "H", 1) for p in ("mB", "xB", "zB", "IBxx", "IByy", "IBzz", "IBxz")}
+        stages.append(GeneratedStage("rear_body", "H_from_G_and_S", frame | rider, combined))
+    if seating:
+        stages.append(GeneratedStage("seating"))
+    return tuple(stages)
+
+
+@functools.lru_cache(maxsize=1024)
+def _node_of_field(field_name: str) -> tuple[str | None, float]:
+    """The node of a file's field and the factor to SI (``None``: a field the bodies do not use)."""
+    if field_name in _KNOWN_EXTRAS:
+        return None, 1.0
+    return NODES.get(field_name, field_name), DEG if _IN_DEGREES.match(field_name) else 1.0
+
+
+def measured_inputs(values: Mapping[str, Quantity], layout: MeasuredLayout) -> dict[str, Quantity]:
+    """The file's values as the reduction's input nodes: SI units (degrees to radians, once) and the
+    symbol table's names; an ``I_yy`` the file gives no compound period for is NaN."""
+    inputs = {}
+    for field_name, q in values.items():
+        node, factor = _node_of_field(field_name)
+        if node is None:
+            continue
+        inputs[node] = q if factor == 1.0 else Quantity(q.value * factor, q.sigma * factor)
+    for body, measured in layout.compound.items():
+        if not measured:
+            inputs[f"I{_node_name(body)}yy"] = Quantity(math.nan)
+    if not layout.seating:  # the seating stage's inputs; NaN reaches the seating outputs alone
+        for name in _SEATING_NODES:
+            inputs.setdefault(name, Quantity(math.nan))
+    return inputs
+
+
+def _line_fit(nodes: Mapping[str, object], point: tuple[str, str], misses: list[str]) -> LineIntersection:
+    """The least-squares line fit of a hung body: point, signed distances and rms."""
+    distances = np.array([float(nodes[m]) for m in misses])  # type: ignore[arg-type]
+    return LineIntersection(np.array([float(nodes[point[0]]), float(nodes[point[1]])]), distances,  # type: ignore[arg-type]
+                            math.sqrt(math.fsum(d * d for d in distances.tolist()) / len(misses)))
+
+
+def _least_squares_point(body: str, com_method: str) -> tuple[str, str]:
+    """The nodes of a hung body's least-squares point (its centre of mass unless the pairwise
+    mean is asked for)."""
+    name = _node_name(body)
+    return (f"x{name}", f"z{name}") if com_method == "least_squares" else (f"{body}.x", f"{body}.z")
+
+
+def _check(nodes: Mapping[str, object], layout: MeasuredLayout, com_method: str, line_tolerance: float,
+           source: str, lines: dict[str, LineIntersection]) -> None:
+    """The checks of the reduction at the nominal point, in the order of its steps; fills ``lines``."""
+    lam = float(nodes["lam"])  # type: ignore[arg-type]
+    if layout.geometry == "heights" and not math.isfinite(lam):
+        a, b = float(nodes["frame.a"]), float(nodes["frame.b"])  # type: ignore[arg-type]
+        raise InputError("d", float(nodes["d"]), "heights and diameters that close into a frame: "  # type: ignore[arg-type]
+                         f"offsets a = {a:.4f} m, b = {b:.4f} m give no steer axis tilt", source)
+    if not 0 < lam < math.pi / 2:
+        raise InputError("gamma" if layout.geometry == "wheelbase" else "h1", math.degrees(math.pi / 2 - lam),
+                         "a head tube angle between 0 and 90 degrees", source)
+    for wheel in ("R", "F"):
+        _check_compound(f"Tc{wheel}1", nodes[f"I{wheel}yy"], nodes[f"Tc{wheel}1"], nodes[f"l{wheel}"], nodes["g"],
+                        source)
+    if layout.split_fork and not math.isfinite(float(nodes["G_reference.l2"])):  # type: ignore[arg-type]
+        raise InputError("l", float(nodes["l"]), "an axle-to-reference-circle distance longer than the height "  # type: ignore[arg-type]
+                         f"difference l1 = {float(nodes['G_reference.l1']):.4f} m", source)  # type: ignore[arg-type]
     for body, indices in layout.orientations.items():
-        groups.setdefault(len(indices), []).append(body)
-    hung: dict[str, _Hung] = {}
-    for m, bodies in groups.items():
-        names = [list(zip(bodies, slot)) for slot in zip(*(layout.orientations[b] for b in bodies))]
-
-        def gather(prefix: str, names=names) -> np.ndarray:
-            return np.array([[x[f"{prefix}{b}{i}"] for b, i in row] for row in names])
-
-        betas = lam - np.radians(gather("alpha"))
-        sin, cos = np.sin(betas), np.cos(betas)
-        ref_x = np.array([references[b][0] for b in bodies])
-        ref_z = np.array([references[b][1] for b in bodies])
-        offsets = sin * ref_x + cos * ref_z - gather("a")
-        ls_x, ls_z, conditioning = least_squares_point(sin, cos, offsets, axis=0)
-        px, pz = (ls_x, ls_z) if com_method == "least_squares" else pairwise_mean_point(sin, cos, offsets, axis=0)
-        periods = gather("Tt")
+        name, m = _node_name(body), len(indices)
+        point = _least_squares_point(body, com_method)
         if m == 3:
-            inertia, det = gen_pendulum.inertia_from_three_orientations(
-                k_t=k_t, T_1=periods[0], T_2=periods[1], T_3=periods[2],
-                alpha_1=betas[0], alpha_2=betas[1], alpha_3=betas[2])  # (bodies, points, 3)
-            singularity = np.abs(det[:, 0])
-        else:  # least squares, one small SVD per point
-            rows = np.moveaxis(gen_pendulum.orientation_row(alpha=betas), 0, 2)  # (bodies, points, m, 3)
-            moments = np.moveaxis(gen_pendulum.torsional_inertia(k_t=k_t, T=periods), 0, 2)[..., None]
-            inertia = (np.linalg.pinv(rows) @ moments)[..., 0]
-            singularity = (np.linalg.svd(rows[:, 0], compute_uv=False)[:, -1] if check
-                           else np.full(len(bodies), math.inf))
-        # The line fit at the first (nominal) point, for the check and the report.
-        sin0, cos0, offsets0 = sin[:, :, 0].T.tolist(), cos[:, :, 0].T.tolist(), offsets[:, :, 0].T.tolist()
-        for j, body in enumerate(bodies):
-            x0, z0 = float(ls_x[j, 0]), float(ls_z[j, 0])
-            miss = [s_ * x0 + c_ * z0 - d_ for s_, c_, d_ in zip(sin0[j], cos0[j], offsets0[j])]
-            fit = LineIntersection(np.array([x0, z0]), np.array(miss), math.sqrt(math.fsum(d * d for d in miss) / m))
-            hung[body] = _Hung(px[j], pz[j], inertia[j], fit, conditioning[j], betas[:, j, 0], float(singularity[j]))
-    compound = [b for b in layout.orientations if layout.compound[b]]
-    if compound:
-        lengths = np.array([np.hypot(hung[b].x - references[b][0], hung[b].z - references[b][1]) for b in compound])
-        yy = gen_pendulum.compound_inertia(T=np.array([x[f"Tc{b}1"] for b in compound]),
-                                           m_p=np.array([x[f"m{b}"] for b in compound]), g=x["g"], l_p=lengths)
-        for j, body in enumerate(compound):
-            hung[body].yy, hung[body].length = yy[j], float(lengths[j, 0])
-    return {body: hung[body] for body in layout.orientations}
+            fit = _line_fit(nodes, point, [f"{body}.miss_{i}" for i in (1, 2, 3)])
+            conditioning = conditioning_2x2(float(nodes[f"{body}.lines_det"]), 3.0)  # type: ignore[arg-type]
+            singularity = abs(float(nodes[f"{body}.eq6_det"]))  # type: ignore[arg-type]
+        else:
+            fit = _line_fit(nodes, point, [f"{body}.lines.miss_{i}" for i in range(1, m + 1)])
+            conditioning = float(nodes[f"{body}.lines.conditioning"])  # type: ignore[arg-type]
+            singularity = float(nodes[f"{body}.tensor.smallest_singular"])  # type: ignore[arg-type]
+        betas = [lam - float(nodes[f"alpha{body}{i}"]) for i in indices]  # type: ignore[arg-type]
+        lines[body] = fit
+        if not conditioning >= PARALLEL_CONDITIONING:
+            raise FitError(PARALLEL)
+        check_lines_meet(f"the {BODIES[body]} ({body})", fit, line_tolerance, source)
+        if not (math.isfinite(float(nodes[f"x{name}"])) and math.isfinite(float(nodes[f"z{name}"]))):  # type: ignore[arg-type]
+            raise FitError(f"{source}: the hanging lines are parallel: two lines of the {BODIES[body]} ({body}) "
+                           "meet nowhere, so the mean of their pairwise intersections is not defined")
+        if singularity < SINGULAR_DETERMINANT:
+            shown = ", ".join(f"{math.degrees(b) % 180:.1f}" for b in betas)
+            raise InputError(
+                f"alpha{body}", f"pendulum axes at [{shown}] deg from +x",
+                f"orientations of the {BODIES[body]} whose pendulum axes differ pairwise by more than a few "
+                f"degrees modulo 180 (Eq. 6 is singular for these: determinant {singularity:.2g})", source,
+            )
+        if layout.compound[body]:
+            _check_compound(f"Tc{body}1", nodes[f"I{name}yy"], nodes[f"Tc{body}1"], nodes[f"{body}.compound.l_p"],
+                            nodes["g"], source)
 
 
-def _check_hung(body: str, hung: _Hung, x: Mapping[str, np.ndarray], check: bool, line_tolerance: float,
-                source: str) -> None:
-    """The checks of one hung body, in the order of the reduction's steps."""
-    check_not_parallel(hung.conditioning)
-    if not check:
-        return
-    check_lines_meet(f"the {BODIES[body]} ({body})", hung.fit, line_tolerance, source)
-    if not (math.isfinite(hung.x[0]) and math.isfinite(hung.z[0])):
-        raise FitError(f"{source}: the hanging lines are parallel: two lines of the {BODIES[body]} ({body}) "
-                       "meet nowhere, so the mean of their pairwise intersections is not defined")
-    if hung.singularity < SINGULAR_ORIENTATIONS:
-        shown = ", ".join(f"{math.degrees(b) % 180:.1f}" for b in hung.betas)
-        raise InputError(
-            f"alpha{body}", f"pendulum axes at [{shown}] deg from +x",
-            f"orientations of the {BODIES[body]} whose pendulum axes differ pairwise by more than a few "
-            f"degrees modulo 180 (Eq. 6 is singular for these: determinant {hung.singularity:.2g})", source,
-        )
-    if np.ndim(hung.yy):
-        _check_compound(f"Tc{body}1", hung.yy, x[f"Tc{body}1"], hung.length, x["g"], source)
-
-
-def _check_compound(name: str, inertia: np.ndarray, period: np.ndarray, length: float, g: np.ndarray,
-                    source: str) -> None:
+def _check_compound(name: str, inertia, period, length, g, source: str) -> None:
     """A compound pendulum period too short for its length gives a negative I_yy: name it."""
-    if not inertia[0] > 0:
-        shortest = 2 * math.pi * math.sqrt(length / g[0])
+    if not float(inertia) > 0:
+        shortest = 2 * math.pi * math.sqrt(float(length) / float(g))
         raise InputError(
-            name, float(period[0]),
-            f"a compound pendulum period above {shortest:.4f} s, that of a point mass {length:.4f} m "
+            name, float(period),
+            f"a compound pendulum period above {shortest:.4f} s, that of a point mass {float(length):.4f} m "
             "from the pivot (a shorter one gives a negative moment of inertia)", source,
         )
 
 
-def evaluate_measured(x: Mapping[str, float], layout: MeasuredLayout, *, com_method: str = "least_squares",
-                      check: bool = False, line_tolerance: float = DEFAULT_LINE_TOLERANCE,
-                      source: str = "<memory>", lines: dict | None = None) -> dict:
-    """The whole reduction, without uncertainty, at one point or at a batch of points.
-
-    Parameters
-    ----------
-    x : mapping of str to float, or of str to 1-D array
-        The file's values (BicycleParameters units): floats for one point, or arrays of equal
-        length for a batch of points (as :func:`bikerider.bicycle.propagation.propagate` passes
-        with ``vectorized=True``, nominal point first).
-    layout : MeasuredLayout
-    com_method : {"least_squares", "pairwise_mean"}
-        How to locate a centre of mass from its lines: the least-squares point (ours) or the mean
-        of the pairwise intersections (BicycleParameters').
-    check : bool
-        Raise on lines that do not meet, singular orientations, non-physical results at the first
-        point.  Nearly parallel hanging lines raise :class:`FitError` at any point.
-    lines : dict, optional
-        Filled with each body's :class:`LineIntersection` at the first point.
-
-    Returns
-    -------
-    dict of str to float, or of str to array
-        BicycleBodies names, seating names when derivable, and the extras of
-        :class:`MeasuredReduction`: floats for one point, arrays over the batch for a batch.
-        NaN for what the file does not determine.
-    """
-    batch = np.ndim(next(iter(x.values()))) > 0
-    points = x if batch else {k: np.array([v], dtype=float) for k, v in x.items()}
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        out = _evaluate(points, layout, com_method, check, line_tolerance, source, lines)
-    if batch:
-        return out
-    return {k: float(v[0]) for k, v in out.items()}
-
-
-def _evaluate(x: Mapping[str, np.ndarray], layout: MeasuredLayout, com_method: str, check: bool,
-              line_tolerance: float, source: str, lines: dict | None) -> dict[str, np.ndarray]:
-    rF = geo.wheel_radius(x["dF"], x["nF"])
-    rR = geo.wheel_radius(x["dR"], x["nR"])
-    if layout.geometry == "wheelbase":
-        lam = np.radians(90.0 - x["gamma"])
-        w, fork_offset = x["w"], x["f"]
-    else:
-        a, b, c_axis = geo.perpendicular_offsets(
-            tuple(x[k] for k in _HEIGHTS_GEOMETRY[:5]), tuple(x[k] for k in _HEIGHTS_GEOMETRY[5:]))
-        lam = geo.steer_tilt_from_offsets(rF, rR, a, b, c_axis)
-        if check and not math.isfinite(lam[0]):
-            raise InputError("d", _first(x["d"]), "heights and diameters that close into a frame: "
-                             f"offsets a = {_first(a):.4f} m, b = {_first(b):.4f} m give no steer axis tilt", source)
-        w, fork_offset = geo.wheelbase_from_offsets(lam, a, b, c_axis), b
-    if check and not 0 < lam[0] < math.pi / 2:
-        raise InputError("gamma" if layout.geometry == "wheelbase" else "h1", math.degrees(math.pi / 2 - lam[0]),
-                         "a head tube angle between 0 and 90 degrees", source)
-    out = {"w": w, "c": geo.trail(rF, lam, fork_offset), "lam_ht": np.pi / 2 - lam, "g": x["g"], "rR": rR, "rF": rF,
-           "lam": lam, "f": fork_offset}
-
-    k_t = geo.torsional_stiffness(geo.rod_moment_of_inertia(x["mP"], x["dP"], x["lP"]), x["TtP1"])
-    out["k_t"] = k_t
-    wheel_xx = gen_pendulum.torsional_inertia(k_t=k_t, T=np.array([x["TtR1"], x["TtF1"]]))
-    wheel_yy = gen_pendulum.compound_inertia(T=np.array([x["TcR1"], x["TcF1"]]), m_p=np.array([x["mR"], x["mF"]]),
-                                             g=x["g"], l_p=np.array([x["lR"], x["lF"]]))
-    for j, wheel in enumerate(("R", "F")):
-        if check:
-            _check_compound(f"Tc{wheel}1", wheel_yy[j], x[f"Tc{wheel}1"], float(x[f"l{wheel}"][0]), x["g"], source)
-        out.update({f"m{wheel}": x[f"m{wheel}"], f"I{wheel}xx": wheel_xx[j], f"I{wheel}yy": wheel_yy[j]})
-
-    references = {"B": (np.zeros_like(rR), -rR), "H": (w, -rF), "S": (w, -rF)}
+def _outputs(layout: MeasuredLayout) -> list[str]:
+    """The reduction's outputs, in the order :class:`MeasuredReduction` reports them."""
+    out = ["w", "c", "lam_ht", "g", "rR", "rF", "lam", "f", "k_t"]
+    for wheel in ("R", "F"):
+        out += [f"m{wheel}", f"I{wheel}xx", f"I{wheel}yy"]
+    for body in layout.orientations:
+        name = _node_name(body)
+        out += [f"m{name}", f"x{name}", f"z{name}", f"I{name}xx", f"I{name}xz", f"I{name}zz", f"I{name}yy"]
     if layout.split_fork:
-        l1, l2 = geo.handlebar_reference_offsets(*(x[k] for k in _HANDLEBAR_REFERENCE))
-        if check and not math.isfinite(l2[0]):
-            raise InputError("l", _first(x["l"]), "an axle-to-reference-circle distance longer than the height "
-                             f"difference l1 = {_first(l1):.4f} m", source)
-        references["G"] = geo.handlebar_reference_point(w, rF, lam, l1, l2)
-    nan = np.full_like(lam, math.nan)
-    for body, hung in _hang(x, layout, lam, k_t, references, com_method, check).items():
-        _check_hung(body, hung, x, check, line_tolerance, source)
-        if lines is not None:
-            lines[body] = hung.fit
-        name = "Bf" if body == "B" else body
-        out.update({f"m{name}": x[f"m{body}"], f"x{name}": hung.x, f"z{name}": hung.z,
-                    f"I{name}xx": hung.inertia[:, 0], f"I{name}xz": hung.inertia[:, 1], f"I{name}zz": hung.inertia[:, 2],
-                    f"I{name}yy": hung.yy if np.ndim(hung.yy) else nan})
-    if layout.split_fork:
-        mH, xH, zH, IH = gen_combination.rear_body(
-            **{f"{p}Bf": out[f"{p}G"] for p in ("m", "x", "z")},
-            **{f"IBf{ax}": out[f"IG{ax}"] for ax in ("xx", "yy", "zz", "xz")},
-            **{f"{p}Br": out[f"{p}S"] for p in ("m", "x", "z")},
-            **{f"IBr{ax}": out[f"IS{ax}"] for ax in ("xx", "yy", "zz", "xz")},
-        )
-        out.update(mH=mH, xH=xH, zH=zH, IHxx=IH[..., 0, 0], IHyy=IH[..., 1, 1], IHzz=IH[..., 2, 2], IHxz=IH[..., 0, 2])
+        out += ["mH", "xH", "zH", "IHxx", "IHyy", "IHzz", "IHxz"]
     if layout.seating:
-        out.update(seating.seating_from_measured(x, rR=rR, rF=rF, w=w, lam=lam, trail=out["c"]))
+        out += ["h_bb", "l_cs", "l_sp", "l_st", "lam_st", "l_s", "l_hb", "l_f", "x_hand", "z_hand"]
     return out
 
 
@@ -530,23 +555,44 @@ _BODY_OUTPUTS = ("w", "c", "lam_ht", "g", "rR", "mR", "IRxx", "IRyy", "rF", "mF"
                  "mH", "xH", "zH", "IHxx", "IHzz", "IHxz", "IHyy")
 
 
-def reduce_measured(values: Mapping[str, Quantity], *, source: NameValueFile | str = "<memory>",
-                    name: str = "bicycle", line_tolerance: float = DEFAULT_LINE_TOLERANCE,
+def reduce_values(values: Mapping[str, Quantity], layout: MeasuredLayout, *, com_method: str = "least_squares",
+                  line_tolerance: float = DEFAULT_LINE_TOLERANCE,
+                  source: str = "<memory>") -> tuple[dict[str, Quantity], dict[str, LineIntersection]]:
+    """The reduction's outputs with first-order uncertainties (NaN where the file does not determine
+    them), in the order of :func:`_outputs`, and each hung body's line fit; the checks of the
+    reduction raise on the way (see :func:`reduce_measured`)."""
+    inputs = measured_inputs(values, layout)
+    key = _layout_key(layout, com_method)
+    result = first_order(_stages(key), inputs)
+    lines: dict[str, LineIntersection] = {}
+    _check(result.nodes, layout, com_method, line_tolerance, source, lines)
+    outputs = _outputs(layout)
+    computed = result.quantities([key for key in outputs if key not in inputs])
+    reduced = {key: inputs[key] if key in inputs else computed[key] for key in outputs}
+    return reduced, lines
+
+
+def reduce_measured(values: Mapping[str, Quantity], *, source: object = "<memory>", name: str = "bicycle",
+                    line_tolerance: float = DEFAULT_LINE_TOLERANCE,
                     com_method: str = "least_squares") -> MeasuredReduction:
     """Reduce BicycleParameters measurements to the bodies, with first-order uncertainties.
 
     Parameters
     ----------
     values : mapping of str to Quantity
-        The Measured file's values (a :class:`NameValueFile` gives messages line numbers).
-    source : NameValueFile or str
-        Where the values came from.
+        The Measured file's values, by the file's names.
+    source : str, or a read file
+        Where the values came from: a name, or an object with ``path``, ``where(name)`` (the file
+        and line of a value) and ``entries`` (each value's repeated trials, ``repeats``), as
+        :func:`bikerider.io.name_value_file.read_name_value_file` returns; then messages give line
+        numbers and repeated period trials are checked.
     name : str
         Name of the bicycle.
     line_tolerance : float
         Largest rms distance [m] of a body's hanging lines from their common point.
     com_method : {"least_squares", "pairwise_mean"}
-        See :func:`evaluate_measured`.
+        How to locate a centre of mass from its lines: the least-squares point (ours) or the mean
+        of the pairwise intersections (BicycleParameters').
 
     Raises
     ------
@@ -557,37 +603,48 @@ def reduce_measured(values: Mapping[str, Quantity], *, source: NameValueFile | s
     """
     if com_method not in ("least_squares", "pairwise_mean"):
         raise ValueError(f"com_method must be 'least_squares' or 'pairwise_mean', not {com_method!r}")
-    label = source.path if isinstance(source, NameValueFile) else str(source)
-    repeats = ({k: e.repeats for k, e in source.entries.items()} if isinstance(source, NameValueFile) else {})
-    values = values.as_dict() if isinstance(values, NameValueFile) else dict(values)  # fast lookups
+    label = str(getattr(source, "path", source))
+    where = getattr(source, "where", None) or (lambda _name: label)
+    repeats = {k: e.repeats for k, e in getattr(source, "entries", {}).items()}
+    values = values.as_dict() if hasattr(values, "as_dict") else dict(values)  # fast lookups
     layout = detect_layout(values, label)
-    _check_values(values, layout, source, repeats)
-    closed_form = reduce_standard_layout(values, layout, line_tolerance) if com_method == "least_squares" else None
-    if closed_form is not None:  # the template's layout, every check passed: exact uncertainties
-        result, lines = closed_form
-    else:  # one batched pass over the nominal point (checked) and every perturbed point of the Jacobian
-        lines = {}
-        used = {k: q for k, q in values.items() if k not in _KNOWN_EXTRAS}
-        result = propagate(lambda x: evaluate_measured(x, layout, com_method=com_method, check=True,
-                                                       line_tolerance=line_tolerance, source=label, lines=lines),
-                           used, vectorized=True)
+    _check_values(values, where, repeats)
+    reduced, lines = reduce_values(values, layout, com_method=com_method, line_tolerance=line_tolerance,
+                                   source=label)
     notes = _notes(values, layout)
-    body_values = {k: result[k] for k in _BODY_OUTPUTS if math.isfinite(result[k].value)}
+    body_values = {k: reduced[k] for k in _BODY_OUTPUTS if math.isfinite(reduced[k].value)}
     if layout.seating:
-        problem = seating.seating_problem({k: q.value for k, q in result.items()}, result["rR"].value)
+        problem = seating_problem({k: q.value for k, q in reduced.items()}, reduced["rR"].value)
         if problem is None:
-            body_values.update({k: result[k] for k in seating.SEATING_OUTPUTS})
-            notes.append(seating.NOTE)
+            body_values.update({k: reduced[k] for k in SEATING_OUTPUTS})
+            notes.append(SEATING_NOTE)
         else:
             notes.append(f"seating measurements not usable: {problem}")
     _drop_inconsistent_yy(body_values, notes, label)
-    extras = {k: q for k, q in result.items() if k not in body_values and math.isfinite(q.value)}
+    extras = {k: q for k, q in reduced.items() if k not in body_values and math.isfinite(q.value)}
     bodies = BicycleBodies(body_values, source=label, name=name, notes=notes)
     return MeasuredReduction(bodies, extras, lines, layout, notes)
 
 
+def seating_problem(values: Mapping[str, float], rR: float) -> str | None:
+    """Why derived seating values cannot be used (``None`` when they can)."""
+    if not all(math.isfinite(values[k]) for k in ("x_hand", "z_hand")):
+        return ("the grips cannot be located: LhbF and LhbR must each exceed whb/2 and the two "
+                "in-plane distances must reach each other across the wheelbase")
+    if not values["l_s"] > 0:
+        return (f"the grips (z = {values['z_hand']:.3f} m) are not above the top of the seat tube, so the "
+                f"paper's stem length would be {values['l_s']:.3f} m (it must be positive)")
+    if not values["l_hb"] > 0:
+        return (f"the grips (x = {values['x_hand']:.3f} m) are ahead of the equivalent stem top, so the "
+                f"paper's handlebar length would be {values['l_hb']:.3f} m (it must be positive)")
+    if not values["l_cs"] > abs(rR - values["h_bb"]):
+        return (f"the chain stay lcs = {values['l_cs']:.3f} m does not reach from the rear axle to the "
+                f"bottom bracket (height difference {abs(rR - values['h_bb']):.3f} m)")
+    return None
+
+
 def _drop_inconsistent_yy(body_values: dict[str, Quantity], notes: list[str], source: str) -> None:
-    """Leave out an ``I_yy`` that breaks the triangle inequality with the in-plane moments.
+    """Leave out an ``I_yy`` that cannot belong to one body with the in-plane moments.
 
     ``IBfyy`` and ``IHyy`` come from a compound pendulum, the in-plane moments from the torsional
     pendulum; when they cannot belong to one body the linear model (which does not use ``I_yy``)
@@ -598,16 +655,7 @@ def _drop_inconsistent_yy(body_values: dict[str, Quantity], notes: list[str], so
         if yy is None:
             continue
         xx, xz, zz = (body_values[f"I{body}{axes}"].value for axes in ("xx", "xz", "zz"))
-        verdict = _triangle_verdict(xx, xz, zz, yy.value)
-        if verdict is None:  # close to a limit: let the full check decide
-            try:
-                check_inertia_tensor(f"I{body}", np.array([[xx, 0.0, xz], [0.0, yy.value, 0.0], [xz, 0.0, zz]]), source)
-                consistent = True
-            except InputError:
-                consistent = False
-        else:
-            consistent = verdict > 0
-        if not consistent:
+        if inertia_problem(xx, yy.value, zz, xz) is not None:
             del body_values[f"I{body}yy"]
             principal = ", ".join(f"{p:.4g}" for p in plane_symmetric_principal_moments(xx, yy.value, zz, xz))
             message = (f"I{body}yy = {yy} (compound pendulum) left out: with the torsional-pendulum "
@@ -615,28 +663,6 @@ def _drop_inconsistent_yy(body_values: dict[str, Quantity], notes: list[str], so
                        "inequality (the linear model does not use it)")
             LOG.info("%s: %s", source, message)
             notes.append(message)
-
-
-#: Relative margin beyond which :func:`_triangle_verdict` decides without the full tensor check.
-_CLEAR_MARGIN = 1e-6
-
-
-def _triangle_verdict(xx: float, xz: float, zz: float, yy: float) -> float | None:
-    """Whether a tensor with in-plane moments ``xx, xz, zz`` and ``yy`` clearly passes (+1) or
-    clearly fails (-1) :func:`~bikerider.inertia.check_inertia_tensor`; ``None`` when it is within
-    :data:`_CLEAR_MARGIN` of a limit (then the full check decides).
-
-    ``y`` is a principal axis, so the principal moments are ``yy`` and those of the xz block
-    (:func:`~bikerider.inertia.plane_symmetric_principal_moments`).  Deciding the clear cases in
-    closed form spares the eigenvalue solver and the raised error on every reduction.
-    """
-    if not (xx > 0 and zz > 0 and yy > 0 and xx * zz - xz * xz > _CLEAR_MARGIN * xx * zz):
-        return None
-    low, mid, high = plane_symmetric_principal_moments(xx, yy, zz, xz)
-    margin = (low + mid - high) / (low + mid + high)
-    if abs(margin) <= _CLEAR_MARGIN:
-        return None
-    return math.copysign(1.0, margin)
 
 
 def _notes(values: Mapping[str, Quantity], layout: MeasuredLayout) -> list[str]:
@@ -651,9 +677,9 @@ def _notes(values: Mapping[str, Quantity], layout: MeasuredLayout) -> list[str]:
         ignored_h = sorted(k for k in values if k == "mH" or ((m := _INDEXED.match(k)) and m.group(2) == "H"))
         if ignored_h:
             notes.append("fork and handlebar measured apart; ignored the combined-body fields " + ", ".join(ignored_h))
-    present = [k for k in seating.MEASURED_NAMES if k in values]
+    present = [k for k in SEATING_FIELDS if k in values]
     if present and not layout.seating:
-        missing = [k for k in seating.MEASURED_NAMES if k not in values]
+        missing = [k for k in SEATING_FIELDS if k not in values]
         notes.append("seating measurements incomplete (missing " + ", ".join(missing) + "): the rider cannot be seated")
     extras = sorted(k for k in values if k in _KNOWN_EXTRAS)
     if extras:
@@ -661,24 +687,7 @@ def _notes(values: Mapping[str, Quantity], layout: MeasuredLayout) -> list[str]:
     return notes
 
 
-def read_measured_file(path: str | Path, *, line_tolerance: float = DEFAULT_LINE_TOLERANCE,
-                       com_method: str = "least_squares") -> MeasuredReduction:
-    """Read and reduce a ``<Name>Measured.txt`` file (see :func:`reduce_measured`).
-
-    The bicycle is named after the file (``BrowserMeasured.txt`` gives ``Browser``).
-    """
-    data = read_name_value_file(path)
-    stem = Path(path).stem
-    name = stem[: -len("Measured")] if stem.endswith("Measured") and len(stem) > len("Measured") else stem
-    return reduce_measured(data, source=data, name=name, line_tolerance=line_tolerance, com_method=com_method)
-
-
-def load_measured_bicycle(path: str | Path) -> BicycleBodies:
-    """The :class:`BicycleBodies` of a ``<Name>Measured.txt`` file."""
-    return read_measured_file(path).bodies
-
-
 __all__ = [
-    "BODIES", "FIELD_PURPOSES", "PERIOD_TRIAL_TOLERANCE", "MeasuredLayout", "MeasuredReduction",
-    "detect_layout", "evaluate_measured", "load_measured_bicycle", "read_measured_file", "reduce_measured",
+    "BODIES", "FIELD_PURPOSES", "PERIOD_TRIAL_TOLERANCE", "SEATING_FIELDS", "SEATING_OUTPUTS", "MeasuredLayout",
+    "MeasuredReduction", "detect_layout", "measured_inputs", "reduce_measured", "reduce_values", "seating_problem",
 ]

@@ -1,12 +1,13 @@
 """Read the 25 benchmark parameters from a TOML file or a ``name = value+/-sigma`` text file."""
 from __future__ import annotations
 
-import math
 from pathlib import Path
 
 from bikerider.benchmark import BENCHMARK_NAMES, BenchmarkParameters
 from bikerider.errors import InputError
-from bikerider.quantity import Quantity, parse_quantity
+from bikerider.io.bicycleparameters import read_benchmark_file
+from bikerider.io.toml_input import read_toml
+from bikerider.quantity import DEG, Quantity, parse_quantity
 
 
 def load_benchmark_parameters(path: str | Path) -> BenchmarkParameters:
@@ -19,12 +20,8 @@ def load_benchmark_parameters(path: str | Path) -> BenchmarkParameters:
     """
     path = Path(path)
     if path.suffix.lower() == ".toml":
-        from bikerider.io.toml_input import read_toml
-
         data = read_toml(path)
         return parameters_from_table(data.get("benchmark", data), str(path))
-    from bikerider.io.bicycleparameters import read_benchmark_file
-
     return read_benchmark_file(path).parameters
 
 
@@ -38,7 +35,7 @@ def parameters_from_table(table: object, source: str) -> BenchmarkParameters:
         if key in ("name", "source", "notes"):
             continue
         if key == "lam_deg":
-            values["lam"] = parse_quantity(raw, key, source).scaled(math.pi / 180)
+            values["lam"] = parse_quantity(raw, key, source).scaled(DEG)
         elif key in BENCHMARK_NAMES:
             values[key] = parse_quantity(raw, key, source)
         else:

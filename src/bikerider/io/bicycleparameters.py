@@ -27,16 +27,18 @@ from __future__ import annotations
 import logging
 import math
 import re
+import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path, PurePath
 
-import numpy as np
-
 from bikerider.benchmark.parameters import BENCHMARK_NAMES, BenchmarkParameters
 from bikerider.bicycle.bodies import BicycleBodies
+from bikerider.bicycle.raw_measurements import DEFAULT_LINE_TOLERANCE, MeasuredReduction, reduce_measured
+from bikerider.bicycle.to_benchmark import LumpedRider, bodies_from_benchmark, merge_rider
 from bikerider.errors import FileFormatError, InputError
-from bikerider.inertia import check_inertia_tensor
+from bikerider.inertia import inertia_problem, plane_symmetric_principal_moments
 from bikerider.io.name_value_file import NameValueFile, parse_name_value_text, read_name_value_file
+from bikerider.io.toml_input import load_bicycle_toml
 from bikerider.quantity import Quantity
 
 LOG = logging.getLogger(__name__)
@@ -54,8 +56,6 @@ _LUMPED_RIDER_SET = frozenset(LUMPED_RIDER_NAMES)
 _RIDER_BODY_NAME = {name: f"{name}r" if name in ("mB", "xB", "zB") else name.replace("IB", "IBr")
                     for name in LUMPED_RIDER_NAMES if name != "yB"}
 """A lumped rider file's name to the rider's in :data:`bikerider.bicycle.to_benchmark.RIDER_BODY_NAMES`."""
-
-FORMATS = ("toml", "measured", "benchmark", "lumped_rider")
 
 _MEASURED_MARKERS = re.compile(r"^(Tt|Tc|alpha|a)[A-Z]\d+$|^(dF|dR|nF|nR|mP|dP|lP|lF|lR|gamma|h\d|d\d|LhbF|LhbR|lamst|whb|lcs|hbb|lsp|lst)$")
 _FLYWHEEL = re.compile(r"^(m|x|z|I)D")
@@ -79,17 +79,12 @@ class BenchmarkFile:
     notes: list[str] = field(default_factory=list)
 
 
-def _tensor_ok(values: dict[str, Quantity], body: str, source: str) -> str | None:
-    tensor = np.array([[values[f"I{body}xx"].value, 0.0, values[f"I{body}xz"].value],
-                       [0.0, values[f"I{body}yy"].value, 0.0],
-                       [values[f"I{body}xz"].value, 0.0, values[f"I{body}zz"].value]])
-    try:
-        check_inertia_tensor(f"I{body}", tensor, source)
-    except InputError:
-        principal = ", ".join(f"{p:.4g}" for p in np.linalg.eigvalsh(tensor))
-        return (f"with I{body}xx, I{body}xz, I{body}zz its principal moments {principal} break the "
-                "triangle inequality")
-    return None
+def _tensor_problem(values: dict[str, Quantity], body: str) -> str | None:
+    xx, yy, zz, xz = (values[f"I{body}{ax}"].value for ax in ("xx", "yy", "zz", "xz"))
+    if inertia_problem(xx, yy, zz, xz) is None:
+        return None
+    principal = ", ".join(f"{p:.4g}" for p in plane_symmetric_principal_moments(xx, yy, zz, xz))
+    return f"with I{body}xx, I{body}xz, I{body}zz its principal moments {principal} break the triangle inequality"
 
 
 def benchmark_from_values(data: NameValueFile) -> BenchmarkFile:
@@ -132,7 +127,7 @@ def benchmark_from_values(data: NameValueFile) -> BenchmarkFile:
                              + ") or a known BicycleParameters extra (yB, yH, IRzz, IFzz, G and S bodies)", where)
     for body in ("B", "H"):
         if all(f"I{body}{ax}" in mapping for ax in ("xx", "yy", "zz", "xz")):
-            problem = _tensor_ok(mapping, body, data.path)
+            problem = _tensor_problem(mapping, body)
             if problem:
                 yy = mapping.pop(f"I{body}yy")
                 extras[f"I{body}yy"] = yy
@@ -151,20 +146,14 @@ def read_benchmark_file(path: str | Path) -> BenchmarkFile:
     return benchmark_from_values(read_name_value_file(path))
 
 
-def read_lumped_rider(path: str | Path):
+def read_lumped_rider(path: str | Path) -> LumpedRider:
     """Read a BicycleParameters lumped rider file (``riders/<Rider>/Parameters/<Rider><Bike>Benchmark.txt``).
-
-    Returns
-    -------
-    bikerider.bicycle.to_benchmark.LumpedRider
 
     Raises
     ------
     InputError
         A missing or unknown entry, or a lateral centre of mass beyond :data:`LATERAL_TOLERANCE`.
     """
-    from bikerider.bicycle.to_benchmark import LumpedRider
-
     data = read_name_value_file(path)
     values = data.as_dict()
     if not _LUMPED_RIDER_SET.issuperset(values):
@@ -180,34 +169,22 @@ def read_lumped_rider(path: str | Path):
     return LumpedRider(renamed, source=str(path), name=stem[:-len("Benchmark")] if stem.endswith("Benchmark") else stem)
 
 
-def merge_rider(bicycle: BicycleBodies | BenchmarkParameters, rider) -> BenchmarkParameters:
-    """Benchmark parameters with the lumped ``rider`` merged into the rear body (Eqs. 15-16).
+def read_measured_file(path: str | Path, *, line_tolerance: float = DEFAULT_LINE_TOLERANCE,
+                       com_method: str = "least_squares") -> MeasuredReduction:
+    """Read and reduce a ``<Name>Measured.txt`` file (see
+    :func:`bikerider.bicycle.raw_measurements.reduce_measured`; messages name its lines).
 
-    Parameters
-    ----------
-    bicycle : BicycleBodies or BenchmarkParameters
-        For benchmark parameters, their rear body B is taken as the rear frame.
-    rider : bikerider.bicycle.to_benchmark.LumpedRider
+    The bicycle is named after the file (``BrowserMeasured.txt`` gives ``Browser``).
     """
-    from bikerider.bicycle.to_benchmark import bicycle_benchmark_parameters
+    data = read_name_value_file(path)
+    stem = Path(path).stem
+    name = stem[: -len("Measured")] if stem.endswith("Measured") and len(stem) > len("Measured") else stem
+    return reduce_measured(data, source=data, name=name, line_tolerance=line_tolerance, com_method=com_method)
 
-    if isinstance(bicycle, BicycleBodies):
-        return bicycle_benchmark_parameters(bicycle, rider)
-    return bicycle_benchmark_parameters(bodies_from_benchmark(bicycle), rider)
 
-
-def bodies_from_benchmark(parameters: BenchmarkParameters) -> BicycleBodies:
-    """The benchmark parameters read back as :class:`BicycleBodies` (rear body B as the frame)."""
-    v, s = parameters.values, parameters.sigmas
-    renames = {"mB": "mBf", "xB": "xBf", "zB": "zBf", "IBxx": "IBfxx", "IBzz": "IBfzz", "IBxz": "IBfxz", "IByy": "IBfyy"}
-    values: dict[str, Quantity] = {}
-    for name in BENCHMARK_NAMES:
-        if v[name] is None:
-            continue
-        values[renames.get(name, name)] = Quantity(float(v[name]), s.get(name, 0.0))  # type: ignore[arg-type]
-    lam = values.pop("lam")
-    values["lam_ht"] = Quantity(math.pi / 2 - lam.value, lam.sigma)
-    return BicycleBodies(values, source=parameters.source or "<memory>")
+def load_measured_bicycle(path: str | Path) -> BicycleBodies:
+    """The :class:`BicycleBodies` of a ``<Name>Measured.txt`` file."""
+    return read_measured_file(path).bodies
 
 
 def detect_format(path: str | Path) -> str:
@@ -230,8 +207,6 @@ def detect_format(path: str | Path) -> str:
     try:
         data = read_name_value_file(path)
     except FileFormatError as exc:
-        import tomllib
-
         try:
             tomllib.loads(path.read_text(encoding="utf-8"))
         except (tomllib.TOMLDecodeError, UnicodeDecodeError):
@@ -270,12 +245,8 @@ def load_bicycle_file(path: str | Path) -> BicycleBodies | BenchmarkParameters:
     """
     kind = detect_format(path)
     if kind == "toml":
-        from bikerider.io.toml_input import load_bicycle_toml
-
         return load_bicycle_toml(path)
     if kind == "measured":
-        from bikerider.bicycle.raw_measurements import load_measured_bicycle
-
         return load_measured_bicycle(path)
     if kind == "benchmark":
         return read_benchmark_file(path).parameters
@@ -284,7 +255,7 @@ def load_bicycle_file(path: str | Path) -> BicycleBodies | BenchmarkParameters:
 
 
 __all__ = [
-    "BenchmarkFile", "FORMATS", "LATERAL_TOLERANCE", "benchmark_from_values", "bodies_from_benchmark",
-    "detect_format", "load_bicycle_file", "merge_rider", "parse_name_value_text", "read_benchmark_file",
-    "read_lumped_rider",
+    "BenchmarkFile", "LATERAL_TOLERANCE", "benchmark_from_values", "bodies_from_benchmark", "detect_format",
+    "load_bicycle_file", "load_measured_bicycle", "merge_rider", "parse_name_value_text", "read_benchmark_file",
+    "read_lumped_rider", "read_measured_file",
 ]

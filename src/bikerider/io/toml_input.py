@@ -12,16 +12,11 @@ import tomllib
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
-from bikerider.bicycle import hanging_lines, pendulum
-from bikerider.bicycle.propagation import propagate
+from bikerider.bicycle import pendulum
 from bikerider.bicycle.bodies import SEATING_NAMES, BicycleBodies
 from bikerider.errors import MISSING, FileFormatError, InputError
-from bikerider.quantity import Quantity, parse_quantity
+from bikerider.quantity import DEG, Quantity, parse_quantity
 from bikerider.rider.measurements import DEFAULT_MASS_FRACTIONS, RiderMeasurements
-
-DEG = math.pi / 180
 
 _GEOMETRY_KEYS = ("w", "c", "rR", "rF", "h_bb", "l_cs", "l_f", "w_fh", "l_hb", "w_rh", "l_sp", "l_st", "l_s")
 _GEOMETRY_ANGLES = ("lam_ht", "lam_st")
@@ -123,27 +118,16 @@ def _com_from_lines(com: _Section) -> tuple[Quantity, Quantity]:
     lines = com.data["lines"]
     if not isinstance(lines, list) or len(lines) < 3:
         raise InputError(_join(com.name, "lines"), lines, "a list of three or more {point = [x, z], angle_deg = ...}", com.source)
-    inputs: dict[str, Quantity] = {}
+    points, angles = [], []
     for i, line in enumerate(lines):
         entry = _Section(line, f"{_join(com.name, 'lines')}[{i}]", com.source, {"point", "angle_deg"})
         point = entry.data.get("point")
         if not isinstance(point, list) or len(point) != 2:
             raise InputError(_join(entry.name, "point"), point, "[x, z] in metres", com.source)
-        inputs[f"x{i}"] = parse_quantity(point[0], f"{entry.name}.point[0]", com.source)
-        inputs[f"z{i}"] = parse_quantity(point[1], f"{entry.name}.point[1]", com.source)
-        inputs[f"b{i}"] = entry.quantity("angle_deg", scale=DEG)  # type: ignore[assignment]
-
-    def meet(values: dict[str, float]) -> dict[str, float]:
-        n = len(lines)
-        pairs = [hanging_lines.line_from_hanging(values[f"b{i}"], 0.0, (values[f"x{i}"], values[f"z{i}"])) for i in range(n)]
-        fit = hanging_lines.intersect_lines(np.array([p[0] for p in pairs]), np.array([p[1] for p in pairs]))
-        return {"x": float(fit.point[0]), "z": float(fit.point[1]), "rms": fit.rms}
-
-    nominal = meet({k: q.value for k, q in inputs.items()})
-    fit = hanging_lines.LineIntersection(np.array([nominal["x"], nominal["z"]]), np.array([nominal["rms"]]), nominal["rms"])
-    hanging_lines.check_lines_meet(com.name, fit, hanging_lines.DEFAULT_LINE_TOLERANCE, com.source)
-    out = propagate(meet, inputs)
-    return out["x"], out["z"]
+        points.append((parse_quantity(point[0], f"{entry.name}.point[0]", com.source),
+                       parse_quantity(point[1], f"{entry.name}.point[1]", com.source)))
+        angles.append(entry.quantity("angle_deg", scale=DEG))
+    return pendulum.centre_of_mass_from_lines(points, angles, com.name, com.source)  # type: ignore[arg-type]
 
 
 def _frame(section: _Section, k_t: Quantity | None, prefix: str, raw: dict[str, Quantity]) -> dict[str, Quantity]:
