@@ -35,7 +35,7 @@ GOAL_RATE, GOAL_MEMORY = 100_000, 2**30
 def draw(n: int, seed: int = 0):
     """``(chain, values)``: the paper's inputs with ``n`` normal draws of every measured value."""
     from bikerider.uncertainty.chain import Chain, prepare_values
-    from bikerider.uncertainty.inputs import paper_inputs
+    from bikerider.io.chain_inputs import paper_inputs
 
     quantities = paper_inputs().quantities
     values = prepare_values(quantities)

@@ -32,7 +32,7 @@ def bicycle_parameters(ctx: Context):
     if "error" not in result:
         values = {k: v[0] for k, v in result["parameters"].items() if k in BENCHMARK_NAMES}
         return BenchmarkParameters.from_mapping(values, source="BicycleParameters Browser + Jason"), "BicycleParameters' values"
-    from bikerider.bicycle.raw_measurements import load_measured_bicycle
+    from bikerider.io.bicycleparameters import load_measured_bicycle
     from bikerider.io.bicycleparameters import merge_rider, read_lumped_rider
 
     from common import DATA

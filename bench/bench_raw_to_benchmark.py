@@ -6,16 +6,18 @@ The same data for both tools: BicycleParameters' ``bicycles/Browser/RawData/Brow
 BicycleParameters' ``add_rider`` reads that file too).  Both propagate the measurement
 uncertainties to every parameter.  Timed warm (imports done):
 
-* bikerider: ``load_measured_bicycle`` (read, check, reduce with first-order uncertainties: for
-  this file's layout, BicycleParameters' template, the generated closed form with exact
-  derivatives) + ``read_lumped_rider`` + ``merge_rider`` (Eqs. 15-16) -> ``BenchmarkParameters``;
+* bikerider: ``load_measured_bicycle`` (read, check, reduce with first-order uncertainties: the
+  generated stages of ``derive/measured_reduction.py`` - for this file's layout, BicycleParameters'
+  template, the one stage ``standard_layout`` - run by the uncertainty engine with their exact
+  Jacobians) + ``read_lumped_rider`` + ``merge_rider`` (Eqs. 15-16) -> ``BenchmarkParameters``;
 * BicycleParameters 1.5.2: ``Bicycle('Browser', pathToData, forceRawCalc=True)`` +
   ``add_rider('Jason')`` (its uncertainties package propagates the sigmas);
 * the two in alternating rounds (BicycleParameters in a worker process kept running, then
   bikerider, ...), the ratio the median of the rounds' ratios: the machine's speed can change by a
   factor of two within seconds, which separate runs would read as a change of ratio;
-* for information, the same reduction by bikerider's general route (the NumPy chain at the
-  ``2 k + 1`` points of a central-difference Jacobian, what every other layout uses).
+* for information, the reduction of a file in another layout (Rigid: heights-and-diameters
+  geometry, handlebar and fork hung apart, bodies in five orientations: the stages one by one and
+  the numeric least-squares stage).
 """
 from __future__ import annotations
 
@@ -26,28 +28,22 @@ from common import DATA, Context, Row, fmt_time, loops_for, measure, time_loop
 GOAL = 10.0
 MEASURED = DATA / "bicycles" / "Browser" / "RawData" / "BrowserMeasured.txt"
 RIDER = DATA / "riders" / "Jason" / "Parameters" / "JasonBrowserBenchmark.txt"
+OTHER = DATA / "bicycles" / "Rigid" / "RawData" / "RigidMeasured.txt"
 
 
 def bikerider_parameters():
-    from bikerider.bicycle.raw_measurements import load_measured_bicycle
-    from bikerider.io.bicycleparameters import merge_rider, read_lumped_rider
+    from bikerider.io.bicycleparameters import load_measured_bicycle, merge_rider, read_lumped_rider
 
     return merge_rider(load_measured_bicycle(MEASURED), read_lumped_rider(RIDER))
 
 
-def general_route():
-    """The reduction of the same file by the general route (batched numerical Jacobian); None when
-    the module's API differs."""
+def other_layout():
+    """The reduction of Rigid's Measured file (another layout); None when the module's API differs."""
     try:
-        from bikerider.bicycle.propagation import propagate
-        from bikerider.bicycle.raw_measurements import _KNOWN_EXTRAS, detect_layout, evaluate_measured
-        from bikerider.io.name_value_file import read_name_value_file
+        from bikerider.io.bicycleparameters import read_measured_file
     except ImportError:
         return None
-    values = read_name_value_file(MEASURED).as_dict()
-    layout = detect_layout(values, str(MEASURED))
-    used = {k: q for k, q in values.items() if k not in _KNOWN_EXTRAS}
-    return lambda: propagate(lambda x: evaluate_measured(x, layout, check=True), used, vectorized=True)
+    return lambda: read_measured_file(OTHER)
 
 
 def run(ctx: Context) -> list[Row]:
@@ -57,7 +53,7 @@ def run(ctx: Context) -> list[Row]:
     item = "one bicycle: raw measurements + rider -> benchmark parameters"
     goal = f">= {GOAL:.0f}x BicycleParameters"
     loops = loops_for(bikerider_parameters)
-    general = general_route()
+    general = other_layout()
     notes = ["compared: reading the raw file, reducing it with uncertainty propagation, reading the lumped "
              "rider and combining it with the rear frame, to the 25 benchmark parameters with sigmas - in "
              "both tools"]
@@ -89,14 +85,13 @@ def run(ctx: Context) -> list[Row]:
                    f"{ratios[0]:.1f}x-{ratios[-1]:.1f}x)"]
     if general is not None:
         general_t = measure(general, 5 if ctx.quick else 9)
-        baselines.append(("(info) bikerider's general route for the same reduction (numerical Jacobian)",
+        baselines.append(("(info) bikerider, a Measured file in another layout (Rigid), reading and reduction",
                           general_t.text()))
-        notes.append(f"this file is in BicycleParameters' template layout, which bikerider reduces by the generated "
-                     f"closed form (derive/measured_reduction.py: values, exact first-order sigmas and check "
-                     f"quantities in one plain-float function); every other layout takes the general route, a "
-                     f"central-difference Jacobian of the NumPy chain with all its points in one batched call: "
-                     f"{fmt_time(general_t.median)} for the reduction alone, so such a file costs about that much "
-                     f"more than the {fmt_time(statistics.median(ours))} here")
+        notes.append(f"this file is in BicycleParameters' template layout, which the reduction takes in one generated "
+                     f"stage (derive/measured_reduction.py: values and the exact Jacobian in one plain-float "
+                     f"function); every other layout runs the stages one by one (Rigid: heights-and-diameters "
+                     f"geometry, handlebar and fork apart, five orientations by the numeric least-squares stage), "
+                     f"{fmt_time(general_t.median)} to read and reduce")
     params = bikerider_parameters()
     gaps = []
     for name in BENCHMARK_NAMES:

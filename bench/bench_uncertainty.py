@@ -16,14 +16,13 @@ import tracemalloc
 import numpy as np
 
 from bikerider.benchmark import WhippleModel
+from bikerider.engine import arguments
 from bikerider.generated import benchmark_model, combination, pendulum
-from bikerider.uncertainty.inputs import paper_inputs
+from bikerider.io.chain_inputs import paper_inputs
 from bikerider.uncertainty.montecarlo import sample_outputs
 from bikerider.uncertainty.stages import CANONICAL
 
-CHAIN = ("h_bb l_cs l_f rF l_hb lam_ht rR l_sp lam_st l_st l_s c w g mR IRxx IRyy mF IFxx IFyy mH xH zH IHxx "
-         "IHyy IHzz IHxz mBf xBf zBf IBfxx IBfyy IBfzz IBfxz l_hh l_la l_ll l_ss l_to l_ua l_ul lam_fl c_h mBr "
-         "c_ch c_la c_ll c_ua c_ul f_h f_la f_ll f_to f_ua f_ul").split()
+CHAIN = arguments("combination.estimate_chain")
 
 
 def vectorised(n: int) -> dict[str, float]:
@@ -55,7 +54,7 @@ def loop(n: int) -> dict[str, float]:
                  IFxx=pendulum.torsional_inertia(k_t=x["k_t"], T=x["T_Fxx"]),
                  IFyy=pendulum.compound_inertia(T=x["T_Fyy"], m_p=x["mF"], g=x["g"], l_p=x["l_pF"]))
         with np.errstate(invalid="ignore"):
-            values = combination.benchmark_parameters(**{k: x[k] for k in CHAIN})
+            values = combination.estimate_chain(**{k: x[k] for k in CHAIN})
         params = dict(zip(("w c lam g rR mR IRxx IRyy xB zB mB IBxx IByy IBzz IBxz xH zH mH IHxx IHyy IHzz IHxz "
                            "rF mF IFxx IFyy").split(), values))
         if not np.isfinite(params["xB"]):

@@ -13,7 +13,7 @@ import sympy as sp
 
 from bikerider.uncertainty import names, text
 from bikerider.uncertainty.chain import Chain, prepare_values
-from bikerider.uncertainty.inputs import paper_inputs
+from bikerider.io.chain_inputs import paper_inputs
 from bikerider.uncertainty.montecarlo import compare, monte_carlo
 from bikerider.uncertainty.propagation import propagate
 from bikerider.uncertainty.symbolic import sensitivity_expression

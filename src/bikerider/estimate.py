@@ -1,44 +1,36 @@
 """The whole method: bicycle and rider measurements to the benchmark parameters and the model.
 
 ``estimate(bicycle, rider)`` seats the rider on the bicycle (``bikerider.rider``), combines rider and
-rear frame into the rear body (Eqs. 15-16) and evaluates the generated chain
-``bikerider.generated.combination.benchmark_parameters`` - the same expressions the closed-form
-sensitivities are derived from - then builds the Whipple model.
+rear frame into the rear body (Eqs. 15-16) and runs the estimate chain's stages
+(``bikerider.uncertainty.stages``, the same stages the sensitivities and Monte Carlo use) to the
+benchmark parameters, then builds the Whipple model.
 """
 from __future__ import annotations
 
 import logging
 import math
 from dataclasses import dataclass, field
-from importlib import resources
 from pathlib import Path
-from typing import TYPE_CHECKING
-
-import numpy as np
 
 from bikerider.benchmark import BENCHMARK_NAMES, BenchmarkParameters, WhippleModel
 from bikerider.bicycle.bodies import BicycleBodies
+from bikerider.bicycle.to_benchmark import LumpedRider, bicycle_benchmark_parameters
+from bikerider.engine import arguments
 from bikerider.errors import InputError
-from bikerider.generated import combination
+from bikerider.io.bicycleparameters import detect_format, load_bicycle_file, merge_rider, read_lumped_rider
+from bikerider.io.chain_inputs import paper_files
+from bikerider.io.toml_input import load_rider_toml
 from bikerider.quantity import Quantity
 from bikerider.rider.measurements import RiderMeasurements
 from bikerider.rider.model import RiderModel, model_arguments, seat_rider, straight_limb_lengths
-
-if TYPE_CHECKING:
-    from bikerider.bicycle.to_benchmark import LumpedRider
+from bikerider.uncertainty import UncertaintyResult, benchmark_inputs, propagate
+from bikerider.uncertainty.chain import Chain
+from bikerider.uncertainty.inputs import chain_raw_inputs
 
 LOG = logging.getLogger(__name__)
 
-CHAIN_BODY_NAMES = (
-    "g", "mR", "IRxx", "IRyy", "mF", "IFxx", "IFyy", "mH", "xH", "zH", "IHxx", "IHyy", "IHzz", "IHxz",
-    "mBf", "xBf", "zBf", "IBfxx", "IBfyy", "IBfzz", "IBfxz",
-)
-CHAIN_GEOMETRY_NAMES = ("h_bb", "l_cs", "l_f", "rF", "l_hb", "lam_ht", "rR", "l_sp", "lam_st", "l_st", "l_s", "c", "w")
-CHAIN_RIDER_NAMES = (
-    "l_hh", "l_la", "l_ll", "l_ss", "l_to", "l_ua", "l_ul", "lam_fl", "c_h",
-    "mBr", "c_ch", "c_la", "c_ll", "c_ua", "c_ul",
-)
-CHAIN_FRACTION_NAMES = ("f_h", "f_la", "f_ll", "f_to", "f_ua", "f_ul")
+CHAIN_INPUTS = arguments("combination.estimate_chain")
+"""The estimate chain's inputs from the bicycle, the rider and the mass fractions."""
 
 
 @dataclass(frozen=True)
@@ -60,7 +52,7 @@ class EstimateResult:
     """
 
     bicycle: BicycleBodies | None
-    rider: "RiderMeasurements | LumpedRider | None"
+    rider: RiderMeasurements | LumpedRider | None
     rider_model: RiderModel | None
     chain_inputs: dict[str, Quantity] | None
     parameters: BenchmarkParameters
@@ -69,19 +61,20 @@ class EstimateResult:
 
 
 def chain_inputs(bicycle: BicycleBodies, rider: RiderMeasurements) -> dict[str, Quantity]:
-    """The arguments of the generated chain, as quantities, in the chain's order.
+    """The inputs of the estimate chain, as quantities, in the chain's order.
 
     A missing rear-frame or handlebar I_yy is passed as NaN; it reaches only I_Byy / I_Hyy,
     which are then reported as not determined (None).
     """
     out: dict[str, Quantity] = {}
-    for name in CHAIN_GEOMETRY_NAMES + CHAIN_BODY_NAMES:
-        q = bicycle.get(name)
-        out[name] = q if q is not None else Quantity(math.nan)
-    for name in CHAIN_RIDER_NAMES:
-        out[name] = rider.values[name]
-    for name in CHAIN_FRACTION_NAMES:
-        out[name] = Quantity(rider.fractions[name])
+    for name in CHAIN_INPUTS:
+        if name in rider.fractions:
+            out[name] = Quantity(rider.fractions[name])
+        elif name in rider.values:
+            out[name] = rider.values[name]
+        else:
+            q = bicycle.get(name)
+            out[name] = q if q is not None else Quantity(math.nan)
     # A limb exactly at its limit of reach: the lengths that keep its closure real (as seat_rider).
     for name, value in straight_limb_lengths(model_arguments(bicycle, rider)).items():
         out[name] = Quantity(value, out[name].sigma)
@@ -99,12 +92,13 @@ def estimate(bicycle: BicycleBodies, rider: RiderMeasurements) -> EstimateResult
     """
     rider_model = seat_rider(bicycle, rider)
     inputs = chain_inputs(bicycle, rider)
-    raw = combination.benchmark_parameters(**{k: q.value for k, q in inputs.items()})
+    nodes = Chain(inputs).evaluate({k: q.value for k, q in inputs.items()})
     values: dict[str, float | None] = {}
-    for name, value in zip(BENCHMARK_NAMES, np.asarray(raw, dtype=float)):
-        values[name] = float(value) if math.isfinite(value) else None
+    for name in BENCHMARK_NAMES:
+        value = float(nodes[name])
+        values[name] = value if math.isfinite(value) else None
     bad = [n for n, v in values.items() if v is None and n not in ("IByy", "IHyy")]
-    if bad:  # pragma: no cover - every input was validated; this guards the generated chain
+    if bad:  # pragma: no cover - every input was validated; this guards the chain
         raise RuntimeError(f"the estimate chain produced non-finite {bad}")
     sigmas = {f"I{w}{a}": inputs[f"I{w}{a}"] for w in "RF" for a in ("xx", "yy")}
     mapping = {k: (Quantity(v, sigmas[k].sigma) if k in sigmas and v is not None else v) for k, v in values.items()}
@@ -120,10 +114,8 @@ def estimate(bicycle: BicycleBodies, rider: RiderMeasurements) -> EstimateResult
     return EstimateResult(bicycle, rider, rider_model, inputs, params, WhippleModel.from_parameters(params), notes)
 
 
-def default_files() -> tuple[Path, Path]:
-    """The paper's bicycle and rider files shipped with the package."""
-    base = resources.files("bikerider") / "data" / "paper"
-    return Path(str(base / "browser_bicycle.toml")), Path(str(base / "jason_rider.toml"))
+default_files = paper_files
+"""The paper's bicycle and rider files shipped with the package."""
 
 
 def estimate_default() -> EstimateResult:
@@ -146,10 +138,6 @@ def estimate_from_files(bicycle_path: str | Path | None = None, rider_path: str 
         Unreadable files, or a combination that cannot work (a rider model on a bicycle given only
         as benchmark parameters, which have no geometry to seat it on).
     """
-    from bikerider.bicycle.to_benchmark import bicycle_benchmark_parameters
-    from bikerider.io.bicycleparameters import detect_format, load_bicycle_file, merge_rider, read_lumped_rider
-    from bikerider.io.toml_input import load_rider_toml
-
     default_bicycle, default_rider = default_files()
     bicycle = load_bicycle_file(bicycle_path or default_bicycle)
     bodies = bicycle if isinstance(bicycle, BicycleBodies) else None
@@ -173,7 +161,7 @@ def estimate_from_files(bicycle_path: str | Path | None = None, rider_path: str 
     return estimate(bodies, rider_measurements)
 
 
-def estimate_uncertainty(result: EstimateResult, speeds=None):
+def estimate_uncertainty(result: EstimateResult, speeds=None) -> UncertaintyResult:
     """First-order uncertainty of every output of ``result`` (``bikerider.uncertainty.propagate``).
 
     With the rider model, the inputs are the raw measurements (pendulum periods and angles kept
@@ -181,9 +169,6 @@ def estimate_uncertainty(result: EstimateResult, speeds=None):
     Only uncertainties the input files state are propagated.  With ``speeds`` [m/s], the
     eigenvalues at those speeds get sigmas too (``.eigenvalues``).
     """
-    from bikerider.uncertainty import benchmark_inputs, propagate
-    from bikerider.uncertainty.inputs import chain_raw_inputs
-
     if result.rider_model is not None:
         return propagate(chain_raw_inputs(result.bicycle, result.rider), speeds=speeds)
     return propagate(benchmark_inputs(result.parameters), speeds=speeds)

@@ -7,9 +7,9 @@ from typing import Any
 import numpy as np
 
 from bikerider.benchmark import BENCHMARK_NAMES, BenchmarkParameters, ModalEigenvalues, WhippleModel
+from bikerider.benchmark.modes import MODES
 from bikerider.errors import InputError
-
-DEFAULT_SPEEDS = "0:10:11"
+from bikerider.generated.manifest import MATRIX_NAMES
 
 
 def parse_speeds(text: str) -> np.ndarray:
@@ -31,11 +31,11 @@ def model_json(parameters: BenchmarkParameters, model: WhippleModel, eig: ModalE
     speeds = model.critical_speeds()
     return {
         "benchmark": parameters.as_dict(),
-        "matrices": {name: getattr(model, name).tolist() for name in ("M", "C1", "K0", "K2")},
+        "matrices": {name: getattr(model, name).tolist() for name in MATRIX_NAMES},
         "speeds": {"weave": speeds.weave, "capsize": speeds.capsize},
         "eigenvalues": {
             "speeds": eig.speeds.tolist(),
-            "modes": ["weave", "weave", "capsize", "castor"],
+            "modes": list(MODES),
             "values": [[[float(z.real), float(z.imag)] for z in row] for row in eig.values],
             "labels": eig.labels.tolist(),
         },
@@ -56,7 +56,7 @@ def model_text(parameters: BenchmarkParameters, model: WhippleModel, eig: ModalE
         lines.append(f"  {name:5s} {shown}")
     lines.append("")
     lines.append("Canonical matrices: M q'' + v C1 q' + (g K0 + v^2 K2) q = f, q = [roll, steer]")
-    for name in ("M", "C1", "K0", "K2"):
+    for name in MATRIX_NAMES:
         lines.extend(_matrix_text(name, getattr(model, name)))
     speeds = model.critical_speeds()
     lines.append("")

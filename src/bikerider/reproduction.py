@@ -15,6 +15,7 @@ import numpy as np
 
 from bikerider.benchmark import BenchmarkParameters, WhippleModel
 from bikerider.estimate import EstimateResult, estimate_default
+from bikerider.quantity import DEG
 
 #: Table 10 as printed (value column), grid points 1..31 [m].
 TABLE_10 = [
@@ -105,7 +106,7 @@ class Row:
 def table12_model() -> WhippleModel:
     """The model built from Table 12's printed parameters (steer axis tilt from the 68.5 deg head angle)."""
     values = dict(TABLE_12)
-    values["lam"] = math.pi / 2 - math.radians(68.5)
+    values["lam"] = math.pi / 2 - 68.5 * DEG
     values["IRyy"] = 2 * values["IRxx"]  # printed 0.16 = 2 x 0.08 exactly: at the wheel's physical limit
     return WhippleModel.from_parameters(BenchmarkParameters.from_mapping(values, "Moore et al. 2009, Table 12"))
 

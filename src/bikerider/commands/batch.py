@@ -79,10 +79,9 @@ def _raw_is_incomplete(error: Exception) -> bool:
 def process_bicycle(folder: Path) -> BatchRow:
     """Benchmark values and critical speeds of one bicycle folder (never raises for bad data)."""
     from bikerider.benchmark import WhippleModel
-    from bikerider.bicycle.raw_measurements import read_measured_file
     from bikerider.bicycle.to_benchmark import bicycle_benchmark_parameters
     from bikerider.errors import BikeriderError
-    from bikerider.io.bicycleparameters import read_benchmark_file
+    from bikerider.io.bicycleparameters import read_benchmark_file, read_measured_file
 
     row = BatchRow(folder.name)
     measured, benchmark = input_files(folder)

@@ -51,6 +51,8 @@ def add_parser(subparsers) -> None:
 
 def _inputs(args: argparse.Namespace):
     from bikerider.errors import InputError
+    from bikerider.io import chain_inputs
+    from bikerider.quantity import DEG
     from bikerider.uncertainty import inputs as inp
 
     if args.rider and not args.bicycle:
@@ -64,7 +66,7 @@ def _inputs(args: argparse.Namespace):
         quantities = {}
         for name, q in data.as_dict().items():
             if name.endswith("_deg"):
-                quantities[name[:-4]] = q.scaled(inp.DEG)
+                quantities[name[:-4]] = q.scaled(DEG)
             else:
                 quantities[name] = q
         if set(quantities) <= set(BENCHMARK_NAMES):
@@ -76,12 +78,12 @@ def _inputs(args: argparse.Namespace):
     if args.bicycle:
         if not args.rider:
             raise InputError("--bicycle", args.bicycle, "a --rider file to go with it")
-        quantities = inp.raw_inputs_from_toml(args.bicycle, args.rider)
+        quantities = chain_inputs.raw_inputs_from_toml(args.bicycle, args.rider)
         sources = {n: f"stated: {args.bicycle}" if q.sigma else "exact (no sigma given)" for n, q in quantities.items()}
         if not args.no_rider_sigmas:
             quantities = inp.with_assumed_rider_sigmas(quantities, sources)
         return inp.InputSet(quantities, sources, f"{args.bicycle} + {args.rider}")
-    return inp.paper_inputs(assume_rider_sigmas=not args.no_rider_sigmas)
+    return chain_inputs.paper_inputs(assume_rider_sigmas=not args.no_rider_sigmas)
 
 
 def run(args: argparse.Namespace) -> int:

@@ -12,15 +12,18 @@ from dataclasses import dataclass
 import numpy as np
 
 from bikerider.bicycle.bodies import BicycleBodies
+from bikerider.engine import arguments
 from bikerider.errors import MISSING, InputError, ReachError
 from bikerider.generated import rider_model as gen
+from bikerider.generated.manifest import GEOMETRY, RIDER_PLACEMENT, RIDER_SEGMENTS
 from bikerider.inertia import check_inertia_tensor
 from bikerider.rider.measurements import RiderMeasurements
 
-_GEOMETRY = ("h_bb", "l_cs", "l_f", "w_fh", "rF", "l_hb", "lam_ht", "w_rh", "rR", "l_sp", "lam_st", "l_st", "l_s", "c", "w")
-_PLACEMENT = ("l_hh", "l_la", "l_ll", "l_ss", "l_to", "l_ua", "l_ul", "lam_fl", "c_h")
-_SEGMENTS = ("mBr", "c_ch", "c_la", "c_ll", "c_ua", "c_ul")
-_HUB_WIDTHS = ("w_rh", "w_fh")  # place grid points only; no segment depends on them
+_GRID = arguments("rider_model.grid_points")
+_REACH = arguments("rider_model.limb_reach")
+_MASS = arguments("rider_model.rider_mass_properties")
+_HUB_WIDTHS = tuple(a for a in _GRID if a not in _REACH)
+"""The hub widths: they place grid points only, no segment depends on them."""
 
 STRAIGHT_LIMB_TOLERANCE = 1e-12
 """A limb whose span (hip to pedal axis, shoulder to grip) is within this relative distance of its
@@ -85,8 +88,8 @@ def model_arguments(bicycle: BicycleBodies, rider: RiderMeasurements) -> dict[st
             "a value: seating the rider model needs every Table 1 measurement "
             f"(missing: {', '.join(missing)})", bicycle.source,
         )
-    args = {k: bicycle[k] if k in bicycle.values else math.nan for k in _GEOMETRY}
-    args.update({k: rider[k] for k in _PLACEMENT + _SEGMENTS})
+    args = {k: bicycle[k] if k in bicycle.values else math.nan for k in GEOMETRY}
+    args.update({k: rider[k] for k in RIDER_PLACEMENT + RIDER_SEGMENTS if k not in rider.fractions})
     args.update(rider.fractions)
     return args
 
@@ -100,7 +103,7 @@ def check_closures(args: dict[str, float], bicycle_source: str, rider_source: st
     fork_offset = args["rF"] * math.cos(args["lam_ht"]) - args["c"] * math.sin(args["lam_ht"])
     if args["l_f"] <= abs(fork_offset):
         raise InputError("l_f", args["l_f"], f"more than the fork offset |f_o| = {abs(fork_offset):.3f} m", bicycle_source)
-    reach_args = {k: args[k] for k in _GEOMETRY + _PLACEMENT if k not in _HUB_WIDTHS}
+    reach_args = {k: args[k] for k in _REACH}
     leg_span, leg_len, arm_span, arm_len = (float(x) for x in gen.limb_reach(**reach_args))
     if leg_span > leg_len * (1 + STRAIGHT_LIMB_TOLERANCE):
         raise ReachError(
@@ -122,7 +125,7 @@ def check_closures(args: dict[str, float], bicycle_source: str, rider_source: st
     if arm_span <= abs(args["l_ua"] - args["l_la"]) * (1 + STRAIGHT_LIMB_TOLERANCE):
         raise ReachError("|l_ua - l_la|", round(abs(args["l_ua"] - args["l_la"]), 4),
                          f"at most {arm_span:.3f} m, the shoulder to grip distance (the elbow cannot close)", rider_source)
-    points = gen.grid_points(**{**{k: args[k] for k in _GEOMETRY + _PLACEMENT}, **straight_limb_lengths(args)})
+    points = gen.grid_points(**{**{k: args[k] for k in _GRID}, **straight_limb_lengths(args)})
     # Preconditions of the branch rule (derive/rider_model.py): hip above the pedal axis,
     # shoulder behind the hand.
     hip, foot, shoulder, hand = points[12], points[4], points[20], points[18]
@@ -139,7 +142,7 @@ def straight_limb_lengths(args: dict[str, float]) -> dict[str, float]:
     Returns an empty dict when no limb is at its limit of reach; otherwise, for each straight limb,
     its two lengths scaled to sum to ``span * (1 + 1e-14)`` (see :data:`_STRAIGHT_MARGIN`).
     """
-    reach_args = {k: args[k] for k in _GEOMETRY + _PLACEMENT if k not in _HUB_WIDTHS}
+    reach_args = {k: args[k] for k in _REACH}
     reach = [float(x) for x in gen.limb_reach(**reach_args)]
     out: dict[str, float] = {}
     for (a, b), span, length in zip(_LIMB_LENGTHS, reach[0::2], reach[1::2]):
@@ -162,8 +165,7 @@ def seat_rider(bicycle: BicycleBodies, rider: RiderMeasurements) -> RiderModel:
     # Reach depends on both files (seat, stem and handlebar on the bicycle; limbs on the rider).
     check_closures(args, bicycle.source, f"{rider.source} seated on {bicycle.source}")
     args.update(straight_limb_lengths(args))
-    points = gen.grid_points(**{k: args[k] for k in _GEOMETRY + _PLACEMENT})
-    mass_args = {k: v for k, v in args.items() if k not in _HUB_WIDTHS}
-    mass, com, inertia = gen.rider_mass_properties(**mass_args)
+    points = gen.grid_points(**{k: args[k] for k in _GRID})
+    mass, com, inertia = gen.rider_mass_properties(**{k: args[k] for k in _MASS})
     check_inertia_tensor("rider inertia", inertia, rider.source)
     return RiderModel(np.asarray(points), float(mass), np.asarray(com), np.asarray(inertia))

@@ -1,14 +1,15 @@
-"""Evaluate the stage graph and its Jacobian (forward-mode chain rule) for any batch shape."""
+"""The estimate chain's stages run by the uncertainty engine, and its inputs checked by name."""
 from __future__ import annotations
 
 import logging
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Iterable, Mapping
 
 import numpy as np
 
-from bikerider.benchmark.parameters import BENCHMARK_NAMES
+from bikerider.engine import Chain as _EngineChain
 from bikerider.errors import InputError
-from bikerider.uncertainty.stages import FRAME, OPTIONAL_NAN, Stage, all_stages
+from bikerider.generated.manifest import BENCHMARK_NAMES
+from bikerider.uncertainty.stages import FRAME, OPTIONAL_NAN, all_stages
 
 LOG = logging.getLogger(__name__)
 
@@ -23,8 +24,8 @@ def known_names() -> set[str]:
     return names
 
 
-class Chain:
-    """The stages that run when the nodes ``provided`` are given, in order.
+class Chain(_EngineChain):
+    """The estimate chain's stages that run when the nodes ``provided`` are given, in order.
 
     Parameters
     ----------
@@ -38,68 +39,7 @@ class Chain:
     """
 
     def __init__(self, provided: Iterable[str]):
-        self.provided = tuple(provided)
-        available = set(self.provided)
-        self.stages: list[Stage] = []
-        for stage in all_stages():
-            if not all(name in available for name in stage.inputs):
-                continue
-            given = [name for name in stage.outputs if name in self.provided]
-            if given:
-                raw = [n for n in stage.inputs if n not in ("g", "k_t") and n in self.provided][:3]
-                raise InputError(
-                    given[0], "given",
-                    f"either {given[0]} or the measurements it is computed from ({', '.join(raw)}, ...), not both",
-                )
-            self.stages.append(stage)
-            available.update(stage.outputs)
-        self.available = available
-
-    def require(self, names: Sequence[str]) -> None:
-        """Raise :class:`InputError` naming the first of ``names`` the inputs cannot give."""
-        for name in names:
-            if name not in self.available:
-                raise InputError(name, "not computable from the inputs given",
-                                 "the measurements it depends on (see bikerider sensitivity --help)")
-
-    def evaluate(self, values: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
-        """Value of every available node; arrays broadcast against each other."""
-        nodes = {k: np.asarray(v, dtype=float) for k, v in values.items()}
-        for stage in self.stages:
-            with np.errstate(invalid="ignore"):
-                outs = stage.value(stage.kwargs(nodes))
-            nodes.update(zip(stage.outputs, (np.asarray(o, dtype=float) for o in outs)))
-        return nodes
-
-    def gradients(self, values: Mapping[str, np.ndarray], wrt: Sequence[str]) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
-        """Node values and ``d node / d wrt`` as arrays ``(..., len(wrt))`` for every available node.
-
-        Forward mode: each stage's Jacobian multiplies the stacked gradients of its inputs.
-        """
-        nodes = {k: np.asarray(v, dtype=float) for k, v in values.items()}
-        n = len(wrt)
-        eye = np.eye(n)
-        grads: dict[str, np.ndarray] = {}
-        index = {name: i for i, name in enumerate(wrt)}
-        for name in nodes:
-            grads[name] = eye[index[name]] if name in index else np.zeros(n)
-        for stage in self.stages:
-            kw = stage.kwargs(nodes)
-            with np.errstate(invalid="ignore", divide="ignore"):
-                outs = stage.value(kw)
-                nodes.update(zip(stage.outputs, (np.asarray(o, dtype=float) for o in outs)))
-                J = np.asarray(stage.jacobian(kw), dtype=float)
-                inputs = np.stack(np.broadcast_arrays(*(grads[name] for name in stage.inputs)), axis=-2)
-                J, inputs = _broadcast_matmul(J, inputs)
-                out = J @ inputs
-            for k, name in enumerate(stage.outputs):
-                grads[name] = out[..., k, :]
-        return nodes, grads
-
-
-def _broadcast_matmul(J: np.ndarray, G: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    batch = np.broadcast_shapes(J.shape[:-2], G.shape[:-2])
-    return np.broadcast_to(J, batch + J.shape[-2:]), np.broadcast_to(G, batch + G.shape[-2:])
+        super().__init__(all_stages(), provided)
 
 
 def prepare_values(values: Mapping[str, object]) -> dict[str, np.ndarray]:

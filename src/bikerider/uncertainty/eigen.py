@@ -18,12 +18,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bikerider.benchmark.model import MODES, check_speeds, label_modes
+from bikerider.benchmark.modes import MODES, check_speeds, label_modes
+from bikerider.engine import arguments
 from bikerider.generated import benchmark_model as gen_model
 from bikerider.generated import sensitivities as gen
 from bikerider.uncertainty.stages import ENTRIES
 
-PARAMETERS = ENTRIES + ("g",)
+PARAMETERS = tuple(a for a in arguments("sensitivities.state_matrix_jacobian") if a != "v")
 """Columns of :attr:`EigenSensitivity.derivatives`: the matrix entries, then ``g``."""
 
 
@@ -35,7 +36,7 @@ class EigenSensitivity:
     ----------
     speeds : ndarray, shape (n,)
     values : ndarray, shape (n, 4), complex
-        Ordered weave (+imag), weave (-imag), capsize, castor (:data:`bikerider.benchmark.model.MODES`).
+        Ordered weave (+imag), weave (-imag), capsize, castor (:data:`bikerider.benchmark.modes.MODES`).
     derivatives : ndarray, shape (n, 4, 17), complex
         d lambda / d [matrix entries, g].
     condition : ndarray, shape (n, 4)

@@ -1,23 +1,19 @@
-"""Measurements as the chain's nodes: read from the project's TOML files without reducing them.
+"""Measurements as the chain's nodes, with where each uncertainty comes from.
 
-:func:`raw_inputs_from_toml` keeps every pendulum period, axis angle and the pendulum stiffness
-as inputs in their own right, so the correlations the reductions create (one ``k_t`` in every
-torsional inertia, one set of periods in all three rear-frame tensor entries, the wheel's mass in
-its compound pendulum) survive into the propagation.  :func:`paper_inputs` is the paper's bicycle
-and rider with the accuracies the paper states, and - where it states none (the rider, Table 7) -
-the assumed sigmas of :data:`ASSUMED_RIDER_SIGMAS`, every one reported with its source.
+:func:`chain_raw_inputs` keeps every pendulum period, axis angle and the pendulum stiffness of a
+bicycle as inputs in their own right, so the correlations the reductions create (one ``k_t`` in
+every torsional inertia, one set of periods in all three rear-frame tensor entries, the wheel's
+mass in its compound pendulum) survive into the propagation.  Where a file states no accuracy (the
+paper's rider, Table 7) :func:`with_assumed_rider_sigmas` gives the assumed sigmas of
+:data:`ASSUMED_RIDER_SIGMAS`, every one reported with its source.  Reading the files is
+:mod:`bikerider.io.chain_inputs`' job (``paper_inputs``, ``raw_inputs_from_toml``).
 """
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from dataclasses import dataclass
-from importlib import resources
-from pathlib import Path
 
-from bikerider.quantity import Quantity
-
-DEG = math.pi / 180
+from bikerider.quantity import DEG, Quantity
 
 ASSUMED_RIDER_SIGMAS: dict[str, tuple[float, str]] = {
     # The paper states no accuracy for Table 7 ("measured as accurately as possible with basic
@@ -27,9 +23,6 @@ ASSUMED_RIDER_SIGMAS: dict[str, tuple[float, str]] = {
     "lam_fl": (1.0 * DEG, "assumed: 1 deg, the accuracy Table 4 states for angles read off photographs"),
     "mBr": (0.1, "assumed: one unit of the last digit Table 8 prints (0.1 kg)"),
 }
-
-_RIDER = ("c_ch", "c_h", "l_hh", "c_la", "l_la", "c_ll", "l_ll", "l_ss", "l_to", "c_ua", "l_ua", "c_ul", "l_ul")
-_FRACTIONS = ("f_h", "f_la", "f_ll", "f_to", "f_ua", "f_ul")
 
 
 @dataclass(frozen=True)
@@ -62,30 +55,11 @@ def chain_raw_inputs(bicycle, rider) -> dict[str, Quantity]:
     return out
 
 
-def raw_inputs_from_toml(bicycle: str | Path, rider: str | Path) -> dict[str, Quantity]:
-    """Every measurement of a bicycle and a rider TOML file as a chain input, unreduced.
-
-    Raises
-    ------
-    FileFormatError, InputError
-        An unreadable file, a missing or malformed value (named with its table and key).
-    """
-    from bikerider.io.toml_input import load_bicycle_toml, load_rider_toml
-
-    return chain_raw_inputs(load_bicycle_toml(bicycle), load_rider_toml(rider))
-
-
 def benchmark_inputs(parameters) -> dict[str, Quantity]:
     """The benchmark parameters (a :class:`bikerider.benchmark.BenchmarkParameters`) as chain inputs,
     each with its sigma; undetermined values (``IByy``/``IHyy`` = None) are left out."""
     return {name: Quantity(float(value), float(parameters.sigmas.get(name, 0.0)))
             for name, value in parameters.values.items() if value is not None}
-
-
-def paper_files() -> tuple[Path, Path]:
-    """The paper's bicycle and rider files shipped with the package."""
-    base = resources.files("bikerider") / "data" / "paper"
-    return Path(str(base / "browser_bicycle.toml")), Path(str(base / "jason_rider.toml"))
 
 
 def with_assumed_rider_sigmas(quantities: Mapping[str, Quantity], sources: dict[str, str]) -> dict[str, Quantity]:
@@ -96,22 +70,3 @@ def with_assumed_rider_sigmas(quantities: Mapping[str, Quantity], sources: dict[
             out[name] = Quantity(out[name].value, sigma)
             sources[name] = note
     return out
-
-
-def paper_inputs(assume_rider_sigmas: bool = True) -> InputSet:
-    """The paper's bicycle and rider, raw measurements, with the paper's stated accuracies.
-
-    Parameters
-    ----------
-    assume_rider_sigmas : bool
-        Give the rider's measurements the sigmas of :data:`ASSUMED_RIDER_SIGMAS` (the paper
-        states none); otherwise they are exact.
-    """
-    bicycle, rider = paper_files()
-    quantities = raw_inputs_from_toml(bicycle, rider)
-    sources = {name: (f"stated: {bicycle.name}" if q.sigma else "exact (no sigma given)") for name, q in quantities.items()}
-    for name in _RIDER + ("lam_fl", "mBr") + _FRACTIONS:
-        sources[name] = "exact (no sigma given)" if quantities[name].sigma == 0 else f"stated: {rider.name}"
-    if assume_rider_sigmas:
-        quantities = with_assumed_rider_sigmas(quantities, sources)
-    return InputSet(quantities, sources, "Batavus Browser and rider (Moore et al. 2009)")

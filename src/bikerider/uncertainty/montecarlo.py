@@ -24,11 +24,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from bikerider.errors import InputError
+from bikerider.generated.manifest import STAGES
 from bikerider.quantity import Quantity
 from bikerider.uncertainty.chain import Chain, prepare_values
 from bikerider.uncertainty.propagation import UncertaintyResult
 
 DEFAULT_OUTPUTS = ("v_weave", "v_capsize")
+_FAILURES = (("knee closure", STAGES["knee"]["outputs"][0]), ("elbow closure", STAGES["elbow"]["outputs"][0]),
+             ("no weave speed", "v_weave"), ("no capsize speed", "v_capsize"))
+"""Why a sample has no value: the node that is NaN then."""
 MISSING_LIMIT = 0.005
 """A fraction of samples without a value above which it is named as a cause of disagreement."""
 CHUNK = 20_000
@@ -94,8 +98,7 @@ def sample_outputs(quantities: Mapping[str, Quantity], n: int, outputs: Sequence
         nodes = chain.evaluate(batch)
         for name in outputs:
             out[name][start:start + size] = np.broadcast_to(nodes[name], (size,))
-        for label, node in (("knee closure", "rX14"), ("elbow closure", "rX23"),
-                            ("no weave speed", "v_weave"), ("no capsize speed", "v_capsize")):
+        for label, node in _FAILURES:
             if node in nodes:
                 failures[label] += int(np.sum(~np.isfinite(np.broadcast_to(nodes[node], (size,)))))
     return out, {k: v for k, v in failures.items() if v}

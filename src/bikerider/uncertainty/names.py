@@ -1,4 +1,4 @@
-"""Names, units and LaTeX of the chain's nodes, and the aliases the command line accepts."""
+"""Names, units and LaTeX of the chain's nodes (the one symbol table), and the aliases the command line accepts."""
 from __future__ import annotations
 
 import re
@@ -12,32 +12,8 @@ ALIASES = {
 }
 """User-facing output names for the speed nodes."""
 
-_RAW = {
-    "T_Bf": ("rear frame torsional period, orientation {i}", "s", "T_{{Bf,{i}}}"),
-    "alpha_Bf": ("rear frame pendulum axis angle, orientation {i}", "rad", r"\alpha_{{Bf,{i}}}"),
-    "T_H": ("handlebar/fork torsional period, orientation {i}", "s", "T_{{H,{i}}}"),
-    "alpha_H": ("handlebar/fork pendulum axis angle, orientation {i}", "rad", r"\alpha_{{H,{i}}}"),
-}
-_WHEEL = {
-    "T_{w}xx": ("{wheel} wheel torsional period about a diameter", "s", "T_{{{w}xx}}"),
-    "T_{w}yy": ("{wheel} wheel compound pendulum period", "s", "T_{{{w}yy}}"),
-    "l_p{w}": ("{wheel} wheel compound pendulum length", "m", "l_{{p{w}}}"),
-}
-
-
-def _raw_table() -> dict[str, tuple[str, str, str]]:
-    out: dict[str, tuple[str, str, str]] = {}
-    for prefix, (desc, unit, latex) in _RAW.items():
-        for i in (1, 2, 3):
-            out[f"{prefix}{i}"] = (desc.format(i=i), unit, latex.format(i=i))
-    for pattern, (desc, unit, latex) in _WHEEL.items():
-        for w, wheel in (("R", "rear"), ("F", "front")):
-            out[pattern.format(w=w)] = (desc.format(wheel=wheel), unit, latex.format(w=w))
-    return out
-
-
-TABLE: dict[str, tuple[str, str, str]] = {**SYMBOLS, **_raw_table()}
-"""Node name -> (description, unit, LaTeX)."""
+TABLE: dict[str, tuple[str, str, str]] = SYMBOLS
+"""Node name -> (description, unit, LaTeX): the symbol table of ``derive/symbols.py``."""
 
 
 def canonical_name(name: str) -> str:

@@ -1,7 +1,8 @@
 """First-order propagation of measurement uncertainties through the whole chain.
 
-``sigma_y^2 = sum_j (dy/dp_j)^2 sigma_j^2`` with the closed-form Jacobian of
-:mod:`bikerider.uncertainty.chain`; the inputs are taken as independent.  Correlations the chain
+``sigma_y^2 = sum_j (dy/dp_j)^2 sigma_j^2`` with the closed-form Jacobian of the estimate chain
+(the uncertainty engine, :mod:`bikerider.engine`, over :mod:`bikerider.uncertainty.stages`); the
+inputs are taken as independent.  Correlations the chain
 itself creates (one pendulum stiffness in every torsional inertia, one wheel mass in its mass and
 its compound pendulum) are carried exactly when the raw measurements are given (see
 :mod:`bikerider.uncertainty.stages`); when already-reduced values are given their correlations
@@ -15,14 +16,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from bikerider.benchmark.parameters import BENCHMARK_NAMES
+from bikerider.engine import first_order
 from bikerider.errors import InputError
+from bikerider.generated.manifest import BENCHMARK_NAMES
 from bikerider.quantity import Quantity
 from bikerider.uncertainty.chain import Chain, prepare_values
 from bikerider.uncertainty.eigen import EigenSensitivity, eigen_sensitivity
-from bikerider.uncertainty.stages import ENTRIES
+from bikerider.uncertainty.stages import COEFFICIENTS, ENTRIES, SPEEDS
 
-SPEED_NODES = {"weave": "v_weave", "capsize": "v_capsize"}
+SPEED_NODES = dict(zip(("weave", "capsize"), SPEEDS))
 
 
 @dataclass(frozen=True)
@@ -202,7 +204,7 @@ def propagate(inputs: Mapping[str, Quantity | float], speeds: Sequence[float] | 
     Parameters
     ----------
     inputs : mapping of str to Quantity or float
-        Chain inputs by name: the arguments of ``generated.combination.benchmark_parameters``
+        Chain inputs by name: the arguments of ``generated.combination.estimate_chain``
         (as ``bikerider.estimate.EstimateResult.chain_inputs`` gives them), optionally with raw
         pendulum measurements in place of reduced inertias, or the benchmark parameters
         themselves.  SI units, radians.  ``IBfyy``/``IHyy`` may be NaN (not measured).
@@ -226,19 +228,19 @@ def propagate(inputs: Mapping[str, Quantity | float], speeds: Sequence[float] | 
     chain = Chain(values)
     chain.require(ENTRIES)
     input_names = tuple(values)
-    nodes, grads = chain.gradients(values, input_names)
+    result = first_order(chain.stages, {name: Quantity(values[name], quantities[name].sigma) for name in input_names},
+                         chain, wrt=input_names)  # every input: derivatives of the exact ones too
+    nodes, grads = result.nodes, result.gradients
     output_names = tuple(n for n in _output_order(chain.available))
-    J = np.array([np.broadcast_to(grads[n], (len(input_names),)) for n in output_names], dtype=float)
-    sig = np.array([quantities[n].sigma for n in input_names])
-    used = sig > 0
+    J = result.jacobian(output_names)
+    sig = result.sigmas
     out_values: dict[str, float | None] = {}
     sigmas: dict[str, float | None] = {}
-    for i, name in enumerate(output_names):
+    for name in output_names:
         y = float(nodes[name])
-        row = J[i, used] * sig[used]
-        ok = math.isfinite(y) and bool(np.all(np.isfinite(row)))
+        sigma = result.sigma(name, skip_nonfinite=False)
         out_values[name] = y if math.isfinite(y) else None
-        sigmas[name] = float(np.sqrt(np.sum(row**2))) if ok else None
+        sigmas[name] = sigma if math.isfinite(y) and math.isfinite(sigma) else None
     notes = []
     for key, node in SPEED_NODES.items():
         if out_values.get(node) is None:
@@ -252,7 +254,7 @@ def propagate(inputs: Mapping[str, Quantity | float], speeds: Sequence[float] | 
 
 def _output_order(available: set[str]) -> list[str]:
     first = [n for n in BENCHMARK_NAMES if n in available] + [n for n in ENTRIES if n in available]
-    first += [n for n in ("v_weave", "v_capsize", "a4", "a3", "a2", "a1", "a0") if n in available]
+    first += [n for n in (*SPEEDS, *COEFFICIENTS) if n in available]
     return first + sorted(available - set(first))
 
 

@@ -1,6 +1,6 @@
 """Closed-form sensitivities as SymPy expressions: the chain rule over the emitted stage expressions.
 
-``derive/sensitivities.py`` emits each stage's expressions (``generated.sensitivities.STAGES``,
+``derive/sensitivities.py`` emits each stage's expressions (``generated.sensitivities.EXPRESSIONS``,
 ``srepr`` text); this module parses them, renames each stage's local symbols to the nodes they
 stand for, and differentiates.  A derivative ``d y / d x`` is returned as a list of exact steps,
 one per intermediate quantity on the way::
@@ -19,9 +19,12 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from functools import cache
 
+import numpy as np
 import sympy as sp
 
 from bikerider.errors import InputError
+from bikerider.generated import benchmark_model as gen_model
+from bikerider.generated.sensitivities import EXPRESSIONS
 from bikerider.uncertainty import names
 from bikerider.uncertainty.chain import Chain, with_optional
 from bikerider.uncertainty.stages import COEFFICIENTS, ENTRIES
@@ -34,9 +37,7 @@ CLOSED_FORM_LIMIT = 600
 
 @cache
 def _stage_expressions(key: str) -> tuple[tuple[str, ...], tuple[str, ...], tuple[sp.Expr, ...]]:
-    from bikerider.generated.sensitivities import STAGES
-
-    inputs, outputs, texts = STAGES[key]
+    inputs, outputs, texts = EXPRESSIONS[key]
     return inputs, outputs, tuple(sp.sympify(t) for t in texts)
 
 
@@ -90,15 +91,17 @@ def symbolic_stages(chain: Chain, output: str) -> dict[str, SymbolicStage]:
             continue
         s = _renamed(stage.symbolic, stage.args, stage.inputs, stage.outputs)
         producers.update({o: s for o in s.outputs})
-    args = ENTRIES + ("g", "v")
+    args = EXPRESSIONS["characteristic"][0]  # the matrix entries, g and the speed v
+    at_speed = {"v": output}  # a speed's condition is taken at that speed
     if output == "v_capsize":
-        producers["v_capsize"] = _renamed("capsize_condition", args, ENTRIES + ("g", "v_capsize"), (),
+        producers["v_capsize"] = _renamed("capsize_condition", args, tuple(at_speed.get(a, a) for a in args), (),
                                           solves="v_capsize")
     elif output == "v_weave":
-        s = _renamed("characteristic", args, ENTRIES + ("g", "v_weave"), COEFFICIENTS)
+        s = _renamed("characteristic", args, tuple(at_speed.get(a, a) for a in args), COEFFICIENTS)
         producers.update({o: s for o in COEFFICIENTS})
-        producers["v_weave"] = _renamed("weave_condition", COEFFICIENTS + ("v",), COEFFICIENTS + ("v_weave",), (),
-                                        solves="v_weave")
+        weave_args = EXPRESSIONS["weave_condition"][0]  # the coefficients and v
+        producers["v_weave"] = _renamed("weave_condition", weave_args, tuple(at_speed.get(a, a) for a in weave_args),
+                                        (), solves="v_weave")
     elif output in COEFFICIENTS and "characteristic" in {st.name for st in chain.stages}:
         s = _renamed("characteristic", args, args, COEFFICIENTS)
         producers.update({o: s for o in COEFFICIENTS})
@@ -197,10 +200,6 @@ def _with_coefficients(point: Mapping[str, float], output: str) -> Mapping[str, 
     """Add the characteristic coefficients at the weave speed, which the weave steps use."""
     if output != "v_weave" or "a0" in point or "v_weave" not in point:
         return point
-    import numpy as np
-
-    from bikerider.generated import benchmark_model as gen_model
-
     coefficients = gen_model.characteristic_coefficients(
         **{k: np.asarray(point[k], dtype=float) for k in ENTRIES}, g=float(point["g"]), v=float(point["v_weave"]))
     return {**point, **{name: float(c) for name, c in zip(COEFFICIENTS, coefficients)}}

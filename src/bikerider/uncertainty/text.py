@@ -5,6 +5,7 @@ import math
 
 import sympy as sp
 
+from bikerider.quantity import DEG
 from bikerider.uncertainty import names
 from bikerider.uncertainty.montecarlo import Comparison
 from bikerider.uncertainty.propagation import Contribution, UncertaintyResult
@@ -12,8 +13,6 @@ from bikerider.uncertainty.symbolic import SensitivityExpression
 
 PRINT_LIMIT = 400
 """Steps longer than this many operations are summarised unless the full text is asked for."""
-
-DEG = math.pi / 180
 
 
 def _fmt(x: float | None, digits: int = 4) -> str:
