@@ -1,9 +1,10 @@
-"""The batched raw-measurement reduction: one call over every point of the numerical Jacobian.
+"""The Measured-file reduction over batches, its least-squares stages, and the one inertia check.
 
-``propagate(..., vectorized=True)`` evaluates the nominal point and every perturbed point in one
-array call; these tests check that this gives what evaluating the points one at a time gives, that
-the batched building blocks (closed-form least squares of the hanging lines, pairwise mean) agree
-with general solvers, and that the closed-form I_yy screen never contradicts the full tensor check.
+The reduction's stages broadcast over batches of points; these tests check that a batch gives what
+its points give one at a time, that the least-squares stage's solution and exact Jacobian agree with
+general solvers and with central differences, that its pairwise-mean variant equals solving each
+pair, and that the one tensor check (``bikerider.inertia``) agrees with an independent eigenvalue
+check.  ``tests/measured_oracle.py`` is the independent NumPy reduction they compare with.
 """
 from __future__ import annotations
 
@@ -14,13 +15,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import measured_oracle as oracle
 from bikerider.bicycle import raw_measurements as rm
-from bikerider.bicycle.hanging_lines import (
-    intersect_lines, least_squares_point, mean_of_pairwise_intersections, pairwise_mean_point,
-)
-from bikerider.bicycle.propagation import perturbed_points, propagate
+from bikerider.bicycle.pendulum import centre_of_mass_from_lines
+from bikerider.engine import Chain, LeastSquaresStage
 from bikerider.errors import FitError, InputError
-from bikerider.inertia import check_inertia_tensor
+from bikerider.inertia import inertia_problem
 from bikerider.io.name_value_file import read_name_value_file
 from bikerider.quantity import Quantity
 
@@ -40,37 +40,23 @@ def _arithmetic(x):
 INPUTS = {"a": Quantity(1.5, 0.01), "b": Quantity(-0.7, 0.002), "c": Quantity(3.0, 0.0), "d": Quantity(9.0, 0.5)}
 
 
-def test_vectorized_and_pointwise_propagation_are_identical():
-    pointwise = propagate(_arithmetic, INPUTS)
-    batched = propagate(_arithmetic, INPUTS, vectorized=True)
+def test_the_oracles_vectorized_and_pointwise_propagation_are_identical():
+    pointwise = oracle.propagate(_arithmetic, INPUTS)
+    batched = oracle.propagate(_arithmetic, INPUTS, vectorized=True)
     assert list(pointwise) == list(batched) == ["p", "q", "const", "nan"]
     for key in ("p", "q", "const"):
         assert batched[key] == pointwise[key], key
     assert math.isnan(batched["nan"].value) and batched["nan"].sigma == pointwise["nan"].sigma == 0.0
 
 
-def test_propagation_matches_the_first_order_formula():
+def test_the_oracles_propagation_matches_the_first_order_formula():
     a, b, c = (INPUTS[k] for k in "abc")
     # p = a b + c / a: dp/da = b - c / a^2, dp/db = a (c and d carry no uncertainty that matters)
     expected = math.hypot((b.value - c.value / a.value**2) * a.sigma, a.value * b.sigma)
     for vectorized in (False, True):
-        result = propagate(_arithmetic, INPUTS, vectorized=vectorized)
+        result = oracle.propagate(_arithmetic, INPUTS, vectorized=vectorized)
         assert result["p"].sigma == pytest.approx(expected, rel=1e-8)
         assert result["const"].sigma == 0.0
-
-
-def test_perturbed_points_step_each_uncertain_input_up_then_down():
-    points, varied, steps, sigmas = perturbed_points(INPUTS)
-    assert points.shape == (4, 2 * 3 + 1)  # a, b, d have an uncertainty
-    assert varied.tolist() == [0, 1, 3]
-    assert sigmas.tolist() == [0.01, 0.002, 0.5]
-    nominal = np.array([q.value for q in INPUTS.values()])
-    assert np.array_equal(points[:, 0], nominal)
-    for j, i in enumerate(varied):
-        up, down = points[:, 2 * j + 1], points[:, 2 * j + 2]
-        assert up[i] == nominal[i] + steps[j] and down[i] == nominal[i] - steps[j]
-        others = np.arange(4) != i
-        assert np.array_equal(up[others], nominal[others]) and np.array_equal(down[others], nominal[others])
 
 
 @pytest.mark.parametrize("name", sorted(MEASURED))
@@ -79,27 +65,30 @@ def test_a_batch_reduces_as_its_points_one_by_one(name, method):
     """Each point of a batch perturbs different inputs, so mixing points up anywhere would show."""
     values = read_name_value_file(MEASURED[name]).as_dict()
     layout = rm.detect_layout(values)
+    inputs = rm.measured_inputs(values, layout)
+    chain = Chain(rm._stages(rm._layout_key(layout, method)), inputs)
     rng = np.random.default_rng(7)
-    nominal = {k: q.value for k, q in values.items()}
-    batch = {k: v + (q.sigma or 1e-4 * abs(v)) * rng.uniform(-1, 1, 5) for (k, q), v in zip(values.items(), nominal.values())}
-    together = rm.evaluate_measured(batch, layout, com_method=method)
+    batch = {k: q.value + (q.sigma or 1e-4 * abs(q.value)) * rng.uniform(-1, 1, 5) if math.isfinite(q.value)
+             else q.value for k, q in inputs.items()}
+    together = chain.evaluate(batch)
     for point in range(5):
-        alone = rm.evaluate_measured({k: float(v[point]) for k, v in batch.items()}, layout, com_method=method)
-        assert set(alone) == set(together)
+        alone = chain.evaluate({k: float(v[point]) if np.ndim(v) else v for k, v in batch.items()})
         for key, value in alone.items():
+            value = float(value)
+            got = np.broadcast_to(together[key], (5,))[point]
             if math.isnan(value):
-                assert math.isnan(together[key][point]), key
+                assert math.isnan(got), key
             else:
-                assert together[key][point] == pytest.approx(value, rel=1e-12, abs=1e-15), (key, point)
+                assert got == pytest.approx(value, rel=1e-12, abs=1e-15), (key, point)
 
 
 @pytest.mark.parametrize("name", sorted(MEASURED))
-def test_reduction_equals_the_pointwise_propagation(name):
-    """The batched reduction against the same Jacobian evaluated one point at a time."""
+def test_reduction_equals_the_oracles_pointwise_propagation(name):
+    """The reduction's exact sigmas against central differences evaluated one point at a time."""
     data = read_name_value_file(MEASURED[name])
     reduction = rm.reduce_measured(data, source=data)
-    values = {k: q for k, q in data.items() if k not in ("xcl", "zcl", "ds1", "ds3")}
-    pointwise = propagate(lambda x: rm.evaluate_measured(x, reduction.layout), values)
+    values = {k: q for k, q in data.items() if k not in oracle.KNOWN_EXTRAS}
+    pointwise = oracle.propagate(lambda x: oracle.evaluate_measured(x, reduction.layout), values)
     results = {**reduction.bodies.values, **reduction.extras}
     assert set(results) == {k for k, q in pointwise.items() if math.isfinite(q.value)}
     for key, q in results.items():
@@ -110,65 +99,90 @@ def test_reduction_equals_the_pointwise_propagation(name):
 
 def _random_lines(rng, batch, m):
     betas = rng.uniform(0, math.pi, (batch, m))
-    return np.sin(betas), np.cos(betas), rng.normal(0, 0.5, (batch, m))
+    return betas, rng.normal(0, 0.5, (batch, m, 2))
 
 
-def test_closed_form_least_squares_equals_lstsq_and_svd():
+def _lines_stage(m: int, method: str = "least_squares") -> LeastSquaresStage:
+    rows = [{"alpha": f"alpha_{i}", "x_p": f"x_{i}", "z_p": f"z_{i}"} for i in range(m)]
+    return LeastSquaresStage("lines", "line_through_point", rows, ("s", "c"), "d", ("x", "z"), method)
+
+
+def test_the_least_squares_stage_equals_lstsq_and_svd():
+    """Lines through random points: the solution and the conditioning against NumPy's solvers, for
+    a batch of 200 line sets at once."""
     rng = np.random.default_rng(1)
-    sin, cos, d = _random_lines(rng, 200, 4)
-    x, z, conditioning = least_squares_point(sin, cos, d)
+    betas, points = _random_lines(rng, 200, 4)
+    stage = _lines_stage(4)
+    kw = {f"alpha_{i}": betas[:, i] for i in range(4)}
+    kw.update({f"x_{i}": points[:, i, 0] for i in range(4)} | {f"z_{i}": points[:, i, 1] for i in range(4)})
+    (x, z), checks = stage.evaluate(kw)
+    conditioning = checks[-2]
     for i in range(200):
-        normals = np.column_stack([sin[i], cos[i]])
-        point, *_ = np.linalg.lstsq(normals, d[i], rcond=None)
+        normals = np.column_stack([np.sin(betas[i]), np.cos(betas[i])])
+        d = np.sum(normals * points[i], axis=1)
+        point, *_ = np.linalg.lstsq(normals, d, rcond=None)
         singular = np.linalg.svd(normals, compute_uv=False)
         assert conditioning[i] == pytest.approx(singular[-1] / singular[0], rel=1e-9, abs=1e-12)
         if conditioning[i] > 1e-3:
             assert (x[i], z[i]) == pytest.approx(tuple(point), rel=1e-9, abs=1e-12)
-    # the lines axis may be any axis
-    x0, z0, c0 = least_squares_point(sin.T, cos.T, d.T, axis=0)
-    assert np.array_equal(x0, x) and np.array_equal(z0, z) and np.array_equal(c0, conditioning)
 
 
-def test_batched_pairwise_mean_equals_solving_each_pair():
+@pytest.mark.parametrize("method", ["least_squares", "pairwise_mean"])
+def test_the_least_squares_stage_jacobian_matches_central_differences(method):
+    rng = np.random.default_rng(4)
+    betas, points = _random_lines(rng, 1, 5)
+    stage = _lines_stage(5, method)
+    kw = {f"alpha_{i}": float(betas[0, i]) for i in range(5)}
+    kw.update({f"x_{i}": float(points[0, i, 0]) for i in range(5)} | {f"z_{i}": float(points[0, i, 1])
+                                                                    for i in range(5)})
+    J = stage.jacobian(kw)
+    for j, name in enumerate(stage.inputs):
+        h = 1e-6
+        up = np.array(stage.value({**kw, name: kw[name] + h}))
+        down = np.array(stage.value({**kw, name: kw[name] - h}))
+        np.testing.assert_allclose(J[:, j], (up - down) / (2 * h), rtol=1e-6, atol=1e-8, err_msg=name)
+
+
+def test_the_pairwise_mean_equals_solving_each_pair():
     rng = np.random.default_rng(2)
-    sin, cos, d = _random_lines(rng, 50, 5)
-    x, z = pairwise_mean_point(sin, cos, d)
+    betas, points = _random_lines(rng, 50, 5)
+    stage = _lines_stage(5, "pairwise_mean")
+    kw = {f"alpha_{i}": betas[:, i] for i in range(5)}
+    kw.update({f"x_{i}": points[:, i, 0] for i in range(5)} | {f"z_{i}": points[:, i, 1] for i in range(5)})
+    x, z = stage.value(kw)
     for i in range(50):
-        normals = np.column_stack([sin[i], cos[i]])
-        pairs = [np.linalg.solve(normals[[a, b]], d[i, [a, b]]) for a in range(5) for b in range(a + 1, 5)]
+        normals = np.column_stack([np.sin(betas[i]), np.cos(betas[i])])
+        d = np.sum(normals * points[i], axis=1)
+        pairs = [np.linalg.solve(normals[[a, b]], d[[a, b]]) for a in range(5) for b in range(a + 1, 5)]
         assert (x[i], z[i]) == pytest.approx(tuple(np.mean(pairs, axis=0)), rel=1e-8, abs=1e-10)
-        assert mean_of_pairwise_intersections(normals, d[i]) == pytest.approx(np.array([x[i], z[i]]))
 
 
 def test_parallel_hanging_lines_are_refused():
-    normals = np.array([[0.0, 1.0], [0.0, -1.0], [1e-5, 1.0]])
+    points = [(Quantity(0.0), Quantity(0.1)), (Quantity(0.0), Quantity(-0.2)), (Quantity(0.0), Quantity(0.3))]
+    angles = [Quantity(0.0), Quantity(math.pi), Quantity(1e-5)]
     with pytest.raises(FitError, match="parallel"):
-        intersect_lines(normals / np.linalg.norm(normals, axis=1)[:, None], np.array([0.1, 0.2, 0.3]))
+        centre_of_mass_from_lines(points, angles, "frame")
 
 
-def test_the_closed_form_yy_screen_never_contradicts_the_tensor_check():
+def test_the_inertia_check_agrees_with_eigenvalues():
+    """The one tensor check against the principal moments from ``eigvalsh``, around the triangle
+    limit (within a hair of it on purpose) and the positive-definite one."""
     rng = np.random.default_rng(3)
     decided = 0
     for _ in range(3000):
         xx, zz = rng.uniform(0.05, 2.0, 2)
         xz = rng.uniform(-1, 1) * math.sqrt(xx * zz) * rng.choice([1.0, 0.999999, 1.0000001])
-        # around the triangle limit yy = xx + zz, sometimes within the screen's margin of it
         yy = (xx + zz) * rng.choice([rng.uniform(0.3, 1.6), 1 + rng.normal(0, 1e-7)])
-        verdict = rm._triangle_verdict(xx, xz, zz, yy)
-        if verdict is None:
-            continue
+        principal = np.linalg.eigvalsh(np.array([[xx, 0.0, xz], [0.0, yy, 0.0], [xz, 0.0, zz]]))
+        margin = (principal[0] + principal[1] - principal[2]) / principal.sum()
+        if abs(margin) < 1e-8 or abs(principal[0]) < 1e-8 * principal.sum():
+            continue  # within round-off of a limit: either answer is right
         decided += 1
-        tensor = np.array([[xx, 0.0, xz], [0.0, yy, 0.0], [xz, 0.0, zz]])
-        try:
-            check_inertia_tensor("I", tensor)
-            passes = True
-        except InputError:
-            passes = False
-        assert passes == (verdict > 0), (xx, xz, zz, yy)
-    assert decided > 1000  # about half the draws are within the margin of a limit on purpose
-    assert rm._triangle_verdict(0.5, -0.1, 0.7, 1.0) == 1.0  # an ordinary frame
-    assert rm._triangle_verdict(0.5, -0.1, 0.7, 1.3) == -1.0  # I_yy beyond the in-plane moments' sum
-    assert rm._triangle_verdict(0.5, -0.1, 0.7, 1.2) is None  # exactly at the limit: the full check decides
+        assert (inertia_problem(xx, yy, zz, xz) is None) == (margin > 0 and principal[0] > 0), (xx, xz, zz, yy)
+    assert decided > 2000
+    assert inertia_problem(0.5, 1.0, 0.7, -0.1) is None  # an ordinary frame
+    assert "triangle" in inertia_problem(0.5, 1.3, 0.7, -0.1)[1]  # I_yy beyond the in-plane moments' sum
+    assert inertia_problem(0.5, None, 0.7, -0.1) is None  # I_yy not determined: the xz block alone
 
 
 def test_two_parallel_lines_leave_the_pairwise_mean_undefined():
@@ -183,3 +197,10 @@ def test_two_parallel_lines_leave_the_pairwise_mean_undefined():
     assert "xBf" in rm.reduce_measured(data, source=data).bodies.values
     with pytest.raises(FitError, match=r"Parallel.txt: the hanging lines are parallel: two lines of the rear frame \(B\)"):
         rm.reduce_measured(data, source=data, com_method="pairwise_mean")
+
+
+def test_a_compound_period_too_short_is_named(tmp_path):
+    values = read_name_value_file(MEASURED["Browser"]).as_dict()
+    values["TcB1"] = Quantity(0.3, 0.001)
+    with pytest.raises(InputError, match="TcB1.*shorter one gives a negative moment of inertia"):
+        rm.reduce_measured(values)

@@ -16,10 +16,9 @@ import numpy as np
 import pytest
 
 from bikerider.benchmark import WhippleModel
-from bikerider.bicycle.hanging_lines import mean_of_pairwise_intersections
-from bikerider.bicycle.raw_measurements import read_measured_file
 from bikerider.bicycle.to_benchmark import bicycle_benchmark_parameters
-from bikerider.io.bicycleparameters import merge_rider, read_benchmark_file, read_lumped_rider
+from bikerider.io.bicycleparameters import merge_rider, read_benchmark_file, read_lumped_rider, read_measured_file
+from measured_oracle import pairwise_mean_point
 from bikerider.io.name_value_file import read_name_value_file
 
 DATA = Path(str(resources.files("bikerider") / "data" / "bicycleparameters"))
@@ -118,7 +117,7 @@ def test_rigid_differences_are_the_centre_of_mass_method():
     x_pairwise, z_pairwise = ours(pairwise, "xB").value, ours(pairwise, "zB").value
     normals = np.array([[math.sin(b), math.cos(b)] for b in _betas(least, "B")])
     offsets = normals @ fit.point - fit.distances
-    assert np.allclose(mean_of_pairwise_intersections(normals, offsets), [x_pairwise, z_pairwise], atol=1e-9)
+    assert np.allclose(pairwise_mean_point(normals[:, 0], normals[:, 1], offsets), [x_pairwise, z_pairwise], atol=1e-9)
     rms_pairwise = math.sqrt(np.mean((normals @ [x_pairwise, z_pairwise] - offsets) ** 2))
     assert rms_pairwise > 2 * fit.rms
     assert ours(least, "xB").sigma < ours(pairwise, "xB").sigma / 3

@@ -58,7 +58,7 @@ def test_condition_number_grows_at_the_double_root(benchmark_entries):
 
 def test_propagated_eigenvalue_sigmas_match_finite_difference_propagation():
     """sigma of Re/Im of each eigenvalue from the chain rule equals one built from perturbed chains."""
-    from bikerider.uncertainty.inputs import paper_inputs
+    from bikerider.io.chain_inputs import paper_inputs
 
     q = paper_inputs().quantities
     result = propagate(q, speeds=[2.0, 7.0])

@@ -149,7 +149,7 @@ def test_bicycleparameters_benchmark_file(tmp_path_factory, data, name):
 @FUZZ
 @given(st.data(), st.sampled_from(["Browser", "Browserins", "Fisher", "Rigid", "Yellow"]))
 def test_measured_file(tmp_path_factory, data, name):
-    from bikerider.bicycle.raw_measurements import read_measured_file
+    from bikerider.io.bicycleparameters import read_measured_file
     from bikerider.bicycle.to_benchmark import bicycle_benchmark_parameters
 
     base = BP / "bicycles" / name / "RawData" / f"{name}Measured.txt"
@@ -237,7 +237,7 @@ HUGE = b"w = 1.02\n" + b"# padding " * 200_000 + b"\n" + b"x" * 2_000_000
 @pytest.mark.parametrize("reader", ["bicycle_toml", "rider_toml", "benchmark_toml", "benchmark_text",
                                     "measured", "lumped_rider", "signal_csv"])
 def test_readers_on_files_that_are_not_input(tmp_path, content, reader):
-    from bikerider.bicycle.raw_measurements import read_measured_file
+    from bikerider.io.bicycleparameters import read_measured_file
     from bikerider.fitting.signal_csv import read_signal_csv
     from bikerider.io.benchmark_file import load_benchmark_parameters
     from bikerider.io.bicycleparameters import read_lumped_rider

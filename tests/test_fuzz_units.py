@@ -112,7 +112,7 @@ MEASURED_CASES = [
 
 @pytest.mark.parametrize("pattern, replacement, words", MEASURED_CASES, ids=[c[1] for c in MEASURED_CASES])
 def test_measured_file_unit_slips(tmp_path, pattern, replacement, words):
-    from bikerider.bicycle.raw_measurements import read_measured_file
+    from bikerider.io.bicycleparameters import read_measured_file
 
     base = BP / "bicycles" / "Browser" / "RawData" / "BrowserMeasured.txt"
     path = _edited(tmp_path, base, pattern, replacement)

@@ -136,7 +136,7 @@ def test_chain_equals_symbolic(paper_result):
     args, chain = d_combination.benchmark_chain()
     values = {k: q.value for k, q in paper_result.chain_inputs.items()}
     values["IBfyy"] = values["IHyy"] = 0.5  # NaN for "not measured" would not compare
-    _check_against_symbolic(gen.benchmark_parameters, args, [chain], values, [(), (2, 3)])
+    _check_against_symbolic(gen.estimate_chain, args, [chain], values, [(), (2, 3)])
 
 
 def test_pendulum_three_orientations_equal_symbolic():

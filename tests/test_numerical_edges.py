@@ -18,7 +18,8 @@ from bikerider.estimate import estimate
 from bikerider.generated import benchmark_model as gen
 from bikerider.generated import rider_model as gen_rider
 from bikerider.quantity import Quantity
-from bikerider.rider.model import _GEOMETRY, _HUB_WIDTHS, _PLACEMENT, model_arguments, seat_rider
+from bikerider.engine import arguments
+from bikerider.rider.model import model_arguments, seat_rider
 
 from strategies import benchmark_mappings, factor, meijaard_values, paper_inputs, run_cli
 
@@ -32,7 +33,7 @@ def _model(**changes) -> WhippleModel:
 # ------------------------------------------------------------------------------------------
 def _reach(bicycle, rider) -> np.ndarray:
     args = model_arguments(bicycle, rider)
-    return np.asarray(gen_rider.limb_reach(**{k: args[k] for k in _GEOMETRY + _PLACEMENT if k not in _HUB_WIDTHS}))
+    return np.asarray(gen_rider.limb_reach(**{k: args[k] for k in arguments("rider_model.limb_reach")}))
 
 
 def _with(rider, **lengths):

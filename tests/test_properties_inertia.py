@@ -20,7 +20,8 @@ from bikerider.bicycle.pendulum import inertia_from_orientations
 from bikerider.estimate import chain_inputs
 from bikerider.generated import combination, rider_model
 from bikerider.quantity import Quantity
-from bikerider.rider.model import _GEOMETRY, _PLACEMENT, model_arguments
+from bikerider.engine import arguments
+from bikerider.rider.model import model_arguments
 
 from strategies import benchmark_mappings, factor, inertia_tensors, seated_pairs
 
@@ -96,7 +97,7 @@ def inertia_about(segments, point: np.ndarray) -> np.ndarray:
 def test_rider_inertia_is_physical_and_independent_of_the_reference_point(pair, offset):
     bicycle, rider, model = pair
     args = model_arguments(bicycle, rider)
-    points = np.asarray(rider_model.grid_points(**{k: args[k] for k in _GEOMETRY + _PLACEMENT}))
+    points = np.asarray(rider_model.grid_points(**{k: args[k] for k in arguments("rider_model.grid_points")}))
     segments = rider_segments(points, args)
     # The closures give every limb its measured length.
     for _, _, length, ends in _LIMBS:
@@ -159,7 +160,7 @@ def test_the_estimate_chain_conserves_total_mass_and_gives_physical_bodies(pair)
     inputs = {k: q.value for k, q in chain_inputs(bicycle, rider).items()}
     values = dict(zip(
         "w c lam g rR mR IRxx IRyy xB zB mB IBxx IByy IBzz IBxz xH zH mH IHxx IHyy IHzz IHxz rF mF IFxx IFyy".split(),
-        np.asarray(combination.benchmark_parameters(**inputs), dtype=float),
+        np.asarray(combination.estimate_chain(**inputs), dtype=float),
     ))
     total_in = bicycle["mR"] + bicycle["mF"] + bicycle["mH"] + bicycle["mBf"] + rider["mBr"]
     total_out = values["mR"] + values["mF"] + values["mH"] + values["mB"]

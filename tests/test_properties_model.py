@@ -141,8 +141,8 @@ def test_the_estimate_chain_is_dimensionally_consistent(pair, s, mu):
             scaled[name] = value * mu * s**2
         else:  # every other chain input is a length or a circumference
             scaled[name] = value * s
-    base = dict(zip(BENCHMARK_NAMES, np.asarray(combination.benchmark_parameters(**inputs), dtype=float)))
-    out = dict(zip(BENCHMARK_NAMES, np.asarray(combination.benchmark_parameters(**scaled), dtype=float)))
+    base = dict(zip(BENCHMARK_NAMES, np.asarray(combination.estimate_chain(**inputs), dtype=float)))
+    out = dict(zip(BENCHMARK_NAMES, np.asarray(combination.estimate_chain(**scaled), dtype=float)))
     for name in BENCHMARK_NAMES:
         if not math.isfinite(base[name]):
             assert not math.isfinite(out[name]), name  # an undetermined I_yy stays undetermined

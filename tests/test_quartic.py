@@ -12,8 +12,9 @@ import numpy as np
 import pytest
 
 from bikerider.benchmark import BenchmarkParameters, WhippleModel
-from bikerider.benchmark.model import label_modes, positive_real_roots
-from bikerider.benchmark.quartic import eigenvalues_from_polynomial, label_roots, quartic_roots
+from bikerider.benchmark.model import label_modes
+from bikerider.benchmark.quartic import eigenvalues_from_polynomial, quartic_roots
+from bikerider.benchmark.roots import quadratic_roots
 from bikerider.errors import InputError
 from bikerider.io.bicycleparameters import read_benchmark_file
 from bikerider.generated import benchmark_model as gen
@@ -142,7 +143,7 @@ def test_labels_follow_label_modes_rules():
         [-3 + 0.1j, 1.0, -3 - 0.1j, 2.0],    # one pair below both reals: the reals are the unborn weave
         [-1 + 2j, -1 - 2j, 0.5, -6.0],       # one pair between the reals (above the weave speed)
     ], dtype=complex)
-    values, labels = label_roots(raw)
+    values, labels = label_modes(raw)
     np.testing.assert_array_equal(values[0], [2.0, 1.0, -0.5, -5.0])
     np.testing.assert_array_equal(values[1], [1 + 2j, 1 - 2j, -0.5, -5.0])
     np.testing.assert_array_equal(values[2], [-3 + 5j, -3 - 5j, 1 + 2j, 1 - 2j])
@@ -150,7 +151,7 @@ def test_labels_follow_label_modes_rules():
     np.testing.assert_array_equal(values[4], [-1 + 2j, -1 - 2j, 0.5, -6.0])
     assert labels[0].tolist() == labels[1].tolist() == labels[4].tolist() == ["weave", "weave", "capsize", "castor"]
     assert labels[2].tolist() == labels[3].tolist() == ["weave", "weave", "other", "other"]
-    reference_values, reference_labels = label_modes(raw)  # the loop the vectorised rules follow
+    reference_values, reference_labels = _label_modes_loop(raw)  # the rules one speed at a time
     np.testing.assert_array_equal(values, reference_values)
     np.testing.assert_array_equal(labels, reference_labels)
 
@@ -222,6 +223,11 @@ def test_critical_speeds_are_eigenvalue_crossings(benchmark_model):
     assert checked > 20 and found_none > 0  # 24 of the 120 draws have both, well apart
 
 
+def positive_real_roots(c2: float, c1: float, c0: float) -> list[float]:
+    """The positive real roots of a quadratic, sorted, by the one quadratic solver."""
+    return sorted(float(u) for u in quadratic_roots(c2, c1, c0) if u > 0)
+
+
 def test_positive_real_roots_edge_cases():
     assert positive_real_roots(0.0, 0.0, 0.0) == []
     assert positive_real_roots(0.0, 2.0, -4.0) == [2.0]           # linear
@@ -259,22 +265,52 @@ def test_overflowing_matrices_are_an_error_not_nan(benchmark_model):
     assert "too large" in str(info.value)
 
 
-def test_factored_labelling_equals_the_general_one():
-    # eigenvalues_from_polynomial labels the roots from the pairing of its two quadratic factors;
-    # on quartics of every kind (four real roots, one pair, two pairs) that must equal label_roots.
-    from bikerider.benchmark.quartic import _factored_roots, _label_factored
+def test_the_labels_of_polynomial_roots_follow_the_rules():
+    # eigenvalues_from_polynomial labels its roots by label_modes; on quartics of every kind (four real
+    # roots, one pair, two pairs) that must equal the rules applied one speed at a time.
+    from bikerider.benchmark.quartic import _factored_roots
 
     rng = np.random.default_rng(11)
     roots = separated_roots(rng, 600)
     coefficients = np.array([np.poly(r).real for r in roots])
-    with np.errstate(all="ignore"):  # as eigenvalues_from_polynomial calls them
+    with np.errstate(all="ignore"):  # as eigenvalues_from_polynomial calls it
         factored = _factored_roots(coefficients)
-        values, labels = _label_factored(factored)
-    expected_values, expected_labels = label_roots(factored.T)
+    values, labels = label_modes(factored.T)
+    expected_values, expected_labels = _label_modes_loop(factored.T)
     scale = np.abs(expected_values).max(axis=1, keepdims=True)
     assert (np.abs(values - expected_values) / scale).max() < 1e-14
     np.testing.assert_array_equal(labels, expected_labels)
     assert {"other", "castor"} <= set(labels.ravel())  # every case was exercised
+
+
+def _label_modes_loop(raw: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The mode-labelling rules of ``bikerider.benchmark.modes``, one speed at a time (an independent
+    implementation, the oracle of the vectorised one)."""
+    n = raw.shape[0]
+    values = np.empty((n, 4), dtype=complex)
+    labels = np.empty((n, 4), dtype=object)
+    for k in range(n):
+        ev = raw[k]
+        tol = 1e-9 * max(1.0, float(np.abs(ev).max()))
+        is_complex = np.abs(ev.imag) > tol
+        complex_ev = ev[is_complex & (ev.imag > 0)]
+        real_ev = np.sort(ev[~is_complex].real)
+        if complex_ev.size == 0:  # all real: the two largest are the weave pair before it is born
+            values[k] = [real_ev[3], real_ev[2], real_ev[1], real_ev[0]]
+            labels[k] = ["weave", "weave", "capsize", "castor"]
+        elif complex_ev.size == 1 and complex_ev[0].real < real_ev[0]:  # the two most negative have met
+            w = complex_ev[0]
+            values[k] = [real_ev[1], real_ev[0], w, np.conj(w)]
+            labels[k] = ["weave", "weave", "other", "other"]
+        elif complex_ev.size == 1:
+            w = complex_ev[0]
+            values[k] = [w, np.conj(w), real_ev[1], real_ev[0]]
+            labels[k] = ["weave", "weave", "capsize", "castor"]
+        else:
+            pair = complex_ev[np.argsort(-complex_ev.imag)]
+            values[k] = [pair[0], np.conj(pair[0]), pair[1], np.conj(pair[1])]
+            labels[k] = ["weave", "weave", "other", "other"]
+    return values, labels
 
 
 def test_model_eigenvalues_quartic_method_equals_eigvals(benchmark_model):

@@ -14,8 +14,9 @@ import math
 import numpy as np
 import pytest
 
-from bikerider.bicycle import measured_geometry as geo
-from bikerider.bicycle.raw_measurements import read_measured_file, reduce_measured
+from bikerider.bicycle.raw_measurements import reduce_measured
+from bikerider.generated import measured_reduction
+from bikerider.io.bicycleparameters import read_measured_file
 from bikerider.errors import FitError, InputError
 from bikerider.io.name_value_file import parse_name_value_text
 
@@ -224,7 +225,9 @@ def test_heights_and_diameters_geometry_recovers_the_frame():
     h1 = a - h2 + h3 - 0.5 * d1 + 0.5 * d2
     h5 = h4 - 0.5 * d3 + 0.5 * d4 - b
     d = math.sqrt(along**2 + (a - b) ** 2) - 0.5 * (d2 + d3)
-    assert geo.perpendicular_offsets((h1, h2, h3, h4, h5), (d1, d2, d3, d4, d)) == pytest.approx((a, b, along))
+    _, checks = measured_reduction.frame_from_heights(dR=1.0, nR=1.0, dF=1.0, nF=1.0, h1=h1, h2=h2, h3=h3, h4=h4,
+                                                      h5=h5, d1=d1, d2=d2, d3=d3, d4=d4, d=d)
+    assert tuple(checks) == pytest.approx((a, b))  # the perpendicular offsets of the wheel centres
     heights = {"h1": h1, "h2": h2, "h3": h3, "h4": h4, "h5": h5, "d1": d1, "d2": d2, "d3": d3, "d4": d4, "d": d}
     reduction = reduce_text(synthetic_measured(sigma=False, drop=("w", "gamma", "f"), **heights))
     assert reduction.layout.geometry == "heights"

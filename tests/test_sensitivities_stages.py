@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from bikerider.uncertainty.chain import Chain, prepare_values
-from bikerider.uncertainty.inputs import paper_inputs
+from bikerider.io.chain_inputs import paper_inputs
 from bikerider.uncertainty.stages import all_stages
 
 SHAPES = [(), (3,), (2, 4)]

@@ -1,5 +1,5 @@
 """The composed chain Jacobian against finite differences of the project's own generated chain
-(``combination.benchmark_parameters``, ``canonical_matrices``), and the vectorised critical speeds
+(``combination.estimate_chain``, ``canonical_matrices``), and the vectorised critical speeds
 against ``WhippleModel.critical_speeds``."""
 from __future__ import annotations
 
@@ -9,13 +9,13 @@ import pytest
 from bikerider.benchmark import BENCHMARK_NAMES, WhippleModel
 from bikerider.generated import benchmark_model, combination
 from bikerider.uncertainty.chain import Chain, prepare_values
-from bikerider.uncertainty.speeds import critical_speeds_from_entries, quadratic_roots
+from bikerider.benchmark.roots import quadratic_roots
+from bikerider.engine import arguments
+from bikerider.uncertainty.speeds import critical_speeds_from_entries
 from bikerider.uncertainty.stages import CANONICAL, ENTRIES
 from test_sensitivities_stages import random_inputs
 
-CHAIN_ARGS = ("h_bb l_cs l_f rF l_hb lam_ht rR l_sp lam_st l_st l_s c w g mR IRxx IRyy mF IFxx IFyy mH xH zH IHxx "
-              "IHyy IHzz IHxz mBf xBf zBf IBfxx IBfyy IBfzz IBfxz l_hh l_la l_ll l_ss l_to l_ua l_ul lam_fl c_h mBr "
-              "c_ch c_la c_ll c_ua c_ul f_h f_la f_ll f_to f_ua f_ul").split()
+CHAIN_ARGS = arguments("combination.estimate_chain")
 
 
 def chain_level_inputs(shape, seed):
@@ -35,14 +35,14 @@ def test_benchmark_jacobian_matches_finite_differences_of_the_generated_chain(sh
     names = list(values)
     nodes, grads = Chain(values).gradients(values, names)
     got = np.stack([np.broadcast_to(grads[n], shape + (len(names),)) for n in BENCHMARK_NAMES], axis=-2)
-    base = combination.benchmark_parameters(**values)
+    base = combination.estimate_chain(**values)
     np.testing.assert_allclose(np.stack([np.broadcast_to(nodes[n], shape) for n in BENCHMARK_NAMES], -1), base,
                                rtol=1e-12)
     for j, name in enumerate(names):
         x = values[name]
         h = 1e-6 * np.maximum(np.abs(x), 1e-2)
-        fd = (combination.benchmark_parameters(**{**values, name: x + h})
-              - combination.benchmark_parameters(**{**values, name: x - h})) / (2 * h)[..., None]
+        fd = (combination.estimate_chain(**{**values, name: x + h})
+              - combination.estimate_chain(**{**values, name: x - h})) / (2 * h)[..., None]
         scale = np.abs(base) + 1.0
         np.testing.assert_allclose(got[..., j] / scale, fd / scale, atol=1e-7, err_msg=name)
 

@@ -63,7 +63,7 @@ def test_bad_names_exit_2_with_a_message(capsys):
 
 
 def test_bicycle_and_rider_files_without_rider_sigmas(capsys):
-    from bikerider.uncertainty.inputs import paper_files
+    from bikerider.io.chain_inputs import paper_files
 
     bicycle, rider = paper_files()
     status, out, _ = run(capsys, "xB", "--bicycle", str(bicycle), "--rider", str(rider), "--no-rider-sigmas")

@@ -6,7 +6,7 @@ import sympy as sp
 
 from bikerider.errors import InputError
 from bikerider.uncertainty.chain import Chain, prepare_values
-from bikerider.uncertainty.inputs import paper_inputs
+from bikerider.io.chain_inputs import paper_inputs
 from bikerider.uncertainty.propagation import propagate
 from bikerider.uncertainty.symbolic import node_symbol, sensitivity_expression
 

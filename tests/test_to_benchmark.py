@@ -1,9 +1,9 @@
 """Bicycle (and lumped rider) to benchmark parameters: the closed-form uncertainties against central differences.
 
 ``bicycle_benchmark_parameters`` takes the rear body's sigmas from the generated closed-form
-Jacobian of Eqs. 15-16 at the nominal point.  The reference here is independent of that: the
-generated rear-body *values* differentiated numerically by ``propagate`` (central differences at
-``2 k + 1`` points), as the function itself did before.
+Jacobian of Eqs. 15-16 at the nominal point (the uncertainty engine).  The reference here is
+independent of that: the generated rear-body *values* differentiated numerically by the tests'
+oracle ``measured_oracle.propagate`` (central differences at ``2 k + 1`` points).
 
 Tolerance of the sigmas: the central differences step each input by ``h = 1e-6 max(|x|, sigma)``.
 Their truncation error is ``h^2 f''' / 6``, about 1e-12 relative; their round-off is about
@@ -22,11 +22,10 @@ import pytest
 
 from bikerider.benchmark.parameters import BENCHMARK_NAMES, BenchmarkParameters
 from bikerider.bicycle.bodies import BicycleBodies
-from bikerider.bicycle.propagation import propagate
-from bikerider.bicycle.raw_measurements import read_measured_file
 from bikerider.bicycle.to_benchmark import RIDER_BODY_NAMES, LumpedRider, bicycle_benchmark_parameters
 from bikerider.generated import combination
-from bikerider.io.bicycleparameters import merge_rider, read_benchmark_file, read_lumped_rider
+from bikerider.io.bicycleparameters import merge_rider, read_benchmark_file, read_lumped_rider, read_measured_file
+from measured_oracle import propagate
 from bikerider.quantity import Quantity
 
 DATA = Path(str(resources.files("bikerider") / "data" / "bicycleparameters"))

@@ -11,7 +11,7 @@ import pytest
 
 from bikerider.errors import InputError
 from bikerider.quantity import Quantity
-from bikerider.uncertainty.inputs import paper_inputs
+from bikerider.io.chain_inputs import paper_inputs
 from bikerider.uncertainty.montecarlo import compare, monte_carlo
 from bikerider.uncertainty.propagation import propagate
 from bikerider.uncertainty.stages import ENTRIES
