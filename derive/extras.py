@@ -100,9 +100,15 @@ def manifest(modules: list[GeneratedModule]) -> str:
     out += ["}", "", "STATES = {"]
     out += [f"    {key!r}: {tuple(value)!r}," for key, value in STATES.items()]
     out += ["}"]
-    for key, value in names.items():
+    for key, value in {**names, **_gap_names()}.items():
         out += ["", f"{key} = {value!r}"]
     return "\n".join(out) + "\n"
+
+
+def _gap_names() -> dict[str, tuple[str, ...]]:
+    """The argument groups of the gap-effect models (``derive/gap_effects.py``) the runtime names."""
+    return {"UPPER_BODY_ARGS": tuple(gap_effects.UPPER_BODY_ARGS.split()),
+            "TYRE_ARGS": tuple(gap_effects.TYRE_ARGS.split())}
 
 
 def check_stage(stage: Stage, functions: dict[str, GeneratedFunction]) -> None:
