@@ -41,6 +41,7 @@ import numpy as np
 
 from bikerider.errors import FileFormatError, FitError, InputError
 from bikerider.gap.models import GAIN_NAMES
+from bikerider.generated.manifest import MATRIX_NAMES
 
 LOG = logging.getLogger(__name__)
 
@@ -389,7 +390,7 @@ def _combine_fits(fits: list) -> tuple[complex, float, float]:
 def _entry_name(raw: str) -> str | None:
     """``Mphidelta`` -> ``M_phidelta``; ``None`` for entries that are not canonical-matrix entries."""
     raw = raw.strip()
-    for prefix in ("C1", "K0", "K2", "M"):
+    for prefix in MATRIX_NAMES:
         if raw.startswith(prefix):
             rest = raw[len(prefix):].lstrip("_")
             name = f"{prefix}_{rest}"

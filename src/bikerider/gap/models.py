@@ -27,10 +27,11 @@ import numpy as np
 
 from bikerider.errors import InputError
 from bikerider.generated import gap_effects as gen
+from bikerider.generated.manifest import FUNCTIONS, TYRE_ARGS, UPPER_BODY_ARGS
 
-BENCH_ARGS = tuple("w c lam rR mR IRxx IRyy xB zB mB IBxx IBzz IBxz xH zH mH IHxx IHzz IHxz rF mF IFxx IFyy".split())
+BENCH_ARGS = FUNCTIONS["benchmark_model.canonical_matrices"]["args"]
 """Benchmark parameters the linear models depend on (plus ``g``)."""
-UPPER_BODY_KEYS = ("m_u", "x_u", "z_u", "IUxx", "IUxz", "IUzz", "z_lean")
+UPPER_BODY_KEYS = UPPER_BODY_ARGS
 GRIP_KEYS = ("x_grip", "z_grip", "b_grip")
 STRUCTURAL_KEYS = {
     "steer_inertia": ("I_steer",),
@@ -38,7 +39,7 @@ STRUCTURAL_KEYS = {
     "steer_stiffness": ("k_steer",),
     "passive_arms": ("m_arm", "k_arm", "c_arm"),
     "rider_lean": ("k_lean", "c_lean"),
-    "tyre_slip": ("c_alpha", "c_gamma", "sigma_t", "t_p"),
+    "tyre_slip": TYRE_ARGS,
 }
 """The model parameters of each structural effect (``parameters`` has none of its own)."""
 GAIN_NAMES = ("k_phi", "k_phid", "k_delta", "k_deltad")
