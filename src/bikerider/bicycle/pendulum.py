@@ -24,6 +24,7 @@ import numpy as np
 
 from bikerider.engine import GeneratedStage, LeastSquaresStage, first_order
 from bikerider.errors import FitError, InputError
+from bikerider.generated.manifest import STAGES
 from bikerider.quantity import Quantity, check_magnitude
 
 #: Below this |determinant| of Eq. 6 for three orientations (``2 sin(a1-a2) sin(a1-a3) sin(a2-a3)``),
@@ -133,7 +134,8 @@ def _orientation_stage(n: int, name: str = "orientations") -> GeneratedStage | L
     if n == 3:
         return GeneratedStage("three_orientations", name, checks={"determinant": f"{name}.determinant"})
     rows = [{"alpha": f"alpha_{i}", "T": f"T_{i}"} for i in range(1, n + 1)]
-    return LeastSquaresStage(name, "orientation_equation", rows, ("r_xx", "r_xz", "r_zz"), "J", ("Ixx", "Ixz", "Izz"))
+    return LeastSquaresStage(name, "orientation_equation", rows, ("r_xx", "r_xz", "r_zz"), "J",
+                             STAGES["three_orientations"]["outputs"])
 
 
 def inertia_from_orientations(k_t: Quantity, periods: list[Quantity], angles: list[Quantity],

@@ -150,7 +150,8 @@ FIELD_PURPOSES: dict[str, str] = {
 }
 
 _WHEELS = ("dF", "nF", "dR", "nR", "mR", "mF", "g", "lF", "lR", "TcF1", "TcR1", "TtF1", "TtR1")
-_ROD = ("mP", "dP", "lP", "TtP1")
+_ROD = arguments("measured_reduction.wheels")[:4]
+"""The calibration rod's fields (``mP, dP, lP, TtP1``): the first inputs of the ``wheels`` stage."""
 _WHEELBASE_GEOMETRY = ("w", "gamma", "f")
 _HEIGHTS_GEOMETRY = tuple(a for a in arguments("measured_reduction.frame_from_heights") if a not in ("rF", "rR"))
 _HANDLEBAR_REFERENCE = tuple(a for a in arguments("measured_reduction.handlebar_reference")
@@ -351,6 +352,9 @@ HAND_OUTPUTS: tuple[str, ...] = ("x_hand", "z_hand")
 SEATING_NOTE = ("seating: l_s and l_hb are equivalent lengths that put the model's hands on the grips "
                 "(LhbF, LhbR); l_f drops out of the rider model; hub widths w_fh, w_rh not measured")
 
+_REAR_BODY = STAGES["rear_body"]["outputs"]
+_HANDLEBAR = [name.replace("B", "H", 1) for name in _REAR_BODY]
+"""The handlebar/fork H: the second body that the rear_body stage combines G and S into."""
 _SEATING_NODES = tuple(a for a in arguments("measured_reduction.seating") if a not in arguments(
     "measured_reduction.frame_from_wheelbase") and a not in STAGES["frame_from_wheelbase"]["outputs"])
 """The seating stage's own inputs (``whb, LhbF, LhbR, h_bb, l_st, lam_st``)."""
@@ -429,8 +433,7 @@ def _stages(key: tuple) -> tuple[Stage, ...]:
     if split_fork:
         frame = {f"{p}Bf": f"{p}G" for p in ("m", "x", "z")} | {f"IBf{a}": f"IG{a}" for a in ("xx", "yy", "zz", "xz")}
         rider = {f"{p}Br": f"{p}S" for p in ("m", "x", "z")} | {f"IBr{a}": f"IS{a}" for a in ("xx", "yy", "zz", "xz")}
-        combined = {p: p.replace("B", "H", 1) for p in ("mB", "xB", "zB", "IBxx", "IByy", "IBzz", "IBxz")}
-        stages.append(GeneratedStage("rear_body", "H_from_G_and_S", frame | rider, combined))
+        stages.append(GeneratedStage("rear_body", "H_from_G_and_S", frame | rider, dict(zip(_REAR_BODY, _HANDLEBAR))))
     if seating:
         stages.append(GeneratedStage("seating"))
     return tuple(stages)
@@ -544,7 +547,7 @@ def _outputs(layout: MeasuredLayout) -> list[str]:
         name = _node_name(body)
         out += [f"m{name}", f"x{name}", f"z{name}", f"I{name}xx", f"I{name}xz", f"I{name}zz", f"I{name}yy"]
     if layout.split_fork:
-        out += ["mH", "xH", "zH", "IHxx", "IHyy", "IHzz", "IHxz"]
+        out += _HANDLEBAR
     if layout.seating:
         out += ["h_bb", "l_cs", "l_sp", "l_st", "lam_st", "l_s", "l_hb", "l_f", "x_hand", "z_hand"]
     return out

@@ -32,7 +32,7 @@ _STAGES = (GeneratedStage("rear_body"), GeneratedStage("steer_axis"))
 
 _LIMITS: dict[str, tuple[float, str]] = {
     "mBr": (500.0, "kg"), "xBr": (5.0, "m"), "zBr": (5.0, "m"),
-    **{k: (1e4, "kg m^2") for k in ("IBrxx", "IBryy", "IBrzz", "IBrxz")},
+    **{k: (1e4, "kg m^2") for k in RIDER_BODY_NAMES if k.startswith("I")},
 }
 """Largest plausible magnitudes of a rigid rider: a larger value is a unit slip."""
 

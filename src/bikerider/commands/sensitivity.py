@@ -93,10 +93,11 @@ def run(args: argparse.Namespace) -> int:
     from bikerider.uncertainty.chain import Chain, prepare_values
     from bikerider.uncertainty.montecarlo import compare, monte_carlo
     from bikerider.uncertainty.propagation import propagate
+    from bikerider.uncertainty.stages import COEFFICIENTS
     from bikerider.uncertainty.symbolic import sensitivity_expression
 
     input_set = _inputs(args)
-    if names.canonical_name(args.output) in ("a0", "a1", "a2", "a3", "a4") and args.speed is None:
+    if names.canonical_name(args.output) in COEFFICIENTS and args.speed is None:
         raise InputError("--speed", "missing", f"a speed in m/s at which to take the coefficient {args.output}")
     quantities = dict(input_set.quantities)
     if args.speed is not None:

@@ -75,10 +75,15 @@ class FirstOrder:
         used = self.sigmas > 0
         terms = self.jacobian(names)[:, used] * self.sigmas[used]
         with np.errstate(invalid="ignore", over="ignore"):
-            squares = np.where(np.isfinite(terms), terms * terms, 0.0).tolist()  # a slope not finite: nothing
-        values = [float(self.nodes[name]) for name in names]
-        return {name: Quantity(value, math.sqrt(math.fsum(row)) if math.isfinite(value) else 0.0)
-                for name, value, row in zip(names, values, squares)}
+            squares = terms * terms
+        squares[~np.isfinite(squares)] = 0.0  # a slope that is not finite contributes nothing
+        sigmas = [math.sqrt(math.fsum(row)) for row in squares.tolist()]  # fsum: correctly rounded
+        nodes = self.nodes
+        out = {}
+        for name, sigma in zip(names, sigmas):
+            value = float(nodes[name])
+            out[name] = Quantity(value, sigma if value - value == 0 else 0.0)  # not finite: not determined
+        return out
 
 
 @functools.lru_cache(maxsize=256)
