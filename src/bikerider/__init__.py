@@ -4,14 +4,82 @@ give, and where real bicycles depart from it.
 The method is that of Moore, Hubbard, Kooijman and Schwab (2009), "A method for estimating physical
 properties of a combined bicycle and rider"; the model is the benchmark of Meijaard et al. (2007).
 
+Public API
+----------
+Estimate (:mod:`bikerider.estimate`)
+    :func:`estimate_default`, :func:`estimate_from_files`, :func:`estimate`,
+    :func:`estimate_uncertainty`, :class:`EstimateResult`.
+Model (:mod:`bikerider.benchmark`)
+    :class:`BenchmarkParameters`, :data:`BENCHMARK_NAMES`, :class:`WhippleModel`,
+    :class:`CriticalSpeeds`, :class:`ModalEigenvalues`.
+Bicycle and rider (:mod:`bikerider.bicycle`, :mod:`bikerider.rider`)
+    :class:`BicycleBodies`, :class:`RiderMeasurements`, :class:`LumpedRider`,
+    :func:`bicycle_benchmark_parameters`, :func:`merge_rider`, :func:`reduce_measured`.
+Files (:mod:`bikerider.io`)
+    :func:`load_bicycle_file`, :func:`load_benchmark_parameters`, :func:`read_measured_file`,
+    :func:`read_lumped_rider`, :func:`load_bicycle_toml`, :func:`load_rider_toml`,
+    :func:`paper_inputs`.
+Uncertainty (:mod:`bikerider.uncertainty`, :mod:`bikerider.engine`)
+    :func:`propagate` (first-order sigmas of the estimate chain), :func:`monte_carlo`,
+    :class:`UncertaintyResult`.
+Values and errors
+    :class:`Quantity`, :class:`BikeriderError`, :class:`InputError`, :class:`FileFormatError`,
+    :class:`FitError`.
+
+The generated NumPy functions are ``bikerider.generated.<module>``; ``bikerider.generated.manifest``
+says what each takes and returns.
+
 Layout
 ------
-``bikerider.bicycle``   bicycle measurements and pendulum reductions
-``bikerider.rider``     the rider model (grid points, closures, segments)
-``bikerider.benchmark`` the 25 benchmark parameters and the Whipple model
-``bikerider.estimate``  the whole pipeline, measurements to model
-``bikerider.io``        input files (TOML, BicycleParameters text files)
-``bikerider.cli``       the ``bikerider`` command line
-``bikerider.generated`` NumPy functions generated from the SymPy derivations in ``derive/``
+``bikerider.engine``      the one uncertainty engine: stages from the manifest, chains, sigmas
+``bikerider.bicycle``     bicycle measurements and their reductions (pendulums, Measured files)
+``bikerider.rider``       the rider model (grid points, closures, segments)
+``bikerider.benchmark``   the 25 benchmark parameters and the Whipple model
+``bikerider.uncertainty`` the estimate chain's sensitivities, propagation and Monte Carlo
+``bikerider.io``          input files (TOML, BicycleParameters text files)
+``bikerider.estimate``    the whole pipeline, measurements to model
+``bikerider.cli``         the ``bikerider`` command line
 """
+from __future__ import annotations
+
+import importlib
+
 __version__ = "0.1.0"
+
+_EXPORTS = {
+    "estimate": "bikerider.estimate", "estimate_default": "bikerider.estimate",
+    "estimate_from_files": "bikerider.estimate", "estimate_uncertainty": "bikerider.estimate",
+    "EstimateResult": "bikerider.estimate",
+    "BENCHMARK_NAMES": "bikerider.benchmark", "BenchmarkParameters": "bikerider.benchmark",
+    "CriticalSpeeds": "bikerider.benchmark", "ModalEigenvalues": "bikerider.benchmark",
+    "WhippleModel": "bikerider.benchmark",
+    "BicycleBodies": "bikerider.bicycle.bodies", "RiderMeasurements": "bikerider.rider.measurements",
+    "LumpedRider": "bikerider.bicycle.to_benchmark",
+    "bicycle_benchmark_parameters": "bikerider.bicycle.to_benchmark", "merge_rider": "bikerider.bicycle.to_benchmark",
+    "reduce_measured": "bikerider.bicycle.raw_measurements",
+    "load_bicycle_file": "bikerider.io.bicycleparameters", "read_measured_file": "bikerider.io.bicycleparameters",
+    "read_lumped_rider": "bikerider.io.bicycleparameters",
+    "load_benchmark_parameters": "bikerider.io.benchmark_file",
+    "load_bicycle_toml": "bikerider.io.toml_input", "load_rider_toml": "bikerider.io.toml_input",
+    "paper_inputs": "bikerider.io.chain_inputs",
+    "propagate": "bikerider.uncertainty", "monte_carlo": "bikerider.uncertainty",
+    "UncertaintyResult": "bikerider.uncertainty",
+    "Quantity": "bikerider.quantity",
+    "BikeriderError": "bikerider.errors", "InputError": "bikerider.errors", "FileFormatError": "bikerider.errors",
+    "FitError": "bikerider.errors",
+}
+__all__ = ["__version__", *_EXPORTS]
+
+
+def __getattr__(name: str):
+    # The public names load their modules on first use: `import bikerider` (which `bikerider --help`
+    # does) stays at 0.06 s instead of the 0.4 s NumPy and the generated code take (python -X importtime).
+    if name in _EXPORTS:
+        value = getattr(importlib.import_module(_EXPORTS[name]), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'bikerider' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(__all__)

@@ -84,6 +84,16 @@ def chain_inputs(bicycle: BicycleBodies, rider: RiderMeasurements) -> dict[str, 
 def estimate(bicycle: BicycleBodies, rider: RiderMeasurements) -> EstimateResult:
     """Run the paper's method on ``bicycle`` with ``rider`` seated on it.
 
+    Parameters
+    ----------
+    bicycle : BicycleBodies
+        With every seating measurement of Table 1.
+    rider : RiderMeasurements
+
+    Returns
+    -------
+    EstimateResult
+
     Raises
     ------
     InputError
@@ -119,7 +129,19 @@ default_files = paper_files
 
 
 def estimate_default() -> EstimateResult:
-    """The method on the paper's own data (the 2008 Batavus Browser and the 72 kg rider)."""
+    """The method on the paper's own data (the 2008 Batavus Browser and the 72 kg rider).
+
+    Returns
+    -------
+    EstimateResult
+        The rider model seated on the bicycle, the benchmark parameters and the Whipple model.
+
+    Examples
+    --------
+    >>> result = estimate_default()
+    >>> round(result.model.critical_speeds().weave, 2)
+    5.66
+    """
     return estimate_from_files()
 
 
@@ -127,6 +149,19 @@ def estimate_from_files(bicycle_path: str | Path | None = None, rider_path: str 
                         with_rider: bool = True) -> EstimateResult:
     """Run the method on files of any supported kind (defaults: the paper's bicycle and rider).
 
+    Parameters
+    ----------
+    bicycle_path, rider_path : str or Path, optional
+        The bicycle and the rider file (default: the paper's).
+    with_rider : bool
+        False for the bicycle alone.
+
+    Returns
+    -------
+    EstimateResult
+
+    Notes
+    -----
     The bicycle may be a project TOML file, a BicycleParameters ``<Name>Measured.txt`` (raw
     measurements) or ``<Name>Benchmark.txt`` (benchmark parameters).  The rider may be a project
     TOML file (the paper's rider model, seated on the bicycle's geometry) or a BicycleParameters
@@ -166,8 +201,17 @@ def estimate_uncertainty(result: EstimateResult, speeds=None) -> UncertaintyResu
 
     With the rider model, the inputs are the raw measurements (pendulum periods and angles kept
     unreduced, so their correlations survive); otherwise the benchmark parameters and their sigmas.
-    Only uncertainties the input files state are propagated.  With ``speeds`` [m/s], the
-    eigenvalues at those speeds get sigmas too (``.eigenvalues``).
+    Only uncertainties the input files state are propagated.
+
+    Parameters
+    ----------
+    result : EstimateResult
+    speeds : array_like, optional
+        Speeds [m/s] at which the eigenvalues get sigmas too (``.eigenvalues``).
+
+    Returns
+    -------
+    UncertaintyResult
     """
     if result.rider_model is not None:
         return propagate(chain_raw_inputs(result.bicycle, result.rider), speeds=speeds)

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import json
 
 
 def add_parser(subparsers) -> None:
@@ -23,8 +24,8 @@ def add_parser(subparsers) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    import json
-
+    # The pipeline (NumPy, the generated code) is imported when the command runs: `bikerider --help`
+    # and the other commands start in 0.06 s instead of 0.4 s (python -X importtime).
     from bikerider import report
     from bikerider.benchmark import WhippleModel
     from bikerider.io.benchmark_file import load_benchmark_parameters
@@ -34,7 +35,7 @@ def run(args: argparse.Namespace) -> int:
     model = WhippleModel.from_parameters(params)
     eig = model.eigenvalues(speeds)
     if args.plot:
-        from bikerider import plotting
+        from bikerider import plotting  # matplotlib: only when figures are asked for
 
         plotting.write_figures(args.plot, model, eig, None, title=str(args.file))
     if args.json:

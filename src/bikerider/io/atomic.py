@@ -8,6 +8,7 @@ target is left as it was.
 """
 from __future__ import annotations
 
+import io
 import os
 import tempfile
 from pathlib import Path
@@ -48,8 +49,6 @@ def atomic_write_text(path: str | Path, text: str, encoding: str = "utf-8") -> P
 
 def figure_bytes(figure, **savefig_options) -> bytes:
     """A matplotlib figure rendered to bytes (PNG unless ``format`` says otherwise)."""
-    import io
-
     buffer = io.BytesIO()
     savefig_options.setdefault("format", "png")
     figure.savefig(buffer, **savefig_options)

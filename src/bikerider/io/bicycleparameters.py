@@ -171,10 +171,24 @@ def read_lumped_rider(path: str | Path) -> LumpedRider:
 
 def read_measured_file(path: str | Path, *, line_tolerance: float = DEFAULT_LINE_TOLERANCE,
                        com_method: str = "least_squares") -> MeasuredReduction:
-    """Read and reduce a ``<Name>Measured.txt`` file (see
-    :func:`bikerider.bicycle.raw_measurements.reduce_measured`; messages name its lines).
+    """Read and reduce a ``<Name>Measured.txt`` file (messages name its lines).
 
-    The bicycle is named after the file (``BrowserMeasured.txt`` gives ``Browser``).
+    Parameters
+    ----------
+    path : str or Path
+    line_tolerance, com_method
+        See :func:`bikerider.bicycle.raw_measurements.reduce_measured`.
+
+    Returns
+    -------
+    MeasuredReduction
+        The bicycle's bodies with first-order uncertainties (named after the file:
+        ``BrowserMeasured.txt`` gives ``Browser``), the extras, the line fits and the notes.
+
+    Raises
+    ------
+    FileFormatError, InputError, FitError
+        An unreadable file, a missing or impossible measurement, hanging lines that do not meet.
     """
     data = read_name_value_file(path)
     stem = Path(path).stem

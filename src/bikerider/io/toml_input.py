@@ -158,7 +158,22 @@ def _frame(section: _Section, k_t: Quantity | None, prefix: str, raw: dict[str, 
 
 
 def load_bicycle_toml(path: str | Path) -> BicycleBodies:
-    """Read a bicycle TOML file (see ``docs/input_format.md``) into :class:`BicycleBodies`."""
+    """Read a bicycle TOML file (see ``docs/input_format.md``).
+
+    Parameters
+    ----------
+    path : str or Path
+
+    Returns
+    -------
+    BicycleBodies
+        Pendulum periods reduced (Eqs. 1-7) with first-order uncertainties; the raw measurements
+        kept in ``raw_inputs`` for the estimate chain.
+
+    Raises
+    ------
+    FileFormatError, InputError
+    """
     source = str(path)
     data = read_toml(path)
     top = _Section(data, "", source,
@@ -208,7 +223,20 @@ def _reduced_names(raw: dict[str, Quantity]) -> tuple[str, ...]:
 
 
 def load_rider_toml(path: str | Path) -> RiderMeasurements:
-    """Read a rider TOML file (see ``docs/input_format.md``) into :class:`RiderMeasurements`."""
+    """Read a rider TOML file (see ``docs/input_format.md``).
+
+    Parameters
+    ----------
+    path : str or Path
+
+    Returns
+    -------
+    RiderMeasurements
+
+    Raises
+    ------
+    FileFormatError, InputError
+    """
     source = str(path)
     data = read_toml(path)
     top = _Section(data, "", source, {"rider", "measurements", "mass_fractions"})

@@ -106,7 +106,22 @@ def sample_outputs(quantities: Mapping[str, Quantity], n: int, outputs: Sequence
 
 def monte_carlo(quantities: Mapping[str, Quantity], n: int, outputs: Sequence[str] = DEFAULT_OUTPUTS,
                 seed: int | None = 0, keep_samples: bool = False) -> MonteCarloResult:
-    """Monte Carlo statistics of ``outputs`` from ``n`` independent normal draws of the inputs."""
+    """Monte Carlo statistics of ``outputs`` from ``n`` independent normal draws of the inputs.
+
+    Parameters
+    ----------
+    quantities : mapping of str to Quantity
+        The estimate chain's inputs (e.g. ``paper_inputs().quantities``).
+    n : int
+        Samples, evaluated by the chain's stages in batches.
+    outputs : sequence of str
+    seed : int, optional
+    keep_samples : bool
+
+    Returns
+    -------
+    MonteCarloResult
+    """
     samples, failures = sample_outputs(quantities, n, outputs, seed)
     mean, std, skew, valid = {}, {}, {}, {}
     for name, s in samples.items():
