@@ -212,7 +212,6 @@ def build() -> GeneratedModule:
                 Output("K2", mats["K2"], "speed stiffness matrix K2, multiplied by v^2 [kg]"),
             ],
             summary="Canonical matrices M, C1, K0, K2 of the linear Whipple model from the benchmark parameters.",
-            scalar=True,
             notes="Meijaard et al. (2007), Appendix A. Rows and columns are [roll, steer].",
         ),
         GeneratedFunction(
