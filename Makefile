@@ -18,8 +18,10 @@ setup: $(STAMP)
 demo: $(STAMP)
 	$(VENV)/bin/bikerider estimate
 
-## test: the full test suite
+## test: lint and format check (ruff, pyproject.toml's settings), then the full test suite
 test: $(STAMP)
+	$(PY) -m ruff check .
+	$(PY) -m ruff format --check .
 	$(PY) -m pytest -q
 
 ## derive: regenerate generated/ from the SymPy derivations in derive/

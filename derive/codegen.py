@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import hashlib
 import logging
+import subprocess
+import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -278,10 +280,38 @@ def _scalar_returns(outputs: list[Output], sources: list[str]) -> list[str]:
     return returns
 
 
+PYPROJECT = DERIVE_DIR.parent / "pyproject.toml"
+
+
+def _ruff(*args: str, source: str | None = None) -> str:
+    """Run the project's pinned ruff (``pip install -e .[test]`` installs it) and return its output."""
+    try:
+        done = subprocess.run([sys.executable, "-m", "ruff", *args], input=source, capture_output=True, text=True,
+                              check=True)
+    except subprocess.CalledProcessError as exc:
+        raise RuntimeError(f"ruff {' '.join(args)} failed: {exc.stderr.strip()}") from None
+    return done.stdout
+
+
+def _ruff_settings() -> str:
+    """ruff's version and the project's ``[tool.ruff]`` tables: what formats generated/."""
+    text = PYPROJECT.read_text(encoding="utf-8")
+    start = text.find("[tool.ruff")
+    return _ruff("--version") + (text[start:] if start >= 0 else "")
+
+
+def format_source(text: str, filename: str) -> str:
+    """``text`` as the project's formatter (ruff, the settings of pyproject.toml) writes it, so that
+    generated code reads like the rest and ``make test``'s format check passes on it."""
+    return _ruff("format", "--config", str(PYPROJECT), "--stdin-filename", filename, "-", source=text)
+
+
 def inputs_hash() -> str:
-    """SHA-256 of every file the generator reads: derive/ sources and templates, and SymPy's version."""
+    """SHA-256 of every file the generator reads: derive/ sources and templates, SymPy's version,
+    and the formatter's version and settings."""
     h = hashlib.sha256()
     h.update(f"sympy {sp.__version__}\n".encode())
+    h.update(_ruff_settings().encode())
     for path in sorted(DERIVE_DIR.rglob("*")):
         if path.is_file() and path.suffix in {".py", ".jinja"} and "__pycache__" not in path.parts:
             h.update(str(path.relative_to(DERIVE_DIR)).encode())
@@ -310,14 +340,15 @@ def render_module(module: GeneratedModule, generator: str, digest: str) -> tuple
     text = _environment().get_template("module.py.jinja").render(
         module=module,
         functions=rendered,
-        uses_math=any(r.scalar for r in rendered),
+        uses_math=any("math." in source for r in rendered if r.scalar
+                      for source in [*(rhs for _, rhs in r.scalar["assignments"]), *r.scalar["returns"]]),
         exports=[name for r in rendered for name in ((r.name, f"{r.name}_scalar") if r.scalar else (r.name,))],
         generator=generator,
         digest=digest,
         sympy_version=sp.__version__,
     )
     counts = {r.name: (r.ops_before, r.ops_after) for r in rendered}
-    return text, counts
+    return format_source(text, f"generated/{module.name}.py"), counts
 
 
 def write_if_changed(path: Path, text: str) -> bool:
