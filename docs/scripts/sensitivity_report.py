@@ -140,8 +140,9 @@ def build() -> str:
         lines += _closed_form(output, wrt, q, point)
     lines += ["## Using it", "",
               "```python",
-              "from bikerider.uncertainty import paper_inputs, propagate, monte_carlo, compare",
-              "inputs = paper_inputs()                       # or raw_inputs_from_toml(bicycle, rider)",
+              "from bikerider import monte_carlo, paper_inputs, propagate",
+              "from bikerider.uncertainty import compare",
+              "inputs = paper_inputs()    # or bikerider.io.chain_inputs.raw_inputs_from_toml(bicycle, rider)",
               "result = propagate(inputs.quantities, speeds=[4.0, 6.0])",
               "result.speeds                                  # {'weave': sigma, 'capsize': sigma} [m/s]",
               "result.benchmark['IBxx']                       # sigma of a benchmark parameter",
