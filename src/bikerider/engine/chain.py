@@ -32,6 +32,9 @@ class Rows(Mapping):
         return len(self.index)
 
 
+_NUMBERS = {float, int}
+
+
 def _is_point(value: object) -> bool:
     """Whether a node's value is one number (a float, or a 0-d array), not a batch."""
     return type(value) is float or getattr(value, "ndim", 0) == 0
@@ -98,7 +101,7 @@ class Chain:
         Forward mode: each stage's Jacobian multiplies the stacked gradients of its inputs.  A
         node not in ``wrt`` and not computed (a constant) has gradient zero.
         """
-        if all(_is_point(v) for v in values.values()):
+        if set(map(type, values.values())) <= _NUMBERS or all(_is_point(v) for v in values.values()):
             return self._point_gradients(values, wrt)
         nodes = dict(values)
         n = len(wrt)

@@ -60,11 +60,7 @@ class FirstOrder:
         grad = self.gradients.get(name)
         if grad is None or not len(self.wrt):
             return 0.0
-        used = self.sigmas > 0
-        terms = np.asarray(grad, dtype=float)[used] * self.sigmas[used]
-        if skip_nonfinite:
-            terms = terms[np.isfinite(terms)]
-        return math.sqrt(math.fsum((terms * terms).tolist()))  # t * t: inf rather than OverflowError
+        return _root_sum_squares(np.asarray(grad, dtype=float).reshape(1, -1), self.sigmas, skip_nonfinite)[0]
 
     def quantity(self, name: str) -> Quantity:
         """``name`` with its sigma; a value that is not finite (not determined) keeps sigma 0."""
@@ -72,18 +68,27 @@ class FirstOrder:
 
     def quantities(self, names: Sequence[str]) -> dict[str, Quantity]:
         """:meth:`quantity` of each of ``names``, at once."""
-        used = self.sigmas > 0
-        terms = self.jacobian(names)[:, used] * self.sigmas[used]
-        with np.errstate(invalid="ignore", over="ignore"):
-            squares = terms * terms
-        squares[~np.isfinite(squares)] = 0.0  # a slope that is not finite contributes nothing
-        sigmas = [math.sqrt(math.fsum(row)) for row in squares.tolist()]  # fsum: correctly rounded
+        sigmas = _root_sum_squares(self.jacobian(names), self.sigmas) if len(self.wrt) else [0.0] * len(names)
         nodes = self.nodes
         out = {}
         for name, sigma in zip(names, sigmas):
             value = float(nodes[name])
             out[name] = Quantity(value, sigma if value - value == 0 else 0.0)  # not finite: not determined
         return out
+
+
+def _root_sum_squares(jacobian: np.ndarray, sigmas: np.ndarray, skip_nonfinite: bool = True) -> list[float]:
+    """``sqrt(sum_j (J_ij sigma_j)^2)`` of each row ``i``; a term that is not finite contributes nothing
+    (``skip_nonfinite``) or makes the row's sigma inf or NaN."""
+    used = sigmas > 0
+    terms = jacobian[:, used] * sigmas[used]
+    with np.errstate(invalid="ignore", over="ignore"):
+        squares = terms * terms  # t * t: inf rather than OverflowError
+    if skip_nonfinite:
+        squares[~np.isfinite(squares)] = 0.0  # a slope at a value the inputs do not determine
+    # fsum: correctly rounded, so the sigmas do not depend on the order of the inputs (a fit
+    # weighted by them, as gap's, moves by more than the last digit when they change by one ulp)
+    return [math.sqrt(math.fsum(row)) for row in squares.tolist()]
 
 
 @functools.lru_cache(maxsize=256)
@@ -99,8 +104,17 @@ def first_order(stages: Iterable[Stage], quantities: Mapping[str, Quantity], cha
     for one bicycle); arrays give a batch.  ``chain``: the stages already selected for these
     inputs (:class:`Chain`), when the caller has them."""
     chain = chain or _chain(tuple(stages), frozenset(quantities))
-    values = {name: getattr(q, "value", q) for name, q in quantities.items()}
-    wrt = tuple(wrt) if wrt is not None else tuple(name for name, q in quantities.items() if q.sigma > 0)
+    values, uncertain = {}, []
+    for name, q in quantities.items():
+        if type(q) is Quantity:
+            values[name] = q.value
+            if q.sigma > 0:
+                uncertain.append(name)
+        else:  # a plain number or an array: no uncertainty
+            values[name] = getattr(q, "value", q)
+            if getattr(q, "sigma", 0.0) > 0:
+                uncertain.append(name)
+    wrt = tuple(wrt) if wrt is not None else tuple(uncertain)
     nodes, gradients = chain.gradients(values, wrt)
     sigmas = np.array([getattr(quantities[name], "sigma", 0.0) for name in wrt], dtype=float)
     return FirstOrder(nodes, gradients, wrt, sigmas)
