@@ -50,7 +50,7 @@ def lambdified_chain():
     """The derivations composed as lambdified functions (no CSE): ``f(values) -> (v_weave, v_capsize)``."""
     import sympy as sp
 
-    from bikerider.uncertainty.speeds import quadratic_roots
+    from bikerider.benchmark.roots import quadratic_roots
     from derive import benchmark_model, combination, pendulum
     from derive.symbols import sym
 
