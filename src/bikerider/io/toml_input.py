@@ -6,7 +6,6 @@ and rider as examples.  Files are only read, never written.
 """
 from __future__ import annotations
 
-import math
 import re
 import tomllib
 from pathlib import Path
