@@ -81,14 +81,19 @@ def _root_sum_squares(jacobian: np.ndarray, sigmas: np.ndarray, skip_nonfinite: 
     """``sqrt(sum_j (J_ij sigma_j)^2)`` of each row ``i``; a term that is not finite contributes nothing
     (``skip_nonfinite``) or makes the row's sigma inf or NaN."""
     used = sigmas > 0
-    terms = jacobian[:, used] * sigmas[used]
+    terms = jacobian * sigmas if used.all() else jacobian[:, used] * sigmas[used]
     with np.errstate(invalid="ignore", over="ignore"):
         squares = terms * terms  # t * t: inf rather than OverflowError
     if skip_nonfinite:
         squares[~np.isfinite(squares)] = 0.0  # a slope at a value the inputs do not determine
     # fsum: correctly rounded, so the sigmas do not depend on the order of the inputs (a fit
-    # weighted by them, as gap's, moves by more than the last digit when they change by one ulp)
-    return [math.sqrt(math.fsum(row)) for row in squares.tolist()]
+    # weighted by them, as gap's, moves by more than the last digit when they change by one ulp).
+    # Only the terms that are not zero are summed (a Jacobian is mostly zeros; zeros add nothing).
+    nonzero = squares != 0
+    terms_by_row = squares[nonzero].tolist()
+    ends = np.cumsum(nonzero.sum(axis=1)).tolist()
+    fsum, sqrt = math.fsum, math.sqrt
+    return [sqrt(fsum(terms_by_row[start:end])) for start, end in zip([0, *ends], ends)]
 
 
 @functools.lru_cache(maxsize=256)
