@@ -20,6 +20,7 @@ DERIVATIONS = (
     "derive.measured_reduction",
     "derive.benchmark_model",
     "derive.gap_effects",
+    "derive.state_space",
     "derive.sensitivities",
 )
 
