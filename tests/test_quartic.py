@@ -216,10 +216,11 @@ def test_critical_speeds_are_eigenvalue_crossings(benchmark_model):
         eps = 1e-5 * max(speeds.weave, speeds.capsize)
         if abs(speeds.weave - speeds.capsize) < 100 * eps:
             continue
-        assert abs(unstable(model, speeds.capsize + eps) - unstable(model, speeds.capsize - eps)) == 1
-        assert abs(unstable(model, speeds.weave + eps) - unstable(model, speeds.weave - eps)) == 2
+        # and in the direction that defines them: the weave pair turns stable, capsize unstable
+        assert unstable(model, speeds.capsize + eps) - unstable(model, speeds.capsize - eps) == 1
+        assert unstable(model, speeds.weave + eps) - unstable(model, speeds.weave - eps) == -2
         checked += 1
-    assert checked > 20 and found_none > 0  # 24 of the 120 draws have both, well apart
+    assert checked > 5 and found_none > 0  # 8 of the 120 draws have both, well apart
 
 
 def test_positive_real_roots_edge_cases():

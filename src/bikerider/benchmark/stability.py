@@ -1,0 +1,412 @@
+"""Every speed interval in which the Whipple model is self-stable, from its characteristic polynomial.
+
+The eigenvalues at speed ``v`` are the roots of ``a4 s^4 + a3 s^3 + a2 s^2 + a1 s + a0`` (``a4 = det
+M > 0``).  By the Lienard-Chipart form of the Routh-Hurwitz criterion all of them have negative real
+parts exactly when ``a0 > 0``, ``a1 > 0``, ``a3 > 0`` and the third Hurwitz determinant
+``H3 = a3 a2 a1 - a4 a1^2 - a0 a3^2 > 0`` (then ``a2 > 0`` follows).  As functions of ``u = v^2``
+(``v > 0``) these are the polynomials of the generated ``critical_speed_polynomials``:
+``a0(u)``, ``a1/v``, ``a3/v`` and ``W(u) = H3 / v^2``, each of degree two at most.
+
+Method.  A stable interval can only begin or end where ``a0`` or ``W`` changes sign: where ``a1`` or
+``a3`` would vanish inside a region with ``a0 > 0``, ``W`` is already negative (``W = -a0 a3^2 / v^2``
+at ``a1 = 0``, ``W = -a4 a1^2 / v^2`` at ``a3 = 0``).  So the positive real roots of ``a0(u)`` and
+``W(u)`` (at most four) cut ``v > 0`` into at most five pieces on which every condition keeps its
+sign; one evaluation per piece says whether the model is stable on it.  Nothing is scanned.
+
+Crossings.  At a sign change of ``a0`` a real eigenvalue crosses zero (``s = -a0/a1`` near it,
+so it moves left as speed rises, a *stabilising* crossing, when ``a0`` rises and ``a1 > 0`` or
+falls and ``a1 < 0``).  At a sign change of ``W`` with ``omega^2 = a1/a3 > 0`` a complex pair
+crosses the imaginary axis at ``+/- i omega``; by Orlando's formula ``H3 = a4^3 prod_{i<j}(s_i + s_j)``
+the pair moves left as speed rises when ``W`` rises and ``a3 > 0`` or falls and ``a3 < 0``.  A sign
+change of ``W`` with ``a1/a3 < 0`` is a pair ``+/- sigma`` of real roots summing to zero, not a
+crossing.  A double root (the polynomial touches zero) is not a crossing either.
+
+Weave and capsize speeds (what :meth:`bikerider.benchmark.WhippleModel.critical_speeds` returns).
+
+* With a stable interval: the *first* (lowest-speed) interval defines them.  ``weave`` is its lower
+  end when a complex pair crosses into the left half-plane there (the usual case); ``capsize`` is its
+  upper end when a real eigenvalue crosses zero there.  A bound of the other kind gives ``None``
+  for that speed (the interval says which crossing bounds it); an interval without an upper end
+  (stable at every higher speed) gives ``capsize = None`` and ``stable_range = (weave, inf)``.
+  Further stable intervals, rare in practice (about 1 in 1000 of the random bicycles of the tests),
+  are listed by :func:`stability` and in ``CriticalSpeeds.stable_intervals``.
+* Without one: ``weave`` is the lowest speed at which a complex pair crosses into the left half
+  plane and ``capsize`` the lowest at which a real eigenvalue crosses into the right half-plane
+  (each mode's own change of stability; the bicycle is never self-stable).  ``None`` where there is
+  no such crossing.
+
+The scalar path (:func:`stability`, plain floats, a few microseconds) and the batched path
+(:func:`stability_batch`, NumPy over any batch shape) implement the same rules; the tests hold them
+equal on thousands of random bicycles and compare both with a dense eigenvalue scan.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from bikerider.generated import benchmark_model as gen
+
+MAX_INTERVALS = 3
+"""At most four sign changes give at most three stable intervals."""
+_ZERO = 1e-14
+"""Polynomial coefficients below this fraction of the largest are zero."""
+_IMAG = 1e-9
+"""A complex root pair with imaginary part below ``_IMAG * max(1, |real part|)`` is a double real root."""
+_DOUBLE = 1e-9
+"""Two roots of one polynomial closer than this (relative) are a double root: a touch, not a crossing."""
+REAL, OSCILLATORY = 1, 2
+"""Kinds of crossing in the batched arrays (0: none)."""
+KIND_NAMES = {0: None, REAL: "real", OSCILLATORY: "oscillatory"}
+
+
+@dataclass(frozen=True)
+class Crossing:
+    """An eigenvalue crossing the imaginary axis as the speed rises.
+
+    Attributes
+    ----------
+    speed : float
+        Where it happens [m/s].
+    kind : {"real", "oscillatory"}
+        ``"real"``: a real eigenvalue crosses zero (capsize-like); ``"oscillatory"``: a complex pair
+        crosses at ``+/- i frequency`` (weave-like).
+    stabilising : bool
+        Whether the eigenvalue(s) move into the left half-plane as the speed rises.
+    frequency : float
+        Angular frequency of an oscillatory crossing [rad/s]; 0 for a real one.
+    """
+
+    speed: float
+    kind: str
+    stabilising: bool
+    frequency: float
+
+
+@dataclass(frozen=True)
+class StableInterval:
+    """A maximal speed interval in which every eigenvalue has a negative real part.
+
+    ``upper`` is ``inf`` when the model stays stable at every higher speed.  ``lower_crossing`` and
+    ``upper_crossing`` are the crossings that bound it (``None`` for ``lower = 0`` or ``upper = inf``).
+    """
+
+    lower: float
+    upper: float
+    lower_crossing: Crossing | None
+    upper_crossing: Crossing | None
+
+    def __iter__(self):  # ``lower, upper = interval``
+        return iter((self.lower, self.upper))
+
+
+@dataclass(frozen=True)
+class Stability:
+    """Stable intervals and crossings of one model, and the weave and capsize speeds they define."""
+
+    intervals: tuple[StableInterval, ...]
+    crossings: tuple[Crossing, ...]
+    weave: float | None
+    capsize: float | None
+    weave_frequency: float | None
+
+    def is_stable(self, speeds) -> np.ndarray:
+        """Whether the model is stable at each speed (interval ends are not stable)."""
+        v = np.asarray(speeds, dtype=float)
+        out = np.zeros(v.shape, dtype=bool)
+        for interval in self.intervals:
+            out |= (v > interval.lower) & (v < interval.upper)
+        return out
+
+
+# -- scalar path -----------------------------------------------------------------------------------
+def positive_real_roots(c2: float, c1: float, c0: float) -> list[float]:
+    """Sorted positive real roots of ``c2 u^2 + c1 u + c0`` on floats, scale-aware.
+
+    Coefficients below ``1e-14`` of the largest count as zero; a complex pair whose imaginary part
+    is below ``1e-9 max(1, |real part|)`` counts as a double real root (round-off can split a
+    double root into such a pair).
+    """
+    scale = max(abs(c2), abs(c1), abs(c0))
+    if scale == 0:
+        return []
+    a, b, c = c2 / scale, c1 / scale, c0 / scale
+    if abs(a) <= _ZERO:
+        if abs(b) <= _ZERO:
+            return []
+        roots = [-c / b]
+    else:
+        disc = b * b - 4 * a * c
+        if disc >= 0:
+            q = -0.5 * (b + math.copysign(math.sqrt(disc), b))
+            roots = [q / a, c / q] if q != 0 else [0.0, 0.0]
+        else:
+            re = -b / (2 * a)
+            if math.sqrt(-disc) / (2 * abs(a)) > _IMAG * max(1.0, abs(re)):
+                return []
+            roots = [re, re]
+    return sorted(u for u in roots if u > 0)
+
+
+def _simple_roots(c: tuple[float, ...]) -> list[float]:
+    """Positive roots of a quadratic in ``u`` where it changes sign (a double root is dropped)."""
+    roots = positive_real_roots(*c) if len(c) == 3 else positive_real_roots(0.0, *c)
+    if len(roots) == 2 and roots[1] - roots[0] <= _DOUBLE * roots[1]:
+        return []
+    return roots
+
+
+def _poly(c: tuple[float, ...], u: float) -> float:
+    out = 0.0
+    for coefficient in c:
+        out = out * u + coefficient
+    return out
+
+
+def stability(entries: dict[str, float], g: float) -> Stability:
+    """Stable intervals, crossings and critical speeds of one model (the module docstring's rules).
+
+    Parameters
+    ----------
+    entries : dict
+        The sixteen matrix entries ``M_phiphi ... K2_deltadelta`` as floats
+        (:func:`bikerider.benchmark.model.matrix_entries`).
+    g : float
+        Acceleration due to gravity [m/s^2].
+
+    Raises
+    ------
+    OverflowError, ValueError
+        From the generated polynomials when entries are too large for floating point; the caller
+        (``WhippleModel.critical_speeds``) turns that into an :class:`InputError`.
+    """
+    a0, w, a1, a3 = gen.critical_speed_polynomials_scalar(**entries, g=g)
+    if not all(math.isfinite(x) for x in (*a0, *w, *a1, *a3)):
+        raise ValueError("critical-speed polynomials are not finite")
+    cuts = sorted([(u, REAL) for u in _simple_roots(a0)] + [(u, OSCILLATORY) for u in _simple_roots(w)])
+    edges = [0.0] + [u for u, _ in cuts] + [math.inf]
+    stable = []
+    signs = []
+    for lo, hi in zip(edges[:-1], edges[1:]):
+        u = 0.5 * (lo + hi) if math.isfinite(hi) else 2.0 * lo + 1.0
+        values = (_poly(a0, u), _poly(w, u), _poly(a1, u), _poly(a3, u))
+        signs.append(values[:2])
+        stable.append(all(x > 0 for x in values))
+    crossings: list[Crossing | None] = []
+    for k, (u, kind) in enumerate(cuts):
+        before, after = signs[k][kind - 1], signs[k + 1][kind - 1]
+        crossing = None
+        if (before > 0) != (after > 0):
+            rising = after > before
+            if kind == REAL:
+                crossing = Crossing(math.sqrt(u), "real", rising == (_poly(a1, u) > 0), 0.0)
+            else:
+                omega2 = _poly(a1, u) / _poly(a3, u) if _poly(a3, u) != 0 else -1.0
+                if omega2 > 0:
+                    crossing = Crossing(math.sqrt(u), "oscillatory", rising == (_poly(a3, u) > 0), math.sqrt(omega2))
+        crossings.append(crossing)
+    intervals = []
+    k = 0
+    while k < len(stable):
+        if not stable[k]:
+            k += 1
+            continue
+        j = k
+        while j + 1 < len(stable) and stable[j + 1]:
+            j += 1
+        lower = math.sqrt(edges[k])
+        upper = math.sqrt(edges[j + 1]) if math.isfinite(edges[j + 1]) else math.inf
+        intervals.append(StableInterval(lower, upper, crossings[k - 1] if k > 0 else None,
+                                        crossings[j] if j < len(cuts) else None))
+        k = j + 1
+    events = tuple(c for c in crossings if c is not None)
+    weave, capsize, frequency = _critical(intervals, events)
+    return Stability(tuple(intervals), events, weave, capsize, frequency)
+
+
+def _critical(intervals: list[StableInterval], crossings: tuple[Crossing, ...]):
+    """Weave speed, capsize speed and weave frequency by the rules of the module docstring."""
+    if intervals:
+        first = intervals[0]
+        low, high = first.lower_crossing, first.upper_crossing
+        weave = low if low is not None and low.kind == "oscillatory" else None
+        capsize = high.speed if high is not None and high.kind == "real" else None
+    else:
+        weave = next((c for c in crossings if c.kind == "oscillatory" and c.stabilising), None)
+        capsize = next((c.speed for c in crossings if c.kind == "real" and not c.stabilising), None)
+    return (weave.speed if weave else None), capsize, (weave.frequency if weave else None)
+
+
+# -- batched path ----------------------------------------------------------------------------------
+def quadratic_roots(c2, c1, c0) -> tuple[np.ndarray, np.ndarray]:
+    """The two real roots of ``c2 u^2 + c1 u + c0`` (ascending), NaN where they are not real.
+
+    Scale-aware: the coefficients are divided by the largest of them first; a leading
+    coefficient below ``1e-14`` of it makes the polynomial linear (one root, the other NaN); a
+    complex pair whose imaginary part is below ``1e-9 max(1, |real part|)`` is a double real root.
+    """
+    c2, c1, c0 = np.broadcast_arrays(*(np.asarray(c, dtype=float) for c in (c2, c1, c0)))
+    scale = np.maximum(np.maximum(np.abs(c2), np.abs(c1)), np.abs(c0))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        scale = np.where(scale > 0, scale, np.nan)
+        a, b, c = c2 / scale, c1 / scale, c0 / scale
+        quadratic = np.abs(a) > _ZERO
+        a_safe = np.where(quadratic, a, 1.0)
+        disc = b * b - 4 * a_safe * c
+        root_disc = np.sqrt(np.abs(disc))
+        # A slightly negative discriminant from rounding is a double root (imaginary part tiny).
+        real_pair = (disc >= 0) | (root_disc / (2 * np.abs(a_safe)) <= _IMAG * np.maximum(1.0, np.abs(b / (2 * a_safe))))
+        root_disc = np.where(disc >= 0, root_disc, 0.0)
+        q = -0.5 * (b + np.where(b >= 0, 1.0, -1.0) * root_disc)
+        r1 = q / a_safe
+        r2 = np.where(q != 0, c / np.where(q != 0, q, 1.0), r1)
+        low, high = np.minimum(r1, r2), np.maximum(r1, r2)
+        low = np.where(quadratic & real_pair, low, np.nan)
+        high = np.where(quadratic & real_pair, high, np.nan)
+        linear = ~quadratic & (np.abs(b) > _ZERO)
+        linear_root = -c / np.where(linear, b, 1.0)
+        low = np.where(linear, linear_root, low)
+        high = np.where(linear, np.nan, high)
+    return low, high
+
+
+@dataclass(frozen=True)
+class StabilityBatch:
+    """:func:`stability` for a batch of models, as arrays of the batch shape ``S``.
+
+    Attributes
+    ----------
+    lower, upper : numpy.ndarray, shape S + (3,)
+        Ends of the stable intervals [m/s], lowest first, NaN-padded; ``upper`` is ``inf`` for an
+        interval without an upper end.
+    lower_kind, upper_kind : numpy.ndarray of int, shape S + (3,)
+        The crossing at each end: 1 real, 2 oscillatory, 0 none (``v = 0``, ``inf`` or padding).
+    weave, capsize, weave_frequency : numpy.ndarray, shape S
+        The critical speeds [m/s] and the weave frequency [rad/s] (NaN: none), by the rules of the
+        module docstring.
+    """
+
+    lower: np.ndarray
+    upper: np.ndarray
+    lower_kind: np.ndarray
+    upper_kind: np.ndarray
+    weave: np.ndarray
+    capsize: np.ndarray
+    weave_frequency: np.ndarray
+
+    @property
+    def n_intervals(self) -> np.ndarray:
+        """Number of stable intervals of each model."""
+        return np.isfinite(self.lower).sum(axis=-1)
+
+    def is_stable(self, speeds) -> np.ndarray:
+        """Stability at each speed, shape ``S + speeds.shape`` (interval ends are not stable)."""
+        v = np.asarray(speeds, dtype=float)
+        out = np.zeros(self.lower.shape[:-1] + v.shape, dtype=bool)
+        pad = (...,) + (None,) * v.ndim
+        for k in range(self.lower.shape[-1]):
+            out |= (v > self.lower[..., k][pad]) & (v < self.upper[..., k][pad])  # NaN compares False
+        return out
+
+
+def _sign_changes(values: np.ndarray) -> np.ndarray:
+    """``values`` (..., 5): whether the sign differs between consecutive pieces, (..., 4)."""
+    positive = values > 0
+    return positive[..., 1:] != positive[..., :-1]
+
+
+def stability_batch(entries: dict[str, np.ndarray], g) -> StabilityBatch:
+    """:func:`stability` for a batch: matrix entries (and ``g``) of any common broadcast shape.
+
+    Parameters
+    ----------
+    entries : dict
+        The sixteen matrix entries as arrays (:func:`bikerider.benchmark.model.matrix_entries`).
+    g : float or array_like
+        Acceleration due to gravity [m/s^2].
+
+    Returns
+    -------
+    StabilityBatch
+        NaN where a polynomial is not finite (entries beyond floating point) as for no interval.
+    """
+    with np.errstate(all="ignore"):
+        a0c, wc, a1c, a3c = gen.critical_speed_polynomials(**entries, g=g)
+    shape = a0c.shape[:-1]
+    roots = []
+    for c in (a0c, wc):
+        low, high = quadratic_roots(c[..., 0], c[..., 1], c[..., 2])
+        double = np.abs(high - low) <= _DOUBLE * np.abs(high)
+        for r in (low, high):
+            roots.append(np.where((r > 0) & ~double, r, np.inf))
+    cuts = np.stack(roots, axis=-1)  # (..., 4): a0 roots then W roots
+    kinds = np.broadcast_to(np.array([REAL, REAL, OSCILLATORY, OSCILLATORY]), cuts.shape)
+    order = np.argsort(cuts, axis=-1, kind="stable")
+    cuts = np.take_along_axis(cuts, order, axis=-1)
+    kinds = np.where(np.isfinite(cuts), np.take_along_axis(kinds, order, axis=-1), 0)
+    edges = np.concatenate([np.zeros(shape + (1,)), cuts, np.full(shape + (1,), np.inf)], axis=-1)
+    lo, hi = edges[..., :-1], edges[..., 1:]
+    with np.errstate(all="ignore"):
+        test = np.where(np.isfinite(hi), 0.5 * (lo + hi), 2.0 * lo + 1.0)  # a point inside each piece
+        test = np.where(np.isfinite(test), test, np.nan)
+
+        def at(c, u):
+            out = np.zeros_like(u)
+            for k in range(c.shape[-1]):
+                out = out * u + c[..., k, None]
+            return out
+
+        v0, vw, v1, v3 = at(a0c, test), at(wc, test), at(a1c, test), at(a3c, test)
+        stable = (v0 > 0) & (vw > 0) & (v1 > 0) & (v3 > 0)  # (..., 5); NaN pieces are not stable
+        # crossings at each cut
+        a1_cut, a3_cut = at(a1c, cuts), at(a3c, cuts)
+        rising0, rising_w = v0[..., 1:] > v0[..., :-1], vw[..., 1:] > vw[..., :-1]
+        real = (kinds == REAL) & _sign_changes(v0)
+        omega2 = a1_cut / a3_cut
+        oscillatory = (kinds == OSCILLATORY) & _sign_changes(vw) & (omega2 > 0)
+        stabilising = np.where(kinds == REAL, rising0 == (a1_cut > 0), rising_w == (a3_cut > 0))
+        crossing_kind = np.where(real, REAL, np.where(oscillatory, OSCILLATORY, 0))
+    # stable intervals: runs of stable pieces
+    previous = np.concatenate([np.zeros(shape + (1,), bool), stable[..., :-1]], axis=-1)
+    following = np.concatenate([stable[..., 1:], np.zeros(shape + (1,), bool)], axis=-1)
+    starts, ends = stable & ~previous, stable & ~following
+    lower = np.full(shape + (MAX_INTERVALS,), np.nan)
+    upper = np.full(shape + (MAX_INTERVALS,), np.nan)
+    lower_kind = np.zeros(shape + (MAX_INTERVALS,), dtype=int)
+    upper_kind = np.zeros(shape + (MAX_INTERVALS,), dtype=int)
+    cut_kind = np.concatenate([np.zeros(shape + (1,), int), crossing_kind, np.zeros(shape + (1,), int)], axis=-1)
+    start_rank = np.cumsum(starts, axis=-1) - 1
+    end_rank = np.cumsum(ends, axis=-1) - 1
+    for j in range(5):
+        for k in range(MAX_INTERVALS):
+            s = starts[..., j] & (start_rank[..., j] == k)
+            lower[..., k] = np.where(s, lo[..., j], lower[..., k])
+            lower_kind[..., k] = np.where(s, cut_kind[..., j], lower_kind[..., k])
+            e = ends[..., j] & (end_rank[..., j] == k)
+            upper[..., k] = np.where(e, hi[..., j], upper[..., k])
+            upper_kind[..., k] = np.where(e, cut_kind[..., j + 1], upper_kind[..., k])
+    lower, upper = np.sqrt(lower), np.sqrt(upper)
+    # critical speeds
+    has = np.isfinite(lower[..., 0])
+    speeds_at_cuts = np.sqrt(cuts)
+    first_osc = _first(speeds_at_cuts, (crossing_kind == OSCILLATORY) & stabilising)
+    first_real = _first(speeds_at_cuts, (crossing_kind == REAL) & ~stabilising)
+    weave = np.where(has, np.where(lower_kind[..., 0] == OSCILLATORY, lower[..., 0], np.nan), first_osc)
+    capsize = np.where(has, np.where(upper_kind[..., 0] == REAL, upper[..., 0], np.nan), first_real)
+    with np.errstate(all="ignore"):
+        u = weave * weave
+        frequency = np.sqrt(at(a1c, u[..., None])[..., 0] / at(a3c, u[..., None])[..., 0])
+    frequency = np.where(np.isfinite(weave), frequency, np.nan)
+    return StabilityBatch(lower, upper, lower_kind, upper_kind, weave, capsize, frequency)
+
+
+def _first(speeds: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    """The lowest of ``speeds`` (..., k, ascending) where ``mask``; NaN where none."""
+    any_ = mask.any(axis=-1)
+    index = np.argmax(mask, axis=-1)
+    return np.where(any_, np.take_along_axis(speeds, index[..., None], axis=-1)[..., 0], np.nan)
+
+
+__all__ = ["Crossing", "StableInterval", "Stability", "StabilityBatch", "positive_real_roots", "quadratic_roots",
+           "stability", "stability_batch"]
