@@ -46,8 +46,9 @@ class FrequencyResponse:
             return 20 * np.log10(np.abs(self.select(output, input)))
 
     def phase_deg(self, output: str, input: str) -> np.ndarray:
-        """Phase [deg], unwrapped along frequency."""
-        return np.degrees(np.unwrap(np.angle(self.select(output, input)), axis=-1))
+        """Phase [deg], unwrapped along frequency and starting in (-180, 180] at the lowest one."""
+        phase = np.degrees(np.unwrap(np.angle(self.select(output, input)), axis=-1))
+        return phase - 360.0 * np.round((phase[..., :1] - 1e-9) / 360.0)
 
 
 def frequency_response(model: WhippleModel, speeds, frequencies, inputs=("T_delta", "F"),

@@ -130,9 +130,10 @@ def _check_axes(base: BenchmarkParameters, axes: dict[str, object]) -> tuple[tup
     names, values = [], []
     for name, raw in axes.items():
         if name not in BENCHMARK_NAMES:
-            raise InputError(name, raw, f"one of the benchmark names {', '.join(BENCHMARK_NAMES)}", base.source)
+            raise InputError(name, f"{np.size(raw)} values", f"one of the benchmark names {', '.join(BENCHMARK_NAMES)}", base.source)
         if base.values[name] is None:
-            raise InputError(name, None, f"a base parameter set that has {name} (it is not determined here)", base.source)
+            raise InputError(name, "not determined",
+                             f"a base parameter set that determines {name}, to vary it", base.source)
         array = np.atleast_1d(np.asarray(raw, dtype=float))
         if array.ndim != 1 or array.size == 0 or not np.all(np.isfinite(array)):
             raise InputError(name, array.tolist() if array.size < 10 else f"array of shape {array.shape}",
@@ -148,7 +149,7 @@ def _validity(base: BenchmarkParameters, names: tuple[str, ...], values: tuple[n
         try:
             base.with_values(**changes)
         except InputError as exc:
-            return str(exc)
+            return str(InputError(exc.name, exc.value, exc.expected))  # without the source: the row says which
         return ""
 
     shape = tuple(v.size for v in values)
