@@ -124,7 +124,8 @@ def plot_eigenvalues(ax, model: WhippleModel, speeds=None, *, imag_ax=None, shap
                 if value is not None and v[0] <= value <= v[-1]:
                     target.axvline(value, color=color or MODE_COLOURS[name], lw=0.9, ls=style,
                                    label=f"{prefix}{name} speed {value:.2f} m/s" if target is ax else None)
-    ax.set_xlabel("speed $v$ [m/s]")
+    if imag_ax is None:
+        ax.set_xlabel("speed $v$ [m/s]")
     ax.set_ylabel("eigenvalue, real and imaginary parts [1/s]" if imag_ax is None else "real part [1/s]")
     if imag_ax is not None:
         imag_ax.set_xlabel("speed $v$ [m/s]")
