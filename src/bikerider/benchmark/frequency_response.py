@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bikerider.benchmark.model import WhippleModel
+from bikerider.benchmark.model import WhippleModel, check_speeds
 from bikerider.benchmark.state_space import LateralForce, StateSpace, state_space
 from bikerider.errors import InputError
 
@@ -72,10 +72,8 @@ def frequency_response(model: WhippleModel, speeds, frequencies, inputs=("T_delt
     -------
     FrequencyResponse
     """
-    v = np.atleast_1d(np.asarray(speeds, dtype=float))
+    v = check_speeds(speeds)
     w = np.atleast_1d(np.asarray(frequencies, dtype=float))
-    if v.ndim != 1:
-        raise InputError("speeds", v.tolist(), "a one-dimensional array of speeds [m/s]")
     if w.ndim != 1 or not np.all(np.isfinite(w)) or np.any(w < 0):
         raise InputError("frequencies", w.tolist() if w.size < 10 else f"array of shape {w.shape}",
                          "a one-dimensional array of finite, non-negative angular frequencies [rad/s]")

@@ -31,6 +31,8 @@ _COORDS = ("phi", "delta")
 _CANONICAL_ARGS = (
     "w c lam rR mR IRxx IRyy xB zB mB IBxx IBzz IBxz xH zH mH IHxx IHzz IHxz rF mF IFxx IFyy".split()
 )
+_ENTRY_NAMES = tuple(f"{m}_{a}{b}" for m in MATRIX_NAMES for a in _COORDS for b in _COORDS)
+"""The keyword names of :func:`matrix_entries`, in the order of ``M, C1, K0, K2`` raveled."""
 MODES = ("weave", "weave", "capsize", "castor")
 """Label order of the four eigenvalues returned by :meth:`WhippleModel.eigenvalues`."""
 
@@ -183,7 +185,7 @@ class WhippleModel:
         Parameters
         ----------
         speeds : array_like, shape (n,)
-            Speeds [m/s].
+            Speeds [m/s].  For a batch the values have shape ``batch_shape + (n, 4)``.
         method : {"eigvals", "quartic"}
             ``"eigvals"``: ``numpy.linalg.eigvals`` of the state matrices (the reference).
             ``"quartic"``: the generated characteristic polynomial solved in closed form for all
@@ -232,7 +234,8 @@ class WhippleModel:
         """Stable intervals, every crossing of the imaginary axis (speed, kind, direction) and the
         critical speeds (:func:`bikerider.benchmark.stability.stability`)."""
         self._one_bicycle("stability")
-        entries = {k: float(v) for k, v in self._entries().items()}
+        values = [x for m in (self.M, self.C1, self.K0, self.K2) for x in m.ravel().tolist()]  # floats, fast
+        entries = dict(zip(_ENTRY_NAMES, values))
         try:
             return stability(entries, self.g)
         except (OverflowError, ValueError):

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 
-from bikerider.benchmark.model import WhippleModel
+from bikerider.benchmark.model import WhippleModel, check_speeds
 from bikerider.benchmark.state_space import LateralForce, StateSpace, state_space
 from bikerider.errors import InputError
 
@@ -128,9 +128,7 @@ def simulate(model: WhippleModel, speeds, times, initial_state=None, inputs=None
     Simulation
     """
     t = _times(times)
-    v = np.atleast_1d(np.asarray(speeds, dtype=float))
-    if v.ndim != 1:
-        raise InputError("speeds", v.tolist(), "a one-dimensional array of speeds [m/s]")
+    v = check_speeds(speeds)
     system = state_space(model, v, input_names, outputs, lateral_force)
     hold = hold or ("foh" if callable(inputs) else "zoh")
     if hold not in ("zoh", "foh"):

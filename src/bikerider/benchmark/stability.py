@@ -159,10 +159,10 @@ def _simple_roots(c: tuple[float, ...]) -> list[float]:
 
 
 def _poly(c: tuple[float, ...], u: float) -> float:
-    out = 0.0
-    for coefficient in c:
-        out = out * u + coefficient
-    return out
+    """``c`` (highest power first, two or three coefficients) at ``u``."""
+    if len(c) == 3:
+        return (c[0] * u + c[1]) * u + c[2]
+    return c[0] * u + c[1]
 
 
 def stability(entries: dict[str, float], g: float) -> Stability:
@@ -183,17 +183,16 @@ def stability(entries: dict[str, float], g: float) -> Stability:
         (``WhippleModel.critical_speeds``) turns that into an :class:`InputError`.
     """
     a0, w, a1, a3 = gen.critical_speed_polynomials_scalar(**entries, g=g)
-    if not all(math.isfinite(x) for x in (*a0, *w, *a1, *a3)):
+    if not all(map(math.isfinite, a0 + w + a1 + a3)):
         raise ValueError("critical-speed polynomials are not finite")
     cuts = sorted([(u, REAL) for u in _simple_roots(a0)] + [(u, OSCILLATORY) for u in _simple_roots(w)])
     edges = [0.0] + [u for u, _ in cuts] + [math.inf]
-    stable = []
-    signs = []
+    stable, signs = [], []
     for lo, hi in zip(edges[:-1], edges[1:]):
-        u = 0.5 * (lo + hi) if math.isfinite(hi) else 2.0 * lo + 1.0
-        values = (_poly(a0, u), _poly(w, u), _poly(a1, u), _poly(a3, u))
-        signs.append(values[:2])
-        stable.append(all(x > 0 for x in values))
+        u = 0.5 * (lo + hi) if hi != math.inf else 2.0 * lo + 1.0
+        v0, vw = _poly(a0, u), _poly(w, u)
+        signs.append((v0, vw))
+        stable.append(v0 > 0 and vw > 0 and _poly(a1, u) > 0 and _poly(a3, u) > 0)
     crossings: list[Crossing | None] = []
     for k, (u, kind) in enumerate(cuts):
         before, after = signs[k][kind - 1], signs[k + 1][kind - 1]
@@ -203,9 +202,9 @@ def stability(entries: dict[str, float], g: float) -> Stability:
             if kind == REAL:
                 crossing = Crossing(math.sqrt(u), "real", rising == (_poly(a1, u) > 0), 0.0)
             else:
-                omega2 = _poly(a1, u) / _poly(a3, u) if _poly(a3, u) != 0 else -1.0
-                if omega2 > 0:
-                    crossing = Crossing(math.sqrt(u), "oscillatory", rising == (_poly(a3, u) > 0), math.sqrt(omega2))
+                a1_u, a3_u = _poly(a1, u), _poly(a3, u)
+                if a3_u != 0 and a1_u / a3_u > 0:
+                    crossing = Crossing(math.sqrt(u), "oscillatory", rising == (a3_u > 0), math.sqrt(a1_u / a3_u))
         crossings.append(crossing)
     intervals = []
     k = 0
@@ -216,10 +215,9 @@ def stability(entries: dict[str, float], g: float) -> Stability:
         j = k
         while j + 1 < len(stable) and stable[j + 1]:
             j += 1
-        lower = math.sqrt(edges[k])
-        upper = math.sqrt(edges[j + 1]) if math.isfinite(edges[j + 1]) else math.inf
-        intervals.append(StableInterval(lower, upper, crossings[k - 1] if k > 0 else None,
-                                        crossings[j] if j < len(cuts) else None))
+        upper = edges[j + 1]
+        intervals.append(StableInterval(math.sqrt(edges[k]), math.sqrt(upper) if upper != math.inf else math.inf,
+                                        crossings[k - 1] if k > 0 else None, crossings[j] if j < len(cuts) else None))
         k = j + 1
     events = tuple(c for c in crossings if c is not None)
     weave, capsize, frequency = _critical(intervals, events)

@@ -71,7 +71,8 @@ def bode_figure(model: WhippleModel, speeds=(3.0, 5.0, 7.0), frequencies=None, *
     if note:
         axes[1, -1].text(1.04, 1.0, note.strip(), transform=axes[1, -1].transAxes, va="top", fontsize=7)
     if title:
-        fig.suptitle(title, x=0.02, ha="left", fontsize=9)
+        fig.suptitle(title, x=0.02, y=0.99, ha="left", va="top", fontsize=9)
+        fig.subplots_adjust(top=0.86)
     fig.align_ylabels()
     return fig
 
