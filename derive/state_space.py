@@ -30,7 +30,7 @@ import sympy as sp
 from derive.benchmark_model import matrix_symbols
 from derive.codegen import GeneratedFunction, GeneratedModule, Output
 from derive.gap_effects import unconstrained_equations
-from derive.symbols import sym, syms
+from derive.symbols import syms
 
 _RATES = sp.symbols("Yd_f psid_f phid_f deltad_f", real=True)
 """Internal rates ``[Y', psi', phi', delta']`` of the first-order point kinematics."""

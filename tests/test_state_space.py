@@ -183,7 +183,7 @@ def test_sampled_input_is_held_and_nonuniform_times_work(model):
     A, B = sim.system.A[0], sim.system.B[0]
     x = np.array([0, 0.01, 0, 0.0])
     for k in range(t.size - 1):  # integrate each hold interval on its own (no discontinuity inside)
-        x = solve_ivp(lambda s, y: A @ y + B @ samples[k], (t[k], t[k + 1]), x, rtol=1e-12, atol=1e-14,
+        x = solve_ivp(lambda s, y, u=samples[k]: A @ y + B @ u, (t[k], t[k + 1]), x, rtol=1e-12, atol=1e-14,
                       method="DOP853").y[:, -1]
         np.testing.assert_allclose(sim.states[0, k + 1], x, rtol=1e-8, atol=1e-12)
     assert held(t[5] + 1e-9) == samples[5]
