@@ -118,7 +118,8 @@ def build() -> str:
     """The text of docs/gallery.md (no drawing)."""
     lines = [HEADER.format(dpi=DPI)]
     for stem, caption, code, _ in _figures():
-        lines.append(f"## {stem.replace('_', ' ')}\n\n![{stem}](gallery/{stem}.png)\n\n{caption}\n\n```python\n{code}\n```\n")
+        title = stem.replace("_", " ")
+        lines.append(f"## {title}\n\n![{stem}](gallery/{stem}.png)\n\n{caption}\n\n```python\n{code}\n```\n")
     return "\n".join(lines)
 
 

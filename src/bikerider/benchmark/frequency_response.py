@@ -80,7 +80,8 @@ def frequency_response(model: WhippleModel, speeds, frequencies, inputs=("T_delt
     system = state_space(model, v, inputs, outputs, lateral_force)
     A = system.A[..., None, :, :]  # S + (n, 1, 4, 4)
     resolvent = 1j * w[:, None, None] * np.eye(4) - A  # S + (n, nf, 4, 4)
-    X = np.linalg.solve(resolvent, np.broadcast_to(system.B[..., None, :, :], resolvent.shape[:-1] + (system.B.shape[-1],)))
+    B = np.broadcast_to(system.B[..., None, :, :], resolvent.shape[:-1] + (system.B.shape[-1],))
+    X = np.linalg.solve(resolvent, B)
     C = system.C if system.C.ndim == 2 else system.C[..., None, :, :]
     G = C @ X + system.D[..., None, :, :]
     return FrequencyResponse(w, v, G, system)

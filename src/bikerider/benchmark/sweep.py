@@ -130,7 +130,8 @@ def _check_axes(base: BenchmarkParameters, axes: dict[str, object]) -> tuple[tup
     names, values = [], []
     for name, raw in axes.items():
         if name not in BENCHMARK_NAMES:
-            raise InputError(name, f"{np.size(raw)} values", f"one of the benchmark names {', '.join(BENCHMARK_NAMES)}", base.source)
+            raise InputError(name, f"{np.size(raw)} values",
+                             f"one of the benchmark names {', '.join(BENCHMARK_NAMES)}", base.source)
         if base.values[name] is None:
             raise InputError(name, "not determined",
                              f"a base parameter set that determines {name}, to vary it", base.source)

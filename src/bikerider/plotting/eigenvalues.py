@@ -120,7 +120,8 @@ def plot_eigenvalues(ax, model: WhippleModel, speeds=None, *, imag_ax=None, shap
                     target.axvspan(lo, hi, color=STABLE_SHADE, zorder=-1,
                                    label=f"{prefix}self-stable" if k == 0 and target is ax else None)
         if critical:
-            for value, name, style in ((stability.weave, "weave", (0, (1, 1.5))), (stability.capsize, "capsize", (0, (4, 2)))):
+            marks = ((stability.weave, "weave", (0, (1, 1.5))), (stability.capsize, "capsize", (0, (4, 2))))
+            for value, name, style in marks:
                 if value is not None and v[0] <= value <= v[-1]:
                     target.axvline(value, color=color or MODE_COLOURS[name], lw=0.9, ls=style,
                                    label=f"{prefix}{name} speed {value:.2f} m/s" if target is ax else None)

@@ -77,7 +77,8 @@ def plot_side_view(ax, parameters: BenchmarkParameters, grid_points: np.ndarray 
               "H": (float(p["mH"]), float(p["xH"]), -float(p["zH"])),  # type: ignore[arg-type]
               "R": (float(p["mR"]), 0.0, rR), "F": (float(p["mF"]), w, rF)}  # type: ignore[arg-type]
     mass = sum(m for m, _, _ in bodies.values())
-    bodies["T"] = (mass, sum(m * x for m, x, _ in bodies.values()) / mass, sum(m * y for m, _, y in bodies.values()) / mass)
+    bodies["T"] = (mass, sum(m * x for m, x, _ in bodies.values()) / mass,
+                   sum(m * y for m, _, y in bodies.values()) / mass)
     from matplotlib.patches import Circle, Ellipse
 
     wheel_style = {"fill": False, "edgecolor": "0.25", "lw": 1.4}
