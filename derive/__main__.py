@@ -42,6 +42,11 @@ def generate(out_dir: Path) -> dict[str, dict[str, tuple[int, int]]]:
         counts[module.name] = module_counts
         names.append(module.name)
         LOG.info("%s: %s in %.1f s", module.name, "written" if written else "unchanged", time.perf_counter() - start)
+    from derive import kernels  # fused C kernels from the same expressions (generated/design_kernels.py)
+
+    text, counts[kernels.MODULE] = kernels.render(GENERATOR, digest)
+    codegen.write_if_changed(out_dir / f"{kernels.MODULE}.py", text)
+    names.append(kernels.MODULE)
     extra = importlib.import_module("derive.extras").build(digest, GENERATOR, counts, names)
     for filename, text in extra.items():
         codegen.write_if_changed(out_dir / filename, text)
