@@ -22,19 +22,24 @@ def add_parser(subparsers) -> None:
     from bikerider.commands.benchmark import add_shipped_options
 
     add_shipped_options(p)
-    p.add_argument("--vary", metavar="NAME=START:STOP:N", action="append", required=True,
+    p.add_argument("--vary", metavar="NAME=START:STOP:N", action="append",
                    help="a benchmark parameter and its range, SI units (NAME_deg for an angle in degrees, e.g. "
-                        "lam_deg=0:30:61); give --vary twice for a stability map")
+                        "lam_deg=0:30:61); give --vary twice for a stability map, more often for a design space "
+                        "(with --random: NAME=LOW:HIGH or NAME=MEAN+/-SIGMA)")
     p.add_argument("--speeds", metavar="START:STOP:N",
                    help="speeds [m/s] at which to report stability (and with --rows speeds, eigenvalues)")
     p.add_argument("--rows", choices=ROWS, default="designs",
                    help="one row per design (default), or per design and speed (needs --speeds)")
     p.add_argument("--json", action="store_true", help="print one JSON object instead of CSV")
     p.add_argument("--out", metavar="FILE", help="write the CSV or JSON to FILE instead of standard output")
-    p.add_argument("--plot", metavar="DIR", help="write sweep.<format>: stable speeds against the parameter, or the map")
+    p.add_argument("--plot", metavar="DIR", help="write sweep.<format>: stable speeds against the parameter, or the map "
+                   "(with --store: stable_fraction, sensitivity and map_<x>_<y>)")
     from bikerider.commands.estimate import add_figure_options
 
     add_figure_options(p)
+    from bikerider.commands.sweep_design import add_design_options
+
+    add_design_options(p)
     p.set_defaults(run=run)
 
 
@@ -71,10 +76,15 @@ def run(args: argparse.Namespace) -> int:
 
     from bikerider.benchmark.sweep import sweep
     from bikerider.commands.benchmark import load_parameters
+    from bikerider.commands.sweep_design import is_design_run, run_design
     from bikerider.errors import InputError
     from bikerider.report import parse_speeds
 
+    if is_design_run(args):
+        return run_design(args)
     base, name = load_parameters(args)
+    if not args.vary:
+        raise InputError("--vary", "missing", "NAME=START:STOP:N, at least one parameter to vary")
     if len(args.vary) > 2:
         raise InputError("--vary", args.vary, "one parameter (a sweep) or two (a stability map)")
     axes = dict(parse_vary(text) for text in args.vary)

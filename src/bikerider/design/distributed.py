@@ -18,6 +18,8 @@ LOG = logging.getLogger(__name__)
 
 IN_FLIGHT = 2
 """Tasks submitted per worker ahead of the results."""
+CONNECT_TIMEOUT = "20s"
+"""How long to wait for a scheduler at an address."""
 
 
 def dask_distributed():
@@ -51,7 +53,7 @@ def run_on_dask(store, pending: list[int], engine: str, scheduler, workers: int 
     else:
         address = scheduler
     try:
-        client = distributed.Client(address, timeout="30s")
+        client = distributed.Client(address, timeout=CONNECT_TIMEOUT)
     except (OSError, TimeoutError) as exc:
         if cluster is not None:
             cluster.close()

@@ -187,10 +187,7 @@ def evaluate(space: DesignSpace, start: int, stop: int, speeds=(), weave_speeds=
     n = stop - start
     inputs = space.inputs(start, stop)
     bench, codes = _benchmark_values(space, inputs, n)
-    if space.kind == "benchmark":
-        sigmas = {k: (0.0 if k in space.names else s) for k, s in space.sigmas.items()}
-    else:
-        sigmas = {}
+    sigmas = {k: (0.0 if k in space.names else s) for k, s in space.sigmas.items()}  # a value set exactly has none
     codes_bench = validity.benchmark_reasons(bench, sigmas)
     np.copyto(codes, np.broadcast_to(codes_bench, (n,)), where=codes == 0)
     valid = codes == 0

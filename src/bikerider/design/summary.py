@@ -170,7 +170,7 @@ def summarize(store: DesignStore, speed_range=None) -> Summary:
         with np.errstate(invalid="ignore"):
             outputs = {o: np.where((y >= lo) & (y <= hi) if o != "width" else (y <= hi - lo), y, np.nan)
                        for o, y in outputs.items()}
-        bins = {o: np.clip(((outputs[o] - lo) / SPEED_BIN).astype(np.int64, copy=False), 0, n_hist - 1)
+        bins = {o: np.clip(np.nan_to_num((outputs[o] - lo) / SPEED_BIN).astype(np.int64), 0, n_hist - 1)
                 for o in OUTPUTS[:2]} if n_hist else {}
         designs += stop - start
         valid_total += int(valid.sum())
