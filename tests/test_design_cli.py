@@ -56,7 +56,7 @@ def test_raw_measurements_through_the_estimate(capsys):
     (["--random", "5", "--vary", "c=0.2:0.1"], "c = '0.2:0.1': expected a range LOW:HIGH"),
     (["--random", "5", "--vary", "c=0.2"], "NAME=LOW:HIGH (uniform) or NAME=MEAN+/-SIGMA"),
     (["--monte-carlo", "5", "--vary", "c=0:1:2"], "--monte-carlo = 5: expected no --vary"),
-    (["--vary", "c=0:0.1:200", "--vary", "w=1:2:100", "--vary", "mB=1:2:100"], "--store = 'missing': expected a folder"),
+    (["--vary", "c=0:0.1:200", "--vary", "w=1:2:100", "--vary", "mB=1:2:100"], "--store = missing: expected a folder"),
     (["--vary", "c=0:0.1:3", "--vary", "w=1:2:3", "--vary", "mB=1:2:3", "--workers", "2"], "--workers = 2"),
 ])
 def test_bad_design_options_are_named(argv, message, capsys):
