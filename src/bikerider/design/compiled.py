@@ -4,8 +4,9 @@ The C source is emitted by ``derive/kernels.py`` from the same SymPy expressions
 functions.  It is compiled once per machine with the C compiler found on ``PATH`` (``$CC``, else
 ``cc``, ``gcc`` or ``clang``) and kept in a cache folder (``$BIKERIDER_CACHE``, else
 ``$XDG_CACHE_HOME/bikerider``, else ``~/.cache/bikerider``) under a name that hashes the source,
-the compiler and the flags, so a changed kernel or compiler compiles anew and concurrent processes
-(Dask workers) never load a half-written library.  Flags: ``-O3 -ffp-contract=off`` (no fused
+the compiler, the flags and the processor's instruction set, so a changed kernel, compiler or
+processor compiles anew and concurrent processes (Dask workers) never load a half-written
+library (it is written elsewhere and renamed into place).  Flags: ``-O3 -ffp-contract=off`` (no fused
 multiply-add contraction and no ``-ffast-math``: the kernels round as NumPy does) and
 ``-march=native`` where the compiler accepts it.
 
@@ -71,6 +72,20 @@ def _compiler_version(compiler: str) -> str:
         return compiler
 
 
+def _cpu() -> str:
+    """What ``-march=native`` depends on: the processor's instruction-set flags (a cache shared by
+    machines of different processors keeps one library for each)."""
+    import platform
+
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith(("flags", "Features")):
+                return line
+    except OSError:
+        pass
+    return platform.machine() + platform.processor()
+
+
 def _compile(compiler: str, c_file: Path, target: Path, flags: tuple[str, ...]) -> subprocess.CompletedProcess:
     return subprocess.run([compiler, *flags, "-o", str(target), str(c_file), "-lm"], capture_output=True, text=True,
                           timeout=600)
@@ -93,7 +108,7 @@ def library() -> ctypes.CDLL:
     folder = cache_dir()
     folder.mkdir(parents=True, exist_ok=True)
     for flags in (BASE_FLAGS + ("-march=native",), BASE_FLAGS):
-        key = hashlib.sha256("\0".join([source.C_SOURCE, version, *flags]).encode()).hexdigest()[:20]
+        key = hashlib.sha256("\0".join([source.C_SOURCE, version, _cpu(), *flags]).encode()).hexdigest()[:20]
         target = folder / f"design_kernels-{key}.so"
         if not target.exists():
             with tempfile.TemporaryDirectory(dir=folder) as tmp:
