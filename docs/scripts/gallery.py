@@ -57,6 +57,46 @@ def _figures():
         result = stability_map(bench, ("c", np.linspace(0.0, 0.2, 101)), ("lam", np.radians(np.linspace(0, 40, 101))))
         return plotting.sweep_figure(result, "Benchmark bicycle: trail and steer axis tilt")
 
+    runs: dict = {}
+
+    def six_parameters():
+        """The design space of the bench's 6.4e7-design map, at 8 values a parameter (262144 designs)."""
+        from bikerider import design
+
+        if "six" not in runs:
+            axes = {"c": (0.0, 0.15), "lam": (0.0, np.radians(36.0)), "w": (0.8, 1.3), "IHzz": (0.002, 0.03),
+                    "IFyy": (0.1, 0.28), "xB": (0.1, 0.6)}
+            space = design.grid(bench, {k: np.linspace(lo, hi, 8) for k, (lo, hi) in axes.items()})
+            runs["six"] = design.explore(space, None, np.linspace(0.0, 10.0, 100))
+        return runs["six"]
+
+    def design_fraction():
+        from bikerider.design import summary
+        from bikerider.plotting import design as figures
+
+        store = six_parameters()
+        return figures.stable_fraction_figure(summary.summarize(store), store.spec.space.base,
+                                              "Benchmark bicycle, 6 parameters at 8 values")
+
+    def design_sensitivity():
+        from bikerider.design import summary
+        from bikerider.plotting import design as figures
+
+        store = six_parameters()
+        return figures.interval_sensitivity_figure(summary.summarize(store), store.spec.space.base,
+                                                   "Benchmark bicycle, 6 parameters at 8 values")
+
+    def design_map():
+        from bikerider import design
+        from bikerider.design import summary
+        from bikerider.plotting import design as figures
+
+        space = design.grid(bench, {"c": np.linspace(-0.02, 0.16, 73), "lam": np.radians(np.linspace(0, 36, 73)),
+                                    "w": np.linspace(0.9, 1.2, 3), "IFyy": np.linspace(0.14, 0.28, 3)})
+        store = design.explore(space, None, np.linspace(0.0, 10.0, 100))
+        cut = summary.design_slice(store, "c", "lam", {"w": 1.05, "IFyy": 0.28})
+        return figures.design_slice_figure(cut, store.spec.speeds, "Benchmark bicycle: trail and steer axis tilt")
+
     return [
         ("eigenvalues", "Eigenvalues against speed of the paper's bicycle and rider, with the first-order "
          "uncertainty that the paper's stated measurement accuracies give (`bikerider estimate --plot DIR`). "
@@ -99,6 +139,20 @@ def _figures():
          "begins (colour) and ends (contours); hatched: never self-stable (`bikerider sweep --bicycle Benchmark "
          "--vary c=0:0.2:101 --vary lam_deg=0:40:101 --plot DIR`).",
          "plotting.sweep_figure(stability_map(parameters, (\"c\", trails), (\"lam\", tilts)))", trail_tilt_map),
+        ("design_stable_fraction", "A design space of six parameters of the benchmark bicycle (trail, steer axis tilt, "
+         "wheelbase, front-assembly inertia, front-wheel spin inertia, rear-body centre of mass), 8 values each: the "
+         "share of the valid designs that is self-stable somewhere in 0-10 m/s, against each parameter, with the share "
+         "of impossible designs (`bikerider sweep ... --store DIR --plot DIR`; [design_space.md](design_space.md)).",
+         "figures.stable_fraction_figure(summary.summarize(store), space.base, title)", design_fraction),
+        ("design_sensitivity", "Sensitivity of the stable interval over the same space: median and interquartile range "
+         "of the weave and capsize speeds (the ends of the first self-stable interval) over the other five parameters, "
+         "against each, and each speed's first-order sensitivity index.",
+         "figures.interval_sensitivity_figure(summary.summarize(store), space.base, title)", design_sensitivity),
+        ("design_map", "A slice of a design space over trail, steer axis tilt, wheelbase and front-wheel spin "
+         "inertia: where the first self-stable interval begins and ends, and the share of 100 speeds (0-10 m/s) at "
+         "which each design is self-stable.",
+         "figures.design_slice_figure(summary.design_slice(store, \"c\", \"lam\", fixed), store.spec.speeds, title)",
+         design_map),
     ]
 
 

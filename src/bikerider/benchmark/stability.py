@@ -329,7 +329,34 @@ def stability_batch(entries: dict[str, np.ndarray], g) -> StabilityBatch:
     -------
     StabilityBatch
         NaN where a polynomial is not finite (entries beyond floating point) as for no interval.
+
+    Notes
+    -----
+    A batch of more than :data:`CHUNK` models is evaluated :data:`CHUNK` at a time (the generated
+    polynomials keep about 200 temporaries per model alive): the memory beyond the results does not
+    grow with the batch.
     """
+    arrays = {k: np.asarray(v, dtype=float) for k, v in entries.items()}
+    g_array = np.asarray(g, dtype=float)
+    shape = np.broadcast_shapes(g_array.shape, *(a.shape for a in arrays.values()))
+    size = int(np.prod(shape))
+    if size <= CHUNK:
+        return _stability_batch(arrays, g_array)
+    flat = {k: np.broadcast_to(a, shape).reshape(size) for k, a in arrays.items()}
+    g_flat = np.broadcast_to(g_array, shape).reshape(size)
+    parts = [_stability_batch({k: a[i:i + CHUNK] for k, a in flat.items()}, g_flat[i:i + CHUNK])
+             for i in range(0, size, CHUNK)]
+    return StabilityBatch(*(np.concatenate([getattr(p, f) for p in parts]).reshape(shape + getattr(parts[0], f).shape[1:])
+                            for f in ("lower", "upper", "lower_kind", "upper_kind", "weave", "capsize",
+                                      "weave_frequency")))
+
+
+CHUNK = 8192
+"""Models :func:`stability_batch` evaluates at once."""
+
+
+def _stability_batch(entries: dict[str, np.ndarray], g) -> StabilityBatch:
+    """:func:`stability_batch` of one chunk."""
     with np.errstate(all="ignore"):
         a0c, wc, a1c, a3c = gen.critical_speed_polynomials(**entries, g=g)
     shape = a0c.shape[:-1]

@@ -14,8 +14,10 @@
 * :func:`closest_to_weave_speed`: the valid design whose weave speed is closest to a target.
 
 "Self-stable" means: a stable interval that overlaps the speed range (by default the run's map
-speeds, else 0-10 m/s).  The stable interval of the sensitivities is the first one; its width
-counts only intervals with an upper end (those stable at every higher speed have none).
+speeds, else 0-10 m/s).  The stable interval of the sensitivities is the first one: the weave speed
+where it begins one, the capsize speed where it ends one (designs that are never self-stable have
+weave and capsize speeds of their own, the modes' changes of stability, which are left out here);
+its width counts only intervals with an upper end.
 """
 from __future__ import annotations
 
@@ -165,8 +167,11 @@ def summarize(store: DesignStore, speed_range=None) -> Summary:
         stable = _stable_in(chunk["lower"], chunk["upper"], lo, hi) & valid
         with np.errstate(invalid="ignore"):
             width = chunk["upper"][:, 0] - chunk["lower"][:, 0]
-        outputs = {"weave_speed": chunk["weave_speed"], "capsize_speed": chunk["capsize_speed"],
-                   "width": np.where(np.isfinite(width), width, np.nan)}
+        first_lower, first_upper = chunk["lower"][:, 0], chunk["upper"][:, 0]
+        outputs = {  # the ends of the first stable interval (a design without one has none)
+            "weave_speed": np.where(chunk["weave_speed"] == first_lower, first_lower, np.nan),
+            "capsize_speed": np.where(chunk["capsize_speed"] == first_upper, first_upper, np.nan),
+            "width": np.where(np.isfinite(width), width, np.nan)}
         with np.errstate(invalid="ignore"):
             outputs = {o: np.where((y >= lo) & (y <= hi) if o != "width" else (y <= hi - lo), y, np.nan)
                        for o, y in outputs.items()}
