@@ -58,16 +58,12 @@ def _numpy_one_batch(args: dict[str, np.ndarray], speeds: np.ndarray):
 
 def _eigvals_user(args: dict[str, np.ndarray], speeds: np.ndarray) -> np.ndarray:
     """A plain NumPy user: state matrices at every speed, eigvals, all real parts negative."""
+    from bench_toolbox import numpy_state_matrices
+
     from bikerider.generated import benchmark_model as gen
 
     M, C1, K0, K2 = gen.canonical_matrices(**{k: v for k, v in args.items() if k != "g"})
-    Minv = np.linalg.inv(M)[:, None]
-    v = speeds[None, :, None, None]
-    K = 9.81 * K0[:, None] + v * v * K2[:, None]
-    lower = np.concatenate([-Minv @ K, -Minv @ (v * C1[:, None])], axis=-1)
-    upper = np.broadcast_to(np.concatenate([np.zeros((2, 2)), np.eye(2)], axis=-1), lower.shape)
-    A = np.concatenate([upper, lower], axis=-2)
-    return (np.linalg.eigvals(A).real < 0).all(axis=-1)
+    return (np.linalg.eigvals(numpy_state_matrices(M, C1, K0, K2, 9.81, speeds)).real < 0).all(axis=-1)
 
 
 MEMORY_SCRIPT = textwrap.dedent("""
