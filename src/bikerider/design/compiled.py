@@ -191,11 +191,16 @@ def _ptr(array: np.ndarray):
 
 
 def stability(arguments: dict[str, np.ndarray], n: int, speeds=(), threads: int | None = None) -> dict[str, np.ndarray]:
-    """Stable intervals, crossing kinds, critical speeds, mass-matrix check and stability bits of
-    ``n`` designs (the outputs of ``bikerider_stability``; see :func:`bikerider.design.engine.evaluate`)."""
+    """Stable intervals, crossing kinds, critical speeds, mass-matrix check and stability bits at
+    the ascending ``speeds`` of ``n`` designs (the outputs of ``bikerider_stability``, as
+    :func:`bikerider.design.engine.numpy_stability` returns them).
+
+    ``arguments`` maps every name of :data:`ARGUMENTS` to ``n`` values or one (broadcast)."""
     lib = library()
     keep, pointers, strides = _inputs(arguments, n)
     v = np.ascontiguousarray(speeds, dtype=float).reshape(-1)
+    if v.size > 1 and not np.all(np.diff(v) > 0):
+        raise ValueError("the map speeds must be ascending (the kernel bisects them)")
     n_bytes = (v.size + 7) // 8
     out = {
         "lower": np.empty((n, 3)), "upper": np.empty((n, 3)),
