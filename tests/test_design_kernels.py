@@ -141,8 +141,14 @@ def test_threads_split_the_work_without_changing_it(random_designs):
     n = random_designs["w"].size
     one = compiled.stability(random_designs, n, SPEEDS, threads=1)
     three = compiled.stability(random_designs, n, SPEEDS, threads=3)
+    buffers = compiled.stability_outputs(n, SPEEDS.size)
+    compiled.stability({k: v[::-1] for k, v in random_designs.items()}, n, SPEEDS, out=buffers)  # other values first
+    reused = compiled.stability(random_designs, n, SPEEDS, out=buffers)
     for key in one:
         np.testing.assert_array_equal(one[key], three[key], err_msg=key)
+        np.testing.assert_array_equal(one[key], reused[key], err_msg=key)
+    with pytest.raises(ValueError, match="ascending"):
+        compiled.stability(random_designs, n, SPEEDS[::-1])
 
 
 def test_the_generator_and_the_runtime_use_one_quartic():

@@ -190,24 +190,34 @@ def _ptr(array: np.ndarray):
     return array.ctypes.data
 
 
-def stability(arguments: dict[str, np.ndarray], n: int, speeds=(), threads: int | None = None) -> dict[str, np.ndarray]:
+def stability_outputs(n: int, n_speeds: int) -> dict[str, np.ndarray]:
+    """Empty output arrays of :func:`stability` for ``n`` designs (to reuse across calls)."""
+    return {
+        "lower": np.empty((n, 3)), "upper": np.empty((n, 3)),
+        "lower_kind": np.empty((n, 3), dtype=np.int8), "upper_kind": np.empty((n, 3), dtype=np.int8),
+        "weave": np.empty(n), "capsize": np.empty(n), "weave_frequency": np.empty(n),
+        "mass_ok": np.empty(n, dtype=np.int8), "stable_bits": np.zeros((n, (n_speeds + 7) // 8), dtype=np.uint8),
+    }
+
+
+def stability(arguments: dict[str, np.ndarray], n: int, speeds=(), threads: int | None = None,
+              out: dict[str, np.ndarray] | None = None) -> dict[str, np.ndarray]:
     """Stable intervals, crossing kinds, critical speeds, mass-matrix check and stability bits at
     the ascending ``speeds`` of ``n`` designs (the outputs of ``bikerider_stability``, as
     :func:`bikerider.design.engine.numpy_stability` returns them).
 
-    ``arguments`` maps every name of :data:`ARGUMENTS` to ``n`` values or one (broadcast)."""
+    ``arguments`` maps every name of :data:`ARGUMENTS` to ``n`` values or one (broadcast).  ``out``
+    (from :func:`stability_outputs`) is filled instead of new arrays: fresh memory costs a page
+    fault per 4 KB on first touch, about a third of the kernel's time."""
     lib = library()
     keep, pointers, strides = _inputs(arguments, n)
     v = np.ascontiguousarray(speeds, dtype=float).reshape(-1)
     if v.size > 1 and not np.all(np.diff(v) > 0):
         raise ValueError("the map speeds must be ascending (the kernel bisects them)")
-    n_bytes = (v.size + 7) // 8
-    out = {
-        "lower": np.empty((n, 3)), "upper": np.empty((n, 3)),
-        "lower_kind": np.empty((n, 3), dtype=np.int8), "upper_kind": np.empty((n, 3), dtype=np.int8),
-        "weave": np.empty(n), "capsize": np.empty(n), "weave_frequency": np.empty(n),
-        "mass_ok": np.empty(n, dtype=np.int8), "stable_bits": np.zeros((n, n_bytes), dtype=np.uint8),
-    }
+    if out is None:
+        out = stability_outputs(n, v.size)
+    elif out["mass_ok"].dtype != np.int8 or out["stable_bits"].shape != (n, (v.size + 7) // 8):
+        raise ValueError("out: arrays of stability_outputs(n, len(speeds))")
     order = ("lower", "upper", "lower_kind", "upper_kind", "weave", "capsize", "weave_frequency", "mass_ok")
 
     def call(start: int, stop: int) -> None:
@@ -216,8 +226,7 @@ def stability(arguments: dict[str, np.ndarray], n: int, speeds=(), threads: int 
 
     _run(call, n, threads)
     del keep
-    out["mass_ok"] = out["mass_ok"].astype(bool)
-    return out
+    return {**out, "mass_ok": out["mass_ok"].astype(bool)}
 
 
 def weave_eigenvalues(arguments: dict[str, np.ndarray], n: int, speeds, threads: int | None = None) -> np.ndarray:
@@ -237,4 +246,4 @@ def weave_eigenvalues(arguments: dict[str, np.ndarray], n: int, speeds, threads:
 
 
 __all__ = ["ARGUMENTS", "KernelUnavailable", "available", "cache_dir", "default_threads", "find_compiler", "library",
-           "stability", "weave_eigenvalues"]
+           "stability", "stability_outputs", "weave_eigenvalues"]
