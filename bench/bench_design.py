@@ -25,7 +25,6 @@ import sys
 import textwrap
 
 import numpy as np
-
 from common import Context, Row, fmt_time, measure_together, ratio_text
 
 N_DESIGNS = 1 << 18
@@ -48,9 +47,10 @@ def _designs(n: int, seed: int = 11) -> dict[str, np.ndarray]:
 
 def _numpy_one_batch(args: dict[str, np.ndarray], speeds: np.ndarray):
     """What ``sweep``/``stability_map`` do: every design in one batch."""
+    from bikerider.generated import benchmark_model as gen
+
     from bikerider.benchmark.model import matrix_entries
     from bikerider.benchmark.stability import stability_batch
-    from bikerider.generated import benchmark_model as gen
 
     result = stability_batch(matrix_entries(*gen.canonical_matrices(**{k: v for k, v in args.items() if k != "g"})), 9.81)
     return result.is_stable(speeds)
@@ -59,7 +59,6 @@ def _numpy_one_batch(args: dict[str, np.ndarray], speeds: np.ndarray):
 def _eigvals_user(args: dict[str, np.ndarray], speeds: np.ndarray) -> np.ndarray:
     """A plain NumPy user: state matrices at every speed, eigvals, all real parts negative."""
     from bench_toolbox import numpy_state_matrices
-
     from bikerider.generated import benchmark_model as gen
 
     M, C1, K0, K2 = gen.canonical_matrices(**{k: v for k, v in args.items() if k != "g"})

@@ -20,7 +20,6 @@ import time
 from pathlib import Path
 
 import numpy as np
-
 from common import Context, Row
 
 GOAL_SECONDS = 600.0
@@ -68,8 +67,9 @@ def run(ctx: Context) -> list[Row]:
 
 def _check_sample(store, space, base, speeds):
     """Stability at the 100 speeds of random stored designs against eigvals of their state matrices."""
-    from bikerider.benchmark import WhippleModel
     from bikerider.generated import benchmark_model as gen
+
+    from bikerider.benchmark import WhippleModel
 
     rng = np.random.default_rng(16)
     index = np.sort(rng.choice(space.size, SAMPLE, replace=False))
@@ -79,8 +79,9 @@ def _check_sample(store, space, base, speeds):
     lower, upper = store.take("lower", index), store.take("upper", index)
     coordinates = np.unravel_index(index, space.shape)
     drawn = {axis.name: axis.values[k] for axis, k in zip(space.axes, coordinates)}
-    args = {k: drawn.get(k, float(base.values[k])) for k in
-            "w c lam rR mR IRxx IRyy xB zB mB IBxx IBzz IBxz xH zH mH IHxx IHzz IHxz rF mF IFxx IFyy".split()}
+    from bikerider.design.compiled import ARGUMENTS  # canonical_matrices' arguments, then g
+
+    args = {k: drawn.get(k, float(base.values[k])) for k in ARGUMENTS if k != "g"}
     model = WhippleModel(*gen.canonical_matrices(**args), g=float(base.values["g"]))
     scan = (np.linalg.eigvals(model.state_matrix(speeds)).real < 0).all(axis=-1)
     ends = np.concatenate([lower, upper], axis=-1)

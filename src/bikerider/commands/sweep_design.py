@@ -168,17 +168,13 @@ def run_design(args: argparse.Namespace) -> int:
 
 
 def _closest_dict(closest) -> dict | None:
+    import math
+
     if closest is None:
         return None
     return {"index": closest.index, "values": closest.values, "weave_speed": closest.weave_speed,
-            "capsize_speed": closest.capsize_speed if np_finite(closest.capsize_speed) else None,
-            "stable_intervals": [[lo, hi if np_finite(hi) else None] for lo, hi in closest.stable_intervals]}
-
-
-def np_finite(x: float) -> bool:
-    import math
-
-    return math.isfinite(x)
+            "capsize_speed": closest.capsize_speed if math.isfinite(closest.capsize_speed) else None,
+            "stable_intervals": [[lo, hi if math.isfinite(hi) else None] for lo, hi in closest.stable_intervals]}
 
 
 def _summary_text(store, summary, closest, target) -> str:
@@ -263,8 +259,8 @@ def _plots(args, store, name: str) -> None:
 
     from bikerider.design import summary as summaries
     from bikerider.errors import InputError
-    from bikerider.plotting.common import save_figure
     from bikerider.plotting import design as figures
+    from bikerider.plotting.common import save_figure
 
     out = Path(args.plot)
     out.mkdir(parents=True, exist_ok=True)

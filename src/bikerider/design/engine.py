@@ -143,11 +143,10 @@ def _benchmark_values(space: DesignSpace, inputs: dict[str, np.ndarray], n: int)
     codes = np.zeros(n, dtype=np.int16)
     if space.kind == "benchmark":
         return inputs, codes
-    from bikerider.generated import combination
-    from bikerider.generated import rider_model
-    from bikerider.rider.model import STRAIGHT_LIMB_TOLERANCE
-
     import inspect
+
+    from bikerider.generated import combination, rider_model
+    from bikerider.rider.model import STRAIGHT_LIMB_TOLERANCE
 
     varied = set(space.names)
     validity.measurement_reasons(codes, {k: inputs[k] for k in varied})
