@@ -14,15 +14,9 @@ import math
 
 import numpy as np
 
-from bikerider.benchmark.parameters import BENCHMARK_NAMES
+from bikerider.benchmark.parameters import _LIMITS, _POSITIVE, BENCHMARK_NAMES  # the rules of validate()
 from bikerider.design.space import measurement_names
 from bikerider.inertia import TRIANGLE_TOLERANCE
-
-_POSITIVE = ("w", "g", "rR", "mR", "IRxx", "IRyy", "mB", "mH", "rF", "mF", "IFxx", "IFyy")
-_LENGTH_LIMITS = {"w": (5.0, "m"), "c": (1.0, "m"), "rR": (3.0, "m"), "rF": (3.0, "m"), "g": (100.0, "m/s^2"),
-                  **{k: (5.0, "m") for k in ("xB", "zB", "xH", "zH")},
-                  **{k: (1000.0, "kg") for k in ("mR", "mB", "mH", "mF")}}
-_INERTIAS = ("IRxx", "IRyy", "IBxx", "IByy", "IBzz", "IBxz", "IHxx", "IHyy", "IHzz", "IHxz", "IFxx", "IFyy")
 
 REASONS: list[tuple[str, str]] = [("", "")]
 """``(name, expected)`` of each reason code; code 0 is a valid design."""
@@ -48,9 +42,7 @@ def _inertia_name(body: str) -> str:
 
 
 def _limits() -> list[tuple[str, float, str]]:
-    out = [(name, limit, unit) for name, (limit, unit) in _LENGTH_LIMITS.items()]
-    out += [(name, 1e4, "kg m^2") for name in _INERTIAS]
-    return out
+    return [(name, limit, unit) for name, (limit, unit) in _LIMITS.items()]
 
 
 _Z_TEXT = "a negative value: z points down in the benchmark frame, so a centre of mass above the ground has z < 0"
