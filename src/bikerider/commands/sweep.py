@@ -9,13 +9,16 @@ ROWS = ("designs", "speeds")
 def add_parser(subparsers) -> None:
     p = subparsers.add_parser(
         "sweep",
-        help="stable speeds and eigenvalues against one benchmark parameter, or a stability map over two",
+        help="stable speeds and eigenvalues against one benchmark parameter, a stability map over two, or a design "
+             "space over many",
         description=(
             "Vary one or two of the 25 benchmark parameters of a base bicycle (a parameter file or a "
             "shipped bicycle) over a range and report, for every design, the self-stable speed intervals, "
             "the weave and capsize speeds and the weave frequency (from the characteristic polynomial, "
             "no speed scan), and optionally stability and eigenvalues at given speeds. Designs no bicycle "
-            "can have are reported as invalid with the reason. Output: CSV (default) or JSON."
+            "can have are reported as invalid with the reason. Output: CSV (default) or JSON. With more "
+            "parameters, random designs, raw measurements or --store it runs a design space of any size "
+            "(chunked, resumable, fused kernels or Dask; docs/design_space.md)."
         ),
     )
     p.add_argument("file", metavar="FILE", nargs="?", help="base benchmark parameter file (or --bicycle NAME)")
