@@ -12,6 +12,23 @@ import numpy as np
 from bikerider.plotting.common import MODE_COLOURS, WIDTH, new_figure
 
 _NEVER = "////"
+MAX_PANELS = 9
+"""Parameters drawn at most; with more, those whose sensitivity indices are largest."""
+
+
+def chosen_parameters(summary, limit: int = MAX_PANELS) -> tuple[list, str]:
+    """The parameters to draw (all, or the ``limit`` with the largest first-order index of the weave
+    or capsize speed, in the space's order) and a note saying which."""
+    parameters = list(summary.parameters)
+    if len(parameters) <= limit:
+        return parameters, ""
+
+    def weight(p) -> float:
+        values = [v for v in (p.sensitivity["weave_speed"], p.sensitivity["capsize_speed"]) if np.isfinite(v)]
+        return max(values, default=0.0)
+
+    keep = sorted(sorted(parameters, key=weight, reverse=True)[:limit], key=parameters.index)
+    return keep, f"the {limit} of {len(parameters)} parameters with the largest sensitivity indices"
 
 
 def _unit(name: str) -> tuple[str, float]:
@@ -65,13 +82,15 @@ def plot_stable_fraction(ax, parameter, base: float | None = None):
 
 
 def stable_fraction_figure(summary, base: dict[str, float] | None = None, title: str = ""):
-    """:func:`plot_stable_fraction` for every varied parameter."""
-    fig, axes = _panels(len(summary.parameters))
-    for ax, p in zip(axes, summary.parameters):
+    """:func:`plot_stable_fraction` for every varied parameter (at most :data:`MAX_PANELS`)."""
+    parameters, which = chosen_parameters(summary)
+    fig, axes = _panels(len(parameters))
+    for ax, p in zip(axes, parameters):
         plot_stable_fraction(ax, p, (base or {}).get(p.name))
     lo, hi = summary.speed_range
     note = (f"self-stable: a stable speed interval within {lo:g}-{hi:g} m/s; {summary.valid:,} of "
-            f"{summary.designs:,} designs valid,\n{summary.stable / max(summary.valid, 1):.1%} of them self-stable")
+            f"{summary.designs:,} designs valid,\n{summary.stable / max(summary.valid, 1):.1%} of them self-stable"
+            + (f"; {which}" if which else ""))
     fig.suptitle(f"{title}\n{note}" if title else note, x=0.01, ha="left", fontsize=9)
     handles, labels = axes[0].get_legend_handles_labels()
     for ax in axes[1:]:
@@ -117,13 +136,15 @@ def summary_range(parameter) -> tuple[float, float]:
 
 
 def interval_sensitivity_figure(summary, base: dict[str, float] | None = None, title: str = ""):
-    """:func:`plot_interval_sensitivity` for every varied parameter."""
-    fig, axes = _panels(len(summary.parameters), 2.2)
-    for ax, p in zip(axes, summary.parameters):
+    """:func:`plot_interval_sensitivity` for every varied parameter (at most :data:`MAX_PANELS`)."""
+    parameters, which = chosen_parameters(summary)
+    fig, axes = _panels(len(parameters), 2.2)
+    for ax, p in zip(axes, parameters):
         plot_interval_sensitivity(ax, p, (base or {}).get(p.name))
     lo, hi = summary.speed_range
     note = (f"ends of the first self-stable interval (speeds within {lo:g}-{hi:g} m/s) over the other parameters;\n"
-            "S: first-order sensitivity index, the share of a speed's variance the parameter explains alone")
+            "S: first-order sensitivity index, the share of a speed's variance the parameter explains alone"
+            + (f";\n{which}" if which else ""))
     fig.suptitle(f"{title}\n{note}" if title else note, x=0.01, ha="left", fontsize=9)
     handles, labels = axes[0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="outside lower center", ncols=len(handles), fontsize=7)
