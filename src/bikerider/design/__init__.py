@@ -13,8 +13,8 @@ or on a Dask cluster.  See ``docs/design_space.md``.
 :func:`explore`                                 run one into a store (:mod:`.run`, :mod:`.store`,
                                                 :mod:`.distributed`)
 :func:`open_store`                              read a run's results
-:func:`summarize`, :func:`design_slice`,        summaries (:mod:`bikerider.design.summary`)
-:func:`closest_to_weave_speed`
+:mod:`bikerider.design.summary`               ``summarize``, ``design_slice``,
+                                                ``closest_to_weave_speed``
 ==============================================  ================================================
 
 The store needs the extra ``bikerider[design]`` (Zarr), a Dask run ``bikerider[distributed]``.

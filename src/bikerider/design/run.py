@@ -89,8 +89,7 @@ def explore(space: DesignSpace, store: str | Path | None = None, speeds=(), weav
     engine = engines.resolve_engine(engine)
     result = DesignStore.create_or_resume(store, spec, restart)
     pending = result.pending()
-    done_before = sum(spec.chunk_range(k)[1] - spec.chunk_range(k)[0] for k in range(spec.n_chunks)) - sum(
-        spec.chunk_range(k)[1] - spec.chunk_range(k)[0] for k in pending)
+    done_before = space.size - sum(spec.chunk_range(k)[1] - spec.chunk_range(k)[0] for k in pending)
     if done_before:
         LOG.info("resuming %s: %d of %d chunks done", store, spec.n_chunks - len(pending), spec.n_chunks)
     progress = Progress(space.size - done_before, done_before, quiet)

@@ -15,6 +15,8 @@ is imported here only, with the non-interactive Agg backend.  The gallery (``doc
 :func:`plot_bode`                              frequency responses
 :func:`plot_stability_sweep`                   stable speeds against a parameter
 :func:`plot_stability_map`                     stability over two parameters
+:mod:`bikerider.plotting.design`               design spaces: self-stable fraction and stable-
+                                              interval sensitivity against each parameter, slices
 ============================================  ===================================================
 """
 from __future__ import annotations
