@@ -43,6 +43,7 @@ docs: $(STAMP)
 	$(PY) docs/scripts/reproduction.py
 	$(PY) docs/scripts/sensitivity_report.py
 	$(PY) docs/scripts/gap_real_data.py
+	$(PY) docs/scripts/gallery.py
 	$(PY) docs/scripts/gap_validation.py
 
 clean:

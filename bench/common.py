@@ -70,6 +70,8 @@ class Context:
 
     quick: bool = False
     repeats: int = 7
+    only: tuple[str, ...] = ()
+    """The modules named with ``--only`` (a long item runs only when named)."""
     _bp: dict = field(default_factory=dict)
     _tmp: Path | None = None
 

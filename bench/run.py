@@ -144,7 +144,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     warnings.simplefilter("ignore")  # lambdified baselines warn with whole expressions
     logging.disable(logging.WARNING)  # the data's own warnings (e.g. an accepted IRyy) are not results
-    ctx = Context(quick=args.quick, repeats=3 if args.quick else 7)
+    ctx = Context(quick=args.quick, repeats=3 if args.quick else 7, only=tuple(args.only or ()))
     start = time.perf_counter()
     try:
         facts = machine_facts(ctx)

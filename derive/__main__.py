@@ -8,7 +8,7 @@ import sys
 import time
 from pathlib import Path
 
-from derive import codegen
+from derive import codegen, extras, kernels
 
 LOG = logging.getLogger("derive")
 
@@ -20,6 +20,7 @@ DERIVATIONS = (
     "derive.measured_reduction",
     "derive.benchmark_model",
     "derive.gap_effects",
+    "derive.state_space",
     "derive.sensitivities",
 )
 
@@ -41,7 +42,10 @@ def generate(out_dir: Path) -> dict[str, dict[str, tuple[int, int]]]:
         counts[module.name] = module_counts
         modules.append(module)
         LOG.info("%s: %s in %.1f s", module.name, "written" if written else "unchanged", time.perf_counter() - start)
-    extra = importlib.import_module("derive.extras").build(digest, GENERATOR, counts, modules)
+    # Fused C kernels from the same expressions (not a NumPy module; the manifest lists them too).
+    text, counts[kernels.MODULE] = kernels.render(GENERATOR, digest)
+    codegen.write_if_changed(out_dir / f"{kernels.MODULE}.py", text)
+    extra = extras.build(digest, GENERATOR, counts, modules, kernels.manifest_entries())
     for filename, text in extra.items():
         codegen.write_if_changed(out_dir / filename, text)
     return counts

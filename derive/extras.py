@@ -18,14 +18,21 @@ HEADER = (
 
 STATES = {
     "benchmark_model.state_matrix": ("phi", "delta", "phid", "deltad"),
+    "state_space.input_matrix": ("phi", "delta", "phid", "deltad"),
     "gap_effects.whipple_extended_state_matrices": ("phi", "delta", "phid", "deltad"),
     "gap_effects.tyre_slip_descriptor": gap_effects.STATE_NAMES,
 }
 """The state vector of each generated state-space function (the derivations' docstrings say so)."""
 
 
-def build(digest: str, generator: str, counts: dict, modules: list[GeneratedModule]) -> dict[str, str]:
-    """Return ``{filename: text}`` for the package init, manifest, symbol table and operation counts."""
+def build(digest: str, generator: str, counts: dict, modules: list[GeneratedModule],
+          kernels: dict[str, dict] | None = None) -> dict[str, str]:
+    """Return ``{filename: text}`` for the package init, manifest, symbol table and operation counts.
+
+    ``kernels``: the manifest entries of the fused C kernels (``derive.kernels.manifest_entries``),
+    whose module ``design_kernels`` is listed with the NumPy modules."""
+    kernels = kernels or {}
+    module_names = tuple(m.name for m in modules) + tuple(sorted({k.split(".")[0] for k in kernels}))
     head = HEADER.format(generator=generator, digest=digest)
     init = head + (
         '"""Generated NumPy functions of bikerider (see derive/ for the derivations).\n\n'
@@ -33,7 +40,7 @@ def build(digest: str, generator: str, counts: dict, modules: list[GeneratedModu
         "``from bikerider.generated.benchmark_model import canonical_matrices``.\n"
         "``manifest`` says what every function takes and returns.\n"
         '"""\n'
-        f"MODULES = {tuple(m.name for m in modules)!r}\n"
+        f"MODULES = {module_names!r}\n"
         f'INPUTS_HASH = "{digest}"\n'
     )
     lines = [head, '"""Every symbol: name -> (description, unit, LaTeX)."""', "", "SYMBOLS = {"]
@@ -43,7 +50,7 @@ def build(digest: str, generator: str, counts: dict, modules: list[GeneratedModu
     table = "\n".join(lines) + "\n"
     ops = {m: {f: {"before_cse": b, "after_cse": a} for f, (b, a) in fns.items()} for m, fns in counts.items()}
     ops_text = json.dumps({"inputs_hash": digest, "operation_counts": ops}, indent=2, sort_keys=True) + "\n"
-    python = {"__init__.py": init, "manifest.py": head + manifest(modules), "symbol_table.py": table}
+    python = {"__init__.py": init, "manifest.py": head + manifest(modules, kernels), "symbol_table.py": table}
     return {**{name: format_source(text, f"generated/{name}") for name, text in python.items()},
             "operation_counts.json": ops_text}
 
@@ -52,7 +59,7 @@ def _shape(output: Output) -> tuple[int, ...]:
     return tuple(int(n) for n in output.shape_suffix)
 
 
-def manifest(modules: list[GeneratedModule]) -> str:
+def manifest(modules: list[GeneratedModule], kernels: dict[str, dict] | None = None) -> str:
     """``generated/manifest.py``: functions, stages, states and named lists, as plain Python data."""
     functions = {f"{m.name}.{f.name}": f for m in modules for f in m.functions}
     stages = [stage for m in modules for stage in m.stages]
@@ -75,7 +82,9 @@ def manifest(modules: list[GeneratedModule]) -> str:
         "rows), the value function and where each output sits in what it returns, the Jacobian",
         "function (its last output; when its others are the value function's, it gives the values",
         "too), and the quantities the runtime checks.  ``STATES``: the state vector of each",
-        "state-space function.  The named lists below them are symbol lists the runtime needs.",
+        "state-space function.  ``KERNELS``: the fused C kernels of ``design_kernels`` (compiled at",
+        "first use by ``bikerider.design.compiled``): their inputs in order and their output arrays",
+        "with element types.  The named lists below them are symbol lists the runtime needs.",
         "",
         "The runtime imports every list of generated argument names from here; none is typed by hand.",
         '"""',
@@ -100,6 +109,10 @@ def manifest(modules: list[GeneratedModule]) -> str:
         out.append("    },")
     out += ["}", "", "STATES = {"]
     out += [f"    {key!r}: {tuple(value)!r}," for key, value in STATES.items()]
+    out += ["}", "", "KERNELS = {"]
+    for key, entry in (kernels or {}).items():
+        out += [f"    {key!r}: {{", f"        \"args\": {tuple(entry['args'])!r},",
+                f"        \"outputs\": {tuple(entry['outputs'])!r},", "    },"]
     out += ["}"]
     for key, value in {**names, **_gap_names()}.items():
         out += ["", f"{key} = {value!r}"]

@@ -154,6 +154,12 @@ _TABLE: dict[str, tuple[str, str, str, bool]] = {
     "c_gamma": ("tyre camber stiffness per unit normal load", "1/rad", r"C_{\gamma}", False),
     "sigma_t": ("tyre relaxation length", "m", r"\sigma", False),
     "t_p": ("tyre pneumatic trail", "m", r"t_{p}", False),
+    # --- State space inputs (derive/state_space.py) ---------------------------------------
+    "x_F": ("lateral force application point, x (in the frame that carries it, reference configuration)", "m",
+            r"x_F", False),
+    "z_F": ("lateral force application point, z (down positive)", "m", r"z_F", False),
+    "H_phiF": ("roll generalized force per unit lateral force (roll moment arm)", "m", r"H_{\phi F}", False),
+    "H_deltaF": ("steer generalized force per unit lateral force", "m", r"H_{\delta F}", False),
     # --- Sensitivities (derive/sensitivities.py) ------------------------------------------
     "mBr_sum": ("rider mass as the sum of its segment masses (mBr times the sum of the fractions)", "kg",
                 r"\sum m_i", True),

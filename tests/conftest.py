@@ -39,3 +39,22 @@ def paper_result():
 
     logging.getLogger("bikerider").setLevel(logging.ERROR)
     return estimate_default()
+
+
+@pytest.fixture(scope="session")
+def random_models():
+    """2704 random valid bicycles, each benchmark parameter within +/-50 % of Meijaard et al. (2007)
+    (the count of the issue-14 audit; tests/random_bicycles.py)."""
+    from random_bicycles import random_parameters
+
+    from bikerider.benchmark import WhippleModel
+
+    return [WhippleModel.from_parameters(p) for p in random_parameters(2704, 0.5, seed=0)]
+
+
+@pytest.fixture(scope="session")
+def random_scan(random_models):
+    """Whether each of ``random_models`` is stable at each speed of a dense grid (eigvals)."""
+    from test_stability_audit import scan_stability
+
+    return scan_stability(random_models)

@@ -18,6 +18,7 @@ SCRIPTS = {
     "reproduction.md": "reproduction.py",
     "sensitivity.md": "sensitivity_report.py",
     "gap_real_data.md": "gap_real_data.py",
+    "gallery.md": "gallery.py",
 }
 
 
@@ -36,3 +37,14 @@ def test_document_is_its_scripts_output(document, caplog):
     committed = (ROOT / "docs" / document).read_text(encoding="utf-8")
     assert committed == expected, (f"docs/{document} is not what docs/scripts/{SCRIPTS[document]} writes now: "
                                    "run `make docs` (or that script) and commit the result")
+
+
+def test_every_gallery_image_is_committed():
+    import re
+
+    text = (ROOT / "docs" / "gallery.md").read_text(encoding="utf-8")
+    images = re.findall(r"!\[[^\]]*\]\((gallery/[^)]+\.png)\)", text)
+    assert len(images) >= 9
+    for image in images:
+        data = (ROOT / "docs" / image).read_bytes()
+        assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) < 60_000, image  # small PNGs

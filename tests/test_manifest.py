@@ -66,8 +66,24 @@ def test_every_stage_names_functions_that_take_its_inputs(kind):
         assert len(index) == len(outputs[name])
 
 
+@pytest.mark.parametrize("name", sorted(manifest.KERNELS))
+def test_every_kernel_is_declared_in_the_c_source_as_the_manifest_says(name):
+    """Each fused C kernel takes the manifest's inputs (gathered from one pointer array) and writes
+    one array per manifest output, in that order (the C signature has a pointer per output)."""
+    module, function = name.split(".")
+    source = importlib.import_module(f"bikerider.generated.{module}").C_SOURCE
+    signature = source[source.index(f"int64_t {function}("):].split("{", 1)[0]
+    entry = manifest.KERNELS[name]
+    assert "const double *const *args" in signature and len(entry["args"]) >= 4
+    c_types = {"float64": "double", "int8": "int8_t", "uint8": "uint8_t"}
+    pointers = [p.split("*")[0].split()[-1] for p in signature.split(",") if "*" in p and "args" not in p
+                and "speeds" not in p.split("*")[-1] and "strides" not in p]
+    assert pointers == [c_types[dtype] for _, dtype, _ in entry["outputs"]]
+
+
 def _known_lists() -> dict[frozenset[str], str]:
     known = {frozenset(entry["args"]): f"the arguments of {name}" for name, entry in manifest.FUNCTIONS.items()}
+    known.update({frozenset(entry["args"]): f"the inputs of {name}" for name, entry in manifest.KERNELS.items()})
     known.update({frozenset(s["inputs"]): f"the inputs of stage {k}" for k, s in manifest.STAGES.items()})
     known.update({frozenset(s["outputs"]): f"the outputs of stage {k}" for k, s in manifest.STAGES.items()
                   if len(s["outputs"]) >= 3})

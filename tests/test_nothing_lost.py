@@ -64,7 +64,8 @@ def test_no_command_writes_its_inputs(inputs, tmp_path):
         code, stdout, err = run_cli(argv)
         assert code == 0, (argv, err)
     assert _snapshot(inputs.values()) == before
-    assert sorted(p.name for p in out.iterdir()) == ["eigenvalues.png", "period.png", "side_view.png"]
+    assert sorted(p.name for p in out.iterdir()) == ["bode.png", "eigenvalues.png", "mode_shapes.png", "period.png",
+                                                     "side_view.png"]
 
 
 def test_batch_does_not_touch_the_data_folder(tmp_path):

@@ -201,15 +201,22 @@ def test_no_weave_and_no_capsize_speed_give_none_and_json_null(tmp_path):
     path.write_text("\n".join(f"{k} = {v!r}" for k, v in {**meijaard_values(), "c": -0.08}.items()) + "\n")
     code, out, err = run_cli(["benchmark", str(path), "--json"])
     assert code == 0, err
-    assert json.loads(out)["speeds"] == {"weave": None, "capsize": None}
+    assert json.loads(out)["speeds"] == {"weave": None, "capsize": None, "stable_intervals": []}
     code, out, err = run_cli(["benchmark", str(path)])
     assert "Weave speed   none at positive speed" in out and "No self-stable speed range" in out
 
 
-def test_no_weave_speed_but_a_capsize_speed():
-    model = _model(lam=0.0)  # vertical steer axis
+def test_vertical_steer_axis_has_a_real_crossing_that_stabilises_not_a_capsize_speed():
+    # With a vertical steer axis a real eigenvalue crosses zero (at 3.52 m/s), but from the right
+    # half-plane into the left: that is no capsize speed (where the capsize mode turns unstable).
+    # The weave pair stays unstable, so there is no weave speed and no stable range either.
+    model = _model(lam=0.0)
     speeds = model.critical_speeds()
-    assert speeds.weave is None and speeds.capsize is not None and speeds.stable_range is None
+    assert speeds.weave is None and speeds.capsize is None and speeds.stable_range is None
+    (crossing,) = model.stability().crossings
+    assert crossing.kind == "real" and crossing.stabilising
+    below, above = model.eigenvalues([crossing.speed * 0.999, crossing.speed * 1.001]).values
+    assert np.sum(below.real > 0) == np.sum(above.real > 0) + 1
 
 
 # ------------------------------------------------------------------------------------------

@@ -15,7 +15,7 @@ import sys
 from bikerider import __version__
 from bikerider.errors import BikeriderError
 
-COMMANDS = ("estimate", "benchmark", "period", "batch", "sensitivity", "gap")
+COMMANDS = ("estimate", "benchmark", "sweep", "period", "batch", "sensitivity", "gap")
 """Subcommand modules under ``bikerider.commands``, in the order ``--help`` lists them."""
 
 LOG = logging.getLogger("bikerider")

@@ -15,7 +15,6 @@ from pathlib import Path
 from bikerider.benchmark import BENCHMARK_NAMES, BenchmarkParameters, WhippleModel
 from bikerider.bicycle.bodies import BicycleBodies
 from bikerider.bicycle.to_benchmark import LumpedRider, bicycle_benchmark_parameters
-from bikerider.engine import arguments
 from bikerider.errors import InputError
 from bikerider.io.bicycleparameters import detect_format, load_bicycle_file, merge_rider, read_lumped_rider
 from bikerider.io.chain_inputs import paper_files
@@ -24,12 +23,12 @@ from bikerider.quantity import Quantity
 from bikerider.rider.measurements import RiderMeasurements
 from bikerider.rider.model import RiderModel, model_arguments, seat_rider, straight_limb_lengths
 from bikerider.uncertainty import UncertaintyResult, benchmark_inputs, propagate
-from bikerider.uncertainty.chain import Chain
+from bikerider.uncertainty.chain import ESTIMATE_INPUTS, benchmark_values
 from bikerider.uncertainty.inputs import chain_raw_inputs
 
 LOG = logging.getLogger(__name__)
 
-CHAIN_INPUTS = arguments("combination.estimate_chain")
+CHAIN_INPUTS = ESTIMATE_INPUTS
 """The estimate chain's inputs from the bicycle, the rider and the mass fractions."""
 
 
@@ -102,7 +101,7 @@ def estimate(bicycle: BicycleBodies, rider: RiderMeasurements) -> EstimateResult
     """
     rider_model = seat_rider(bicycle, rider)
     inputs = chain_inputs(bicycle, rider)
-    nodes = Chain(inputs).evaluate({k: q.value for k, q in inputs.items()})
+    nodes = benchmark_values({k: q.value for k, q in inputs.items()})
     values: dict[str, float | None] = {}
     for name in BENCHMARK_NAMES:
         value = float(nodes[name])

@@ -7,7 +7,7 @@ from typing import Any
 import numpy as np
 
 from bikerider.benchmark import BENCHMARK_NAMES, BenchmarkParameters, ModalEigenvalues, WhippleModel
-from bikerider.benchmark.modes import MODES
+from bikerider.benchmark.mode_labels import MODES
 from bikerider.errors import InputError
 from bikerider.generated.manifest import MATRIX_NAMES
 
@@ -32,7 +32,8 @@ def model_json(parameters: BenchmarkParameters, model: WhippleModel, eig: ModalE
     return {
         "benchmark": parameters.as_dict(),
         "matrices": {name: getattr(model, name).tolist() for name in MATRIX_NAMES},
-        "speeds": {"weave": speeds.weave, "capsize": speeds.capsize},
+        "speeds": {"weave": speeds.weave, "capsize": speeds.capsize,
+                   "stable_intervals": [[lo, hi if math.isfinite(hi) else None] for lo, hi in speeds.stable_intervals]},
         "eigenvalues": {
             "speeds": eig.speeds.tolist(),
             "modes": list(MODES),
@@ -63,8 +64,10 @@ def model_text(parameters: BenchmarkParameters, model: WhippleModel, eig: ModalE
     sig = speed_sigmas or {}
     lines.append(f"Weave speed   {_speed(speeds.weave, sig.get('weave'))}")
     lines.append(f"Capsize speed {_speed(speeds.capsize, sig.get('capsize'))}")
-    if speeds.stable_range:
-        lines.append(f"Self-stable from {speeds.stable_range[0]:.4f} to {speeds.stable_range[1]:.4f} m/s")
+    if speeds.stable_intervals:
+        shown = [f"from {lo:.4f} to {hi:.4f} m/s" if math.isfinite(hi) else f"above {lo:.4f} m/s"
+                 for lo, hi in speeds.stable_intervals]
+        lines.append("Self-stable " + ", and ".join(shown))
     else:
         lines.append("No self-stable speed range")
     lines.append("")

@@ -1,24 +1,27 @@
 """The linear Whipple model ``M q'' + v C1 q' + (g K0 + v^2 K2) q = f`` and its eigen-analysis.
 
-Eigenvalues are labelled weave, capsize and castor by the rules of :mod:`bikerider.benchmark.modes`
-(``"other"`` where they do not apply); the critical speeds are the roots of generated polynomials
-(:mod:`bikerider.benchmark.roots`), found without a scan over speed.
+Eigenvalues are labelled weave, capsize and castor by the rules of
+:mod:`bikerider.benchmark.mode_labels` (``"other"`` where they do not apply); the stable intervals
+and the weave and capsize speeds come from the characteristic polynomial
+(:mod:`bikerider.benchmark.stability`, whose roots are those of :mod:`bikerider.benchmark.roots`),
+found without a scan over speed.  One bicycle or a batch of them: the matrices may carry leading
+batch dimensions.
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
-from bikerider.benchmark.modes import MODES, ModalEigenvalues, check_speeds, label_modes
+from bikerider.benchmark.mode_labels import MODES, ModalEigenvalues, check_speeds, label_modes
 from bikerider.benchmark.parameters import BenchmarkParameters
 from bikerider.benchmark.quartic import eigenvalues_from_polynomial
-from bikerider.benchmark.roots import critical_speeds, polynomial_positive_real_roots
+from bikerider.benchmark.roots import polynomial_positive_real_roots, positive_real_roots
+from bikerider.benchmark.stability import Stability, stability
 from bikerider.engine import arguments
 from bikerider.errors import InputError
 from bikerider.generated import benchmark_model as gen
-from bikerider.generated.manifest import COORDINATES, MATRIX_NAMES
+from bikerider.generated.manifest import COORDINATES, LATERAL_FORCE_GEOMETRY, MATRIX_ENTRIES, MATRIX_NAMES
 
 _CANONICAL_ARGS = arguments("benchmark_model.canonical_matrices")
 
@@ -36,46 +39,77 @@ def matrix_entries(M, C1, K0, K2) -> dict[str, np.ndarray]:
 
 @dataclass(frozen=True)
 class CriticalSpeeds:
-    """Weave (Hopf) and capsize speeds in m/s; ``None`` where none exists at positive speed."""
+    """Weave and capsize speeds in m/s (``None`` where there is none) and the stable intervals.
+
+    The definitions (crossings with their direction, the interval they bound) are those of
+    :mod:`bikerider.benchmark.stability`.
+    """
 
     weave: float | None
     capsize: float | None
     weave_frequency: float | None
     """Angular frequency of the weave pair at the weave speed [rad/s]."""
+    stable_intervals: tuple[tuple[float, float], ...] = ()
+    """Every speed interval in which all eigenvalues have negative real parts, lowest first; an
+    upper end ``inf`` means stable at every higher speed."""
 
     @property
     def stable_range(self) -> tuple[float, float] | None:
-        """``(weave, capsize)`` when the model is self-stable between them."""
-        if self.weave is not None and self.capsize is not None and self.weave < self.capsize:
-            return (self.weave, self.capsize)
-        return None
+        """The first (lowest-speed) self-stable interval ``(lower, upper)``, ``upper`` possibly
+        ``inf``; ``None`` when the model is stable at no speed."""
+        return self.stable_intervals[0] if self.stable_intervals else None
 
 
 class WhippleModel:
-    """Canonical matrices and their dynamics.
+    """Canonical matrices and their dynamics, for one bicycle or a batch.
 
     Parameters
     ----------
-    M, C1, K0, K2 : array_like, shape (2, 2)
-        The canonical matrices (K0 per unit g).
-    g : float
+    M, C1, K0, K2 : array_like, shape (..., 2, 2)
+        The canonical matrices (K0 per unit g).  Leading dimensions are a batch of bicycles; the
+        four broadcast against each other (and ``g``) to the batch shape :attr:`batch_shape`.
+    g : float or array_like
         Acceleration due to gravity [m/s^2].
+
+    Notes
+    -----
+    For a batch, the speed-dependent methods return arrays of shape ``batch_shape +
+    speeds.shape + ...`` (every bicycle at every speed); :meth:`critical_speeds`,
+    :meth:`stability` and :meth:`weave_birth_speed` take one bicycle
+    (:func:`bikerider.benchmark.stability.stability_batch` is their batched form).
     """
 
     def __init__(self, M, C1, K0, K2, g: float = 9.81):
         mats = [np.array(m, dtype=float) for m in (M, C1, K0, K2)]
         for name, m in zip(MATRIX_NAMES, mats):
-            if m.shape != (2, 2):
-                raise InputError(name, m.shape, "a 2x2 matrix")
+            if m.ndim < 2 or m.shape[-2:] != (2, 2):
+                raise InputError(name, m.shape, "a 2x2 matrix, or a batch of them of shape (..., 2, 2)")
             if not np.all(np.isfinite(m)):
-                raise InputError(name, m.tolist(), "finite entries")
-        det_m = np.linalg.det(mats[0])
-        if not (mats[0][0, 0] > 0 and det_m > 1e-12 * np.abs(mats[0]).max() ** 2):
-            raise InputError("M", mats[0].tolist(), "a positive definite mass matrix (the model is singular otherwise)")
+                bad = tuple(int(i) for i in np.argwhere(~np.isfinite(m))[0][:-2])
+                raise InputError(_at(name, bad), (m[bad] if bad else m).tolist(), "finite entries")
+        g_array = np.asarray(g, dtype=float)
+        try:
+            shape = np.broadcast_shapes(*(m.shape[:-2] for m in mats), g_array.shape)
+        except ValueError:
+            raise InputError("M, C1, K0, K2, g", [m.shape for m in mats] + [g_array.shape],
+                             "batch shapes that broadcast against each other") from None
+        mats = [np.broadcast_to(m, shape + (2, 2)) for m in mats]
+        M0 = mats[0]
+        det_m = M0[..., 0, 0] * M0[..., 1, 1] - M0[..., 0, 1] * M0[..., 1, 0]
+        singular = ~((M0[..., 0, 0] > 0) & (det_m > 1e-12 * np.abs(M0).max(axis=(-2, -1)) ** 2))
+        if np.any(singular):
+            bad = tuple(int(i) for i in np.argwhere(singular)[0]) if shape else ()
+            raise InputError(_at("M", bad), M0[bad].tolist(),
+                             "a positive definite mass matrix (the model is singular otherwise)")
         self.M, self.C1, self.K0, self.K2 = mats
-        self.g = float(g)
+        self.batch_shape: tuple[int, ...] = tuple(shape)
+        """Shape of the batch of bicycles; ``()`` for one."""
+        self.g = float(g_array) if g_array.ndim == 0 else np.broadcast_to(g_array, shape)
         self.source: str | None = None
         """Where the parameters came from, for messages (set by :meth:`from_parameters`)."""
+        self.geometry: dict[str, np.ndarray] | None = None
+        """Wheelbase ``w``, trail ``c`` and steer axis tilt ``lam`` (set by :meth:`from_parameters`),
+        which a lateral-force input needs (:mod:`bikerider.benchmark.state_space`)."""
 
     @classmethod
     def from_parameters(cls, parameters: BenchmarkParameters) -> "WhippleModel":
@@ -87,19 +121,36 @@ class WhippleModel:
         except InputError as exc:  # name the file the parameters came from
             raise InputError(exc.name, exc.value, exc.expected, parameters.source) from None
         model.source = parameters.source
+        model.geometry = {k: np.asarray(v[k], dtype=float) for k in LATERAL_FORCE_GEOMETRY}
         return model
 
     # -- matrices ---------------------------------------------------------------------------
     def _entries(self) -> dict[str, np.ndarray]:
         return matrix_entries(self.M, self.C1, self.K0, self.K2)
 
+    def entries(self) -> dict[str, np.ndarray]:
+        """The sixteen entries ``M_phiphi ... K2_deltadelta`` (each of the batch shape), the keyword
+        arguments of the generated matrix-level functions."""
+        return self._entries()
+
+    def _batched(self, speeds) -> tuple[dict[str, np.ndarray], np.ndarray, np.ndarray]:
+        """Entries and g shaped ``batch + (1,) * speeds.ndim`` and the speeds, for outer broadcasting."""
+        v = np.asarray(speeds, dtype=float)
+        pad = (...,) + (None,) * v.ndim
+        entries = {k: e[pad] for k, e in self._entries().items()}
+        g = self.g if not self.batch_shape else np.asarray(self.g)[pad]
+        return entries, g, v
+
     def state_matrix(self, speeds) -> np.ndarray:
-        """State matrices ``(..., 4, 4)`` for ``x = [phi, delta, phi', delta']``."""
-        return gen.state_matrix(**self._entries(), g=self.g, v=np.asarray(speeds, dtype=float))
+        """State matrices ``batch_shape + speeds.shape + (4, 4)`` for ``x = [phi, delta, phi', delta']``."""
+        entries, g, v = self._batched(speeds)
+        return gen.state_matrix(**entries, g=g, v=v)
 
     def characteristic_coefficients(self, speeds) -> np.ndarray:
-        """``(..., 5)`` coefficients ``[a4, a3, a2, a1, a0]`` of the characteristic polynomial."""
-        return gen.characteristic_coefficients(**self._entries(), g=self.g, v=np.asarray(speeds, dtype=float))
+        """``batch_shape + speeds.shape + (5,)`` coefficients ``[a4, a3, a2, a1, a0]`` of the
+        characteristic polynomial."""
+        entries, g, v = self._batched(speeds)
+        return gen.characteristic_coefficients(**entries, g=g, v=v)
 
     # -- eigenvalues -----------------------------------------------------------------------
     def eigenvalues(self, speeds, method: str = "eigvals") -> ModalEigenvalues:
@@ -108,7 +159,7 @@ class WhippleModel:
         Parameters
         ----------
         speeds : array_like, shape (n,)
-            Speeds [m/s].
+            Speeds [m/s].  For a batch the values have shape ``batch_shape + (n, 4)``.
         method : {"eigvals", "quartic"}
             ``"eigvals"``: ``numpy.linalg.eigvals`` of the state matrices (the reference).
             ``"quartic"``: the generated characteristic polynomial solved in closed form for all
@@ -116,40 +167,46 @@ class WhippleModel:
             ``"eigvals"`` within about 1e-13 except at a double root (near ``v_d``), where each
             root of the pair is good to about 1e-8.
         """
+        if method not in ("eigvals", "quartic"):
+            raise InputError("method", method, 'either "eigvals" or "quartic"')
         if method == "quartic":
             return eigenvalues_from_polynomial(self, speeds)
-        if method != "eigvals":
-            raise InputError("method", method, 'either "eigvals" or "quartic"')
         speeds = check_speeds(speeds)
         with np.errstate(over="ignore", invalid="ignore"):
             state = self.state_matrix(speeds)
         finite = np.all(np.isfinite(state), axis=(-2, -1))
         if not np.all(finite):
-            raise InputError("speeds", float(speeds[~finite][0]),
+            raise InputError("speeds", float(speeds[np.nonzero(~finite)[-1][0]]),
                              "a speed at which the state matrix is finite (the model's matrices, or the speed, "
                              "are too large for floating point there)", self.source)
-        raw = np.linalg.eigvals(state)
-        values, labels = label_modes(raw)
-        return ModalEigenvalues(speeds, values, labels)
+        values, labels = label_modes(np.linalg.eigvals(state).reshape(-1, 4))
+        shape = self.batch_shape + speeds.shape + (4,)
+        return ModalEigenvalues(speeds, values.reshape(shape), labels.reshape(shape))
 
     # -- critical speeds ---------------------------------------------------------------------
     def critical_speeds(self) -> CriticalSpeeds:
-        """Weave and capsize speeds from the closed-form conditions (no scan over speed).
+        """Weave and capsize speeds and the stable intervals, from the characteristic polynomial.
 
-        Capsize: the smallest positive root of ``det(g K0 + v^2 K2) = 0``.  Weave: the smallest
-        positive root of the third Hurwitz determinant (a quadratic in ``v^2``) at which the
-        crossing frequency ``omega^2 = a1/a3`` is positive.
+        No scan over speed: the Routh-Hurwitz conditions are polynomials in ``v^2`` whose real
+        roots, with the direction of each crossing, give every stable interval; the weave and
+        capsize speeds are the crossings that bound the first one
+        (:mod:`bikerider.benchmark.stability` gives the rules, also for several intervals or none).
         """
-        entries = {k: float(v) for k, v in self._entries().items()}
+        result = self.stability()
+        return CriticalSpeeds(result.weave, result.capsize, result.weave_frequency,
+                              tuple((i.lower, i.upper) for i in result.intervals))
+
+    def stability(self) -> Stability:
+        """Stable intervals, every crossing of the imaginary axis (speed, kind, direction) and the
+        critical speeds (:func:`bikerider.benchmark.stability.stability`)."""
+        self._one_bicycle("stability")
+        values = [x for m in (self.M, self.C1, self.K0, self.K2) for x in m.ravel().tolist()]  # floats, fast
+        entries = dict(zip(MATRIX_ENTRIES, values))
         try:
-            polynomials = gen.critical_speed_polynomials_scalar(**entries, g=self.g)
-        except OverflowError:
-            polynomials = ((math.inf,),) * 4
-        if not all(math.isfinite(c) for c in (*polynomials[0], *polynomials[1])):
+            return stability(entries, self.g)
+        except (OverflowError, ValueError):
             raise InputError("M, C1, K0, K2", "entries too large for floating point",
-                             "matrices whose critical-speed polynomials are finite", self.source)
-        weave, capsize, frequency = (float(x) for x in critical_speeds(*polynomials))
-        return CriticalSpeeds(*(x if math.isfinite(x) else None for x in (weave, capsize, frequency)))
+                             "matrices whose critical-speed polynomials are finite", self.source) from None
 
     def weave_birth_speed(self) -> float | None:
         """The speed ``v_d`` at which the weave pair is born from two real eigenvalues [m/s].
@@ -161,6 +218,7 @@ class WhippleModel:
         above (Meijaard et al. 2007, section 6; the other two
         may be real or a complex pair of their own).  ``None`` when there is no such speed.
         """
+        self._one_bicycle("weave_birth_speed")
         with np.errstate(over="ignore", invalid="ignore"):
             coefficients = np.asarray(gen.discriminant_polynomial(**self._entries(), g=self.g), dtype=float)
         if not np.all(np.isfinite(coefficients)):
@@ -177,6 +235,12 @@ class WhippleModel:
                 return float(np.sqrt(u))
         return None
 
+    def _one_bicycle(self, method: str) -> None:
+        if self.batch_shape:
+            raise InputError("model", f"a batch of shape {self.batch_shape}",
+                             f"one bicycle for {method}() (for a batch: bikerider.benchmark.stability."
+                             "stability_batch(model.entries(), model.g))", self.source)
+
     def _pair_born_at(self, speed: float, relative: float = 1e-6) -> bool:
         """Whether the two eigenvalues with the largest real parts are real just below ``speed`` and
         a complex pair just above (the other two may be real or complex on either side)."""
@@ -187,5 +251,10 @@ class WhippleModel:
         return bool(np.all(np.abs(top_below.imag) <= tol) and np.all(np.abs(top_above.imag) > tol))
 
 
+def _at(name: str, index: tuple[int, ...]) -> str:
+    """``name`` with a batch index, ``M[3, 1]``, for messages (just ``name`` for one bicycle)."""
+    return f"{name}[{', '.join(map(str, index))}]" if index else name
+
+
 __all__ = ["MODES", "CriticalSpeeds", "ModalEigenvalues", "WhippleModel", "check_speeds", "label_modes",
-           "matrix_entries"]
+           "matrix_entries", "positive_real_roots"]

@@ -110,6 +110,36 @@ class BenchmarkParameters:
             check_wheel_inertia(wheel, v[f"I{wheel}xx"], v[f"I{wheel}yy"],  # type: ignore[arg-type]
                                 self.sigmas.get(f"I{wheel}xx", 0.0), self.sigmas.get(f"I{wheel}yy", 0.0), src)
 
+    def with_values(self, **changes: float | Quantity) -> "BenchmarkParameters":
+        """A copy with some values changed, validated; the others keep their values and uncertainties.
+
+        Parameters
+        ----------
+        **changes : float or Quantity
+            New values by benchmark name (SI units, ``lam`` in radians); a :class:`Quantity` sets
+            the uncertainty too, a plain number makes it zero.
+
+        Raises
+        ------
+        InputError
+            An unknown name, or a changed set no bicycle can have (the message names the value).
+
+        Examples
+        --------
+        >>> longer_trail = parameters.with_values(c=0.1)  # doctest: +SKIP
+        """
+        unknown = sorted(set(changes) - _NAME_SET)
+        if unknown:
+            raise InputError(unknown[0], changes[unknown[0]], f"one of the benchmark names {', '.join(BENCHMARK_NAMES)}",
+                             self.source)
+        mapping: dict[str, object] = {name: (None if self.values[name] is None
+                                             else Quantity(self.values[name], self.sigmas.get(name, 0.0)))  # type: ignore[arg-type]
+                                      for name in BENCHMARK_NAMES}
+        mapping.update(changes)
+        changed = ", ".join(f"{k}={v.value if isinstance(v, Quantity) else v:g}" for k, v in changes.items())
+        source = f"{self.source or 'parameters'} with {changed}" if changes else self.source
+        return BenchmarkParameters.from_mapping({k: v for k, v in mapping.items() if v is not None}, source)
+
     def __getitem__(self, name: str) -> float | None:
         return self.values[name]
 

@@ -13,7 +13,7 @@ generated plain-float ``critical_speed_polynomials_scalar``; see ``WhippleModel.
     than half the distance to its nearest neighbour, so two roots never collapse onto one.
 :func:`eigenvalues_from_polynomial`
     The same result as :meth:`bikerider.benchmark.WhippleModel.eigenvalues` (values and mode
-    labels, the rules of :func:`bikerider.benchmark.modes.label_modes`), without ``eigvals``.
+    labels, the rules of :func:`bikerider.benchmark.mode_labels.label_modes`), without ``eigvals``.
 Accuracy.  For simple roots the result agrees with ``numpy.linalg.eigvals`` of the state matrix to
 about ``1e-13`` relative to ``max(1, |root|)`` (the tests hold it to ``1e-10`` over random quartics
 and the benchmark bicycle at 1000 speeds).  A root of multiplicity two is ill-conditioned for any
@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from bikerider.benchmark.modes import ModalEigenvalues, check_speeds, label_modes
+from bikerider.benchmark.mode_labels import ModalEigenvalues, check_speeds, label_modes
 from bikerider.benchmark.roots import monic_quadratic_roots
 from bikerider.errors import InputError
 
@@ -230,7 +230,7 @@ def eigenvalues_from_polynomial(model, speeds) -> ModalEigenvalues:
     Parameters
     ----------
     model : bikerider.benchmark.WhippleModel
-        Anything with ``characteristic_coefficients(speeds)``.
+        Anything with ``characteristic_coefficients(speeds)`` (one bicycle or a batch).
     speeds : array_like, shape (n,)
         Speeds [m/s].
 
@@ -238,7 +238,8 @@ def eigenvalues_from_polynomial(model, speeds) -> ModalEigenvalues:
     -------
     ModalEigenvalues
         As :meth:`WhippleModel.eigenvalues` returns (see the module docstring for the accuracy),
-        labelled by :func:`bikerider.benchmark.modes.label_modes`.
+        labelled by :func:`bikerider.benchmark.mode_labels.label_modes`; values of shape
+        ``batch_shape + (n, 4)``.
 
     Raises
     ------
@@ -248,9 +249,10 @@ def eigenvalues_from_polynomial(model, speeds) -> ModalEigenvalues:
     speeds = check_speeds(speeds)
     coefficients = _check_coefficients(model.characteristic_coefficients(speeds))
     with np.errstate(all="ignore"):  # divisions by zero are masked by np.where
-        roots = _factored_roots(coefficients)
+        roots = _factored_roots(coefficients.reshape(-1, 5))
     values, labels = label_modes(roots.T)
-    return ModalEigenvalues(speeds, values, labels)
+    shape = coefficients.shape[:-1] + (4,)
+    return ModalEigenvalues(speeds, values.reshape(shape), labels.reshape(shape))
 
 
 __all__ = ["eigenvalues_from_polynomial", "quartic_roots"]

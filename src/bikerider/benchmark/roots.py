@@ -1,16 +1,14 @@
-"""Polynomial roots: the one quadratic solver, and the critical speeds it gives.
+"""Polynomial roots: the one quadratic solver of bikerider, for one polynomial or a batch.
 
 :func:`monic_quadratic_roots` solves ``y^2 + b y + c`` by the cancellation-free formula (complex
 pairs included), for any batch shape; the quartic solver (:mod:`bikerider.benchmark.quartic`) uses it
-for its two quadratic factors and :func:`quadratic_roots` for the real roots of the critical-speed
-polynomials.
+for its two quadratic factors, and :func:`quadratic_roots` (scale-aware, real roots only) for the
+polynomials in ``u = v^2`` whose roots bound the stable speed intervals
+(:mod:`bikerider.benchmark.stability`).  :func:`polynomial_positive_real_roots` takes a polynomial
+of any degree (the discriminant of the characteristic quartic).
 
-Critical speeds (:func:`critical_speeds`) are the positive roots of quadratics in ``u = v^2``, the
-generated ``benchmark_model.critical_speed_polynomials``: capsize is the smallest positive root of
-``det(g K0 + u K2)``; weave is the smallest positive root of the third Hurwitz determinant at which
-the crossing frequency ``omega^2 = a1/a3`` is positive.  Where there is no such root the speed is
-NaN.  One bicycle and a batch of a hundred thousand go through the same code: written once over
-a namespace ``xp`` of the few functions it needs, NumPy for arrays and :class:`_Floats` for one
+One bicycle and a batch of a hundred thousand go through the same code: written once over a
+namespace ``xp`` of the few functions it needs, NumPy for arrays and :class:`_Floats` for one
 bicycle's plain floats (NumPy's per-call overhead on 0-d arrays would cost ten times the
 arithmetic; the results are the same bit for bit).
 """
@@ -33,17 +31,11 @@ class _Floats:
     overhead on 0-d arrays)."""
 
     nan = math.nan
-    abs, sqrt, copysign, isfinite = abs, math.sqrt, math.copysign, math.isfinite
+    abs, sqrt, copysign = abs, math.sqrt, math.copysign
 
     @staticmethod
     def where(condition, a, b):
         return a if condition else b
-
-    @staticmethod
-    def divide(a, b):  # as numpy.divide: inf (signed) or NaN rather than ZeroDivisionError
-        if b != 0:
-            return a / b
-        return math.nan if a != a or a == 0 else math.copysign(math.inf, a) * math.copysign(1.0, b)
 
     @staticmethod
     def maximum(a, b):  # NaN-propagating, as numpy.maximum
@@ -107,46 +99,10 @@ def _quadratic_roots(c2, c1, c0, xp) -> tuple:
     return low, high
 
 
-def _smallest_positive(low, high, xp, accept_low=True, accept_high=True):
-    return xp.where((low > 0) & accept_low, low, xp.where((high > 0) & accept_high, high, xp.nan))
-
-
-def critical_speeds(capsize, weave, a1_over_v, a3_over_v) -> tuple:
-    """``(v_weave, v_capsize, weave_frequency)`` from the critical-speed polynomials in ``u = v^2``.
-
-    Parameters
-    ----------
-    capsize, weave : array_like, shape (..., 3)
-        Coefficients of ``det(g K0 + u K2)`` and of the third Hurwitz determinant over ``v^2``,
-        highest power first.
-    a1_over_v, a3_over_v : array_like, shape (..., 2)
-        ``a1/v`` and ``a3/v`` in ``u``: their ratio is the squared crossing frequency.
-
-    Returns
-    -------
-    v_weave, v_capsize, weave_frequency : float or ndarray
-        [m/s, m/s, rad/s]; NaN where there is none at positive speed.  Floats for one bicycle's
-        coefficients given as sequences of numbers (the generated plain-float twin's), arrays
-        otherwise.
-    """
-    polynomials = (capsize, weave, a1_over_v, a3_over_v)
-    if all(isinstance(p, (tuple, list)) and all(type(c) is float or type(c) is int for c in p) for p in polynomials):
-        return _critical_speeds(*([float(c) for c in p] for p in polynomials), _Floats)
-    # coefficient first, then the batch: unpacking gives one array per coefficient
-    capsize, weave, a1, a3 = (np.moveaxis(np.asarray(p, dtype=float), -1, 0) for p in polynomials)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        return _critical_speeds(capsize, weave, a1, a3, np)
-
-
-def _critical_speeds(capsize, weave, a1, a3, xp) -> tuple:
-    capsize_u = _smallest_positive(*_quadratic_roots(*capsize, xp), xp)
-    roots = _quadratic_roots(*weave, xp)
-    omega2 = [xp.divide(a1[0] * u + a1[1], a3[0] * u + a3[1]) for u in roots]
-    accept = [xp.isfinite(w) & (w > 0) for w in omega2]
-    weave_u = _smallest_positive(*roots, xp, *accept)
-    omega2_at = xp.where(weave_u == roots[0], omega2[0], omega2[1])
-    frequency = xp.where(xp.isfinite(weave_u), xp.sqrt(xp.abs(omega2_at)), xp.nan)
-    return xp.sqrt(weave_u), xp.sqrt(capsize_u), frequency  # NaN or positive: the roots of real speeds
+def positive_real_roots(c2: float, c1: float, c0: float) -> list[float]:
+    """The positive real roots of one ``c2 u^2 + c1 u + c0`` in plain floats, ascending
+    (:func:`quadratic_roots`' rules: a double root appears twice)."""
+    return [u for u in quadratic_roots(float(c2), float(c1), float(c0)) if u > 0]
 
 
 def polynomial_positive_real_roots(coefficients: np.ndarray) -> np.ndarray:
@@ -165,5 +121,5 @@ def polynomial_positive_real_roots(coefficients: np.ndarray) -> np.ndarray:
     return np.sort(real[real > 0])
 
 
-__all__ = ["IMAGINARY", "ZERO", "critical_speeds", "monic_quadratic_roots", "polynomial_positive_real_roots",
+__all__ = ["IMAGINARY", "ZERO", "monic_quadratic_roots", "polynomial_positive_real_roots", "positive_real_roots",
            "quadratic_roots"]

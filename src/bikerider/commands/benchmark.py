@@ -10,17 +10,51 @@ def add_parser(subparsers) -> None:
         "benchmark",
         help="matrices, critical speeds and eigenvalues from benchmark parameters",
         description=(
-            "Read the 25 benchmark parameters (a TOML file with the Meijaard et al. 2007 names, or a "
-            "BicycleParameters 'name = value+/-sigma' Benchmark.txt file) and print M, C1, K0, K2, the "
-            "weave and capsize speeds and the eigenvalues against speed."
+            "Read the 25 benchmark parameters (a TOML file with the Meijaard et al. 2007 names, a "
+            "BicycleParameters 'name = value+/-sigma' Benchmark.txt file, or a shipped bicycle with "
+            "--bicycle NAME) and print M, C1, K0, K2, the weave and capsize speeds, the self-stable speed "
+            "intervals and the eigenvalues against speed."
         ),
     )
-    p.add_argument("file", metavar="FILE", help="benchmark parameter file (.toml or name = value+/-sigma text)")
+    p.add_argument("file", metavar="FILE", nargs="?",
+                   help="benchmark parameter file (.toml or name = value+/-sigma text); or --bicycle NAME")
+    add_shipped_options(p)
     p.add_argument("--speeds", metavar="START:STOP:N", default="0:10:11",
                    help="speeds for the eigenvalues, m/s, N points (default 0:10:11)")
     p.add_argument("--json", action="store_true", help="print one JSON object instead of text")
-    p.add_argument("--plot", metavar="DIR", help="write eigenvalues.png into DIR")
+    p.add_argument("--plot", metavar="DIR",
+                   help="write the figures eigenvalues, side_view, mode_shapes and bode into DIR")
+    from bikerider.commands.estimate import add_figure_options
+
+    add_figure_options(p)
     p.set_defaults(run=run)
+
+
+def add_shipped_options(p) -> None:
+    """``--bicycle NAME`` and ``--rider NAME``: a parameter set shipped with bikerider (also ``sweep``)."""
+    from bikerider.shipped import BICYCLES, RIDERS
+
+    p.add_argument("--bicycle", metavar="NAME",
+                   help=f"a shipped bicycle instead of FILE: {', '.join(BICYCLES)} (BicycleParameters data)")
+    p.add_argument("--rider", metavar="NAME", help=f"with --bicycle: seat a shipped rider on it ({', '.join(RIDERS)})")
+
+
+def load_parameters(args: argparse.Namespace):
+    """The parameters of FILE or of ``--bicycle``/``--rider``, and a name for titles."""
+    from bikerider.errors import InputError
+
+    if (args.file is None) == (args.bicycle is None):
+        raise InputError("FILE / --bicycle", args.file or args.bicycle, "either a parameter file or --bicycle NAME")
+    if args.rider is not None and args.bicycle is None:
+        raise InputError("--rider", args.rider, "--bicycle NAME as well (a shipped rider on a shipped bicycle)")
+    if args.bicycle is not None:
+        from bikerider.shipped import named
+
+        parameters = named(args.bicycle, args.rider)
+        return parameters, parameters.source.split(" (")[0]
+    from bikerider.io.benchmark_file import load_benchmark_parameters
+
+    return load_benchmark_parameters(args.file), str(args.file)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -28,19 +62,19 @@ def run(args: argparse.Namespace) -> int:
     # and the other commands start in 0.06 s instead of 0.4 s (python -X importtime).
     from bikerider import report
     from bikerider.benchmark import WhippleModel
-    from bikerider.io.benchmark_file import load_benchmark_parameters
 
     speeds = report.parse_speeds(args.speeds)
-    params = load_benchmark_parameters(args.file)
+    params, name = load_parameters(args)
     model = WhippleModel.from_parameters(params)
     eig = model.eigenvalues(speeds)
     if args.plot:
         from bikerider import plotting  # matplotlib: only when figures are asked for
 
-        plotting.write_figures(args.plot, model, eig, None, title=str(args.file))
+        plotting.write_figures(args.plot, model, eig, None, title=name, parameters=params, figures=plotting.FIGURES,
+                               fmt=args.format, dpi=args.dpi)
     if args.json:
         print(json.dumps(report.model_json(params, model, eig), indent=2, allow_nan=False))
     else:
-        print(f"Benchmark parameters from {args.file}\n")
+        print(f"Benchmark parameters from {params.source or name}\n")
         print(report.model_text(params, model, eig))
     return 0

@@ -29,8 +29,16 @@ def add_parser(subparsers) -> None:
     p.add_argument("--speeds", metavar="START:STOP:N", default="0:10:11",
                    help="speeds for the eigenvalues, m/s, N points (default 0:10:11)")
     p.add_argument("--json", action="store_true", help="print one JSON object instead of text")
-    p.add_argument("--plot", metavar="DIR", help="write eigenvalues.png and side_view.png into DIR")
+    p.add_argument("--plot", metavar="DIR",
+                   help="write the figures eigenvalues, side_view, mode_shapes and bode into DIR")
+    add_figure_options(p)
     p.set_defaults(run=run)
+
+
+def add_figure_options(p) -> None:
+    """``--format`` and ``--dpi`` of the figures ``--plot`` writes (shared with ``benchmark``, ``sweep``)."""
+    p.add_argument("--format", default="png", choices=("png", "pdf", "svg"), help="figure file format (default png)")
+    p.add_argument("--dpi", type=float, default=None, help="resolution of PNG figures (default 200)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -53,8 +61,11 @@ def run(args: argparse.Namespace) -> int:
     if args.plot:
         from bikerider import plotting  # matplotlib: only when figures are asked for
 
+        band = estimate_uncertainty(result, np.linspace(speeds.min(), speeds.max(), 101)).eigenvalues \
+            if speeds.max() > speeds.min() else None
         plotting.write_figures(args.plot, result.model, eig, rm.grid_points if rm else None,
-                               title=f"{bicycle_name} + {rider_name}")
+                               title=f"{bicycle_name} + {rider_name}", parameters=result.parameters,
+                               figures=plotting.FIGURES, fmt=args.format, dpi=args.dpi, uncertainty=band)
     if args.json:
         out = report.model_json(parameters, result.model, eig)
         out["uncertainty"] = {"benchmark": uncertainty.benchmark, "speeds": uncertainty.speeds,

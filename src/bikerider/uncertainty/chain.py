@@ -3,15 +3,21 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Iterable, Mapping
+from functools import lru_cache
 
 import numpy as np
 
 from bikerider.engine import Chain as _EngineChain
+from bikerider.engine import arguments
 from bikerider.errors import InputError
 from bikerider.generated.manifest import BENCHMARK_NAMES
 from bikerider.uncertainty.stages import FRAME, OPTIONAL_NAN, all_stages
 
 LOG = logging.getLogger(__name__)
+
+ESTIMATE_INPUTS = arguments("combination.estimate_chain")
+"""The estimate chain's inputs from a bicycle, a seated rider and the mass fractions, in order (the
+generated test oracle ``combination.estimate_chain`` takes the same)."""
 
 
 def known_names() -> set[str]:
@@ -40,6 +46,30 @@ class Chain(_EngineChain):
 
     def __init__(self, provided: Iterable[str]):
         super().__init__(all_stages(), provided)
+
+
+@lru_cache(maxsize=32)
+def _chain(provided: tuple[str, ...]) -> Chain:
+    return Chain(provided)
+
+
+def benchmark_values(values: Mapping[str, object]) -> dict[str, object]:
+    """The benchmark parameters the estimate chain's stages give for ``values``.
+
+    Parameters
+    ----------
+    values : mapping of str to float or array_like
+        Nodes of the chain by name (e.g. every name of :data:`ESTIMATE_INPUTS`); arrays broadcast
+        against each other, so one call evaluates a whole batch of bicycles.
+
+    Returns
+    -------
+    dict of str to float or numpy.ndarray
+        Every name of ``BENCHMARK_NAMES``; NaN where the inputs do not determine a value (``IByy``,
+        ``IHyy`` without their I_yy) or where the geometry does not close.
+    """
+    nodes = _chain(tuple(values)).evaluate(values)
+    return {name: nodes[name] for name in BENCHMARK_NAMES}
 
 
 def prepare_values(values: Mapping[str, object]) -> dict[str, np.ndarray]:

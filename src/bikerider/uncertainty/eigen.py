@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bikerider.benchmark.modes import MODES, check_speeds, label_modes
+from bikerider.benchmark.mode_labels import MODES, check_speeds, label_modes
 from bikerider.engine import arguments
 from bikerider.generated import benchmark_model as gen_model
 from bikerider.generated import sensitivities as gen
@@ -36,7 +36,7 @@ class EigenSensitivity:
     ----------
     speeds : ndarray, shape (n,)
     values : ndarray, shape (n, 4), complex
-        Ordered weave (+imag), weave (-imag), capsize, castor (:data:`bikerider.benchmark.modes.MODES`).
+        Ordered weave (+imag), weave (-imag), capsize, castor (:data:`bikerider.benchmark.mode_labels.MODES`).
     derivatives : ndarray, shape (n, 4, 17), complex
         d lambda / d [matrix entries, g].
     condition : ndarray, shape (n, 4)

@@ -39,12 +39,14 @@ class ModalEigenvalues:
 
     speeds: np.ndarray
     values: np.ndarray
+    """``(n, 4)`` for one bicycle, ``batch_shape + (n, 4)`` for a batch."""
     labels: np.ndarray
+    """The label of each value, the shape of :attr:`values`."""
 
     def mode(self, name: str) -> np.ndarray:
         """Eigenvalues labelled ``name`` at each speed (``weave`` gives the positive-imaginary one)."""
         index = MODES.index(name)
-        return self.values[:, index]
+        return self.values[..., index]
 
 
 def check_speeds(speeds) -> np.ndarray:

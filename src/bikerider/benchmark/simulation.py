@@ -1,0 +1,159 @@
+"""Exact time responses of the Whipple model at fixed speeds (matrix exponential, no ODE solver).
+
+Between two sample times ``t_k`` and ``t_k+1 = t_k + h`` the linear model with an input held
+constant (zero-order hold) or varying linearly (first-order hold) has the exact solution
+
+    x_k+1 = Phi x_k + Gamma_0 u_k + Gamma_1 (u_k+1 - u_k) / h,
+
+with ``Phi = exp(A h)`` and ``Gamma_0``, ``Gamma_1`` the blocks of the exponential of the augmented
+matrix ``[[A, B, 0], [0, 0, I], [0, 0, 0]] h`` (Van Loan's method).  So the result at the sample
+times is exact (to rounding) for inputs that are piecewise constant (``hold="zoh"``: sampled data
+from a controller or a logger) or piecewise linear between the samples (``hold="foh"``); a smooth
+input given as a function is sampled at the times and held linearly, with an error of order
+``h^2`` times its curvature.  Several speeds (and a batch of bicycles) are simulated at once.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg
+
+from bikerider.benchmark.model import WhippleModel, check_speeds
+from bikerider.benchmark.state_space import LateralForce, StateSpace, state_space
+from bikerider.errors import InputError
+
+
+@dataclass(frozen=True)
+class Simulation:
+    """A time response.
+
+    Attributes
+    ----------
+    times : numpy.ndarray, shape (nt,)
+        Sample times [s].
+    speeds : numpy.ndarray, shape (n,)
+        Speeds [m/s].
+    states : numpy.ndarray, shape S + (n, nt, 4)
+        ``[phi, delta, phi_dot, delta_dot]`` at each time (``S``: the model's batch shape).
+    outputs : numpy.ndarray, shape S + (n, nt, p)
+        The chosen outputs.
+    inputs : numpy.ndarray, shape (nt, m)
+        The input samples used.
+    system : StateSpace
+        The state space simulated.
+    """
+
+    times: np.ndarray
+    speeds: np.ndarray
+    states: np.ndarray
+    outputs: np.ndarray
+    inputs: np.ndarray
+    system: StateSpace
+
+    def output(self, name: str) -> np.ndarray:
+        """One output by name, ``S + (n, nt)``."""
+        return self.outputs[..., self.system.outputs.index(name)]
+
+
+def _times(times) -> np.ndarray:
+    t = np.asarray(times, dtype=float)
+    if t.ndim != 1 or t.size < 2 or not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
+        raise InputError("times", t.tolist() if t.size < 10 else f"array of shape {t.shape}",
+                         "at least two finite, strictly increasing times [s]")
+    return t
+
+
+def _samples(inputs, times: np.ndarray, m: int) -> np.ndarray:
+    """Input samples ``(nt, m)`` from None, a callable ``u(t)`` or an array."""
+    if inputs is None:
+        return np.zeros((times.size, m))
+    if callable(inputs):
+        rows = [np.atleast_1d(np.asarray(inputs(float(t)), dtype=float)) for t in times]
+        u = np.array(rows)
+    else:
+        u = np.asarray(inputs, dtype=float)
+        if u.ndim == 1 and m == 1:
+            u = u[:, None]
+    if u.shape != (times.size, m):
+        raise InputError("inputs", f"shape {u.shape}",
+                         f"shape ({times.size}, {m}): one value per time and input (or a function of t returning {m})")
+    if not np.all(np.isfinite(u)):
+        raise InputError("inputs", "non-finite samples", "finite input values")
+    return u
+
+
+def discretise(A: np.ndarray, B: np.ndarray, h: float | np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``Phi, Gamma_0, Gamma_1`` for steps ``h`` (see the module docstring); batched over ``A``, ``B``."""
+    n, m = A.shape[-1], B.shape[-1]
+    shape = np.broadcast_shapes(A.shape[:-2], B.shape[:-2], np.shape(h))
+    big = np.zeros(shape + (n + 2 * m, n + 2 * m))
+    big[..., :n, :n] = A
+    big[..., :n, n:n + m] = B
+    big[..., n:n + m, n + m:] = np.eye(m)
+    E = scipy.linalg.expm(big * np.asarray(h, dtype=float)[..., None, None])
+    return E[..., :n, :n], E[..., :n, n:n + m], E[..., :n, n + m:]
+
+
+def simulate(model: WhippleModel, speeds, times, initial_state=None, inputs=None,
+             input_names=("T_phi", "T_delta"), outputs=("phi", "delta", "phi_dot", "delta_dot"),
+             lateral_force: LateralForce | None = None, hold: str | None = None) -> Simulation:
+    """Time response of ``model`` at each of ``speeds`` (held constant), exact at the sample times.
+
+    Parameters
+    ----------
+    model : WhippleModel
+        One bicycle or a batch.
+    speeds : array_like, shape (n,)
+        Speeds [m/s]; every one is simulated.
+    times : array_like, shape (nt,)
+        Increasing sample times [s], starting at the time of the initial state.
+    initial_state : array_like, shape (4,) or broadcastable to S + (n, 4), optional
+        ``[phi, delta, phi_dot, delta_dot]`` at ``times[0]`` (rad, rad/s); zero by default.
+    inputs : None, callable or array_like, optional
+        ``None`` (no input), a function ``u(t)`` returning one value per input, or samples of
+        shape ``(nt, m)`` (``(nt,)`` for one input).
+    input_names : sequence of str
+        The inputs, from ``T_phi``, ``T_delta``, ``F`` (:mod:`bikerider.benchmark.state_space`).
+    outputs : sequence of str
+        Outputs to return besides the states.
+    lateral_force : LateralForce, optional
+        Where ``F`` acts (needed when ``F`` is an input).
+    hold : {"zoh", "foh"}, optional
+        How the input varies between samples: held constant (the default for samples) or linear
+        (the default for a function).
+
+    Returns
+    -------
+    Simulation
+    """
+    t = _times(times)
+    v = check_speeds(speeds)
+    system = state_space(model, v, input_names, outputs, lateral_force)
+    hold = hold or ("foh" if callable(inputs) else "zoh")
+    if hold not in ("zoh", "foh"):
+        raise InputError("hold", hold, 'either "zoh" (piecewise constant input) or "foh" (piecewise linear)')
+    u = _samples(inputs, t, len(system.inputs))
+    lead = system.A.shape[:-2]
+    x = np.broadcast_to(np.zeros(4) if initial_state is None else np.asarray(initial_state, dtype=float),
+                        lead + (4,)).copy()
+    if not np.all(np.isfinite(x)):
+        raise InputError("initial_state", np.asarray(initial_state).tolist(), "finite [phi, delta, phi_dot, delta_dot]")
+    steps = np.diff(t)
+    uniform = np.allclose(steps, steps[0], rtol=1e-12, atol=0)
+    if uniform:
+        Phi, G0, G1 = discretise(system.A, system.B, steps[0])
+    else:  # one exponential per step: (..., nt-1, n, n)
+        Phi, G0, G1 = discretise(system.A[..., None, :, :], system.B[..., None, :, :], steps)
+    states = np.empty(lead + (t.size, 4))
+    states[..., 0, :] = x
+    for k in range(t.size - 1):
+        P, Q0, Q1 = (Phi, G0, G1) if uniform else (Phi[..., k, :, :], G0[..., k, :, :], G1[..., k, :, :])
+        step = Q0 @ u[k] + (Q1 @ ((u[k + 1] - u[k]) / steps[k]) if hold == "foh" else 0.0)
+        x = np.einsum("...ij,...j->...i", P, x) + step
+        states[..., k + 1, :] = x
+    y = np.einsum("...ij,...tj->...ti", system.C, states) + np.einsum("...ij,tj->...ti", system.D, u)
+    return Simulation(t, v, states, y, u, system)
+
+
+__all__ = ["Simulation", "discretise", "simulate"]

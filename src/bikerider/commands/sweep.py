@@ -1,0 +1,144 @@
+"""``bikerider sweep``: stable speed intervals (and eigenvalues) against one or two benchmark parameters."""
+from __future__ import annotations
+
+import argparse
+
+ROWS = ("designs", "speeds")
+
+
+def add_parser(subparsers) -> None:
+    p = subparsers.add_parser(
+        "sweep",
+        help="stable speeds and eigenvalues against one benchmark parameter, a stability map over two, or a design "
+             "space over many",
+        description=(
+            "Vary one or two of the 25 benchmark parameters of a base bicycle (a parameter file or a "
+            "shipped bicycle) over a range and report, for every design, the self-stable speed intervals, "
+            "the weave and capsize speeds and the weave frequency (from the characteristic polynomial, "
+            "no speed scan), and optionally stability and eigenvalues at given speeds. Designs no bicycle "
+            "can have are reported as invalid with the reason. Output: CSV (default) or JSON. With more "
+            "parameters, random designs, raw measurements or --store it runs a design space of any size "
+            "(chunked, resumable, fused kernels or Dask; docs/design_space.md)."
+        ),
+    )
+    p.add_argument("file", metavar="FILE", nargs="?", help="base benchmark parameter file (or --bicycle NAME)")
+    from bikerider.commands.benchmark import add_shipped_options
+
+    add_shipped_options(p)
+    p.add_argument("--vary", metavar="NAME=START:STOP:N", action="append",
+                   help="a benchmark parameter and its range, SI units (NAME_deg for an angle in degrees, e.g. "
+                        "lam_deg=0:30:61); give --vary twice for a stability map, more often for a design space "
+                        "(with --random: NAME=LOW:HIGH or NAME=MEAN+/-SIGMA)")
+    p.add_argument("--speeds", metavar="START:STOP:N",
+                   help="speeds [m/s] at which to report stability (and with --rows speeds, eigenvalues)")
+    p.add_argument("--rows", choices=ROWS, default="designs",
+                   help="one row per design (default), or per design and speed (needs --speeds)")
+    p.add_argument("--json", action="store_true", help="print one JSON object instead of CSV")
+    p.add_argument("--out", metavar="FILE", help="write the CSV or JSON to FILE instead of standard output")
+    p.add_argument("--plot", metavar="DIR", help="write sweep.<format>: stable speeds against the parameter, or the map "
+                   "(with --store: stable_fraction, sensitivity and map_<x>_<y>)")
+    from bikerider.commands.estimate import add_figure_options
+
+    add_figure_options(p)
+    from bikerider.commands.sweep_design import add_design_options
+
+    add_design_options(p)
+    p.set_defaults(run=run)
+
+
+def parse_vary(text: str):
+    """``NAME=START:STOP:N`` to ``(name, values)`` in SI units (``NAME_deg``: degrees to radians)."""
+    import math
+
+    import numpy as np
+
+    from bikerider.errors import InputError
+
+    name, _, span = text.partition("=")
+    parts = span.split(":")
+    try:
+        if not name or len(parts) != 3:
+            raise ValueError
+        start, stop, n = float(parts[0]), float(parts[1]), int(parts[2])
+    except ValueError:
+        raise InputError("--vary", text, "NAME=START:STOP:N, e.g. c=0.02:0.12:51 (N values, SI units)") from None
+    if not (math.isfinite(start) and math.isfinite(stop)) or not 1 <= n <= 100_000 or stop < start:
+        raise InputError("--vary", text, "a finite range START <= STOP and 1 <= N <= 100000 values")
+    values = np.linspace(start, stop, n)
+    if name.endswith("_deg"):
+        name, values = name[:-len("_deg")], np.radians(values)
+    return name.strip(), values
+
+
+def run(args: argparse.Namespace) -> int:
+    import csv
+    import io
+    import json
+
+    import numpy as np
+
+    from bikerider.benchmark.sweep import sweep
+    from bikerider.commands.benchmark import load_parameters
+    from bikerider.commands.sweep_design import is_design_run, run_design
+    from bikerider.errors import InputError
+    from bikerider.report import parse_speeds
+
+    if is_design_run(args):
+        return run_design(args)
+    base, name = load_parameters(args)
+    if not args.vary:
+        raise InputError("--vary", "missing", "NAME=START:STOP:N, at least one parameter to vary")
+    if len(args.vary) > 2:
+        raise InputError("--vary", args.vary, "one parameter (a sweep) or two (a stability map)")
+    axes = dict(parse_vary(text) for text in args.vary)
+    if len(axes) != len(args.vary):
+        raise InputError("--vary", args.vary, "two different parameters")
+    speeds = parse_speeds(args.speeds) if args.speeds else np.empty(0)
+    if args.rows == "speeds" and not speeds.size:
+        raise InputError("--rows", "speeds", "--speeds START:STOP:N as well")
+    result = sweep(base, axes, speeds, eigenvalues=args.rows == "speeds")
+    if args.plot:
+        from pathlib import Path
+
+        from bikerider import plotting
+
+        what = " and ".join(result.names)
+        plotting.save_figure(plotting.sweep_figure(result, f"{name}: {what}"),
+                             Path(args.plot) / f"sweep.{args.format}", args.format, args.dpi)
+    if args.json:
+        out = {"base": name, "parameters": {n: v.tolist() for n, v in zip(result.names, result.values)},
+               "speeds": speeds.tolist(), "designs": result.design_rows()}
+        if speeds.size:
+            out["stable"] = result.stable().tolist()
+        if args.rows == "speeds":
+            out["speed_rows"] = result.speed_rows()
+        text = json.dumps(out, indent=2, allow_nan=False) + "\n"
+    else:
+        buffer = io.StringIO()
+        rows = result.design_rows() if args.rows == "designs" else result.speed_rows()
+        for row in rows:
+            if "stable_intervals" in row:
+                row["stable_intervals"] = ";".join(
+                    f"{_cell(i['lower'])}:{_cell(i['upper'])}" for i in row["stable_intervals"])  # type: ignore[union-attr]
+        writer = csv.DictWriter(buffer, fieldnames=list(rows[0]), lineterminator="\n")
+        writer.writeheader()
+        writer.writerows({k: _cell(v) for k, v in row.items()} for row in rows)
+        text = buffer.getvalue()
+    if args.out:
+        from bikerider.io.atomic import atomic_write_text
+
+        atomic_write_text(args.out, text)
+    else:
+        print(text, end="")
+    return 0
+
+
+def _cell(value) -> str:
+    """CSV text of a value: floats to 10 significant digits, None empty, infinity ``inf``."""
+    if value is None:
+        return ""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, float):
+        return f"{value:.10g}"
+    return str(value)

@@ -1,0 +1,240 @@
+"""Results of a design-space run, written chunk by chunk to a Zarr store, and read back.
+
+Layout of a store folder (a Zarr v3 group; any Zarr reader opens it, e.g. ``zarr.open_group`` or
+``xarray.open_zarr``):
+
+* one array per output of :data:`bikerider.design.engine.FIELDS`, first dimension the design (flat
+  index; for a grid, C order over the axes), chunked like the run;
+* for a random space, ``value:<name>``: the drawn value of each varied parameter;
+* attributes: the design space (``space``, JSON: base, axes or draws, seed), the map speeds, the
+  weave speeds, the chunk size, the table of reason codes and the version that wrote it;
+* ``done/<k>``: an empty file per finished chunk, created after its arrays are written.
+
+A chunk is finished exactly when its marker exists: a run that is stopped (killed, interrupted)
+leaves at most the chunks being written without markers, and the next run with the same store
+redoes those and only those.  A store is tied to its run: opening it for a different space, speeds
+or chunk size is an error, never a silent mix.  Without a folder the store lives in memory.
+"""
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from bikerider.design.engine import FIELDS
+from bikerider.design.space import DesignSpace
+from bikerider.errors import InputError
+
+FORMAT = "bikerider design store 1"
+
+
+def zarr_module():
+    """``zarr``, or an error that names the extra to install."""
+    try:
+        import zarr
+    except ImportError:
+        raise InputError("--store", "zarr not installed", "pip install 'bikerider[design]' (the Zarr store of a "
+                         "design-space run)") from None
+    return zarr
+
+
+@dataclass(frozen=True)
+class RunSpec:
+    """What a store holds: the space and the settings that shape its arrays."""
+
+    space: DesignSpace
+    speeds: np.ndarray
+    weave_speeds: np.ndarray
+    chunk_size: int
+
+    @property
+    def n_chunks(self) -> int:
+        return -(-self.space.size // self.chunk_size)
+
+    def chunk_range(self, k: int) -> tuple[int, int]:
+        start = k * self.chunk_size
+        return start, min(self.space.size, start + self.chunk_size)
+
+    def attributes(self) -> dict:
+        from bikerider import __version__
+        from bikerider.design.validity import REASONS
+
+        return {"format": FORMAT, "space": self.space.to_json(), "speeds": self.speeds.tolist(),
+                "weave_speeds": self.weave_speeds.tolist(), "chunk_size": self.chunk_size,
+                "reasons": [list(r) for r in REASONS], "fields": {f.name: f.doc for f in FIELDS},
+                "bikerider": __version__}
+
+
+def _width(field, spec: RunSpec) -> tuple[int, ...]:
+    if field.width == "3":
+        return (3,)
+    if field.width == "speeds":
+        return (spec.weave_speeds.size,)
+    if field.width == "bits":
+        return ((spec.speeds.size + 7) // 8,)
+    return ()
+
+
+_FILL = {"bool": False, "int16": 0, "int8": 0, "uint8": 0, "float64": math.nan}
+
+
+class DesignStore:
+    """A Zarr store of one run: create or resume, write chunks, read outputs.
+
+    Use :func:`open_store` to read a finished (or partial) run.
+    """
+
+    def __init__(self, group, spec: RunSpec, path: Path | None):
+        self.group, self.spec, self.path = group, spec, path
+        self._done_memory: set[int] = set()
+
+    # -- creation ----------------------------------------------------------------------------
+    @classmethod
+    def create_or_resume(cls, path: str | Path | None, spec: RunSpec, restart: bool = False) -> "DesignStore":
+        """Open the store of ``spec`` at ``path`` (created when missing; in memory when None).
+
+        Raises
+        ------
+        InputError
+            ``path`` holds another run (a different space, speeds or chunk size), or is not a store.
+        """
+        zarr = zarr_module()
+        if path is None:
+            group = zarr.open_group(zarr.storage.MemoryStore(), mode="w")
+            store = cls(group, spec, None)
+            store._create()
+            return store
+        path = Path(path)
+        if path.exists() and not restart:
+            if not (path / "zarr.json").exists():
+                raise InputError("--store", str(path), "a new folder or the store of this run (this folder is not "
+                                 "a bikerider design store)")
+            group = zarr.open_group(str(path), mode="a")
+            attrs = dict(group.attrs)
+            if attrs.get("format") != FORMAT:
+                raise InputError("--store", str(path), "a new folder or the store of this run (not a bikerider "
+                                 "design store)")
+            mine = spec.attributes()
+            for key in ("space", "speeds", "weave_speeds", "chunk_size"):
+                if attrs.get(key) != mine[key]:
+                    raise InputError("--store", str(path), f"a new folder, or the same run to resume (its {key} "
+                                     "differ; remove the folder or give --restart to start again)")
+            return cls(group, spec, path)
+        if path.exists() and restart:
+            import shutil
+
+            shutil.rmtree(path)
+        group = zarr.open_group(str(path), mode="w")
+        store = cls(group, spec, path)
+        store._create()
+        return store
+
+    def _create(self) -> None:
+        n, chunk = self.spec.space.size, self.spec.chunk_size
+        for field in FIELDS:
+            width = _width(field, self.spec)
+            self.group.create_array(field.name, shape=(n,) + width, chunks=(chunk,) + width, dtype=field.dtype,
+                                    fill_value=_FILL[field.dtype])
+        if not self.spec.space.is_grid:
+            for name in self.spec.space.names:
+                self.group.create_array(f"value:{name}", shape=(n,), chunks=(chunk,), dtype="float64",
+                                        fill_value=math.nan)
+        self.group.attrs.update(self.spec.attributes())
+        if self.path is not None:
+            (self.path / "done").mkdir(exist_ok=True)
+
+    # -- progress of the run ----------------------------------------------------------------------
+    def is_done(self, k: int) -> bool:
+        if self.path is None:
+            return k in self._done_memory
+        return (self.path / "done" / str(k)).exists()
+
+    def pending(self) -> list[int]:
+        """Chunks without a marker, in order."""
+        if self.path is None:
+            return [k for k in range(self.spec.n_chunks) if k not in self._done_memory]
+        done = {int(p.name) for p in (self.path / "done").iterdir() if p.name.isdigit()}
+        return [k for k in range(self.spec.n_chunks) if k not in done]
+
+    def write(self, k: int, result: dict[str, np.ndarray]) -> None:
+        """Write chunk ``k`` (every array), then its marker."""
+        start, stop = self.spec.chunk_range(k)
+        for name, array in result.items():
+            self.group[name][start:stop] = array
+        if self.path is None:
+            self._done_memory.add(k)
+        else:
+            marker = self.path / "done" / str(k)
+            with open(marker, "w", encoding="utf-8"):
+                pass
+
+    # -- reading ------------------------------------------------------------------------------
+    @property
+    def complete(self) -> bool:
+        return not self.pending()
+
+    def read(self, name: str, start: int = 0, stop: int | None = None) -> np.ndarray:
+        """Output ``name`` of designs ``start .. stop - 1``."""
+        return np.asarray(self.group[name][start:stop if stop is not None else self.spec.space.size])
+
+    def take(self, name: str, index: np.ndarray) -> np.ndarray:
+        """Output ``name`` of the designs at flat indices ``index`` (any order)."""
+        index = np.asarray(index, dtype=np.int64)
+        order = np.argsort(index, kind="stable")
+        array = self.group[name]
+        selection = (index[order],) + (slice(None),) * (array.ndim - 1)
+        values = np.asarray(array.get_orthogonal_selection(selection))
+        out = np.empty_like(values)
+        out[order] = values
+        return out
+
+    def chunks(self, names: tuple[str, ...] = ()) -> Iterator[tuple[int, int, dict[str, np.ndarray]]]:
+        """``(start, stop, {name: array})`` for every finished chunk, in order (memory: one chunk)."""
+        for k in range(self.spec.n_chunks):
+            if not self.is_done(k):
+                continue
+            start, stop = self.spec.chunk_range(k)
+            yield start, stop, {name: self.read(name, start, stop) for name in names}
+
+    def stable(self, start: int = 0, stop: int | None = None) -> np.ndarray:
+        """Self-stability of designs ``start .. stop - 1`` at each map speed, ``(n, speeds)`` bools."""
+        bits = self.read("stable", start, stop)
+        return np.unpackbits(bits, axis=-1, count=self.spec.speeds.size, bitorder="little").astype(bool)
+
+    def varied_values(self, start: int, stop: int) -> dict[str, np.ndarray]:
+        """The varied parameters of designs ``start .. stop - 1`` (grid: from the axes)."""
+        if self.spec.space.is_grid:
+            return self.spec.space.values(start, stop)
+        return {name: self.read(f"value:{name}", start, stop) for name in self.spec.space.names}
+
+    def reason_texts(self, codes: np.ndarray) -> list[str]:
+        """``"name: expected ..."`` for reason codes, from the table stored with the run."""
+        table = self.group.attrs["reasons"]
+        return [f"{table[c][0]}: expected {table[c][1]}" if c else "" for c in np.asarray(codes).tolist()]
+
+
+def open_store(path: str | Path) -> DesignStore:
+    """Open the store of a run (finished or not) for reading.
+
+    Raises
+    ------
+    InputError
+        ``path`` is not a bikerider design store.
+    """
+    zarr = zarr_module()
+    path = Path(path)
+    if not (path / "zarr.json").exists():
+        raise InputError("--store", str(path), "the folder of a design-space run (bikerider sweep --store)")
+    group = zarr.open_group(str(path), mode="r")
+    attrs = dict(group.attrs)
+    if attrs.get("format") != FORMAT:
+        raise InputError("--store", str(path), "the folder of a design-space run (bikerider sweep --store)")
+    spec = RunSpec(DesignSpace.from_json(attrs["space"]), np.asarray(attrs["speeds"], dtype=float),
+                   np.asarray(attrs["weave_speeds"], dtype=float), int(attrs["chunk_size"]))
+    return DesignStore(group, spec, path)
+
+
+__all__ = ["DesignStore", "RunSpec", "open_store", "zarr_module"]

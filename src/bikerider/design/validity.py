@@ -1,0 +1,225 @@
+"""Which designs a bicycle can have, for whole batches at once, and why the others cannot.
+
+:meth:`bikerider.benchmark.BenchmarkParameters.validate` checks one parameter set and raises on
+the first problem; a design space needs the same verdict for millions of designs without a Python
+call per design.  :func:`benchmark_reasons` applies the same checks, in the same order, to arrays
+and returns for each design the code of the first check it fails (0: valid); :data:`REASONS` turns
+a code into the ``(name, expected)`` pair that ``validate`` would have raised (the tests hold the
+two equal on random designs).  :func:`rider_reasons` adds the checks of seating a rider (limbs that
+reach the pedals and grips) for designs over raw measurements.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from bikerider.benchmark.parameters import _LIMITS, _POSITIVE, BENCHMARK_NAMES  # the rules of validate()
+from bikerider.design.space import measurement_names
+from bikerider.inertia import TRIANGLE_TOLERANCE
+
+REASONS: list[tuple[str, str]] = [("", "")]
+"""``(name, expected)`` of each reason code; code 0 is a valid design."""
+_CODES: dict[tuple[str, str], int] = {}
+
+
+def _register(name: str, expected: str) -> int:
+    key = (name, expected)
+    if key not in _CODES:
+        _CODES[key] = len(REASONS)
+        REASONS.append(key)
+    return _CODES[key]
+
+
+def _code(name: str, expected: str) -> int:
+    """The code of a reason registered at import (codes are stored: they must not depend on the
+    order in which a process meets them)."""
+    return _CODES[(name, expected)]
+
+
+def _inertia_name(body: str) -> str:
+    return f"I{body} (I{body}xx, I{body}yy, I{body}zz, I{body}xz)"
+
+
+def _limits() -> list[tuple[str, float, str]]:
+    return [(name, limit, unit) for name, (limit, unit) in _LIMITS.items()]
+
+
+_Z_TEXT = "a negative value: z points down in the benchmark frame, so a centre of mass above the ground has z < 0"
+_LEGS_CLOSE = "at most the hip to pedal-axis distance apart (the knee cannot close otherwise)"
+_ARMS_CLOSE = "at most the shoulder to grip distance apart (the elbow cannot close otherwise)"
+for _name in BENCHMARK_NAMES:
+    _register(_name, "a finite number")
+for _name in _POSITIVE:
+    _register(_name, "a positive value")
+for _name, _limit, _unit in _limits():
+    _register(_name, f"at most {_limit:g} {_unit} in magnitude (SI units)")
+for _name in ("w", "rR", "rF"):
+    _register(_name, "at least 0.001 m (SI units: a length in metres)")
+_register("lam", "a steer axis tilt between -pi/2 and pi/2 rad")
+for _name in ("zB", "zH"):
+    _register(_name, _Z_TEXT)
+for _body in ("B", "H"):
+    _register(_inertia_name(_body), "finite moments and products of inertia")
+    _register(_inertia_name(_body), "positive moments with Ixx*Izz > Ixz^2 (a positive definite tensor)")
+    _register(_inertia_name(_body), "positive principal moments of inertia")
+    _register(_inertia_name(_body), "each principal moment at most the sum of the other two (triangle inequality)")
+for _wheel in ("R", "F"):
+    _register(f"I{_wheel}yy", f"at most 2*I{_wheel}xx (triangle inequality of an axisymmetric wheel)")
+SINGULAR = _register("M", "a positive definite mass matrix (the model is singular otherwise)")
+NOT_COMPUTED = _register("benchmark parameters", "finite values from the estimate chain (the measured geometry "
+                                                 "does not close)")
+_SIGNED = frozenset({"c", "xH", "zH", "xBf", "zBf", "IHxz", "IBfxz", "IHyy", "IBfyy"})
+"""Measurements of the estimate chain that may be zero or negative (trail, coordinates, products of
+inertia; the I_yy that may be left undetermined)."""
+_ANGLES = frozenset({"lam_ht", "lam_st", "lam_fl"})
+_FRACTIONS = frozenset({"f_h", "f_la", "f_ll", "f_to", "f_ua", "f_ul"})
+
+
+def _measurement_check(name: str) -> str:
+    if name in _ANGLES:
+        return "an angle between 0 and 180 degrees"
+    if name in _FRACTIONS:
+        return "a mass fraction between 0 and 1"
+    return "a positive value"
+
+
+for _name in measurement_names():
+    if _name not in _SIGNED:
+        _register(_name, _measurement_check(_name))
+CHAIN_STAY = _register("l_cs", "more than |rR - h_bb| (chain stay must reach the bottom bracket)")
+FORK = _register("l_f", "more than the fork offset |f_o|")
+LEGS_SHORT = _register("l_ll + l_ul", "at least the distance from the hip (top of the seat) to the pedal axis")
+LEGS_CLOSE = _register("|l_ll - l_ul|", _LEGS_CLOSE)
+ARMS_SHORT = _register("l_ua + l_la", "at least the distance from the shoulder to the handlebar grip")
+ARMS_CLOSE = _register("|l_ua - l_la|", _ARMS_CLOSE)
+
+
+def _assign(codes: np.ndarray, failed: np.ndarray, code: int) -> None:
+    """Give ``code`` to the designs that fail now and passed every earlier check (a check of values
+    that do not vary costs one comparison, not one per design)."""
+    failed = np.asarray(failed)
+    if failed.ndim == 0:
+        if failed:
+            codes[codes == 0] = code
+        return
+    np.copyto(codes, code, where=failed & (codes == 0))
+
+
+def benchmark_reasons(values: dict[str, np.ndarray], sigmas: dict[str, float] | None = None) -> np.ndarray:
+    """Reason codes (0: valid) of designs given as benchmark values, by the rules and in the order of
+    :meth:`BenchmarkParameters.validate`.
+
+    Parameters
+    ----------
+    values : dict
+        Every benchmark name to an array (or scalar) broadcasting to the batch; ``IByy``/``IHyy``
+        may be NaN (not determined: only the xz block of that tensor is checked).
+    sigmas : dict, optional
+        Standard uncertainties of the wheel inertias that were not varied (a wheel's ``I_yy`` may
+        exceed ``2 I_xx`` within their combined uncertainty, as ``validate`` allows).
+
+    Returns
+    -------
+    numpy.ndarray of int16
+        One code per design; ``REASONS[code]`` is ``(name, expected)``.
+    """
+    sigmas = sigmas or {}
+    v = {k: np.asarray(x, dtype=float) for k, x in values.items()}
+    shape = np.broadcast_shapes(*(x.shape for x in v.values()))
+    codes = np.zeros(shape, dtype=np.int16)
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        for name, x in v.items():
+            if name not in ("IByy", "IHyy"):
+                _assign(codes, ~np.isfinite(x), _code(name, "a finite number"))
+        for name in _POSITIVE:
+            _assign(codes, v[name] <= 0, _code(name, "a positive value"))
+        for name, limit, unit in _limits():
+            _assign(codes, np.abs(v[name]) > limit, _code(name, f"at most {limit:g} {unit} in magnitude (SI units)"))
+        for name in ("w", "rR", "rF"):
+            _assign(codes, v[name] < 1e-3, _code(name, "at least 0.001 m (SI units: a length in metres)"))
+        lam = v["lam"]
+        _assign(codes, ~((-math.pi / 2 < lam) & (lam < math.pi / 2)),
+                _code("lam", "a steer axis tilt between -pi/2 and pi/2 rad"))
+        for name in ("zB", "zH"):
+            _assign(codes, ~(v[name] < 0), _code(name, _Z_TEXT))
+        for body in ("B", "H"):
+            _inertia(codes, body, v[f"I{body}xx"], v[f"I{body}yy"], v[f"I{body}zz"], v[f"I{body}xz"])
+        for wheel in ("R", "F"):
+            xx, yy = v[f"I{wheel}xx"], v[f"I{wheel}yy"]
+            excess = yy - 2 * xx
+            allowed = math.hypot(sigmas.get(f"I{wheel}yy", 0.0), 2 * sigmas.get(f"I{wheel}xx", 0.0))
+            _assign(codes, (excess > 1e-9 * yy) & (excess > allowed),
+                    _code(f"I{wheel}yy", f"at most 2*I{wheel}xx (triangle inequality of an axisymmetric wheel)"))
+    return codes
+
+
+def _inertia(codes: np.ndarray, body: str, xx, yy, zz, xz) -> None:
+    """``check_plane_symmetric_inertia`` on arrays (``yy`` NaN: the xz block alone)."""
+    name = _inertia_name(body)
+    _assign(codes, ~(np.isfinite(xx) & np.isfinite(xz) & np.isfinite(zz)), _code(name, "finite moments and products of inertia"))
+    scale = np.maximum(np.maximum(np.abs(xx), np.abs(zz)), np.where(np.isfinite(yy), np.abs(yy), 0.0))
+    scale = np.maximum(scale, np.abs(xz))
+    scale = np.where(scale > 0, scale, 1.0)
+    b_xx, b_xz, b_zz = xx / scale, xz / scale, zz / scale
+    _assign(codes, (b_xx <= 0) | (b_zz <= 0) | (b_xx * b_zz - b_xz**2 <= 0),
+            _code(name, "positive moments with Ixx*Izz > Ixz^2 (a positive definite tensor)"))
+    has_yy = np.isfinite(yy)
+    mean, radius = (b_xx + b_zz) / 2, np.hypot((b_xx - b_zz) / 2, b_xz)
+    b_yy = yy / scale
+    first, second, third = mean - radius, b_yy, mean + radius
+    low = np.minimum(np.minimum(first, second), third)
+    high = np.maximum(np.maximum(first, second), third)
+    middle = first + second + third - low - high
+    _assign(codes, has_yy & (low <= 0), _code(name, "positive principal moments of inertia"))
+    slack = TRIANGLE_TOLERANCE * (low + middle + high)
+    _assign(codes, has_yy & (high > low + middle + slack),
+            _code(name, "each principal moment at most the sum of the other two (triangle inequality)"))
+
+
+def mass_matrix_reasons(codes: np.ndarray, mass_ok: np.ndarray) -> None:
+    """Mark designs whose mass matrix is not positive definite (``WhippleModel``'s check)."""
+    _assign(codes, ~mass_ok, SINGULAR)
+
+
+def measurement_reasons(codes: np.ndarray, values: dict[str, np.ndarray]) -> None:
+    """The readers' checks of single measurements (positive lengths, masses and inertias; angles in
+    (0, 180) degrees; mass fractions in (0, 1)) on the varied measurements."""
+    with np.errstate(invalid="ignore"):
+        for name, x in values.items():
+            if name in _SIGNED:
+                continue
+            if name in _ANGLES:
+                bad = ~((x > 0) & (x < math.pi))
+            elif name in _FRACTIONS:
+                bad = ~((x > 0) & (x < 1))
+            else:
+                bad = ~(x > 0)
+            _assign(codes, bad, _code(name, _measurement_check(name)))
+
+
+def rider_reasons(codes: np.ndarray, reach: np.ndarray, values: dict[str, np.ndarray], tolerance: float) -> None:
+    """The seating checks of ``bikerider.rider.model.seat_rider``, in its order, from the generated
+    ``limb_reach`` (``[leg span, leg length, arm span, arm length]``) and the limb lengths."""
+    leg_span, leg_length, arm_span, arm_length = (reach[..., k] for k in range(4))
+    v = values
+    with np.errstate(invalid="ignore"):
+        _assign(codes, v["l_cs"] <= np.abs(v["rR"] - v["h_bb"]), CHAIN_STAY)
+        fork_offset = v["rF"] * np.cos(v["lam_ht"]) - v["c"] * np.sin(v["lam_ht"])
+        _assign(codes, v["l_f"] <= np.abs(fork_offset), FORK)
+        _assign(codes, ~(np.isfinite(leg_span) & np.isfinite(arm_span)), NOT_COMPUTED)
+        _assign(codes, leg_span > leg_length * (1 + tolerance), LEGS_SHORT)
+        _assign(codes, leg_span <= np.abs(v["l_ll"] - v["l_ul"]) * (1 + tolerance), LEGS_CLOSE)
+        _assign(codes, arm_span > arm_length * (1 + tolerance), ARMS_SHORT)
+        _assign(codes, arm_span <= np.abs(v["l_ua"] - v["l_la"]) * (1 + tolerance), ARMS_CLOSE)
+
+
+def reason_text(code: int) -> str:
+    """``"name: expected ..."`` of a code (``""`` for a valid design)."""
+    name, expected = REASONS[int(code)]
+    return f"{name}: expected {expected}" if name else ""
+
+
+__all__ = ["NOT_COMPUTED", "REASONS", "SINGULAR", "benchmark_reasons", "mass_matrix_reasons", "measurement_reasons",
+           "reason_text",
+           "rider_reasons"]

@@ -1,0 +1,116 @@
+"""Figures fit for a paper: eigenvalues against speed, side view, mode shapes, Bode, sweeps.
+
+Every ``plot_*`` function draws on a matplotlib ``ax`` it is given and returns it, so figures can
+be composed; every ``*_figure`` function makes a whole figure in the bikerider style
+(:mod:`bikerider.plotting.common`); :func:`save_figure` writes one as PNG, PDF or SVG.  matplotlib
+is imported here only, with the non-interactive Agg backend.  The gallery (``docs/gallery.md``,
+``make docs``) shows every figure.
+
+============================================  ===================================================
+:func:`plot_eigenvalues`                       eigenvalues against speed, tracked modes
+:func:`eigenvalue_comparison_figure`           several bicycles on one figure
+:func:`plot_side_view`                         bicycle (and rider), centres of mass, inertia ellipses
+:func:`plot_mode_phasors`                      roll and steer of a mode as phasors
+:func:`plot_mode_shape_speeds`                 mode shapes against speed
+:func:`plot_bode`                              frequency responses
+:func:`plot_stability_sweep`                   stable speeds against a parameter
+:func:`plot_stability_map`                     stability over two parameters
+:mod:`bikerider.plotting.design`               design spaces: self-stable fraction and stable-
+                                              interval sensitivity against each parameter, slices
+============================================  ===================================================
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from bikerider.plotting.bode import bode_figure, plot_bode
+from bikerider.plotting.common import DEFAULT_DPI, FORMATS, check_format, pyplot, save_figure
+from bikerider.plotting.eigenvalues import eigenvalue_comparison_figure, eigenvalue_figure, plot_eigenvalues
+from bikerider.plotting.modes import mode_shape_figure, plot_mode_phasors, plot_mode_shape_speeds
+from bikerider.plotting.side_view import plot_side_view, side_view_figure
+from bikerider.plotting.sweep import plot_stability_map, plot_stability_sweep, sweep_figure
+
+FIGURES = ("eigenvalues", "side_view", "mode_shapes", "bode")
+"""The figures :func:`write_figures` can write, by file stem."""
+
+
+def write_figures(directory: str | Path, model, eig, grid_points: np.ndarray | None, title: str = "", *,
+                  parameters=None, figures=("eigenvalues", "side_view"), fmt: str = "png", dpi: float | None = None,
+                  uncertainty=None) -> list[Path]:
+    """Write figures of one bicycle into ``directory``; return their paths.
+
+    Parameters
+    ----------
+    directory : str or Path
+        Created if missing.
+    model : WhippleModel
+    eig : ModalEigenvalues or array_like
+        Its speeds set the speed range of the eigenvalue and mode figures.
+    grid_points : numpy.ndarray or None
+        The rider model's grid points (the side view draws the rider).
+    title : str
+        Figure title (the bicycle's name).
+    parameters : BenchmarkParameters, optional
+        Needed for the side view without grid points and for the lateral force of the Bode figure
+        (it acts at the rear body's centre of mass).
+    figures : sequence of str
+        Which of :data:`FIGURES`; a figure whose data are missing (a side view with neither grid
+        points nor parameters) is skipped.
+    fmt : {"png", "pdf", "svg"}
+    dpi : float, optional
+        Resolution of PNG files (default :data:`DEFAULT_DPI`).
+    uncertainty : EigenvalueUncertainty, optional
+        Draws a one-sigma band on the eigenvalue figure.
+    """
+    from bikerider.benchmark.state_space import LateralForce
+    from bikerider.errors import InputError
+
+    check_format(fmt, dpi)
+    unknown = [f for f in figures if f not in FIGURES]
+    if unknown:
+        raise InputError("figures", unknown[0], f"one of {', '.join(FIGURES)}")
+    out = Path(directory)
+    out.mkdir(parents=True, exist_ok=True)
+    speeds = getattr(eig, "speeds", eig)
+    written = []
+    for name in figures:
+        if name == "eigenvalues":
+            fig = eigenvalue_figure(model, speeds, title, uncertainty=uncertainty)
+        elif name == "side_view":
+            if parameters is None and grid_points is None:
+                continue
+            if parameters is None:
+                raise InputError("parameters", None, "the benchmark parameters for a side view")
+            fig = side_view_figure(parameters, grid_points, title)
+        elif name == "mode_shapes":
+            fig = mode_shape_figure(model, _mode_speed(model, speeds), speeds, title)
+        else:
+            force = None if parameters is None else LateralForce(parameters.values["xB"], parameters.values["zB"])
+            fig = bode_figure(model, _bode_speeds(model, speeds), lateral_force=force, title=title)
+        written.append(save_figure(fig, out / f"{name}.{fmt}", fmt, dpi))
+    return written
+
+
+def _mode_speed(model, speeds) -> float:
+    """The middle of the first stable interval, else the middle of the speed range."""
+    v = np.asarray(speeds, dtype=float)
+    lo, hi = (float(v.min()), float(v.max())) if v.size > 1 and v.max() > v.min() else (0.0, 10.0)
+    stable = model.critical_speeds().stable_range
+    if stable and lo <= stable[0] <= hi:
+        return 0.5 * (stable[0] + min(stable[1], hi))
+    return 0.5 * (lo + hi)
+
+
+def _bode_speeds(model, speeds) -> tuple[float, ...]:
+    """Three round speeds across the range."""
+    v = np.asarray(speeds, dtype=float)
+    lo, hi = (float(v.min()), float(v.max())) if v.size > 1 and v.max() > v.min() else (0.0, 10.0)
+    return tuple(float(np.round(x, 1)) for x in np.linspace(lo + 0.25 * (hi - lo), hi - 0.15 * (hi - lo), 3))
+
+
+__all__ = ["DEFAULT_DPI", "FIGURES", "FORMATS", "bode_figure", "eigenvalue_comparison_figure", "eigenvalue_figure",
+           "mode_shape_figure", "plot_bode", "plot_eigenvalues", "plot_mode_phasors", "plot_mode_shape_speeds",
+           "plot_side_view", "plot_stability_map", "plot_stability_sweep", "pyplot", "save_figure",
+           "side_view_figure", "sweep_figure", "write_figures"]
