@@ -15,7 +15,7 @@ import pytest
 
 from bikerider.benchmark.parameters import BENCHMARK_NAMES, BenchmarkParameters
 from bikerider.errors import InputError
-from bikerider.inertia import check_inertia_tensor, inertia_problem
+from bikerider.inertia import TENSOR_RULES, broken_rules, check_inertia_tensor, inertia_problem
 from bikerider.io.bicycleparameters import read_benchmark_file
 from bikerider.quantity import Quantity
 
@@ -80,6 +80,25 @@ def test_the_inertia_check_at_its_edges(xx, yy, zz, xz, valid):
     else:
         with pytest.raises(InputError):
             check_inertia_tensor("I", tensor)
+
+
+def test_the_batched_inertia_check_breaks_the_rules_the_one_check_names():
+    # bikerider.inertia.broken_rules (design spaces) against inertia_problem, tensor by tensor:
+    # random tensors at every scale, near the limits, and the edge cases above
+    rng = np.random.default_rng(12)
+    n = 3000
+    scale = 10.0 ** rng.choice([-170.0, 0.0, 150.0], n) * 10.0 ** rng.uniform(-3, 3, n)
+    xx, zz = rng.uniform(-0.2, 2.0, (2, n)) * scale
+    xz = rng.choice([-1, 1], n) * np.sqrt(np.abs(xx * zz)) * rng.choice([0.5, 1 - 1e-6, 1 + 1e-6], n)
+    yy = np.where(rng.random(n) < 0.2, np.nan, (np.abs(xx) + np.abs(zz)) * rng.uniform(-0.2, 1.2, n))
+    edges = np.array([(math.nan, 1.0, 1.0, 0.0), (1.0, math.inf, 1.0, 0.0), (0.0, 1.0, 1.0, 0.0),
+                      (1.0, 2.0, 1.0, 0.0), (1.0, math.nan, 1.0, 1.0), (0.0, 0.0, 0.0, 0.0)])
+    xx, yy, zz, xz = (np.concatenate([a, edges[:, k]]) for k, a in enumerate((xx, yy, zz, xz)))
+    got = broken_rules(xx, yy, zz, xz)
+    for i in range(xx.size):
+        problem = inertia_problem(float(xx[i]), float(yy[i]), float(zz[i]), float(xz[i]))
+        assert got[i] == (0 if problem is None else TENSOR_RULES.index(problem[1]) + 1), (xx[i], yy[i], zz[i], xz[i])
+    assert len(set(got.tolist())) == len(TENSOR_RULES) + 1  # every rule broken somewhere, and none
 
 
 def test_the_benchmark_bicycle_passes_the_inertia_check():

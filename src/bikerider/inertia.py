@@ -25,6 +25,15 @@ from bikerider.errors import InputError
 TRIANGLE_TOLERANCE = 1e-9
 #: Largest relative asymmetry ``|t_ij - t_ji|`` accepted (beyond an absolute 1e-12) in a general tensor.
 SYMMETRY_TOLERANCE = 1e-12
+#: What a plane-symmetric tensor of a real body must have, in the order checked: the ``expected``
+#: of each :class:`InputError`, and the rules :func:`broken_rules` numbers from 1.
+TENSOR_RULES = (
+    "finite moments and products of inertia",
+    "positive moments with Ixx*Izz > Ixz^2 (a positive definite tensor)",
+    "positive principal moments of inertia",
+    "each principal moment at most the sum of the other two (triangle inequality)",
+)
+FINITE, POSITIVE_DEFINITE, POSITIVE_PRINCIPAL, TRIANGLE = TENSOR_RULES
 
 
 def plane_symmetric_principal_moments(xx: float, yy: float, zz: float, xz: float) -> list[float]:
@@ -42,14 +51,12 @@ def inertia_problem(xx: float, yy: float | None, zz: float, xz: float) -> tuple[
     """
     yy_known = yy is not None and math.isfinite(yy)
     if not all(math.isfinite(x) for x in (xx, xz, zz)):
-        return [[xx, 0.0, xz], [0.0, yy if yy_known else math.nan, 0.0], [xz, 0.0, zz]], \
-            "finite moments and products of inertia"
+        return [[xx, 0.0, xz], [0.0, yy if yy_known else math.nan, 0.0], [xz, 0.0, zz]], FINITE
     # The checks below are scale invariant; on the tensor over its largest entry they cannot overflow.
     scale = max(abs(xx), abs(zz), abs(xz), abs(yy) if yy_known else 0.0) or 1.0
     b_xx, b_xz, b_zz = xx / scale, xz / scale, zz / scale
     if b_xx <= 0 or b_zz <= 0 or b_xx * b_zz - b_xz**2 <= 0:
-        return (f"Ixx={xx:.6g}, Izz={zz:.6g}, Ixz={xz:.6g}",
-                "positive moments with Ixx*Izz > Ixz^2 (a positive definite tensor)")
+        return f"Ixx={xx:.6g}, Izz={zz:.6g}, Ixz={xz:.6g}", POSITIVE_DEFINITE
     if not yy_known:
         return None
     unit = plane_symmetric_principal_moments(b_xx, yy / scale, b_zz, b_xz)  # type: ignore[operator]
@@ -60,11 +67,39 @@ def _principal_problem(unit: list[float], scale: float) -> tuple[object, str] | 
     """The positivity and triangle checks on ascending principal moments of the scaled tensor."""
     principal = [p * scale for p in unit]
     if unit[0] <= 0:
-        return principal, "positive principal moments of inertia"
+        return principal, POSITIVE_PRINCIPAL
     if unit[2] > unit[0] + unit[1] + TRIANGLE_TOLERANCE * math.fsum(unit):
-        return (f"principal moments {principal[0]:.6g}, {principal[1]:.6g}, {principal[2]:.6g}",
-                "each principal moment at most the sum of the other two (triangle inequality)")
+        return f"principal moments {principal[0]:.6g}, {principal[1]:.6g}, {principal[2]:.6g}", TRIANGLE
     return None
+
+
+def broken_rules(xx, yy, zz, xz) -> np.ndarray:
+    """:func:`inertia_problem` for arrays of plane-symmetric tensors (any broadcast shape): the number
+    of the first of :data:`TENSOR_RULES` each breaks, from 1; 0 where it can belong to a real body.
+
+    The same checks in the same order, without a Python call per tensor (design spaces check
+    millions); ``yy`` NaN: not determined, the xz block alone is checked."""
+    xx, yy, zz, xz = (np.asarray(a, dtype=float) for a in (xx, yy, zz, xz))
+    out = np.zeros(np.broadcast_shapes(xx.shape, yy.shape, zz.shape, xz.shape), dtype=np.int8)
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        has_yy = np.isfinite(yy)
+        scale = np.maximum(np.maximum(np.abs(xx), np.abs(zz)), np.maximum(np.abs(xz), np.where(has_yy, np.abs(yy), 0.0)))
+        scale = np.where(scale > 0, scale, 1.0)
+        b_xx, b_xz, b_zz, b_yy = xx / scale, xz / scale, zz / scale, yy / scale
+        mean, radius = (b_xx + b_zz) / 2, np.hypot((b_xx - b_zz) / 2, b_xz)
+        first, third = mean - radius, mean + radius
+        low = np.minimum(np.minimum(first, b_yy), third)
+        high = np.maximum(np.maximum(first, b_yy), third)
+        middle = first + b_yy + third - low - high
+        broken = (
+            ~(np.isfinite(xx) & np.isfinite(xz) & np.isfinite(zz)),
+            (b_xx <= 0) | (b_zz <= 0) | (b_xx * b_zz - b_xz**2 <= 0),
+            has_yy & (low <= 0),
+            has_yy & (high > low + middle + TRIANGLE_TOLERANCE * (low + middle + high)),
+        )
+    for rule in range(len(broken), 0, -1):  # the first broken rule wins
+        out = np.where(broken[rule - 1], rule, out)
+    return out
 
 
 def check_plane_symmetric_inertia(name: str, xx: float, yy: float | None, zz: float, xz: float,

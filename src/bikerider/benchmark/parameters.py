@@ -6,6 +6,7 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
+from bikerider.benchmark import rules
 from bikerider.errors import MISSING, InputError
 from bikerider.generated.manifest import BENCHMARK_NAMES
 from bikerider.inertia import TRIANGLE_TOLERANCE, check_plane_symmetric_inertia
@@ -19,14 +20,6 @@ OPTIONAL_NAMES = frozenset({"IByy", "IHyy"})
 
 LOG = logging.getLogger(__name__)
 
-_POSITIVE = ("w", "g", "rR", "mR", "IRxx", "IRyy", "mB", "mH", "rF", "mF", "IFxx", "IFyy")
-_LIMITS: dict[str, tuple[float, str]] = {
-    "w": (5.0, "m"), "c": (1.0, "m"), "rR": (3.0, "m"), "rF": (3.0, "m"), "g": (100.0, "m/s^2"),
-    **{k: (5.0, "m") for k in ("xB", "zB", "xH", "zH")},
-    **{k: (1000.0, "kg") for k in ("mR", "mB", "mH", "mF")},
-    **{k: (1e4, "kg m^2") for k in BENCHMARK_NAMES if k.startswith("I")},
-}
-"""Largest plausible magnitudes (the rear body may hold riders): a larger value is a unit slip."""
 _NAME_SET = frozenset(BENCHMARK_NAMES)
 
 
@@ -83,30 +76,29 @@ class BenchmarkParameters:
         return params
 
     def validate(self) -> None:
-        """Raise :class:`InputError` for values no real bicycle can have."""
+        """Raise :class:`InputError` for values no real bicycle can have (the rules of
+        :mod:`bikerider.benchmark.rules`, in their order)."""
         v, src = self.values, self.source
-        for name in _POSITIVE:
+        for name in rules.POSITIVE:
             if v[name] <= 0:  # type: ignore[operator]
                 raise InputError(name, v[name], "a positive value", src)
-        for name, (limit, unit) in _LIMITS.items():
+        for name, (limit, unit) in rules.LIMITS.items():
             if v[name] is not None and not abs(v[name]) <= limit:  # type: ignore[arg-type]
                 check_magnitude(name, v[name], limit, unit, src)  # type: ignore[arg-type]
-        for name in ("w", "rR", "rF"):  # the model divides by these
-            if v[name] < 1e-3:  # type: ignore[operator]
-                raise InputError(name, v[name], "at least 0.001 m (SI units: a length in metres)", src)
+        for name in rules.DIVISORS:  # the model divides by these
+            if v[name] < rules.MIN_DIVISOR:  # type: ignore[operator]
+                raise InputError(name, v[name], rules.DIVISOR_EXPECTED, src)
         if not -math.pi / 2 < v["lam"] < math.pi / 2:  # type: ignore[operator]
             hint = (f" ({v['lam']:g} looks like degrees: give lam_deg = {v['lam']:g} in a TOML file, "
                     f"or {v['lam'] * DEG:.6g} rad)" if abs(v["lam"]) <= 90 else "")  # type: ignore[arg-type]
-            raise InputError("lam", v["lam"], f"a steer axis tilt between -pi/2 and pi/2 rad{hint}", src)
-        for name in ("zB", "zH"):
+            raise InputError("lam", v["lam"], f"{rules.TILT_EXPECTED}{hint}", src)
+        for name in rules.BELOW_GROUND:
             if not v[name] < 0:  # type: ignore[operator]
-                raise InputError(name, v[name], "a negative value: z points down in the benchmark frame, so a "
-                                 "centre of mass above the ground has z < 0", src)
-        for body in ("B", "H"):
-            check_plane_symmetric_inertia(f"I{body} (I{body}xx, I{body}yy, I{body}zz, I{body}xz)",
-                                          v[f"I{body}xx"], v[f"I{body}yy"], v[f"I{body}zz"],  # type: ignore[arg-type]
-                                          v[f"I{body}xz"], src)  # type: ignore[arg-type]
-        for wheel in ("R", "F"):
+                raise InputError(name, v[name], rules.BELOW_GROUND_EXPECTED, src)
+        for body in rules.BODIES:
+            check_plane_symmetric_inertia(rules.tensor_name(body), *(v[k] for k in rules.tensor_entries(body)),  # type: ignore[arg-type]
+                                          src)
+        for wheel in rules.WHEELS:
             check_wheel_inertia(wheel, v[f"I{wheel}xx"], v[f"I{wheel}yy"],  # type: ignore[arg-type]
                                 self.sigmas.get(f"I{wheel}xx", 0.0), self.sigmas.get(f"I{wheel}yy", 0.0), src)
 

@@ -20,14 +20,13 @@ import numpy as np
 
 from bikerider.benchmark.model import WhippleModel
 from bikerider.benchmark.parameters import BENCHMARK_NAMES, BenchmarkParameters
+from bikerider.benchmark.rules import TIED
 from bikerider.benchmark.stability import KIND_NAMES, StabilityBatch, stability_batch
 from bikerider.engine import arguments
 from bikerider.errors import InputError
 from bikerider.generated import benchmark_model as gen
 
 _CANONICAL_ARGS = arguments("benchmark_model.canonical_matrices")
-_LINKED = ({"IBxx", "IByy", "IBzz", "IBxz"}, {"IHxx", "IHyy", "IHzz", "IHxz"}, {"IRxx", "IRyy"}, {"IFxx", "IFyy"})
-"""Parameters that a validity check ties together."""
 
 
 @dataclass(frozen=True)
@@ -155,7 +154,7 @@ def _validity(base: BenchmarkParameters, names: tuple[str, ...], values: tuple[n
 
     shape = tuple(v.size for v in values)
     reasons = np.full(shape, "", dtype=object)
-    linked = len(names) == 2 and any(names[0] in group and names[1] in group for group in _LINKED)
+    linked = len(names) == 2 and any(names[0] in group and names[1] in group for group in TIED)
     if len(names) == 1 or not linked:
         per_axis = [[check({name: float(x)}) for x in axis] for name, axis in zip(names, values)]
         for index in np.ndindex(shape):

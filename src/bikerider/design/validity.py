@@ -2,7 +2,8 @@
 
 :meth:`bikerider.benchmark.BenchmarkParameters.validate` checks one parameter set and raises on
 the first problem; a design space needs the same verdict for millions of designs without a Python
-call per design.  :func:`benchmark_reasons` applies the same checks, in the same order, to arrays
+call per design.  :func:`benchmark_reasons` applies the same rules (the one table of
+:mod:`bikerider.benchmark.rules`, the tensor check of :mod:`bikerider.inertia`), in the same order, to arrays
 and returns for each design the code of the first check it fails (0: valid); :data:`REASONS` turns
 a code into the ``(name, expected)`` pair that ``validate`` would have raised (the tests hold the
 two equal on random designs).  :func:`rider_reasons` adds the checks of seating a rider (limbs that
@@ -14,9 +15,10 @@ import math
 
 import numpy as np
 
-from bikerider.benchmark.parameters import _LIMITS, _POSITIVE, BENCHMARK_NAMES  # the rules of validate()
+from bikerider.benchmark import rules
+from bikerider.benchmark.parameters import BENCHMARK_NAMES
 from bikerider.design.space import measurement_names
-from bikerider.inertia import TRIANGLE_TOLERANCE
+from bikerider.inertia import TENSOR_RULES, TRIANGLE_TOLERANCE, broken_rules
 
 REASONS: list[tuple[str, str]] = [("", "")]
 """``(name, expected)`` of each reason code; code 0 is a valid design."""
@@ -37,35 +39,24 @@ def _code(name: str, expected: str) -> int:
     return _CODES[(name, expected)]
 
 
-def _inertia_name(body: str) -> str:
-    return f"I{body} (I{body}xx, I{body}yy, I{body}zz, I{body}xz)"
-
-
-def _limits() -> list[tuple[str, float, str]]:
-    return [(name, limit, unit) for name, (limit, unit) in _LIMITS.items()]
-
-
-_Z_TEXT = "a negative value: z points down in the benchmark frame, so a centre of mass above the ground has z < 0"
 _LEGS_CLOSE = "at most the hip to pedal-axis distance apart (the knee cannot close otherwise)"
 _ARMS_CLOSE = "at most the shoulder to grip distance apart (the elbow cannot close otherwise)"
 for _name in BENCHMARK_NAMES:
     _register(_name, "a finite number")
-for _name in _POSITIVE:
+for _name in rules.POSITIVE:
     _register(_name, "a positive value")
-for _name, _limit, _unit in _limits():
-    _register(_name, f"at most {_limit:g} {_unit} in magnitude (SI units)")
-for _name in ("w", "rR", "rF"):
-    _register(_name, "at least 0.001 m (SI units: a length in metres)")
-_register("lam", "a steer axis tilt between -pi/2 and pi/2 rad")
-for _name in ("zB", "zH"):
-    _register(_name, _Z_TEXT)
-for _body in ("B", "H"):
-    _register(_inertia_name(_body), "finite moments and products of inertia")
-    _register(_inertia_name(_body), "positive moments with Ixx*Izz > Ixz^2 (a positive definite tensor)")
-    _register(_inertia_name(_body), "positive principal moments of inertia")
-    _register(_inertia_name(_body), "each principal moment at most the sum of the other two (triangle inequality)")
-for _wheel in ("R", "F"):
-    _register(f"I{_wheel}yy", f"at most 2*I{_wheel}xx (triangle inequality of an axisymmetric wheel)")
+for _name, (_limit, _unit) in rules.LIMITS.items():
+    _register(_name, rules.limit_expected(_limit, _unit))
+for _name in rules.DIVISORS:
+    _register(_name, rules.DIVISOR_EXPECTED)
+_register("lam", rules.TILT_EXPECTED)
+for _name in rules.BELOW_GROUND:
+    _register(_name, rules.BELOW_GROUND_EXPECTED)
+for _body in rules.BODIES:
+    for _rule in TENSOR_RULES:
+        _register(rules.tensor_name(_body), _rule)
+for _wheel in rules.WHEELS:
+    _register(f"I{_wheel}yy", rules.wheel_expected(_wheel))
 SINGULAR = _register("M", "a positive definite mass matrix (the model is singular otherwise)")
 NOT_COMPUTED = _register("benchmark parameters", "finite values from the estimate chain (the measured geometry "
                                                  "does not close)")
@@ -132,49 +123,27 @@ def benchmark_reasons(values: dict[str, np.ndarray], sigmas: dict[str, float] | 
         for name, x in v.items():
             if name not in ("IByy", "IHyy"):
                 _assign(codes, ~np.isfinite(x), _code(name, "a finite number"))
-        for name in _POSITIVE:
+        for name in rules.POSITIVE:
             _assign(codes, v[name] <= 0, _code(name, "a positive value"))
-        for name, limit, unit in _limits():
-            _assign(codes, np.abs(v[name]) > limit, _code(name, f"at most {limit:g} {unit} in magnitude (SI units)"))
-        for name in ("w", "rR", "rF"):
-            _assign(codes, v[name] < 1e-3, _code(name, "at least 0.001 m (SI units: a length in metres)"))
+        for name, (limit, unit) in rules.LIMITS.items():
+            _assign(codes, np.abs(v[name]) > limit, _code(name, rules.limit_expected(limit, unit)))
+        for name in rules.DIVISORS:
+            _assign(codes, v[name] < rules.MIN_DIVISOR, _code(name, rules.DIVISOR_EXPECTED))
         lam = v["lam"]
-        _assign(codes, ~((-math.pi / 2 < lam) & (lam < math.pi / 2)),
-                _code("lam", "a steer axis tilt between -pi/2 and pi/2 rad"))
-        for name in ("zB", "zH"):
-            _assign(codes, ~(v[name] < 0), _code(name, _Z_TEXT))
-        for body in ("B", "H"):
-            _inertia(codes, body, v[f"I{body}xx"], v[f"I{body}yy"], v[f"I{body}zz"], v[f"I{body}xz"])
-        for wheel in ("R", "F"):
+        _assign(codes, ~((-math.pi / 2 < lam) & (lam < math.pi / 2)), _code("lam", rules.TILT_EXPECTED))
+        for name in rules.BELOW_GROUND:
+            _assign(codes, ~(v[name] < 0), _code(name, rules.BELOW_GROUND_EXPECTED))
+        for body in rules.BODIES:
+            broken = broken_rules(*(v[k] for k in rules.tensor_entries(body)))
+            for number, rule in enumerate(TENSOR_RULES, start=1):
+                _assign(codes, broken == number, _code(rules.tensor_name(body), rule))
+        for wheel in rules.WHEELS:
             xx, yy = v[f"I{wheel}xx"], v[f"I{wheel}yy"]
             excess = yy - 2 * xx
             allowed = math.hypot(sigmas.get(f"I{wheel}yy", 0.0), 2 * sigmas.get(f"I{wheel}xx", 0.0))
-            _assign(codes, (excess > 1e-9 * yy) & (excess > allowed),
-                    _code(f"I{wheel}yy", f"at most 2*I{wheel}xx (triangle inequality of an axisymmetric wheel)"))
+            _assign(codes, (excess > TRIANGLE_TOLERANCE * yy) & (excess > allowed),
+                    _code(f"I{wheel}yy", rules.wheel_expected(wheel)))
     return codes
-
-
-def _inertia(codes: np.ndarray, body: str, xx, yy, zz, xz) -> None:
-    """``check_plane_symmetric_inertia`` on arrays (``yy`` NaN: the xz block alone)."""
-    name = _inertia_name(body)
-    _assign(codes, ~(np.isfinite(xx) & np.isfinite(xz) & np.isfinite(zz)), _code(name, "finite moments and products of inertia"))
-    scale = np.maximum(np.maximum(np.abs(xx), np.abs(zz)), np.where(np.isfinite(yy), np.abs(yy), 0.0))
-    scale = np.maximum(scale, np.abs(xz))
-    scale = np.where(scale > 0, scale, 1.0)
-    b_xx, b_xz, b_zz = xx / scale, xz / scale, zz / scale
-    _assign(codes, (b_xx <= 0) | (b_zz <= 0) | (b_xx * b_zz - b_xz**2 <= 0),
-            _code(name, "positive moments with Ixx*Izz > Ixz^2 (a positive definite tensor)"))
-    has_yy = np.isfinite(yy)
-    mean, radius = (b_xx + b_zz) / 2, np.hypot((b_xx - b_zz) / 2, b_xz)
-    b_yy = yy / scale
-    first, second, third = mean - radius, b_yy, mean + radius
-    low = np.minimum(np.minimum(first, second), third)
-    high = np.maximum(np.maximum(first, second), third)
-    middle = first + second + third - low - high
-    _assign(codes, has_yy & (low <= 0), _code(name, "positive principal moments of inertia"))
-    slack = TRIANGLE_TOLERANCE * (low + middle + high)
-    _assign(codes, has_yy & (high > low + middle + slack),
-            _code(name, "each principal moment at most the sum of the other two (triangle inequality)"))
 
 
 def mass_matrix_reasons(codes: np.ndarray, mass_ok: np.ndarray) -> None:
