@@ -1,8 +1,8 @@
 """Benchmark parameter sets of the bicycles shipped with bikerider, by name.
 
 The BicycleParameters data (``src/bikerider/data/bicycleparameters``, BSD-2-Clause, Moore and
-contributors) hold seven bicycles as ``<Name>Benchmark.txt``: the Meijaard et al. (2007)
-``Benchmark`` bicycle and six measured ones (``Browser``, ``Browserins``, ``Fisher``, ``Rigid``,
+contributors; :mod:`bikerider.io.shipped_files` finds them) hold seven bicycles as
+``<Name>Benchmark.txt``: the Meijaard et al. (2007) ``Benchmark`` bicycle and six measured ones (``Browser``, ``Browserins``, ``Fisher``, ``Rigid``,
 ``Silver``, ``Yellow``), and the rider ``Jason`` of Moore et al. (2009) as one rigid body seated on
 the ``Browser`` and the ``Rigid``.  ::
 
@@ -16,15 +16,9 @@ from importlib import resources
 
 from bikerider.benchmark import BenchmarkParameters
 from bikerider.errors import InputError
-
-BICYCLES = ("Benchmark", "Browser", "Browserins", "Fisher", "Rigid", "Silver", "Yellow")
-"""Names of the shipped bicycles."""
-RIDERS = {"Jason": ("Browser", "Rigid")}
-"""Shipped lumped riders and the bicycles each has been seated on."""
-
-
-def _data():
-    return resources.files("bikerider") / "data" / "bicycleparameters"
+from bikerider.io.benchmark_file import load_benchmark_parameters
+from bikerider.io.bicycleparameters import merge_rider, read_lumped_rider
+from bikerider.io.shipped_files import BICYCLES, RIDERS, bicycle_file, rider_file
 
 
 def _match(name: str, choices, what: str) -> str:
@@ -49,11 +43,8 @@ def named(bicycle: str, rider: str | None = None) -> BenchmarkParameters:
     InputError
         An unknown name, or a rider never seated on that bicycle.
     """
-    from bikerider.io.benchmark_file import load_benchmark_parameters
-    from bikerider.io.bicycleparameters import merge_rider, read_lumped_rider
-
     bicycle = _match(bicycle, BICYCLES, "bicycle")
-    with resources.as_file(_data() / "bicycles" / bicycle / "Parameters" / f"{bicycle}Benchmark.txt") as path:
+    with resources.as_file(bicycle_file(bicycle)) as path:
         parameters = load_benchmark_parameters(path)
     if rider is None:
         return BenchmarkParameters(parameters.values, parameters.sigmas, f"{bicycle} (shipped BicycleParameters data)")
@@ -61,7 +52,7 @@ def named(bicycle: str, rider: str | None = None) -> BenchmarkParameters:
     if bicycle not in RIDERS[rider]:
         raise InputError("rider", rider, f"a rider seated on the {bicycle} (the shipped {rider} sits on "
                          f"{' and '.join(RIDERS[rider])})")
-    with resources.as_file(_data() / "riders" / rider / "Parameters" / f"{rider}{bicycle}Benchmark.txt") as path:
+    with resources.as_file(rider_file(rider, bicycle)) as path:
         lumped = read_lumped_rider(path)
     merged = merge_rider(parameters, lumped)
     return BenchmarkParameters(merged.values, merged.sigmas, f"{bicycle} + {rider} (shipped BicycleParameters data)")

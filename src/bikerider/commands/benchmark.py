@@ -4,6 +4,10 @@ from __future__ import annotations
 import argparse
 import json
 
+from bikerider.commands.estimate import add_figure_options
+from bikerider.errors import InputError
+from bikerider.io.shipped_files import BICYCLES, RIDERS
+
 
 def add_parser(subparsers) -> None:
     p = subparsers.add_parser(
@@ -24,16 +28,12 @@ def add_parser(subparsers) -> None:
     p.add_argument("--json", action="store_true", help="print one JSON object instead of text")
     p.add_argument("--plot", metavar="DIR",
                    help="write the figures eigenvalues, side_view, mode_shapes and bode into DIR")
-    from bikerider.commands.estimate import add_figure_options
-
     add_figure_options(p)
     p.set_defaults(run=run)
 
 
 def add_shipped_options(p) -> None:
     """``--bicycle NAME`` and ``--rider NAME``: a parameter set shipped with bikerider (also ``sweep``)."""
-    from bikerider.shipped import BICYCLES, RIDERS
-
     p.add_argument("--bicycle", metavar="NAME",
                    help=f"a shipped bicycle instead of FILE: {', '.join(BICYCLES)} (BicycleParameters data)")
     p.add_argument("--rider", metavar="NAME", help=f"with --bicycle: seat a shipped rider on it ({', '.join(RIDERS)})")
@@ -41,8 +41,6 @@ def add_shipped_options(p) -> None:
 
 def load_parameters(args: argparse.Namespace):
     """The parameters of FILE or of ``--bicycle``/``--rider``, and a name for titles."""
-    from bikerider.errors import InputError
-
     if (args.file is None) == (args.bicycle is None):
         raise InputError("FILE / --bicycle", args.file or args.bicycle, "either a parameter file or --bicycle NAME")
     if args.rider is not None and args.bicycle is None:

@@ -2,6 +2,17 @@
 from __future__ import annotations
 
 import argparse
+import csv
+import io
+import json
+from pathlib import Path
+
+from bikerider.commands.benchmark import add_shipped_options, load_parameters
+from bikerider.commands.estimate import add_figure_options
+from bikerider.commands.sweep_design import add_design_options, is_design_run, run_design
+from bikerider.commands.sweep_options import cell, parse_vary
+from bikerider.errors import InputError
+from bikerider.io.atomic import atomic_write_text
 
 ROWS = ("designs", "speeds")
 
@@ -22,8 +33,6 @@ def add_parser(subparsers) -> None:
         ),
     )
     p.add_argument("file", metavar="FILE", nargs="?", help="base benchmark parameter file (or --bicycle NAME)")
-    from bikerider.commands.benchmark import add_shipped_options
-
     add_shipped_options(p)
     p.add_argument("--vary", metavar="NAME=START:STOP:N", action="append",
                    help="a benchmark parameter and its range, SI units (NAME_deg for an angle in degrees, e.g. "
@@ -37,50 +46,15 @@ def add_parser(subparsers) -> None:
     p.add_argument("--out", metavar="FILE", help="write the CSV or JSON to FILE instead of standard output")
     p.add_argument("--plot", metavar="DIR", help="write sweep.<format>: stable speeds against the parameter, or the map "
                    "(with --store: stable_fraction, sensitivity and map_<x>_<y>)")
-    from bikerider.commands.estimate import add_figure_options
-
     add_figure_options(p)
-    from bikerider.commands.sweep_design import add_design_options
-
     add_design_options(p)
     p.set_defaults(run=run)
 
 
-def parse_vary(text: str):
-    """``NAME=START:STOP:N`` to ``(name, values)`` in SI units (``NAME_deg``: degrees to radians)."""
-    import math
-
-    import numpy as np
-
-    from bikerider.errors import InputError
-
-    name, _, span = text.partition("=")
-    parts = span.split(":")
-    try:
-        if not name or len(parts) != 3:
-            raise ValueError
-        start, stop, n = float(parts[0]), float(parts[1]), int(parts[2])
-    except ValueError:
-        raise InputError("--vary", text, "NAME=START:STOP:N, e.g. c=0.02:0.12:51 (N values, SI units)") from None
-    if not (math.isfinite(start) and math.isfinite(stop)) or not 1 <= n <= 100_000 or stop < start:
-        raise InputError("--vary", text, "a finite range START <= STOP and 1 <= N <= 100000 values")
-    values = np.linspace(start, stop, n)
-    if name.endswith("_deg"):
-        name, values = name[:-len("_deg")], np.radians(values)
-    return name.strip(), values
-
-
 def run(args: argparse.Namespace) -> int:
-    import csv
-    import io
-    import json
-
-    import numpy as np
+    import numpy as np  # heavy modules: imported when the command runs (cli.py)
 
     from bikerider.benchmark.sweep import sweep
-    from bikerider.commands.benchmark import load_parameters
-    from bikerider.commands.sweep_design import is_design_run, run_design
-    from bikerider.errors import InputError
     from bikerider.report import parse_speeds
 
     if is_design_run(args):
@@ -98,9 +72,7 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("--rows", "speeds", "--speeds START:STOP:N as well")
     result = sweep(base, axes, speeds, eigenvalues=args.rows == "speeds")
     if args.plot:
-        from pathlib import Path
-
-        from bikerider import plotting
+        from bikerider import plotting  # matplotlib: only when figures are asked for
 
         what = " and ".join(result.names)
         plotting.save_figure(plotting.sweep_figure(result, f"{name}: {what}"),
@@ -119,26 +91,15 @@ def run(args: argparse.Namespace) -> int:
         for row in rows:
             if "stable_intervals" in row:
                 row["stable_intervals"] = ";".join(
-                    f"{_cell(i['lower'])}:{_cell(i['upper'])}" for i in row["stable_intervals"])  # type: ignore[union-attr]
+                    f"{cell(i['lower'])}:{cell(i['upper'])}" for i in row["stable_intervals"])  # type: ignore[union-attr]
         writer = csv.DictWriter(buffer, fieldnames=list(rows[0]), lineterminator="\n")
         writer.writeheader()
-        writer.writerows({k: _cell(v) for k, v in row.items()} for row in rows)
+        writer.writerows({k: cell(v) for k, v in row.items()} for row in rows)
         text = buffer.getvalue()
     if args.out:
-        from bikerider.io.atomic import atomic_write_text
-
         atomic_write_text(args.out, text)
     else:
         print(text, end="")
     return 0
 
 
-def _cell(value) -> str:
-    """CSV text of a value: floats to 10 significant digits, None empty, infinity ``inf``."""
-    if value is None:
-        return ""
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, float):
-        return f"{value:.10g}"
-    return str(value)

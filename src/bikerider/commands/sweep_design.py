@@ -8,6 +8,16 @@ two, in memory).
 from __future__ import annotations
 
 import argparse
+import csv
+import io
+import json
+import math
+from pathlib import Path
+
+from bikerider.commands.benchmark import load_parameters
+from bikerider.commands.sweep_options import cell, parse_vary
+from bikerider.errors import InputError
+from bikerider.io.atomic import atomic_write_text
 
 MAX_ROWS = 1_000_000
 """Designs a run without --store may print as rows."""
@@ -53,10 +63,6 @@ def is_design_run(args: argparse.Namespace) -> bool:
 
 def parse_draw(text: str):
     """``NAME=LOW:HIGH`` or ``NAME=MEAN+/-SIGMA`` to ``(name, (distribution, a, b))`` (``_deg``: degrees)."""
-    import math
-
-    from bikerider.errors import InputError
-
     name, _, spec = text.partition("=")
     try:
         if "+/-" in spec:
@@ -77,11 +83,7 @@ def parse_draw(text: str):
 
 def _base(args: argparse.Namespace):
     """The base of the design space and its name."""
-    from bikerider.errors import InputError
-
     if args.measured is None:
-        from bikerider.commands.benchmark import load_parameters
-
         return load_parameters(args)
     if args.file or args.bicycle:
         raise InputError("--measured", args.file or args.bicycle, "no FILE or --bicycle with --measured (the "
@@ -96,9 +98,6 @@ def _base(args: argparse.Namespace):
 
 def _space(args: argparse.Namespace, base, name: str):
     from bikerider import design
-    from bikerider.commands.sweep import parse_vary
-    from bikerider.errors import InputError
-
     if args.monte_carlo is not None:
         if args.vary or args.random is not None:
             raise InputError("--monte-carlo", args.monte_carlo, "no --vary and no --random with it (it draws every "
@@ -119,13 +118,10 @@ def _space(args: argparse.Namespace, base, name: str):
 
 def run_design(args: argparse.Namespace) -> int:
     """Run a design space; print rows (small, in memory) or a summary (``--store``)."""
-    import json
-
     import numpy as np
 
     from bikerider import design
     from bikerider.design import summary as summaries
-    from bikerider.errors import InputError
     from bikerider.report import parse_speeds
 
     base, name = _base(args)
@@ -159,8 +155,6 @@ def run_design(args: argparse.Namespace) -> int:
         else:
             text = _summary_text(store, summary, closest, args.target_weave_speed)
     if args.out:
-        from bikerider.io.atomic import atomic_write_text
-
         atomic_write_text(args.out, text)
     else:
         print(text, end="")
@@ -168,8 +162,6 @@ def run_design(args: argparse.Namespace) -> int:
 
 
 def _closest_dict(closest) -> dict | None:
-    import math
-
     if closest is None:
         return None
     return {"index": closest.index, "values": closest.values, "weave_speed": closest.weave_speed,
@@ -208,13 +200,7 @@ def _summary_text(store, summary, closest, target) -> str:
 
 def _rows_text(args, store, closest) -> str:
     """Per-design rows (CSV or JSON) of a run held in memory."""
-    import csv
-    import io
-    import json
-
     import numpy as np
-
-    from bikerider.commands.sweep import _cell
 
     n = store.spec.space.size
     values = store.varied_values(0, n)
@@ -246,19 +232,16 @@ def _rows_text(args, store, closest) -> str:
         return json.dumps(out, indent=2, allow_nan=False) + "\n"
     buffer = io.StringIO()
     for row in rows:
-        row["stable_intervals"] = ";".join(f"{_cell(lo)}:{_cell(hi if hi is not None else float('inf'))}"
+        row["stable_intervals"] = ";".join(f"{cell(lo)}:{cell(hi if hi is not None else float('inf'))}"
                                            for lo, hi in row["stable_intervals"])  # type: ignore[union-attr]
     writer = csv.DictWriter(buffer, fieldnames=list(rows[0]), lineterminator="\n")
     writer.writeheader()
-    writer.writerows({k: _cell(v) for k, v in row.items()} for row in rows)
+    writer.writerows({k: cell(v) for k, v in row.items()} for row in rows)
     return buffer.getvalue()
 
 
 def _plots(args, store, name: str) -> None:
-    from pathlib import Path
-
     from bikerider.design import summary as summaries
-    from bikerider.errors import InputError
     from bikerider.plotting import design as figures
     from bikerider.plotting.common import save_figure
 

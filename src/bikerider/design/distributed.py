@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import logging
 
+from bikerider.design.compiled import default_threads
+from bikerider.design.engine import evaluate
 from bikerider.errors import InputError
 
 LOG = logging.getLogger(__name__)
@@ -24,7 +26,7 @@ CONNECT_TIMEOUT = "20s"
 
 def dask_distributed():
     """``dask.distributed``, or an error that names the extra to install."""
-    try:
+    try:  # an optional extra: imported when a run asks for Dask
         import dask.distributed
     except ImportError:
         raise InputError("--dask", "dask.distributed not installed",
@@ -34,8 +36,6 @@ def dask_distributed():
 
 def evaluate_chunk(space, start: int, stop: int, speeds, weave_speeds, engine: str):
     """The task a worker runs: one chunk, single-threaded (the cluster provides the parallelism)."""
-    from bikerider.design.engine import evaluate
-
     return evaluate(space, start, stop, speeds, weave_speeds, engine, threads=1)
 
 
@@ -45,8 +45,6 @@ def run_on_dask(store, pending: list[int], engine: str, scheduler, workers: int 
     spec = store.spec
     cluster = None
     if scheduler == "local":
-        from bikerider.design.compiled import default_threads
-
         cluster = distributed.LocalCluster(n_workers=workers or default_threads(), threads_per_worker=1,
                                            processes=True, dashboard_address=None)
         address = cluster

@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from bikerider.design import engine as engines
+from bikerider.design.distributed import run_on_dask
 from bikerider.design.progress import Progress
 from bikerider.design.space import DesignSpace
 from bikerider.design.store import DesignStore, RunSpec
@@ -94,8 +95,6 @@ def explore(space: DesignSpace, store: str | Path | None = None, speeds=(), weav
         LOG.info("resuming %s: %d of %d chunks done", store, spec.n_chunks - len(pending), spec.n_chunks)
     progress = Progress(space.size - done_before, done_before, quiet)
     if scheduler is not None:
-        from bikerider.design.distributed import run_on_dask
-
         run_on_dask(result, pending, engine, scheduler, workers, progress)
     else:
         _run_local(result, pending, engine, threads, progress)

@@ -18,14 +18,17 @@ or chunk size is an error, never a silent mix.  Without a folder the store lives
 from __future__ import annotations
 
 import math
+import shutil
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from bikerider import __version__
 from bikerider.design.engine import FIELDS
 from bikerider.design.space import DesignSpace
+from bikerider.design.validity import REASONS
 from bikerider.errors import InputError
 
 FORMAT = "bikerider design store 1"
@@ -33,7 +36,7 @@ FORMAT = "bikerider design store 1"
 
 def zarr_module():
     """``zarr``, or an error that names the extra to install."""
-    try:
+    try:  # an optional extra: imported when a run asks for a store
         import zarr
     except ImportError:
         raise InputError("--store", "zarr not installed", "pip install 'bikerider[design]' (the Zarr store of a "
@@ -59,9 +62,6 @@ class RunSpec:
         return start, min(self.space.size, start + self.chunk_size)
 
     def attributes(self) -> dict:
-        from bikerider import __version__
-        from bikerider.design.validity import REASONS
-
         return {"format": FORMAT, "space": self.space.to_json(), "speeds": self.speeds.tolist(),
                 "weave_speeds": self.weave_speeds.tolist(), "chunk_size": self.chunk_size,
                 "reasons": [list(r) for r in REASONS], "fields": {f.name: f.doc for f in FIELDS},
@@ -124,8 +124,6 @@ class DesignStore:
                                      "differ; remove the folder or give --restart to start again)")
             return cls(group, spec, path)
         if path.exists() and restart:
-            import shutil
-
             shutil.rmtree(path)
         group = zarr.open_group(str(path), mode="w")
         store = cls(group, spec, path)

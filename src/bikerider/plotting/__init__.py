@@ -25,6 +25,8 @@ from pathlib import Path
 
 import numpy as np
 
+from bikerider.benchmark.state_space import LateralForce
+from bikerider.errors import InputError
 from bikerider.plotting.bode import bode_figure, plot_bode
 from bikerider.plotting.common import DEFAULT_DPI, FORMATS, check_format, pyplot, save_figure
 from bikerider.plotting.eigenvalues import eigenvalue_comparison_figure, eigenvalue_figure, plot_eigenvalues
@@ -64,9 +66,6 @@ def write_figures(directory: str | Path, model, eig, grid_points: np.ndarray | N
     uncertainty : EigenvalueUncertainty, optional
         Draws a one-sigma band on the eigenvalue figure.
     """
-    from bikerider.benchmark.state_space import LateralForce
-    from bikerider.errors import InputError
-
     check_format(fmt, dpi)
     unknown = [f for f in figures if f not in FIGURES]
     if unknown:

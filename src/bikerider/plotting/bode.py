@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import numpy as np
+from matplotlib.lines import Line2D
 
 from bikerider.benchmark.frequency_response import FrequencyResponse, frequency_response
 from bikerider.benchmark.model import WhippleModel
@@ -47,8 +48,6 @@ def bode_figure(model: WhippleModel, speeds=(3.0, 5.0, 7.0), frequencies=None, *
                 lateral_force: LateralForce | None = None, title: str = ""):
     """Bode diagrams from steer torque (left) and, given ``lateral_force``, a lateral force (right)
     to roll (solid) and steer (dashed) at a few speeds (:func:`plot_bode`)."""
-    from matplotlib.lines import Line2D
-
     w = np.logspace(-1, 2, 300) if frequencies is None else np.asarray(frequencies, dtype=float)
     inputs = ("T_delta",) if lateral_force is None else ("T_delta", "F")
     response = frequency_response(model, speeds, w, inputs=inputs, lateral_force=lateral_force)

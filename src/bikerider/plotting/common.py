@@ -8,6 +8,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from matplotlib.lines import Line2D
+
+from bikerider.errors import InputError
+from bikerider.io.atomic import atomic_write_bytes, figure_bytes
+
 FORMATS = ("png", "pdf", "svg")
 """File formats the figures are written in."""
 DEFAULT_DPI = 200
@@ -31,7 +36,7 @@ RC = {"font.size": 9, "axes.titlesize": 9, "axes.labelsize": 9, "legend.fontsize
 
 def pyplot():
     """``matplotlib.pyplot`` with the non-interactive Agg backend and the bikerider style."""
-    import matplotlib
+    import matplotlib  # here, not at the top: the backend must be chosen before pyplot is first imported
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -48,8 +53,6 @@ def new_figure(width: float = WIDTH, height: float = 3.6, **subplots):
 
 def check_format(fmt: str, dpi: float | None = None) -> None:
     """:class:`InputError` unless ``fmt`` is one of :data:`FORMATS` and ``dpi`` a sensible resolution."""
-    from bikerider.errors import InputError
-
     if fmt not in FORMATS:
         raise InputError("--format", fmt, f"one of {', '.join(FORMATS)}")
     if dpi is not None and not 20 <= dpi <= 2400:
@@ -58,8 +61,6 @@ def check_format(fmt: str, dpi: float | None = None) -> None:
 
 def save_figure(fig, path: str | Path, fmt: str | None = None, dpi: float | None = None) -> Path:
     """Write ``fig`` to ``path`` (format from ``fmt`` or the suffix) atomically and close it."""
-    from bikerider.io.atomic import atomic_write_bytes, figure_bytes
-
     path = Path(path)
     fmt = fmt or path.suffix.lstrip(".") or "png"
     check_format(fmt, dpi)
@@ -84,8 +85,6 @@ def _metadata(fmt: str) -> dict:
 def legend_outside(ax, handles=None, labels=None, title: str | None = None, anchor=(1.02, 1.0), notes=()):
     """A legend to the right of ``ax``, clear of the data; ``notes`` (lines of text) follow the
     entries inside it, so they never overlap it."""
-    from matplotlib.lines import Line2D
-
     if handles is None:
         handles, labels = ax.get_legend_handles_labels()
     unique = dict(zip(labels, handles))

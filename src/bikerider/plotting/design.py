@@ -7,8 +7,11 @@ from __future__ import annotations
 
 import math
 
+import matplotlib.patches as mpatches
 import numpy as np
+from matplotlib.colors import ListedColormap
 
+from bikerider.generated.symbol_table import SYMBOLS
 from bikerider.plotting.common import MODE_COLOURS, WIDTH, new_figure
 
 _NEVER = "////"
@@ -33,8 +36,6 @@ def chosen_parameters(summary, limit: int = MAX_PANELS) -> tuple[list, str]:
 
 def _unit(name: str) -> tuple[str, float]:
     """Axis unit and scale of a parameter (radians shown in degrees)."""
-    from bikerider.generated.symbol_table import SYMBOLS
-
     unit = SYMBOLS.get(name, ("", "-", ""))[1]
     return ("deg", 180 / math.pi) if unit == "rad" else (unit, 1.0)
 
@@ -154,8 +155,6 @@ def interval_sensitivity_figure(summary, base: dict[str, float] | None = None, t
 def _hatch_cells(ax, x, y, mask: np.ndarray, face: str, hatch: str | None = None) -> None:
     """Fill (and hatch) the grid cells where ``mask`` (shape (ny, nx)), aligned with a
     ``shading="nearest"`` mesh."""
-    from matplotlib.colors import ListedColormap
-
     if mask.any():
         ax.pcolor(x, y, np.ma.masked_where(~mask, np.ones(mask.shape)), shading="nearest",
                   cmap=ListedColormap([face]), hatch=hatch, edgecolor="0.45", linewidth=0.0)
@@ -198,8 +197,6 @@ def plot_design_slice(ax, design_slice, colorbar: bool = True, legend: bool = Tr
 
 def slice_legend_handles(ax) -> list:
     """The key of :func:`plot_design_slice`."""
-    import matplotlib.patches as mpatches
-
     return [mpatches.Patch(facecolor="white", edgecolor="0.45", hatch=_NEVER, label="never self-stable"),
             mpatches.Patch(color="0.8", label="impossible design"),
             ax.plot([], [], color="k", lw=0.6, label="self-stable up to [m/s] (capsize speed)")[0],

@@ -9,10 +9,11 @@ and a note beside the legend says which mode, from which speed and how far it go
 from __future__ import annotations
 
 import numpy as np
+from matplotlib.lines import Line2D
 
-from bikerider.benchmark.model import ModalEigenvalues, WhippleModel
 from bikerider.benchmark.mode_shapes import ModeShapes, mode_shapes
-from bikerider.plotting.common import MODE_COLOURS, STABLE_SHADE, legend_outside, new_figure
+from bikerider.benchmark.model import ModalEigenvalues, WhippleModel
+from bikerider.plotting.common import CYCLE, MODE_COLOURS, STABLE_SHADE, legend_outside, new_figure
 
 DEFAULT_SPEEDS = np.linspace(0.0, 10.0, 401)
 """Speeds of the figures when none are given [m/s]."""
@@ -231,10 +232,6 @@ def plot_eigenvalue_comparison(ax, models: dict[str, WhippleModel], speeds=None,
     matplotlib.axes.Axes
         ``ax``.
     """
-    from matplotlib.lines import Line2D
-
-    from bikerider.plotting.common import CYCLE
-
     grid = speed_grid(speeds)
     every = {name: mode_shapes(model, grid) for name, model in models.items()}
     handles, labels = [], []

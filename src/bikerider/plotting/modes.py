@@ -8,8 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from bikerider.benchmark.model import WhippleModel
 from bikerider.benchmark.mode_shapes import ModeShapes, mode_shapes
+from bikerider.benchmark.model import WhippleModel
 from bikerider.plotting.common import MODE_COLOURS, WIDTH, legend_outside, pyplot
 from bikerider.plotting.eigenvalues import speed_grid
 

@@ -17,9 +17,11 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from matplotlib.patches import Circle, Ellipse, Wedge
 
 from bikerider.benchmark.parameters import BenchmarkParameters
 from bikerider.plotting.common import BODY_COLOURS, legend_outside, new_figure
+from bikerider.rider.model import SEGMENT_LINES
 
 _BODY_NAMES = {"B": "rear body B", "H": "front assembly H", "T": "whole bicycle"}
 _FRAME_POINTS = [(2, 5), (5, 10), (10, 2), (10, 12), (12, 11), (11, 7), (10, 13), (12, 16), (16, 17), (17, 19)]
@@ -40,8 +42,6 @@ def inertia_ellipse(mass: float, Ixx: float, Izz: float, Ixz: float, Iyy: float 
 
 
 def _com_symbol(ax, x: float, y: float, radius: float, colour: str, zorder: int = 6) -> None:
-    from matplotlib.patches import Circle, Wedge
-
     for start in (0, 180):
         ax.add_patch(Wedge((x, y), radius, start, start + 90, facecolor=colour, edgecolor="none", zorder=zorder))
     for start in (90, 270):
@@ -79,8 +79,6 @@ def plot_side_view(ax, parameters: BenchmarkParameters, grid_points: np.ndarray 
     mass = sum(m for m, _, _ in bodies.values())
     bodies["T"] = (mass, sum(m * x for m, x, _ in bodies.values()) / mass,
                    sum(m * y for m, _, y in bodies.values()) / mass)
-    from matplotlib.patches import Circle, Ellipse
-
     wheel_style = {"fill": False, "edgecolor": "0.25", "lw": 1.4}
     ax.add_patch(Circle((0.0, rR), rR, **wheel_style))
     ax.add_patch(Circle((w, rF), rF, **wheel_style))
@@ -104,8 +102,6 @@ def plot_side_view(ax, parameters: BenchmarkParameters, grid_points: np.ndarray 
         for k, (a, b) in enumerate(_FRAME_POINTS):
             ax.plot(g[[a - 1, b - 1], 0], -g[[a - 1, b - 1], 2], color="0.2", lw=1.8,
                     label="bicycle (grid points)" if k == 0 else None)
-        from bikerider.rider.model import SEGMENT_LINES
-
         first = True
         for name, a, b in SEGMENT_LINES:
             if "left" in name:

@@ -1,6 +1,7 @@
 """Sweeps: the self-stable speeds against one parameter, and stability maps over two."""
 from __future__ import annotations
 
+import matplotlib.patches as mpatches
 import numpy as np
 
 from bikerider.benchmark.sweep import Sweep
@@ -68,8 +69,6 @@ def plot_stability_map(ax, result: Sweep, colorbar: bool = True):
     -------
     matplotlib.axes.Axes
     """
-    import matplotlib.patches as mpatches
-
     if len(result.names) != 2:
         raise ValueError("plot_stability_map needs a sweep over two parameters")
     x, y = result.values
