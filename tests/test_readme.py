@@ -9,9 +9,13 @@ ROOT = Path(__file__).resolve().parents[1]
 DATA = Path(str(resources.files("bikerider") / "data" / "bicycleparameters"))
 
 
-def test_the_readme_python_section_runs():
+def test_the_readme_python_section_runs(tmp_path, monkeypatch):
+    """Every Python block of the section, in order, in one namespace (files it writes go to a
+    temporary folder)."""
+    monkeypatch.chdir(tmp_path)
     text = (ROOT / "README.md").read_text()
-    code = re.search(r"## From Python.*?```python\n(.*?)```", text, re.S).group(1)
+    section = re.search(r"## From Python\n(.*?)\n## ", text, re.S).group(1)
+    code = "\n".join(re.findall(r"```python\n(.*?)```", section, re.S))
     code = code.replace('"BrowserMeasured.txt"', repr(str(DATA / "bicycles" / "Browser" / "RawData" / "BrowserMeasured.txt")))
     code = code.replace('"JasonBrowserBenchmark.txt"',
                         repr(str(DATA / "riders" / "Jason" / "Parameters" / "JasonBrowserBenchmark.txt")))
@@ -20,6 +24,8 @@ def test_the_readme_python_section_runs():
     result = namespace["result"]
     assert round(result.model.critical_speeds().weave, 2) == 5.66  # README: 5.66 +/- 0.53 m/s
     assert "canonical_matrices" in namespace and "FUNCTIONS" in namespace
+    assert (tmp_path / "eigenvalues.pdf").stat().st_size > 0 and namespace["store"].spec.space.size == 8000
+    assert namespace["ss"].B.shape == (2, 4, 2) and namespace["trail"].shape == (61,)
 
 
 def test_every_public_name_resolves():

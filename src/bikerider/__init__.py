@@ -11,7 +11,18 @@ Estimate (:mod:`bikerider.estimate`)
     :func:`estimate_uncertainty`, :class:`EstimateResult`.
 Model (:mod:`bikerider.benchmark`)
     :class:`BenchmarkParameters`, :data:`BENCHMARK_NAMES`, :class:`WhippleModel`,
-    :class:`CriticalSpeeds`, :class:`ModalEigenvalues`.
+    :class:`CriticalSpeeds`, :class:`ModalEigenvalues`; :func:`named` (the shipped parameter sets,
+    :mod:`bikerider.shipped`).
+Dynamics toolbox (:mod:`bikerider.benchmark`, ``docs/dynamics.md``); one bicycle or a batch
+    :func:`state_space` (:class:`StateSpace`, :class:`LateralForce`), :func:`mode_shapes`
+    (:class:`ModeShapes`), :func:`simulate` (:class:`Simulation`), :func:`frequency_response`
+    (:class:`FrequencyResponse`), :func:`stability_batch` (the stable intervals of many bicycles;
+    one bicycle's: ``WhippleModel.stability()``), :func:`sweep` and :func:`stability_map`
+    (:class:`Sweep`).  Figures: :mod:`bikerider.plotting`.
+Design spaces at scale (:mod:`bikerider.design`, ``docs/design_space.md``)
+    :func:`design_grid`, :func:`random_designs`, :func:`design_monte_carlo` (a
+    :class:`DesignSpace`), :func:`explore` (run one, chunked and resumable, into a store),
+    :func:`open_store`.
 Bicycle and rider (:mod:`bikerider.bicycle`, :mod:`bikerider.rider`)
     :class:`BicycleBodies`, :class:`RiderMeasurements`, :class:`LumpedRider`,
     :func:`bicycle_benchmark_parameters`, :func:`merge_rider`, :func:`reduce_measured`.
@@ -34,7 +45,8 @@ Layout
 ``bikerider.engine``      the one uncertainty engine: stages from the manifest, chains, sigmas
 ``bikerider.bicycle``     bicycle measurements and their reductions (pendulums, Measured files)
 ``bikerider.rider``       the rider model (grid points, closures, segments)
-``bikerider.benchmark``   the 25 benchmark parameters and the Whipple model
+``bikerider.benchmark``   the 25 benchmark parameters, the Whipple model and its dynamics toolbox
+``bikerider.design``      design spaces: grids and random designs over millions of bicycles
 ``bikerider.uncertainty`` the estimate chain's sensitivities, propagation and Monte Carlo
 ``bikerider.io``          input files (TOML, BicycleParameters text files)
 ``bikerider.estimate``    the whole pipeline, measurements to model
@@ -46,13 +58,24 @@ import importlib
 
 __version__ = "0.1.0"
 
-_EXPORTS = {
+_EXPORTS = {  # public name: "module" (the same name there) or "module:name"
     "estimate": "bikerider.estimate", "estimate_default": "bikerider.estimate",
     "estimate_from_files": "bikerider.estimate", "estimate_uncertainty": "bikerider.estimate",
     "EstimateResult": "bikerider.estimate",
     "BENCHMARK_NAMES": "bikerider.benchmark", "BenchmarkParameters": "bikerider.benchmark",
     "CriticalSpeeds": "bikerider.benchmark", "ModalEigenvalues": "bikerider.benchmark",
-    "WhippleModel": "bikerider.benchmark",
+    "WhippleModel": "bikerider.benchmark", "named": "bikerider.shipped",
+    "state_space": "bikerider.benchmark.state_space", "StateSpace": "bikerider.benchmark.state_space",
+    "LateralForce": "bikerider.benchmark.state_space",
+    "mode_shapes": "bikerider.benchmark.mode_shapes", "ModeShapes": "bikerider.benchmark.mode_shapes",
+    "simulate": "bikerider.benchmark.simulation", "Simulation": "bikerider.benchmark.simulation",
+    "frequency_response": "bikerider.benchmark.frequency_response",
+    "FrequencyResponse": "bikerider.benchmark.frequency_response",
+    "stability_batch": "bikerider.benchmark.stability", "StabilityBatch": "bikerider.benchmark.stability",
+    "sweep": "bikerider.benchmark.sweep", "stability_map": "bikerider.benchmark.sweep", "Sweep": "bikerider.benchmark.sweep",
+    "design_grid": "bikerider.design:grid", "random_designs": "bikerider.design",
+    "design_monte_carlo": "bikerider.design:monte_carlo", "DesignSpace": "bikerider.design",
+    "explore": "bikerider.design", "open_store": "bikerider.design",
     "BicycleBodies": "bikerider.bicycle.bodies", "RiderMeasurements": "bikerider.rider.measurements",
     "LumpedRider": "bikerider.bicycle.to_benchmark",
     "bicycle_benchmark_parameters": "bikerider.bicycle.to_benchmark", "merge_rider": "bikerider.bicycle.to_benchmark",
@@ -75,7 +98,8 @@ def __getattr__(name: str):
     # The public names load their modules on first use: `import bikerider` (which `bikerider --help`
     # does) stays at 0.06 s instead of the 0.4 s NumPy and the generated code take (python -X importtime).
     if name in _EXPORTS:
-        value = getattr(importlib.import_module(_EXPORTS[name]), name)
+        module, _, attribute = _EXPORTS[name].partition(":")
+        value = getattr(importlib.import_module(module), attribute or name)
         globals()[name] = value
         return value
     raise AttributeError(f"module 'bikerider' has no attribute {name!r}")

@@ -38,6 +38,11 @@ def named(bicycle: str, rider: str | None = None) -> BenchmarkParameters:
     rider : str, optional
         One of :data:`RIDERS`, on a bicycle it was seated on.
 
+    Returns
+    -------
+    BenchmarkParameters
+        With the uncertainties the files give; ``source`` names the set.
+
     Raises
     ------
     InputError

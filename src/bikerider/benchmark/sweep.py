@@ -223,8 +223,27 @@ def _expand(valid: np.ndarray, array: np.ndarray) -> np.ndarray:
 
 
 def stability_map(base: BenchmarkParameters, x: tuple[str, object], y: tuple[str, object], speeds=()) -> Sweep:
-    """Stable intervals over the grid of two parameters, ``x = (name, values)``, ``y = (name, values)``,
-    without eigenvalues (:meth:`Sweep.stable` gives stability at each of ``speeds``)."""
+    """Stable intervals over the grid of two parameters, without eigenvalues.
+
+    Parameters
+    ----------
+    base : BenchmarkParameters
+        The parameters not varied.
+    x, y : tuple of (str, array_like)
+        Two different benchmark names and their values (SI units; ``lam`` in radians).
+    speeds : array_like, shape (n,)
+        Speeds [m/s] at which :meth:`Sweep.stable` gives stability.
+
+    Returns
+    -------
+    Sweep
+        Of grid shape ``(len(x values), len(y values))``.
+
+    Raises
+    ------
+    InputError
+        The same name twice, or the errors of :func:`sweep`.
+    """
     if x[0] == y[0]:
         raise InputError("parameters", [x[0], y[0]], "two different benchmark parameters")
     return sweep(base, {x[0]: x[1], y[0]: y[1]}, speeds, eigenvalues=False)

@@ -199,6 +199,13 @@ def grid(base, parameters: dict[str, object], name: str = "") -> DesignSpace:
         What the designs vary (benchmark parameters, or raw measurements through the whole estimate).
     parameters : dict
         Name to a one-dimensional array of values (SI units; angles in radians).
+    name : str, optional
+        A name for titles and the store (default: the base's source).
+
+    Returns
+    -------
+    DesignSpace
+        Of shape ``(len(values) for each parameter)``, in C order (the last parameter varies fastest).
 
     Raises
     ------
@@ -229,12 +236,25 @@ def random_designs(base, parameters: dict[str, tuple], n: int, seed: int = 0, na
 
     Parameters
     ----------
+    base : BenchmarkParameters or EstimateResult
+        What the designs vary (see :func:`grid`).
     parameters : dict
         Name to ``("uniform", low, high)`` or ``("normal", mean, sigma)``.
     n : int
         Number of designs.
     seed : int
         Seed of the random streams (the same seed gives the same designs).
+    name : str, optional
+        A name for titles and the store.
+
+    Returns
+    -------
+    DesignSpace
+
+    Raises
+    ------
+    InputError
+        An unknown name, an empty range, a non-positive sigma or a number of designs out of range.
     """
     kind, values, sigmas, source = _base_of(base)
     n = _check_count(n)
@@ -248,7 +268,29 @@ def random_designs(base, parameters: dict[str, tuple], n: int, seed: int = 0, na
 
 
 def monte_carlo(base, n: int, seed: int = 0, name: str = "") -> DesignSpace:
-    """``n`` designs with every base value that has a standard uncertainty drawn normally about it."""
+    """``n`` designs with every base value that has a standard uncertainty drawn normally about it (a
+    population of measurement errors).
+
+    Parameters
+    ----------
+    base : BenchmarkParameters or EstimateResult
+        Values with standard uncertainties (see :func:`grid`).
+    n : int
+        Number of designs.
+    seed : int
+        Seed of the random streams.
+    name : str, optional
+        A name for titles and the store.
+
+    Returns
+    -------
+    DesignSpace
+
+    Raises
+    ------
+    InputError
+        A base without uncertainties, or a number of designs out of range.
+    """
     kind, values, sigmas, source = _base_of(base)
     n = _check_count(n)
     draws = tuple(Draw(k, "normal", values[k], sigmas[k]) for k in values

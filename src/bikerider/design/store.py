@@ -217,6 +217,16 @@ class DesignStore:
 def open_store(path: str | Path) -> DesignStore:
     """Open the store of a run (finished or not) for reading.
 
+    Parameters
+    ----------
+    path : str or Path
+        The folder a run wrote (``explore(space, path, ...)`` or ``bikerider sweep --store``).
+
+    Returns
+    -------
+    DesignStore
+        Its space, speeds and every output (``read``, ``stable``, ``reason_texts``).
+
     Raises
     ------
     InputError
