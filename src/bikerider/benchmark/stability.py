@@ -43,7 +43,7 @@ equal on thousands of random bicycles and compare both with a dense eigenvalue s
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
@@ -283,9 +283,8 @@ def stability_batch(entries: dict[str, np.ndarray], g) -> StabilityBatch:
     g_flat = np.broadcast_to(g_array, shape).reshape(size)
     parts = [_stability_batch({k: a[i:i + CHUNK] for k, a in flat.items()}, g_flat[i:i + CHUNK])
              for i in range(0, size, CHUNK)]
-    return StabilityBatch(*(np.concatenate([getattr(p, f) for p in parts]).reshape(shape + getattr(parts[0], f).shape[1:])
-                            for f in ("lower", "upper", "lower_kind", "upper_kind", "weave", "capsize",
-                                      "weave_frequency")))
+    return StabilityBatch(*(np.concatenate([getattr(p, f.name) for p in parts]).reshape(
+        shape + getattr(parts[0], f.name).shape[1:]) for f in fields(StabilityBatch)))
 
 
 CHUNK = 8192

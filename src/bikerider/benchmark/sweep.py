@@ -14,7 +14,7 @@ each axis once (a pair is valid when both of its values are).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
@@ -208,8 +208,7 @@ def sweep(base: BenchmarkParameters, parameters: dict[str, object], speeds=(), e
     model = WhippleModel(*gen.canonical_matrices(**arguments), g=float(base.values["g"]))  # type: ignore[arg-type]
     result = stability_batch(model.entries(), model.g)
     result = StabilityBatch(*(np.where(_expand(valid, a), a, np.nan if a.dtype.kind == "f" else 0)
-                              for a in (result.lower, result.upper, result.lower_kind, result.upper_kind,
-                                        result.weave, result.capsize, result.weave_frequency)))
+                              for a in (getattr(result, f.name) for f in fields(StabilityBatch))))
     ev = labels = None
     if eigenvalues and speeds.size:
         modal = model.eigenvalues(speeds, method=method)

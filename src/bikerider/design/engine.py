@@ -27,7 +27,7 @@ import numpy as np
 
 from bikerider.benchmark.mode_labels import label_modes
 from bikerider.benchmark.model import matrix_entries
-from bikerider.benchmark.parameters import BENCHMARK_NAMES
+from bikerider.benchmark.parameters import BENCHMARK_NAMES, OPTIONAL_NAMES
 from bikerider.benchmark.quartic import quartic_roots
 from bikerider.benchmark.stability import stability_batch
 from bikerider.design import compiled, validity
@@ -75,6 +75,8 @@ FIELDS = (
                                                      "speed (negative: unstable)"),
 )
 """Every output of a design, in the store's order."""
+_FIELD_NAMES = {"weave": "weave_speed", "capsize": "capsize_speed", "stable_bits": "stable"}
+"""The fields of the stability kernel's outputs whose names differ (the others keep theirs)."""
 
 
 def resolve_engine(engine: str) -> str:
@@ -146,7 +148,7 @@ def _benchmark_values(space: DesignSpace, inputs: dict[str, np.ndarray], n: int)
         validity.rider_reasons(codes, np.broadcast_to(reach, (n, 4)), inputs, STRAIGHT_LIMB_TOLERANCE)
         values = benchmark_values(inputs)
     bench = {name: np.broadcast_to(values[name], (n,)) for name in BENCHMARK_NAMES}
-    required = [k for k in BENCHMARK_NAMES if k not in ("IByy", "IHyy")]
+    required = [k for k in BENCHMARK_NAMES if k not in OPTIONAL_NAMES]
     missing = ~np.all(np.isfinite(np.stack([bench[k] for k in required], axis=-1)), axis=-1)
     np.copyto(codes, validity.NOT_COMPUTED, where=missing & (codes == 0))
     return bench, codes
@@ -190,12 +192,11 @@ def evaluate(space: DesignSpace, start: int, stop: int, speeds=(), weave_speeds=
     valid = codes == 0
     invalid = ~valid
     out = {"valid": valid, "reason": codes}
-    for key, name in (("lower", "lower"), ("upper", "upper"), ("weave", "weave_speed"), ("capsize", "capsize_speed"),
-                      ("weave_frequency", "weave_frequency"), ("lower_kind", "lower_kind"),
-                      ("upper_kind", "upper_kind"), ("stable_bits", "stable")):
-        array = result[key]
+    for key, array in result.items():  # the kernel's outputs (manifest.KERNELS), as the store's fields
+        if key == "mass_ok":
+            continue
         array[invalid] = np.nan if array.dtype.kind == "f" else 0  # results of the base design stood in for them
-        out[name] = array
+        out[_FIELD_NAMES.get(key, key)] = array
     w = np.asarray(weave_speeds, dtype=float).reshape(-1)
     if w.size:
         if engine == "compiled":

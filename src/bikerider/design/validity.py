@@ -16,7 +16,7 @@ import math
 import numpy as np
 
 from bikerider.benchmark import rules
-from bikerider.benchmark.parameters import BENCHMARK_NAMES
+from bikerider.benchmark.parameters import BENCHMARK_NAMES, OPTIONAL_NAMES
 from bikerider.design.space import measurement_names
 from bikerider.inertia import TENSOR_RULES, TRIANGLE_TOLERANCE, broken_rules
 
@@ -121,7 +121,7 @@ def benchmark_reasons(values: dict[str, np.ndarray], sigmas: dict[str, float] | 
     codes = np.zeros(shape, dtype=np.int16)
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
         for name, x in v.items():
-            if name not in ("IByy", "IHyy"):
+            if name not in OPTIONAL_NAMES:
                 _assign(codes, ~np.isfinite(x), _code(name, "a finite number"))
         for name in rules.POSITIVE:
             _assign(codes, v[name] <= 0, _code(name, "a positive value"))
