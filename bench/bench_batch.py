@@ -18,6 +18,7 @@ the grips with these sigmas; they give NaN and are counted.
 Peak memory: a fresh subprocess draws the 100000 sets and evaluates them; the peak resident set
 size of that process (``ru_maxrss``) is reported, and its growth during the evaluation.
 """
+
 from __future__ import annotations
 
 import json
@@ -25,7 +26,6 @@ import subprocess
 import sys
 
 import numpy as np
-
 from common import BENCH, ROOT, Context, Row, measure, ratio_text
 
 N = 100_000
@@ -34,8 +34,8 @@ GOAL_RATE, GOAL_MEMORY = 100_000, 2**30
 
 def draw(n: int, seed: int = 0):
     """``(chain, values)``: the paper's inputs with ``n`` normal draws of every measured value."""
-    from bikerider.uncertainty.chain import Chain, prepare_values
     from bikerider.io.chain_inputs import paper_inputs
+    from bikerider.uncertainty.chain import Chain, prepare_values
 
     quantities = paper_inputs().quantities
     values = prepare_values(quantities)
@@ -80,8 +80,11 @@ def lambdified_chain():
         v = dict(values)
         by_name = {s.name: s for s in three_args}
         for body, prefix in (("Bf", "Bf"),):
-            kw = {"k_t": v["k_t"], **{f"T_{i}": v[f"T_{prefix}{i}"] for i in (1, 2, 3)},
-                  **{f"alpha_{i}": v[f"alpha_{prefix}{i}"] for i in (1, 2, 3)}}
+            kw = {
+                "k_t": v["k_t"],
+                **{f"T_{i}": v[f"T_{prefix}{i}"] for i in (1, 2, 3)},
+                **{f"alpha_{i}": v[f"alpha_{prefix}{i}"] for i in (1, 2, 3)},
+            }
             ixx, ixz, izz = f_three(*(kw[s] for s in by_name))
             v[f"I{body}xx"], v[f"I{body}xz"], v[f"I{body}zz"] = ixx, ixz, izz
         for wheel in ("R", "F"):
@@ -150,10 +153,12 @@ def run(ctx: Context) -> list[Row]:
     nodes = chain.evaluate(values)
     weave, capsize = nodes["v_weave"], nodes["v_capsize"]
     rate = N / ours.median
-    notes = [f"{N} sets; weave speed found in {int(np.isfinite(weave).sum())}, capsize in "
-             f"{int(np.isfinite(capsize).sum())} (the rest: the rider's hands cannot reach the grips, "
-             f"elbow closure NaN in {int((~np.isfinite(nodes['rX23'])).sum())})",
-             f"median weave {np.nanmedian(weave):.4f} m/s, capsize {np.nanmedian(capsize):.4f} m/s"]
+    notes = [
+        f"{N} sets; weave speed found in {int(np.isfinite(weave).sum())}, capsize in "
+        f"{int(np.isfinite(capsize).sum())} (the rest: the rider's hands cannot reach the grips, "
+        f"elbow closure NaN in {int((~np.isfinite(nodes['rX23'])).sum())})",
+        f"median weave {np.nanmedian(weave):.4f} m/s, capsize {np.nanmedian(capsize):.4f} m/s",
+    ]
 
     m = 2000 if ctx.quick else 10_000
     small = {k: (v[:m] if v.ndim else v) for k, v in values.items()}
@@ -165,29 +170,59 @@ def run(ctx: Context) -> list[Row]:
     both = np.isfinite(lam_weave) & np.isfinite(weave[:m])
     same_nan = bool(np.array_equal(np.isfinite(lam_weave), np.isfinite(weave[:m])))
     gap = float(np.max(np.abs(lam_weave[both] - weave[:m][both]) / weave[:m][both])) if both.any() else float("nan")
-    notes.append(f"sympy.lambdify baseline on the first {m} sets: building the functions took {build:.1f} s "
-                 f"(not in the ratio); weave speeds agree to {gap:.1e} relative, same sets without a speed: {same_nan}")
+    notes.append(
+        f"sympy.lambdify baseline on the first {m} sets: building the functions took {build:.1f} s "
+        f"(not in the ratio); weave speeds agree to {gap:.1e} relative, same sets without a speed: {same_nan}"
+    )
     lam_rate = m / lam_t.median
-    rows = [Row(f"raw measurements -> critical speeds, batch of {N}",
-                f"{rate:,.0f} sets/s ({ours.text()} per batch)",
-                [(f"sympy.lambdify (no CSE), {m} sets", f"{lam_rate:,.0f} sets/s ({lam_t.text()} per batch)"),
-                 ("BicycleParameters", "no batch path (one set: see 'one bicycle from raw measurements')")],
-                f"{ratio_text(1 / lam_rate, 1 / rate)} vs lambdify", f">= {GOAL_RATE:,} sets/s",
-                rate >= GOAL_RATE, notes)]
+    rows = [
+        Row(
+            f"raw measurements -> critical speeds, batch of {N}",
+            f"{rate:,.0f} sets/s ({ours.text()} per batch)",
+            [
+                (f"sympy.lambdify (no CSE), {m} sets", f"{lam_rate:,.0f} sets/s ({lam_t.text()} per batch)"),
+                ("BicycleParameters", "no batch path (one set: see 'one bicycle from raw measurements')"),
+            ],
+            f"{ratio_text(1 / lam_rate, 1 / rate)} vs lambdify",
+            f">= {GOAL_RATE:,} sets/s",
+            rate >= GOAL_RATE,
+            notes,
+        )
+    ]
 
-    proc = subprocess.run([sys.executable, str(BENCH / "bench_batch.py"), "--memory", str(N)],
-                          capture_output=True, text=True, cwd=str(ROOT), timeout=600)
+    proc = subprocess.run(
+        [sys.executable, str(BENCH / "bench_batch.py"), "--memory", str(N)],
+        capture_output=True,
+        text=True,
+        cwd=str(ROOT),
+        timeout=600,
+    )
     try:
         mem = json.loads(proc.stdout.strip().splitlines()[-1])
         peak, growth = mem["after"], mem["after"] - mem["before"]
-        rows.append(Row(f"peak memory, batch of {N}", f"{peak / 2**20:.0f} MiB peak RSS of the process "
-                        f"(+{growth / 2**20:.0f} MiB during the evaluation)", [], "-", "< 1 GiB", peak < GOAL_MEMORY,
-                        ["whole batch evaluated at once in a fresh process (peak RSS = VmHWM, including the "
-                         "interpreter, NumPy and the drawn inputs); the Monte Carlo command evaluates in chunks "
-                         "of 20000 and needs less"]))
+        rows.append(
+            Row(
+                f"peak memory, batch of {N}",
+                f"{peak / 2**20:.0f} MiB peak RSS of the process (+{growth / 2**20:.0f} MiB during the evaluation)",
+                [],
+                "-",
+                "< 1 GiB",
+                peak < GOAL_MEMORY,
+                [
+                    "whole batch evaluated at once in a fresh process (peak RSS = VmHWM, including the "
+                    "interpreter, NumPy and the drawn inputs); the Monte Carlo command evaluates in chunks "
+                    "of 20000 and needs less"
+                ],
+            )
+        )
     except (json.JSONDecodeError, IndexError, KeyError):
-        rows.append(Row(f"peak memory, batch of {N}", "FAILED: " + (proc.stderr.strip().splitlines() or ["no output"])[-1],
-                        met=False))
+        rows.append(
+            Row(
+                f"peak memory, batch of {N}",
+                "FAILED: " + (proc.stderr.strip().splitlines() or ["no output"])[-1],
+                met=False,
+            )
+        )
     return rows
 
 

@@ -6,6 +6,7 @@ from ``python -X importtime``.  For comparison, a fresh BicycleParameters proces
 kind of job: import, ``Bicycle('Browser', forceRawCalc=True)``, ``add_rider('Jason')``, ``eig`` at
 11 speeds, print.
 """
+
 from __future__ import annotations
 
 import os
@@ -46,8 +47,9 @@ def _wall(cmd: list[str], runs: int, env: dict | None = None) -> tuple[float, in
 def heaviest_imports(top: int = 5) -> list[str]:
     """``module cumulative-ms`` of the slowest top-level imports of ``bikerider estimate``."""
     code = "import sys; sys.argv = ['bikerider', 'estimate']; from bikerider.cli import main; main()"
-    proc = subprocess.run([sys.executable, "-X", "importtime", "-c", code], capture_output=True, text=True,
-                          cwd=str(ROOT), timeout=120)
+    proc = subprocess.run(
+        [sys.executable, "-X", "importtime", "-c", code], capture_output=True, text=True, cwd=str(ROOT), timeout=120
+    )
     rows = []
     for line in proc.stderr.splitlines():
         m = re.match(r"import time:\s+(\d+) \|\s+(\d+) \| (\s*)(\S+)", line)
@@ -63,20 +65,35 @@ def run(ctx: Context) -> list[Row]:
     cmd = [str(cli), "estimate"] if cli.exists() else [sys.executable, "-m", "bikerider", "estimate"]
     env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
     ours, status = _wall(cmd, runs, env)
-    notes = [f"command: {' '.join(Path(c).name if i == 0 else c for i, c in enumerate(cmd))} "
-             f"(exit status {status}), median of {runs} runs",
-             "heaviest imports (python -X importtime, cumulative): " + ", ".join(heaviest_imports())]
+    notes = [
+        f"command: {' '.join(Path(c).name if i == 0 else c for i, c in enumerate(cmd))} "
+        f"(exit status {status}), median of {runs} runs",
+        "heaviest imports (python -X importtime, cumulative): " + ", ".join(heaviest_imports()),
+    ]
     baselines = []
     ratio = "-"
     if BASELINE_PYTHON.exists():
         bp_time, bp_status = _wall([str(BASELINE_PYTHON), "-c", BP_SCRIPT, str(ctx.bp_data())], runs)
         if bp_status == 0:
-            baselines.append(("BicycleParameters, fresh process (import, Bicycle from raw, add_rider, eig)",
-                              f"{fmt_time(bp_time)} (median of {runs})"))
+            baselines.append(
+                (
+                    "BicycleParameters, fresh process (import, Bicycle from raw, add_rider, eig)",
+                    f"{fmt_time(bp_time)} (median of {runs})",
+                )
+            )
             ratio = f"{ratio_text(bp_time, ours)} vs BicycleParameters"
         else:
             notes.append(f"BicycleParameters cold run failed (exit status {bp_status})")
     else:
         notes.append("BicycleParameters baseline not installed")
-    return [Row("bikerider estimate, cold start", f"{fmt_time(ours)} wall (median of {runs})", baselines, ratio,
-                f"<= {GOAL_SECONDS:.0f} s", ours <= GOAL_SECONDS and status == 0, notes)]
+    return [
+        Row(
+            "bikerider estimate, cold start",
+            f"{fmt_time(ours)} wall (median of {runs})",
+            baselines,
+            ratio,
+            f"<= {GOAL_SECONDS:.0f} s",
+            ours <= GOAL_SECONDS and status == 0,
+            notes,
+        )
+    ]

@@ -13,10 +13,10 @@ Measured on the bicycle of item 1 (Browser + Jason):
 * SymPy: ``derive.benchmark_model.critical_speed_polynomials()`` lambdified without CSE on the
   same scalars, then ``numpy.roots``.
 """
+
 from __future__ import annotations
 
 import numpy as np
-
 from common import Context, Row, fmt_time, measure_together, ratio_text
 
 GOAL_SECONDS = 100e-6
@@ -67,11 +67,11 @@ def lambdified_polynomials():
 
 
 def run(ctx: Context) -> list[Row]:
-    from bikerider.benchmark import WhippleModel
-    from bikerider.benchmark.model import matrix_entries
+    from bench_eigenvalues import bicycle_parameters
     from bikerider.generated import benchmark_model as gen
 
-    from bench_eigenvalues import bicycle_parameters
+    from bikerider.benchmark import WhippleModel
+    from bikerider.benchmark.model import matrix_entries
 
     params, origin = bicycle_parameters(ctx)
     model = WhippleModel.from_parameters(params)
@@ -84,33 +84,56 @@ def run(ctx: Context) -> list[Row]:
         capsize_c, weave_c, _, _ = gen.critical_speed_polynomials(**entries, g=model.g)
         return np.roots(capsize_c[np.abs(capsize_c) > 0]), np.roots(weave_c)
 
-    t = measure_together({
-        "ours": lambda: model.critical_speeds(),
-        "current": numpy_polynomials,
-        "numpy": lambda: scan(model, grid),
-        "sympy": lambda: lam(values),
-    }, ctx.repeats)
+    t = measure_together(
+        {
+            "ours": lambda: model.critical_speeds(),
+            "current": numpy_polynomials,
+            "numpy": lambda: scan(model, grid),
+            "sympy": lambda: lam(values),
+        },
+        ctx.repeats,
+    )
     ours, current, numpy_t, sympy_t = t["ours"], t["current"], t["numpy"], t["sympy"]
 
     exact = model.critical_speeds()
     scanned = scan(model, grid)
-    notes = [f"model: Browser + Jason, {origin}",
-             f"bikerider: weave {exact.weave:.10f} m/s, capsize {exact.capsize:.10f} m/s",
-             f"numpy scan ({GRID} speeds): weave {scanned[0]:.6f}, capsize {scanned[1]:.6f} m/s",
-             f"sympy.lambdify: weave {lam(values)[0]:.10f}, capsize {lam(values)[1]:.10f} m/s"]
-    baselines = [("bikerider generated NumPy polynomials on 0-d arrays + np.roots", current.text()),
-                 (f"numpy eigvals scan, {GRID} speeds", numpy_t.text()),
-                 ("sympy.lambdify (no CSE) polynomials + np.roots", sympy_t.text())]
-    ratios = [f"{ratio_text(numpy_t.median, ours.median)} vs numpy scan",
-              f"{ratio_text(current.median, ours.median)} vs NumPy polynomials",
-              f"{ratio_text(sympy_t.median, ours.median)} vs lambdify"]
+    notes = [
+        f"model: Browser + Jason, {origin}",
+        f"bikerider: weave {exact.weave:.10f} m/s, capsize {exact.capsize:.10f} m/s",
+        f"numpy scan ({GRID} speeds): weave {scanned[0]:.6f}, capsize {scanned[1]:.6f} m/s",
+        f"sympy.lambdify: weave {lam(values)[0]:.10f}, capsize {lam(values)[1]:.10f} m/s",
+    ]
+    baselines = [
+        ("bikerider generated NumPy polynomials on 0-d arrays + np.roots", current.text()),
+        (f"numpy eigvals scan, {GRID} speeds", numpy_t.text()),
+        ("sympy.lambdify (no CSE) polynomials + np.roots", sympy_t.text()),
+    ]
+    ratios = [
+        f"{ratio_text(numpy_t.median, ours.median)} vs numpy scan",
+        f"{ratio_text(current.median, ours.median)} vs NumPy polynomials",
+        f"{ratio_text(sympy_t.median, ours.median)} vs lambdify",
+    ]
     bp = ctx.bp("scan", n=GRID, repeats=ctx.repeats)
     if "error" in bp:
         notes.append(bp["error"])
     else:
-        baselines.insert(0, (f"BicycleParameters Bicycle.eig scan, {GRID} speeds",
-                             f"{fmt_time(bp['seconds'])} (median of {bp['repeats']})"))
+        baselines.insert(
+            0,
+            (
+                f"BicycleParameters Bicycle.eig scan, {GRID} speeds",
+                f"{fmt_time(bp['seconds'])} (median of {bp['repeats']})",
+            ),
+        )
         ratios.insert(0, f"{ratio_text(bp['seconds'], ours.median)} vs BicycleParameters scan")
         notes.append(f"BicycleParameters scan: weave {bp['weave']:.6f}, capsize {bp['capsize']:.6f} m/s")
-    return [Row("weave and capsize speeds, one bicycle", f"{ours.text()} (closed form, floats)", baselines,
-                "; ".join(ratios), f"< {fmt_time(GOAL_SECONDS)}, no speed scan", ours.median < GOAL_SECONDS, notes)]
+    return [
+        Row(
+            "weave and capsize speeds, one bicycle",
+            f"{ours.text()} (closed form, floats)",
+            baselines,
+            "; ".join(ratios),
+            f"< {fmt_time(GOAL_SECONDS)}, no speed scan",
+            ours.median < GOAL_SECONDS,
+            notes,
+        )
+    ]

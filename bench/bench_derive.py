@@ -6,6 +6,7 @@ elsewhere so the benchmark never touches the tree), wall time from a fresh proce
 operation counts it produced with ``bench/operation_counts_baseline.json`` (the test
 ``tests/test_operation_counts.py`` enforces the 5 % limit on the committed counts).
 """
+
 from __future__ import annotations
 
 import subprocess
@@ -23,8 +24,13 @@ def run(ctx: Context) -> list[Row]:
 
     out = ctx.tmpdir() / "generated"
     start = time.perf_counter()
-    proc = subprocess.run([sys.executable, "-m", "derive", "--out", str(out), "-q"], cwd=str(ROOT),
-                          capture_output=True, text=True, timeout=1800)
+    proc = subprocess.run(
+        [sys.executable, "-m", "derive", "--out", str(out), "-q"],
+        cwd=str(ROOT),
+        capture_output=True,
+        text=True,
+        timeout=1800,
+    )
     seconds = time.perf_counter() - start
     if proc.returncode != 0:
         tail = (proc.stderr.strip().splitlines() or ["no output"])[-1]
@@ -32,10 +38,19 @@ def run(ctx: Context) -> list[Row]:
     produced = oc.load_counts(out / "operation_counts.json")
     result = oc.compare(oc.load_counts(oc.BASELINE), produced)
     total = sum(v["after_cse"] for v in produced.values())
-    notes = [f"{len(produced)} generated functions, {total} operations after CSE in all",
-             "operation counts against bench/operation_counts_baseline.json: " + oc.report(result).replace("\n", "; ")]
+    notes = [
+        f"{len(produced)} generated functions, {total} operations after CSE in all",
+        "operation counts against bench/operation_counts_baseline.json: " + oc.report(result).replace("\n", "; "),
+    ]
     counts_ok = not result.grown
-    return [Row("make derive (python -m derive, all modules)", f"{fmt_time(seconds)} (1 run, fresh process)",
-                [("operation counts vs baseline", "no growth > 5 %" if counts_ok else f"{len(result.grown)} grew > 5 %")],
-                "-", f"<= {GOAL_SECONDS:.0f} s; no function's operation count +5 %",
-                seconds <= GOAL_SECONDS and counts_ok, notes)]
+    return [
+        Row(
+            "make derive (python -m derive, all modules)",
+            f"{fmt_time(seconds)} (1 run, fresh process)",
+            [("operation counts vs baseline", "no growth > 5 %" if counts_ok else f"{len(result.grown)} grew > 5 %")],
+            "-",
+            f"<= {GOAL_SECONDS:.0f} s; no function's operation count +5 %",
+            seconds <= GOAL_SECONDS and counts_ok,
+            notes,
+        )
+    ]

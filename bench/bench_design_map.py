@@ -11,6 +11,7 @@ engine, every core).  Timed: the whole run, wall clock, with the machine's load 
 and after.  Checked: 2000 designs drawn at random from the store against a dense eigenvalue scan
 (``numpy.linalg.eigvals`` of the state matrices at the same 100 speeds).
 """
+
 from __future__ import annotations
 
 import os
@@ -24,13 +25,19 @@ from common import Context, Row
 
 GOAL_SECONDS = 600.0
 SAMPLE = 2000
-AXES = {"c": (0.0, 0.15), "lam": (0.0, np.radians(36.0)), "w": (0.8, 1.3), "IHzz": (0.002, 0.03),
-        "IFyy": (0.1, 0.28), "xB": (0.1, 0.6)}
+AXES = {
+    "c": (0.0, 0.15),
+    "lam": (0.0, np.radians(36.0)),
+    "w": (0.8, 1.3),
+    "IHzz": (0.002, 0.03),
+    "IFyy": (0.1, 0.28),
+    "xB": (0.1, 0.6),
+}
 
 
 def run(ctx: Context) -> list[Row]:
     side = 8 if ctx.quick else 20
-    item = f"stability map: {side ** 6:.2g} designs (6 parameters x {side} values) x 100 speeds, into a Zarr store"
+    item = f"stability map: {side**6:.2g} designs (6 parameters x {side} values) x 100 speeds, into a Zarr store"
     if "design_map" not in ctx.only:
         return [Row(item, "not run (minutes on both cores): python bench/run.py --only design_map", met=None)]
     from bikerider import design
@@ -53,16 +60,30 @@ def run(ctx: Context) -> list[Row]:
         valid = int(sum(chunk["valid"].sum() for _, _, chunk in store.chunks(("valid",))))
     finally:
         shutil.rmtree(folder, ignore_errors=True)
-    return [Row(item, f"{seconds:.0f} s wall ({space.size / seconds:,.0f} designs/s, "
-                      f"{space.size * speeds.size / seconds:,.0f} (design, speed) points/s)",
-                [("dense eigenvalue scan of a sample", f"{checked} designs x 100 speeds: {disagree} points differ "
-                  f"({near} within 1e-6 m/s of an interval end)")],
-                "-", f"< {GOAL_SECONDS:.0f} s on 2 cores; identical to the scan", seconds < GOAL_SECONDS and disagree == 0,
-                [f"{space.size:,} designs ({valid:,} valid), {speeds.size} speeds; store {size / 2**30:.2f} GiB on disk",
-                 f"load average (1/5/15 min) before {' / '.join(f'{x:.2f}' for x in load_before)}, "
-                 f"after {' / '.join(f'{x:.2f}' for x in load_after)}; {os.cpu_count()} cores",
-                 f"compiled engine, {compiled.default_threads()} threads, chunks of 262144 designs, computing "
-                 "overlapped with writing"])]
+    return [
+        Row(
+            item,
+            f"{seconds:.0f} s wall ({space.size / seconds:,.0f} designs/s, "
+            f"{space.size * speeds.size / seconds:,.0f} (design, speed) points/s)",
+            [
+                (
+                    "dense eigenvalue scan of a sample",
+                    f"{checked} designs x 100 speeds: {disagree} points differ "
+                    f"({near} within 1e-6 m/s of an interval end)",
+                )
+            ],
+            "-",
+            f"< {GOAL_SECONDS:.0f} s on 2 cores; identical to the scan",
+            seconds < GOAL_SECONDS and disagree == 0,
+            [
+                f"{space.size:,} designs ({valid:,} valid), {speeds.size} speeds; store {size / 2**30:.2f} GiB on disk",
+                f"load average (1/5/15 min) before {' / '.join(f'{x:.2f}' for x in load_before)}, "
+                f"after {' / '.join(f'{x:.2f}' for x in load_after)}; {os.cpu_count()} cores",
+                f"compiled engine, {compiled.default_threads()} threads, chunks of 262144 designs, computing "
+                "overlapped with writing",
+            ],
+        )
+    ]
 
 
 def _check_sample(store, space, base, speeds):

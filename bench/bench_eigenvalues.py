@@ -14,10 +14,10 @@ files.  Measured:
 * SymPy: the state-matrix entries of ``derive.benchmark_model.state_matrix()`` lambdified without
   common-subexpression elimination, stacked, then ``eigvals``.
 """
+
 from __future__ import annotations
 
 import numpy as np
-
 from common import Context, Row, fmt_time, measure_together, ratio_text
 
 SPEEDS = 1000
@@ -31,11 +31,12 @@ def bicycle_parameters(ctx: Context):
     result = ctx.bp("raw", repeats=15)
     if "error" not in result:
         values = {k: v[0] for k, v in result["parameters"].items() if k in BENCHMARK_NAMES}
-        return BenchmarkParameters.from_mapping(values, source="BicycleParameters Browser + Jason"), "BicycleParameters' values"
-    from bikerider.io.bicycleparameters import load_measured_bicycle
-    from bikerider.io.bicycleparameters import merge_rider, read_lumped_rider
-
+        return BenchmarkParameters.from_mapping(
+            values, source="BicycleParameters Browser + Jason"
+        ), "BicycleParameters' values"
     from common import DATA
+
+    from bikerider.io.bicycleparameters import load_measured_bicycle, merge_rider, read_lumped_rider
 
     bicycle = load_measured_bicycle(DATA / "bicycles" / "Browser" / "RawData" / "BrowserMeasured.txt")
     rider = read_lumped_rider(DATA / "riders" / "Jason" / "Parameters" / "JasonBrowserBenchmark.txt")
@@ -72,12 +73,15 @@ def run(ctx: Context) -> list[Row]:
     speeds = np.linspace(0.0, 10.0, SPEEDS)
     lam = lambdified_state_matrix()
     entries = list(matrix_entries(model.M, model.C1, model.K0, model.K2).values()) + [model.g]
-    t = measure_together({
-        "ours": lambda: eigenvalues_from_polynomial(model, speeds),
-        "current": lambda: model.eigenvalues(speeds),
-        "numpy": lambda: np.linalg.eigvals(model.state_matrix(speeds)),
-        "sympy": lambda: np.linalg.eigvals(lam(entries, speeds)),
-    }, ctx.repeats)
+    t = measure_together(
+        {
+            "ours": lambda: eigenvalues_from_polynomial(model, speeds),
+            "current": lambda: model.eigenvalues(speeds),
+            "numpy": lambda: np.linalg.eigvals(model.state_matrix(speeds)),
+            "sympy": lambda: np.linalg.eigvals(lam(entries, speeds)),
+        },
+        ctx.repeats,
+    )
     ours, current, numpy_t, sympy_t = t["ours"], t["current"], t["numpy"], t["sympy"]
 
     result = eigenvalues_from_polynomial(model, speeds)
@@ -85,11 +89,15 @@ def run(ctx: Context) -> list[Row]:
     accuracy = float((np.abs(result.values - reference.values) / np.maximum(1, np.abs(reference.values))).max())
     labels_agree = bool(np.all(result.labels == reference.labels))
 
-    baselines = [("bikerider WhippleModel.eigenvalues (eigvals + labels)", current.text()),
-                 ("numpy.linalg.eigvals, stacked", numpy_t.text()),
-                 ("sympy.lambdify (no CSE) state matrix + eigvals", sympy_t.text())]
-    notes = [f"model: Browser + Jason, {origin}; {SPEEDS} speeds 0-10 m/s",
-             f"max |quartic - eigvals| / max(1, |lambda|) = {accuracy:.1e}; mode labels agree: {labels_agree}"]
+    baselines = [
+        ("bikerider WhippleModel.eigenvalues (eigvals + labels)", current.text()),
+        ("numpy.linalg.eigvals, stacked", numpy_t.text()),
+        ("sympy.lambdify (no CSE) state matrix + eigvals", sympy_t.text()),
+    ]
+    notes = [
+        f"model: Browser + Jason, {origin}; {SPEEDS} speeds 0-10 m/s",
+        f"max |quartic - eigvals| / max(1, |lambda|) = {accuracy:.1e}; mode labels agree: {labels_agree}",
+    ]
     bp = ctx.bp("eig", n=SPEEDS, repeats=ctx.repeats)
     met = numpy_t.median / ours.median >= GOAL_NUMPY and accuracy <= GOAL_ACCURACY
     ratios = [f"{ratio_text(numpy_t.median, ours.median)} vs numpy"]
@@ -102,11 +110,22 @@ def run(ctx: Context) -> list[Row]:
         met = met and bp["seconds"] / ours.median >= GOAL_BP
         ours_at = eigenvalues_from_polynomial(model, bp["speeds"]).values
         theirs = [np.array([complex(*z) for z in row]) for row in bp["eigenvalues"]]
-        gap = max(float(np.abs(np.sort_complex(a) - np.sort_complex(b)).max() / max(1, np.abs(b).max()))
-                  for a, b in zip(ours_at, theirs))
+        gap = max(
+            float(np.abs(np.sort_complex(a) - np.sort_complex(b)).max() / max(1, np.abs(b).max()))
+            for a, b in zip(ours_at, theirs)
+        )
         notes.append(f"agreement with BicycleParameters' eigenvalues at {bp['speeds']} m/s: {gap:.1e} relative")
     ratios.append(f"{ratio_text(current.median, ours.median)} vs eigenvalues()")
     ratios.append(f"{ratio_text(sympy_t.median, ours.median)} vs lambdify")
-    return [Row("eigenvalues, one bicycle, 1000 speeds", f"{ours.text()} (quartic + labels)", baselines,
-                "; ".join(ratios), f">= {GOAL_BP:.0f}x BicycleParameters, >= {GOAL_NUMPY:.0f}x numpy eigvals, "
-                f"<= {GOAL_ACCURACY:.0e} vs eigvals", met, notes)]
+    return [
+        Row(
+            "eigenvalues, one bicycle, 1000 speeds",
+            f"{ours.text()} (quartic + labels)",
+            baselines,
+            "; ".join(ratios),
+            f">= {GOAL_BP:.0f}x BicycleParameters, >= {GOAL_NUMPY:.0f}x numpy eigvals, "
+            f"<= {GOAL_ACCURACY:.0e} vs eigvals",
+            met,
+            notes,
+        )
+    ]

@@ -19,6 +19,7 @@ uncertainties to every parameter.  Timed warm (imports done):
   geometry, handlebar and fork hung apart, bodies in five orientations: the stages one by one and
   the numeric least-squares stage).
 """
+
 from __future__ import annotations
 
 import statistics
@@ -54,15 +55,18 @@ def run(ctx: Context) -> list[Row]:
     goal = f">= {GOAL:.0f}x BicycleParameters"
     loops = loops_for(bikerider_parameters)
     general = other_layout()
-    notes = ["compared: reading the raw file, reducing it with uncertainty propagation, reading the lumped "
-             "rider and combining it with the rear frame, to the 25 benchmark parameters with sigmas - in "
-             "both tools"]
+    notes = [
+        "compared: reading the raw file, reducing it with uncertainty propagation, reading the lumped "
+        "rider and combining it with the rear frame, to the 25 benchmark parameters with sigmas - in "
+        "both tools"
+    ]
     server = ctx.bp_server()
     if isinstance(server, str):
         ours = [time_loop(bikerider_parameters, loops) for _ in range(rounds)]
         notes.append(server)
-        return [Row(item, f"{fmt_time(statistics.median(ours))} (median of {rounds}x{loops})", [], "-", goal, None,
-                    notes)]
+        return [
+            Row(item, f"{fmt_time(statistics.median(ours))} (median of {rounds}x{loops})", [], "-", goal, None, notes)
+        ]
     theirs: list[float] = []
     ours = []
     with server:
@@ -79,19 +83,27 @@ def run(ctx: Context) -> list[Row]:
             ours.append(time_loop(bikerider_parameters, loops))
     ratios = sorted(t / o for t, o in zip(theirs, ours))
     ratio = statistics.median(ratios)
-    baselines = [("BicycleParameters Bicycle(forceRawCalc=True) + add_rider",
-                  f"{fmt_time(statistics.median(theirs))} (median of {rounds} rounds of 5)")]
-    ratio_texts = [f"{ratio:.1f}x vs BicycleParameters (median of {rounds} interleaved rounds; "
-                   f"{ratios[0]:.1f}x-{ratios[-1]:.1f}x)"]
+    baselines = [
+        (
+            "BicycleParameters Bicycle(forceRawCalc=True) + add_rider",
+            f"{fmt_time(statistics.median(theirs))} (median of {rounds} rounds of 5)",
+        )
+    ]
+    ratio_texts = [
+        f"{ratio:.1f}x vs BicycleParameters (median of {rounds} interleaved rounds; {ratios[0]:.1f}x-{ratios[-1]:.1f}x)"
+    ]
     if general is not None:
         general_t = measure(general, 5 if ctx.quick else 9)
-        baselines.append(("(info) bikerider, a Measured file in another layout (Rigid), reading and reduction",
-                          general_t.text()))
-        notes.append(f"this file is in BicycleParameters' template layout, which the reduction takes in one generated "
-                     f"stage (derive/measured_reduction.py: values and the exact Jacobian in one plain-float "
-                     f"function); every other layout runs the stages one by one (Rigid: heights-and-diameters "
-                     f"geometry, handlebar and fork apart, five orientations by the numeric least-squares stage), "
-                     f"{fmt_time(general_t.median)} to read and reduce")
+        baselines.append(
+            ("(info) bikerider, a Measured file in another layout (Rigid), reading and reduction", general_t.text())
+        )
+        notes.append(
+            f"this file is in BicycleParameters' template layout, which the reduction takes in one generated "
+            f"stage (derive/measured_reduction.py: values and the exact Jacobian in one plain-float "
+            f"function); every other layout runs the stages one by one (Rigid: heights-and-diameters "
+            f"geometry, handlebar and fork apart, five orientations by the numeric least-squares stage), "
+            f"{fmt_time(general_t.median)} to read and reduce"
+        )
     params = bikerider_parameters()
     gaps = []
     for name in BENCHMARK_NAMES:
@@ -100,8 +112,19 @@ def run(ctx: Context) -> list[Row]:
             continue
         gaps.append((abs(float(ours_v) - theirs_v[0]) / max(abs(theirs_v[0]), 1e-12), name))
     worst = max(gaps)
-    notes.append(f"largest relative difference of the {len(gaps)} shared values: {worst[0]:.1e} ({worst[1]}); "
-                 "bikerider locates centres of mass by least squares over all hanging lines, BicycleParameters "
-                 "by the mean of pairwise intersections")
-    return [Row(item, f"{fmt_time(statistics.median(ours))} (median of {rounds}x{loops})", baselines,
-                "; ".join(ratio_texts), goal, ratio >= GOAL, notes)]
+    notes.append(
+        f"largest relative difference of the {len(gaps)} shared values: {worst[0]:.1e} ({worst[1]}); "
+        "bikerider locates centres of mass by least squares over all hanging lines, BicycleParameters "
+        "by the mean of pairwise intersections"
+    )
+    return [
+        Row(
+            item,
+            f"{fmt_time(statistics.median(ours))} (median of {rounds}x{loops})",
+            baselines,
+            "; ".join(ratio_texts),
+            goal,
+            ratio >= GOAL,
+            notes,
+        )
+    ]

@@ -16,10 +16,10 @@ in chunks of 1000 bicycles (1e5 pairs) so that neither holds more than a few hun
   canonical matrices (given to it untimed): state matrices at every speed, ``eigvals``, all real
   parts negative.  The notes count the (design, speed) points where the two disagree.
 """
+
 from __future__ import annotations
 
 import numpy as np
-
 from common import ROOT, Context, Row, measure_together, ratio_text
 
 PAIRS_BICYCLES, PAIRS_SPEEDS, CHUNK = 10_000, 100, 1000
@@ -54,9 +54,10 @@ def numpy_state_matrices(M, C1, K0, K2, g, speeds):
 
 
 def run(ctx: Context) -> list[Row]:
+    from bikerider.generated import benchmark_model as gen
+
     from bikerider.benchmark import WhippleModel
     from bikerider.benchmark.sweep import stability_map
-    from bikerider.generated import benchmark_model as gen
     from bikerider.shipped import named
 
     n_bicycles = PAIRS_BICYCLES // 10 if ctx.quick else PAIRS_BICYCLES
@@ -64,8 +65,10 @@ def run(ctx: Context) -> list[Row]:
     repeats = 2 if ctx.quick else 3
     speeds = np.linspace(0.0, 10.0, PAIRS_SPEEDS)
     batch = _random_models(n_bicycles)
-    chunks = [WhippleModel(batch.M[k:k + CHUNK], batch.C1[k:k + CHUNK], batch.K0[k:k + CHUNK], batch.K2[k:k + CHUNK])
-              for k in range(0, n_bicycles, CHUNK)]
+    chunks = [
+        WhippleModel(batch.M[k : k + CHUNK], batch.C1[k : k + CHUNK], batch.K0[k : k + CHUNK], batch.K2[k : k + CHUNK])
+        for k in range(0, n_bicycles, CHUNK)
+    ]
 
     def ours_A():
         for m in chunks:
@@ -83,8 +86,9 @@ def run(ctx: Context) -> list[Row]:
         for m in chunks:
             np.linalg.eigvals(numpy_state_matrices(m.M, m.C1, m.K0, m.K2, m.g, speeds))
 
-    t = measure_together({"ours_A": ours_A, "numpy_A": numpy_A, "ours_eig": ours_eig, "numpy_eig": numpy_eig},
-                         repeats, min_sample=0.0)
+    t = measure_together(
+        {"ours_A": ours_A, "numpy_A": numpy_A, "ours_eig": ours_eig, "numpy_eig": numpy_eig}, repeats, min_sample=0.0
+    )
     pairs = n_bicycles * PAIRS_SPEEDS
     # accuracy of both routes on the first chunk
     m = chunks[0]
@@ -93,24 +97,36 @@ def run(ctx: Context) -> list[Row]:
     reference = np.sort_complex(np.linalg.eigvals(m.state_matrix(speeds)).reshape(-1, 4))
     diff_eig = np.median(np.abs(ours - reference).max(axis=-1))
     rows = [
-        Row(f"A(v), {pairs:.0e} (bicycle, speed) pairs", f"{t['ours_A'].text()} (generated state_matrix)",
+        Row(
+            f"A(v), {pairs:.0e} (bicycle, speed) pairs",
+            f"{t['ours_A'].text()} (generated state_matrix)",
             [("plain NumPy: inv(M), block matrices by broadcasting", t["numpy_A"].text())],
-            f"{ratio_text(t['numpy_A'].median, t['ours_A'].median)} vs NumPy", f">= {GOAL_A:g}x NumPy",
+            f"{ratio_text(t['numpy_A'].median, t['ours_A'].median)} vs NumPy",
+            f">= {GOAL_A:g}x NumPy",
             t["numpy_A"].median >= GOAL_A * t["ours_A"].median,
-            [f"{n_bicycles} random bicycles x {PAIRS_SPEEDS} speeds, chunks of {CHUNK} bicycles; "
-             f"largest difference between the two {diff_A:.1e}"]),
-        Row(f"eigenvalues, {pairs:.0e} (bicycle, speed) pairs", f"{t['ours_eig'].text()} (quartic, labelled)",
+            [
+                f"{n_bicycles} random bicycles x {PAIRS_SPEEDS} speeds, chunks of {CHUNK} bicycles; "
+                f"largest difference between the two {diff_A:.1e}"
+            ],
+        ),
+        Row(
+            f"eigenvalues, {pairs:.0e} (bicycle, speed) pairs",
+            f"{t['ours_eig'].text()} (quartic, labelled)",
             [("numpy.linalg.eigvals of the NumPy state matrices (unlabelled)", t["numpy_eig"].text())],
-            f"{ratio_text(t['numpy_eig'].median, t['ours_eig'].median)} vs NumPy", f">= {GOAL_EIGENVALUES:g}x NumPy",
+            f"{ratio_text(t['numpy_eig'].median, t['ours_eig'].median)} vs NumPy",
+            f">= {GOAL_EIGENVALUES:g}x NumPy",
             t["numpy_eig"].median >= GOAL_EIGENVALUES * t["ours_eig"].median,
-            [f"median over pairs of the largest eigenvalue difference to eigvals: {diff_eig:.1e} 1/s"]),
+            [f"median over pairs of the largest eigenvalue difference to eigvals: {diff_eig:.1e} 1/s"],
+        ),
     ]
     base = named("Benchmark")
     trails, masses = np.linspace(-0.02, 0.2, side), np.linspace(20.0, 140.0, side)
     map_speeds = np.linspace(0.0, 10.0, MAP_SPEEDS)
     grid_c, grid_m = np.meshgrid(trails, masses, indexing="ij")
-    args = {k: np.full(grid_c.shape, float(base.values[k])) for k in
-            "w c lam rR mR IRxx IRyy xB zB mB IBxx IBzz IBxz xH zH mH IHxx IHzz IHxz rF mF IFxx IFyy".split()}
+    args = {
+        k: np.full(grid_c.shape, float(base.values[k]))
+        for k in "w c lam rR mR IRxx IRyy xB zB mB IBxx IBzz IBxz xH zH mH IHxx IHzz IHxz rF mF IFxx IFyy".split()
+    }
     args["c"], args["mB"] = grid_c, grid_m
     M, C1, K0, K2 = (x.reshape(-1, 2, 2) for x in gen.canonical_matrices(**args))
 
@@ -120,20 +136,28 @@ def run(ctx: Context) -> list[Row]:
     def numpy_map():
         out = []
         for k in range(0, M.shape[0], CHUNK):
-            A = numpy_state_matrices(M[k:k + CHUNK], C1[k:k + CHUNK], K0[k:k + CHUNK], K2[k:k + CHUNK], 9.81, map_speeds)
+            A = numpy_state_matrices(
+                M[k : k + CHUNK], C1[k : k + CHUNK], K0[k : k + CHUNK], K2[k : k + CHUNK], 9.81, map_speeds
+            )
             out.append((np.linalg.eigvals(A).real < 0).all(axis=-1))
         return np.concatenate(out).reshape(side, side, MAP_SPEEDS)
 
     t = measure_together({"ours": ours_map, "numpy": numpy_map}, repeats, min_sample=0.0)
     ours_stable, numpy_stable = ours_map(), numpy_map()
     disagree = int((ours_stable != numpy_stable).sum())
-    rows.append(Row(f"stability map {side}x{side} designs at {MAP_SPEEDS} speeds",
-                    f"{t['ours'].text()} (stability_map + Sweep.stable)",
-                    [("plain NumPy: state matrices + eigvals at every (design, speed), matrices given",
-                      t["numpy"].text())],
-                    f"{ratio_text(t['numpy'].median, t['ours'].median)} vs NumPy", f">= {GOAL_MAP:g}x NumPy",
-                    t["numpy"].median >= GOAL_MAP * t["ours"].median,
-                    [f"trail -0.02-0.2 m x rear-body mass 20-140 kg of the benchmark bicycle; {disagree} of "
-                     f"{ours_stable.size} (design, speed) points disagree (a point on a stability boundary, "
-                     "where eigvals' rounding decides)"]))
+    rows.append(
+        Row(
+            f"stability map {side}x{side} designs at {MAP_SPEEDS} speeds",
+            f"{t['ours'].text()} (stability_map + Sweep.stable)",
+            [("plain NumPy: state matrices + eigvals at every (design, speed), matrices given", t["numpy"].text())],
+            f"{ratio_text(t['numpy'].median, t['ours'].median)} vs NumPy",
+            f">= {GOAL_MAP:g}x NumPy",
+            t["numpy"].median >= GOAL_MAP * t["ours"].median,
+            [
+                f"trail -0.02-0.2 m x rear-body mass 20-140 kg of the benchmark bicycle; {disagree} of "
+                f"{ours_stable.size} (design, speed) points disagree (a point on a stability boundary, "
+                "where eigvals' rounding decides)"
+            ],
+        )
+    )
     return rows

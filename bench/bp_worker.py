@@ -14,6 +14,7 @@ answers each with one line of JSON (so a benchmark can interleave rounds of both
               of ``n`` speeds, then the first grid interval where the largest real part of the
               complex (weave) eigenvalues and of the real ones changes sign, interpolated linearly.
 """
+
 from __future__ import annotations
 
 import contextlib
@@ -54,8 +55,12 @@ def versions(params: dict) -> dict:
     import numpy
     import uncertainties
 
-    return {"bicycleparameters": bicycleparameters.__version__, "numpy": numpy.__version__,
-            "uncertainties": uncertainties.__version__, "python": sys.version.split()[0]}
+    return {
+        "bicycleparameters": bicycleparameters.__version__,
+        "numpy": numpy.__version__,
+        "uncertainties": uncertainties.__version__,
+        "python": sys.version.split()[0],
+    }
 
 
 def raw(params: dict) -> dict:
@@ -77,8 +82,12 @@ def eig(params: dict) -> dict:
     with _quiet():
         seconds, (values, _) = _median_time(lambda: bicycle.eig(speeds), params.get("repeats", 7))
     picks = [0, len(speeds) // 2, len(speeds) - 1]
-    return {"seconds": seconds, "repeats": params.get("repeats", 7), "speeds": [float(speeds[i]) for i in picks],
-            "eigenvalues": [[[float(z.real), float(z.imag)] for z in values[i]] for i in picks]}
+    return {
+        "seconds": seconds,
+        "repeats": params.get("repeats", 7),
+        "speeds": [float(speeds[i]) for i in picks],
+        "eigenvalues": [[[float(z.real), float(z.imag)] for z in values[i]] for i in picks],
+    }
 
 
 def _crossing(speeds, signal) -> float | None:
@@ -112,11 +121,17 @@ def scan(params: dict) -> dict:
 
     with _quiet():
         seconds, (v_weave, v_capsize) = _median_time(find, params.get("repeats", 7))
-    return {"seconds": seconds, "repeats": params.get("repeats", 7), "weave": v_weave, "capsize": v_capsize,
-            "resolution": float(speeds[1] - speeds[0])}
+    return {
+        "seconds": seconds,
+        "repeats": params.get("repeats", 7),
+        "weave": v_weave,
+        "capsize": v_capsize,
+        "resolution": float(speeds[1] - speeds[0]),
+    }
 
 
 TASKS = {"versions": versions, "raw": raw, "eig": eig, "scan": scan}
+
 
 def serve() -> None:
     for line in sys.stdin:

@@ -12,6 +12,7 @@ BicycleParameters cannot share the project's virtual environment (it pins its ow
 so it lives in ``bench/.venv-baseline`` (``make bench`` creates it) and runs in a subprocess,
 :file:`bench/bp_worker.py`, which times itself and prints JSON.
 """
+
 from __future__ import annotations
 
 import json
@@ -100,8 +101,10 @@ class Context:
     def bp_server(self) -> BaselineServer | str:
         """A running :class:`BaselineServer`, or why there is none."""
         if not BASELINE_PYTHON.exists():
-            return (f"BicycleParameters baseline not installed ({BASELINE_VENV.relative_to(ROOT)} missing; "
-                    "`make bench` creates it with pip install bicycleparameters)")
+            return (
+                f"BicycleParameters baseline not installed ({BASELINE_VENV.relative_to(ROOT)} missing; "
+                "`make bench` creates it with pip install bicycleparameters)"
+            )
         return BaselineServer(self.bp_data())
 
     def cleanup(self) -> None:
@@ -148,8 +151,9 @@ def measure(fn: Callable[[], object], repeats: int = 7, min_sample: float = MIN_
     return Timing(statistics.median(time_loop(fn, loops) for _ in range(repeats)), repeats, loops)
 
 
-def measure_together(fns: dict[str, Callable[[], object]], repeats: int = 7,
-                     min_sample: float = MIN_SAMPLE) -> dict[str, Timing]:
+def measure_together(
+    fns: dict[str, Callable[[], object]], repeats: int = 7, min_sample: float = MIN_SAMPLE
+) -> dict[str, Timing]:
     """:func:`measure` for several functions, their timed loops interleaved round by round, so a
     change in the machine's load during the run affects all of them alike."""
     loops = {name: loops_for(fn, min_sample) for name, fn in fns.items()}
@@ -167,11 +171,18 @@ def ratio_text(baseline: float, ours: float) -> str:
 def run_bp_worker(task: str, params: dict, timeout: float = 600) -> dict:
     """Run ``bench/bp_worker.py TASK JSON`` with the baseline interpreter; parse its JSON output."""
     if not BASELINE_PYTHON.exists():
-        return {"error": f"BicycleParameters baseline not installed ({BASELINE_VENV.relative_to(ROOT)} missing; "
-                         "`make bench` creates it with pip install bicycleparameters)"}
+        return {
+            "error": f"BicycleParameters baseline not installed ({BASELINE_VENV.relative_to(ROOT)} missing; "
+            "`make bench` creates it with pip install bicycleparameters)"
+        }
     try:
-        proc = subprocess.run([str(BASELINE_PYTHON), str(BENCH / "bp_worker.py"), task, json.dumps(params)],
-                              capture_output=True, text=True, timeout=timeout, cwd=str(ROOT))
+        proc = subprocess.run(
+            [str(BASELINE_PYTHON), str(BENCH / "bp_worker.py"), task, json.dumps(params)],
+            capture_output=True,
+            text=True,
+            timeout=timeout,
+            cwd=str(ROOT),
+        )
     except subprocess.TimeoutExpired:
         return {"error": f"BicycleParameters worker timed out after {timeout:.0f} s ({task})"}
     if proc.returncode != 0:
@@ -194,10 +205,15 @@ class BaselineServer:
         self.data, self.timeout = data, timeout
         self.process: subprocess.Popen | None = None
 
-    def __enter__(self) -> "BaselineServer":
-        self.process = subprocess.Popen([str(BASELINE_PYTHON), str(BENCH / "bp_worker.py"), "serve"],
-                                        stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                                        text=True, cwd=str(ROOT))
+    def __enter__(self) -> BaselineServer:
+        self.process = subprocess.Popen(
+            [str(BASELINE_PYTHON), str(BENCH / "bp_worker.py"), "serve"],
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+            cwd=str(ROOT),
+        )
         return self
 
     def call(self, task: str, **params) -> dict:
@@ -252,6 +268,8 @@ def machine_facts(ctx: Context) -> dict[str, str]:
     if "error" in versions:
         facts["bicycleparameters"] = versions["error"]
     else:
-        facts["bicycleparameters"] = (f"{versions['bicycleparameters']} (own venv: python {versions['python']}, "
-                                      f"numpy {versions['numpy']}, uncertainties {versions['uncertainties']})")
+        facts["bicycleparameters"] = (
+            f"{versions['bicycleparameters']} (own venv: python {versions['python']}, "
+            f"numpy {versions['numpy']}, uncertainties {versions['uncertainties']})"
+        )
     return facts

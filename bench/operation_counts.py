@@ -13,6 +13,7 @@ Usage::
 
 Update the baseline only when a growth is understood and wanted (say why in the commit).
 """
+
 from __future__ import annotations
 
 import argparse
@@ -45,12 +46,16 @@ def load_counts(path: Path) -> dict[str, dict[str, int]]:
     """``{"module.function": {"after_cse": n, "before_cse": n}}`` from an operation-counts file."""
     data = json.loads(path.read_text(encoding="utf-8"))
     counts = data["operation_counts"]
-    return {f"{module}.{function}": dict(values) for module, functions in counts.items()
-            for function, values in functions.items()}
+    return {
+        f"{module}.{function}": dict(values)
+        for module, functions in counts.items()
+        for function, values in functions.items()
+    }
 
 
-def compare(baseline: dict[str, dict[str, int]], current: dict[str, dict[str, int]],
-            tolerance: float = TOLERANCE) -> Comparison:
+def compare(
+    baseline: dict[str, dict[str, int]], current: dict[str, dict[str, int]], tolerance: float = TOLERANCE
+) -> Comparison:
     """Growth beyond ``tolerance``, removed and added functions."""
     grown, changed = [], []
     for name, base in sorted(baseline.items()):

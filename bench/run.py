@@ -12,6 +12,7 @@ items (see :mod:`common`).  A ``bench_*.py`` module without ``run`` is executed 
 output is shown under the table.  A module that fails is reported and the others still run.
 The exit status is 0 unless ``--strict`` is given and a goal is not met.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -37,7 +38,7 @@ ORDER = ("eigenvalues", "critical_speeds", "batch", "raw_to_benchmark", "derive"
 
 
 def discover(only: list[str] | None) -> list[str]:
-    found = sorted(p.stem[len("bench_"):] for p in BENCH.glob("bench_*.py"))
+    found = sorted(p.stem[len("bench_") :] for p in BENCH.glob("bench_*.py"))
     ordered = [n for n in ORDER if n in found] + [n for n in found if n not in ORDER]
     if only:
         unknown = [n for n in only if n not in found]
@@ -60,15 +61,26 @@ def run_module(name: str, ctx: Context) -> tuple[list[Row], str]:
     if module.__doc__:
         DESCRIPTIONS[name] = module.__doc__.strip()
     if not hasattr(module, "run"):
-        proc = subprocess.run([sys.executable, str(BENCH / f"bench_{name}.py")], capture_output=True, text=True,
-                              cwd=str(ROOT), timeout=1800)
+        proc = subprocess.run(
+            [sys.executable, str(BENCH / f"bench_{name}.py")],
+            capture_output=True,
+            text=True,
+            cwd=str(ROOT),
+            timeout=1800,
+        )
         output = proc.stdout + (f"\n(exit status {proc.returncode}) {proc.stderr[-2000:]}" if proc.returncode else "")
         return [], f"### bench_{name}.py (script output)\n\n```\n{output.strip()}\n```\n"
     try:
         return list(module.run(ctx)), ""
     except Exception:  # noqa: BLE001
-        return [Row(name, "FAILED: " + traceback.format_exc(limit=3).strip().splitlines()[-1], met=False,
-                    notes=[traceback.format_exc(limit=6)])], ""
+        return [
+            Row(
+                name,
+                "FAILED: " + traceback.format_exc(limit=3).strip().splitlines()[-1],
+                met=False,
+                notes=[traceback.format_exc(limit=6)],
+            )
+        ], ""
 
 
 def _cell(text: str) -> str:
@@ -80,7 +92,9 @@ def table(rows: list[Row]) -> str:
     for row in rows:
         baselines = "<br>".join(f"{name}: {value}" for name, value in row.baselines) or "-"
         met = {True: "yes", False: "**no**", None: "n/a"}[row.met]
-        lines.append("| " + " | ".join(_cell(x) for x in (row.item, row.bikerider, baselines, row.ratio, row.goal, met)) + " |")
+        lines.append(
+            "| " + " | ".join(_cell(x) for x in (row.item, row.bikerider, baselines, row.ratio, row.goal, met)) + " |"
+        )
     return "\n".join(lines)
 
 
@@ -96,7 +110,7 @@ def notes_text(rows: list[Row]) -> str:
 def document(command: str, facts: dict[str, str], rows: list[Row], extra: str, seconds: float) -> str:
     met = sum(r.met is True for r in rows)
     judged = sum(r.met is not None for r in rows)
-    when = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+    when = datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M UTC")
     parts = [
         "# Performance",
         "",
@@ -161,7 +175,11 @@ def main(argv: list[str] | None = None) -> int:
     finally:
         ctx.cleanup()
     seconds = time.perf_counter() - start
-    command = "make bench" if not argv and os.environ.get("MAKELEVEL") else "python bench/run.py " + " ".join(argv or sys.argv[1:])
+    command = (
+        "make bench"
+        if not argv and os.environ.get("MAKELEVEL")
+        else "python bench/run.py " + " ".join(argv or sys.argv[1:])
+    )
     text = document(command.strip(), facts, rows, "\n".join(extra), seconds)
     print(text)
     if args.write_docs:

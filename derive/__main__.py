@@ -1,4 +1,5 @@
 """Regenerate every module in ``generated/``: ``python -m derive [--out DIR] [--check]``."""
+
 from __future__ import annotations
 
 import argparse
@@ -60,7 +61,9 @@ def main(argv: list[str] | None = None) -> int:
     start = time.perf_counter()
     counts = generate(args.out)
     total = sum(after for module in counts.values() for _, after in module.values())
-    LOG.info("generated %d modules (%d operations after CSE) in %.1f s", len(counts), total, time.perf_counter() - start)
+    LOG.info(
+        "generated %d modules (%d operations after CSE) in %.1f s", len(counts), total, time.perf_counter() - start
+    )
     return 0
 
 

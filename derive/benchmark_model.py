@@ -14,6 +14,7 @@ characteristic polynomial ``det(M s^2 + v C1 s + g K0 + v^2 K2)`` and, as polyno
 The matrix-level functions take all sixteen entries, so they serve any two-degree-of-freedom
 canonical model (identified matrices, models with added effects), not just the benchmark.
 """
+
 from __future__ import annotations
 
 import sympy as sp
@@ -237,16 +238,24 @@ def build() -> GeneratedModule:
             name="critical_speed_polynomials",
             args=entry_args + [g],
             outputs=[
-                Output("capsize", _padded(polys["capsize"], 3),
-                       "coefficients in u = v^2 of det(g K0 + u K2), highest first [kg^2 m^2/s^4 ...]",
-                       vector=True),
-                Output("weave", _padded(polys["weave"], 3),
-                       "coefficients in u = v^2 of the third Hurwitz determinant over v^2, highest first",
-                       vector=True),
-                Output("a1_over_v", _padded(polys["a1_over_v"], 2),
-                       "coefficients in u of a1/v, highest first", vector=True),
-                Output("a3_over_v", _padded(polys["a3_over_v"], 2),
-                       "coefficients in u of a3/v, highest first", vector=True),
+                Output(
+                    "capsize",
+                    _padded(polys["capsize"], 3),
+                    "coefficients in u = v^2 of det(g K0 + u K2), highest first [kg^2 m^2/s^4 ...]",
+                    vector=True,
+                ),
+                Output(
+                    "weave",
+                    _padded(polys["weave"], 3),
+                    "coefficients in u = v^2 of the third Hurwitz determinant over v^2, highest first",
+                    vector=True,
+                ),
+                Output(
+                    "a1_over_v", _padded(polys["a1_over_v"], 2), "coefficients in u of a1/v, highest first", vector=True
+                ),
+                Output(
+                    "a3_over_v", _padded(polys["a3_over_v"], 2), "coefficients in u of a3/v, highest first", vector=True
+                ),
             ],
             summary="Polynomials in u = v^2 whose positive roots are the capsize and weave speeds.",
             scalar=True,
@@ -262,9 +271,12 @@ def build() -> GeneratedModule:
             name="discriminant_polynomial",
             args=entry_args + [g],
             outputs=[
-                Output("discriminant", _padded(discriminant_polynomial(), 7),
-                       "coefficients in u = v^2 of the discriminant of the characteristic quartic in s, "
-                       "highest first", vector=True),
+                Output(
+                    "discriminant",
+                    _padded(discriminant_polynomial(), 7),
+                    "coefficients in u = v^2 of the discriminant of the characteristic quartic in s, highest first",
+                    vector=True,
+                ),
             ],
             summary="The discriminant of the characteristic polynomial in s, as a polynomial in u = v^2.",
             notes=(

@@ -6,6 +6,7 @@ common-subexpression pass over all of its outputs together.  Every emitted file 
 naming its generator and a hash of the generator's inputs, and the operation counts before and
 after common-subexpression elimination.
 """
+
 from __future__ import annotations
 
 import hashlib
@@ -135,8 +136,7 @@ class GeneratedFunction:
                 extra = e.free_symbols - allowed
                 if extra:
                     raise ValueError(
-                        f"{self.name}: output {out.name} uses {sorted(map(str, extra))}, "
-                        "which are not arguments"
+                        f"{self.name}: output {out.name} uses {sorted(map(str, extra))}, which are not arguments"
                     )
 
 
@@ -232,8 +232,12 @@ def _render_function(fn: GeneratedFunction) -> _Rendered:
         scalar = {
             "assignments": [(str(lhs), print_scalar(rhs)) for lhs, rhs in replacements],
             "returns": _scalar_returns(fn.outputs, [print_scalar(e) for e in reduced]),
-            "sparse": (f"; {', '.join(sparse)} as a flat tuple of the entries that are not identically zero "
-                       "(bikerider.generated.manifest gives their indices)") if sparse else "",
+            "sparse": (
+                f"; {', '.join(sparse)} as a flat tuple of the entries that are not identically zero "
+                "(bikerider.generated.manifest gives their indices)"
+            )
+            if sparse
+            else "",
         }
     outputs = []
     k = 0
@@ -265,7 +269,7 @@ def _scalar_returns(outputs: list[Output], sources: list[str]) -> list[str]:
         n = 1
         for size in suffix:
             n *= size
-        flat = sources[k:k + n]
+        flat = sources[k : k + n]
         k += n
         if out.sparse:
             returns.append("(" + "".join(f"{flat[i]}, " for i in out.nonzero).rstrip(" ") + ")")
@@ -275,7 +279,7 @@ def _scalar_returns(outputs: list[Output], sources: list[str]) -> list[str]:
         elif len(suffix) == 1:
             returns.append("(" + ", ".join(flat) + ",)")
         else:
-            rows = [flat[i * suffix[1]:(i + 1) * suffix[1]] for i in range(suffix[0])]
+            rows = [flat[i * suffix[1] : (i + 1) * suffix[1]] for i in range(suffix[0])]
             returns.append("(" + ", ".join("(" + ", ".join(r) + ",)" for r in rows) + ",)")
     return returns
 
@@ -286,8 +290,9 @@ PYPROJECT = DERIVE_DIR.parent / "pyproject.toml"
 def _ruff(*args: str, source: str | None = None) -> str:
     """Run the project's pinned ruff (``pip install -e .[test]`` installs it) and return its output."""
     try:
-        done = subprocess.run([sys.executable, "-m", "ruff", *args], input=source, capture_output=True, text=True,
-                              check=True)
+        done = subprocess.run(
+            [sys.executable, "-m", "ruff", *args], input=source, capture_output=True, text=True, check=True
+        )
     except subprocess.CalledProcessError as exc:
         raise RuntimeError(f"ruff {' '.join(args)} failed: {exc.stderr.strip()}") from None
     return done.stdout
@@ -337,15 +342,23 @@ def _environment() -> jinja2.Environment:
 def render_module(module: GeneratedModule, generator: str, digest: str) -> tuple[str, dict[str, tuple[int, int]]]:
     """Render one module to source text; also return ``{function: (ops_before, ops_after)}``."""
     rendered = [_render_function(f) for f in module.functions]
-    text = _environment().get_template("module.py.jinja").render(
-        module=module,
-        functions=rendered,
-        uses_math=any("math." in source for r in rendered if r.scalar
-                      for source in [*(rhs for _, rhs in r.scalar["assignments"]), *r.scalar["returns"]]),
-        exports=[name for r in rendered for name in ((r.name, f"{r.name}_scalar") if r.scalar else (r.name,))],
-        generator=generator,
-        digest=digest,
-        sympy_version=sp.__version__,
+    text = (
+        _environment()
+        .get_template("module.py.jinja")
+        .render(
+            module=module,
+            functions=rendered,
+            uses_math=any(
+                "math." in source
+                for r in rendered
+                if r.scalar
+                for source in [*(rhs for _, rhs in r.scalar["assignments"]), *r.scalar["returns"]]
+            ),
+            exports=[name for r in rendered for name in ((r.name, f"{r.name}_scalar") if r.scalar else (r.name,))],
+            generator=generator,
+            digest=digest,
+            sympy_version=sp.__version__,
+        )
     )
     counts = {r.name: (r.ops_before, r.ops_after) for r in rendered}
     return format_source(text, f"generated/{module.name}.py"), counts
@@ -367,9 +380,17 @@ def jacobian(outputs: list[sp.Expr], args: list[sp.Symbol]) -> sp.Matrix:
     return sp.Matrix(len(outputs), len(args), lambda i, j: outputs[i].diff(args[j]))
 
 
-def stage_functions(module: str, name: str, inputs: list[sp.Symbol], outputs: dict[str, sp.Expr], summary: str,
-                    checks: dict[str, sp.Expr] | None = None, derivatives: sp.Matrix | None = None,
-                    notes: str = "", scalar: bool = True) -> tuple[list[GeneratedFunction], Stage]:
+def stage_functions(
+    module: str,
+    name: str,
+    inputs: list[sp.Symbol],
+    outputs: dict[str, sp.Expr],
+    summary: str,
+    checks: dict[str, sp.Expr] | None = None,
+    derivatives: sp.Matrix | None = None,
+    notes: str = "",
+    scalar: bool = True,
+) -> tuple[list[GeneratedFunction], Stage]:
     """A stage kind emitted as two functions: ``<name>`` (its outputs as one vector ``values``, and
     ``checks`` when there are any) and ``<name>_jacobian``, the same and the Jacobian (what a chain
     rule needs, in one call).
@@ -395,19 +416,34 @@ def stage_functions(module: str, name: str, inputs: list[sp.Symbol], outputs: di
     args = ", ".join(s.name for s in inputs)
     value_outputs = [Output("values", sp.Matrix(list(outputs.values())), f"[{names}] [SI]", vector=True)]
     if checks:
-        value_outputs.append(Output("checks", sp.Matrix(list(checks.values())),
-                                    f"[{', '.join(checks)}], for the runtime's checks [SI]", vector=True))
+        value_outputs.append(
+            Output(
+                "checks",
+                sp.Matrix(list(checks.values())),
+                f"[{', '.join(checks)}], for the runtime's checks [SI]",
+                vector=True,
+            )
+        )
     matrix = derivatives if derivatives is not None else jacobian(list(outputs.values()), inputs)
     functions = [
         GeneratedFunction(name, list(inputs), value_outputs, summary, notes=notes, scalar=scalar),
-        GeneratedFunction(f"{name}_jacobian", list(inputs),
-                          [*value_outputs, Output("jacobian", matrix, f"d[{names}]/d[{args}] [SI]", sparse=True)],
-                          f"{name} and its Jacobian (rows in output order, columns in argument order), with one "
-                          "common-subexpression pass over both.", scalar=scalar),
+        GeneratedFunction(
+            f"{name}_jacobian",
+            list(inputs),
+            [*value_outputs, Output("jacobian", matrix, f"d[{names}]/d[{args}] [SI]", sparse=True)],
+            f"{name} and its Jacobian (rows in output order, columns in argument order), with one "
+            "common-subexpression pass over both.",
+            scalar=scalar,
+        ),
     ]
     stage = Stage(
-        name, list(inputs), list(outputs), f"{module}.{name}", [("values", (i,)) for i in range(len(outputs))],
-        f"{module}.{name}_jacobian", [(check, "checks", (i,)) for i, check in enumerate(checks)],
+        name,
+        list(inputs),
+        list(outputs),
+        f"{module}.{name}",
+        [("values", (i,)) for i in range(len(outputs))],
+        f"{module}.{name}_jacobian",
+        [(check, "checks", (i,)) for i, check in enumerate(checks)],
         list(outputs.values()),
     )
     return functions, stage

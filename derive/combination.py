@@ -4,6 +4,7 @@ whole chain from the paper's measurements to the 26 benchmark values (Table 12).
 Both bodies are symmetric about the XZ plane, so their centres of mass have y = 0 and the parallel
 axis terms (Eq. 13) move only the xx, yy, zz and xz entries.
 """
+
 from __future__ import annotations
 
 import sympy as sp
@@ -37,8 +38,14 @@ def rear_body() -> tuple[sp.Expr, sp.Expr, sp.Expr, sp.Matrix]:
     mBf, xBf, zBf, IBfxx, IBfyy, IBfzz, IBfxz = syms(FRAME_ARGS)
     mBr, xBr, zBr, IBrxx, IBryy, IBrzz, IBrxz = syms(RIDER_BODY_ARGS)
     return combine(
-        mBf, xBf, zBf, _tensor(IBfxx, IBfyy, IBfzz, IBfxz),
-        mBr, xBr, zBr, _tensor(IBrxx, IBryy, IBrzz, IBrxz),
+        mBf,
+        xBf,
+        zBf,
+        _tensor(IBfxx, IBfyy, IBfzz, IBfxz),
+        mBr,
+        xBr,
+        zBr,
+        _tensor(IBrxx, IBryy, IBrzz, IBrxz),
     )
 
 
@@ -51,12 +58,22 @@ def benchmark_chain() -> tuple[list[sp.Symbol], sp.Matrix]:
     values = {name: sym(name) for name in BENCHMARK_NAMES}
     values.update(
         lam=sp.pi / 2 - sym("lam_ht"),
-        mB=mB, xB=xB, zB=zB, IBxx=IB[0, 0], IByy=IB[1, 1], IBzz=IB[2, 2], IBxz=IB[0, 2],
+        mB=mB,
+        xB=xB,
+        zB=zB,
+        IBxx=IB[0, 0],
+        IByy=IB[1, 1],
+        IBzz=IB[2, 2],
+        IBxz=IB[0, 2],
     )
     geometry = [s for s in syms(rider_model.GEOMETRY_ARGS) if s.name not in ("w_rh", "w_fh")]
     args = (
-        geometry + [sym("g")] + syms(BODY_ARGS) + syms(FRAME_ARGS)
-        + syms(rider_model.RIDER_ARGS) + syms(rider_model.SEGMENT_ARGS)
+        geometry
+        + [sym("g")]
+        + syms(BODY_ARGS)
+        + syms(FRAME_ARGS)
+        + syms(rider_model.RIDER_ARGS)
+        + syms(rider_model.SEGMENT_ARGS)
     )
     return args, sp.Matrix([values[n] for n in BENCHMARK_NAMES])
 
@@ -71,7 +88,8 @@ def build() -> GeneratedModule:
         names={"BENCHMARK_NAMES": tuple(BENCHMARK_NAMES)},
         functions=[
             GeneratedFunction(
-                "rear_body", syms(FRAME_ARGS) + syms(RIDER_BODY_ARGS),
+                "rear_body",
+                syms(FRAME_ARGS) + syms(RIDER_BODY_ARGS),
                 [
                     Output("mB", mB, "rear body mass (Eq. 15) [kg]"),
                     Output("xB", xB, "rear body centre of mass x (Eq. 16) [m]"),
@@ -82,15 +100,23 @@ def build() -> GeneratedModule:
                 scalar=True,  # merging one lumped rider (bikerider.bicycle.to_benchmark)
             ),
             GeneratedFunction(
-                "estimate_chain", chain_args,
-                [Output("parameters", chain,
+                "estimate_chain",
+                chain_args,
+                [
+                    Output(
+                        "parameters",
+                        chain,
                         "the 26 benchmark values in the order " + ", ".join(BENCHMARK_NAMES) + " [SI]",
-                        vector=True)],
+                        vector=True,
+                    )
+                ],
                 "The whole estimate in one expression: bicycle and rider measurements to the benchmark "
                 "parameters (Table 12).",
-                notes=("lam = pi/2 - lam_ht.  IByy is NaN-free only when IBfyy is given.  The runtime computes "
-                       "the same chain stage by stage (bikerider.uncertainty.stages); this one-piece form is "
-                       "the tests' independent check of the stages."),
+                notes=(
+                    "lam = pi/2 - lam_ht.  IByy is NaN-free only when IBfyy is given.  The runtime computes "
+                    "the same chain stage by stage (bikerider.uncertainty.stages); this one-piece form is "
+                    "the tests' independent check of the stages."
+                ),
             ),
         ],
     )

@@ -1,5 +1,6 @@
 """Files in ``generated/`` that are not function modules: the package init, the manifest, the
 symbol table and the operation counts."""
+
 from __future__ import annotations
 
 import json
@@ -25,8 +26,9 @@ STATES = {
 """The state vector of each generated state-space function (the derivations' docstrings say so)."""
 
 
-def build(digest: str, generator: str, counts: dict, modules: list[GeneratedModule],
-          kernels: dict[str, dict] | None = None) -> dict[str, str]:
+def build(
+    digest: str, generator: str, counts: dict, modules: list[GeneratedModule], kernels: dict[str, dict] | None = None
+) -> dict[str, str]:
     """Return ``{filename: text}`` for the package init, manifest, symbol table and operation counts.
 
     ``kernels``: the manifest entries of the fused C kernels (``derive.kernels.manifest_entries``),
@@ -51,8 +53,10 @@ def build(digest: str, generator: str, counts: dict, modules: list[GeneratedModu
     ops = {m: {f: {"before_cse": b, "after_cse": a} for f, (b, a) in fns.items()} for m, fns in counts.items()}
     ops_text = json.dumps({"inputs_hash": digest, "operation_counts": ops}, indent=2, sort_keys=True) + "\n"
     python = {"__init__.py": init, "manifest.py": head + manifest(modules, kernels), "symbol_table.py": table}
-    return {**{name: format_source(text, f"generated/{name}") for name, text in python.items()},
-            "operation_counts.json": ops_text}
+    return {
+        **{name: format_source(text, f"generated/{name}") for name, text in python.items()},
+        "operation_counts.json": ops_text,
+    }
 
 
 def _shape(output: Output) -> tuple[int, ...]:
@@ -94,13 +98,13 @@ def manifest(modules: list[GeneratedModule], kernels: dict[str, dict] | None = N
     for key, fn in functions.items():
         out += [
             f"    {key!r}: {{",
-            f"        \"args\": {tuple(a.name for a in fn.args)!r},",
-            f"        \"outputs\": {tuple((o.name, _shape(o)) for o in fn.outputs)!r},",
-            f"        \"scalar\": {fn.scalar!r},",
+            f'        "args": {tuple(a.name for a in fn.args)!r},',
+            f'        "outputs": {tuple((o.name, _shape(o)) for o in fn.outputs)!r},',
+            f'        "scalar": {fn.scalar!r},',
         ]
         sparse = {o.name: o.nonzero for o in fn.outputs if o.sparse}
         if sparse and fn.scalar:
-            out.append(f"        \"nonzero\": {sparse!r},")
+            out.append(f'        "nonzero": {sparse!r},')
         out.append("    },")
     out += ["}", "", "STAGES = {"]
     for stage in stages:
@@ -111,8 +115,12 @@ def manifest(modules: list[GeneratedModule], kernels: dict[str, dict] | None = N
     out += [f"    {key!r}: {tuple(value)!r}," for key, value in STATES.items()]
     out += ["}", "", "KERNELS = {"]
     for key, entry in (kernels or {}).items():
-        out += [f"    {key!r}: {{", f"        \"args\": {tuple(entry['args'])!r},",
-                f"        \"outputs\": {tuple(entry['outputs'])!r},", "    },"]
+        out += [
+            f"    {key!r}: {{",
+            f'        "args": {tuple(entry["args"])!r},',
+            f'        "outputs": {tuple(entry["outputs"])!r},',
+            "    },",
+        ]
     out += ["}"]
     for key, value in {**names, **_gap_names()}.items():
         out += ["", f"{key} = {value!r}"]
@@ -121,8 +129,10 @@ def manifest(modules: list[GeneratedModule], kernels: dict[str, dict] | None = N
 
 def _gap_names() -> dict[str, tuple[str, ...]]:
     """The argument groups of the gap-effect models (``derive/gap_effects.py``) the runtime names."""
-    return {"UPPER_BODY_ARGS": tuple(gap_effects.UPPER_BODY_ARGS.split()),
-            "TYRE_ARGS": tuple(gap_effects.TYRE_ARGS.split())}
+    return {
+        "UPPER_BODY_ARGS": tuple(gap_effects.UPPER_BODY_ARGS.split()),
+        "TYRE_ARGS": tuple(gap_effects.TYRE_ARGS.split()),
+    }
 
 
 def check_stage(stage: Stage, functions: dict[str, GeneratedFunction]) -> None:
@@ -143,8 +153,9 @@ def check_stage(stage: Stage, functions: dict[str, GeneratedFunction]) -> None:
     if stage.exprs is None:
         return
     rng = random.Random(stage.name)
-    point = {s: sp.Rational(rng.randint(30, 90), 100) * (1 if s.is_positive else rng.choice((-1, 1)))
-             for s in stage.inputs}
+    point = {
+        s: sp.Rational(rng.randint(30, 90), 100) * (1 if s.is_positive else rng.choice((-1, 1))) for s in stage.inputs
+    }
     outputs = {o.name: o for o in value.outputs}
     for output, (name, index), expr in zip(stage.outputs, stage.picks, stage.exprs):
         picked = outputs[name].expr
@@ -153,5 +164,6 @@ def check_stage(stage: Stage, functions: dict[str, GeneratedFunction]) -> None:
         difference = sp.N((picked - expr).xreplace(point), 30)
         scale = abs(sp.N(expr.xreplace(point), 30)) + 1
         if not abs(difference) <= 1e-20 * scale:
-            raise ValueError(f"stage {stage.name}: {stage.value} output {name}{list(index)} is not the stage's "
-                             f"output {output}")
+            raise ValueError(
+                f"stage {stage.name}: {stage.value} output {name}{list(index)} is not the stage's output {output}"
+            )

@@ -48,6 +48,7 @@ Rows and columns of every matrix follow the coordinates; the rigid-rider models 
 blocks with ``theta`` removed (``theta = 0`` is a holonomic constraint whose reaction acts only in
 the ``theta`` equation).
 """
+
 from __future__ import annotations
 
 from functools import cache
@@ -86,20 +87,20 @@ class _Jet:
     def __init__(self, a0, a1, a2):
         self.o = [sp.Matrix(a0), sp.Matrix(a1), sp.Matrix(a2)]
 
-    def __mul__(self, other: "_Jet") -> "_Jet":
+    def __mul__(self, other: _Jet) -> _Jet:
         a, b = self.o, other.o
         return _Jet(a[0] * b[0], a[0] * b[1] + a[1] * b[0], a[0] * b[2] + a[1] * b[1] + a[2] * b[0])
 
-    def __add__(self, other: "_Jet") -> "_Jet":
+    def __add__(self, other: _Jet) -> _Jet:
         return _Jet(*[x + y for x, y in zip(self.o, other.o)])
 
-    def __sub__(self, other: "_Jet") -> "_Jet":
+    def __sub__(self, other: _Jet) -> _Jet:
         return _Jet(*[x - y for x, y in zip(self.o, other.o)])
 
-    def scaled(self, factor: sp.Expr) -> "_Jet":
+    def scaled(self, factor: sp.Expr) -> _Jet:
         return _Jet(*[factor * x for x in self.o])
 
-    def T(self) -> "_Jet":  # noqa: N802 - transpose, as in SymPy
+    def T(self) -> _Jet:  # noqa: N802 - transpose, as in SymPy
         return _Jet(*[x.T for x in self.o])
 
 
@@ -178,8 +179,9 @@ def unconstrained_equations() -> dict[str, sp.Matrix]:
         trail), ``camber`` (2x5: wheel camber angles ``camber q``), ``loads`` (2x1: static normal
         loads ``N_R, N_F``).
     """
-    (w, c, lam, rR, mR, IRxx, IRyy, xB, zB, mB, IBxx, IBzz, IBxz,
-     xH, zH, mH, IHxx, IHzz, IHxz, rF, mF, IFxx, IFyy) = syms(BENCHMARK_ARGS)
+    (w, c, lam, rR, mR, IRxx, IRyy, xB, zB, mB, IBxx, IBzz, IBxz, xH, zH, mH, IHxx, IHzz, IHxz, rF, mF, IFxx, IFyy) = (
+        syms(BENCHMARK_ARGS)
+    )
     I_steer, c_steer, k_steer = syms(STEER_ARGS)
     m_arm, x_grip, z_grip, b_grip, k_arm, c_arm = syms(ARM_ARGS)
     m_u, x_u, z_u, IUxx, IUxz, IUzz, z_lean = syms(UPPER_BODY_ARGS)
@@ -322,8 +324,16 @@ def unconstrained_equations() -> dict[str, sp.Matrix]:
     # Static normal loads from the moment balance about the rear contact (rear body includes U).
     load_F = g * (mB * xB + mH * xH + mF * w) / w
     load_R = g * (mR + mB + mH + mF) - load_F
-    return {"M": M, "D": D, "K": K, "P": P, "S": S, "Papp": Papp, "camber": camber,
-            "loads": sp.Matrix([load_R, load_F])}
+    return {
+        "M": M,
+        "D": D,
+        "K": K,
+        "P": P,
+        "S": S,
+        "Papp": Papp,
+        "camber": camber,
+        "loads": sp.Matrix([load_R, load_F]),
+    }
 
 
 # ---------------------------------------------------------------------------------------------
@@ -346,17 +356,19 @@ def nonholonomic_equations(lean: bool) -> dict[str, sp.Matrix]:
     if S[:, 0] != sp.zeros(2, 1):
         raise AssertionError("slip depends on the lateral position")
     Pd_inv = Pd.inv()
-    dep_rate = -Pd_inv * Pi            # [Y', psi'] per independent rate
-    dep_pos = -Pd_inv * S[:, 2:]        # [Y', psi'] per independent coordinate
-    dep_psi = -Pd_inv * S[:, 1]         # [Y', psi'] per psi
+    dep_rate = -Pd_inv * Pi  # [Y', psi'] per independent rate
+    dep_pos = -Pd_inv * S[:, 2:]  # [Y', psi'] per independent coordinate
+    dep_psi = -Pd_inv * S[:, 1]  # [Y', psi'] per psi
     if sp.simplify(dep_psi[1]) != 0:
         raise AssertionError("the yaw rate depends on the heading")
-    p = sp.Matrix(_Q[2:2 + n_ind])
-    pd = sp.Matrix(_QD[2:2 + n_ind])
-    pdd = sp.Matrix(_QDD[2:2 + n_ind])
+    p = sp.Matrix(_Q[2 : 2 + n_ind])
+    pd = sp.Matrix(_QD[2 : 2 + n_ind])
+    pdd = sp.Matrix(_QDD[2 : 2 + n_ind])
     psi = _Q[1]
     yaw_rate = (dep_rate[1, :] * pd + dep_pos[1, :] * p)[0]
-    q_rate = sp.Matrix.vstack(sp.Matrix([(dep_rate[0, :] * pd + dep_pos[0, :] * p)[0] + dep_psi[0] * psi, yaw_rate]), pd)
+    q_rate = sp.Matrix.vstack(
+        sp.Matrix([(dep_rate[0, :] * pd + dep_pos[0, :] * p)[0] + dep_psi[0] * psi, yaw_rate]), pd
+    )
     q_acc = sp.Matrix.vstack(dep_rate * pdd + dep_pos * pd + dep_psi * yaw_rate, pdd)
     q_pos = sp.Matrix.vstack(sp.Matrix([_Q[0], psi]), p)
     T = sp.Matrix.vstack(dep_rate, sp.eye(n_ind))
@@ -370,8 +382,12 @@ def nonholonomic_equations(lean: bool) -> dict[str, sp.Matrix]:
     B = sp.zeros(n_ind, 2)
     B[0, 0] = 1
     B[1, 1] = 1
-    return {"M": Mr.applyfunc(sp.factor_terms), "C": Cr.applyfunc(sp.factor_terms),
-            "K": Kr.applyfunc(sp.factor_terms), "B": B}
+    return {
+        "M": Mr.applyfunc(sp.factor_terms),
+        "C": Cr.applyfunc(sp.factor_terms),
+        "K": Kr.applyfunc(sp.factor_terms),
+        "B": B,
+    }
 
 
 # ---------------------------------------------------------------------------------------------
@@ -409,7 +425,7 @@ def tyre_descriptor() -> dict[str, sp.Matrix]:
     # Camber thrust N c_gamma gamma acts at the contact point at once.
     A[3:8, 0:3] += P.T * sp.diag(loads[0] * c_gamma, loads[1] * c_gamma) * camber[:, 2:]
     # Slip force: (sigma_t / v) F' = -F - N c_alpha v_lat / v, acting t_p behind the contact.
-    rate_part = sp.Matrix.hstack(P[:, 0], P[:, 1:])      # coefficients of [u, r, phid, deltad, thetad]
+    rate_part = sp.Matrix.hstack(P[:, 0], P[:, 1:])  # coefficients of [u, r, phid, deltad, thetad]
     for i in range(2):
         E[8 + i, 8 + i] = sigma_t / v
         A[8 + i, 8 + i] = -1
@@ -418,8 +434,13 @@ def tyre_descriptor() -> dict[str, sp.Matrix]:
     slip = sp.zeros(2, n)
     slip[:, 0:3] = S[:, 2:]
     slip[:, 3:8] = rate_part
-    return {"E": E.applyfunc(sp.factor_terms), "A": A.applyfunc(sp.factor_terms), "B": B,
-            "slip": slip.applyfunc(sp.factor_terms), "loads": loads}
+    return {
+        "E": E.applyfunc(sp.factor_terms),
+        "A": A.applyfunc(sp.factor_terms),
+        "B": B,
+        "slip": slip.applyfunc(sp.factor_terms),
+        "loads": loads,
+    }
 
 
 # ---------------------------------------------------------------------------------------------
@@ -502,7 +523,9 @@ def build() -> GeneratedModule:
             name="tyre_slip_contacts",
             args=bench + upper + [g, v],
             outputs=[
-                Output("slip", tyre_eq["slip"], "lateral slip velocity of the rear and front contact per state [mixed]"),
+                Output(
+                    "slip", tyre_eq["slip"], "lateral slip velocity of the rear and front contact per state [mixed]"
+                ),
                 Output("loads", tyre_eq["loads"], "static normal loads of the rear and front tyre [N]", vector=True),
             ],
             summary="Contact slip velocities (slip @ x) and static tyre loads of the tyre model.",

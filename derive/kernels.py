@@ -24,6 +24,7 @@ source is emitted inside ``generated/design_kernels.py`` (as ``C_SOURCE``, with 
 output layout), which the runtime (``bikerider.design.compiled``) compiles with the machine's C
 compiler at first use.  The NumPy functions stay the reference: the tests hold the two equal.
 """
+
 from __future__ import annotations
 
 import sympy as sp
@@ -41,10 +42,17 @@ NEWTON_STEPS = 2
 """Guarded Newton steps after the closed-form quartic: ``bikerider.benchmark.quartic.NEWTON_STEPS``
 (a test holds the two equal)."""
 OUTPUTS = {
-    "bikerider_stability": (("lower", "float64", "3"), ("upper", "float64", "3"), ("lower_kind", "int8", "3"),
-                            ("upper_kind", "int8", "3"), ("weave", "float64", ""), ("capsize", "float64", ""),
-                            ("weave_frequency", "float64", ""), ("mass_ok", "int8", ""),
-                            ("stable_bits", "uint8", "bits")),
+    "bikerider_stability": (
+        ("lower", "float64", "3"),
+        ("upper", "float64", "3"),
+        ("lower_kind", "int8", "3"),
+        ("upper_kind", "int8", "3"),
+        ("weave", "float64", ""),
+        ("capsize", "float64", ""),
+        ("weave_frequency", "float64", ""),
+        ("mass_ok", "int8", ""),
+        ("stable_bits", "uint8", "bits"),
+    ),
     "bikerider_weave": (("real", "float64", "speeds"), ("imag", "float64", "speeds")),
 }
 """The output arrays of each exported C function, in the order of its pointer arguments (the
@@ -129,13 +137,18 @@ def build() -> dict:
     if leftover:
         raise ValueError(f"canonical matrices use functions other than sin/cos(lam): {leftover}")
     polys = benchmark_model.critical_speed_polynomials()
-    padded = (list(benchmark_model._padded(polys["capsize"], 3)) + list(benchmark_model._padded(polys["weave"], 3))
-              + list(benchmark_model._padded(polys["a1_over_v"], 2)) + list(benchmark_model._padded(polys["a3_over_v"], 2)))
+    padded = (
+        list(benchmark_model._padded(polys["capsize"], 3))
+        + list(benchmark_model._padded(polys["weave"], 3))
+        + list(benchmark_model._padded(polys["a1_over_v"], 2))
+        + list(benchmark_model._padded(polys["a3_over_v"], 2))
+    )
     zeros = structure(mats)
-    polynomials = _block([sp.expand(sp.sympify(e).xreplace(zeros)) for e in padded],
-                         [f"p[{k}][i]" for k in range(10)])
-    coefficients = _block([sp.expand(sp.sympify(e).xreplace(zeros)) for e in benchmark_model.characteristic_coefficients()],
-                          [f"a[{k}]" for k in range(5)])
+    polynomials = _block([sp.expand(sp.sympify(e).xreplace(zeros)) for e in padded], [f"p[{k}][i]" for k in range(10)])
+    coefficients = _block(
+        [sp.expand(sp.sympify(e).xreplace(zeros)) for e in benchmark_model.characteristic_coefficients()],
+        [f"a[{k}]" for k in range(5)],
+    )
     return {
         "args": [{"name": name, "index": k} for k, name in enumerate(args)],
         "lam_index": args.index("lam"),
@@ -145,8 +158,11 @@ def build() -> dict:
         "polynomial_block": polynomials["lines"],
         "coefficient_block": coefficients["lines"],
         "block": BLOCK,
-        "counts": {"entries": entries["ops"], "critical_speed_polynomials": polynomials["ops"],
-                   "characteristic_coefficients": coefficients["ops"]},
+        "counts": {
+            "entries": entries["ops"],
+            "critical_speed_polynomials": polynomials["ops"],
+            "characteristic_coefficients": coefficients["ops"],
+        },
         "argument_names": args,
         "speed": syms("v")[0].name,
         "newton_steps": NEWTON_STEPS,
@@ -161,7 +177,8 @@ def render(generator: str, digest: str) -> tuple[str, dict[str, tuple[int, int]]
     if "'''" in c_source or '"""' in c_source or "\\" in c_source:
         raise ValueError("the C source must not contain triple quotes or backslashes (it is embedded in a raw string)")
     text = env.get_template("design_kernels.py.jinja").render(
-        **context, c_source=c_source, generator=generator, digest=digest, sympy_version=sp.__version__)
+        **context, c_source=c_source, generator=generator, digest=digest, sympy_version=sp.__version__
+    )
     counts = {name: ops for name, ops in context["counts"].items()}
     return format_source(text, f"generated/{MODULE}.py"), counts
 

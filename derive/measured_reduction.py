@@ -51,6 +51,7 @@ seating), its derivatives are accumulated by the chain rule through them (:class
 rather than taken of one large substituted expression; common-subexpression elimination then
 shares the intermediates between the values and the derivatives.
 """
+
 from __future__ import annotations
 
 import sympy as sp
@@ -93,22 +94,27 @@ class ForwardChain:
     def expand(self, expr: sp.Expr) -> sp.Expr:
         """``expr`` with every intermediate replaced by its definition (inputs only)."""
         if len(self._expanded) < len(self.definitions):  # each definition once, in order
-            for symbol, definition in self.definitions[len(self._expanded):]:
+            for symbol, definition in self.definitions[len(self._expanded) :]:
                 self._expanded[symbol] = definition.xreplace(self._expanded)
         return sp.sympify(expr).xreplace(self._expanded)
 
     def jacobian(self, outputs: list[sp.Symbol]) -> sp.Matrix:
         """``d outputs / d inputs``, every entry in the inputs only."""
-        return sp.Matrix(len(outputs), len(self.inputs),
-                         lambda i, j: self.expand(self.gradient[outputs[i]].get(self.inputs[j], sp.Integer(0))))
+        return sp.Matrix(
+            len(outputs),
+            len(self.inputs),
+            lambda i, j: self.expand(self.gradient[outputs[i]].get(self.inputs[j], sp.Integer(0))),
+        )
 
-    def stage(self, name: str, outputs: dict[str, sp.Symbol], summary: str,
-              checks: dict[str, sp.Symbol] | None = None) -> tuple[list[GeneratedFunction], Stage]:
+    def stage(
+        self, name: str, outputs: dict[str, sp.Symbol], summary: str, checks: dict[str, sp.Symbol] | None = None
+    ) -> tuple[list[GeneratedFunction], Stage]:
         """The stage functions of ``outputs`` (intermediate symbols) with the chain's Jacobian."""
         values = {key: self.expand(symbol) for key, symbol in outputs.items()}
         check_values = {key: self.expand(symbol) for key, symbol in (checks or {}).items()}
-        return stage_functions(MODULE, name, self.inputs, values, summary, check_values,
-                               derivatives=self.jacobian(list(outputs.values())))
+        return stage_functions(
+            MODULE, name, self.inputs, values, summary, check_values, derivatives=self.jacobian(list(outputs.values()))
+        )
 
 
 def _rolled_radius(d: sp.Expr, n: sp.Expr) -> sp.Expr:
@@ -119,9 +125,13 @@ def _rolled_radius(d: sp.Expr, n: sp.Expr) -> sp.Expr:
 def _frame(chain: ForwardChain, rR, rF, lam, w, f) -> dict[str, sp.Symbol]:
     """The trail (Meijaard et al. 2007 geometry) and the wheel centres, the reference points of
     the hung bodies."""
-    return {"c": chain.define("c", (rF * sp.sin(lam) - f) / sp.cos(lam)),
-            "x_rear": chain.define("x_rear", sp.Integer(0)), "z_rear": chain.define("z_rear", -rR),
-            "x_front": chain.define("x_front", w), "z_front": chain.define("z_front", -rF)}
+    return {
+        "c": chain.define("c", (rF * sp.sin(lam) - f) / sp.cos(lam)),
+        "x_rear": chain.define("x_rear", sp.Integer(0)),
+        "z_rear": chain.define("z_rear", -rR),
+        "x_front": chain.define("x_front", w),
+        "z_front": chain.define("z_front", -rF),
+    }
 
 
 def define_frame_from_wheelbase(chain: ForwardChain, dR, nR, dF, nF, w, lam_ht, f) -> dict[str, sp.Symbol]:
@@ -133,9 +143,11 @@ def define_frame_from_wheelbase(chain: ForwardChain, dR, nR, dF, nF, w, lam_ht, 
 def frame_from_wheelbase() -> tuple[list[GeneratedFunction], Stage]:
     inputs = syms("dR nR dF nF w lam_ht f")
     chain = ForwardChain(inputs)
-    return chain.stage("frame_from_wheelbase", define_frame_from_wheelbase(chain, *inputs),
-                       "Wheel radii, steer axis tilt, trail and wheel centres from wheelbase, head tube angle and "
-                       "fork offset.")
+    return chain.stage(
+        "frame_from_wheelbase",
+        define_frame_from_wheelbase(chain, *inputs),
+        "Wheel radii, steer axis tilt, trail and wheel centres from wheelbase, head tube angle and fork offset.",
+    )
 
 
 def frame_from_heights() -> tuple[list[GeneratedFunction], Stage]:
@@ -150,13 +162,18 @@ def frame_from_heights() -> tuple[list[GeneratedFunction], Stage]:
     w = chain.define("w", (a + b) * sp.cos(lam) + along * sp.sin(lam))
     lam_ht = chain.define("lam_ht", sp.pi / 2 - lam)
     outputs = {"rR": rR, "rF": rF, "lam": lam, "lam_ht": lam_ht, "w": w, "f": b, **_frame(chain, rR, rF, lam, w, b)}
-    return chain.stage("frame_from_heights", outputs,
-                       "Wheel radii, steer axis tilt, head tube angle, wheelbase, fork offset, trail and wheel centres "
-                       "from heights and diameters.", checks={"a": a, "b": b})
+    return chain.stage(
+        "frame_from_heights",
+        outputs,
+        "Wheel radii, steer axis tilt, head tube angle, wheelbase, fork offset, trail and wheel centres "
+        "from heights and diameters.",
+        checks={"a": a, "b": b},
+    )
 
 
-def define_wheels(chain: ForwardChain, mP, dP, lP, TtP1, TtR1, TtF1, TcR1, TcF1, mR, mF, lR, lF, g
-                  ) -> dict[str, sp.Symbol]:
+def define_wheels(
+    chain: ForwardChain, mP, dP, lP, TtP1, TtR1, TtF1, TcR1, TcF1, mR, mF, lR, lF, g
+) -> dict[str, sp.Symbol]:
     rod = mP * (3 * (dP / 2) ** 2 + lP**2) / 12  # a solid rod about a transverse axis through its middle
     k_t = chain.define("k_t", 4 * sp.pi**2 * rod / TtP1**2)  # Eq. 1 inverted
     torsional, compound = pendulum.torsional_inertia(), pendulum.compound_inertia()
@@ -171,9 +188,11 @@ def define_wheels(chain: ForwardChain, mP, dP, lP, TtP1, TtR1, TtF1, TcR1, TcF1,
 def wheels() -> tuple[list[GeneratedFunction], Stage]:
     inputs = syms("mP dP lP TtP1 TtR1 TtF1 TcR1 TcF1 mR mF lR lF g")
     chain = ForwardChain(inputs)
-    return chain.stage("wheels", define_wheels(chain, *inputs),
-                       "The torsional pendulum's stiffness from its calibration rod, and the wheels' inertias (Eqs. "
-                       "1 and 7).")
+    return chain.stage(
+        "wheels",
+        define_wheels(chain, *inputs),
+        "The torsional pendulum's stiffness from its calibration rod, and the wheels' inertias (Eqs. 1 and 7).",
+    )
 
 
 def handlebar_reference() -> tuple[list[GeneratedFunction], Stage]:
@@ -184,22 +203,28 @@ def handlebar_reference() -> tuple[list[GeneratedFunction], Stage]:
     l2 = chain.define("l2", sp.sqrt((length - (d5 + d6) / 2) ** 2 - l1**2))  # along the steer axis, up
     x = chain.define("x", w - l2 * sp.sin(lam) + l1 * sp.cos(lam))
     z = chain.define("z", -rF - l2 * sp.cos(lam) - l1 * sp.sin(lam))
-    return chain.stage("handlebar_reference", {"x_ref": x, "z_ref": z},
-                       "The handlebar reference point of a handlebar measured apart from its fork.",
-                       checks={"l1": l1, "l2": l2})
+    return chain.stage(
+        "handlebar_reference",
+        {"x_ref": x, "z_ref": z},
+        "The handlebar reference point of a handlebar measured apart from its fork.",
+        checks={"l1": l1, "l2": l2},
+    )
 
 
-def define_hung_body_3(chain: ForwardChain, lam, x_ref, z_ref, k_t, hangs, offsets, periods,
-                       prefix: str = "") -> tuple[dict[str, sp.Symbol], dict[str, sp.Symbol]]:
+def define_hung_body_3(
+    chain: ForwardChain, lam, x_ref, z_ref, k_t, hangs, offsets, periods, prefix: str = ""
+) -> tuple[dict[str, sp.Symbol], dict[str, sp.Symbol]]:
     """Outputs ``x, z, Ixx, Ixz, Izz`` and checks ``miss_1..3, lines_det, eq6_det``."""
+
     def define(name, expr):
         return chain.define(prefix + name, expr)
 
     betas = [define(f"beta{i}", lam - h) for i, h in enumerate(hangs, start=1)]
     sines = [define(f"sin{i}", sp.sin(b)) for i, b in enumerate(betas, start=1)]
     cosines = [define(f"cos{i}", sp.cos(b)) for i, b in enumerate(betas, start=1)]
-    distances = [define(f"d{i}", s * x_ref + c * z_ref - a)
-                 for i, (s, c, a) in enumerate(zip(sines, cosines, offsets), start=1)]
+    distances = [
+        define(f"d{i}", s * x_ref + c * z_ref - a) for i, (s, c, a) in enumerate(zip(sines, cosines, offsets), start=1)
+    ]
     ss = define("ss", sp.Add(*(s * s for s in sines)))
     cc = define("cc", sp.Add(*(c * c for c in cosines)))
     sc = define("sc", sp.Add(*(s * c for s, c in zip(sines, cosines))))
@@ -208,13 +233,17 @@ def define_hung_body_3(chain: ForwardChain, lam, x_ref, z_ref, k_t, hangs, offse
     lines_det = define("linesdet", ss * cc - sc**2)
     x = define("x", (cc * sd - sc * cd) / lines_det)
     z = define("z", (ss * cd - sc * sd) / lines_det)
-    misses = {f"miss_{i}": define(f"miss{i}", s * x + c * z - d)
-              for i, (s, c, d) in enumerate(zip(sines, cosines, distances), start=1)}
+    misses = {
+        f"miss_{i}": define(f"miss{i}", s * x + c * z - d)
+        for i, (s, c, d) in enumerate(zip(sines, cosines, distances), start=1)
+    }
     solution, eq6_det = pendulum.three_orientation_solution()
     substitution = dict(zip(syms("T_1 T_2 T_3 alpha_1 alpha_2 alpha_3"), [*periods, *betas]))
     substitution[sym("k_t")] = k_t
-    inertia = {f"I{axes}": define(f"I{axes}", entry.xreplace(substitution))
-               for axes, entry in zip(("xx", "xz", "zz"), solution)}
+    inertia = {
+        f"I{axes}": define(f"I{axes}", entry.xreplace(substitution))
+        for axes, entry in zip(("xx", "xz", "zz"), solution)
+    }
     det = define("eq6det", eq6_det.xreplace(substitution))
     return {"x": x, "z": z, **inertia}, {**misses, "lines_det": lines_det, "eq6_det": det}
 
@@ -224,18 +253,25 @@ def hung_body_3() -> tuple[list[GeneratedFunction], Stage]:
     hangs, offsets, periods = syms("hang_1 hang_2 hang_3"), syms("off_1 off_2 off_3"), syms("T_1 T_2 T_3")
     chain = ForwardChain([lam, x_ref, z_ref, k_t, *hangs, *offsets, *periods])
     outputs, checks = define_hung_body_3(chain, lam, x_ref, z_ref, k_t, hangs, offsets, periods)
-    return chain.stage("hung_body_3", outputs,
-                       "Centre of mass (hanging lines) and in-plane inertia (Eq. 6) of a body hung in three "
-                       "orientations.", checks=checks)
+    return chain.stage(
+        "hung_body_3",
+        outputs,
+        "Centre of mass (hanging lines) and in-plane inertia (Eq. 6) of a body hung in three orientations.",
+        checks=checks,
+    )
 
 
 def hanging_line() -> tuple[list[GeneratedFunction], Stage]:
     lam, hang, off, x_ref, z_ref = syms("lam hang off x_ref z_ref")
     beta = lam - hang
     s, c = sp.sin(beta), sp.cos(beta)
-    return stage_functions(MODULE, "hanging_line", [lam, hang, off, x_ref, z_ref],
-                           {"s": s, "c": c, "d": s * x_ref + c * z_ref - off},
-                           "One hanging orientation's line s x + c z = d (a row of the least-squares centre of mass).")
+    return stage_functions(
+        MODULE,
+        "hanging_line",
+        [lam, hang, off, x_ref, z_ref],
+        {"s": s, "c": c, "d": s * x_ref + c * z_ref - off},
+        "One hanging orientation's line s x + c z = d (a row of the least-squares centre of mass).",
+    )
 
 
 def hung_orientation_equation() -> tuple[list[GeneratedFunction], Stage]:
@@ -243,17 +279,24 @@ def hung_orientation_equation() -> tuple[list[GeneratedFunction], Stage]:
     alpha = sym("alpha")
     row = [entry.xreplace({alpha: lam - hang}) for entry in pendulum.orientation_row(alpha)]
     J = pendulum.torsional_inertia().xreplace({sym("T"): T})
-    return stage_functions(MODULE, "hung_orientation_equation", [lam, hang, k_t, T],
-                           {"r_xx": row[0], "r_xz": row[1], "r_zz": row[2], "J": J},
-                           "One hanging orientation's row of Eq. 6, J = r . [Ixx, Ixz, Izz], with J from Eq. 1.")
+    return stage_functions(
+        MODULE,
+        "hung_orientation_equation",
+        [lam, hang, k_t, T],
+        {"r_xx": row[0], "r_xz": row[1], "r_zz": row[2], "J": J},
+        "One hanging orientation's row of Eq. 6, J = r . [Ixx, Ixz, Izz], with J from Eq. 1.",
+    )
 
 
-def define_compound_about_point(chain: ForwardChain, T, m_p, g, x_c, z_c, x_ref, z_ref,
-                                prefix: str = "") -> tuple[sp.Symbol, sp.Symbol]:
+def define_compound_about_point(
+    chain: ForwardChain, T, m_p, g, x_c, z_c, x_ref, z_ref, prefix: str = ""
+) -> tuple[sp.Symbol, sp.Symbol]:
     """``(Iyy, l_p)``: Eq. 7 about the reference point, and the pendulum length."""
     length = chain.define(f"{prefix}l", sp.sqrt((x_c - x_ref) ** 2 + (z_c - z_ref) ** 2))
-    Iyy = chain.define(f"{prefix}Iyy", pendulum.compound_inertia().xreplace(
-        {sym("T"): T, sym("m_p"): m_p, sym("g"): g, sym("l_p"): length}))
+    Iyy = chain.define(
+        f"{prefix}Iyy",
+        pendulum.compound_inertia().xreplace({sym("T"): T, sym("m_p"): m_p, sym("g"): g, sym("l_p"): length}),
+    )
     return Iyy, length
 
 
@@ -261,13 +304,15 @@ def compound_about_point() -> tuple[list[GeneratedFunction], Stage]:
     inputs = syms("T m_p g x_c z_c x_ref z_ref")
     chain = ForwardChain(inputs)
     Iyy, length = define_compound_about_point(chain, *inputs)
-    return chain.stage("compound_about_point", {"Iyy": Iyy},
-                       "Eq. 7 for a body swung about its reference point (the pendulum length from its centre "
-                       "of mass).", checks={"l_p": length})
+    return chain.stage(
+        "compound_about_point",
+        {"Iyy": Iyy},
+        "Eq. 7 for a body swung about its reference point (the pendulum length from its centre of mass).",
+        checks={"l_p": length},
+    )
 
 
-def define_seating(chain: ForwardChain, w, rF, rR, c, lam, whb, LhbF, LhbR, h_bb, l_st, lam_st
-                   ) -> dict[str, sp.Symbol]:
+def define_seating(chain: ForwardChain, w, rF, rR, c, lam, whb, LhbF, LhbR, h_bb, l_st, lam_st) -> dict[str, sp.Symbol]:
     half = whb / 2  # the grip is whb/2 to the side of the mid-plane: its in-plane distances
     front = chain.define("front", sp.sqrt(LhbF**2 - half**2))
     rear = chain.define("rear", sp.sqrt(LhbR**2 - half**2))
@@ -289,8 +334,11 @@ def define_seating(chain: ForwardChain, w, rF, rR, c, lam, whb, LhbF, LhbR, h_bb
 def seating() -> tuple[list[GeneratedFunction], Stage]:
     inputs = syms("w rF rR c lam whb LhbF LhbR h_bb l_st lam_st")
     chain = ForwardChain(inputs)
-    return chain.stage("seating", define_seating(chain, *inputs),
-                       "The paper's stem, handlebar and fork lengths that put the rider model's hands on the grips.")
+    return chain.stage(
+        "seating",
+        define_seating(chain, *inputs),
+        "The paper's stem, handlebar and fork lengths that put the rider model's hands on the grips.",
+    )
 
 
 STANDARD_BODIES = {"B": ("Bf", "mBf", "rear"), "H": ("H", "mH", "front")}
@@ -303,12 +351,23 @@ def standard_layout() -> tuple[list[GeneratedFunction], Stage]:
     composed into one stage, so one bicycle in this layout takes one call."""
     frame_in = syms("dR nR dF nF w lam_ht f")
     wheels_in = syms("mP dP lP TtP1 TtR1 TtF1 TcR1 TcF1 mR mF lR lF g")
-    body_in = {body: (syms(" ".join(f"alpha{body}{i}" for i in (1, 2, 3))), syms(" ".join(f"a{body}{i}" for i in
-                      (1, 2, 3))), syms(" ".join(f"Tt{body}{i}" for i in (1, 2, 3))), sym(f"Tc{body}1"), sym(mass))
-               for body, (_, mass, _) in STANDARD_BODIES.items()}
+    body_in = {
+        body: (
+            syms(" ".join(f"alpha{body}{i}" for i in (1, 2, 3))),
+            syms(" ".join(f"a{body}{i}" for i in (1, 2, 3))),
+            syms(" ".join(f"Tt{body}{i}" for i in (1, 2, 3))),
+            sym(f"Tc{body}1"),
+            sym(mass),
+        )
+        for body, (_, mass, _) in STANDARD_BODIES.items()
+    }
     seating_in = syms("whb LhbF LhbR h_bb l_st lam_st")
-    inputs = [*frame_in, *wheels_in, *(s for b in body_in.values() for group in b for s in
-                                       (group if isinstance(group, list) else [group])), *seating_in]
+    inputs = [
+        *frame_in,
+        *wheels_in,
+        *(s for b in body_in.values() for group in b for s in (group if isinstance(group, list) else [group])),
+        *seating_in,
+    ]
     chain = ForwardChain(inputs)
     frame = define_frame_from_wheelbase(chain, *frame_in)
     wheels = define_wheels(chain, *wheels_in)
@@ -316,26 +375,46 @@ def standard_layout() -> tuple[list[GeneratedFunction], Stage]:
     for body, (name, _, wheel) in STANDARD_BODIES.items():
         hangs, offsets, periods, Tc, mass = body_in[body]
         x_ref, z_ref = frame[f"x_{wheel}"], frame[f"z_{wheel}"]
-        hung, hung_checks = define_hung_body_3(chain, frame["lam"], x_ref, z_ref, wheels["k_t"], hangs, offsets,
-                                               periods, prefix=body)
-        Iyy, length = define_compound_about_point(chain, Tc, mass, sym("g"), hung["x"], hung["z"], x_ref, z_ref,
-                                                  prefix=body)
-        outputs.update({f"x{name}": hung["x"], f"z{name}": hung["z"],
-                        **{f"I{name}{a}": hung[f"I{a}"] for a in ("xx", "xz", "zz")}, f"I{name}yy": Iyy})
+        hung, hung_checks = define_hung_body_3(
+            chain, frame["lam"], x_ref, z_ref, wheels["k_t"], hangs, offsets, periods, prefix=body
+        )
+        Iyy, length = define_compound_about_point(
+            chain, Tc, mass, sym("g"), hung["x"], hung["z"], x_ref, z_ref, prefix=body
+        )
+        outputs.update(
+            {
+                f"x{name}": hung["x"],
+                f"z{name}": hung["z"],
+                **{f"I{name}{a}": hung[f"I{a}"] for a in ("xx", "xz", "zz")},
+                f"I{name}yy": Iyy,
+            }
+        )
         checks.update({f"{body}_{check}": value for check, value in hung_checks.items()})
         checks[f"{body}_l_p"] = length
-    outputs.update(define_seating(chain, sym("w"), frame["rF"], frame["rR"], frame["c"], frame["lam"],
-                                  *seating_in))
-    return chain.stage("standard_layout", outputs,
-                       "A Measured file in BicycleParameters' template: every step of the reduction in one stage.",
-                       checks=checks)
+    outputs.update(define_seating(chain, sym("w"), frame["rF"], frame["rR"], frame["c"], frame["lam"], *seating_in))
+    return chain.stage(
+        "standard_layout",
+        outputs,
+        "A Measured file in BicycleParameters' template: every step of the reduction in one stage.",
+        checks=checks,
+    )
 
 
 def build() -> GeneratedModule:
     functions: list[GeneratedFunction] = []
     stages: list[Stage] = []
-    for make in (frame_from_wheelbase, frame_from_heights, wheels, handlebar_reference, hung_body_3, hanging_line,
-                 hung_orientation_equation, compound_about_point, seating, standard_layout):
+    for make in (
+        frame_from_wheelbase,
+        frame_from_heights,
+        wheels,
+        handlebar_reference,
+        hung_body_3,
+        hanging_line,
+        hung_orientation_equation,
+        compound_about_point,
+        seating,
+        standard_layout,
+    ):
         fns, stage = make()
         functions += fns
         stages.append(stage)

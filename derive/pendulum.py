@@ -10,6 +10,7 @@ from the ground, rotating up from the +x axis; with z pointing down its unit vec
 This is the paper's Eq. 5 with its Eq. 3 product ``I_xz`` equal to minus the tensor entry; the
 tensors the paper prints in Table 5 are tensor entries (benchmark convention).
 """
+
 from __future__ import annotations
 
 from functools import cache
@@ -60,9 +61,13 @@ def orientation_equation():
     takes more than three orientations."""
     alpha, k_t, T = syms("alpha k_t T")
     row = list(orientation_row(alpha))
-    return stage_functions("pendulum", "orientation_equation", [alpha, k_t, T],
-                           {"r_xx": row[0], "r_xz": row[1], "r_zz": row[2], "J": torsional_inertia()},
-                           "One orientation's row of Eq. 6, J = r . [Ixx, Ixz, Izz], with J from Eq. 1.")
+    return stage_functions(
+        "pendulum",
+        "orientation_equation",
+        [alpha, k_t, T],
+        {"r_xx": row[0], "r_xz": row[1], "r_zz": row[2], "J": torsional_inertia()},
+        "One orientation's row of Eq. 6, J = r . [Ixx, Ixz, Izz], with J from Eq. 1.",
+    )
 
 
 def line_through_point():
@@ -70,8 +75,13 @@ def line_through_point():
     normal ``(s, c) = (sin(alpha), cos(alpha))``."""
     alpha, x_p, z_p = syms("alpha x_p z_p")
     s, c = sp.sin(alpha), sp.cos(alpha)
-    return stage_functions("pendulum", "line_through_point", [alpha, x_p, z_p], {"s": s, "c": c, "d": s * x_p + c * z_p},
-                           "A pendulum-axis line through a point, in normal form s x + c z = d.")
+    return stage_functions(
+        "pendulum",
+        "line_through_point",
+        [alpha, x_p, z_p],
+        {"s": s, "c": c, "d": s * x_p + c * z_p},
+        "A pendulum-axis line through a point, in normal form s x + c z = d.",
+    )
 
 
 def build() -> GeneratedModule:
@@ -84,13 +94,15 @@ def build() -> GeneratedModule:
         description=__doc__.split("\n\n", 1)[1].strip(),
         functions=[
             GeneratedFunction(
-                "torsional_inertia", [k_t, T],
+                "torsional_inertia",
+                [k_t, T],
                 [Output("J", torsional_inertia(), "moment of inertia about the pendulum axis [kg m^2]")],
                 "Moment of inertia about a torsional pendulum's axis from its period (Eq. 1).",
                 scalar=True,
             ),
             GeneratedFunction(
-                "compound_inertia", [T, m_p, g, l_p],
+                "compound_inertia",
+                [T, m_p, g, l_p],
                 [Output("Iyy", compound_inertia(), "moment of inertia about the wheel axle [kg m^2]")],
                 "Wheel moment of inertia about its axle from a compound pendulum period (Eq. 7).",
                 scalar=True,
@@ -99,8 +111,7 @@ def build() -> GeneratedModule:
                 "inertia_from_three_orientations",
                 [k_t, *syms("T_1 T_2 T_3 alpha_1 alpha_2 alpha_3")],
                 [
-                    Output("inertia", solution, "[Ixx, Ixz, Izz] in the benchmark convention [kg m^2]",
-                           vector=True),
+                    Output("inertia", solution, "[Ixx, Ixz, Izz] in the benchmark convention [kg m^2]", vector=True),
                     Output("determinant", det, "determinant of Eq. 6; zero when two axes coincide [1]"),
                 ],
                 "Eq. 6 solved in closed form for three pendulum orientations.",

@@ -26,6 +26,7 @@ to its higher-numbered one, local y is global Y, and x follows by the right-hand
 the local tensors are rotated (Eq. 12), moved to the rider's centre of mass (Eq. 13) and summed
 (Eq. 14).
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -225,9 +226,7 @@ def build() -> GeneratedModule:
     mass, com, inertia = rider_mass_properties(points)
     knee, elbow = closures["knee"], closures["elbow"]
     reach = sp.Matrix([knee.distance, knee.reach, elbow.distance, elbow.reach])
-    branch_text = "\n".join(
-        f"    {name}: q = {sp.sstr(b)}" for name, c in closures.items() for b in c.branches
-    )
+    branch_text = "\n".join(f"    {name}: q = {sp.sstr(b)}" for name, c in closures.items() for b in c.branches)
     description = (
         "Derived in derive/rider_model.py.  Closure branches found by SymPy (D is the distance\n"
         "between the limb's ends, l_a and l_b the lengths from the distal and proximal ends):\n\n"
@@ -239,24 +238,35 @@ def build() -> GeneratedModule:
         name="rider_model",
         summary="Seated rider on the bicycle (Moore et al. 2009): grid points, limb reach, mass properties.",
         description=description,
-        names={"GEOMETRY": tuple(GEOMETRY_ARGS.split()), "RIDER_PLACEMENT": tuple(RIDER_ARGS.split()),
-               "RIDER_SEGMENTS": tuple(SEGMENT_ARGS.split())},
+        names={
+            "GEOMETRY": tuple(GEOMETRY_ARGS.split()),
+            "RIDER_PLACEMENT": tuple(RIDER_ARGS.split()),
+            "RIDER_SEGMENTS": tuple(SEGMENT_ARGS.split()),
+        },
         functions=[
             GeneratedFunction(
-                "grid_points", geometry + placement,
+                "grid_points",
+                geometry + placement,
                 [Output("points", grid, "grid points 1..31 (rows) in the benchmark frame [m]")],
                 "The 31 skeleton grid points of Table 10, knees and elbows on the natural branch.",
             ),
             GeneratedFunction(
-                "limb_reach", used_geometry + placement,
-                [Output("reach", reach,
+                "limb_reach",
+                used_geometry + placement,
+                [
+                    Output(
+                        "reach",
+                        reach,
                         "[hip to pedal-axis distance, l_ll + l_ul, shoulder to hand distance, l_ua + l_la] [m]",
-                        vector=True)],
+                        vector=True,
+                    )
+                ],
                 "Distances the leg and arm closures must span, and the limb lengths that span them.",
                 notes="A closure has a solution when |l_a - l_b| <= distance <= l_a + l_b.",
             ),
             GeneratedFunction(
-                "rider_mass_properties", used_geometry + placement + segment_args,
+                "rider_mass_properties",
+                used_geometry + placement + segment_args,
                 [
                     Output("mass", mass, "rider mass, the sum of the segment masses [kg]"),
                     Output("com", com, "rider centre of mass [x, y, z] (Eq. 8) [m]", vector=True),

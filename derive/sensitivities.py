@@ -28,6 +28,7 @@ order and columns in argument order.  The stage expressions themselves are also 
 without importing ``derive``; the stages' names, inputs, outputs and functions go into the
 manifest (``generated/manifest.py``).
 """
+
 from __future__ import annotations
 
 import itertools
@@ -95,10 +96,35 @@ def closure(name: str) -> tuple[list[sp.Symbol], list[sp.Symbol], sp.Matrix]:
 def _check_split(coords: sp.Matrix) -> None:
     """The staged grid points equal rider_model.grid_points at a test point (guards the split)."""
     points = _grid_points()
-    point = {s: sp.Float(v, 30) for s, v in zip(syms(USED_GEOMETRY), (
-        "0.295", "0.46", "0.455", "0.342", "0.19", "1.1955", "0.342", "0.24", "1.1955", "0.53", "0.25", "0.055", "1.12"))}
-    point.update({s: sp.Float(v, 30) for s, v in zip(syms(rider_model.RIDER_ARGS), (
-        "0.26", "0.33", "0.46", "0.44", "0.48", "0.28", "0.46", "1.4469", "0.58"))})
+    point = {
+        s: sp.Float(v, 30)
+        for s, v in zip(
+            syms(USED_GEOMETRY),
+            (
+                "0.295",
+                "0.46",
+                "0.455",
+                "0.342",
+                "0.19",
+                "1.1955",
+                "0.342",
+                "0.24",
+                "1.1955",
+                "0.53",
+                "0.25",
+                "0.055",
+                "1.12",
+            ),
+        )
+    }
+    point.update(
+        {
+            s: sp.Float(v, 30)
+            for s, v in zip(
+                syms(rider_model.RIDER_ARGS), ("0.26", "0.33", "0.46", "0.44", "0.48", "0.28", "0.46", "1.4469", "0.58")
+            )
+        }
+    )
     values = {s: e.xreplace(point) for s, e in zip([s for k in BASE_POINTS for s in point_symbols(k)], coords)}
     values.update(point)
     for name in CLOSURES:
@@ -123,7 +149,11 @@ def _symbolic_points() -> list[sp.Matrix]:
 
 
 def _rider_args() -> list[sp.Symbol]:
-    return [s for k in GRID_POINTS for s in point_symbols(k)] + syms(rider_model.RIDER_ARGS) + syms(rider_model.SEGMENT_ARGS)
+    return (
+        [s for k in GRID_POINTS for s in point_symbols(k)]
+        + syms(rider_model.RIDER_ARGS)
+        + syms(rider_model.SEGMENT_ARGS)
+    )
 
 
 def rider_com() -> tuple[list[sp.Symbol], sp.Matrix]:
@@ -229,8 +259,11 @@ def stage_table() -> dict[str, dict[str, list]]:
     canon_args, canon_outputs = canonical_outputs()
     entries = benchmark_model.matrix_entry_args()
     table: dict[str, dict[str, list]] = {
-        "three_orientations": {"inputs": [k_t, *syms("T_1 T_2 T_3 alpha_1 alpha_2 alpha_3")],
-                               "outputs": syms("Ixx Ixz Izz"), "exprs": list(solution)},
+        "three_orientations": {
+            "inputs": [k_t, *syms("T_1 T_2 T_3 alpha_1 alpha_2 alpha_3")],
+            "outputs": syms("Ixx Ixz Izz"),
+            "exprs": list(solution),
+        },
         "torsional": {"inputs": [k_t, T], "outputs": [sp.Symbol("J")], "exprs": [pendulum.torsional_inertia()]},
         "compound": {"inputs": [T, m_p, g, l_p], "outputs": [sp.Symbol("Iyy")], "exprs": [pendulum.compound_inertia()]},
         "grid": {"inputs": grid_args, "outputs": grid_outputs, "exprs": list(coords)},
@@ -238,20 +271,34 @@ def stage_table() -> dict[str, dict[str, list]]:
     for name in CLOSURES:
         args, outs, exprs = closure(name)
         table[name] = {"inputs": args, "outputs": outs, "exprs": list(exprs)}
-    table.update({
-        "rider_com": {"inputs": com_args, "outputs": syms("mBr_sum xBr zBr"), "exprs": list(com_outputs)},
-        "rider_inertia": {"inputs": inertia_args, "outputs": syms("IBrxx IBryy IBrzz IBrxz"),
-                          "exprs": list(inertia_outputs)},
-        "rear_body": {"inputs": body_args, "outputs": syms(REAR_BODY_OUTPUTS), "exprs": list(body_outputs)},
-        "steer_axis": {"inputs": [sym("lam_ht")], "outputs": [sym("lam")], "exprs": [sp.pi / 2 - sym("lam_ht")]},
-        "canonical": {"inputs": canon_args, "outputs": entries, "exprs": list(canon_outputs)},
-        "characteristic": {"inputs": entries + [g, v], "outputs": syms(COEFFICIENT_NAMES),
-                           "exprs": benchmark_model.characteristic_coefficients()},
-        "capsize_condition": {"inputs": entries + [g, v], "outputs": [sym("v_capsize")],
-                              "exprs": [capsize_condition()]},
-        "weave_condition": {"inputs": syms(COEFFICIENT_NAMES) + [v], "outputs": [sym("v_weave")],
-                            "exprs": [weave_condition_in_coefficients()]},
-    })
+    table.update(
+        {
+            "rider_com": {"inputs": com_args, "outputs": syms("mBr_sum xBr zBr"), "exprs": list(com_outputs)},
+            "rider_inertia": {
+                "inputs": inertia_args,
+                "outputs": syms("IBrxx IBryy IBrzz IBrxz"),
+                "exprs": list(inertia_outputs),
+            },
+            "rear_body": {"inputs": body_args, "outputs": syms(REAR_BODY_OUTPUTS), "exprs": list(body_outputs)},
+            "steer_axis": {"inputs": [sym("lam_ht")], "outputs": [sym("lam")], "exprs": [sp.pi / 2 - sym("lam_ht")]},
+            "canonical": {"inputs": canon_args, "outputs": entries, "exprs": list(canon_outputs)},
+            "characteristic": {
+                "inputs": entries + [g, v],
+                "outputs": syms(COEFFICIENT_NAMES),
+                "exprs": benchmark_model.characteristic_coefficients(),
+            },
+            "capsize_condition": {
+                "inputs": entries + [g, v],
+                "outputs": [sym("v_capsize")],
+                "exprs": [capsize_condition()],
+            },
+            "weave_condition": {
+                "inputs": syms(COEFFICIENT_NAMES) + [v],
+                "outputs": [sym("v_weave")],
+                "exprs": [weave_condition_in_coefficients()],
+            },
+        }
+    )
     return table
 
 
@@ -280,12 +327,19 @@ def _names(symbols: list[sp.Symbol]) -> str:
     return ", ".join(s.name for s in symbols)
 
 
-def _stage_jacobian(name: str, stage: dict[str, list], summary: str, notes: str = "",
-                    scalar: bool = False) -> GeneratedFunction:
+def _stage_jacobian(
+    name: str, stage: dict[str, list], summary: str, notes: str = "", scalar: bool = False
+) -> GeneratedFunction:
     J = jacobian(sp.Matrix(stage["exprs"]), stage["inputs"])
     doc = f"d[{_names(stage['outputs'])}]/d[{_names(stage['inputs'])}] [SI]"
-    return GeneratedFunction(f"{name}_jacobian", stage["inputs"], [Output("jacobian", J, doc, sparse=True)], summary,
-                             notes=notes, scalar=scalar)
+    return GeneratedFunction(
+        f"{name}_jacobian",
+        stage["inputs"],
+        [Output("jacobian", J, doc, sparse=True)],
+        summary,
+        notes=notes,
+        scalar=scalar,
+    )
 
 
 def build() -> GeneratedModule:
@@ -294,13 +348,18 @@ def build() -> GeneratedModule:
     entries = benchmark_model.matrix_entry_args()
     grid = stages["grid"]
     functions = [
-        _stage_jacobian("three_orientations", stages["three_orientations"],
-                        "Jacobian of Eq. 6 solved for three orientations (benchmark-convention Ixz)."),
+        _stage_jacobian(
+            "three_orientations",
+            stages["three_orientations"],
+            "Jacobian of Eq. 6 solved for three orientations (benchmark-convention Ixz).",
+        ),
         _stage_jacobian("torsional", stages["torsional"], "Jacobian of Eq. 1, J = k T^2 / (4 pi^2).", scalar=True),
-        _stage_jacobian("compound", stages["compound"], "Jacobian of Eq. 7, Iyy = (T / 2 pi)^2 m g l - m l^2.",
-                        scalar=True),
+        _stage_jacobian(
+            "compound", stages["compound"], "Jacobian of Eq. 7, Iyy = (T / 2 pi)^2 m g l - m l^2.", scalar=True
+        ),
         GeneratedFunction(
-            "grid_coordinates", grid["inputs"],
+            "grid_coordinates",
+            grid["inputs"],
             [Output("coordinates", sp.Matrix(grid["exprs"]), f"[{_names(grid['outputs'])}] [m]", vector=True)],
             "x and z of the grid points given explicitly by geometry and placement (Table 10).",
         ),
@@ -310,56 +369,94 @@ def build() -> GeneratedModule:
         stage = stages[name]
         functions += [
             GeneratedFunction(
-                name, stage["inputs"],
+                name,
+                stage["inputs"],
                 [Output("coordinates", sp.Matrix(stage["exprs"]), f"[{_names(stage['outputs'])}] [m]", vector=True)],
                 f"The {name} (natural branch) from the ends of its limb and the limb's two lengths.",
                 notes="NaN where the limb cannot span the distance between its ends.",
             ),
             _stage_jacobian(name, stage, f"Jacobian of the {name} closure."),
         ]
-    for name, what in (("rider_com", "Rider mass and centre of mass [mBr_sum, xBr, zBr] (Eq. 8)"),
-                       ("rider_inertia", "Rider inertia [IBrxx, IBryy, IBrzz, IBrxz] about (xBr, 0, zBr) (Eqs. 11-14)")):
+    for name, what in (
+        ("rider_com", "Rider mass and centre of mass [mBr_sum, xBr, zBr] (Eq. 8)"),
+        ("rider_inertia", "Rider inertia [IBrxx, IBryy, IBrzz, IBrxz] about (xBr, 0, zBr) (Eqs. 11-14)"),
+    ):
         stage = stages[name]
         functions += [
             GeneratedFunction(
-                name, stage["inputs"],
+                name,
+                stage["inputs"],
                 [Output("properties", sp.Matrix(stage["exprs"]), f"[{_names(stage['outputs'])}] [SI]", vector=True)],
                 f"{what} from grid point coordinates.",
             ),
             _stage_jacobian(name, stage, f"Jacobian of {name} at fixed grid points."),
         ]
     functions += [
-        _stage_jacobian("rear_body", stages["rear_body"], "Jacobian of the rear body (Eqs. 15-16).",
-                        notes="The argument mBr is the rider's mass as its segments sum it (mBr_sum).",
-                        scalar=True),  # merging one lumped rider (bikerider.bicycle.to_benchmark)
-        _stage_jacobian("canonical", stages["canonical"],
-                        "Jacobian of the canonical matrix entries (Meijaard et al. 2007, Appendix A)."),
-        _stage_jacobian("characteristic", stages["characteristic"],
-                        "Jacobian of the characteristic polynomial's coefficients [a4, a3, a2, a1, a0]."),
+        _stage_jacobian(
+            "rear_body",
+            stages["rear_body"],
+            "Jacobian of the rear body (Eqs. 15-16).",
+            notes="The argument mBr is the rider's mass as its segments sum it (mBr_sum).",
+            scalar=True,
+        ),  # merging one lumped rider (bikerider.bicycle.to_benchmark)
+        _stage_jacobian(
+            "canonical",
+            stages["canonical"],
+            "Jacobian of the canonical matrix entries (Meijaard et al. 2007, Appendix A).",
+        ),
+        _stage_jacobian(
+            "characteristic",
+            stages["characteristic"],
+            "Jacobian of the characteristic polynomial's coefficients [a4, a3, a2, a1, a0].",
+        ),
         GeneratedFunction(
-            "capsize_speed_gradient", entries + [g, v],
-            [Output("gradient", speed_gradient(capsize_condition()).T,
-                    "d v_capsize / d[matrix entries, g] [SI]", vector=True)],
+            "capsize_speed_gradient",
+            entries + [g, v],
+            [
+                Output(
+                    "gradient",
+                    speed_gradient(capsize_condition()).T,
+                    "d v_capsize / d[matrix entries, g] [SI]",
+                    vector=True,
+                )
+            ],
             "Implicit derivative of the capsize speed: -(dF/dp)/(dF/dv), F = det(g K0 + v^2 K2).",
             notes="Evaluate at v = the capsize speed; F must have a simple root there (dF/dv != 0).",
         ),
         GeneratedFunction(
-            "weave_speed_gradient", entries + [g, v],
-            [Output("gradient", speed_gradient(weave_condition()).T,
-                    "d v_weave / d[matrix entries, g] [SI]", vector=True)],
+            "weave_speed_gradient",
+            entries + [g, v],
+            [
+                Output(
+                    "gradient",
+                    speed_gradient(weave_condition()).T,
+                    "d v_weave / d[matrix entries, g] [SI]",
+                    vector=True,
+                )
+            ],
             "Implicit derivative of the weave speed: -(dF/dp)/(dF/dv), F the third Hurwitz determinant / v^2.",
             notes="Evaluate at v = the weave speed; F must have a simple root there (dF/dv != 0).",
         ),
         GeneratedFunction(
-            "state_matrix_jacobian", entries + [g, v],
-            [Output("jacobian", jacobian(sp.Matrix(list(benchmark_model.state_matrix())), entries + [g, v]),
-                    "d[A entries, row by row]/d[matrix entries, g, v] [SI]")],
+            "state_matrix_jacobian",
+            entries + [g, v],
+            [
+                Output(
+                    "jacobian",
+                    jacobian(sp.Matrix(list(benchmark_model.state_matrix())), entries + [g, v]),
+                    "d[A entries, row by row]/d[matrix entries, g, v] [SI]",
+                )
+            ],
             "Jacobian of the state matrix A(v) (x = [phi, delta, phi', delta']), for eigenvalue sensitivities.",
         ),
     ]
     steer_functions, steer_stage = stage_functions(
-        "sensitivities", "steer_axis", stages["steer_axis"]["inputs"], {"lam": stages["steer_axis"]["exprs"][0]},
-        "Steer axis tilt from the head tube angle, lam = pi/2 - lam_ht.")
+        "sensitivities",
+        "steer_axis",
+        stages["steer_axis"]["inputs"],
+        {"lam": stages["steer_axis"]["exprs"][0]},
+        "Steer axis tilt from the head tube angle, lam = pi/2 - lam_ht.",
+    )
     functions += steer_functions
     return GeneratedModule(
         name="sensitivities",
@@ -387,10 +484,14 @@ _VALUES: dict[str, tuple[str, list[tuple[str, tuple[int, ...]]]]] = {
     "elbow": ("sensitivities.elbow", _entries("coordinates", (2,))),
     "rider_com": ("sensitivities.rider_com", _entries("properties", (3,))),
     "rider_inertia": ("sensitivities.rider_inertia", _entries("properties", (4,))),
-    "rear_body": ("combination.rear_body", [("mB", ()), ("xB", ()), ("zB", ()), ("IB", (0, 0)), ("IB", (1, 1)),
-                                            ("IB", (2, 2)), ("IB", (0, 2))]),
-    "canonical": ("benchmark_model.canonical_matrices",
-                  [e for name in benchmark_model.MATRIX_NAMES for e in _entries(name, (2, 2))]),
+    "rear_body": (
+        "combination.rear_body",
+        [("mB", ()), ("xB", ()), ("zB", ()), ("IB", (0, 0)), ("IB", (1, 1)), ("IB", (2, 2)), ("IB", (0, 2))],
+    ),
+    "canonical": (
+        "benchmark_model.canonical_matrices",
+        [e for name in benchmark_model.MATRIX_NAMES for e in _entries(name, (2, 2))],
+    ),
     "characteristic": ("benchmark_model.characteristic_coefficients", _entries("coefficients", (5,))),
 }
 """The value function of each stage of the chain and where each output sits in what it returns
@@ -404,6 +505,16 @@ def chain_stages(stages: dict[str, dict[str, list]]) -> list[Stage]:
     out = []
     for name, (value, picks) in _VALUES.items():
         stage = stages[name]
-        out.append(Stage(name, stage["inputs"], [s.name for s in stage["outputs"]], value, picks,
-                         f"sensitivities.{name}_jacobian", _CHECKS.get(name, []), list(stage["exprs"])))
+        out.append(
+            Stage(
+                name,
+                stage["inputs"],
+                [s.name for s in stage["outputs"]],
+                value,
+                picks,
+                f"sensitivities.{name}_jacobian",
+                _CHECKS.get(name, []),
+                list(stage["exprs"]),
+            )
+        )
     return out

@@ -23,6 +23,7 @@ With ``B_T = M^-1`` the state space of ``x = [phi, delta, phi', delta']`` is
 ``x' = A(v) x + B u`` with ``B = [0; M^-1 [I | H]]`` for ``u = [T_phi, T_delta, F]``; ``B`` does not
 depend on the speed.
 """
+
 from __future__ import annotations
 
 import sympy as sp
@@ -99,11 +100,18 @@ def build() -> GeneratedModule:
             name="lateral_force_input",
             args=geometry,
             outputs=[
-                Output("rear", lateral_force_vector("rear"),
-                       "[H_phiF, H_deltaF] for a force at a point of the rear frame [m]", vector=True),
-                Output("front", lateral_force_vector("front"),
-                       "[H_phiF, H_deltaF] for a force at a point of the front frame (handlebar and fork) [m]",
-                       vector=True),
+                Output(
+                    "rear",
+                    lateral_force_vector("rear"),
+                    "[H_phiF, H_deltaF] for a force at a point of the rear frame [m]",
+                    vector=True,
+                ),
+                Output(
+                    "front",
+                    lateral_force_vector("front"),
+                    "[H_phiF, H_deltaF] for a force at a point of the front frame (handlebar and fork) [m]",
+                    vector=True,
+                ),
             ],
             summary="Generalized forces [roll, steer] of a unit lateral force at the point (x_F, z_F) of either frame.",
             notes=(
@@ -114,9 +122,13 @@ def build() -> GeneratedModule:
         GeneratedFunction(
             name="input_matrix",
             args=list(M) + syms(" ".join(FORCE_VECTOR)),
-            outputs=[Output("B", input_matrix(),
-                            "input matrix for u = [T_phi, T_delta, F], x = [phi, delta, phi', delta'] "
-                            "[1/(kg m^2), 1/(kg m)]")],
+            outputs=[
+                Output(
+                    "B",
+                    input_matrix(),
+                    "input matrix for u = [T_phi, T_delta, F], x = [phi, delta, phi', delta'] [1/(kg m^2), 1/(kg m)]",
+                )
+            ],
             summary="Input matrix B of x' = A(v) x + B u for roll torque, steer torque and a lateral force.",
             notes="B = [0; M^-1 [I | H]]; it does not depend on the speed.",
         ),

@@ -5,6 +5,7 @@ used in generated code and in input files.  Tests check that every argument of e
 function is described here with a non-empty description and unit.  Angles are in radians
 everywhere past the input boundary.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -93,10 +94,18 @@ _TABLE: dict[str, tuple[str, str, str, bool]] = {
     "z_p": ("a point of a pendulum-axis line, z (down positive)", "m", "z_p", False),
     # --- A body hung from the torsional pendulum (BicycleParameters' photographs) -----------
     "hang": ("hanging angle: the upward steer axis from the photograph's horizontal", "rad", r"\alpha_h", False),
-    "off": ("distance from the pendulum axis to the body's reference point, positive to its left in "
-            "the photograph", "m", "a_h", False),
-    "x_ref": ("reference point of a hung body (a wheel centre or the handlebar reference point), x", "m",
-              r"x_{ref}", False),
+    "off": (
+        "distance from the pendulum axis to the body's reference point, positive to its left in the photograph",
+        "m",
+        "a_h",
+        False,
+    ),
+    "x_ref": (
+        "reference point of a hung body (a wheel centre or the handlebar reference point), x",
+        "m",
+        r"x_{ref}",
+        False,
+    ),
     "z_ref": ("reference point of a hung body, z (down positive)", "m", r"z_{ref}", False),
     # --- Rider (Moore et al. 2009, Tables 7 and 8) -----------------------------------------
     "mBr": ("rider mass", "kg", "m_{Br}", True),
@@ -131,8 +140,7 @@ _TABLE: dict[str, tuple[str, str, str, bool]] = {
     "v": ("forward speed", "m/s", "v", False),
     "u": ("forward speed squared", "m^2/s^2", "u", False),
     # --- Sim-to-real gap: candidate unmodelled effects (derive/gap_effects.py) -----------
-    "I_steer": ("added moment of inertia about the steer axis, carried by the front frame", "kg m^2",
-                r"I_{s}", False),
+    "I_steer": ("added moment of inertia about the steer axis, carried by the front frame", "kg m^2", r"I_{s}", False),
     "c_steer": ("viscous steer damping between front and rear frame", "N m s/rad", r"c_{s}", False),
     "k_steer": ("steer stiffness between front and rear frame", "N m/rad", r"k_{s}", False),
     "m_arm": ("mass of the rider's arms that moves with the handlebar (both arms)", "kg", r"m_{a}", False),
@@ -155,14 +163,22 @@ _TABLE: dict[str, tuple[str, str, str, bool]] = {
     "sigma_t": ("tyre relaxation length", "m", r"\sigma", False),
     "t_p": ("tyre pneumatic trail", "m", r"t_{p}", False),
     # --- State space inputs (derive/state_space.py) ---------------------------------------
-    "x_F": ("lateral force application point, x (in the frame that carries it, reference configuration)", "m",
-            r"x_F", False),
+    "x_F": (
+        "lateral force application point, x (in the frame that carries it, reference configuration)",
+        "m",
+        r"x_F",
+        False,
+    ),
     "z_F": ("lateral force application point, z (down positive)", "m", r"z_F", False),
     "H_phiF": ("roll generalized force per unit lateral force (roll moment arm)", "m", r"H_{\phi F}", False),
     "H_deltaF": ("steer generalized force per unit lateral force", "m", r"H_{\delta F}", False),
     # --- Sensitivities (derive/sensitivities.py) ------------------------------------------
-    "mBr_sum": ("rider mass as the sum of its segment masses (mBr times the sum of the fractions)", "kg",
-                r"\sum m_i", True),
+    "mBr_sum": (
+        "rider mass as the sum of its segment masses (mBr times the sum of the fractions)",
+        "kg",
+        r"\sum m_i",
+        True,
+    ),
     "v_weave": ("weave speed: the weave pair crosses the imaginary axis", "m/s", "v_w", True),
     "v_capsize": ("capsize speed: the capsize eigenvalue crosses zero", "m/s", "v_c", True),
 }
@@ -193,17 +209,35 @@ for _body, _word in {"B": "rear frame", "H": "handlebar and fork"}.items():
     for _i in (1, 2, 3):
         _MEASURED[f"alpha{_body}{_i}"] = (
             f"hanging angle of the {_word} in orientation {_i}: steer axis from the photograph's horizontal",
-            "rad", rf"\alpha_{{{_body}{_i}}}", False)
+            "rad",
+            rf"\alpha_{{{_body}{_i}}}",
+            False,
+        )
         _MEASURED[f"a{_body}{_i}"] = (
             f"distance from the pendulum axis to the {_word}'s reference point in orientation {_i}",
-            "m", f"a_{{{_body}{_i}}}", False)
-        _MEASURED[f"Tt{_body}{_i}"] = (f"torsional pendulum period of the {_word} in orientation {_i}", "s",
-                                       f"T_{{t{_body}{_i}}}", True)
+            "m",
+            f"a_{{{_body}{_i}}}",
+            False,
+        )
+        _MEASURED[f"Tt{_body}{_i}"] = (
+            f"torsional pendulum period of the {_word} in orientation {_i}",
+            "s",
+            f"T_{{t{_body}{_i}}}",
+            True,
+        )
 for _i in (1, 2, 3):
-    _MEASURED[f"hang_{_i}"] = (f"hanging angle in orientation {_i}: the upward steer axis from the photograph's "
-                               "horizontal", "rad", rf"\alpha_{{h{_i}}}", False)
-    _MEASURED[f"off_{_i}"] = (f"distance from the pendulum axis to the reference point in orientation {_i}", "m",
-                              f"a_{{h{_i}}}", False)
+    _MEASURED[f"hang_{_i}"] = (
+        f"hanging angle in orientation {_i}: the upward steer axis from the photograph's horizontal",
+        "rad",
+        rf"\alpha_{{h{_i}}}",
+        False,
+    )
+    _MEASURED[f"off_{_i}"] = (
+        f"distance from the pendulum axis to the reference point in orientation {_i}",
+        "m",
+        f"a_{{h{_i}}}",
+        False,
+    )
 _HEIGHTS = {  # BicycleParameters' frame measured with its steer axis level on a table (see measured_reduction.py)
     "h1": "height h1 of the heights-and-diameters frame measurement (rear wheel offset from the steer axis)",
     "h2": "height h2 of the heights-and-diameters frame measurement (rear wheel offset from the steer axis)",
@@ -228,19 +262,39 @@ _TABLE.update(_MEASURED)
 for _body, _word in {"Bf": "rear frame", "H": "handlebar/fork"}.items():
     for _i in (1, 2, 3):
         _TABLE[f"T_{_body}{_i}"] = (f"{_word} torsional period, orientation {_i}", "s", f"T_{{{_body},{_i}}}", True)
-        _TABLE[f"alpha_{_body}{_i}"] = (f"{_word} pendulum axis angle, orientation {_i}", "rad",
-                                        rf"\alpha_{{{_body},{_i}}}", False)
+        _TABLE[f"alpha_{_body}{_i}"] = (
+            f"{_word} pendulum axis angle, orientation {_i}",
+            "rad",
+            rf"\alpha_{{{_body},{_i}}}",
+            False,
+        )
 for _w, _wheel in {"R": "rear", "F": "front"}.items():
     _TABLE[f"T_{_w}xx"] = (f"{_wheel} wheel torsional period about a diameter", "s", f"T_{{{_w}xx}}", True)
     _TABLE[f"T_{_w}yy"] = (f"{_wheel} wheel compound pendulum period", "s", f"T_{{{_w}yy}}", True)
     _TABLE[f"l_p{_w}"] = (f"{_wheel} wheel compound pendulum length", "m", f"l_{{p{_w}}}", True)
 for _k in range(5):
-    _TABLE[f"a{_k}"] = (f"coefficient of s^{_k} in the characteristic polynomial", f"kg^2 m^4 s^{_k - 4}", f"a_{_k}", False)
-for _k, _where in {5: "pedal axis", 13: "hip", 14: "knee", 15: "shoulder line", 19: "hand",
-                   23: "elbow", 25: "head centre"}.items():
+    _TABLE[f"a{_k}"] = (
+        f"coefficient of s^{_k} in the characteristic polynomial",
+        f"kg^2 m^4 s^{_k - 4}",
+        f"a_{_k}",
+        False,
+    )
+for _k, _where in {
+    5: "pedal axis",
+    13: "hip",
+    14: "knee",
+    15: "shoulder line",
+    19: "hand",
+    23: "elbow",
+    25: "head centre",
+}.items():
     for _axis in "XZ":
-        _TABLE[f"r{_axis}{_k}"] = (f"rider grid point {_k} ({_where}), {_axis} coordinate", "m",
-                                   f"r_{{{_axis}{_k}}}", False)
+        _TABLE[f"r{_axis}{_k}"] = (
+            f"rider grid point {_k} ({_where}), {_axis} coordinate",
+            "m",
+            f"r_{{{_axis}{_k}}}",
+            False,
+        )
 
 _MATRIX_UNITS = {
     "M": ("mass matrix", ("kg m^2", "kg m^2", "kg m^2", "kg m^2")),
@@ -295,7 +349,6 @@ def latex_names() -> dict[sp.Symbol, str]:
 
 
 BENCHMARK_NAMES = (
-    "w c lam g rR mR IRxx IRyy xB zB mB IBxx IByy IBzz IBxz "
-    "xH zH mH IHxx IHyy IHzz IHxz rF mF IFxx IFyy"
+    "w c lam g rR mR IRxx IRyy xB zB mB IBxx IByy IBzz IBxz xH zH mH IHxx IHyy IHzz IHxz rF mF IFxx IFyy"
 ).split()
 """The benchmark parameters in Meijaard et al. (2007) Table 1 order."""

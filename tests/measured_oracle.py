@@ -11,6 +11,7 @@ sigma, held to 1e-6).
 Line convention.  In the bicycle's XZ plane a line is ``n . p = d`` with the unit normal
 ``n = (sin(beta), cos(beta))`` and ``beta = lam - alpha`` the pendulum axis angle.
 """
+
 from __future__ import annotations
 
 import itertools
@@ -20,7 +21,11 @@ from collections.abc import Callable, Mapping
 import numpy as np
 
 from bikerider.bicycle.pendulum import (
-    DEFAULT_LINE_TOLERANCE, PARALLEL_CONDITIONING, SINGULAR_DETERMINANT, LineIntersection, check_lines_meet,
+    DEFAULT_LINE_TOLERANCE,
+    PARALLEL_CONDITIONING,
+    SINGULAR_DETERMINANT,
+    LineIntersection,
+    check_lines_meet,
 )
 from bikerider.bicycle.raw_measurements import BODIES, MeasuredLayout
 from bikerider.errors import FitError, InputError
@@ -53,8 +58,9 @@ def perturbed_points(inputs: Mapping[str, Quantity]):
     return points, varied, steps, sigma
 
 
-def propagate(function: Callable[[dict], dict], inputs: Mapping[str, Quantity], *,
-              vectorized: bool = False) -> dict[str, Quantity]:
+def propagate(
+    function: Callable[[dict], dict], inputs: Mapping[str, Quantity], *, vectorized: bool = False
+) -> dict[str, Quantity]:
     """``function``'s outputs with first-order sigmas from central differences (inputs independent;
     a slope that is not finite contributes nothing; an output NaN at the nominal point keeps sigma 0).
     ``vectorized``: every point in one call, each input a 1-D array of the points."""
@@ -111,8 +117,11 @@ def least_squares_point(sin, cos, distances, axis=-1):
     trace = ss + cc
     with np.errstate(divide="ignore", invalid="ignore"):
         root = np.sqrt(np.maximum(trace * trace - 4 * det, 0.0))
-        return ((cc * sd - sc * cd) / det, (ss * cd - sc * sd) / det,
-                np.sqrt(np.maximum(trace - root, 0.0) / (trace + root)))
+        return (
+            (cc * sd - sc * cd) / det,
+            (ss * cd - sc * sd) / det,
+            np.sqrt(np.maximum(trace - root, 0.0) / (trace + root)),
+        )
 
 
 def pairwise_mean_point(sin, cos, distances, axis=-1):
@@ -146,8 +155,9 @@ def _combine(m1, x1, z1, I1, m2, x2, z2, I2):
     out = []
     for k, (a, b) in enumerate(zip(I1, I2)):
         dx1, dz1, dx2, dz2 = x1 - x, z1 - z, x2 - x, z2 - z
-        shift = [dz1**2, dx1**2 + dz1**2, dx1**2, -dx1 * dz1][k] * m1 + [dz2**2, dx2**2 + dz2**2, dx2**2,
-                                                                       -dx2 * dz2][k] * m2
+        shift = [dz1**2, dx1**2 + dz1**2, dx1**2, -dx1 * dz1][k] * m1 + [dz2**2, dx2**2 + dz2**2, dx2**2, -dx2 * dz2][
+            k
+        ] * m2
         out.append(a + b + shift)
     return m, x, z, out
 
@@ -162,14 +172,25 @@ def _first(value) -> float:
 def _check_compound(name, inertia, period, length, g, source):
     if not inertia[0] > 0:
         shortest = 2 * math.pi * math.sqrt(length / g[0])
-        raise InputError(name, float(period[0]),
-                         f"a compound pendulum period above {shortest:.4f} s, that of a point mass {length:.4f} m "
-                         "from the pivot (a shorter one gives a negative moment of inertia)", source)
+        raise InputError(
+            name,
+            float(period[0]),
+            f"a compound pendulum period above {shortest:.4f} s, that of a point mass {length:.4f} m "
+            "from the pivot (a shorter one gives a negative moment of inertia)",
+            source,
+        )
 
 
-def evaluate_measured(x: Mapping[str, object], layout: MeasuredLayout, *, com_method: str = "least_squares",
-                      check: bool = False, line_tolerance: float = DEFAULT_LINE_TOLERANCE, source: str = "<memory>",
-                      lines: dict | None = None) -> dict:
+def evaluate_measured(
+    x: Mapping[str, object],
+    layout: MeasuredLayout,
+    *,
+    com_method: str = "least_squares",
+    check: bool = False,
+    line_tolerance: float = DEFAULT_LINE_TOLERANCE,
+    source: str = "<memory>",
+    lines: dict | None = None,
+) -> dict:
     """The whole reduction, without uncertainty, at one point (floats) or a batch (1-D arrays of
     equal length, nominal point first): the reduction's outputs by name, NaN where not determined.
     With ``check``, the reduction's errors at the first point."""
@@ -194,14 +215,31 @@ def _evaluate(x, layout, com_method, check, line_tolerance, source, lines) -> di
         ratio = (rF - rR) / np.hypot(a + b, e)
         lam = np.arctan2(e, a + b) + np.arcsin(np.where(np.abs(ratio) <= 1, ratio, np.nan))
         if check and not math.isfinite(lam[0]):
-            raise InputError("d", _first(x["d"]), "heights and diameters that close into a frame: "
-                             f"offsets a = {_first(a):.4f} m, b = {_first(b):.4f} m give no steer axis tilt", source)
+            raise InputError(
+                "d",
+                _first(x["d"]),
+                "heights and diameters that close into a frame: "
+                f"offsets a = {_first(a):.4f} m, b = {_first(b):.4f} m give no steer axis tilt",
+                source,
+            )
         w, fork_offset = (a + b) * np.cos(lam) + e * np.sin(lam), b
     if check and not 0 < lam[0] < math.pi / 2:
-        raise InputError("gamma" if layout.geometry == "wheelbase" else "h1", math.degrees(math.pi / 2 - lam[0]),
-                         "a head tube angle between 0 and 90 degrees", source)
-    out = {"w": w, "c": (rF * np.sin(lam) - fork_offset) / np.cos(lam), "lam_ht": np.pi / 2 - lam, "g": x["g"],
-           "rR": rR, "rF": rF, "lam": lam, "f": fork_offset}
+        raise InputError(
+            "gamma" if layout.geometry == "wheelbase" else "h1",
+            math.degrees(math.pi / 2 - lam[0]),
+            "a head tube angle between 0 and 90 degrees",
+            source,
+        )
+    out = {
+        "w": w,
+        "c": (rF * np.sin(lam) - fork_offset) / np.cos(lam),
+        "lam_ht": np.pi / 2 - lam,
+        "g": x["g"],
+        "rR": rR,
+        "rF": rF,
+        "lam": lam,
+        "f": fork_offset,
+    }
     k_t = 4 * math.pi**2 * (x["mP"] * (3 * (0.5 * x["dP"]) ** 2 + x["lP"] ** 2) / 12) / x["TtP1"] ** 2
     out["k_t"] = k_t
     for wheel in ("R", "F"):
@@ -215,8 +253,12 @@ def _evaluate(x, layout, com_method, check, line_tolerance, source, lines) -> di
         l1 = (h7 - 0.5 * d6) - (h6 - 0.5 * d5)
         l2 = sqrt_or_nan((length - 0.5 * (d5 + d6)) ** 2 - l1**2)
         if check and not math.isfinite(l2[0]):
-            raise InputError("l", _first(x["l"]), "an axle-to-reference-circle distance longer than the height "
-                             f"difference l1 = {_first(l1):.4f} m", source)
+            raise InputError(
+                "l",
+                _first(x["l"]),
+                f"an axle-to-reference-circle distance longer than the height difference l1 = {_first(l1):.4f} m",
+                source,
+            )
         references["G"] = (w - l2 * np.sin(lam) + l1 * np.cos(lam), -rF - l2 * np.cos(lam) - l1 * np.sin(lam))
     for body, indices in layout.orientations.items():
         name = "Bf" if body == "B" else body
@@ -230,7 +272,9 @@ def _evaluate(x, layout, com_method, check, line_tolerance, source, lines) -> di
         moments = torsional(k_t, np.array([x[f"Tt{body}{i}"] for i in indices])).T[..., None]  # (points, m, 1)
         inertia = (np.linalg.pinv(rows) @ moments)[..., 0]
         miss = sin[:, 0] * ls_x[0] + cos[:, 0] * ls_z[0] - offsets[:, 0]
-        fit = LineIntersection(np.array([ls_x[0], ls_z[0]]), miss, math.sqrt(math.fsum(d * d for d in miss) / len(miss)))
+        fit = LineIntersection(
+            np.array([ls_x[0], ls_z[0]]), miss, math.sqrt(math.fsum(d * d for d in miss) / len(miss))
+        )
         if lines is not None:
             lines[body] = fit
         if check:
@@ -238,14 +282,26 @@ def _evaluate(x, layout, com_method, check, line_tolerance, source, lines) -> di
                 raise FitError("the hanging lines are parallel: the orientations do not locate the centre of mass")
             check_lines_meet(f"the {BODIES[body]} ({body})", fit, line_tolerance, source)
             if not (math.isfinite(px[0]) and math.isfinite(pz[0])):
-                raise FitError(f"{source}: the hanging lines are parallel: two lines of the {BODIES[body]} ({body}) "
-                               "meet nowhere, so the mean of their pairwise intersections is not defined")
-            singular = (abs(np.linalg.det(rows[0])) if len(indices) == 3
-                        else np.linalg.svd(rows[0], compute_uv=False)[-1])
+                raise FitError(
+                    f"{source}: the hanging lines are parallel: two lines of the {BODIES[body]} ({body}) "
+                    "meet nowhere, so the mean of their pairwise intersections is not defined"
+                )
+            singular = (
+                abs(np.linalg.det(rows[0])) if len(indices) == 3 else np.linalg.svd(rows[0], compute_uv=False)[-1]
+            )
             if singular < SINGULAR_DETERMINANT:
                 raise InputError(f"alpha{body}", "coinciding pendulum axes", "Eq. 6 is singular", source)
-        out.update({f"m{name}": x[f"m{body}"], f"x{name}": px, f"z{name}": pz, f"I{name}xx": inertia[:, 0],
-                    f"I{name}xz": inertia[:, 1], f"I{name}zz": inertia[:, 2], f"I{name}yy": np.full_like(lam, np.nan)})
+        out.update(
+            {
+                f"m{name}": x[f"m{body}"],
+                f"x{name}": px,
+                f"z{name}": pz,
+                f"I{name}xx": inertia[:, 0],
+                f"I{name}xz": inertia[:, 1],
+                f"I{name}zz": inertia[:, 2],
+                f"I{name}yy": np.full_like(lam, np.nan),
+            }
+        )
         if layout.compound[body]:
             length = np.hypot(px - ref_x, pz - ref_z)
             yy = compound(x[f"Tc{body}1"], x[f"m{body}"], x["g"], length)
@@ -254,8 +310,9 @@ def _evaluate(x, layout, com_method, check, line_tolerance, source, lines) -> di
             out[f"I{name}yy"] = yy
     if layout.split_fork:
         inertia = lambda b: tuple(out[f"I{b}{a}"] for a in ("xx", "yy", "zz", "xz"))  # noqa: E731
-        m, xh, zh, IH = _combine(out["mG"], out["xG"], out["zG"], inertia("G"), out["mS"], out["xS"], out["zS"],
-                                 inertia("S"))
+        m, xh, zh, IH = _combine(
+            out["mG"], out["xG"], out["zG"], inertia("G"), out["mS"], out["xS"], out["zS"], inertia("S")
+        )
         out.update(mH=m, xH=xh, zH=zh, IHxx=IH[0], IHyy=IH[1], IHzz=IH[2], IHxz=IH[3])
     if layout.seating:
         x_hand, z_hand = grip_position(w, rF, rR, x["whb"], x["LhbF"], x["LhbR"])
@@ -263,16 +320,29 @@ def _evaluate(x, layout, com_method, check, line_tolerance, source, lines) -> di
         x12 = w + out["c"] + z10 * np.tan(lam)
         lam_ht = np.pi / 2 - lam
         l_s = (z10 - z_hand) / np.sin(lam_ht)
-        out.update({"h_bb": x["hbb"], "l_cs": x["lcs"], "l_sp": x["lsp"], "l_st": x["lst"], "lam_st": x["lamst"],
-                    "l_s": l_s, "l_hb": x12 - l_s * np.cos(lam_ht) - x_hand, "l_f": np.hypot(x12 - w, z10 + rF),
-                    "x_hand": x_hand, "z_hand": z_hand})
+        out.update(
+            {
+                "h_bb": x["hbb"],
+                "l_cs": x["lcs"],
+                "l_sp": x["lsp"],
+                "l_st": x["lst"],
+                "lam_st": x["lamst"],
+                "l_s": l_s,
+                "l_hb": x12 - l_s * np.cos(lam_ht) - x_hand,
+                "l_f": np.hypot(x12 - w, z10 + rF),
+                "x_hand": x_hand,
+                "z_hand": z_hand,
+            }
+        )
     return out
 
 
-def reduce(values: Mapping[str, Quantity], layout: MeasuredLayout, com_method: str = "least_squares",
-           vectorized: bool = True) -> dict[str, Quantity]:
+def reduce(
+    values: Mapping[str, Quantity], layout: MeasuredLayout, com_method: str = "least_squares", vectorized: bool = True
+) -> dict[str, Quantity]:
     """The oracle's reduction with central-difference sigmas: every output that is finite."""
     used = {k: q for k, q in values.items() if k not in KNOWN_EXTRAS}
-    result = propagate(lambda x: evaluate_measured(x, layout, com_method=com_method, check=True), used,
-                       vectorized=vectorized)
+    result = propagate(
+        lambda x: evaluate_measured(x, layout, com_method=com_method, check=True), used, vectorized=vectorized
+    )
     return {k: q for k, q in result.items() if math.isfinite(q.value)}

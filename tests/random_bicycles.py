@@ -7,6 +7,7 @@ tensors that satisfy the triangle inequality, wheels with ``I_yy <= 2 I_xx``, ..
 0.5 about one draw in sixty is valid, so a vectorised pre-filter of the same inertia inequalities
 (slightly looser, so it never rejects a draw the project accepts) spares most of the calls.
 """
+
 from __future__ import annotations
 
 import json
@@ -45,9 +46,12 @@ def random_parameters(n: int, spread: float = 0.5, seed: int = 0) -> list[Benchm
     logging.getLogger("bikerider").setLevel(logging.ERROR)  # wheel inertias accepted within sigma
     while len(out) < n:
         draws = {k: base[k] * rng.uniform(1 - spread, 1 + spread, 20000) for k in names}
-        keep = (_triangle(draws["IBxx"], draws["IByy"], draws["IBzz"], draws["IBxz"])
-                & _triangle(draws["IHxx"], draws["IHyy"], draws["IHzz"], draws["IHxz"])
-                & (draws["IRyy"] <= 2 * draws["IRxx"] * (1 + 1e-6)) & (draws["IFyy"] <= 2 * draws["IFxx"] * (1 + 1e-6)))
+        keep = (
+            _triangle(draws["IBxx"], draws["IByy"], draws["IBzz"], draws["IBxz"])
+            & _triangle(draws["IHxx"], draws["IHyy"], draws["IHzz"], draws["IHxz"])
+            & (draws["IRyy"] <= 2 * draws["IRxx"] * (1 + 1e-6))
+            & (draws["IFyy"] <= 2 * draws["IFxx"] * (1 + 1e-6))
+        )
         for i in np.flatnonzero(keep):
             try:
                 out.append(BenchmarkParameters.from_mapping({"g": base["g"], **{k: float(draws[k][i]) for k in names}}))

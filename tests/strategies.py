@@ -13,6 +13,7 @@ is drawn between the bounds the in-plane principal moments allow.  :func:`seated
 bicycle and a rider and rejects (``hypothesis.reject``) the pairs the project itself refuses with
 :class:`bikerider.errors.ReachError`.
 """
+
 from __future__ import annotations
 
 import contextlib
@@ -25,8 +26,8 @@ from collections.abc import Iterable
 from pathlib import Path
 
 import numpy as np
-from hypothesis import strategies as st
 from hypothesis import reject
+from hypothesis import strategies as st
 
 from bikerider.bicycle.bodies import BicycleBodies
 from bikerider.errors import ReachError
@@ -124,8 +125,7 @@ def mass_fractions(draw) -> dict[str, float]:
 def riders(draw) -> RiderMeasurements:
     """The paper's rider with every measurement, the mass and the fractions perturbed."""
     _, base = paper_inputs()
-    values = {k: Quantity(q.value * draw(factor(0.92, 1.08))) for k, q in base.values.items()
-              if k in RIDER_LENGTHS}
+    values = {k: Quantity(q.value * draw(factor(0.92, 1.08))) for k, q in base.values.items() if k in RIDER_LENGTHS}
     values["mBr"] = Quantity(draw(factor(45.0, 120.0)))
     values["lam_fl"] = Quantity(math.radians(draw(factor(65.0, 90.0))))
     return RiderMeasurements(values, draw(mass_fractions()), "<hypothesis rider>", "perturbed rider")
@@ -163,8 +163,14 @@ def benchmark_mappings(draw) -> dict[str, float]:
     for body in ("B", "H"):
         angle, scale, yy = draw(tensor_perturbation())
         xx, zz, xz = rotate_xz(v[f"I{body}xx"], v[f"I{body}zz"], v[f"I{body}xz"], angle, scale)
-        out.update({f"I{body}xx": xx, f"I{body}zz": zz, f"I{body}xz": xz,
-                    f"I{body}yy": yy_between(xx, zz, xz, 0.5 if yy is None else yy)})
+        out.update(
+            {
+                f"I{body}xx": xx,
+                f"I{body}zz": zz,
+                f"I{body}xz": xz,
+                f"I{body}yy": yy_between(xx, zz, xz, 0.5 if yy is None else yy),
+            }
+        )
     return out
 
 
@@ -187,15 +193,49 @@ def inertia_tensors(draw) -> np.ndarray:
 # =============================================================================================
 
 BAD_NUMBERS = (
-    "nan", "NaN", "inf", "-inf", "1e308", "-1e308", "1e-308", "1e400", "-1", "0", "-0.5", "1120", "1e6",
-    "abc", "true", "", "1,2", "+/-", "1+/-nan", "1 +/- 1e308", "1+/--1", "0x10", "1_000", "٣", "1e", "--1",
+    "nan",
+    "NaN",
+    "inf",
+    "-inf",
+    "1e308",
+    "-1e308",
+    "1e-308",
+    "1e400",
+    "-1",
+    "0",
+    "-0.5",
+    "1120",
+    "1e6",
+    "abc",
+    "true",
+    "",
+    "1,2",
+    "+/-",
+    "1+/-nan",
+    "1 +/- 1e308",
+    "1+/--1",
+    "0x10",
+    "1_000",
+    "٣",
+    "1e",
+    "--1",
 )
 """Replacements for one number: non-finite, huge, tiny, negative, zero, unit slips, not numbers."""
 
 _NUMBER = re.compile(rb"-?\d+\.?\d*(?:[eE][+-]?\d+)?")
 
-MUTATIONS = ("number", "number", "number", "truncate", "byte", "delete_line", "duplicate_line",
-             "swap_lines", "junk_line", "not_utf8")
+MUTATIONS = (
+    "number",
+    "number",
+    "number",
+    "truncate",
+    "byte",
+    "delete_line",
+    "duplicate_line",
+    "swap_lines",
+    "junk_line",
+    "not_utf8",
+)
 
 
 @st.composite
@@ -210,7 +250,7 @@ def mutated(draw, data: bytes) -> tuple[str, bytes]:
         matches = list(_NUMBER.finditer(code))
         m = matches[draw(st.integers(0, len(matches) - 1))]
         bad = draw(st.sampled_from(BAD_NUMBERS)).encode()
-        lines[i] = code[:m.start()] + bad + code[m.end():] + hash_ + comment
+        lines[i] = code[: m.start()] + bad + code[m.end() :] + hash_ + comment
         return f"line {i + 1}: {m.group().decode()} -> {bad.decode()!r}", b"\n".join(lines)
     if kind == "truncate":
         k = draw(st.integers(0, len(data) - 1))
@@ -218,15 +258,15 @@ def mutated(draw, data: bytes) -> tuple[str, bytes]:
     if kind == "byte":
         k = draw(st.integers(0, len(data) - 1))
         b = draw(st.integers(0, 255))
-        return f"byte {k} -> {b:#x}", data[:k] + bytes([b]) + data[k + 1:]
+        return f"byte {k} -> {b:#x}", data[:k] + bytes([b]) + data[k + 1 :]
     if kind == "not_utf8":
         k = draw(st.integers(0, len(data)))
         return f"\\xff\\xfe at byte {k}", data[:k] + b"\xff\xfe" + data[k:]
     i = draw(st.integers(0, len(lines) - 1))
     if kind == "delete_line":
-        return f"line {i + 1} deleted", b"\n".join(lines[:i] + lines[i + 1:])
+        return f"line {i + 1} deleted", b"\n".join(lines[:i] + lines[i + 1 :])
     if kind == "duplicate_line":
-        return f"line {i + 1} doubled", b"\n".join(lines[:i + 1] + lines[i:])
+        return f"line {i + 1} doubled", b"\n".join(lines[: i + 1] + lines[i:])
     if kind == "swap_lines":
         j = draw(st.integers(0, len(lines) - 1))
         lines[i], lines[j] = lines[j], lines[i]
@@ -266,7 +306,8 @@ def assert_names_file(exc: BaseException, *paths: Path) -> None:
     """The message names one of ``paths`` (by its full path as given, or at least its name)."""
     message = str(exc)
     assert any(str(p) in message or p.name in message for p in paths), (
-        f"error does not name the file ({', '.join(p.name for p in paths)}): {message}")
+        f"error does not name the file ({', '.join(p.name for p in paths)}): {message}"
+    )
     assert "Traceback" not in message
 
 

@@ -1,4 +1,5 @@
 """Bad input gets a clear error naming the measurement, its value and what was expected."""
+
 from __future__ import annotations
 
 import math
@@ -69,9 +70,34 @@ def test_impossible_angles(paper):
 
 
 def _benchmark() -> dict[str, float]:
-    return dict(w=1.02, c=0.08, lam=math.pi / 10, g=9.81, rR=0.3, mR=2.0, IRxx=0.0603, IRyy=0.12, xB=0.3, zB=-0.9,
-                mB=85.0, IBxx=9.2, IByy=11.0, IBzz=2.8, IBxz=2.4, xH=0.9, zH=-0.7, mH=4.0, IHxx=0.05892, IHyy=0.06,
-                IHzz=0.00708, IHxz=-0.00756, rF=0.35, mF=3.0, IFxx=0.1405, IFyy=0.28)
+    return dict(
+        w=1.02,
+        c=0.08,
+        lam=math.pi / 10,
+        g=9.81,
+        rR=0.3,
+        mR=2.0,
+        IRxx=0.0603,
+        IRyy=0.12,
+        xB=0.3,
+        zB=-0.9,
+        mB=85.0,
+        IBxx=9.2,
+        IByy=11.0,
+        IBzz=2.8,
+        IBxz=2.4,
+        xH=0.9,
+        zH=-0.7,
+        mH=4.0,
+        IHxx=0.05892,
+        IHyy=0.06,
+        IHzz=0.00708,
+        IHxz=-0.00756,
+        rF=0.35,
+        mF=3.0,
+        IFxx=0.1405,
+        IFyy=0.28,
+    )
 
 
 def test_pendulum_angles_that_leave_eq6_singular():
@@ -144,7 +170,7 @@ def _bicycle_with_com_lines(tmp_path, lines: str):
 def test_centre_of_mass_from_hanging_lines(tmp_path):
     # Three lines through (0.25, -0.62) at 41, 81 and 150 degrees (the paper's Table 4 angles).
     lines = ", ".join(
-        f'{{ point = [{0.25 + 0.3 * math.cos(math.radians(a))}, {-0.62 - 0.3 * math.sin(math.radians(a))}], '
+        f"{{ point = [{0.25 + 0.3 * math.cos(math.radians(a))}, {-0.62 - 0.3 * math.sin(math.radians(a))}], "
         f'angle_deg = "{a} +/- 1" }}'
         for a in (41, 81, 150)
     )
@@ -157,7 +183,9 @@ def test_centre_of_mass_from_hanging_lines(tmp_path):
 def test_hanging_lines_that_do_not_meet(tmp_path):
     from bikerider.errors import FitError
 
-    lines = ('{ point = [0.25, -0.62], angle_deg = 41 }, { point = [0.25, -0.62], angle_deg = 81 }, '
-             '{ point = [0.45, -0.62], angle_deg = 150 }')
+    lines = (
+        "{ point = [0.25, -0.62], angle_deg = 41 }, { point = [0.25, -0.62], angle_deg = 81 }, "
+        "{ point = [0.45, -0.62], angle_deg = 150 }"
+    )
     with pytest.raises(FitError, match=r"rear_frame.com.*do not meet"):
         _bicycle_with_com_lines(tmp_path, lines)

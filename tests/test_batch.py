@@ -1,4 +1,5 @@
 """``bikerider batch`` over a BicycleParameters data folder."""
+
 from __future__ import annotations
 
 import csv
@@ -18,7 +19,11 @@ NAMES = ["Benchmark", "Browser", "Browserins", "Fisher", "Rigid", "Silver", "Yel
 
 
 def _digests(root: Path) -> dict[str, str]:
-    return {str(p.relative_to(root)): hashlib.sha256(p.read_bytes()).hexdigest() for p in sorted(root.rglob("*")) if p.is_file()}
+    return {
+        str(p.relative_to(root)): hashlib.sha256(p.read_bytes()).hexdigest()
+        for p in sorted(root.rglob("*"))
+        if p.is_file()
+    }
 
 
 @pytest.fixture()
@@ -41,8 +46,15 @@ def test_every_bicycle_tabulated(data_copy, tmp_path, capsys, meijaard2007):
     rows = _rows(prefix.with_suffix(".csv").read_text())
     assert sorted(rows) == NAMES
     sources = {name: row["source"] for name, row in rows.items()}
-    assert sources == {"Benchmark": "parameters", "Browser": "raw", "Browserins": "raw", "Fisher": "raw",
-                       "Rigid": "raw", "Silver": "parameters", "Yellow": "raw"}
+    assert sources == {
+        "Benchmark": "parameters",
+        "Browser": "raw",
+        "Browserins": "raw",
+        "Fisher": "raw",
+        "Rigid": "raw",
+        "Silver": "parameters",
+        "Yellow": "raw",
+    }
     # Meijaard et al. (2007) Table 2(a): weave 4.29238253634111 m/s, capsize 6.02426201538837 m/s
     speeds = meijaard2007["speeds_table2a"]
     assert float(rows["Benchmark"]["weave_speed"]) == pytest.approx(speeds["v_w"]["value"], rel=1e-7)

@@ -6,16 +6,17 @@ general solvers and with central differences, that its pairwise-mean variant equ
 pair, and that the one tensor check (``bikerider.inertia``) agrees with an independent eigenvalue
 check.  ``tests/measured_oracle.py`` is the independent NumPy reduction they compare with.
 """
+
 from __future__ import annotations
 
 import math
 from importlib import resources
 from pathlib import Path
 
+import measured_oracle as oracle
 import numpy as np
 import pytest
 
-import measured_oracle as oracle
 from bikerider.bicycle import raw_measurements as rm
 from bikerider.bicycle.pendulum import centre_of_mass_from_lines
 from bikerider.engine import Chain, LeastSquaresStage
@@ -33,8 +34,12 @@ MEASURED = {name: DATA / "bicycles" / name / "RawData" / f"{name}Measured.txt" f
 def _arithmetic(x):
     """Plain arithmetic (correctly rounded, so identical on floats and on arrays), a constant output
     and one that is NaN."""
-    return {"p": x["a"] * x["b"] + x["c"] / x["a"], "q": np.sqrt(x["b"] * x["b"] + x["c"]), "const": 2.5,
-            "nan": x["a"] * math.nan}
+    return {
+        "p": x["a"] * x["b"] + x["c"] / x["a"],
+        "q": np.sqrt(x["b"] * x["b"] + x["c"]),
+        "const": 2.5,
+        "nan": x["a"] * math.nan,
+    }
 
 
 INPUTS = {"a": Quantity(1.5, 0.01), "b": Quantity(-0.7, 0.002), "c": Quantity(3.0, 0.0), "d": Quantity(9.0, 0.5)}
@@ -68,8 +73,10 @@ def test_a_batch_reduces_as_its_points_one_by_one(name, method):
     inputs = rm.measured_inputs(values, layout)
     chain = Chain(rm._stages(rm._layout_key(layout, method)), inputs)
     rng = np.random.default_rng(7)
-    batch = {k: q.value + (q.sigma or 1e-4 * abs(q.value)) * rng.uniform(-1, 1, 5) if math.isfinite(q.value)
-             else q.value for k, q in inputs.items()}
+    batch = {
+        k: q.value + (q.sigma or 1e-4 * abs(q.value)) * rng.uniform(-1, 1, 5) if math.isfinite(q.value) else q.value
+        for k, q in inputs.items()
+    }
     together = chain.evaluate(batch)
     for point in range(5):
         alone = chain.evaluate({k: float(v[point]) if np.ndim(v) else v for k, v in batch.items()})
@@ -133,8 +140,9 @@ def test_the_least_squares_stage_jacobian_matches_central_differences(method):
     betas, points = _random_lines(rng, 1, 5)
     stage = _lines_stage(5, method)
     kw = {f"alpha_{i}": float(betas[0, i]) for i in range(5)}
-    kw.update({f"x_{i}": float(points[0, i, 0]) for i in range(5)} | {f"z_{i}": float(points[0, i, 1])
-                                                                    for i in range(5)})
+    kw.update(
+        {f"x_{i}": float(points[0, i, 0]) for i in range(5)} | {f"z_{i}": float(points[0, i, 1]) for i in range(5)}
+    )
     J = stage.jacobian(kw)
     for j, name in enumerate(stage.inputs):
         h = 1e-6
@@ -191,11 +199,15 @@ def test_two_parallel_lines_leave_the_pairwise_mean_undefined():
     from bikerider.io.name_value_file import parse_name_value_text
 
     text = MEASURED["Rigid"].read_text()
-    text = text.replace("alphaB5 = 51.8+/-0.1", "alphaB5 = 55.7+/-0.1").replace("aB5 = 0.51625+/-0.001", "aB5 = 0.51925+/-0.001")
+    text = text.replace("alphaB5 = 51.8+/-0.1", "alphaB5 = 55.7+/-0.1").replace(
+        "aB5 = 0.51625+/-0.001", "aB5 = 0.51925+/-0.001"
+    )
     data = parse_name_value_text(text, "Parallel.txt")
     assert data["alphaB5"].value == data["alphaB3"].value
     assert "xBf" in rm.reduce_measured(data, source=data).bodies.values
-    with pytest.raises(FitError, match=r"Parallel.txt: the hanging lines are parallel: two lines of the rear frame \(B\)"):
+    with pytest.raises(
+        FitError, match=r"Parallel.txt: the hanging lines are parallel: two lines of the rear frame \(B\)"
+    ):
         rm.reduce_measured(data, source=data, com_method="pairwise_mean")
 
 

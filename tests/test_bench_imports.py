@@ -1,5 +1,6 @@
 """Every name bench/ imports from bikerider exists (the bench modules import inside their functions,
 so a moved name would otherwise fail only under ``make bench``)."""
+
 from __future__ import annotations
 
 import ast

@@ -1,4 +1,5 @@
 """The Whipple benchmark of Meijaard et al. (2007): matrices, eigenvalues, critical speeds."""
+
 from __future__ import annotations
 
 import numpy as np

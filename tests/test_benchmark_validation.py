@@ -4,6 +4,7 @@
 handlebar's inertia tensor passes ``check_inertia_tensor``; only when it cannot does the full check
 run (and raise with its own message).  The screen must never accept a tensor the full check refuses.
 """
+
 from __future__ import annotations
 
 import math
@@ -51,8 +52,9 @@ def test_the_inertia_check_agrees_with_eigenvalues_at_every_scale():
         # I_yy at, near and far from the triangle limits
         half, radius = (xx + zz) / 2, math.hypot((xx - zz) / 2, xz)
         limit = rng.choice([2 * radius, 2 * half])  # lower and upper bound of a valid I_yy
-        yy = rng.choice([None, limit * (1 + rng.normal(0, 1e-12)), limit * (1 + rng.normal(0, 1e-8)),
-                         limit * rng.uniform(0.5, 1.5)])
+        yy = rng.choice(
+            [None, limit * (1 + rng.normal(0, 1e-12)), limit * (1 + rng.normal(0, 1e-8)), limit * rng.uniform(0.5, 1.5)]
+        )
         expected = _eigenvalue_verdict(xx, yy, zz, xz)
         if expected is None:
             continue
@@ -65,11 +67,17 @@ def test_the_inertia_check_agrees_with_eigenvalues_at_every_scale():
 @pytest.mark.parametrize(
     "xx, yy, zz, xz, valid",
     [
-        (math.nan, 1.0, 1.0, 0.0, False), (1.0, 1.0, 1.0, math.nan, False), (math.inf, 1.0, 1.0, 0.0, False),
+        (math.nan, 1.0, 1.0, 0.0, False),
+        (1.0, 1.0, 1.0, math.nan, False),
+        (math.inf, 1.0, 1.0, 0.0, False),
         (1.0, math.inf, 1.0, 0.0, True),  # an I_yy that is not finite is not determined: the xz block alone
-        (1.0, math.nan, 1.0, 0.0, True), (0.0, 1.0, 1.0, 0.0, False), (-1.0, None, 1.0, 0.0, False),
-        (0.0, 0.0, 0.0, 0.0, False), (1.0, 2.0, 1.0, 0.0, True),  # the triangle limit itself: within the slack
-        (1.0, None, 1.0, 1.0, False), (1e-200, 1.0, 1e-200, 0.0, False),
+        (1.0, math.nan, 1.0, 0.0, True),
+        (0.0, 1.0, 1.0, 0.0, False),
+        (-1.0, None, 1.0, 0.0, False),
+        (0.0, 0.0, 0.0, 0.0, False),
+        (1.0, 2.0, 1.0, 0.0, True),  # the triangle limit itself: within the slack
+        (1.0, None, 1.0, 1.0, False),
+        (1e-200, 1.0, 1e-200, 0.0, False),
     ],
 )
 def test_the_inertia_check_at_its_edges(xx, yy, zz, xz, valid):
@@ -91,8 +99,16 @@ def test_the_batched_inertia_check_breaks_the_rules_the_one_check_names():
     xx, zz = rng.uniform(-0.2, 2.0, (2, n)) * scale
     xz = rng.choice([-1, 1], n) * np.sqrt(np.abs(xx * zz)) * rng.choice([0.5, 1 - 1e-6, 1 + 1e-6], n)
     yy = np.where(rng.random(n) < 0.2, np.nan, (np.abs(xx) + np.abs(zz)) * rng.uniform(-0.2, 1.2, n))
-    edges = np.array([(math.nan, 1.0, 1.0, 0.0), (1.0, math.inf, 1.0, 0.0), (0.0, 1.0, 1.0, 0.0),
-                      (1.0, 2.0, 1.0, 0.0), (1.0, math.nan, 1.0, 1.0), (0.0, 0.0, 0.0, 0.0)])
+    edges = np.array(
+        [
+            (math.nan, 1.0, 1.0, 0.0),
+            (1.0, math.inf, 1.0, 0.0),
+            (0.0, 1.0, 1.0, 0.0),
+            (1.0, 2.0, 1.0, 0.0),
+            (1.0, math.nan, 1.0, 1.0),
+            (0.0, 0.0, 0.0, 0.0),
+        ]
+    )
     xx, yy, zz, xz = (np.concatenate([a, edges[:, k]]) for k, a in enumerate((xx, yy, zz, xz)))
     got = broken_rules(xx, yy, zz, xz)
     for i in range(xx.size):

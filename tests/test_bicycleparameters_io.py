@@ -1,4 +1,5 @@
 """Readers of BicycleParameters Benchmark and lumped-rider files; the format detector."""
+
 from __future__ import annotations
 
 import logging
@@ -12,7 +13,11 @@ from bikerider.benchmark import BenchmarkParameters
 from bikerider.bicycle.bodies import BicycleBodies
 from bikerider.errors import FileFormatError, InputError
 from bikerider.io.bicycleparameters import (
-    bodies_from_benchmark, detect_format, load_bicycle_file, read_benchmark_file, read_lumped_rider,
+    bodies_from_benchmark,
+    detect_format,
+    load_bicycle_file,
+    read_benchmark_file,
+    read_lumped_rider,
 )
 
 DATA = Path(str(resources.files("bikerider") / "data"))

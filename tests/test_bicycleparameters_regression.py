@@ -5,6 +5,7 @@ src/bikerider/data/bicycleparameters/README.md.  For every bicycle with both Raw
 Parameters, bikerider reduces ``<Name>Measured.txt`` and compares with ``<Name>Benchmark.txt``.
 docs/bicycleparameters.md explains each difference pinned here.
 """
+
 from __future__ import annotations
 
 import logging
@@ -14,11 +15,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from measured_oracle import pairwise_mean_point
 
 from bikerider.benchmark import WhippleModel
 from bikerider.bicycle.to_benchmark import bicycle_benchmark_parameters
 from bikerider.io.bicycleparameters import merge_rider, read_benchmark_file, read_lumped_rider, read_measured_file
-from measured_oracle import pairwise_mean_point
 from bikerider.io.name_value_file import read_name_value_file
 
 DATA = Path(str(resources.files("bikerider") / "data" / "bicycleparameters"))
@@ -147,8 +148,9 @@ def test_critical_speeds_match(name):
     against the Parameters file."""
     reduction = reduce(name, "pairwise_mean")
     ours_speeds = WhippleModel.from_parameters(bicycle_benchmark_parameters(reduction.bodies)).critical_speeds()
-    ref_speeds = WhippleModel.from_parameters(read_benchmark_file(
-        DATA / "bicycles" / name / "Parameters" / f"{name}Benchmark.txt").parameters).critical_speeds()
+    ref_speeds = WhippleModel.from_parameters(
+        read_benchmark_file(DATA / "bicycles" / name / "Parameters" / f"{name}Benchmark.txt").parameters
+    ).critical_speeds()
     assert ours_speeds.weave == pytest.approx(ref_speeds.weave, rel=1e-7)
     assert ours_speeds.capsize == pytest.approx(ref_speeds.capsize, rel=1e-7)
 
@@ -157,7 +159,9 @@ def test_browser_speeds_against_the_reference_copy(meijaard2007):
     # tests/data/meijaard2007.json, second_set_batavus_browser_no_rider: weave 4.195375631060284 m/s,
     # capsize 4.350111500614676 m/s computed from BicycleParameters' Browser parameters.
     computed = meijaard2007["second_set_batavus_browser_no_rider"]["computed"]
-    speeds = WhippleModel.from_parameters(bicycle_benchmark_parameters(reduce("Browser", "pairwise_mean").bodies)).critical_speeds()
+    speeds = WhippleModel.from_parameters(
+        bicycle_benchmark_parameters(reduce("Browser", "pairwise_mean").bodies)
+    ).critical_speeds()
     assert speeds.weave == pytest.approx(computed["weave_speed"], rel=1e-8)
     assert speeds.capsize == pytest.approx(computed["capsize_speed"], rel=1e-8)
 
@@ -174,8 +178,12 @@ def test_iyy_inconsistent_with_in_plane_inertia(name, body, in_parameters_file):
     reduction = reduce(name, method)
     assert f"I{body}yy" not in reduction.bodies.values
     yy = reduction.extras[f"I{body}yy"].value
-    tensor = np.array([[reduction.bodies[f"I{body}xx"], reduction.bodies[f"I{body}xz"]],
-                       [reduction.bodies[f"I{body}xz"], reduction.bodies[f"I{body}zz"]]])
+    tensor = np.array(
+        [
+            [reduction.bodies[f"I{body}xx"], reduction.bodies[f"I{body}xz"]],
+            [reduction.bodies[f"I{body}xz"], reduction.bodies[f"I{body}zz"]],
+        ]
+    )
     small, large = np.linalg.eigvalsh(tensor)
     assert yy > large + small or large > yy + small
     benchmark = read_benchmark_file(DATA / "bicycles" / name / "Parameters" / f"{name}Benchmark.txt")

@@ -1,4 +1,5 @@
 """The command line: estimate and benchmark, text, JSON and figures."""
+
 from __future__ import annotations
 
 import json
@@ -11,8 +12,34 @@ import pytest
 from bikerider.cli import main
 
 DATA = Path(__file__).parent / "data"
-NAMES = ["w", "c", "lam", "g", "rR", "mR", "IRxx", "IRyy", "xB", "zB", "mB", "IBxx", "IByy", "IBzz", "IBxz",
-         "xH", "zH", "mH", "IHxx", "IHyy", "IHzz", "IHxz", "rF", "mF", "IFxx", "IFyy"]
+NAMES = [
+    "w",
+    "c",
+    "lam",
+    "g",
+    "rR",
+    "mR",
+    "IRxx",
+    "IRyy",
+    "xB",
+    "zB",
+    "mB",
+    "IBxx",
+    "IByy",
+    "IBzz",
+    "IBxz",
+    "xH",
+    "zH",
+    "mH",
+    "IHxx",
+    "IHyy",
+    "IHzz",
+    "IHxz",
+    "rF",
+    "mF",
+    "IFxx",
+    "IFyy",
+]
 
 
 def test_estimate_json_default(capsys):

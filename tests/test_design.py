@@ -1,4 +1,5 @@
 """Design spaces, their runs into stores (chunked, resumable, on Dask), validity, summaries."""
+
 from __future__ import annotations
 
 import inspect
@@ -35,8 +36,14 @@ def bench():
 @pytest.fixture(scope="module")
 def space(bench):
     # trail, steer axis tilt and rear-body mass: some designs impossible (mB <= 0), some never stable
-    return design.grid(bench, {"c": np.linspace(-0.05, 0.2, 11), "lam": np.radians(np.linspace(-5, 40, 10)),
-                               "mB": np.linspace(-10.0, 120.0, 7)})
+    return design.grid(
+        bench,
+        {
+            "c": np.linspace(-0.05, 0.2, 11),
+            "lam": np.radians(np.linspace(-5, 40, 10)),
+            "mB": np.linspace(-10.0, 120.0, 7),
+        },
+    )
 
 
 @pytest.fixture(scope="module")
@@ -66,16 +73,18 @@ def test_a_grid_is_every_combination_in_c_order(space):
 
 
 def test_random_designs_do_not_depend_on_the_chunks(bench):
-    space = design.random_designs(bench, {"c": ("uniform", 0.0, 0.2), "mB": ("normal", 85.0, 10.0)},
-                                  2 * RANDOM_BLOCK + 17, seed=4)
+    space = design.random_designs(
+        bench, {"c": ("uniform", 0.0, 0.2), "mB": ("normal", 85.0, 10.0)}, 2 * RANDOM_BLOCK + 17, seed=4
+    )
     whole = space.values(0, space.size)
     pieces = [space.values(a, b) for a, b in ((0, 1000), (1000, RANDOM_BLOCK + 5), (RANDOM_BLOCK + 5, space.size))]
     for name in ("c", "mB"):
         np.testing.assert_array_equal(whole[name], np.concatenate([p[name] for p in pieces]))
     assert 0.0 <= whole["c"].min() and whole["c"].max() <= 0.2
     assert whole["mB"].mean() == pytest.approx(85.0, abs=0.2)
-    again = design.random_designs(bench, {"c": ("uniform", 0.0, 0.2), "mB": ("normal", 85.0, 10.0)},
-                                  2 * RANDOM_BLOCK + 17, seed=4)
+    again = design.random_designs(
+        bench, {"c": ("uniform", 0.0, 0.2), "mB": ("normal", 85.0, 10.0)}, 2 * RANDOM_BLOCK + 17, seed=4
+    )
     np.testing.assert_array_equal(again.values(5, 50)["c"], whole["c"][5:50])
 
 
@@ -87,18 +96,24 @@ def test_a_space_round_trips_through_json(space, bench):
     assert design.DesignSpace.from_json(mc.to_json()).values(0, 100)["mB"].tolist() == mc.values(0, 100)["mB"].tolist()
 
 
-@pytest.mark.parametrize("make, message", [
-    (lambda b: design.grid(b, {"trail": [0.1]}), "--vary = 'trail': expected one of the benchmark names"),
-    (lambda b: design.grid(b, {"c": []}), "c = 'an empty range': expected at least one value"),
-    (lambda b: design.grid(b, {"c": [0.1, np.nan]}), "c = .*finite values"),
-    (lambda b: design.grid(b, {}), "--vary = 'nothing'"),
-    (lambda b: design.grid(b, {"IByy": [1.0]}), "a base that determines IByy"),
-    (lambda b: design.grid(b, {k: np.arange(1000.0) for k in ("c", "w", "mB", "mH", "mF")}), "at most 1e"),
-    (lambda b: design.random_designs(b, {"c": ("uniform", 0.2, 0.1)}, 10), "c = '0.2:0.1': expected a range LOW:HIGH"),
-    (lambda b: design.random_designs(b, {"c": ("normal", 0.1, 0.0)}, 10), "a positive standard deviation"),
-    (lambda b: design.random_designs(b, {"c": ("uniform", 0.0, 0.1)}, 0), "--random = 0"),
-    (lambda b: design.monte_carlo(b, 10), "--monte-carlo = 'no uncertainties'"),
-])
+@pytest.mark.parametrize(
+    "make, message",
+    [
+        (lambda b: design.grid(b, {"trail": [0.1]}), "--vary = 'trail': expected one of the benchmark names"),
+        (lambda b: design.grid(b, {"c": []}), "c = 'an empty range': expected at least one value"),
+        (lambda b: design.grid(b, {"c": [0.1, np.nan]}), "c = .*finite values"),
+        (lambda b: design.grid(b, {}), "--vary = 'nothing'"),
+        (lambda b: design.grid(b, {"IByy": [1.0]}), "a base that determines IByy"),
+        (lambda b: design.grid(b, {k: np.arange(1000.0) for k in ("c", "w", "mB", "mH", "mF")}), "at most 1e"),
+        (
+            lambda b: design.random_designs(b, {"c": ("uniform", 0.2, 0.1)}, 10),
+            "c = '0.2:0.1': expected a range LOW:HIGH",
+        ),
+        (lambda b: design.random_designs(b, {"c": ("normal", 0.1, 0.0)}, 10), "a positive standard deviation"),
+        (lambda b: design.random_designs(b, {"c": ("uniform", 0.0, 0.1)}, 0), "--random = 0"),
+        (lambda b: design.monte_carlo(b, 10), "--monte-carlo = 'no uncertainties'"),
+    ],
+)
 def test_bad_spaces_are_named(bench, make, message):
     if "IByy" in message:  # a base that leaves IByy undetermined
         from bikerider.benchmark import BenchmarkParameters
@@ -138,8 +153,11 @@ def test_vectorised_validity_is_with_values(bench):
         if expected is None:
             assert got is None, (changes, got)
         else:
-            assert got is not None and got[0] == expected[0] and expected[1].startswith(got[1].split(" (")[0]), \
-                (changes, got, expected)
+            assert got is not None and got[0] == expected[0] and expected[1].startswith(got[1].split(" (")[0]), (
+                changes,
+                got,
+                expected,
+            )
             kinds.add(got[0])
     assert len(kinds) >= 8  # masses, lengths, tilt, tensors, wheels, ... all met
 
@@ -175,8 +193,9 @@ def test_the_map_equals_a_dense_eigenvalue_scan(reference, space, bench):
     values = space.values(0, space.size)
     valid = reference.read("valid")
     names = inspect.signature(gen.canonical_matrices).parameters
-    args = {k: np.where(valid, values[k], float(bench.values[k])) if k in values else float(bench.values[k])
-            for k in names}
+    args = {
+        k: np.where(valid, values[k], float(bench.values[k])) if k in values else float(bench.values[k]) for k in names
+    }
     model = WhippleModel(*gen.canonical_matrices(**args), g=9.81)
     scan = (np.linalg.eigvals(model.state_matrix(SPEEDS)).real < 0).all(axis=-1) & valid[:, None]
     stable = reference.stable()
@@ -250,8 +269,9 @@ def test_an_interrupted_run_resumes_without_redoing_chunks(tmp_path, monkeypatch
     store = tmp_path / "run"
     script = tmp_path / "run.py"
     script.write_text(RUN_SCRIPT)
-    proc = subprocess.Popen([sys.executable, str(script), str(store)], stdout=subprocess.DEVNULL,
-                            stderr=subprocess.DEVNULL)
+    proc = subprocess.Popen(
+        [sys.executable, str(script), str(store)], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL
+    )
     deadline = time.monotonic() + 120
     try:
         while time.monotonic() < deadline:
@@ -281,8 +301,9 @@ def test_an_interrupted_run_resumes_without_redoing_chunks(tmp_path, monkeypatch
 @pytest.mark.slow
 def test_a_dask_local_cluster_of_two_workers_gives_the_same_run(space, reference, tmp_path):
     pytest.importorskip("dask.distributed")
-    on_dask = design.explore(space, tmp_path / "dask", SPEEDS, [3.0, 6.0], chunk_size=128, engine="numpy",
-                             scheduler="local", workers=2)
+    on_dask = design.explore(
+        space, tmp_path / "dask", SPEEDS, [3.0, 6.0], chunk_size=128, engine="numpy", scheduler="local", workers=2
+    )
     assert on_dask.complete
     _equal_runs(on_dask, reference)
 
@@ -299,7 +320,8 @@ def test_a_wrong_scheduler_address_is_named(space, monkeypatch):
 def test_memory_is_that_of_a_chunk(tmp_path):
     """Peak memory of a subprocess running 2e5 and 8e5 designs: the same within 40 MB (bench/ measures more)."""
     script = tmp_path / "mem.py"
-    script.write_text(textwrap.dedent("""
+    script.write_text(
+        textwrap.dedent("""
         import resource, sys
         import numpy as np
         from bikerider import design
@@ -308,11 +330,13 @@ def test_memory_is_that_of_a_chunk(tmp_path):
         space = design.grid(named("Benchmark"), {"c": np.linspace(0, 0.2, n // 1000), "mB": np.linspace(40, 120, 1000)})
         design.explore(space, sys.argv[1], np.linspace(0, 10, 101), chunk_size=50_000, engine="numpy")
         print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)
-    """))
+    """)
+    )
     peaks = []
     for n in (200_000, 800_000):
-        out = subprocess.run([sys.executable, str(script), str(tmp_path / f"s{n}"), str(n)], capture_output=True,
-                             text=True, check=True)
+        out = subprocess.run(
+            [sys.executable, str(script), str(tmp_path / f"s{n}"), str(n)], capture_output=True, text=True, check=True
+        )
         peaks.append(int(out.stdout.split()[-1]) / 1024)
     assert abs(peaks[1] - peaks[0]) < 40, peaks
 
@@ -371,9 +395,11 @@ def test_figures_draw(reference, tmp_path):
 
     s = summary.summarize(reference)
     base = reference.spec.space.base
-    for name, fig in (("fraction", figures.stable_fraction_figure(s, base, "t")),
-                      ("sensitivity", figures.interval_sensitivity_figure(s, base, "t")),
-                      ("map", figures.design_slice_figure(summary.design_slice(reference, "c", "lam"), SPEEDS, "t"))):
+    for name, fig in (
+        ("fraction", figures.stable_fraction_figure(s, base, "t")),
+        ("sensitivity", figures.interval_sensitivity_figure(s, base, "t")),
+        ("map", figures.design_slice_figure(summary.design_slice(reference, "c", "lam"), SPEEDS, "t")),
+    ):
         path = save_figure(fig, tmp_path / f"{name}.png")
         assert path.stat().st_size > 10_000
 

@@ -1,4 +1,5 @@
 """``bikerider sweep`` on design spaces: stores, random designs, raw measurements, errors."""
+
 from __future__ import annotations
 
 import json
@@ -8,8 +9,21 @@ import pytest
 from bikerider.cli import main
 
 pytest.importorskip("zarr")
-GRID = ["--bicycle", "Benchmark", "--vary", "c=0:0.15:8", "--vary", "lam_deg=0:30:6", "--vary", "w=0.9:1.2:3",
-        "--speeds", "0:10:21", "--weave-speeds", "4:6:2", "--quiet"]
+GRID = [
+    "--bicycle",
+    "Benchmark",
+    "--vary",
+    "c=0:0.15:8",
+    "--vary",
+    "lam_deg=0:30:6",
+    "--vary",
+    "w=0.9:1.2:3",
+    "--speeds",
+    "0:10:21",
+    "--weave-speeds",
+    "4:6:2",
+    "--quiet",
+]
 
 
 def test_a_grid_into_a_store_prints_a_summary_and_resumes(tmp_path, capsys):
@@ -28,37 +42,79 @@ def test_a_grid_into_a_store_prints_a_summary_and_resumes(tmp_path, capsys):
 
 
 def test_plots_of_a_store(tmp_path, capsys):
-    assert main(["sweep", *GRID, "--store", str(tmp_path / "s"), "--plot", str(tmp_path / "fig"),
-                 "--slice", "lam,w"]) == 0
-    assert sorted(p.name for p in (tmp_path / "fig").iterdir()) == ["map_lam_w.png", "sensitivity.png",
-                                                                    "stable_fraction.png"]
+    assert (
+        main(["sweep", *GRID, "--store", str(tmp_path / "s"), "--plot", str(tmp_path / "fig"), "--slice", "lam,w"]) == 0
+    )
+    assert sorted(p.name for p in (tmp_path / "fig").iterdir()) == [
+        "map_lam_w.png",
+        "sensitivity.png",
+        "stable_fraction.png",
+    ]
 
 
 def test_random_designs_as_rows(capsys):
-    assert main(["sweep", "--bicycle", "Benchmark", "--random", "6", "--vary", "c=0:0.2", "--vary", "mB=85+/-10",
-                 "--weave-speeds", "5:5:1", "--quiet"]) == 0
+    assert (
+        main(
+            [
+                "sweep",
+                "--bicycle",
+                "Benchmark",
+                "--random",
+                "6",
+                "--vary",
+                "c=0:0.2",
+                "--vary",
+                "mB=85+/-10",
+                "--weave-speeds",
+                "5:5:1",
+                "--quiet",
+            ]
+        )
+        == 0
+    )
     lines = capsys.readouterr().out.strip().splitlines()
     assert lines[0].startswith("c,mB,valid,reason,weave_speed") and lines[0].endswith("weave_damping_ratio@5")
     assert len(lines) == 7
 
 
 def test_raw_measurements_through_the_estimate(capsys):
-    assert main(["sweep", "--measured", "--vary", "l_sp=0.18:0.22:3", "--vary", "mBr=60:80:2", "--vary",
-                 "lam_ht_deg=70:72:2", "--json", "--quiet"]) == 0
+    assert (
+        main(
+            [
+                "sweep",
+                "--measured",
+                "--vary",
+                "l_sp=0.18:0.22:3",
+                "--vary",
+                "mBr=60:80:2",
+                "--vary",
+                "lam_ht_deg=70:72:2",
+                "--json",
+                "--quiet",
+            ]
+        )
+        == 0
+    )
     out = json.loads(capsys.readouterr().out)
     assert out["kind"] == "measurements" and len(out["designs"]) == 12
     assert all(d["valid"] and d["weave_speed"] is not None for d in out["designs"])
 
 
-@pytest.mark.parametrize("argv, message", [
-    (["--vary", "trail=0:1:3", "--vary", "c=0:1:3", "--vary", "w=1:2:3"], "--vary = 'trail': expected one of the"),
-    (["--vary", "c=0:0.1:0", "--vary", "w=1:2:3", "--vary", "mB=1:2:3"], "1 <= N"),
-    (["--random", "5", "--vary", "c=0.2:0.1"], "c = '0.2:0.1': expected a range LOW:HIGH"),
-    (["--random", "5", "--vary", "c=0.2"], "NAME=LOW:HIGH (uniform) or NAME=MEAN+/-SIGMA"),
-    (["--monte-carlo", "5", "--vary", "c=0:1:2"], "--monte-carlo = 5: expected no --vary"),
-    (["--vary", "c=0:0.1:200", "--vary", "w=1:2:100", "--vary", "mB=1:2:100"], "--store = missing: expected a folder"),
-    (["--vary", "c=0:0.1:3", "--vary", "w=1:2:3", "--vary", "mB=1:2:3", "--workers", "2"], "--workers = 2"),
-])
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["--vary", "trail=0:1:3", "--vary", "c=0:1:3", "--vary", "w=1:2:3"], "--vary = 'trail': expected one of the"),
+        (["--vary", "c=0:0.1:0", "--vary", "w=1:2:3", "--vary", "mB=1:2:3"], "1 <= N"),
+        (["--random", "5", "--vary", "c=0.2:0.1"], "c = '0.2:0.1': expected a range LOW:HIGH"),
+        (["--random", "5", "--vary", "c=0.2"], "NAME=LOW:HIGH (uniform) or NAME=MEAN+/-SIGMA"),
+        (["--monte-carlo", "5", "--vary", "c=0:1:2"], "--monte-carlo = 5: expected no --vary"),
+        (
+            ["--vary", "c=0:0.1:200", "--vary", "w=1:2:100", "--vary", "mB=1:2:100"],
+            "--store = missing: expected a folder",
+        ),
+        (["--vary", "c=0:0.1:3", "--vary", "w=1:2:3", "--vary", "mB=1:2:3", "--workers", "2"], "--workers = 2"),
+    ],
+)
 def test_bad_design_options_are_named(argv, message, capsys):
     assert main(["sweep", "--bicycle", "Benchmark", "--quiet", *argv]) == 2
     assert message in capsys.readouterr().err

@@ -8,15 +8,16 @@ determined to 1e-12 by the matrix entries; where a one-ulp change of the entries
 ``delta`` (a polynomial coefficient that cancels), both are that uncertain, and they must agree to
 ``8 delta``.  Found on 2e5 random designs: 48 weave speeds need the second term, at most 3.3 delta.
 """
+
 from __future__ import annotations
 
 import numpy as np
 import pytest
+from bikerider.generated import benchmark_model as gen
 
 from bikerider.benchmark import WhippleModel
 from bikerider.benchmark.model import matrix_entries
 from bikerider.benchmark.stability import stability_batch
-from bikerider.generated import benchmark_model as gen
 from bikerider.shipped import named
 
 compiled = pytest.importorskip("bikerider.design.compiled")
@@ -29,18 +30,84 @@ N = 20_000
 SPEEDS = np.linspace(0.0, 10.0, 101)
 FLOATS = ("lower", "upper", "weave", "capsize", "weave_frequency")
 TWO_INTERVALS = [  # unusual bicycles with two self-stable intervals (found by a search over wide random designs)
-    {"w": 0.620795, "c": 0.234243, "lam": 0.449306, "rR": 0.0584220, "mR": 2.04246, "IRxx": 0.0971783, "IRyy": 0.185346,
-     "xB": 0.167507, "zB": -0.255922, "mB": 46.9052, "IBxx": 9.10270, "IBzz": 2.95335, "IBxz": 3.28661, "xH": 1.81001,
-     "zH": -0.891029, "mH": 5.36583, "IHxx": 0.0566949, "IHzz": 0.0120683, "IHxz": -0.0102589, "rF": 0.0415094,
-     "mF": 2.03050, "IFxx": 0.204892, "IFyy": 0.344371, "g": 9.81},
-    {"w": 0.487089, "c": 0.123976, "lam": 0.526784, "rR": 0.0174541, "mR": 3.75261, "IRxx": 0.109100, "IRyy": 0.114344,
-     "xB": 0.496190, "zB": -0.110446, "mB": 110.443, "IBxx": 6.43474, "IBzz": 4.86737, "IBxz": 0.148607, "xH": 0.529202,
-     "zH": -0.966683, "mH": 4.93205, "IHxx": 0.0556766, "IHzz": 0.00893323, "IHxz": -0.00318123, "rF": 0.480949,
-     "mF": 0.185035, "IFxx": 0.248186, "IFyy": 0.169059, "g": 9.81},
-    {"w": 0.976444, "c": -0.233274, "lam": 0.102691, "rR": 0.0655273, "mR": 0.738111, "IRxx": 0.0441131,
-     "IRyy": 0.0733604, "xB": -0.231852, "zB": -0.969098, "mB": 4.76221, "IBxx": 12.4829, "IBzz": 3.33314,
-     "IBxz": 2.45938, "xH": 2.27193, "zH": -0.635948, "mH": 4.36277, "IHxx": 0.0584413, "IHzz": 0.00169174,
-     "IHxz": -0.00153724, "rF": 0.0522165, "mF": 5.43058, "IFxx": 0.269723, "IFyy": 0.279141, "g": 9.81},
+    {
+        "w": 0.620795,
+        "c": 0.234243,
+        "lam": 0.449306,
+        "rR": 0.0584220,
+        "mR": 2.04246,
+        "IRxx": 0.0971783,
+        "IRyy": 0.185346,
+        "xB": 0.167507,
+        "zB": -0.255922,
+        "mB": 46.9052,
+        "IBxx": 9.10270,
+        "IBzz": 2.95335,
+        "IBxz": 3.28661,
+        "xH": 1.81001,
+        "zH": -0.891029,
+        "mH": 5.36583,
+        "IHxx": 0.0566949,
+        "IHzz": 0.0120683,
+        "IHxz": -0.0102589,
+        "rF": 0.0415094,
+        "mF": 2.03050,
+        "IFxx": 0.204892,
+        "IFyy": 0.344371,
+        "g": 9.81,
+    },
+    {
+        "w": 0.487089,
+        "c": 0.123976,
+        "lam": 0.526784,
+        "rR": 0.0174541,
+        "mR": 3.75261,
+        "IRxx": 0.109100,
+        "IRyy": 0.114344,
+        "xB": 0.496190,
+        "zB": -0.110446,
+        "mB": 110.443,
+        "IBxx": 6.43474,
+        "IBzz": 4.86737,
+        "IBxz": 0.148607,
+        "xH": 0.529202,
+        "zH": -0.966683,
+        "mH": 4.93205,
+        "IHxx": 0.0556766,
+        "IHzz": 0.00893323,
+        "IHxz": -0.00318123,
+        "rF": 0.480949,
+        "mF": 0.185035,
+        "IFxx": 0.248186,
+        "IFyy": 0.169059,
+        "g": 9.81,
+    },
+    {
+        "w": 0.976444,
+        "c": -0.233274,
+        "lam": 0.102691,
+        "rR": 0.0655273,
+        "mR": 0.738111,
+        "IRxx": 0.0441131,
+        "IRyy": 0.0733604,
+        "xB": -0.231852,
+        "zB": -0.969098,
+        "mB": 4.76221,
+        "IBxx": 12.4829,
+        "IBzz": 3.33314,
+        "IBxz": 2.45938,
+        "xH": 2.27193,
+        "zH": -0.635948,
+        "mH": 4.36277,
+        "IHxx": 0.0584413,
+        "IHzz": 0.00169174,
+        "IHxz": -0.00153724,
+        "rF": 0.0522165,
+        "mF": 5.43058,
+        "IFxx": 0.269723,
+        "IFyy": 0.279141,
+        "g": 9.81,
+    },
 ]
 
 
@@ -64,8 +131,10 @@ def _one_ulp_sensitivity(entries: dict[str, np.ndarray], reference) -> dict[str,
     delta = {k: np.zeros(getattr(reference, k).shape[0]) for k in FLOATS}
     for seed in range(4):
         rng = np.random.default_rng(100 + seed)
-        moved = {k: np.where(rng.random(v.shape) < 0.5, np.nextafter(v, np.inf), np.nextafter(v, -np.inf))
-                 for k, v in entries.items()}
+        moved = {
+            k: np.where(rng.random(v.shape) < 0.5, np.nextafter(v, np.inf), np.nextafter(v, -np.inf))
+            for k, v in entries.items()
+        }
         other = stability_batch(moved, 9.81)
         for k in FLOATS:
             with np.errstate(invalid="ignore"):
@@ -156,11 +225,11 @@ def test_the_generator_and_the_runtime_use_one_quartic():
     from pathlib import Path
 
     sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-    from derive import kernels
-
-    from bikerider.benchmark import quartic
     from bikerider.generated import design_kernels
     from bikerider.generated.manifest import KERNELS
+
+    from bikerider.benchmark import quartic
+    from derive import kernels
 
     assert kernels.NEWTON_STEPS == quartic.NEWTON_STEPS
     assert compiled.ARGUMENTS == tuple(kernels.arguments()) == KERNELS["design_kernels.bikerider_stability"]["args"]

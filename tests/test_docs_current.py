@@ -5,6 +5,7 @@
 in them must regenerate them, or the documents would quote results the code no longer gives.  (The
 blind gap validation, ``docs/gap_validation.md``, takes minutes and is left to ``make docs``.)
 """
+
 from __future__ import annotations
 
 import importlib.util
@@ -35,8 +36,10 @@ def test_document_is_its_scripts_output(document, caplog):
     caplog.set_level(logging.ERROR)
     expected = _script(SCRIPTS[document]).build()
     committed = (ROOT / "docs" / document).read_text(encoding="utf-8")
-    assert committed == expected, (f"docs/{document} is not what docs/scripts/{SCRIPTS[document]} writes now: "
-                                   "run `make docs` (or that script) and commit the result")
+    assert committed == expected, (
+        f"docs/{document} is not what docs/scripts/{SCRIPTS[document]} writes now: "
+        "run `make docs` (or that script) and commit the result"
+    )
 
 
 def test_every_gallery_image_is_committed():

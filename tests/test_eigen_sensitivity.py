@@ -1,12 +1,13 @@
 """Eigenvalue sensitivities from left and right eigenvectors against finite differences."""
+
 from __future__ import annotations
 
 import numpy as np
 import pytest
+from bikerider.generated import benchmark_model as gm
 
 from bikerider.benchmark.model import label_modes
 from bikerider.errors import InputError
-from bikerider.generated import benchmark_model as gm
 from bikerider.uncertainty.chain import Chain
 from bikerider.uncertainty.eigen import PARAMETERS, eigen_sensitivity
 from bikerider.uncertainty.propagation import propagate

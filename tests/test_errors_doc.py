@@ -4,6 +4,7 @@ field name the code raises InputError/ReachError for, and each FileFormatError/F
 The raise sites are found by reading the source (``ast``), so a new error without documentation
 fails here.  Names computed at run time (a variable) are covered by the generic rows of the page.
 """
+
 from __future__ import annotations
 
 import ast
@@ -18,8 +19,10 @@ import bikerider.errors as errors
 ROOT = Path(__file__).resolve().parents[1]
 SRC = ROOT / "src" / "bikerider"
 DOC = (ROOT / "docs" / "errors.md").read_text()
-SPANS = [span.replace("\\|", "|") for span in
-         re.findall(r"`([^`]+)`", re.sub(r"^```.*?^```", "", DOC, flags=re.MULTILINE | re.DOTALL))]
+SPANS = [
+    span.replace("\\|", "|")
+    for span in re.findall(r"`([^`]+)`", re.sub(r"^```.*?^```", "", DOC, flags=re.MULTILINE | re.DOTALL))
+]
 """Every backticked span of the page."""
 PLACEHOLDER = r"(?:<[^>]+>|[\w.]+|\.\.\.|i, j)"
 """What a ``{...}`` of an f-string may be written as on the page: ``<body>``, ``B``, ``...``."""
@@ -31,8 +34,9 @@ def _raises() -> list[tuple[str, int, str, ast.expr]]:
     out = []
     for path in sorted(SRC.rglob("*.py")):
         for node in ast.walk(ast.parse(path.read_text())):
-            if not (isinstance(node, ast.Raise) and isinstance(node.exc, ast.Call)
-                    and isinstance(node.exc.func, ast.Name)):
+            if not (
+                isinstance(node, ast.Raise) and isinstance(node.exc, ast.Call) and isinstance(node.exc.func, ast.Name)
+            ):
                 continue
             cls, args = node.exc.func.id, node.exc.args
             if cls in ("InputError", "ReachError") and args:
@@ -63,8 +67,11 @@ def test_the_raise_sites_were_found():
     assert len(RAISES) > 150
 
 
-@pytest.mark.parametrize("cls", [c for _, c in inspect.getmembers(errors, inspect.isclass)
-                                 if issubclass(c, errors.BikeriderError)], ids=lambda c: c.__name__)
+@pytest.mark.parametrize(
+    "cls",
+    [c for _, c in inspect.getmembers(errors, inspect.isclass) if issubclass(c, errors.BikeriderError)],
+    ids=lambda c: c.__name__,
+)
 def test_every_error_class_is_documented(cls):
     assert f"`{cls.__name__}`" in DOC
 
@@ -92,28 +99,39 @@ def test_every_exit_status_is_documented():
 NAMED = [(f, line, cls, arg) for f, line, cls, arg in RAISES if cls in ("InputError", "ReachError") and _pattern(arg)]
 
 
-@pytest.mark.parametrize("where, cls, arg", [(f"{f}:{line}", cls, arg) for f, line, cls, arg in NAMED],
-                         ids=[f"{Path(f).stem}:{line}" for f, line, _, _ in NAMED])
+@pytest.mark.parametrize(
+    "where, cls, arg",
+    [(f"{f}:{line}", cls, arg) for f, line, cls, arg in NAMED],
+    ids=[f"{Path(f).stem}:{line}" for f, line, _, _ in NAMED],
+)
 def test_every_field_name_is_documented(where, cls, arg):
     pattern = re.compile(rf"(?<![\w<]){_pattern(arg)}(?![\w>])")
     assert any(pattern.search(span) for span in SPANS), (
-        f"{where}: {cls} for {ast.unparse(arg)} is not in a `...` span of docs/errors.md")
+        f"{where}: {cls} for {ast.unparse(arg)} is not in a `...` span of docs/errors.md"
+    )
 
 
-MESSAGES = [(f, line, cls, arg) for f, line, cls, arg in RAISES if cls in ("FileFormatError", "FitError") and _pattern(arg)]
+MESSAGES = [
+    (f, line, cls, arg) for f, line, cls, arg in RAISES if cls in ("FileFormatError", "FitError") and _pattern(arg)
+]
 
 
 def _key_words(arg: ast.expr) -> str:
     """The first literal piece of a message with three words or more (else the longest), its first
     four words: what a user would search the page for."""
-    pieces = [arg.value] if isinstance(arg, ast.Constant) else [v.value for v in arg.values if isinstance(v, ast.Constant)]
+    pieces = (
+        [arg.value] if isinstance(arg, ast.Constant) else [v.value for v in arg.values if isinstance(v, ast.Constant)]
+    )
     tokens = [re.findall(r"[A-Za-z0-9_'=<>-]+", piece) for piece in pieces]
     words = next((t for t in tokens if len(t) >= 3), max(tokens, key=len))
     return " ".join(words[:4])
 
 
-@pytest.mark.parametrize("where, cls, arg", [(f"{f}:{line}", cls, arg) for f, line, cls, arg in MESSAGES],
-                         ids=[f"{Path(f).stem}:{line}" for f, line, _, _ in MESSAGES])
+@pytest.mark.parametrize(
+    "where, cls, arg",
+    [(f"{f}:{line}", cls, arg) for f, line, cls, arg in MESSAGES],
+    ids=[f"{Path(f).stem}:{line}" for f, line, _, _ in MESSAGES],
+)
 def test_every_file_and_fit_message_is_documented(where, cls, arg):
     words = _key_words(arg)
     flat = re.sub(r"[^A-Za-z0-9_'=<>-]+", " ", DOC.replace("\\|", "|"))

@@ -4,6 +4,7 @@ Contract (bikerider.cli.main): exit status 0 (or 1 for a batch in which some bic
 finite output, or 2 with a one-line message on stderr naming the offending file, option or value;
 argparse usage errors also exit 2.  Never a traceback, never NaN or infinity in ``--json`` output.
 """
+
 from __future__ import annotations
 
 import shutil
@@ -12,13 +13,13 @@ from pathlib import Path
 
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from strategies import check_json_output, mutated, run_cli, signal_csv
 
 from bikerider.estimate import default_files
 
-from strategies import check_json_output, mutated, run_cli, signal_csv
-
-FUZZ = settings(max_examples=40, deadline=None,
-                suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+FUZZ = settings(
+    max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture]
+)
 BP = Path(str(resources.files("bikerider") / "data" / "bicycleparameters"))
 BICYCLE_TOML, RIDER_TOML = default_files()
 TESTS = Path(__file__).parent
@@ -70,8 +71,9 @@ def test_period_with_a_mutated_record(tmp_path_factory, data):
     _assert_clean(code, out, err, path, json_wanted=True)
 
 
-@settings(max_examples=15, deadline=None,
-          suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+@settings(
+    max_examples=15, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture]
+)
 @given(st.data(), st.sampled_from(["Browser", "Fisher", "Rigid", "Yellow"]))
 def test_batch_with_one_mutated_measured_file(tmp_path_factory, data, name):
     root = tmp_path_factory.mktemp("cli") / "bp"
@@ -97,20 +99,67 @@ def _token_pool(tmp: Path) -> list[str]:
     binary = tmp / "binary.txt"
     binary.write_bytes(bytes(range(256)))
     return [
-        "estimate", "benchmark", "period", "batch", "sensitivity", "--json", "--bicycle", "--rider", "--no-rider",
-        "--speeds", "--plot", "--out", "--drift", "--wrt", "--inputs", "--top", "--speed", "--latex",
-        "-v", "--help", "--version", "0:10:11", "10:0:5", "0:1e308:3", "nan:1:3", "0:10:-1", "a:b:c", "0:10",
-        "5", "-1", "nan", "inf", "1e400", "", "w", "weave_speed", "capsize_speed", "IBxx", "l_ll", "mBr",
-        str(BICYCLE_TOML), str(RIDER_TOML), str(TESTS / "data" / "BenchmarkBenchmark.txt"),
-        str(BP), str(BP / "bicycles" / "Browser" / "RawData" / "BrowserMeasured.txt"),
+        "estimate",
+        "benchmark",
+        "period",
+        "batch",
+        "sensitivity",
+        "--json",
+        "--bicycle",
+        "--rider",
+        "--no-rider",
+        "--speeds",
+        "--plot",
+        "--out",
+        "--drift",
+        "--wrt",
+        "--inputs",
+        "--top",
+        "--speed",
+        "--latex",
+        "-v",
+        "--help",
+        "--version",
+        "0:10:11",
+        "10:0:5",
+        "0:1e308:3",
+        "nan:1:3",
+        "0:10:-1",
+        "a:b:c",
+        "0:10",
+        "5",
+        "-1",
+        "nan",
+        "inf",
+        "1e400",
+        "",
+        "w",
+        "weave_speed",
+        "capsize_speed",
+        "IBxx",
+        "l_ll",
+        "mBr",
+        str(BICYCLE_TOML),
+        str(RIDER_TOML),
+        str(TESTS / "data" / "BenchmarkBenchmark.txt"),
+        str(BP),
+        str(BP / "bicycles" / "Browser" / "RawData" / "BrowserMeasured.txt"),
         str(BP / "riders" / "Jason" / "Parameters" / "JasonBrowserBenchmark.txt"),
-        str(tmp / "missing.toml"), str(tmp), str(nan_file), str(binary), str(tmp / "out" / "x"),
-        "\udcff", "é", "--", "-",
+        str(tmp / "missing.toml"),
+        str(tmp),
+        str(nan_file),
+        str(binary),
+        str(tmp / "out" / "x"),
+        "\udcff",
+        "é",
+        "--",
+        "-",
     ]
 
 
-@settings(max_examples=150, deadline=None,
-          suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+@settings(
+    max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture]
+)
 @given(st.data())
 def test_random_argument_lists(tmp_path_factory, data):
     tmp = tmp_path_factory.mktemp("argv")
@@ -128,8 +177,9 @@ def test_random_argument_lists(tmp_path_factory, data):
         check_json_output(out, " ".join(argv))
 
 
-@settings(max_examples=20, deadline=None,
-          suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+@settings(
+    max_examples=20, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture]
+)
 @given(st.data(), st.sampled_from(["inputs", "bicycle", "rider"]))
 def test_sensitivity_with_a_mutated_file(tmp_path_factory, data, which):
     bases = {"inputs": TESTS / "data" / "BenchmarkBenchmark.txt", "bicycle": BICYCLE_TOML, "rider": RIDER_TOML}
@@ -137,8 +187,11 @@ def test_sensitivity_with_a_mutated_file(tmp_path_factory, data, which):
     path = tmp_path_factory.mktemp("cli") / bases[which].name
     path.write_bytes(text)
     files = {"bicycle": str(BICYCLE_TOML), "rider": str(RIDER_TOML), which: str(path)}
-    argv = (["sensitivity", "weave_speed", "--inputs", files["inputs"]] if which == "inputs" else
-            ["sensitivity", "capsize_speed", "--bicycle", files["bicycle"], "--rider", files["rider"], "--top", "3"])
+    argv = (
+        ["sensitivity", "weave_speed", "--inputs", files["inputs"]]
+        if which == "inputs"
+        else ["sensitivity", "capsize_speed", "--bicycle", files["bicycle"], "--rider", files["rider"], "--top", "3"]
+    )
     code, out, err = run_cli(argv)
     if code == 2 and which == "bicycle" and str(RIDER_TOML) in err:
         path = RIDER_TOML  # a rider who cannot reach is named by the rider file
@@ -148,14 +201,25 @@ def test_sensitivity_with_a_mutated_file(tmp_path_factory, data, which):
         assert " inf" not in out.lower(), out
 
 
-@settings(max_examples=8, deadline=None,
-          suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+@settings(
+    max_examples=8, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture]
+)
 @given(st.data())
 def test_gap_with_a_mutated_eigenvalue_file(tmp_path_factory, data):
     gap = Path(str(resources.files("bikerider") / "data" / "gap"))
     what, text = data.draw(mutated((gap / "kooijman2008_run52.csv").read_bytes()))
     path = tmp_path_factory.mktemp("cli") / "run52.csv"
     path.write_bytes(text)
-    code, out, err = run_cli(["gap", "--model", str(gap / "kooijman2008_bicycle.toml"), "--data", str(path),
-                              "--effects", "parameters,steer_damping", "--json"])
+    code, out, err = run_cli(
+        [
+            "gap",
+            "--model",
+            str(gap / "kooijman2008_bicycle.toml"),
+            "--data",
+            str(path),
+            "--effects",
+            "parameters,steer_damping",
+            "--json",
+        ]
+    )
     _assert_clean(code, out, err, path, json_wanted=True)

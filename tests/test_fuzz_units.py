@@ -1,5 +1,6 @@
 """Mixed units and impossible values in real input files: a message that names the value and, for a
 likely unit slip, the unit it was probably given in.  Each case edits one line of a valid file."""
+
 from __future__ import annotations
 
 import re
@@ -7,11 +8,10 @@ from importlib import resources
 from pathlib import Path
 
 import pytest
+from strategies import run_cli
 
 from bikerider.errors import InputError
 from bikerider.estimate import default_files
-
-from strategies import run_cli
 
 BP = Path(str(resources.files("bikerider") / "data" / "bicycleparameters"))
 TESTS = Path(__file__).parent
@@ -29,19 +29,22 @@ def _edited(tmp_path: Path, base: Path, pattern: str, replacement: str, name: st
 
 BICYCLE_CASES = [
     # (line pattern, replacement, words the message must hold)
-    (r'^w = .*$', 'w = "1120 +/- 2"', ["w = 1120", "mm", "1.12 m"]),
-    (r'^rF = .*$', 'rF = 34.2', ["rF = 34.2", "cm", "0.342 m"]),
-    (r'^lam_ht_deg = .*$', "lam_ht_deg = 1.2", ["lam_ht_deg = 1.2", "looks like radians", "68.75 deg"]),
-    (r'^lam_st_deg = .*$', "lam_st_deg = 200", ["lam_st_deg = 200", "between 0 and 180 degrees"]),
-    (r'^g = .*$', "g = 981", ["g = 981", "cm/s^2", "9.81 m/s^2"]),
-    (r'^g = .*$', "g = 0", ["g = 0", "positive"]),
-    (r'^g = .*$', "g = -9.81", ["g = -9.81", "positive"]),
-    (r'^k_t = .*$', 'k_t = "-5.01"', ["k_t = -5.01", "positive torsional stiffness"]),
+    (r"^w = .*$", 'w = "1120 +/- 2"', ["w = 1120", "mm", "1.12 m"]),
+    (r"^rF = .*$", "rF = 34.2", ["rF = 34.2", "cm", "0.342 m"]),
+    (r"^lam_ht_deg = .*$", "lam_ht_deg = 1.2", ["lam_ht_deg = 1.2", "looks like radians", "68.75 deg"]),
+    (r"^lam_st_deg = .*$", "lam_st_deg = 200", ["lam_st_deg = 200", "between 0 and 180 degrees"]),
+    (r"^g = .*$", "g = 981", ["g = 981", "cm/s^2", "9.81 m/s^2"]),
+    (r"^g = .*$", "g = 0", ["g = 0", "positive"]),
+    (r"^g = .*$", "g = -9.81", ["g = -9.81", "positive"]),
+    (r"^k_t = .*$", 'k_t = "-5.01"', ["k_t = -5.01", "positive torsional stiffness"]),
     (r'^Ixx = \{ torsional_period = "0.79', 'Ixx = { torsional_period = "790', ["790", "ms", "0.79 s"]),
     (r'^mass = "14.05 \+/- 0.02"', 'mass = "14050"', ["mBf = 14050", "in g", "14.05 kg"]),
-    (r'com = \{ x = "0.25 \+/- 0.02", z = "-0.62', 'com = { x = "0.25 +/- 0.02", z = "0.62',
-     ["zBf = 0.62", "z points down", "z < 0"]),
-    (r'^c = .*$', 'c = "55 +/- 2"', ["c = 55", "mm", "0.055 m"]),
+    (
+        r'com = \{ x = "0.25 \+/- 0.02", z = "-0.62',
+        'com = { x = "0.25 +/- 0.02", z = "0.62',
+        ["zBf = 0.62", "z points down", "z < 0"],
+    ),
+    (r"^c = .*$", 'c = "55 +/- 2"', ["c = 55", "mm", "0.055 m"]),
 ]
 
 
@@ -137,7 +140,7 @@ def test_plausible_extremes_are_still_accepted(tmp_path):
 
     bicycle = _edited(tmp_path, BICYCLE_TOML, r"^lam_ht_deg = .*$", 'lam_ht_deg = "45 +/- 0.5"', "b1.toml")
     assert load_bicycle_toml(bicycle)["lam_ht"] == pytest.approx(0.7853981633974483)
-    bicycle = _edited(tmp_path, bicycle, r'^w = .*$', 'w = "2.6 +/- 0.002"', "b2.toml")
+    bicycle = _edited(tmp_path, bicycle, r"^w = .*$", 'w = "2.6 +/- 0.002"', "b2.toml")
     assert load_bicycle_toml(bicycle)["w"] == 2.6
     rider = _edited(tmp_path, RIDER_TOML, r"^mass = .*$", "mass = 160.0", "r1.toml")
     assert load_rider_toml(rider)["mBr"] == 160.0

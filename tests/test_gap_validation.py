@@ -7,6 +7,7 @@ alone raises no structural verdict in at least 9 of 10 null cases.  This reduced
 protocol: 3 sessions of 4 runs) demands every case right, with fixed seeds, and the predicted
 shrinkage within 0.15 of the shrinkage achieved on fresh data.
 """
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -23,7 +24,9 @@ CASES = [("null", 11), ("null", 12), ("steer_damping", 13), ("rider_lean", 14), 
 
 @pytest.fixture(scope="module")
 def suite():
-    model = load_model(BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt", BP / "riders/Jason/Parameters/JasonRigidBenchmark.txt")
+    model = load_model(
+        BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt", BP / "riders/Jason/Parameters/JasonRigidBenchmark.txt"
+    )
     return V.run_suite(model, CASES, V.QUICK)
 
 

@@ -1,4 +1,5 @@
 """Generated code: reproducible from derive/, equal to the symbolic expressions, broadcasting."""
+
 from __future__ import annotations
 
 import ast
@@ -36,7 +37,9 @@ def test_regeneration_is_identical(regenerated):
     fresh = sorted(p.name for p in regenerated.iterdir() if p.is_file())
     assert fresh == committed
     for name in fresh:
-        assert (regenerated / name).read_text() == (GENERATED / name).read_text(), f"generated/{name} differs from make derive"
+        assert (regenerated / name).read_text() == (GENERATED / name).read_text(), (
+            f"generated/{name} differs from make derive"
+        )
 
 
 def test_headers_name_generator_and_inputs_hash():
@@ -85,7 +88,7 @@ def _evaluate(outputs, point: dict) -> list[np.ndarray]:
     result, k = [], 0
     for shape in shapes:
         n = int(np.prod(shape)) if shape else 1
-        result.append(np.array(values[k:k + n]).reshape(shape))
+        result.append(np.array(values[k : k + n]).reshape(shape))
         k += n
     return result
 
@@ -120,6 +123,7 @@ def test_benchmark_matrices_equal_symbolic(benchmark_values):
 
 def test_rider_model_equals_symbolic(paper_result):
     from bikerider.generated import rider_model as gen
+
     from bikerider.rider.model import model_arguments
 
     points, _ = d_rider.grid_points()

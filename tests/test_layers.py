@@ -4,14 +4,25 @@ Every ``import bikerider.<x>...`` in ``src/bikerider`` (at the top of a module o
 is an edge from the importing package (or top-level module) to ``<x>``; the graph must have no
 cycle.  Readers live in ``io``: the reductions and models below it never import it.
 """
+
 from __future__ import annotations
 
 import ast
 from pathlib import Path
 
 SRC = Path(__file__).resolve().parents[1] / "src" / "bikerider"
-BELOW_IO = ("benchmark", "bicycle", "rider", "uncertainty", "engine", "fitting", "inertia", "quantity", "errors",
-            "generated")
+BELOW_IO = (
+    "benchmark",
+    "bicycle",
+    "rider",
+    "uncertainty",
+    "engine",
+    "fitting",
+    "inertia",
+    "quantity",
+    "errors",
+    "generated",
+)
 """Packages and modules that never import ``bikerider.io``."""
 
 
@@ -31,8 +42,11 @@ def _imports() -> dict[str, dict[str, str]]:
             if isinstance(node, ast.Import):
                 names = [a.name for a in node.names]
             elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
-                names = [node.module] + [f"{node.module}.{a.name}" for a in node.names] \
-                    if node.module == "bikerider" else [node.module]
+                names = (
+                    [node.module] + [f"{node.module}.{a.name}" for a in node.names]
+                    if node.module == "bikerider"
+                    else [node.module]
+                )
             for name in names:
                 parts = name.split(".")
                 if parts[0] == "bikerider" and len(parts) > 1 and parts[1] != unit and not parts[1].startswith("__"):
@@ -52,7 +66,7 @@ def test_the_packages_import_each_other_without_a_cycle():
         stack.append(unit)
         for target in edges.get(unit, {}):
             if state.get(target) == 1:
-                return stack[stack.index(target):] + [target]
+                return stack[stack.index(target) :] + [target]
             if target not in state and (cycle := visit(target)):
                 return cycle
         state[unit] = 2

@@ -6,6 +6,7 @@ module of the runtime types a list of generated argument names again: every tupl
 or more names written in ``src/`` is compared with every function's arguments and every named list
 of the manifest (in any order), and with every stage's inputs.
 """
+
 from __future__ import annotations
 
 import ast
@@ -15,7 +16,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 from bikerider.generated import manifest
 
 SRC = Path(__file__).resolve().parents[1] / "src" / "bikerider"
@@ -72,12 +72,15 @@ def test_every_kernel_is_declared_in_the_c_source_as_the_manifest_says(name):
     one array per manifest output, in that order (the C signature has a pointer per output)."""
     module, function = name.split(".")
     source = importlib.import_module(f"bikerider.generated.{module}").C_SOURCE
-    signature = source[source.index(f"int64_t {function}("):].split("{", 1)[0]
+    signature = source[source.index(f"int64_t {function}(") :].split("{", 1)[0]
     entry = manifest.KERNELS[name]
     assert "const double *const *args" in signature and len(entry["args"]) >= 4
     c_types = {"float64": "double", "int8": "int8_t", "uint8": "uint8_t"}
-    pointers = [p.split("*")[0].split()[-1] for p in signature.split(",") if "*" in p and "args" not in p
-                and "speeds" not in p.split("*")[-1] and "strides" not in p]
+    pointers = [
+        p.split("*")[0].split()[-1]
+        for p in signature.split(",")
+        if "*" in p and "args" not in p and "speeds" not in p.split("*")[-1] and "strides" not in p
+    ]
     assert pointers == [c_types[dtype] for _, dtype, _ in entry["outputs"]]
 
 
@@ -85,8 +88,13 @@ def _known_lists() -> dict[frozenset[str], str]:
     known = {frozenset(entry["args"]): f"the arguments of {name}" for name, entry in manifest.FUNCTIONS.items()}
     known.update({frozenset(entry["args"]): f"the inputs of {name}" for name, entry in manifest.KERNELS.items()})
     known.update({frozenset(s["inputs"]): f"the inputs of stage {k}" for k, s in manifest.STAGES.items()})
-    known.update({frozenset(s["outputs"]): f"the outputs of stage {k}" for k, s in manifest.STAGES.items()
-                  if len(s["outputs"]) >= 3})
+    known.update(
+        {
+            frozenset(s["outputs"]): f"the outputs of stage {k}"
+            for k, s in manifest.STAGES.items()
+            if len(s["outputs"]) >= 3
+        }
+    )
     for name in dir(manifest):
         value = getattr(manifest, name)
         if name.isupper() and isinstance(value, tuple) and all(isinstance(v, str) for v in value):
@@ -101,7 +109,7 @@ def _run_of_arguments(names: tuple[str, ...]) -> str | None:
     for function, entry in manifest.FUNCTIONS.items():
         args = entry["args"]
         for start in range(len(args) - len(names) + 1):
-            if args[start:start + len(names)] == names:
+            if args[start : start + len(names)] == names:
                 return f"the arguments of {function}"
     return None
 
@@ -148,7 +156,8 @@ def test_no_generated_function_is_called_positionally():
             if not isinstance(node, ast.Call) or not node.args:
                 continue
             func = node.func
-            if (isinstance(func, ast.Attribute) and isinstance(func.value, ast.Name) and func.value.id in modules) \
-                    or (isinstance(func, ast.Name) and func.id in functions):
+            if (isinstance(func, ast.Attribute) and isinstance(func.value, ast.Name) and func.value.id in modules) or (
+                isinstance(func, ast.Name) and func.id in functions
+            ):
                 positional.append(f"{path.relative_to(SRC)}:{node.lineno}")
     assert not positional, "call generated functions with keyword arguments:\n" + "\n".join(positional)

@@ -6,18 +6,19 @@ NumPy, its uncertainties by central differences.  Agreement on the shipped files
 copies of them checks both.  Values agree to rounding; uncertainties to the central differences'
 truncation error (relative step 1e-6, so about 1e-8 of a sigma; held to 1e-6).
 """
+
 from __future__ import annotations
 
 import math
 from importlib import resources
 from pathlib import Path
 
+import measured_oracle as oracle
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-import measured_oracle as oracle
 from bikerider.bicycle import raw_measurements as rm
 from bikerider.engine import Chain
 from bikerider.errors import FitError, InputError
@@ -87,8 +88,11 @@ REJECTED = {
     # a hanging distance 0.1 m off: the rear frame's lines miss their common point
     "lines that do not meet": (lambda v: {"aB1": Quantity(v["aB1"].value + 0.1, 0.003)}, FitError, "rear frame"),
     # orientation 2 the same axis and line as orientation 1, seen from the other side
-    "coincident orientations": (lambda v: {"alphaH2": Quantity(v["alphaH1"].value - 180.0, 0.2),
-                                           "aH2": Quantity(-v["aH1"].value, 0.003)}, InputError, "Eq. 6 is singular"),
+    "coincident orientations": (
+        lambda v: {"alphaH2": Quantity(v["alphaH1"].value - 180.0, 0.2), "aH2": Quantity(-v["aH1"].value, 0.003)},
+        InputError,
+        "Eq. 6 is singular",
+    ),
 }
 
 
@@ -122,8 +126,10 @@ def test_the_stages_broadcast_over_batches(name, shape):
     stages = rm._stages(rm._layout_key(layout, "least_squares"))
     chain = Chain(stages, inputs)
     rng = np.random.default_rng(3)
-    batch = {k: q.value * (1 + 1e-4 * rng.uniform(-1, 1, shape)) if math.isfinite(q.value) else q.value
-             for k, q in inputs.items()}
+    batch = {
+        k: q.value * (1 + 1e-4 * rng.uniform(-1, 1, shape)) if math.isfinite(q.value) else q.value
+        for k, q in inputs.items()
+    }
     together = chain.evaluate(batch)
     outputs = [o for stage in chain.stages for o in stage.outputs]
     for index in np.ndindex(*shape):
@@ -141,8 +147,12 @@ _HANGING = [f"{kind}{body}{i}" for body in "BH" for kind in ("alpha", "a", "Tt")
 
 @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(
-    moves=st.dictionaries(st.sampled_from(_HANGING + ["gamma", "TcB1", "TcH1", "TcR1", "LhbF", "whb", "TtP1"]),
-                          st.floats(-0.5, 0.5), min_size=1, max_size=4),
+    moves=st.dictionaries(
+        st.sampled_from(_HANGING + ["gamma", "TcB1", "TcH1", "TcR1", "LhbF", "whb", "TtP1"]),
+        st.floats(-0.5, 0.5),
+        min_size=1,
+        max_size=4,
+    ),
 )
 def test_the_reduction_decides_what_the_oracle_decides(moves):
     """Hanging angles, distances and periods moved far (up to 50 %, angles up to 90 degrees): where the

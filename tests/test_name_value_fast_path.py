@@ -3,6 +3,7 @@
 A trailing comment sends a line through the general path (the one-match pattern admits no ``#``),
 so each line is parsed both ways and the entries, or the errors, must be the same.
 """
+
 from __future__ import annotations
 
 import pytest

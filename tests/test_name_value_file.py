@@ -1,4 +1,5 @@
 """The ``name = value+/-sigma`` reader (BicycleParameters format)."""
+
 from __future__ import annotations
 
 import math

@@ -1,4 +1,5 @@
 """Nothing lost: inputs are never written, outputs appear whole or not at all, a batch survives a bad bicycle."""
+
 from __future__ import annotations
 
 import os
@@ -8,11 +9,10 @@ from importlib import resources
 from pathlib import Path
 
 import pytest
+from strategies import run_cli, signal_csv
 
 from bikerider.estimate import default_files
 from bikerider.io.atomic import atomic_write_bytes, atomic_write_text
-
-from strategies import run_cli, signal_csv
 
 BP = Path(str(resources.files("bikerider") / "data" / "bicycleparameters"))
 TESTS = Path(__file__).parent
@@ -37,8 +37,12 @@ def inputs(tmp_path):
         "bicycle": shutil.copy(bicycle, folder / "bicycle.toml"),
         "rider": shutil.copy(rider, folder / "rider.toml"),
         "benchmark": shutil.copy(TESTS / "data" / "BenchmarkBenchmark.txt", folder / "BenchmarkBenchmark.txt"),
-        "measured": shutil.copy(BP / "bicycles" / "Browser" / "RawData" / "BrowserMeasured.txt", folder / "BrowserMeasured.txt"),
-        "lumped": shutil.copy(BP / "riders" / "Jason" / "Parameters" / "JasonBrowserBenchmark.txt", folder / "JasonBrowserBenchmark.txt"),
+        "measured": shutil.copy(
+            BP / "bicycles" / "Browser" / "RawData" / "BrowserMeasured.txt", folder / "BrowserMeasured.txt"
+        ),
+        "lumped": shutil.copy(
+            BP / "riders" / "Jason" / "Parameters" / "JasonBrowserBenchmark.txt", folder / "JasonBrowserBenchmark.txt"
+        ),
     }
     trial = folder / "trial.csv"
     trial.write_bytes(signal_csv())
@@ -55,7 +59,16 @@ def test_no_command_writes_its_inputs(inputs, tmp_path):
     before = _snapshot(inputs.values())
     out = tmp_path / "out"
     runs = [
-        ["estimate", "--json", "--bicycle", str(inputs["bicycle"]), "--rider", str(inputs["rider"]), "--plot", str(out)],
+        [
+            "estimate",
+            "--json",
+            "--bicycle",
+            str(inputs["bicycle"]),
+            "--rider",
+            str(inputs["rider"]),
+            "--plot",
+            str(out),
+        ],
         ["estimate", "--bicycle", str(inputs["measured"]), "--rider", str(inputs["lumped"])],
         ["benchmark", str(inputs["benchmark"]), "--json", "--plot", str(out)],
         ["period", str(inputs["trial"]), "--json", "--plot", str(out / "period.png")],
@@ -64,8 +77,13 @@ def test_no_command_writes_its_inputs(inputs, tmp_path):
         code, stdout, err = run_cli(argv)
         assert code == 0, (argv, err)
     assert _snapshot(inputs.values()) == before
-    assert sorted(p.name for p in out.iterdir()) == ["bode.png", "eigenvalues.png", "mode_shapes.png", "period.png",
-                                                     "side_view.png"]
+    assert sorted(p.name for p in out.iterdir()) == [
+        "bode.png",
+        "eigenvalues.png",
+        "mode_shapes.png",
+        "period.png",
+        "side_view.png",
+    ]
 
 
 def test_batch_does_not_touch_the_data_folder(tmp_path):
@@ -95,7 +113,7 @@ def test_batch_over_a_folder_with_one_corrupted_bicycle(tmp_path):
     shutil.copytree(BP, data)
     bad = data / "bicycles" / "Fisher" / "RawData" / "FisherMeasured.txt"
     raw = bad.read_bytes()
-    bad.write_bytes(raw[: len(raw) // 2] + b"\xff\xfe\x00garbage\n" + raw[len(raw) // 2:])
+    bad.write_bytes(raw[: len(raw) // 2] + b"\xff\xfe\x00garbage\n" + raw[len(raw) // 2 :])
     prefix = tmp_path / "table"
     code, out, err = run_cli(["batch", str(data), "--out", str(prefix)])
     assert code == 1  # some bicycle failed; the table still lists the others
@@ -173,8 +191,17 @@ def test_a_gap_report_that_fails_midway_leaves_the_old_report(tmp_path, monkeypa
     import matplotlib.figure
 
     gap = Path(str(resources.files("bikerider") / "data" / "gap"))
-    argv = ["gap", "--model", str(gap / "kooijman2008_bicycle.toml"), "--data", str(gap / "kooijman2008_run52.csv"),
-            "--effects", "parameters", "--report", str(tmp_path / "report")]
+    argv = [
+        "gap",
+        "--model",
+        str(gap / "kooijman2008_bicycle.toml"),
+        "--data",
+        str(gap / "kooijman2008_run52.csv"),
+        "--effects",
+        "parameters",
+        "--report",
+        str(tmp_path / "report"),
+    ]
     code, _, err = run_cli(argv)
     assert code == 0, err
     before = {p.name: p.read_bytes() for p in (tmp_path / "report").iterdir()}

@@ -1,5 +1,6 @@
 """Numerical edges: limbs at the limit of reach, the speed where the weave pair is born, bicycles
 without critical speeds, nearly singular mass matrices, speeds too large for floating point."""
+
 from __future__ import annotations
 
 import itertools
@@ -9,19 +10,18 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
-from hypothesis import strategies as st
-
-from bikerider.benchmark import BenchmarkParameters, WhippleModel
-from bikerider.errors import InputError, ReachError
-from bikerider.estimate import estimate
 from bikerider.generated import benchmark_model as gen
 from bikerider.generated import rider_model as gen_rider
-from bikerider.quantity import Quantity
-from bikerider.engine import arguments
-from bikerider.rider.model import model_arguments, seat_rider
-
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 from strategies import benchmark_mappings, factor, meijaard_values, paper_inputs, run_cli
+
+from bikerider.benchmark import BenchmarkParameters, WhippleModel
+from bikerider.engine import arguments
+from bikerider.errors import InputError, ReachError
+from bikerider.estimate import estimate
+from bikerider.quantity import Quantity
+from bikerider.rider.model import model_arguments, seat_rider
 
 
 def _model(**changes) -> WhippleModel:
@@ -47,7 +47,7 @@ def _distance_to_line(point: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
 
 
 LIMBS = {  # limb: (distal length, proximal length, reach index, distal end, joint, proximal end), 0-based points
-    "leg": ("l_ll", "l_ul", 0, 4, 13, 12),   # pedal axis 5, knee 14, hip 13
+    "leg": ("l_ll", "l_ul", 0, 4, 13, 12),  # pedal axis 5, knee 14, hip 13
     "arm": ("l_la", "l_ua", 2, 18, 22, 20),  # hand 19, elbow 23, shoulder 21
 }
 
@@ -240,6 +240,12 @@ def test_speeds_too_large_for_floating_point():
     model = _model()
     with pytest.raises(InputError, match=r"speeds = 1e\+200"):
         model.eigenvalues([1.0, 1e200])
-    code, _, err = run_cli(["benchmark", str(__import__("pathlib").Path(__file__).parent / "data" / "BenchmarkBenchmark.txt"),
-                            "--speeds", "0:1e300:3"])
+    code, _, err = run_cli(
+        [
+            "benchmark",
+            str(__import__("pathlib").Path(__file__).parent / "data" / "BenchmarkBenchmark.txt"),
+            "--speeds",
+            "0:1e300:3",
+        ]
+    )
     assert code == 2 and "speeds" in err and "Traceback" not in err

@@ -5,6 +5,7 @@ A generated function missing from the baseline fails too (it would escape the ch
 baseline when adding one); a removed function is reported as a warning.  When a growth is wanted,
 take a new baseline with ``python bench/operation_counts.py --update`` and say why in the commit.
 """
+
 from __future__ import annotations
 
 import importlib.util
@@ -32,19 +33,26 @@ oc = _tool()
 def test_no_generated_function_grew_more_than_5_percent():
     result = oc.compare(oc.load_counts(oc.BASELINE), oc.load_counts(oc.CURRENT))
     if result.removed:
-        warnings.warn("generated functions removed since the operation-count baseline: "
-                      + ", ".join(result.removed), stacklevel=1)
-    assert not result.added, ("generated functions without an operation-count baseline (run "
-                              "`python bench/operation_counts.py --update`): " + ", ".join(result.added))
+        warnings.warn(
+            "generated functions removed since the operation-count baseline: " + ", ".join(result.removed), stacklevel=1
+        )
+    assert not result.added, (
+        "generated functions without an operation-count baseline (run "
+        "`python bench/operation_counts.py --update`): " + ", ".join(result.added)
+    )
     assert not result.grown, "operation counts grew by more than 5 %:\n" + "\n".join(
-        f"  {name} {kind}: {old} -> {new} ({(new - old) / old:+.1%})" for name, kind, old, new in result.grown)
+        f"  {name} {kind}: {old} -> {new} ({(new - old) / old:+.1%})" for name, kind, old, new in result.grown
+    )
 
 
 def test_baseline_covers_the_generated_modules():
     baseline = json.loads(oc.BASELINE.read_text())["operation_counts"]
     assert {"benchmark_model", "combination", "pendulum", "rider_model"} <= set(baseline)
-    assert all(v["after_cse"] > 0 and v["before_cse"] >= v["after_cse"]
-               for functions in baseline.values() for v in functions.values())
+    assert all(
+        v["after_cse"] > 0 and v["before_cse"] >= v["after_cse"]
+        for functions in baseline.values()
+        for v in functions.values()
+    )
 
 
 def _counts(**functions: tuple[int, int]) -> dict[str, dict[str, int]]:

@@ -1,4 +1,5 @@
 """The wheel must contain every subpackage: pyproject.toml lists them explicitly."""
+
 from __future__ import annotations
 
 import tomllib
@@ -11,8 +12,7 @@ def test_every_subpackage_is_listed_in_pyproject():
     config = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
     listed = set(config["packages"])
     on_disk = {
-        ".".join(p.parent.relative_to(ROOT / "src").parts)
-        for p in (ROOT / "src" / "bikerider").rglob("__init__.py")
+        ".".join(p.parent.relative_to(ROOT / "src").parts) for p in (ROOT / "src" / "bikerider").rglob("__init__.py")
     }
     assert on_disk - listed == set(), "add these to [tool.setuptools] packages in pyproject.toml"
     assert "bikerider.generated" in listed and config["package-dir"]["bikerider.generated"] == "generated"

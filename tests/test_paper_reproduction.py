@@ -1,5 +1,6 @@
 """Moore et al. (2009): what the method reproduces from the paper's own inputs, and pinned causes
 for what it does not (docs/reproduction.md is written from the same rows)."""
+
 from __future__ import annotations
 
 import numpy as np

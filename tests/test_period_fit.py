@@ -1,4 +1,5 @@
 """Damped-oscillation fits and the ``bikerider period`` command, on synthetic signals."""
+
 from __future__ import annotations
 
 import json
@@ -13,8 +14,20 @@ from bikerider.fitting.damped_oscillation import fit_damped_oscillation, period_
 from bikerider.fitting.signal_csv import read_signal_csv
 
 
-def signal(period, zeta, noise, *, seed=0, duration=12.0, rate=200.0, offset=0.02, amplitude=1.0,
-           phase=0.7, drift=0.0, jitter=False):
+def signal(
+    period,
+    zeta,
+    noise,
+    *,
+    seed=0,
+    duration=12.0,
+    rate=200.0,
+    offset=0.02,
+    amplitude=1.0,
+    phase=0.7,
+    drift=0.0,
+    jitter=False,
+):
     """Samples of offset + drift t + amplitude exp(-sigma t) sin(omega_d t + phase) + white noise."""
     rng = np.random.default_rng(seed)
     t = np.arange(0.0, duration, 1.0 / rate)
@@ -80,11 +93,17 @@ def test_evaluate_reproduces_the_noise_free_signal():
     "make, fragment",
     [
         (lambda: (np.arange(10) * 0.1, np.sin(np.arange(10))), "too few samples"),
-        (lambda: (np.r_[np.arange(50) * 0.1, 4.0, np.arange(51, 100) * 0.1], np.sin(np.arange(100))), "not strictly increasing"),
+        (
+            lambda: (np.r_[np.arange(50) * 0.1, 4.0, np.arange(51, 100) * 0.1], np.sin(np.arange(100))),
+            "not strictly increasing",
+        ),
         (lambda: (np.arange(100) * 0.1, np.r_[np.sin(np.arange(99)), np.nan]), "non-finite"),
         (lambda: (np.arange(500) * 0.01, np.random.default_rng(1).standard_normal(500)), "no oscillation"),
         (lambda: (np.arange(500) * 0.01, np.full(500, 0.3)), "not determined by the data"),
-        (lambda: (np.arange(100) * 0.01, np.sin(2 * np.pi * 0.3 * np.arange(100) * 0.01)), "cycles|longer than the record"),
+        (
+            lambda: (np.arange(100) * 0.01, np.sin(2 * np.pi * 0.3 * np.arange(100) * 0.01)),
+            "cycles|longer than the record",
+        ),
         (lambda: (np.arange(100) * 0.1, np.sin(np.arange(100) * 0.1)[:50]), "equal length"),
     ],
     ids=["few", "time-order", "nan", "noise", "constant", "short", "lengths"],
@@ -102,8 +121,10 @@ def test_bad_frequency_guess_is_refused():
 
 
 def test_trials_combine_standard_errors_and_scatter():
-    fits = [fit_damped_oscillation(*signal(1.894 * (1 + d), 0.003, 0.05, seed=i)[:2])
-            for i, d in enumerate((-0.001, 0.0, 0.0015))]
+    fits = [
+        fit_damped_oscillation(*signal(1.894 * (1 + d), 0.003, 0.05, seed=i)[:2])
+        for i, d in enumerate((-0.001, 0.0, 0.0015))
+    ]
     estimate = period_from_trials(fits)
     periods = np.array([f.period for f in fits])
     errors = np.array([f.period_se for f in fits])
@@ -125,6 +146,7 @@ def test_trial_of_another_oscillation_is_named():
 
 
 # -- CSV files and the command -------------------------------------------------------------
+
 
 def write_csv(path, t, y, header="time,rate"):
     lines = ([header] if header else []) + [f"{float(a)!r},{float(b)!r}" for a, b in zip(t, y)]

@@ -1,5 +1,6 @@
 """Figures: every plotting function draws on the axes it is given and returns it; nothing is
 clipped silently; legends and keys sit outside the data; PNG, PDF and SVG."""
+
 from __future__ import annotations
 
 import json
@@ -43,8 +44,12 @@ def test_eigenvalues_are_lines_per_tracked_mode_with_the_stable_interval_shaded(
     fig, ax = _axes()
     assert plotting.plot_eigenvalues(ax, model, np.linspace(0, 10, 11)) is ax
     lines = [line for line in ax.get_lines() if line.get_label().endswith("part")]
-    assert {line.get_label() for line in lines} >= {"weave, real part", "weave, imaginary part", "capsize, real part",
-                                                    "castor, real part"}
+    assert {line.get_label() for line in lines} >= {
+        "weave, real part",
+        "weave, imaginary part",
+        "capsize, real part",
+        "castor, real part",
+    }
     assert all(line.get_linestyle() == "-" for line in lines if "real" in line.get_label())
     assert all(line.get_linestyle() == "--" for line in lines if "imaginary" in line.get_label())
     assert all(len(line.get_xdata()) == 401 for line in lines)  # a fine grid, not the 11 speeds given
@@ -148,14 +153,31 @@ def test_several_bicycles_on_one_figure():
 
 @pytest.mark.parametrize("fmt", ["png", "pdf", "svg"])
 def test_write_figures_in_every_format_and_resolution(tmp_path, model, bench, fmt):
-    written = plotting.write_figures(tmp_path, model, np.linspace(0, 10, 5), None, "Benchmark", parameters=bench,
-                                     figures=plotting.FIGURES, fmt=fmt, dpi=60)
+    written = plotting.write_figures(
+        tmp_path,
+        model,
+        np.linspace(0, 10, 5),
+        None,
+        "Benchmark",
+        parameters=bench,
+        figures=plotting.FIGURES,
+        fmt=fmt,
+        dpi=60,
+    )
     assert [p.name for p in written] == [f"{n}.{fmt}" for n in plotting.FIGURES]
     for path in written:
-        assert path.read_bytes()[:len(MAGIC[fmt])] == MAGIC[fmt]
+        assert path.read_bytes()[: len(MAGIC[fmt])] == MAGIC[fmt]
     if fmt != "png":  # vector files carry no date: the same figure is the same file
-        again = plotting.write_figures(tmp_path / "again", model, np.linspace(0, 10, 5), None, "Benchmark",
-                                       parameters=bench, figures=("eigenvalues",), fmt=fmt)
+        again = plotting.write_figures(
+            tmp_path / "again",
+            model,
+            np.linspace(0, 10, 5),
+            None,
+            "Benchmark",
+            parameters=bench,
+            figures=("eigenvalues",),
+            fmt=fmt,
+        )
         assert again[0].read_bytes() == written[0].read_bytes()
 
 
@@ -182,16 +204,49 @@ def test_sweep_command_csv_json_and_map(tmp_path, capsys):
     lines = capsys.readouterr().out.splitlines()
     assert lines[0] == "c,valid,reason,weave_speed,capsize_speed,weave_frequency,stable_intervals"
     assert len(lines) == 6 and lines[3].startswith("0.1,true,,4.507")
-    assert main(["sweep", "--bicycle", "Benchmark", "--vary", "lam_deg=0:30:4", "--vary", "mB=-10:120:3",
-                 "--speeds", "4:6:3", "--json", "--plot", str(tmp_path)]) == 0
+    assert (
+        main(
+            [
+                "sweep",
+                "--bicycle",
+                "Benchmark",
+                "--vary",
+                "lam_deg=0:30:4",
+                "--vary",
+                "mB=-10:120:3",
+                "--speeds",
+                "4:6:3",
+                "--json",
+                "--plot",
+                str(tmp_path),
+            ]
+        )
+        == 0
+    )
     out = json.loads(capsys.readouterr().out)
     assert out["parameters"]["lam"] == pytest.approx(np.radians([0, 10, 20, 30]).tolist())
     assert len(out["designs"]) == 12 and np.shape(out["stable"]) == (4, 3, 3)
     invalid = [d for d in out["designs"] if not d["valid"]]
     assert len(invalid) == 4 and all("mB = -10" in d["reason"] for d in invalid)
     assert (tmp_path / "sweep.png").exists()
-    assert main(["sweep", "--bicycle", "Benchmark", "--vary", "c=0.06:0.1:2", "--speeds", "5:5:1", "--rows", "speeds",
-                 "--out", str(tmp_path / "rows.csv")]) == 0
+    assert (
+        main(
+            [
+                "sweep",
+                "--bicycle",
+                "Benchmark",
+                "--vary",
+                "c=0.06:0.1:2",
+                "--speeds",
+                "5:5:1",
+                "--rows",
+                "speeds",
+                "--out",
+                str(tmp_path / "rows.csv"),
+            ]
+        )
+        == 0
+    )
     rows = (tmp_path / "rows.csv").read_text().splitlines()
     assert rows[0].startswith("c,speed,stable,weave_real,weave_imag") and rows[1].split(",")[2] == "true"
     assert main(["sweep", "--bicycle", "Benchmark", "--vary", "trail=0:1:3"]) == 2

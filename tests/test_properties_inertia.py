@@ -6,24 +6,24 @@ positive principal moments and the triangle inequality are tested with ``numpy.l
 and the rider's tensor is recomputed from the grid points by a separate NumPy implementation of
 Moore et al. (2009), Table 9 and Eqs. 8-14, summed about an arbitrary reference point.
 """
+
 from __future__ import annotations
 
 import math
 
 import numpy as np
 import pytest
+from bikerider.generated import combination, rider_model
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from strategies import benchmark_mappings, factor, inertia_tensors, seated_pairs
 
 from bikerider.benchmark import BenchmarkParameters
 from bikerider.bicycle.pendulum import inertia_from_orientations
-from bikerider.estimate import chain_inputs
-from bikerider.generated import combination, rider_model
-from bikerider.quantity import Quantity
 from bikerider.engine import arguments
+from bikerider.estimate import chain_inputs
+from bikerider.quantity import Quantity
 from bikerider.rider.model import model_arguments
-
-from strategies import benchmark_mappings, factor, inertia_tensors, seated_pairs
 
 SETTINGS = settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 
@@ -127,21 +127,34 @@ def test_rear_body_conserves_mass_and_moment_and_is_physical(pair, offset):
     frame = {k: bicycle[k] for k in ("mBf", "xBf", "zBf", "IBfxx", "IBfzz", "IBfxz")}
     frame["IBfyy"] = bicycle["IBfyy"] if bicycle.get("IBfyy") is not None else math.nan
     I_r = model.inertia
-    rider_body = dict(mBr=model.mass, xBr=model.com[0], zBr=model.com[2],
-                      IBrxx=I_r[0, 0], IBryy=I_r[1, 1], IBrzz=I_r[2, 2], IBrxz=I_r[0, 2])
+    rider_body = dict(
+        mBr=model.mass,
+        xBr=model.com[0],
+        zBr=model.com[2],
+        IBrxx=I_r[0, 0],
+        IBryy=I_r[1, 1],
+        IBrzz=I_r[2, 2],
+        IBrxz=I_r[0, 2],
+    )
     mB, xB, zB, IB = (np.asarray(x) for x in combination.rear_body(**frame, **rider_body))
     assert float(mB) == pytest.approx(frame["mBf"] + model.mass, rel=1e-14)
     assert float(mB * xB) == pytest.approx(frame["mBf"] * frame["xBf"] + model.mass * model.com[0], rel=1e-12)
     assert float(mB * zB) == pytest.approx(frame["mBf"] * frame["zBf"] + model.mass * model.com[2], rel=1e-12)
     # Independent combination about an arbitrary point P in the XZ plane, moved to B's centre.
-    frame_tensor = np.array([[frame["IBfxx"], 0, frame["IBfxz"]], [0, frame["IBfyy"], 0], [frame["IBfxz"], 0, frame["IBfzz"]]])
+    frame_tensor = np.array(
+        [[frame["IBfxx"], 0, frame["IBfxz"]], [0, frame["IBfyy"], 0], [frame["IBfxz"], 0, frame["IBfzz"]]]
+    )
     rider_tensor = np.array([[I_r[0, 0], 0, I_r[0, 2]], [0, I_r[1, 1], 0], [I_r[0, 2], 0, I_r[2, 2]]])
     point = np.array([offset[0], 0.0, offset[1]])
     frame_c = np.array([frame["xBf"], 0.0, frame["zBf"]])
     rider_c = np.array([model.com[0], 0.0, model.com[2]])
     centre = np.array([float(xB), 0.0, float(zB)])
-    about_p = (frame_tensor + parallel_axis(frame["mBf"], frame_c - point)
-               + rider_tensor + parallel_axis(model.mass, rider_c - point))
+    about_p = (
+        frame_tensor
+        + parallel_axis(frame["mBf"], frame_c - point)
+        + rider_tensor
+        + parallel_axis(model.mass, rider_c - point)
+    )
     expected = about_p - parallel_axis(float(mB), centre - point)
     finite = np.isfinite(expected)
     np.testing.assert_allclose(IB[finite], expected[finite], rtol=0, atol=1e-10 * np.abs(IB[finite]).max())
@@ -158,22 +171,32 @@ def test_rear_body_conserves_mass_and_moment_and_is_physical(pair, offset):
 def test_the_estimate_chain_conserves_total_mass_and_gives_physical_bodies(pair):
     bicycle, rider, model = pair
     inputs = {k: q.value for k, q in chain_inputs(bicycle, rider).items()}
-    values = dict(zip(
-        "w c lam g rR mR IRxx IRyy xB zB mB IBxx IByy IBzz IBxz xH zH mH IHxx IHyy IHzz IHxz rF mF IFxx IFyy".split(),
-        np.asarray(combination.estimate_chain(**inputs), dtype=float),
-    ))
+    values = dict(
+        zip(
+            "w c lam g rR mR IRxx IRyy xB zB mB IBxx IByy IBzz IBxz xH zH mH IHxx IHyy IHzz IHxz rF mF IFxx IFyy".split(),
+            np.asarray(combination.estimate_chain(**inputs), dtype=float),
+        )
+    )
     total_in = bicycle["mR"] + bicycle["mF"] + bicycle["mH"] + bicycle["mBf"] + rider["mBr"]
     total_out = values["mR"] + values["mF"] + values["mH"] + values["mB"]
     assert total_out == pytest.approx(total_in, rel=1e-13)
     # The rear body's first moment is the frame's plus the rider's (Eq. 16).
-    assert values["mB"] * values["xB"] == pytest.approx(bicycle["mBf"] * bicycle["xBf"] + model.mass * model.com[0], rel=1e-12)
+    assert values["mB"] * values["xB"] == pytest.approx(
+        bicycle["mBf"] * bicycle["xBf"] + model.mass * model.com[0], rel=1e-12
+    )
     params = BenchmarkParameters.from_mapping(
-        {k: (None if not math.isfinite(x) else x) for k, x in values.items()}, "<hypothesis>")
+        {k: (None if not math.isfinite(x) else x) for k, x in values.items()}, "<hypothesis>"
+    )
     for body in ("B", "H"):
         yy = params[f"I{body}yy"]
-        tensor = np.array([[params[f"I{body}xx"], 0, params[f"I{body}xz"]],
-                           [0, yy if yy is not None else np.nan, 0],
-                           [params[f"I{body}xz"], 0, params[f"I{body}zz"]]], dtype=float)
+        tensor = np.array(
+            [
+                [params[f"I{body}xx"], 0, params[f"I{body}xz"]],
+                [0, yy if yy is not None else np.nan, 0],
+                [params[f"I{body}xz"], 0, params[f"I{body}zz"]],
+            ],
+            dtype=float,
+        )
         if yy is None:
             assert np.all(np.linalg.eigvalsh(tensor[np.ix_([0, 2], [0, 2])]) > 0)
         else:
@@ -186,8 +209,10 @@ def test_benchmark_bodies_of_random_bicycles_are_physical(mapping):
     params = BenchmarkParameters.from_mapping(mapping, "<hypothesis>")
     v = params.values
     for body in ("B", "H"):
-        tensor = np.array([[v[f"I{body}xx"], 0, v[f"I{body}xz"]], [0, v[f"I{body}yy"], 0],
-                           [v[f"I{body}xz"], 0, v[f"I{body}zz"]]], dtype=float)
+        tensor = np.array(
+            [[v[f"I{body}xx"], 0, v[f"I{body}xz"]], [0, v[f"I{body}yy"], 0], [v[f"I{body}xz"], 0, v[f"I{body}zz"]]],
+            dtype=float,
+        )
         assert_physical_tensor(tensor, f"I{body}")
     for wheel in ("R", "F"):  # an axisymmetric wheel: diag(Ixx, Iyy, Ixx)
         assert_physical_tensor(np.diag([v[f"I{wheel}xx"], v[f"I{wheel}yy"], v[f"I{wheel}xx"]]), f"wheel {wheel}")
@@ -237,7 +262,8 @@ def test_least_squares_reduction_with_more_orientations(tensor, angles):
         angles = np.linspace(-1.4, 1.4, len(angles))
     periods = periods_for(tensor, angles)
     result = inertia_from_orientations(Quantity(K_T), periods, [Quantity(a) for a in angles], "body")
-    np.testing.assert_allclose([q.value for q in result], [tensor[0, 0], tensor[0, 2], tensor[2, 2]],
-                               rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(
+        [q.value for q in result], [tensor[0, 0], tensor[0, 2], tensor[2, 2]], rtol=1e-9, atol=1e-12
+    )
     flipped = inertia_from_orientations(Quantity(K_T), periods, [Quantity(a - math.pi) for a in angles], "body")
     np.testing.assert_allclose([q.value for q in flipped], [q.value for q in result], rtol=1e-9, atol=1e-12)

@@ -9,6 +9,7 @@ determinant, so: the eigenvalues at speed ``sqrt(s) v`` are those at ``v`` divid
 and the weave and capsize speeds scale by ``sqrt(s)``; ``mu`` drops out.  (``s^3`` masses, a
 geometrically similar bicycle of the same materials, is the case ``mu = s^3``.)
 """
+
 from __future__ import annotations
 
 import math
@@ -16,13 +17,12 @@ import math
 import numpy as np
 import pytest
 import scipy.linalg
+from bikerider.generated import combination
 from hypothesis import HealthCheck, given, settings
+from strategies import benchmark_mappings, factor, seated_pairs
 
 from bikerider.benchmark import BENCHMARK_NAMES, BenchmarkParameters, WhippleModel
 from bikerider.estimate import chain_inputs
-from bikerider.generated import combination
-
-from strategies import benchmark_mappings, factor, seated_pairs
 
 SETTINGS = settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 
@@ -147,5 +147,5 @@ def test_the_estimate_chain_is_dimensionally_consistent(pair, s, mu):
         if not math.isfinite(base[name]):
             assert not math.isfinite(out[name]), name  # an undetermined I_yy stays undetermined
             continue
-        factor_ = (s if name in LENGTHS else mu if name in MASSES else mu * s**2 if name in INERTIAS else 1.0)
+        factor_ = s if name in LENGTHS else mu if name in MASSES else mu * s**2 if name in INERTIAS else 1.0
         assert out[name] == pytest.approx(factor_ * base[name], rel=1e-11, abs=1e-14), name

@@ -3,6 +3,7 @@
 Reference roots come from ``numpy.linalg.eigvals`` (of companion matrices, or of the model's state
 matrices through ``WhippleModel.eigenvalues``) and from exactly known roots.
 """
+
 from __future__ import annotations
 
 import itertools
@@ -10,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from bikerider.generated import benchmark_model as gen
 
 from bikerider.benchmark import BenchmarkParameters, WhippleModel
 from bikerider.benchmark.model import label_modes
@@ -17,7 +19,6 @@ from bikerider.benchmark.quartic import eigenvalues_from_polynomial, quartic_roo
 from bikerider.benchmark.roots import positive_real_roots
 from bikerider.errors import InputError
 from bikerider.io.bicycleparameters import read_benchmark_file
-from bikerider.generated import benchmark_model as gen
 
 PERMUTATIONS = np.array(list(itertools.permutations(range(4))))
 
@@ -136,13 +137,16 @@ def test_double_root_at_benchmark_vd(benchmark_model, meijaard2007):
 
 
 def test_labels_follow_label_modes_rules():
-    raw = np.array([
-        [-5.0, 1.0, 2.0, -0.5],              # all real: two largest are weave
-        [-5.0, 1 + 2j, 1 - 2j, -0.5],        # one pair
-        [1 + 2j, 1 - 2j, -3 + 5j, -3 - 5j],  # two pairs: larger imaginary part is weave
-        [-3 + 0.1j, 1.0, -3 - 0.1j, 2.0],    # one pair below both reals: the reals are the unborn weave
-        [-1 + 2j, -1 - 2j, 0.5, -6.0],       # one pair between the reals (above the weave speed)
-    ], dtype=complex)
+    raw = np.array(
+        [
+            [-5.0, 1.0, 2.0, -0.5],  # all real: two largest are weave
+            [-5.0, 1 + 2j, 1 - 2j, -0.5],  # one pair
+            [1 + 2j, 1 - 2j, -3 + 5j, -3 - 5j],  # two pairs: larger imaginary part is weave
+            [-3 + 0.1j, 1.0, -3 - 0.1j, 2.0],  # one pair below both reals: the reals are the unborn weave
+            [-1 + 2j, -1 - 2j, 0.5, -6.0],  # one pair between the reals (above the weave speed)
+        ],
+        dtype=complex,
+    )
     values, labels = label_modes(raw)
     np.testing.assert_array_equal(values[0], [2.0, 1.0, -0.5, -5.0])
     np.testing.assert_array_equal(values[1], [1 + 2j, 1 - 2j, -0.5, -5.0])
@@ -180,8 +184,10 @@ def _random_models(benchmark_model: WhippleModel, n: int, spread: float, seed: i
     rng = np.random.default_rng(seed)
     out = []
     while len(out) < n:
-        mats = [m * (1 + spread * rng.standard_normal(m.shape)) for m in (benchmark_model.M, benchmark_model.C1,
-                                                                          benchmark_model.K0, benchmark_model.K2)]
+        mats = [
+            m * (1 + spread * rng.standard_normal(m.shape))
+            for m in (benchmark_model.M, benchmark_model.C1, benchmark_model.K0, benchmark_model.K2)
+        ]
         mats[0] = (mats[0] + mats[0].T) / 2
         if np.linalg.eigvalsh(mats[0]).min() <= 0:
             continue  # a model needs a positive definite mass matrix
@@ -192,9 +198,12 @@ def _random_models(benchmark_model: WhippleModel, n: int, spread: float, seed: i
 def test_scalar_speed_polynomials_equal_the_generated_numpy_ones(benchmark_model):
     # The plain-float variant the code generator emits must be the same expressions.
     for model in [benchmark_model] + _random_models(benchmark_model, 50, 0.3, 1):
-        entries = {f"{n}_{a}{b}": float(m[i, j])
-                   for n, m in zip(("M", "C1", "K0", "K2"), (model.M, model.C1, model.K0, model.K2))
-                   for i, a in enumerate(("phi", "delta")) for j, b in enumerate(("phi", "delta"))}
+        entries = {
+            f"{n}_{a}{b}": float(m[i, j])
+            for n, m in zip(("M", "C1", "K0", "K2"), (model.M, model.C1, model.K0, model.K2))
+            for i, a in enumerate(("phi", "delta"))
+            for j, b in enumerate(("phi", "delta"))
+        }
         scalar = gen.critical_speed_polynomials_scalar(**entries, g=model.g)
         vectorised = gen.critical_speed_polynomials(**entries, g=model.g)
         for ours, reference in zip(scalar, vectorised):
@@ -226,21 +235,24 @@ def test_critical_speeds_are_eigenvalue_crossings(benchmark_model):
 
 def test_positive_real_roots_edge_cases():
     assert positive_real_roots(0.0, 0.0, 0.0) == []
-    assert positive_real_roots(0.0, 2.0, -4.0) == [2.0]           # linear
-    assert positive_real_roots(1e-20, 2.0, -4.0) == [2.0]         # leading coefficient below 1e-14
-    assert positive_real_roots(1.0, 0.0, 1.0) == []               # u^2 + 1
+    assert positive_real_roots(0.0, 2.0, -4.0) == [2.0]  # linear
+    assert positive_real_roots(1e-20, 2.0, -4.0) == [2.0]  # leading coefficient below 1e-14
+    assert positive_real_roots(1.0, 0.0, 1.0) == []  # u^2 + 1
     assert positive_real_roots(1.0, -3.0, 2.0) == pytest.approx([1.0, 2.0], rel=1e-15)
-    assert positive_real_roots(1.0, 3.0, 2.0) == []               # both negative
-    double = positive_real_roots(1.0, -4.0, 4.0 + 1e-18)          # rounding makes the pair complex
+    assert positive_real_roots(1.0, 3.0, 2.0) == []  # both negative
+    double = positive_real_roots(1.0, -4.0, 4.0 + 1e-18)  # rounding makes the pair complex
     assert double == pytest.approx([2.0, 2.0])
 
 
-@pytest.mark.parametrize("bad, field", [
-    (np.ones(4), "coefficients"),
-    (np.ones((3, 6)), "coefficients"),
-    (np.array([[1.0, 2.0, np.nan, 1.0, 1.0]]), "coefficients[0, 2]"),
-    (np.array([[1.0, 2.0, 3.0, 1.0, 1.0], [0.0, 2.0, 3.0, 1.0, 1.0]]), "coefficients[1, 0]"),
-])
+@pytest.mark.parametrize(
+    "bad, field",
+    [
+        (np.ones(4), "coefficients"),
+        (np.ones((3, 6)), "coefficients"),
+        (np.array([[1.0, 2.0, np.nan, 1.0, 1.0]]), "coefficients[0, 2]"),
+        (np.array([[1.0, 2.0, 3.0, 1.0, 1.0], [0.0, 2.0, 3.0, 1.0, 1.0]]), "coefficients[1, 0]"),
+    ],
+)
 def test_bad_coefficients_are_named(bad, field):
     with pytest.raises(InputError) as info:
         quartic_roots(bad)
@@ -254,8 +266,13 @@ def test_bad_speeds_are_named(benchmark_model):
 
 
 def test_overflowing_matrices_are_an_error_not_nan(benchmark_model):
-    huge = WhippleModel(benchmark_model.M * 1e120, benchmark_model.C1 * 1e120, benchmark_model.K0 * 1e120,
-                        benchmark_model.K2 * 1e120, g=benchmark_model.g)
+    huge = WhippleModel(
+        benchmark_model.M * 1e120,
+        benchmark_model.C1 * 1e120,
+        benchmark_model.K0 * 1e120,
+        benchmark_model.K2 * 1e120,
+        g=benchmark_model.g,
+    )
     with pytest.raises(InputError) as info:
         huge.critical_speeds()
     assert "too large" in str(info.value)

@@ -6,6 +6,7 @@ reduction: the bicycle is turned in the photograph until its upward steer axis m
 is the horizontal distance of the reference point left of that axis, and each period follows from
 the moment of inertia about the (vertical) axis, ``J = e^T I e``, with ``I`` the benchmark tensor.
 """
+
 from __future__ import annotations
 
 import logging
@@ -13,20 +14,41 @@ import math
 
 import numpy as np
 import pytest
+from bikerider.generated import measured_reduction
 
 from bikerider.bicycle.raw_measurements import reduce_measured
-from bikerider.generated import measured_reduction
-from bikerider.io.bicycleparameters import read_measured_file
 from bikerider.errors import FitError, InputError
+from bikerider.io.bicycleparameters import read_measured_file
 from bikerider.io.name_value_file import parse_name_value_text
 
 G = 9.81
 K_T = 5.0
 TRUTH = {
-    "rR": 0.34, "rF": 0.345, "w": 1.1, "lam": math.radians(90 - 68.0), "f": 0.05,
-    "mR": 3.0, "IRxx": 0.09, "IRyy": 0.15, "mF": 2.0, "IFxx": 0.085, "IFyy": 0.145,
-    "mBf": 9.0, "xBf": 0.30, "zBf": -0.55, "IBfxx": 0.50, "IBfyy": 1.00, "IBfzz": 0.70, "IBfxz": -0.10,
-    "mH": 3.0, "xH": 0.87, "zH": -0.75, "IHxx": 0.25, "IHyy": 0.24, "IHzz": 0.10, "IHxz": -0.07,
+    "rR": 0.34,
+    "rF": 0.345,
+    "w": 1.1,
+    "lam": math.radians(90 - 68.0),
+    "f": 0.05,
+    "mR": 3.0,
+    "IRxx": 0.09,
+    "IRyy": 0.15,
+    "mF": 2.0,
+    "IFxx": 0.085,
+    "IFyy": 0.145,
+    "mBf": 9.0,
+    "xBf": 0.30,
+    "zBf": -0.55,
+    "IBfxx": 0.50,
+    "IBfyy": 1.00,
+    "IBfzz": 0.70,
+    "IBfxz": -0.10,
+    "mH": 3.0,
+    "xH": 0.87,
+    "zH": -0.75,
+    "IHxx": 0.25,
+    "IHyy": 0.24,
+    "IHzz": 0.10,
+    "IHxz": -0.07,
 }
 ROD = {"mP": 5.0, "dP": 0.03, "lP": 1.0}
 ALPHAS = {"B": (10.0, 140.0, 230.0, 300.0, 75.0), "H": (350.0, 30.0, 290.0, 120.0, 200.0)}
@@ -48,7 +70,9 @@ def vertical_in_bicycle(alpha_deg, lam):
 
 def tensor(body):
     t = TRUTH
-    return np.array([[t[f"I{body}xx"], 0, t[f"I{body}xz"]], [0, t[f"I{body}yy"], 0], [t[f"I{body}xz"], 0, t[f"I{body}zz"]]])
+    return np.array(
+        [[t[f"I{body}xx"], 0, t[f"I{body}xz"]], [0, t[f"I{body}yy"], 0], [t[f"I{body}xz"], 0, t[f"I{body}zz"]]]
+    )
 
 
 def torsional_period(J):
@@ -64,13 +88,26 @@ def synthetic_measured(n_orientations=3, sigma=True, drop=(), **overrides) -> st
     t, lam = TRUTH, TRUTH["lam"]
     rod_inertia = ROD["mP"] * (3 * (ROD["dP"] / 2) ** 2 + ROD["lP"] ** 2) / 12
     values = {
-        "dF": 2 * math.pi * 10 * t["rF"], "nF": 10, "dR": 2 * math.pi * 10 * t["rR"], "nR": 10,
-        "w": t["w"], "gamma": 90 - math.degrees(lam), "f": t["f"], "g": G,
-        "mR": t["mR"], "mF": t["mF"], "mB": t["mBf"], "mH": t["mH"], **ROD,
+        "dF": 2 * math.pi * 10 * t["rF"],
+        "nF": 10,
+        "dR": 2 * math.pi * 10 * t["rR"],
+        "nR": 10,
+        "w": t["w"],
+        "gamma": 90 - math.degrees(lam),
+        "f": t["f"],
+        "g": G,
+        "mR": t["mR"],
+        "mF": t["mF"],
+        "mB": t["mBf"],
+        "mH": t["mH"],
+        **ROD,
         "TtP1": 2 * math.pi * math.sqrt(rod_inertia / K_T),
-        "lR": 0.29, "lF": 0.295,
-        "TtR1": torsional_period(t["IRxx"]), "TtF1": torsional_period(t["IFxx"]),
-        "TcR1": compound_period(t["IRyy"], t["mR"], 0.29), "TcF1": compound_period(t["IFyy"], t["mF"], 0.295),
+        "lR": 0.29,
+        "lF": 0.295,
+        "TtR1": torsional_period(t["IRxx"]),
+        "TtF1": torsional_period(t["IFxx"]),
+        "TcR1": compound_period(t["IRyy"], t["mR"], 0.29),
+        "TcF1": compound_period(t["IFyy"], t["mF"], 0.295),
     }
     references = {"B": (0.0, -t["rR"]), "H": (t["w"], -t["rF"])}
     for body, name in (("B", "Bf"), ("H", "H")):
@@ -89,7 +126,9 @@ def synthetic_measured(n_orientations=3, sigma=True, drop=(), **overrides) -> st
             continue
         text = value if isinstance(value, str) else f"{value!r}"
         if sigma and not isinstance(value, str) and key not in ("nF", "nR"):
-            text += "+/-" + ("0.2" if key.startswith(("alpha", "gamma")) else "0.001" if key.startswith("a") else "1e-4")
+            text += "+/-" + (
+                "0.2" if key.startswith(("alpha", "gamma")) else "0.001" if key.startswith("a") else "1e-4"
+            )
         lines.append(f"{key} = {text}")
     return "\n".join(lines) + "\n"
 
@@ -225,8 +264,9 @@ def test_heights_and_diameters_geometry_recovers_the_frame():
     h1 = a - h2 + h3 - 0.5 * d1 + 0.5 * d2
     h5 = h4 - 0.5 * d3 + 0.5 * d4 - b
     d = math.sqrt(along**2 + (a - b) ** 2) - 0.5 * (d2 + d3)
-    _, checks = measured_reduction.frame_from_heights(dR=1.0, nR=1.0, dF=1.0, nF=1.0, h1=h1, h2=h2, h3=h3, h4=h4,
-                                                      h5=h5, d1=d1, d2=d2, d3=d3, d4=d4, d=d)
+    _, checks = measured_reduction.frame_from_heights(
+        dR=1.0, nR=1.0, dF=1.0, nF=1.0, h1=h1, h2=h2, h3=h3, h4=h4, h5=h5, d1=d1, d2=d2, d3=d3, d4=d4, d=d
+    )
     assert tuple(checks) == pytest.approx((a, b))  # the perpendicular offsets of the wheel centres
     heights = {"h1": h1, "h2": h2, "h3": h3, "h4": h4, "h5": h5, "d1": d1, "d2": d2, "d3": d3, "d4": d4, "d": d}
     reduction = reduce_text(synthetic_measured(sigma=False, drop=("w", "gamma", "f"), **heights))

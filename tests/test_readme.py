@@ -1,4 +1,5 @@
 """README's Python section runs as written (with the file names pointed at the shipped data)."""
+
 from __future__ import annotations
 
 import re
@@ -16,9 +17,12 @@ def test_the_readme_python_section_runs(tmp_path, monkeypatch):
     text = (ROOT / "README.md").read_text()
     section = re.search(r"## From Python\n(.*?)\n## ", text, re.S).group(1)
     code = "\n".join(re.findall(r"```python\n(.*?)```", section, re.S))
-    code = code.replace('"BrowserMeasured.txt"', repr(str(DATA / "bicycles" / "Browser" / "RawData" / "BrowserMeasured.txt")))
-    code = code.replace('"JasonBrowserBenchmark.txt"',
-                        repr(str(DATA / "riders" / "Jason" / "Parameters" / "JasonBrowserBenchmark.txt")))
+    code = code.replace(
+        '"BrowserMeasured.txt"', repr(str(DATA / "bicycles" / "Browser" / "RawData" / "BrowserMeasured.txt"))
+    )
+    code = code.replace(
+        '"JasonBrowserBenchmark.txt"', repr(str(DATA / "riders" / "Jason" / "Parameters" / "JasonBrowserBenchmark.txt"))
+    )
     namespace: dict = {}
     exec(compile(code, "README.md", "exec"), namespace)  # noqa: S102 - the project's own README
     result = namespace["result"]

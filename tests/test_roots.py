@@ -1,4 +1,5 @@
 """The one root solver gives one polynomial (plain floats) the batch's results bit for bit."""
+
 from __future__ import annotations
 
 import math
@@ -28,4 +29,3 @@ def test_floats_and_arrays_agree_bit_for_bit() -> None:
         assert _same(one[0], float(low[i])) and _same(one[1], float(high[i])), i
         positive = roots.positive_real_roots(*c[i])
         assert positive == [u for u in (float(low[i]), float(high[i])) if u > 0], i
-

@@ -9,18 +9,20 @@ from importlib import resources
 
 import numpy as np
 import pytest
-
-from bikerider.bicycle.raw_measurements import SEATING_OUTPUTS, seating_problem
 from bikerider.generated import measured_reduction
 from bikerider.generated import rider_model as gen
+
+from bikerider.bicycle.raw_measurements import SEATING_OUTPUTS, seating_problem
 from bikerider.io.bicycleparameters import read_measured_file
 from bikerider.io.toml_input import load_rider_toml
+
 
 def grip_position(w, rF, rR, whb, LhbF, LhbR):
     """``(x, z)`` of a grip from the generated seating stage (the other inputs do not place it)."""
     with np.errstate(invalid="ignore"):
-        values = measured_reduction.seating(w=w, rF=rF, rR=rR, c=0.05, lam=0.35, whb=whb, LhbF=LhbF, LhbR=LhbR,
-                                            h_bb=0.3, l_st=0.5, lam_st=1.2)
+        values = measured_reduction.seating(
+            w=w, rF=rF, rR=rR, c=0.05, lam=0.35, whb=whb, LhbF=LhbF, LhbR=LhbR, h_bb=0.3, l_st=0.5, lam_st=1.2
+        )
     return float(values[3]), float(values[4])
 
 

@@ -3,13 +3,14 @@
 Every stage of the chain is checked at random physical points - the paper's bicycle and rider
 with every input scaled by a random factor within a few percent - for several batch shapes.
 """
+
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from bikerider.uncertainty.chain import Chain, prepare_values
 from bikerider.io.chain_inputs import paper_inputs
+from bikerider.uncertainty.chain import Chain, prepare_values
 from bikerider.uncertainty.stages import all_stages
 
 SHAPES = [(), (3,), (2, 4)]
@@ -69,9 +70,17 @@ def test_characteristic_and_handlebar_stages_with_their_inputs():
     rng = np.random.default_rng(3)
     # Table 4 handlebar rows 1-2 (1.50 s at 37 deg, 0.70 s at 105 deg); the third orientation is a
     # made-up one (lost in the seed text) chosen far from the other two.
-    values.update(T_H1=1.50 + 0.01 * rng.standard_normal(5), T_H2=0.70 + 0.01 * rng.standard_normal(5),
-                  T_H3=1.10 + 0.01 * rng.standard_normal(5), alpha_H1=np.radians(37.0), alpha_H2=np.radians(105.0),
-                  alpha_H3=np.radians(160.0), T_Ryy=1.40, l_pR=0.30, v=np.array([1.0, 3.0, 5.0, 7.0, 9.0]))
+    values.update(
+        T_H1=1.50 + 0.01 * rng.standard_normal(5),
+        T_H2=0.70 + 0.01 * rng.standard_normal(5),
+        T_H3=1.10 + 0.01 * rng.standard_normal(5),
+        alpha_H1=np.radians(37.0),
+        alpha_H2=np.radians(105.0),
+        alpha_H3=np.radians(160.0),
+        T_Ryy=1.40,
+        l_pR=0.30,
+        v=np.array([1.0, 3.0, 5.0, 7.0, 9.0]),
+    )
     chain = Chain(values)
     names = [s.name for s in chain.stages]
     assert {"handlebar_pendulum", "R_wheel_compound", "characteristic"} <= set(names)
@@ -109,6 +118,7 @@ def test_staged_rider_equals_the_generated_rider_model():
 def test_state_matrix_jacobian_matches_finite_differences():
     from bikerider.generated import benchmark_model as gm
     from bikerider.generated import sensitivities as gen
+
     from bikerider.uncertainty.stages import ENTRIES
 
     values = random_inputs((), seed=5)

@@ -1,19 +1,20 @@
 """The composed chain Jacobian against finite differences of the project's own generated chain
 (``combination.estimate_chain``, ``canonical_matrices``), and the vectorised critical speeds
 against ``WhippleModel.critical_speeds``."""
+
 from __future__ import annotations
 
 import numpy as np
 import pytest
+from bikerider.generated import benchmark_model, combination
+from test_sensitivities_stages import random_inputs
 
 from bikerider.benchmark import BENCHMARK_NAMES, WhippleModel
-from bikerider.generated import benchmark_model, combination
-from bikerider.uncertainty.chain import Chain, prepare_values
 from bikerider.benchmark.roots import quadratic_roots
 from bikerider.engine import arguments
+from bikerider.uncertainty.chain import Chain, prepare_values
 from bikerider.uncertainty.speeds import critical_speeds_from_entries
 from bikerider.uncertainty.stages import CANONICAL, ENTRIES
-from test_sensitivities_stages import random_inputs
 
 CHAIN_ARGS = arguments("combination.estimate_chain")
 
@@ -36,13 +37,16 @@ def test_benchmark_jacobian_matches_finite_differences_of_the_generated_chain(sh
     nodes, grads = Chain(values).gradients(values, names)
     got = np.stack([np.broadcast_to(grads[n], shape + (len(names),)) for n in BENCHMARK_NAMES], axis=-2)
     base = combination.estimate_chain(**values)
-    np.testing.assert_allclose(np.stack([np.broadcast_to(nodes[n], shape) for n in BENCHMARK_NAMES], -1), base,
-                               rtol=1e-12)
+    np.testing.assert_allclose(
+        np.stack([np.broadcast_to(nodes[n], shape) for n in BENCHMARK_NAMES], -1), base, rtol=1e-12
+    )
     for j, name in enumerate(names):
         x = values[name]
         h = 1e-6 * np.maximum(np.abs(x), 1e-2)
-        fd = (combination.estimate_chain(**{**values, name: x + h})
-              - combination.estimate_chain(**{**values, name: x - h})) / (2 * h)[..., None]
+        fd = (
+            combination.estimate_chain(**{**values, name: x + h})
+            - combination.estimate_chain(**{**values, name: x - h})
+        ) / (2 * h)[..., None]
         scale = np.abs(base) + 1.0
         np.testing.assert_allclose(got[..., j] / scale, fd / scale, atol=1e-7, err_msg=name)
 
@@ -67,16 +71,24 @@ def test_matrix_and_speed_jacobian_matches_finite_differences_at_benchmark_level
 
 def test_vectorised_speeds_equal_the_model_for_random_bicycles():
     values = chain_level_inputs((12,), seed=40)
-    values.update({k: v * (1 + 0.2 * np.random.default_rng(1).standard_normal(12))
-                   for k, v in values.items() if k in ("c", "mH", "IFyy", "IRyy", "xH")})
+    values.update(
+        {
+            k: v * (1 + 0.2 * np.random.default_rng(1).standard_normal(12))
+            for k, v in values.items()
+            if k in ("c", "mH", "IFyy", "IRyy", "xH")
+        }
+    )
     nodes = Chain(values).evaluate(values)
     speeds = critical_speeds_from_entries({k: nodes[k] for k in ENTRIES}, 9.81)
     for i in range(12):
         params = {k: float(nodes[k][i]) if np.ndim(nodes[k]) else float(nodes[k]) for k in CANONICAL}
         model = WhippleModel(*benchmark_model.canonical_matrices(**params), g=9.81)
         cs = model.critical_speeds()
-        for got, want in ((speeds["v_weave"][i], cs.weave), (speeds["v_capsize"][i], cs.capsize),
-                          (speeds["weave_frequency"][i], cs.weave_frequency)):
+        for got, want in (
+            (speeds["v_weave"][i], cs.weave),
+            (speeds["v_capsize"][i], cs.capsize),
+            (speeds["weave_frequency"][i], cs.weave_frequency),
+        ):
             if want is None:
                 assert np.isnan(got)
             else:

@@ -1,8 +1,8 @@
 """``bikerider sensitivity``: ranking, closed forms, LaTeX, other inputs, Monte Carlo, errors."""
+
 from __future__ import annotations
 
 from importlib import resources
-
 
 from bikerider.cli import main
 

@@ -1,12 +1,13 @@
 """Symbolic sensitivities: hand-derived closed forms, and agreement with the numeric Jacobian."""
+
 from __future__ import annotations
 
 import pytest
 import sympy as sp
 
 from bikerider.errors import InputError
-from bikerider.uncertainty.chain import Chain, prepare_values
 from bikerider.io.chain_inputs import paper_inputs
+from bikerider.uncertainty.chain import Chain, prepare_values
 from bikerider.uncertainty.propagation import propagate
 from bikerider.uncertainty.symbolic import node_symbol, sensitivity_expression
 
@@ -38,18 +39,28 @@ def test_hand_derived_closed_forms(paper, benchmark_values):
     assert sensitivity_expression("lam", "lam_ht", q).closed_form == -1
 
 
-@pytest.mark.parametrize("output, wrt", [
-    ("v_capsize", "T_Fyy"), ("v_weave", "IHxz"), ("IBfxz", "alpha_Bf2"), ("IBrxx", "l_to"),
-    ("zB", "lam_fl"), ("v_capsize", "mBr"), ("xBr", "l_ul"), ("M_phidelta", "k_t"),
-])
+@pytest.mark.parametrize(
+    "output, wrt",
+    [
+        ("v_capsize", "T_Fyy"),
+        ("v_weave", "IHxz"),
+        ("IBfxz", "alpha_Bf2"),
+        ("IBrxx", "l_to"),
+        ("zB", "lam_fl"),
+        ("v_capsize", "mBr"),
+        ("xBr", "l_ul"),
+        ("M_phidelta", "k_t"),
+    ],
+)
 def test_symbolic_steps_equal_the_numeric_jacobian(paper, output, wrt):
     q, point, result = paper
     expr = sensitivity_expression(output, wrt, q)
     assert expr.evaluate(point) == pytest.approx(result.derivative(output, wrt), rel=1e-9, abs=1e-14)
     if expr.closed_form is not None and output != "v_weave":  # weave also needs a0..a4 at v_weave
         values = {s: point[s.name] for s in expr.closed_form.free_symbols if s.name in point}
-        assert float(expr.closed_form.xreplace(values).evalf()) == pytest.approx(result.derivative(output, wrt),
-                                                                                   rel=1e-9)
+        assert float(expr.closed_form.xreplace(values).evalf()) == pytest.approx(
+            result.derivative(output, wrt), rel=1e-9
+        )
 
 
 def test_speed_conditions_are_reported(paper):

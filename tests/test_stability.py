@@ -1,16 +1,17 @@
 """Stable speed intervals, crossings and critical speeds against dense eigenvalue scans, and the
 batched analysis against the one-bicycle analysis (the audit itself: test_stability_audit.py)."""
+
 from __future__ import annotations
 
 import math
 
 import numpy as np
 import pytest
+from random_bicycles import batched_model, benchmark_values
+from test_stability_audit import GRID, STEP, _unstable_count
 
 from bikerider.benchmark import BenchmarkParameters, WhippleModel
 from bikerider.benchmark.stability import stability, stability_batch
-from random_bicycles import batched_model, benchmark_values
-from test_stability_audit import GRID, STEP, _unstable_count
 
 
 @pytest.mark.slow
@@ -87,11 +88,16 @@ def test_batched_stability_equals_one_at_a_time(random_models):
         for k, interval in enumerate(one.intervals):
             assert batch.lower[i, k] == pytest.approx(interval.lower, rel=1e-12)
             assert batch.upper[i, k] == pytest.approx(interval.upper, rel=1e-12)
-            for kind, crossing in ((batch.lower_kind[i, k], interval.lower_crossing),
-                                   (batch.upper_kind[i, k], interval.upper_crossing)):
+            for kind, crossing in (
+                (batch.lower_kind[i, k], interval.lower_crossing),
+                (batch.upper_kind[i, k], interval.upper_crossing),
+            ):
                 assert kind == {None: 0, "real": 1, "oscillatory": 2}[crossing.kind if crossing else None]
-        for got, want in ((batch.weave[i], one.weave), (batch.capsize[i], one.capsize),
-                          (batch.weave_frequency[i], one.weave_frequency)):
+        for got, want in (
+            (batch.weave[i], one.weave),
+            (batch.capsize[i], one.capsize),
+            (batch.weave_frequency[i], one.weave_frequency),
+        ):
             assert (np.isnan(got) and want is None) or got == pytest.approx(want, rel=1e-12)
 
 

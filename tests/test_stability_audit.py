@@ -11,6 +11,7 @@ reported weave speed, 45 whose capsize eigenvalue does not turn unstable at the 
 speed, and 25 stable bicycles (stable above their weave speed, no capsize speed) whose stable
 range was None.  It passes now.
 """
+
 from __future__ import annotations
 
 import math
@@ -32,7 +33,7 @@ def scan_stability(models: list[WhippleModel]) -> np.ndarray:
     """Stable (every eigenvalue with a negative real part) at each speed of GRID, per model."""
     out = []
     for k in range(0, len(models), 400):
-        values = np.linalg.eigvals(np.stack([m.state_matrix(GRID) for m in models[k:k + 400]]))
+        values = np.linalg.eigvals(np.stack([m.state_matrix(GRID) for m in models[k : k + 400]]))
         out.append((values.real < 0).all(axis=-1))
     return np.concatenate(out)
 
@@ -82,9 +83,8 @@ def test_audit_weave_and_capsize_speeds_bound_the_stable_interval_of_a_dense_sca
         else:
             assert scanned[0][1] - STEP <= upper <= scanned[0][1]
         checked += 1
-    assert (wrong_direction, wrong_capsize, missing_range) == (0, 0, 0), \
-        f"weave pair not turning stable at the weave speed: {wrong_direction}, capsize eigenvalue not turning " \
+    assert (wrong_direction, wrong_capsize, missing_range) == (0, 0, 0), (
+        f"weave pair not turning stable at the weave speed: {wrong_direction}, capsize eigenvalue not turning "
         f"unstable at the capsize speed: {wrong_capsize}, stable but no stable range: {missing_range}"
+    )
     assert checked > 1500 and unbounded > 10  # 1617 checked, 25 of them stable at every speed above weave
-
-

@@ -1,9 +1,11 @@
 """State space, lateral-force input, mode shapes, simulation and frequency response of the Whipple model."""
+
 from __future__ import annotations
 
 import numpy as np
 import pytest
 import scipy.linalg
+from random_bicycles import batched_model, benchmark_values, random_parameters
 from scipy.integrate import solve_ivp
 
 from bikerider.benchmark import BenchmarkParameters, WhippleModel
@@ -14,7 +16,6 @@ from bikerider.benchmark.state_space import LateralForce, input_matrix, state_sp
 from bikerider.errors import InputError
 from bikerider.io.benchmark_file import load_benchmark_parameters
 from bikerider.io.name_value_file import read_name_value_file
-from random_bicycles import batched_model, benchmark_values, random_parameters
 
 DATA = __import__("pathlib").Path(__file__).resolve().parents[1] / "src" / "bikerider" / "data" / "bicycleparameters"
 SEAT_POINT = LateralForce(0.3, -0.9)
@@ -34,8 +35,9 @@ def test_lateral_force_input_reproduces_moore_2012_for_the_rigid_bicycle():
     # acted just below the seat; its point (xcl, zcl) and the bicycle's geometry come from
     # BicycleParameters' RigidMeasured.txt and RigidBenchmark.txt, shipped with bikerider.
     measured = read_name_value_file(DATA / "bicycles" / "Rigid" / "RawData" / "RigidMeasured.txt").as_dict()
-    rigid = WhippleModel.from_parameters(load_benchmark_parameters(DATA / "bicycles" / "Rigid" / "Parameters"
-                                                                   / "RigidBenchmark.txt"))
+    rigid = WhippleModel.from_parameters(
+        load_benchmark_parameters(DATA / "bicycles" / "Rigid" / "Parameters" / "RigidBenchmark.txt")
+    )
     force = LateralForce(measured["xcl"].value, measured["zcl"].value)
     H = force.vector(**rigid.geometry)
     assert H[0] == pytest.approx(0.942975, abs=5e-7)
@@ -62,8 +64,9 @@ def test_input_matrix_is_the_inverse_mass_matrix_times_the_generalized_forces(mo
 
 
 def test_state_space_outputs_and_errors(model):
-    ss = state_space(model, [2.0, 5.0], inputs=("T_delta", "F"), outputs=("delta", "phi_dot", "delta_ddot"),
-                     lateral_force=SEAT_POINT)
+    ss = state_space(
+        model, [2.0, 5.0], inputs=("T_delta", "F"), outputs=("delta", "phi_dot", "delta_ddot"), lateral_force=SEAT_POINT
+    )
     assert ss.A.shape == (2, 4, 4) and ss.B.shape == (2, 4, 2) and ss.C.shape == (2, 3, 4) and ss.D.shape == (2, 3, 2)
     x, u = np.array([0.1, -0.2, 0.3, 0.05]), np.array([1.5, 20.0])
     for k in range(2):
@@ -153,8 +156,16 @@ def test_free_response_is_the_matrix_exponential(model):
 
 
 def _ode(A, B, u, t, x0):
-    out = solve_ivp(lambda s, x: A @ x + B @ u(s), (t[0], t[-1]), x0, t_eval=t, rtol=1e-12, atol=1e-14,
-                    method="DOP853", max_step=0.01)
+    out = solve_ivp(
+        lambda s, x: A @ x + B @ u(s),
+        (t[0], t[-1]),
+        x0,
+        t_eval=t,
+        rtol=1e-12,
+        atol=1e-14,
+        method="DOP853",
+        max_step=0.01,
+    )
     return out.y.T
 
 
@@ -183,8 +194,9 @@ def test_sampled_input_is_held_and_nonuniform_times_work(model):
     A, B = sim.system.A[0], sim.system.B[0]
     x = np.array([0, 0.01, 0, 0.0])
     for k in range(t.size - 1):  # integrate each hold interval on its own (no discontinuity inside)
-        x = solve_ivp(lambda s, y, u=samples[k]: A @ y + B @ u, (t[k], t[k + 1]), x, rtol=1e-12, atol=1e-14,
-                      method="DOP853").y[:, -1]
+        x = solve_ivp(
+            lambda s, y, u=samples[k]: A @ y + B @ u, (t[k], t[k + 1]), x, rtol=1e-12, atol=1e-14, method="DOP853"
+        ).y[:, -1]
         np.testing.assert_allclose(sim.states[0, k + 1], x, rtol=1e-8, atol=1e-12)
     assert held(t[5] + 1e-9) == samples[5]
 
@@ -192,11 +204,18 @@ def test_sampled_input_is_held_and_nonuniform_times_work(model):
 def test_batched_simulation_equals_one_at_a_time():
     models = [WhippleModel.from_parameters(p) for p in random_parameters(3, seed=4)]
     t = np.linspace(0, 2, 41)
-    together = simulate(batched_model(models), [3.0, 6.0], t, initial_state=[0.1, 0, 0, 0],
-                        inputs=lambda s: [np.sin(3 * s)], input_names=("T_delta",))
+    together = simulate(
+        batched_model(models),
+        [3.0, 6.0],
+        t,
+        initial_state=[0.1, 0, 0, 0],
+        inputs=lambda s: [np.sin(3 * s)],
+        input_names=("T_delta",),
+    )
     for i, m in enumerate(models):
-        alone = simulate(m, [3.0, 6.0], t, initial_state=[0.1, 0, 0, 0], inputs=lambda s: [np.sin(3 * s)],
-                         input_names=("T_delta",))
+        alone = simulate(
+            m, [3.0, 6.0], t, initial_state=[0.1, 0, 0, 0], inputs=lambda s: [np.sin(3 * s)], input_names=("T_delta",)
+        )
         np.testing.assert_allclose(together.states[i], alone.states, rtol=1e-12, atol=1e-15)
 
 

@@ -1,15 +1,16 @@
 """with_values, sweeps over one or two parameters, and the shipped parameter sets."""
+
 from __future__ import annotations
 
 import numpy as np
 import pytest
+from random_bicycles import benchmark_values
 
 from bikerider.benchmark import BenchmarkParameters, WhippleModel
 from bikerider.benchmark.sweep import stability_map, sweep
 from bikerider.errors import InputError
 from bikerider.quantity import Quantity
 from bikerider.shipped import BICYCLES, named
-from random_bicycles import benchmark_values
 
 
 @pytest.fixture(scope="module")
@@ -40,8 +41,10 @@ def test_one_parameter_sweep_equals_one_bicycle_at_a_time(base):
     for i, c in enumerate(trails):
         model = WhippleModel.from_parameters(base.with_values(c=float(c)))
         speeds_one = model.critical_speeds()
-        for got, want in ((result.stability.weave[i], speeds_one.weave),
-                          (result.stability.capsize[i], speeds_one.capsize)):
+        for got, want in (
+            (result.stability.weave[i], speeds_one.weave),
+            (result.stability.capsize[i], speeds_one.capsize),
+        ):
             assert (np.isnan(got) and want is None) or got == pytest.approx(want, rel=1e-12)
         stable = np.zeros(21, bool)
         for lo, hi in speeds_one.stable_intervals:
@@ -52,8 +55,9 @@ def test_one_parameter_sweep_equals_one_bicycle_at_a_time(base):
 
 def test_a_stability_map_marks_impossible_designs_and_goes_on(base):
     # IBxx and IBzz share a validity check (the rear body's inertia tensor): every pair is checked.
-    result = stability_map(base, ("IBxx", np.linspace(0.5, 12.0, 6)), ("IBzz", np.linspace(0.2, 6.0, 5)),
-                           speeds=np.linspace(0, 10, 11))
+    result = stability_map(
+        base, ("IBxx", np.linspace(0.5, 12.0, 6)), ("IBzz", np.linspace(0.2, 6.0, 5)), speeds=np.linspace(0, 10, 11)
+    )
     assert result.shape == (6, 5)
     assert not result.valid.all() and result.valid.any()
     i, j = np.argwhere(~result.valid)[0]

@@ -12,6 +12,7 @@ bicycles, 2e-7 at worst among BicycleParameters' (Silver, whose rear body's ``I_
 1.7e-5 kg m^2 per kg of rider).  So the two routes must agree to 1e-6 relative; values are the same
 generated expressions at the same point and agree to round-off.
 """
+
 from __future__ import annotations
 
 import math
@@ -19,20 +20,38 @@ from importlib import resources
 from pathlib import Path
 
 import pytest
+from bikerider.generated import combination
+from measured_oracle import propagate
 
 from bikerider.benchmark.parameters import BENCHMARK_NAMES, BenchmarkParameters
 from bikerider.bicycle.bodies import BicycleBodies
 from bikerider.bicycle.to_benchmark import RIDER_BODY_NAMES, LumpedRider, bicycle_benchmark_parameters
-from bikerider.generated import combination
 from bikerider.io.bicycleparameters import merge_rider, read_benchmark_file, read_lumped_rider, read_measured_file
-from measured_oracle import propagate
 from bikerider.quantity import Quantity
 
 DATA = Path(str(resources.files("bikerider") / "data" / "bicycleparameters"))
 JASON = DATA / "riders" / "Jason" / "Parameters" / "JasonBrowserBenchmark.txt"
 FRAME = ("mBf", "xBf", "zBf", "IBfxx", "IBfyy", "IBfzz", "IBfxz")
-PASS_THROUGH = ("w", "c", "g", "rR", "mR", "IRxx", "IRyy", "xH", "zH", "mH", "IHxx", "IHyy", "IHzz", "IHxz",
-                "rF", "mF", "IFxx", "IFyy")
+PASS_THROUGH = (
+    "w",
+    "c",
+    "g",
+    "rR",
+    "mR",
+    "IRxx",
+    "IRyy",
+    "xH",
+    "zH",
+    "mH",
+    "IHxx",
+    "IHyy",
+    "IHzz",
+    "IHxz",
+    "rF",
+    "mF",
+    "IFxx",
+    "IFyy",
+)
 
 
 def _combine(x: dict) -> dict:
@@ -60,8 +79,9 @@ def _without(rider: LumpedRider, name: str) -> LumpedRider:
 
 def _with_sigmas(rider: LumpedRider) -> LumpedRider:
     """The rider with an uncertainty on every entry (the Jason file gives one on the mass alone)."""
-    return LumpedRider({k: Quantity(q.value, 0.01 * abs(q.value) + 1e-3) for k, q in rider.values.items()},
-                       rider.source, rider.name)
+    return LumpedRider(
+        {k: Quantity(q.value, 0.01 * abs(q.value) + 1e-3) for k, q in rider.values.items()}, rider.source, rider.name
+    )
 
 
 RIDERS = {

@@ -1,5 +1,6 @@
 """First-order propagation against Monte Carlo, on the paper's bicycle and rider and on the
 BicycleParameters Browser (benchmark parameters with their sigmas)."""
+
 from __future__ import annotations
 
 import json
@@ -10,8 +11,8 @@ import numpy as np
 import pytest
 
 from bikerider.errors import InputError
-from bikerider.quantity import Quantity
 from bikerider.io.chain_inputs import paper_inputs
+from bikerider.quantity import Quantity
 from bikerider.uncertainty.montecarlo import compare, monte_carlo
 from bikerider.uncertainty.propagation import propagate
 from bikerider.uncertainty.stages import ENTRIES

@@ -5,6 +5,7 @@ text without drawing (the test of current documents compares it); :func:`main` d
 too.  The figures are small PNGs (90 dpi) so that the repository stays light; the commands write
 them at 200 dpi, or as PDF or SVG.
 """
+
 from __future__ import annotations
 
 import logging
@@ -35,18 +36,22 @@ def _figures():
 
     def eigenvalues_paper():
         band = estimate_uncertainty(paper, speeds).eigenvalues
-        return plotting.eigenvalue_figure(paper.model, speeds, "Batavus Browser + rider (Moore et al. 2009)",
-                                          uncertainty=band)
+        return plotting.eigenvalue_figure(
+            paper.model, speeds, "Batavus Browser + rider (Moore et al. 2009)", uncertainty=band
+        )
 
     def bode_browser():
         from bikerider.benchmark.state_space import LateralForce
 
         force = LateralForce(browser.values["xB"], browser.values["zB"])  # type: ignore[arg-type]
-        return plotting.bode_figure(browser_model, (3.0, 5.5, 8.0), lateral_force=force,
-                                    title="Browser + Jason (BicycleParameters)")
+        return plotting.bode_figure(
+            browser_model, (3.0, 5.5, 8.0), lateral_force=force, title="Browser + Jason (BicycleParameters)"
+        )
 
     def compare():
-        models = {name: WhippleModel.from_parameters(named(name)) for name in ("Benchmark", "Browser", "Fisher", "Yellow")}
+        models = {
+            name: WhippleModel.from_parameters(named(name)) for name in ("Benchmark", "Browser", "Fisher", "Yellow")
+        }
         return plotting.eigenvalue_comparison_figure(models, title="Shipped bicycles without rider")
 
     def trail_sweep():
@@ -64,8 +69,14 @@ def _figures():
         from bikerider import design
 
         if "six" not in runs:
-            axes = {"c": (0.0, 0.15), "lam": (0.0, np.radians(36.0)), "w": (0.8, 1.3), "IHzz": (0.002, 0.03),
-                    "IFyy": (0.1, 0.28), "xB": (0.1, 0.6)}
+            axes = {
+                "c": (0.0, 0.15),
+                "lam": (0.0, np.radians(36.0)),
+                "w": (0.8, 1.3),
+                "IHzz": (0.002, 0.03),
+                "IFyy": (0.1, 0.28),
+                "xB": (0.1, 0.6),
+            }
             space = design.grid(bench, {k: np.linspace(lo, hi, 8) for k, (lo, hi) in axes.items()})
             runs["six"] = design.explore(space, None, np.linspace(0.0, 10.0, 100))
         return runs["six"]
@@ -75,84 +86,136 @@ def _figures():
         from bikerider.plotting import design as figures
 
         store = six_parameters()
-        return figures.stable_fraction_figure(summary.summarize(store), store.spec.space.base,
-                                              "Benchmark bicycle, 6 parameters at 8 values")
+        return figures.stable_fraction_figure(
+            summary.summarize(store), store.spec.space.base, "Benchmark bicycle, 6 parameters at 8 values"
+        )
 
     def design_sensitivity():
         from bikerider.design import summary
         from bikerider.plotting import design as figures
 
         store = six_parameters()
-        return figures.interval_sensitivity_figure(summary.summarize(store), store.spec.space.base,
-                                                   "Benchmark bicycle, 6 parameters at 8 values")
+        return figures.interval_sensitivity_figure(
+            summary.summarize(store), store.spec.space.base, "Benchmark bicycle, 6 parameters at 8 values"
+        )
 
     def design_map():
         from bikerider import design
         from bikerider.design import summary
         from bikerider.plotting import design as figures
 
-        space = design.grid(bench, {"c": np.linspace(-0.02, 0.16, 73), "lam": np.radians(np.linspace(0, 36, 73)),
-                                    "w": np.linspace(0.9, 1.2, 3), "IFyy": np.linspace(0.14, 0.28, 3)})
+        space = design.grid(
+            bench,
+            {
+                "c": np.linspace(-0.02, 0.16, 73),
+                "lam": np.radians(np.linspace(0, 36, 73)),
+                "w": np.linspace(0.9, 1.2, 3),
+                "IFyy": np.linspace(0.14, 0.28, 3),
+            },
+        )
         store = design.explore(space, None, np.linspace(0.0, 10.0, 100))
         cut = summary.design_slice(store, "c", "lam", {"w": 1.05, "IFyy": 0.28})
         return figures.design_slice_figure(cut, store.spec.speeds, "Benchmark bicycle: trail and steer axis tilt")
 
     return [
-        ("eigenvalues", "Eigenvalues against speed of the paper's bicycle and rider, with the first-order "
-         "uncertainty that the paper's stated measurement accuracies give (`bikerider estimate --plot DIR`). "
-         "Lines per tracked mode, real parts solid and imaginary parts dashed (Meijaard et al. 2007 Fig. 3, "
-         "Moore et al. 2009 Fig. 5); the self-stable interval shaded; the castor mode leaves the chosen range, "
-         "which the marker on the edge and the note in the legend say.",
-         "plotting.eigenvalue_figure(model, speeds, title, uncertainty=estimate_uncertainty(result, speeds).eigenvalues)",
-         eigenvalues_paper),
-        ("eigenvalues_two_panel", "The benchmark bicycle (Meijaard et al. 2007) with real and imaginary parts on two "
-         "panels and every line in range (`ylim=\"all\"`).",
-         "plotting.eigenvalue_figure(model, speeds, title, two_panel=True, ylim=\"all\")",
-         lambda: plotting.eigenvalue_figure(bench_model, speeds, "Benchmark bicycle (Meijaard et al. 2007)",
-                                            two_panel=True, ylim="all")),
-        ("side_view", "Side view of the paper's bicycle and seated rider (Moore et al. 2009 Fig. 4): the bicycle "
-         "through its grid points, the rider's segments, the centre of mass of the rear body (frame and rider), "
-         "of the front assembly and of the whole bicycle, and the inertia ellipses (the section of the uniform "
-         "solid ellipsoid with the body's mass and inertia).",
-         "plotting.side_view_figure(result.parameters, result.rider_model.grid_points, title)",
-         lambda: plotting.side_view_figure(paper.parameters, paper.rider_model.grid_points,
-                                           "Batavus Browser + rider (Moore et al. 2009)")),
-        ("side_view_benchmark", "Side view from benchmark parameters alone (`bikerider benchmark --plot DIR`): "
-         "schematic frame and fork on the wheels and the steer axis.",
-         "plotting.side_view_figure(parameters, None, title)",
-         lambda: plotting.side_view_figure(bench, None, "Benchmark bicycle (Meijaard et al. 2007)")),
-        ("mode_shapes", "Mode shapes of the benchmark bicycle at 5 m/s as phasors (length: relative amplitude of "
-         "roll and steer; angle: phase, steer relative to roll) and against speed.",
-         "plotting.mode_shape_figure(model, 5.0, speeds, title)",
-         lambda: plotting.mode_shape_figure(bench_model, 5.0, speeds, "Benchmark bicycle")),
-        ("bode", "Frequency responses of the Browser with rider Jason from steer torque and from a lateral force at "
-         "the rear body's centre of mass to roll and steer, at three speeds (self-stable ones marked).",
-         "plotting.bode_figure(model, (3.0, 5.5, 8.0), lateral_force=LateralForce(xB, zB), title=title)",
-         bode_browser),
-        ("compare", "Several bicycles on one figure: real parts (one colour per bicycle, one line style per mode), "
-         "the weave frequency and the self-stable intervals.",
-         "plotting.eigenvalue_comparison_figure({name: model, ...}, title=title)", compare),
-        ("sweep", "Self-stable speeds of the benchmark bicycle against its trail (`bikerider sweep --bicycle "
-         "Benchmark --vary c=-0.02:0.2:111 --plot DIR`).",
-         "plotting.sweep_figure(sweep(parameters, {\"c\": trails}))", trail_sweep),
-        ("stability_map", "Stability map over trail and steer axis tilt: where the first self-stable interval "
-         "begins (colour) and ends (contours); hatched: never self-stable (`bikerider sweep --bicycle Benchmark "
-         "--vary c=0:0.2:101 --vary lam_deg=0:40:101 --plot DIR`).",
-         "plotting.sweep_figure(stability_map(parameters, (\"c\", trails), (\"lam\", tilts)))", trail_tilt_map),
-        ("design_stable_fraction", "A design space of six parameters of the benchmark bicycle (trail, steer axis tilt, "
-         "wheelbase, front-assembly inertia, front-wheel spin inertia, rear-body centre of mass), 8 values each: the "
-         "share of the valid designs that is self-stable somewhere in 0-10 m/s, against each parameter, with the share "
-         "of impossible designs (`bikerider sweep ... --store DIR --plot DIR`; [design_space.md](design_space.md)).",
-         "figures.stable_fraction_figure(summary.summarize(store), space.base, title)", design_fraction),
-        ("design_sensitivity", "Sensitivity of the stable interval over the same space: median and interquartile range "
-         "of the weave and capsize speeds (the ends of the first self-stable interval) over the other five parameters, "
-         "against each, and each speed's first-order sensitivity index.",
-         "figures.interval_sensitivity_figure(summary.summarize(store), space.base, title)", design_sensitivity),
-        ("design_map", "A slice of a design space over trail, steer axis tilt, wheelbase and front-wheel spin "
-         "inertia: where the first self-stable interval begins and ends, and the share of 100 speeds (0-10 m/s) at "
-         "which each design is self-stable.",
-         "figures.design_slice_figure(summary.design_slice(store, \"c\", \"lam\", fixed), store.spec.speeds, title)",
-         design_map),
+        (
+            "eigenvalues",
+            "Eigenvalues against speed of the paper's bicycle and rider, with the first-order "
+            "uncertainty that the paper's stated measurement accuracies give (`bikerider estimate --plot DIR`). "
+            "Lines per tracked mode, real parts solid and imaginary parts dashed (Meijaard et al. 2007 Fig. 3, "
+            "Moore et al. 2009 Fig. 5); the self-stable interval shaded; the castor mode leaves the chosen range, "
+            "which the marker on the edge and the note in the legend say.",
+            "plotting.eigenvalue_figure(model, speeds, title, uncertainty=estimate_uncertainty(result, speeds).eigenvalues)",
+            eigenvalues_paper,
+        ),
+        (
+            "eigenvalues_two_panel",
+            "The benchmark bicycle (Meijaard et al. 2007) with real and imaginary parts on two "
+            'panels and every line in range (`ylim="all"`).',
+            'plotting.eigenvalue_figure(model, speeds, title, two_panel=True, ylim="all")',
+            lambda: plotting.eigenvalue_figure(
+                bench_model, speeds, "Benchmark bicycle (Meijaard et al. 2007)", two_panel=True, ylim="all"
+            ),
+        ),
+        (
+            "side_view",
+            "Side view of the paper's bicycle and seated rider (Moore et al. 2009 Fig. 4): the bicycle "
+            "through its grid points, the rider's segments, the centre of mass of the rear body (frame and rider), "
+            "of the front assembly and of the whole bicycle, and the inertia ellipses (the section of the uniform "
+            "solid ellipsoid with the body's mass and inertia).",
+            "plotting.side_view_figure(result.parameters, result.rider_model.grid_points, title)",
+            lambda: plotting.side_view_figure(
+                paper.parameters, paper.rider_model.grid_points, "Batavus Browser + rider (Moore et al. 2009)"
+            ),
+        ),
+        (
+            "side_view_benchmark",
+            "Side view from benchmark parameters alone (`bikerider benchmark --plot DIR`): "
+            "schematic frame and fork on the wheels and the steer axis.",
+            "plotting.side_view_figure(parameters, None, title)",
+            lambda: plotting.side_view_figure(bench, None, "Benchmark bicycle (Meijaard et al. 2007)"),
+        ),
+        (
+            "mode_shapes",
+            "Mode shapes of the benchmark bicycle at 5 m/s as phasors (length: relative amplitude of "
+            "roll and steer; angle: phase, steer relative to roll) and against speed.",
+            "plotting.mode_shape_figure(model, 5.0, speeds, title)",
+            lambda: plotting.mode_shape_figure(bench_model, 5.0, speeds, "Benchmark bicycle"),
+        ),
+        (
+            "bode",
+            "Frequency responses of the Browser with rider Jason from steer torque and from a lateral force at "
+            "the rear body's centre of mass to roll and steer, at three speeds (self-stable ones marked).",
+            "plotting.bode_figure(model, (3.0, 5.5, 8.0), lateral_force=LateralForce(xB, zB), title=title)",
+            bode_browser,
+        ),
+        (
+            "compare",
+            "Several bicycles on one figure: real parts (one colour per bicycle, one line style per mode), "
+            "the weave frequency and the self-stable intervals.",
+            "plotting.eigenvalue_comparison_figure({name: model, ...}, title=title)",
+            compare,
+        ),
+        (
+            "sweep",
+            "Self-stable speeds of the benchmark bicycle against its trail (`bikerider sweep --bicycle "
+            "Benchmark --vary c=-0.02:0.2:111 --plot DIR`).",
+            'plotting.sweep_figure(sweep(parameters, {"c": trails}))',
+            trail_sweep,
+        ),
+        (
+            "stability_map",
+            "Stability map over trail and steer axis tilt: where the first self-stable interval "
+            "begins (colour) and ends (contours); hatched: never self-stable (`bikerider sweep --bicycle Benchmark "
+            "--vary c=0:0.2:101 --vary lam_deg=0:40:101 --plot DIR`).",
+            'plotting.sweep_figure(stability_map(parameters, ("c", trails), ("lam", tilts)))',
+            trail_tilt_map,
+        ),
+        (
+            "design_stable_fraction",
+            "A design space of six parameters of the benchmark bicycle (trail, steer axis tilt, "
+            "wheelbase, front-assembly inertia, front-wheel spin inertia, rear-body centre of mass), 8 values each: the "
+            "share of the valid designs that is self-stable somewhere in 0-10 m/s, against each parameter, with the share "
+            "of impossible designs (`bikerider sweep ... --store DIR --plot DIR`; [design_space.md](design_space.md)).",
+            "figures.stable_fraction_figure(summary.summarize(store), space.base, title)",
+            design_fraction,
+        ),
+        (
+            "design_sensitivity",
+            "Sensitivity of the stable interval over the same space: median and interquartile range "
+            "of the weave and capsize speeds (the ends of the first self-stable interval) over the other five parameters, "
+            "against each, and each speed's first-order sensitivity index.",
+            "figures.interval_sensitivity_figure(summary.summarize(store), space.base, title)",
+            design_sensitivity,
+        ),
+        (
+            "design_map",
+            "A slice of a design space over trail, steer axis tilt, wheelbase and front-wheel spin "
+            "inertia: where the first self-stable interval begins and ends, and the share of 100 speeds (0-10 m/s) at "
+            "which each design is self-stable.",
+            'figures.design_slice_figure(summary.design_slice(store, "c", "lam", fixed), store.spec.speeds, title)',
+            design_map,
+        ),
     ]
 
 

@@ -11,11 +11,11 @@ Run from the project root::
 
     .venv/bin/python docs/scripts/gap_real_data.py
 """
+
 from __future__ import annotations
 
 import sys
 from pathlib import Path
-
 
 ROOT = Path(__file__).resolve().parents[2]
 DATA = ROOT / "src" / "bikerider" / "data"
@@ -33,17 +33,24 @@ def _diagnose(model, groups=None, eigen_file=None):
 
 
 def _ranking_table(result) -> list[str]:
-    lines = ["| rank | effect | held-out before | after | shrink | plausible | fitted (95 % interval) | tied with |",
-             "|---|---|---|---|---|---|---|---|"]
+    lines = [
+        "| rank | effect | held-out before | after | shrink | plausible | fitted (95 % interval) | tied with |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
     for r in result["ranking"]:
         if r["effect"] == "parameters":
             fitted = f"{len(r['parameters'])} shifts"
         else:
-            fitted = ", ".join(f"{k} = {_shown(v['value'], v['ci95'])} [{_shown(v['ci95'][0], v['ci95'])}, "
-                               f"{_shown(v['ci95'][1], v['ci95'])}] {v['unit']}" for k, v in r["parameters"].items())
+            fitted = ", ".join(
+                f"{k} = {_shown(v['value'], v['ci95'])} [{_shown(v['ci95'][0], v['ci95'])}, "
+                f"{_shown(v['ci95'][1], v['ci95'])}] {v['unit']}"
+                for k, v in r["parameters"].items()
+            )
         shrink = "-" if r["shrink"] is None else f"{r['shrink']:+.2f}"
-        lines.append(f"| {r['rank']} | {r['effect']} | {r['heldout_error_before']:.1f} | {r['heldout_error_after']:.1f} | "
-                     f"{shrink} | {'yes' if r['plausible'] else 'no'} | {fitted} | {', '.join(r['tied_with']) or '-'} |")
+        lines.append(
+            f"| {r['rank']} | {r['effect']} | {r['heldout_error_before']:.1f} | {r['heldout_error_after']:.1f} | "
+            f"{shrink} | {'yes' if r['plausible'] else 'no'} | {fitted} | {', '.join(r['tied_with']) or '-'} |"
+        )
     return lines
 
 
@@ -101,9 +108,11 @@ def build() -> str:
     ]
     for q in ("real", "imag"):
         c = cells[q]
-        lines.append(f"| weave {q} part [1/s] | {c['mean_measured']:.2f} | {c['mean_predicted']:.3f} | "
-                     f"{c['combined_sigma']:.3f} | {c['data_sigma']:.3f} | {c['model_sigma']:.3f} | "
-                     f"{(c['mean_measured'] - c['mean_predicted']) / c['combined_sigma']:+.2f} |")
+        lines.append(
+            f"| weave {q} part [1/s] | {c['mean_measured']:.2f} | {c['mean_predicted']:.3f} | "
+            f"{c['combined_sigma']:.3f} | {c['data_sigma']:.3f} | {c['model_sigma']:.3f} | "
+            f"{(c['mean_measured'] - c['mean_predicted']) / c['combined_sigma']:+.2f} |"
+        )
     lines += [
         "",
         f"Gap test: chi2 = {k['gap']['test']['chi2']:.2f} on {k['gap']['test']['dof']} (p = {k['gap']['test']['p_value']:.2f}):",
@@ -138,8 +147,10 @@ def build() -> str:
         entry, group = c["quantity"].split(" ")
         diff = c["mean_measured"] - c["mean_predicted"]
         rel = diff / abs(c["mean_predicted"])
-        lines.append(f"| {entry} | {group.strip('()')} | {c['mean_measured']:.4g} | {c['mean_predicted']:.4g} | "
-                     f"{rel:+.0%} | {diff / c['combined_sigma']:+.0f} |")
+        lines.append(
+            f"| {entry} | {group.strip('()')} | {c['mean_measured']:.4g} | {c['mean_predicted']:.4g} | "
+            f"{rel:+.0%} | {diff / c['combined_sigma']:+.0f} |"
+        )
     t = jj["gap"]["test"]
     pt = jj["parameter_fit"]["test"]
     pt5 = runs["J-H,J-P (rider 5 %)"]["parameter_fit"]["test"]

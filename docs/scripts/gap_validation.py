@@ -6,6 +6,7 @@ Run from the project root (takes a few minutes)::
 
     .venv/bin/python docs/scripts/gap_validation.py
 """
+
 from __future__ import annotations
 
 import logging
@@ -36,7 +37,9 @@ def main() -> int:
     from bikerider.gap.model_input import load_model
 
     logging.basicConfig(level=logging.INFO, format="%(message)s")
-    model = load_model(BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt", BP / "riders/Jason/Parameters/JasonRigidBenchmark.txt")
+    model = load_model(
+        BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt", BP / "riders/Jason/Parameters/JasonRigidBenchmark.txt"
+    )
     start = time.perf_counter()
     suite = V.run_suite(model, V.FULL_CASES, V.FULL)
     elapsed = time.perf_counter() - start
@@ -97,48 +100,71 @@ def main() -> int:
         f"(goal: at most 1 of 10); rate {alarms / max(n_null, 1):.0%}.",
     ]
     if errors.size:
-        lines.append(f"* Error of the predicted shrinkage (predicted minus achieved on fresh data), {errors.size} cases "
-                     f"with a selection: mean {errors.mean():+.3f}, RMS {np.sqrt(np.mean(errors**2)):.3f}, "
-                     f"largest {errors[np.argmax(np.abs(errors))]:+.3f}.")
-    lines += [f"* {len(suite.cases)} cases in {elapsed:.0f} s (data generation, diagnosis and fresh test data).", "",
-              "### Confusion matrix", "",
-              "Rows: hidden truth; columns: the first-ranked effect when the verdict is structural, otherwise the "
-              "verdict.", "", "| truth | " + " | ".join(cols) + " |", "|---|" + "---|" * len(cols)]
+        lines.append(
+            f"* Error of the predicted shrinkage (predicted minus achieved on fresh data), {errors.size} cases "
+            f"with a selection: mean {errors.mean():+.3f}, RMS {np.sqrt(np.mean(errors**2)):.3f}, "
+            f"largest {errors[np.argmax(np.abs(errors))]:+.3f}."
+        )
+    lines += [
+        f"* {len(suite.cases)} cases in {elapsed:.0f} s (data generation, diagnosis and fresh test data).",
+        "",
+        "### Confusion matrix",
+        "",
+        "Rows: hidden truth; columns: the first-ranked effect when the verdict is structural, otherwise the verdict.",
+        "",
+        "| truth | " + " | ".join(cols) + " |",
+        "|---|" + "---|" * len(cols),
+    ]
     for i, r in enumerate(rows):
         lines.append(f"| {r} | " + " | ".join(str(x) if x else "." for x in table[i]) + " |")
-    lines += ["", "### Every case", "",
-              "| truth | seed | measured | verdict | ranking (first three) | first's fitted values | tied with first | "
-              "selected | predicted shrink | achieved shrink | correct |",
-              "|---|---|---|---|---|---|---|---|---|---|---|"]
+    lines += [
+        "",
+        "### Every case",
+        "",
+        "| truth | seed | measured | verdict | ranking (first three) | first's fitted values | tied with first | "
+        "selected | predicted shrink | achieved shrink | correct |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
     for c in suite.cases:
         fitted = ", ".join(f"{k} {_fitted(v)}" for k, v in c.first_parameters.items()) or "-"
-        lines.append(f"| {c.truth} | {c.seed} | {c.n_measured} | {c.verdict} | {', '.join(c.ranking[:3])} | {fitted} | "
-                     f"{', '.join(c.ties_with_first) or '-'} | {', '.join(c.selected) or '-'} | "
-                     f"{_f(c.predicted_shrink)} | {_f(c.actual_shrink)} | {'yes' if c.correct else '**no**'} |")
+        lines.append(
+            f"| {c.truth} | {c.seed} | {c.n_measured} | {c.verdict} | {', '.join(c.ranking[:3])} | {fitted} | "
+            f"{', '.join(c.ties_with_first) or '-'} | {', '.join(c.selected) or '-'} | "
+            f"{_f(c.predicted_shrink)} | {_f(c.actual_shrink)} | {'yes' if c.correct else '**no**'} |"
+        )
     misses = [c for c in suite.cases if not c.correct]
     lines += ["", "## Reading the results", ""]
     for c in misses:
         if c.hidden:
-            lines.append(f"* Miss: `{c.truth}` (seed {c.seed}) gave `{c.top}` first"
-                         + (f" and selected {', '.join(c.selected)}." if c.selected else " and selected nothing: no candidate "
-                            "predicted the held-out groups significantly better than the nominal model."))
+            lines.append(
+                f"* Miss: `{c.truth}` (seed {c.seed}) gave `{c.top}` first"
+                + (
+                    f" and selected {', '.join(c.selected)}."
+                    if c.selected
+                    else " and selected nothing: no candidate "
+                    "predicted the held-out groups significantly better than the nominal model."
+                )
+            )
         else:
             lines.append(f"* False alarm: null case, seed {c.seed}, verdict {c.verdict}.")
     if any(c.truth == "strong_steer_damping" and not c.correct for c in misses):
-        lines += ["  Coulomb friction of 0.1 N m is large against the steer torques of a small perturbation; its",
-                  "  effect depends on the amplitude, which differs from run to run, and none of the linear candidates",
-                  "  predicts the held-out sessions significantly better. The diagnosis reports a structural gap and",
-                  "  selects nothing rather than naming an effect it cannot support."]
+        lines += [
+            "  Coulomb friction of 0.1 N m is large against the steer torques of a small perturbation; its",
+            "  effect depends on the amplitude, which differs from run to run, and none of the linear candidates",
+            "  predicts the held-out sessions significantly better. The diagnosis reports a structural gap and",
+            "  selects nothing rather than naming an effect it cannot support.",
+        ]
     lines += [
-              "* Ties are common between `steer_damping` and `passive_arms` (whose damping can stand in for it)",
-              "  and between the steer effects and `rider_lean`; the tie rule ranks the simpler effect first.",
-              "* The fitted steer damping of the Coulomb-plus-viscous truths exceeds the viscous part: Coulomb",
-              "  friction acts as an amplitude-dependent viscous damping at the small steer rates of a",
-              "  perturbation run, which the plausibility check may then flag against the viscous literature range.",
-              "* Compare the fitted values with the truths above: weave eigenvalues alone determine some parameters",
-              "  poorly (the tyres' cornering stiffness and relaxation length above all); the 95 % intervals and the",
-              "  plausibility flag in `bikerider gap`'s output say how well.",
-              ""]
+        "* Ties are common between `steer_damping` and `passive_arms` (whose damping can stand in for it)",
+        "  and between the steer effects and `rider_lean`; the tie rule ranks the simpler effect first.",
+        "* The fitted steer damping of the Coulomb-plus-viscous truths exceeds the viscous part: Coulomb",
+        "  friction acts as an amplitude-dependent viscous damping at the small steer rates of a",
+        "  perturbation run, which the plausibility check may then flag against the viscous literature range.",
+        "* Compare the fitted values with the truths above: weave eigenvalues alone determine some parameters",
+        "  poorly (the tyres' cornering stiffness and relaxation length above all); the 95 % intervals and the",
+        "  plausibility flag in `bikerider gap`'s output say how well.",
+        "",
+    ]
     OUT.write_text("\n".join(lines), encoding="utf-8")
     print(f"wrote {OUT}: first {first}/{n_effect}, false alarms {alarms}/{n_null}, {elapsed:.0f} s")
     return 0

@@ -2,6 +2,7 @@
 
 Run with ``make docs`` (or ``python docs/scripts/reproduction.py``).
 """
+
 from __future__ import annotations
 
 import logging

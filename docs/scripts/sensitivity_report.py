@@ -3,6 +3,7 @@ weave and capsize speeds, first-order against Monte Carlo, and the key closed fo
 
 Run with ``python docs/scripts/sensitivity_report.py`` (deterministic: the Monte Carlo is seeded).
 """
+
 from __future__ import annotations
 
 import logging
@@ -11,9 +12,9 @@ from pathlib import Path
 
 import sympy as sp
 
+from bikerider.io.chain_inputs import paper_inputs
 from bikerider.uncertainty import names, text
 from bikerider.uncertainty.chain import Chain, prepare_values
-from bikerider.io.chain_inputs import paper_inputs
 from bikerider.uncertainty.montecarlo import compare, monte_carlo
 from bikerider.uncertainty.propagation import propagate
 from bikerider.uncertainty.symbolic import sensitivity_expression
@@ -22,8 +23,25 @@ OUT = Path(__file__).resolve().parents[1] / "sensitivity.md"
 N = 100_000
 SEED = 2009
 SPEEDS = ("v_weave", "v_capsize")
-MC_OUTPUTS = ("v_weave", "v_capsize", "mB", "xB", "zB", "IBxx", "IBzz", "IBxz", "IFyy", "IRxx",
-              "M_phiphi", "M_phidelta", "M_deltadelta", "C1_phidelta", "C1_deltadelta", "K0_phiphi", "K2_phidelta")
+MC_OUTPUTS = (
+    "v_weave",
+    "v_capsize",
+    "mB",
+    "xB",
+    "zB",
+    "IBxx",
+    "IBzz",
+    "IBxz",
+    "IFyy",
+    "IRxx",
+    "M_phiphi",
+    "M_phidelta",
+    "M_deltadelta",
+    "C1_phidelta",
+    "C1_deltadelta",
+    "K0_phiphi",
+    "K2_phidelta",
+)
 
 HEADER = """# How far to trust the weave and capsize speeds
 
@@ -63,8 +81,11 @@ def _speed_section(result, speed: str, exact_rider=None) -> list[str]:
     lines.append(text.ranking_text(result, speed, top=12, markdown=True))
     if exact_rider is not None:
         leader = exact_rider.contributions(speed)[0]
-        lines += ["", f"With the rider's measurements taken as exact the leader is the same: {leader.name} "
-                      f"({leader.share:.1%}); first-order sigma {exact_rider.sigmas[speed]:.3g} m/s."]
+        lines += [
+            "",
+            f"With the rider's measurements taken as exact the leader is the same: {leader.name} "
+            f"({leader.share:.1%}); first-order sigma {exact_rider.sigmas[speed]:.3g} m/s.",
+        ]
     return lines + [""]
 
 
@@ -73,8 +94,12 @@ def _closed_form(output: str, wrt: str, provided, point) -> list[str]:
     value = expr.evaluate(point)
     body = sp.latex(expr.expression, symbol_names=expr.latex_names())
     lhs = rf"\frac{{d {names.latex(expr.output)}}}{{d {names.latex(expr.wrt)}}}"
-    return [f"$$ {lhs} = {body} $$", "",
-            f"= {value:.5g} {names.unit(expr.output)}/{names.unit(expr.wrt)} at the paper's inputs.", ""]
+    return [
+        f"$$ {lhs} = {body} $$",
+        "",
+        f"= {value:.5g} {names.unit(expr.output)}/{names.unit(expr.wrt)} at the paper's inputs.",
+        "",
+    ]
 
 
 def build() -> str:
@@ -90,8 +115,10 @@ def build() -> str:
     lines += ["", "## Which measurement matters most", ""]
     leaders = {s: result.contributions(s)[0] for s in SPEEDS}
     for s, c in leaders.items():
-        lines.append(f"- **{'weave' if s == 'v_weave' else 'capsize'} speed: {c.name}** "
-                     f"({names.describe(c.name)[0]}), {c.share:.0%} of the variance, elasticity {c.elasticity:.2f}.")
+        lines.append(
+            f"- **{'weave' if s == 'v_weave' else 'capsize'} speed: {c.name}** "
+            f"({names.describe(c.name)[0]}), {c.share:.0%} of the variance, elasticity {c.elasticity:.2f}."
+        )
     iffy, ify_sigma = result.values["IFyy"], result.sigmas["IFyy"]
     tf = q["T_Fyy"]
     gravity_term = (tf.value / (2 * math.pi)) ** 2 * q["mF"].value * q["g"].value * q["l_pF"].value
@@ -104,60 +131,85 @@ def build() -> str:
         "speeds' conditions through C1 and K2.  Redo the front wheel's compound pendulum first - time "
         "more periods, or use a longer pendulum so the two terms of Eq. 7 differ more.",
         "",
-        "## Rankings", "",
+        "## Rankings",
+        "",
     ]
     for speed in SPEEDS:
         lines += _speed_section(result, speed, exact)
-    lines += ["## First order against Monte Carlo", "",
-              f"{N} input sets drawn (seed {SEED}), the whole chain from raw measurements evaluated at once "
-              "(`bikerider.uncertainty.montecarlo`).  An output is flagged when the two sigmas differ by more "
-              "than 10 %; the verdict says why, from the samples that have no value, the second-order term "
-              "of each input at +/-1 sigma and the skewness of the samples.", ""]
+    lines += [
+        "## First order against Monte Carlo",
+        "",
+        f"{N} input sets drawn (seed {SEED}), the whole chain from raw measurements evaluated at once "
+        "(`bikerider.uncertainty.montecarlo`).  An output is flagged when the two sigmas differ by more "
+        "than 10 %; the verdict says why, from the samples that have no value, the second-order term "
+        "of each input at +/-1 sigma and the skewness of the samples.",
+        "",
+    ]
     mc = monte_carlo(q, N, outputs=MC_OUTPUTS, seed=SEED)
     comparisons = compare(result, mc, q)
     lines.append(text.table(text.COMPARISON_HEADER, text.comparison_rows(comparisons), markdown=True))
     fails = ", ".join(f"{k}: {v} ({v / N:.1%})" for k, v in mc.failures.items()) or "none"
     reach = point["rX15"], point["rZ15"], point["rX19"], point["rZ19"]
     span = math.hypot(reach[0] - reach[2], reach[1] - reach[3])
-    lines += ["", f"Samples without a value: {fails}.  The elbow closure is near its limit: the shoulders are "
-                  f"{span:.3f} m from the hands and the arm is l_ua + l_la = {q['l_ua'].value + q['l_la'].value:.2f} m "
-                  f"long ({span / (q['l_ua'].value + q['l_la'].value):.1%} stretched), so a 2-sigma longer reach "
-                  "or shorter arm leaves the hands out of reach.  First-order propagation cannot see this; "
-                  "it describes the samples that do seat the rider.", ""]
+    lines += [
+        "",
+        f"Samples without a value: {fails}.  The elbow closure is near its limit: the shoulders are "
+        f"{span:.3f} m from the hands and the arm is l_ua + l_la = {q['l_ua'].value + q['l_la'].value:.2f} m "
+        f"long ({span / (q['l_ua'].value + q['l_la'].value):.1%} stretched), so a 2-sigma longer reach "
+        "or shorter arm leaves the hands out of reach.  First-order propagation cannot see this; "
+        "it describes the samples that do seat the rider.",
+        "",
+    ]
     exact_inputs = paper_inputs(assume_rider_sigmas=False).quantities
     mc_exact = monte_carlo(exact_inputs, N, outputs=SPEEDS, seed=SEED)
     lost = max(mc_exact.failures.values(), default=0) / N
-    lines += [f"With the rider's measurements exact only {lost:.2%} of the samples lose their rider (the "
-              "bicycle's own geometry moves the grips), and what remains of the disagreement is the "
-              "nonlinearity of the speeds in the front wheel's period:", "",
-              text.table(text.COMPARISON_HEADER, text.comparison_rows(compare(exact, mc_exact, exact_inputs)),
-                         markdown=True), ""]
-    lines += ["## Key closed forms", "",
-              "Intermediate quantities stay symbols (their own closed forms follow from the same steps); "
-              "`bikerider sensitivity OUTPUT --wrt INPUT` prints any of them.", ""]
-    for output, wrt in (("IFyy", "T_Fyy"), ("v_capsize", "T_Fyy"), ("M_phiphi", "mH"), ("xB", "xBf"),
-                        ("IBfxz", "T_Bf1")):
+    lines += [
+        f"With the rider's measurements exact only {lost:.2%} of the samples lose their rider (the "
+        "bicycle's own geometry moves the grips), and what remains of the disagreement is the "
+        "nonlinearity of the speeds in the front wheel's period:",
+        "",
+        text.table(text.COMPARISON_HEADER, text.comparison_rows(compare(exact, mc_exact, exact_inputs)), markdown=True),
+        "",
+    ]
+    lines += [
+        "## Key closed forms",
+        "",
+        "Intermediate quantities stay symbols (their own closed forms follow from the same steps); "
+        "`bikerider sensitivity OUTPUT --wrt INPUT` prints any of them.",
+        "",
+    ]
+    for output, wrt in (
+        ("IFyy", "T_Fyy"),
+        ("v_capsize", "T_Fyy"),
+        ("M_phiphi", "mH"),
+        ("xB", "xBf"),
+        ("IBfxz", "T_Bf1"),
+    ):
         lines += _closed_form(output, wrt, q, point)
-    lines += ["## Using it", "",
-              "```python",
-              "from bikerider import monte_carlo, paper_inputs, propagate",
-              "from bikerider.uncertainty import compare",
-              "inputs = paper_inputs()    # or bikerider.io.chain_inputs.raw_inputs_from_toml(bicycle, rider)",
-              "result = propagate(inputs.quantities, speeds=[4.0, 6.0])",
-              "result.speeds                                  # {'weave': sigma, 'capsize': sigma} [m/s]",
-              "result.benchmark['IBxx']                       # sigma of a benchmark parameter",
-              "result.contributions('v_capsize')[0]           # the measurement to redo first",
-              "result.eigenvalues.as_list()                   # eigenvalue sigmas at 4 and 6 m/s",
-              "```", "",
-              "`propagate` also takes `bikerider.estimate.EstimateResult.chain_inputs` (reduced inertias; their "
-              "correlations are then unknown and taken as zero), `benchmark_inputs(result.parameters)` (the 25 "
-              "benchmark parameters with their sigmas, e.g. from a BicycleParameters `Benchmark.txt`), or "
-              "`raw_inputs_from_toml(bicycle, rider)`, which keeps every pendulum period and angle as an input.  "
-              "`result.as_dict()` is JSON-ready.  On the command line, `bikerider estimate --json` carries the "
-              "eigenvalue sigmas at its `--speeds` in `uncertainty.eigenvalues`, each with its condition number "
-              "(large near the speed where the weave pair is born, where first order fails).  "
-              "`bench/bench_uncertainty.py` measures the Monte Carlo "
-              "throughput (about 0.7 s for 100 000 raw measurement sets on one core)."]
+    lines += [
+        "## Using it",
+        "",
+        "```python",
+        "from bikerider import monte_carlo, paper_inputs, propagate",
+        "from bikerider.uncertainty import compare",
+        "inputs = paper_inputs()    # or bikerider.io.chain_inputs.raw_inputs_from_toml(bicycle, rider)",
+        "result = propagate(inputs.quantities, speeds=[4.0, 6.0])",
+        "result.speeds                                  # {'weave': sigma, 'capsize': sigma} [m/s]",
+        "result.benchmark['IBxx']                       # sigma of a benchmark parameter",
+        "result.contributions('v_capsize')[0]           # the measurement to redo first",
+        "result.eigenvalues.as_list()                   # eigenvalue sigmas at 4 and 6 m/s",
+        "```",
+        "",
+        "`propagate` also takes `bikerider.estimate.EstimateResult.chain_inputs` (reduced inertias; their "
+        "correlations are then unknown and taken as zero), `benchmark_inputs(result.parameters)` (the 25 "
+        "benchmark parameters with their sigmas, e.g. from a BicycleParameters `Benchmark.txt`), or "
+        "`raw_inputs_from_toml(bicycle, rider)`, which keeps every pendulum period and angle as an input.  "
+        "`result.as_dict()` is JSON-ready.  On the command line, `bikerider estimate --json` carries the "
+        "eigenvalue sigmas at its `--speeds` in `uncertainty.eigenvalues`, each with its condition number "
+        "(large near the speed where the weave pair is born, where first order fails).  "
+        "`bench/bench_uncertainty.py` measures the Monte Carlo "
+        "throughput (about 0.7 s for 100 000 raw measurement sets on one core).",
+    ]
     return "\n".join(lines) + "\n"
 
 

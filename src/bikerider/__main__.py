@@ -1,4 +1,5 @@
 """``python -m bikerider`` runs the command line."""
+
 import sys
 
 from bikerider.cli import main

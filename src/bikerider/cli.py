@@ -4,6 +4,7 @@ Each subcommand lives in ``bikerider/commands/<name>.py`` with ``add_parser(subp
 ``run(args) -> int``.  Command modules import nothing heavy at module level, so ``--help`` and
 start-up stay fast; they import NumPy, SciPy or matplotlib inside ``run``.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -54,7 +55,10 @@ def main(argv: list[str] | None = None) -> int:
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
     except OSError as exc:
-        print(f"bikerider {args.command}: error: {exc.strerror or exc}: {exc.filename or ''}".rstrip(": "), file=sys.stderr)
+        print(
+            f"bikerider {args.command}: error: {exc.strerror or exc}: {exc.filename or ''}".rstrip(": "),
+            file=sys.stderr,
+        )
         return 2
     except KeyboardInterrupt:
         return 130

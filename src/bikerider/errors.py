@@ -3,8 +3,8 @@
 The command line prints ``BikeriderError`` messages without a traceback and exits with status 2.
 ``docs/errors.md`` lists them all.
 """
-from __future__ import annotations
 
+from __future__ import annotations
 
 MISSING = "missing"
 """The value shown for a required measurement that was not given."""

@@ -5,6 +5,7 @@ rear frame into the rear body (Eqs. 15-16) and runs the estimate chain's stages
 (``bikerider.uncertainty.stages``, the same stages the sensitivities and Monte Carlo use) to the
 benchmark parameters, then builds the Whipple model.
 """
+
 from __future__ import annotations
 
 import logging
@@ -144,8 +145,9 @@ def estimate_default() -> EstimateResult:
     return estimate_from_files()
 
 
-def estimate_from_files(bicycle_path: str | Path | None = None, rider_path: str | Path | None = None,
-                        with_rider: bool = True) -> EstimateResult:
+def estimate_from_files(
+    bicycle_path: str | Path | None = None, rider_path: str | Path | None = None, with_rider: bool = True
+) -> EstimateResult:
     """Run the method on files of any supported kind (defaults: the paper's bicycle and rider).
 
     Parameters
@@ -187,7 +189,8 @@ def estimate_from_files(bicycle_path: str | Path | None = None, rider_path: str 
     rider_measurements = load_rider_toml(rider_file)
     if bodies is None:
         raise InputError(
-            "--rider", str(rider_file),
+            "--rider",
+            str(rider_file),
             "a lumped rider file (mB, xB, zB, IBxx, ...) or --no-rider: the bicycle was given as benchmark "
             "parameters, which have no geometry to seat the rider model on",
             str(bicycle_path),

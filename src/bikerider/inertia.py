@@ -12,6 +12,7 @@ Every body of the benchmark is symmetric about its XZ plane: its tensor is
 ``yy`` and those of the xz block in closed form (:func:`plane_symmetric_principal_moments`), so
 the check runs on plain floats.
 """
+
 from __future__ import annotations
 
 import math
@@ -83,7 +84,9 @@ def broken_rules(xx, yy, zz, xz) -> np.ndarray:
     out = np.zeros(np.broadcast_shapes(xx.shape, yy.shape, zz.shape, xz.shape), dtype=np.int8)
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
         has_yy = np.isfinite(yy)
-        scale = np.maximum(np.maximum(np.abs(xx), np.abs(zz)), np.maximum(np.abs(xz), np.where(has_yy, np.abs(yy), 0.0)))
+        scale = np.maximum(
+            np.maximum(np.abs(xx), np.abs(zz)), np.maximum(np.abs(xz), np.where(has_yy, np.abs(yy), 0.0))
+        )
         scale = np.where(scale > 0, scale, 1.0)
         b_xx, b_xz, b_zz, b_yy = xx / scale, xz / scale, zz / scale, yy / scale
         mean, radius = (b_xx + b_zz) / 2, np.hypot((b_xx - b_zz) / 2, b_xz)
@@ -102,8 +105,9 @@ def broken_rules(xx, yy, zz, xz) -> np.ndarray:
     return out
 
 
-def check_plane_symmetric_inertia(name: str, xx: float, yy: float | None, zz: float, xz: float,
-                                  source: str | None = None) -> None:
+def check_plane_symmetric_inertia(
+    name: str, xx: float, yy: float | None, zz: float, xz: float, source: str | None = None
+) -> None:
     """Raise :class:`InputError` naming ``name`` unless :func:`inertia_problem` finds nothing."""
     problem = inertia_problem(xx, yy, zz, xz)
     if problem is not None:

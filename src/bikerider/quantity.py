@@ -1,4 +1,5 @@
 """Measured values with a standard uncertainty: ``value +/- sigma``."""
+
 from __future__ import annotations
 
 import math
@@ -34,7 +35,7 @@ class Quantity:
     def __str__(self) -> str:
         return f"{self.value:.6g} +/- {self.sigma:.2g}" if self.sigma else f"{self.value:.6g}"
 
-    def scaled(self, factor: float) -> "Quantity":
+    def scaled(self, factor: float) -> Quantity:
         """The same quantity in other units (e.g. degrees to radians)."""
         return Quantity(self.value * factor, self.sigma * abs(factor))
 
@@ -79,7 +80,6 @@ def parse_quantity(raw: object, name: str, source: str | None = None) -> Quantit
     return Quantity(value, sigma)
 
 
-
 #: Unit slips worth suggesting when a value is too large for its SI unit: (factor to SI, unit).
 UNIT_SLIPS: dict[str, tuple[tuple[float, str], ...]] = {
     "m": ((1e-3, "mm"), (1e-2, "cm")),
@@ -112,5 +112,9 @@ def check_degrees(name: str, degrees: float, source: str | None = None) -> None:
     pi degrees on any bicycle or rider; a value in (0, pi] was almost surely given in radians.
     """
     if 0 < degrees <= math.pi:
-        raise InputError(name, degrees, f"an angle in degrees ({degrees:g} looks like radians: "
-                         f"{degrees:g} rad = {math.degrees(degrees):.4g} deg)", source)
+        raise InputError(
+            name,
+            degrees,
+            f"an angle in degrees ({degrees:g} looks like radians: {degrees:g} rad = {math.degrees(degrees):.4g} deg)",
+            source,
+        )

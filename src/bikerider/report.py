@@ -1,4 +1,5 @@
 """Text and JSON renderings of model results, shared by the ``estimate`` and ``benchmark`` commands."""
+
 from __future__ import annotations
 
 import math
@@ -32,8 +33,11 @@ def model_json(parameters: BenchmarkParameters, model: WhippleModel, eig: ModalE
     return {
         "benchmark": parameters.as_dict(),
         "matrices": {name: getattr(model, name).tolist() for name in MATRIX_NAMES},
-        "speeds": {"weave": speeds.weave, "capsize": speeds.capsize,
-                   "stable_intervals": [[lo, hi if math.isfinite(hi) else None] for lo, hi in speeds.stable_intervals]},
+        "speeds": {
+            "weave": speeds.weave,
+            "capsize": speeds.capsize,
+            "stable_intervals": [[lo, hi if math.isfinite(hi) else None] for lo, hi in speeds.stable_intervals],
+        },
         "eigenvalues": {
             "speeds": eig.speeds.tolist(),
             "modes": list(MODES),
@@ -47,8 +51,12 @@ def _matrix_text(name: str, m: np.ndarray) -> list[str]:
     return [f"  {name:3s} = [[{m[0, 0]:12.6f} {m[0, 1]:12.6f}]", f"         [{m[1, 0]:12.6f} {m[1, 1]:12.6f}]]"]
 
 
-def model_text(parameters: BenchmarkParameters, model: WhippleModel, eig: ModalEigenvalues,
-               speed_sigmas: dict[str, float | None] | None = None) -> str:
+def model_text(
+    parameters: BenchmarkParameters,
+    model: WhippleModel,
+    eig: ModalEigenvalues,
+    speed_sigmas: dict[str, float | None] | None = None,
+) -> str:
     """Readable text: parameters (with sigmas), matrices, critical speeds, eigenvalue table."""
     lines = ["Benchmark parameters (Meijaard et al. 2007, Table 1 names; SI units)"]
     for name in BENCHMARK_NAMES:
@@ -65,8 +73,10 @@ def model_text(parameters: BenchmarkParameters, model: WhippleModel, eig: ModalE
     lines.append(f"Weave speed   {_speed(speeds.weave, sig.get('weave'))}")
     lines.append(f"Capsize speed {_speed(speeds.capsize, sig.get('capsize'))}")
     if speeds.stable_intervals:
-        shown = [f"from {lo:.4f} to {hi:.4f} m/s" if math.isfinite(hi) else f"above {lo:.4f} m/s"
-                 for lo, hi in speeds.stable_intervals]
+        shown = [
+            f"from {lo:.4f} to {hi:.4f} m/s" if math.isfinite(hi) else f"above {lo:.4f} m/s"
+            for lo, hi in speeds.stable_intervals
+        ]
         lines.append("Self-stable " + ", and ".join(shown))
     else:
         lines.append("No self-stable speed range")
@@ -74,7 +84,9 @@ def model_text(parameters: BenchmarkParameters, model: WhippleModel, eig: ModalE
     lines.append("Eigenvalues [1/s] against speed")
     lines.append(f"  {'v [m/s]':>8s} {'weave':>26s} {'capsize':>12s} {'castor':>12s}")
     for v, row, labels in zip(eig.speeds, eig.values, eig.labels):
-        weave = f"{row[0].real:.4f} +/- {abs(row[0].imag):.4f}i" if row[0].imag else f"{row[0].real:.4f}, {row[1].real:.4f}"
+        weave = (
+            f"{row[0].real:.4f} +/- {abs(row[0].imag):.4f}i" if row[0].imag else f"{row[0].real:.4f}, {row[1].real:.4f}"
+        )
         if labels[2] == "other":  # capsize and castor have met, or a second complex pair
             lines.append(f"  {v:8.3f} {weave:>26s}   other pair {row[2].real:.4f} +/- {abs(row[2].imag):.4f}i")
             continue

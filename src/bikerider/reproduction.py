@@ -6,6 +6,7 @@ precision - the cause found.  ``docs/scripts/reproduction.py`` writes ``docs/rep
 these rows; ``tests/test_paper_reproduction.py`` pins the computed values and checks every stated
 cause.  The method is never adjusted to hit a printed number.
 """
+
 from __future__ import annotations
 
 import math
@@ -19,22 +20,92 @@ from bikerider.quantity import DEG
 
 #: Table 10 as printed (value column), grid points 1..31 [m].
 TABLE_10 = [
-    (0, 0, 0), (0, 0, -0.342), (0, 0.065, -0.342), (0, -0.065, -0.342), (0.458, 0, -0.295),
-    (1.120, 0, 0), (1.120, 0, -0.342), (1.120, 0.050, -0.342), (1.120, -0.050, -0.342),
-    (0.263, 0, -0.788), (0.887, 0, -0.733), (0.865, 0, -0.788), (0.175, 0, -1.011),
-    (0.551, 0, -0.746), (0.235, 0, -1.488), (0.773, 0, -1.021), (0.773, 0.220, -1.021),
-    (0.773, -0.220, -1.021), (0.583, 0.220, -1.021), (0.583, -0.220, -1.021), (0.235, 0.220, -1.488),
-    (0.235, -0.220, -1.488), (0.321, 0.220, -1.222), (0.321, -0.220, -1.222), (0.246, 0, -1.579),
-    (0.458, 0.130, -0.295), (0.458, -0.130, -0.295), (0.551, 0.130, -0.746), (0.551, -0.130, -0.746),
-    (0.175, 0.130, -1.011), (0.175, -0.130, -1.011),
+    (0, 0, 0),
+    (0, 0, -0.342),
+    (0, 0.065, -0.342),
+    (0, -0.065, -0.342),
+    (0.458, 0, -0.295),
+    (1.120, 0, 0),
+    (1.120, 0, -0.342),
+    (1.120, 0.050, -0.342),
+    (1.120, -0.050, -0.342),
+    (0.263, 0, -0.788),
+    (0.887, 0, -0.733),
+    (0.865, 0, -0.788),
+    (0.175, 0, -1.011),
+    (0.551, 0, -0.746),
+    (0.235, 0, -1.488),
+    (0.773, 0, -1.021),
+    (0.773, 0.220, -1.021),
+    (0.773, -0.220, -1.021),
+    (0.583, 0.220, -1.021),
+    (0.583, -0.220, -1.021),
+    (0.235, 0.220, -1.488),
+    (0.235, -0.220, -1.488),
+    (0.321, 0.220, -1.222),
+    (0.321, -0.220, -1.222),
+    (0.246, 0, -1.579),
+    (0.458, 0.130, -0.295),
+    (0.458, -0.130, -0.295),
+    (0.551, 0.130, -0.746),
+    (0.551, -0.130, -0.746),
+    (0.175, 0.130, -1.011),
+    (0.175, -0.130, -1.011),
 ]
 
 #: Table 12 as printed (benchmark names; I_Byy and I_Hyy are left symbolic there).
-TABLE_12 = dict(w=1.120, c=0.055, lam=0.38, g=9.81, rR=0.342, mR=3.12, IRxx=0.08, IRyy=0.16, xB=0.28, zB=-1.03,
-                mB=86.0, IBxx=11.89, IBzz=3.73, IBxz=-2.13, xH=0.88, zH=-0.78, mH=4.35, IHxx=0.35, IHzz=0.07,
-                IHxz=-0.04, rF=0.342, mF=2.02, IFxx=0.08, IFyy=0.16)
-TABLE_12_DECIMALS = dict(w=3, c=3, lam=2, g=2, rR=3, mR=2, IRxx=2, IRyy=2, xB=2, zB=2, mB=0, IBxx=2, IBzz=2,
-                         IBxz=2, xH=2, zH=2, mH=2, IHxx=2, IHzz=2, IHxz=2, rF=3, mF=2, IFxx=2, IFyy=2)
+TABLE_12 = dict(
+    w=1.120,
+    c=0.055,
+    lam=0.38,
+    g=9.81,
+    rR=0.342,
+    mR=3.12,
+    IRxx=0.08,
+    IRyy=0.16,
+    xB=0.28,
+    zB=-1.03,
+    mB=86.0,
+    IBxx=11.89,
+    IBzz=3.73,
+    IBxz=-2.13,
+    xH=0.88,
+    zH=-0.78,
+    mH=4.35,
+    IHxx=0.35,
+    IHzz=0.07,
+    IHxz=-0.04,
+    rF=0.342,
+    mF=2.02,
+    IFxx=0.08,
+    IFyy=0.16,
+)
+TABLE_12_DECIMALS = dict(
+    w=3,
+    c=3,
+    lam=2,
+    g=2,
+    rR=3,
+    mR=2,
+    IRxx=2,
+    IRyy=2,
+    xB=2,
+    zB=2,
+    mB=0,
+    IBxx=2,
+    IBzz=2,
+    IBxz=2,
+    xH=2,
+    zH=2,
+    mH=2,
+    IHxx=2,
+    IHzz=2,
+    IHxz=2,
+    rF=3,
+    mF=2,
+    IFxx=2,
+    IFyy=2,
+)
 
 #: Eqs. 18-21 as printed.
 EQS_18_21 = {
@@ -130,8 +201,12 @@ def rows(result: EstimateResult | None = None) -> list[Row]:
     # Eq. 8 and Eq. 14.
     for axis, printed in zip("xyz", (0.291, 0.0, -1.109)):
         out.append(Row(f"Eq. 8: r_Br{axis}", printed, float(rm.com["xyz".index(axis)]), 3))
-    for label, (i, j), printed in (("I_Brxx", (0, 0), 8.00), ("I_Bryy", (1, 1), 8.07), ("I_Brzz", (2, 2), 2.36),
-                                   ("I_Brxz", (0, 2), -1.93)):
+    for label, (i, j), printed in (
+        ("I_Brxx", (0, 0), 8.00),
+        ("I_Bryy", (1, 1), 8.07),
+        ("I_Brzz", (2, 2), 2.36),
+        ("I_Brxz", (0, 2), -1.93),
+    ):
         out.append(Row(f"Eq. 14: {label}", printed, float(rm.inertia[i, j]), 2))
     # Table 12.
     for name, printed in TABLE_12.items():
@@ -148,7 +223,8 @@ def rows(result: EstimateResult | None = None) -> list[Row]:
                 row = out[-1]
                 if not row.reproduced and label not in CAUSES:
                     CAUSES[label] = (K0_CAUSE if mat == "K0" else INERTIA_CAUSE).format(
-                        table12=f"{getattr(t12, mat)[i, j]:.2f}")
+                        table12=f"{getattr(t12, mat)[i, j]:.2f}"
+                    )
     for row in out:
         if row.label.startswith("Table 10") and not row.reproduced and row.label not in CAUSES:
             CAUSES[row.label] = GRID_CAUSE.format(diff=1000 * abs(row.computed - row.printed))

@@ -10,6 +10,7 @@ the ``Browser`` and the ``Rigid``.  ::
     browser = named("Browser")                  # the bicycle alone
     browser_jason = named("Browser", rider="Jason")
 """
+
 from __future__ import annotations
 
 from importlib import resources
@@ -55,8 +56,11 @@ def named(bicycle: str, rider: str | None = None) -> BenchmarkParameters:
         return BenchmarkParameters(parameters.values, parameters.sigmas, f"{bicycle} (shipped BicycleParameters data)")
     rider = _match(rider, tuple(RIDERS), "rider")
     if bicycle not in RIDERS[rider]:
-        raise InputError("rider", rider, f"a rider seated on the {bicycle} (the shipped {rider} sits on "
-                         f"{' and '.join(RIDERS[rider])})")
+        raise InputError(
+            "rider",
+            rider,
+            f"a rider seated on the {bicycle} (the shipped {rider} sits on {' and '.join(RIDERS[rider])})",
+        )
     with resources.as_file(rider_file(rider, bicycle)) as path:
         lumped = read_lumped_rider(path)
     merged = merge_rider(parameters, lumped)

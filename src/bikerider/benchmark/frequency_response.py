@@ -4,6 +4,7 @@ For every speed (and bicycle of a batch) and frequency the complex response is f
 ``(i w I - A) X = B`` (no explicit inverse).  The default inputs and outputs are those of lateral
 perturbation experiments (Moore 2012): steer torque and a lateral force to roll and steer angle.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -51,8 +52,14 @@ class FrequencyResponse:
         return phase - 360.0 * np.round((phase[..., :1] - 1e-9) / 360.0)
 
 
-def frequency_response(model: WhippleModel, speeds, frequencies, inputs=("T_delta", "F"),
-                       outputs=("phi", "delta"), lateral_force: LateralForce | None = None) -> FrequencyResponse:
+def frequency_response(
+    model: WhippleModel,
+    speeds,
+    frequencies,
+    inputs=("T_delta", "F"),
+    outputs=("phi", "delta"),
+    lateral_force: LateralForce | None = None,
+) -> FrequencyResponse:
     """``C (i w I - A)^-1 B + D`` of ``model`` at every speed and angular frequency.
 
     Parameters
@@ -75,8 +82,11 @@ def frequency_response(model: WhippleModel, speeds, frequencies, inputs=("T_delt
     v = check_speeds(speeds)
     w = np.atleast_1d(np.asarray(frequencies, dtype=float))
     if w.ndim != 1 or not np.all(np.isfinite(w)) or np.any(w < 0):
-        raise InputError("frequencies", w.tolist() if w.size < 10 else f"array of shape {w.shape}",
-                         "a one-dimensional array of finite, non-negative angular frequencies [rad/s]")
+        raise InputError(
+            "frequencies",
+            w.tolist() if w.size < 10 else f"array of shape {w.shape}",
+            "a one-dimensional array of finite, non-negative angular frequencies [rad/s]",
+        )
     system = state_space(model, v, inputs, outputs, lateral_force)
     A = system.A[..., None, :, :]  # S + (n, 1, 4, 4)
     resolvent = 1j * w[:, None, None] * np.eye(4) - A  # S + (n, nf, 4, 4)

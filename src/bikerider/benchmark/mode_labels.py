@@ -19,6 +19,7 @@ An eigenvalue is complex when its imaginary part exceeds :data:`IMAGINARY_TOLERA
 ``max(1, max |eigenvalue|)`` of its speed.  :func:`label_modes` is the one implementation of these
 rules, for eigenvalues from ``eigvals`` and from the characteristic polynomial alike.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass

@@ -21,6 +21,7 @@ cross keep their identity).  A tracked column is named by the label most of its 
 Track on a speed grid fine enough to follow the eigenvalues (steps of 0.1 m/s or less for a
 bicycle).
 """
+
 from __future__ import annotations
 
 import itertools
@@ -97,6 +98,7 @@ def null_vectors(model: WhippleModel, speeds: np.ndarray, eigenvalues: np.ndarra
     the result is ``S + (n, k, 2)``.  Of the two rows of the singular 2x2 matrix the larger gives
     the null vector.
     """
+
     def at(matrix):  # S + (2, 2) -> S + (1, 1, 2, 2)
         return matrix[..., None, None, :, :]
 
@@ -105,8 +107,11 @@ def null_vectors(model: WhippleModel, speeds: np.ndarray, eigenvalues: np.ndarra
     gK0 = np.asarray(model.g)[..., None, None] * model.K0
     Q = at(model.M) * s * s + v * at(model.C1) * s + at(gK0) + v * v * at(model.K2)
     first = np.abs(Q[..., 0, 0]) + np.abs(Q[..., 0, 1]) >= np.abs(Q[..., 1, 0]) + np.abs(Q[..., 1, 1])
-    q = np.where(first[..., None], np.stack([-Q[..., 0, 1], Q[..., 0, 0]], axis=-1),
-                 np.stack([Q[..., 1, 1], -Q[..., 1, 0]], axis=-1))
+    q = np.where(
+        first[..., None],
+        np.stack([-Q[..., 0, 1], Q[..., 0, 0]], axis=-1),
+        np.stack([Q[..., 1, 1], -Q[..., 1, 0]], axis=-1),
+    )
     return normalise(q)
 
 
@@ -165,8 +170,9 @@ def mode_shapes(model: WhippleModel, speeds) -> ModeShapes:
         flat[k] = one[:, rank]
         all_names.append(tuple(names[j] for j in rank))
     values = flat.reshape(values.shape)
-    names_out = all_names[0] if not model.batch_shape else np.array(all_names, dtype=object).reshape(
-        model.batch_shape + (4,))
+    names_out = (
+        all_names[0] if not model.batch_shape else np.array(all_names, dtype=object).reshape(model.batch_shape + (4,))
+    )
     return ModeShapes(speeds, values, null_vectors(model, speeds, values), names_out)
 
 

@@ -7,6 +7,7 @@ and the weave and capsize speeds come from the characteristic polynomial
 found without a scan over speed.  One bicycle or a batch of them: the matrices may carry leading
 batch dimensions.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -91,16 +92,20 @@ class WhippleModel:
         try:
             shape = np.broadcast_shapes(*(m.shape[:-2] for m in mats), g_array.shape)
         except ValueError:
-            raise InputError("M, C1, K0, K2, g", [m.shape for m in mats] + [g_array.shape],
-                             "batch shapes that broadcast against each other") from None
+            raise InputError(
+                "M, C1, K0, K2, g",
+                [m.shape for m in mats] + [g_array.shape],
+                "batch shapes that broadcast against each other",
+            ) from None
         mats = [np.broadcast_to(m, shape + (2, 2)) for m in mats]
         M0 = mats[0]
         det_m = M0[..., 0, 0] * M0[..., 1, 1] - M0[..., 0, 1] * M0[..., 1, 0]
         singular = ~((M0[..., 0, 0] > 0) & (det_m > 1e-12 * np.abs(M0).max(axis=(-2, -1)) ** 2))
         if np.any(singular):
             bad = tuple(int(i) for i in np.argwhere(singular)[0]) if shape else ()
-            raise InputError(_at("M", bad), M0[bad].tolist(),
-                             "a positive definite mass matrix (the model is singular otherwise)")
+            raise InputError(
+                _at("M", bad), M0[bad].tolist(), "a positive definite mass matrix (the model is singular otherwise)"
+            )
         self.M, self.C1, self.K0, self.K2 = mats
         self.batch_shape: tuple[int, ...] = tuple(shape)
         """Shape of the batch of bicycles; ``()`` for one."""
@@ -112,7 +117,7 @@ class WhippleModel:
         which a lateral-force input needs (:mod:`bikerider.benchmark.state_space`)."""
 
     @classmethod
-    def from_parameters(cls, parameters: BenchmarkParameters) -> "WhippleModel":
+    def from_parameters(cls, parameters: BenchmarkParameters) -> WhippleModel:
         """Build from benchmark parameters (Meijaard et al. 2007, Appendix A)."""
         v = parameters.values
         M, C1, K0, K2 = gen.canonical_matrices(**{k: v[k] for k in _CANONICAL_ARGS})
@@ -176,9 +181,13 @@ class WhippleModel:
             state = self.state_matrix(speeds)
         finite = np.all(np.isfinite(state), axis=(-2, -1))
         if not np.all(finite):
-            raise InputError("speeds", float(speeds[np.nonzero(~finite)[-1][0]]),
-                             "a speed at which the state matrix is finite (the model's matrices, or the speed, "
-                             "are too large for floating point there)", self.source)
+            raise InputError(
+                "speeds",
+                float(speeds[np.nonzero(~finite)[-1][0]]),
+                "a speed at which the state matrix is finite (the model's matrices, or the speed, "
+                "are too large for floating point there)",
+                self.source,
+            )
         values, labels = label_modes(np.linalg.eigvals(state).reshape(-1, 4))
         shape = self.batch_shape + speeds.shape + (4,)
         return ModalEigenvalues(speeds, values.reshape(shape), labels.reshape(shape))
@@ -193,8 +202,9 @@ class WhippleModel:
         (:mod:`bikerider.benchmark.stability` gives the rules, also for several intervals or none).
         """
         result = self.stability()
-        return CriticalSpeeds(result.weave, result.capsize, result.weave_frequency,
-                              tuple((i.lower, i.upper) for i in result.intervals))
+        return CriticalSpeeds(
+            result.weave, result.capsize, result.weave_frequency, tuple((i.lower, i.upper) for i in result.intervals)
+        )
 
     def stability(self) -> Stability:
         """Stable intervals, every crossing of the imaginary axis (speed, kind, direction) and the
@@ -205,8 +215,12 @@ class WhippleModel:
         try:
             return stability(entries, self.g)
         except (OverflowError, ValueError):
-            raise InputError("M, C1, K0, K2", "entries too large for floating point",
-                             "matrices whose critical-speed polynomials are finite", self.source) from None
+            raise InputError(
+                "M, C1, K0, K2",
+                "entries too large for floating point",
+                "matrices whose critical-speed polynomials are finite",
+                self.source,
+            ) from None
 
     def weave_birth_speed(self) -> float | None:
         """The speed ``v_d`` at which the weave pair is born from two real eigenvalues [m/s].
@@ -222,8 +236,12 @@ class WhippleModel:
         with np.errstate(over="ignore", invalid="ignore"):
             coefficients = np.asarray(gen.discriminant_polynomial(**self._entries(), g=self.g), dtype=float)
         if not np.all(np.isfinite(coefficients)):
-            raise InputError("M, C1, K0, K2", "entries too large for floating point",
-                             "matrices whose characteristic discriminant is finite", self.source)
+            raise InputError(
+                "M, C1, K0, K2",
+                "entries too large for floating point",
+                "matrices whose characteristic discriminant is finite",
+                self.source,
+            )
         slope = np.polyder(coefficients)
         for u in polynomial_positive_real_roots(coefficients):
             for _ in range(3):  # Newton steps: the root of a simple zero to full precision
@@ -237,9 +255,13 @@ class WhippleModel:
 
     def _one_bicycle(self, method: str) -> None:
         if self.batch_shape:
-            raise InputError("model", f"a batch of shape {self.batch_shape}",
-                             f"one bicycle for {method}() (for a batch: bikerider.benchmark.stability."
-                             "stability_batch(model.entries(), model.g))", self.source)
+            raise InputError(
+                "model",
+                f"a batch of shape {self.batch_shape}",
+                f"one bicycle for {method}() (for a batch: bikerider.benchmark.stability."
+                "stability_batch(model.entries(), model.g))",
+                self.source,
+            )
 
     def _pair_born_at(self, speed: float, relative: float = 1e-6) -> bool:
         """Whether the two eigenvalues with the largest real parts are real just below ``speed`` and
@@ -256,5 +278,13 @@ def _at(name: str, index: tuple[int, ...]) -> str:
     return f"{name}[{', '.join(map(str, index))}]" if index else name
 
 
-__all__ = ["MODES", "CriticalSpeeds", "ModalEigenvalues", "WhippleModel", "check_speeds", "label_modes",
-           "matrix_entries", "positive_real_roots"]
+__all__ = [
+    "MODES",
+    "CriticalSpeeds",
+    "ModalEigenvalues",
+    "WhippleModel",
+    "check_speeds",
+    "label_modes",
+    "matrix_entries",
+    "positive_real_roots",
+]

@@ -1,4 +1,5 @@
 """The 26 benchmark values (Meijaard et al. 2007, Table 1; 25 parameters plus gravity)."""
+
 from __future__ import annotations
 
 import logging
@@ -42,7 +43,7 @@ class BenchmarkParameters:
     source: str | None = None
 
     @classmethod
-    def from_mapping(cls, mapping: Mapping[str, object], source: str | None = None) -> "BenchmarkParameters":
+    def from_mapping(cls, mapping: Mapping[str, object], source: str | None = None) -> BenchmarkParameters:
         """Build from a mapping of names to numbers or :class:`Quantity`; validate.
 
         Raises
@@ -53,7 +54,9 @@ class BenchmarkParameters:
         """
         if not _NAME_SET.issuperset(mapping):
             unknown = sorted(set(mapping) - _NAME_SET)
-            raise InputError(unknown[0], mapping[unknown[0]], f"one of the benchmark names {', '.join(BENCHMARK_NAMES)}", source)
+            raise InputError(
+                unknown[0], mapping[unknown[0]], f"one of the benchmark names {', '.join(BENCHMARK_NAMES)}", source
+            )
         values: dict[str, float | None] = {}
         sigmas: dict[str, float] = {}
         get, isfinite = mapping.get, math.isfinite
@@ -89,20 +92,33 @@ class BenchmarkParameters:
             if v[name] < rules.MIN_DIVISOR:  # type: ignore[operator]
                 raise InputError(name, v[name], rules.DIVISOR_EXPECTED, src)
         if not -math.pi / 2 < v["lam"] < math.pi / 2:  # type: ignore[operator]
-            hint = (f" ({v['lam']:g} looks like degrees: give lam_deg = {v['lam']:g} in a TOML file, "
-                    f"or {v['lam'] * DEG:.6g} rad)" if abs(v["lam"]) <= 90 else "")  # type: ignore[arg-type]
+            hint = (
+                f" ({v['lam']:g} looks like degrees: give lam_deg = {v['lam']:g} in a TOML file, "
+                f"or {v['lam'] * DEG:.6g} rad)"
+                if abs(v["lam"]) <= 90
+                else ""
+            )  # type: ignore[arg-type]
             raise InputError("lam", v["lam"], f"{rules.TILT_EXPECTED}{hint}", src)
         for name in rules.BELOW_GROUND:
             if not v[name] < 0:  # type: ignore[operator]
                 raise InputError(name, v[name], rules.BELOW_GROUND_EXPECTED, src)
         for body in rules.BODIES:
-            check_plane_symmetric_inertia(rules.tensor_name(body), *(v[k] for k in rules.tensor_entries(body)),  # type: ignore[arg-type]
-                                          src)
+            check_plane_symmetric_inertia(
+                rules.tensor_name(body),
+                *(v[k] for k in rules.tensor_entries(body)),  # type: ignore[arg-type]
+                src,
+            )
         for wheel in rules.WHEELS:
-            check_wheel_inertia(wheel, v[f"I{wheel}xx"], v[f"I{wheel}yy"],  # type: ignore[arg-type]
-                                self.sigmas.get(f"I{wheel}xx", 0.0), self.sigmas.get(f"I{wheel}yy", 0.0), src)
+            check_wheel_inertia(
+                wheel,
+                v[f"I{wheel}xx"],
+                v[f"I{wheel}yy"],  # type: ignore[arg-type]
+                self.sigmas.get(f"I{wheel}xx", 0.0),
+                self.sigmas.get(f"I{wheel}yy", 0.0),
+                src,
+            )
 
-    def with_values(self, **changes: float | Quantity) -> "BenchmarkParameters":
+    def with_values(self, **changes: float | Quantity) -> BenchmarkParameters:
         """A copy with some values changed, validated; the others keep their values and uncertainties.
 
         Parameters
@@ -122,11 +138,13 @@ class BenchmarkParameters:
         """
         unknown = sorted(set(changes) - _NAME_SET)
         if unknown:
-            raise InputError(unknown[0], changes[unknown[0]], f"one of the benchmark names {', '.join(BENCHMARK_NAMES)}",
-                             self.source)
-        mapping: dict[str, object] = {name: (None if self.values[name] is None
-                                             else Quantity(self.values[name], self.sigmas.get(name, 0.0)))  # type: ignore[arg-type]
-                                      for name in BENCHMARK_NAMES}
+            raise InputError(
+                unknown[0], changes[unknown[0]], f"one of the benchmark names {', '.join(BENCHMARK_NAMES)}", self.source
+            )
+        mapping: dict[str, object] = {
+            name: (None if self.values[name] is None else Quantity(self.values[name], self.sigmas.get(name, 0.0)))  # type: ignore[arg-type]
+            for name in BENCHMARK_NAMES
+        }
         mapping.update(changes)
         changed = ", ".join(f"{k}={v.value if isinstance(v, Quantity) else v:g}" for k, v in changes.items())
         source = f"{self.source or 'parameters'} with {changed}" if changes else self.source
@@ -140,8 +158,9 @@ class BenchmarkParameters:
         return {name: self.values[name] for name in BENCHMARK_NAMES}
 
 
-def check_wheel_inertia(wheel: str, Ixx: float, Iyy: float, sigma_xx: float, sigma_yy: float,
-                        source: str | None = None) -> None:
+def check_wheel_inertia(
+    wheel: str, Ixx: float, Iyy: float, sigma_xx: float, sigma_yy: float, source: str | None = None
+) -> None:
     """Triangle inequality of an axisymmetric wheel: ``I_yy <= 2 I_xx`` (``2 I_xx - I_yy = 2 int y^2 dm``).
 
     A violation within the combined standard uncertainty of the two values is logged (printed
@@ -151,8 +170,10 @@ def check_wheel_inertia(wheel: str, Ixx: float, Iyy: float, sigma_xx: float, sig
     if excess <= TRIANGLE_TOLERANCE * Iyy:
         return
     allowed = math.hypot(sigma_yy, 2 * sigma_xx)
-    message = (f"at most 2*I{wheel}xx = {2 * Ixx:.6g} (triangle inequality of an axisymmetric wheel; "
-               f"exceeded by {excess:.3g} kg m^2, combined uncertainty {allowed:.3g})")
+    message = (
+        f"at most 2*I{wheel}xx = {2 * Ixx:.6g} (triangle inequality of an axisymmetric wheel; "
+        f"exceeded by {excess:.3g} kg m^2, combined uncertainty {allowed:.3g})"
+    )
     if excess > allowed:
         raise InputError(f"I{wheel}yy", Iyy, message, source)
     LOG.warning("I%syy = %.6g is not %s; accepted within its uncertainty", wheel, Iyy, message)

@@ -23,6 +23,7 @@ merge, this solver and ``eigvals`` therefore each place the two roots within abo
 true double root (and may disagree on whether the pair is real or complex by that much), while
 the pair's mean is accurate to ``1e-12``; the tests check exactly these bounds.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -53,8 +54,11 @@ def _check_coefficients(coefficients) -> np.ndarray:
     zero = c[..., 0] == 0
     if zero.any():
         index = tuple(int(i) for i in np.argwhere(zero)[0]) if zero.ndim else ()
-        raise InputError(f"coefficients[{', '.join(map(str, index + (0,)))}]", 0.0,
-                         "a nonzero leading coefficient a4 (a polynomial of degree four)")
+        raise InputError(
+            f"coefficients[{', '.join(map(str, index + (0,)))}]",
+            0.0,
+            "a nonzero leading coefficient a4 (a polynomial of degree four)",
+        )
     return c
 
 

@@ -12,6 +12,7 @@ namespace ``xp`` of the few functions it needs, NumPy for arrays and :class:`_Fl
 bicycle's plain floats (NumPy's per-call overhead on 0-d arrays would cost ten times the
 arithmetic; the results are the same bit for bit).
 """
+
 from __future__ import annotations
 
 import math
@@ -116,10 +117,16 @@ def polynomial_positive_real_roots(coefficients: np.ndarray) -> np.ndarray:
     nonzero = np.flatnonzero(np.abs(c) > ZERO)
     if nonzero.size == 0:
         return np.empty(0)
-    roots = np.roots(c[nonzero[0]:])
+    roots = np.roots(c[nonzero[0] :])
     real = roots[np.abs(roots.imag) <= IMAGINARY * np.maximum(1.0, np.abs(roots.real))].real
     return np.sort(real[real > 0])
 
 
-__all__ = ["IMAGINARY", "ZERO", "monic_quadratic_roots", "polynomial_positive_real_roots", "positive_real_roots",
-           "quadratic_roots"]
+__all__ = [
+    "IMAGINARY",
+    "ZERO",
+    "monic_quadratic_roots",
+    "polynomial_positive_real_roots",
+    "positive_real_roots",
+    "quadratic_roots",
+]

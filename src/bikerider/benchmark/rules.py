@@ -13,6 +13,7 @@ millions of designs, a reason code per design), in the same order:
 7. the inertia tensor of each of :data:`BODIES` (:mod:`bikerider.inertia`, the one tensor check);
 8. the triangle inequality of each of :data:`WHEELS`: ``I_yy <= 2 I_xx``.
 """
+
 from __future__ import annotations
 
 from bikerider.generated.manifest import BENCHMARK_NAMES
@@ -20,7 +21,11 @@ from bikerider.generated.manifest import BENCHMARK_NAMES
 POSITIVE = ("w", "g", "rR", "mR", "IRxx", "IRyy", "mB", "mH", "rF", "mF", "IFxx", "IFyy")
 """Values that must be positive."""
 LIMITS: dict[str, tuple[float, str]] = {
-    "w": (5.0, "m"), "c": (1.0, "m"), "rR": (3.0, "m"), "rF": (3.0, "m"), "g": (100.0, "m/s^2"),
+    "w": (5.0, "m"),
+    "c": (1.0, "m"),
+    "rR": (3.0, "m"),
+    "rF": (3.0, "m"),
+    "g": (100.0, "m/s^2"),
     **{k: (5.0, "m") for k in ("xB", "zB", "xH", "zH")},
     **{k: (1000.0, "kg") for k in ("mR", "mB", "mH", "mF")},
     **{k: (1e4, "kg m^2") for k in BENCHMARK_NAMES if k.startswith("I")},
@@ -34,8 +39,9 @@ DIVISOR_EXPECTED = "at least 0.001 m (SI units: a length in metres)"
 TILT_EXPECTED = "a steer axis tilt between -pi/2 and pi/2 rad"
 BELOW_GROUND = ("zB", "zH")
 """Centres of mass that must lie above the ground."""
-BELOW_GROUND_EXPECTED = ("a negative value: z points down in the benchmark frame, so a centre of mass above the "
-                         "ground has z < 0")
+BELOW_GROUND_EXPECTED = (
+    "a negative value: z points down in the benchmark frame, so a centre of mass above the ground has z < 0"
+)
 BODIES = ("B", "H")
 """The bodies whose plane-symmetric inertia tensors are checked: rear frame (with rider), front assembly."""
 WHEELS = ("R", "F")
@@ -63,9 +69,24 @@ def wheel_expected(wheel: str) -> str:
 
 
 TIED = tuple(frozenset(tensor_entries(body)) for body in BODIES) + tuple(
-    frozenset((f"I{wheel}xx", f"I{wheel}yy")) for wheel in WHEELS)
+    frozenset((f"I{wheel}xx", f"I{wheel}yy")) for wheel in WHEELS
+)
 """Values one rule checks together (each body's tensor, each wheel's two moments)."""
 
-__all__ = ["BELOW_GROUND", "BELOW_GROUND_EXPECTED", "BODIES", "DIVISORS", "DIVISOR_EXPECTED", "LIMITS", "MIN_DIVISOR",
-           "POSITIVE", "TIED", "TILT_EXPECTED", "WHEELS", "limit_expected", "tensor_entries", "tensor_name",
-           "wheel_expected"]
+__all__ = [
+    "BELOW_GROUND",
+    "BELOW_GROUND_EXPECTED",
+    "BODIES",
+    "DIVISORS",
+    "DIVISOR_EXPECTED",
+    "LIMITS",
+    "MIN_DIVISOR",
+    "POSITIVE",
+    "TIED",
+    "TILT_EXPECTED",
+    "WHEELS",
+    "limit_expected",
+    "tensor_entries",
+    "tensor_name",
+    "wheel_expected",
+]

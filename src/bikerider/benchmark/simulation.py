@@ -12,6 +12,7 @@ from a controller or a logger) or piecewise linear between the samples (``hold="
 input given as a function is sampled at the times and held linearly, with an error of order
 ``h^2`` times its curvature.  Several speeds (and a batch of bicycles) are simulated at once.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -59,8 +60,11 @@ class Simulation:
 def _times(times) -> np.ndarray:
     t = np.asarray(times, dtype=float)
     if t.ndim != 1 or t.size < 2 or not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
-        raise InputError("times", t.tolist() if t.size < 10 else f"array of shape {t.shape}",
-                         "at least two finite, strictly increasing times [s]")
+        raise InputError(
+            "times",
+            t.tolist() if t.size < 10 else f"array of shape {t.shape}",
+            "at least two finite, strictly increasing times [s]",
+        )
     return t
 
 
@@ -76,8 +80,11 @@ def _samples(inputs, times: np.ndarray, m: int) -> np.ndarray:
         if u.ndim == 1 and m == 1:
             u = u[:, None]
     if u.shape != (times.size, m):
-        raise InputError("inputs", f"shape {u.shape}",
-                         f"shape ({times.size}, {m}): one value per time and input (or a function of t returning {m})")
+        raise InputError(
+            "inputs",
+            f"shape {u.shape}",
+            f"shape ({times.size}, {m}): one value per time and input (or a function of t returning {m})",
+        )
     if not np.all(np.isfinite(u)):
         raise InputError("inputs", "non-finite samples", "finite input values")
     return u
@@ -89,15 +96,23 @@ def discretise(A: np.ndarray, B: np.ndarray, h: float | np.ndarray) -> tuple[np.
     shape = np.broadcast_shapes(A.shape[:-2], B.shape[:-2], np.shape(h))
     big = np.zeros(shape + (n + 2 * m, n + 2 * m))
     big[..., :n, :n] = A
-    big[..., :n, n:n + m] = B
-    big[..., n:n + m, n + m:] = np.eye(m)
+    big[..., :n, n : n + m] = B
+    big[..., n : n + m, n + m :] = np.eye(m)
     E = scipy.linalg.expm(big * np.asarray(h, dtype=float)[..., None, None])
-    return E[..., :n, :n], E[..., :n, n:n + m], E[..., :n, n + m:]
+    return E[..., :n, :n], E[..., :n, n : n + m], E[..., :n, n + m :]
 
 
-def simulate(model: WhippleModel, speeds, times, initial_state=None, inputs=None,
-             input_names=("T_phi", "T_delta"), outputs=("phi", "delta", "phi_dot", "delta_dot"),
-             lateral_force: LateralForce | None = None, hold: str | None = None) -> Simulation:
+def simulate(
+    model: WhippleModel,
+    speeds,
+    times,
+    initial_state=None,
+    inputs=None,
+    input_names=("T_phi", "T_delta"),
+    outputs=("phi", "delta", "phi_dot", "delta_dot"),
+    lateral_force: LateralForce | None = None,
+    hold: str | None = None,
+) -> Simulation:
     """Time response of ``model`` at each of ``speeds`` (held constant), exact at the sample times.
 
     Parameters
@@ -135,8 +150,9 @@ def simulate(model: WhippleModel, speeds, times, initial_state=None, inputs=None
         raise InputError("hold", hold, 'either "zoh" (piecewise constant input) or "foh" (piecewise linear)')
     u = _samples(inputs, t, len(system.inputs))
     lead = system.A.shape[:-2]
-    x = np.broadcast_to(np.zeros(4) if initial_state is None else np.asarray(initial_state, dtype=float),
-                        lead + (4,)).copy()
+    x = np.broadcast_to(
+        np.zeros(4) if initial_state is None else np.asarray(initial_state, dtype=float), lead + (4,)
+    ).copy()
     if not np.all(np.isfinite(x)):
         raise InputError("initial_state", np.asarray(initial_state).tolist(), "finite [phi, delta, phi_dot, delta_dot]")
     steps = np.diff(t)

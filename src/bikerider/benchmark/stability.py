@@ -40,6 +40,7 @@ The scalar path (:func:`stability`, plain floats, a few microseconds) and the ba
 (:func:`stability_batch`, NumPy over any batch shape) implement the same rules; the tests hold them
 equal on thousands of random bicycles and compare both with a dense eigenvalue scan.
 """
+
 from __future__ import annotations
 
 import math
@@ -185,8 +186,14 @@ def stability(entries: dict[str, float], g: float) -> Stability:
         while j + 1 < len(stable) and stable[j + 1]:
             j += 1
         upper = edges[j + 1]
-        intervals.append(StableInterval(math.sqrt(edges[k]), math.sqrt(upper) if upper != math.inf else math.inf,
-                                        crossings[k - 1] if k > 0 else None, crossings[j] if j < len(cuts) else None))
+        intervals.append(
+            StableInterval(
+                math.sqrt(edges[k]),
+                math.sqrt(upper) if upper != math.inf else math.inf,
+                crossings[k - 1] if k > 0 else None,
+                crossings[j] if j < len(cuts) else None,
+            )
+        )
         k = j + 1
     events = tuple(c for c in crossings if c is not None)
     weave, capsize, frequency = _critical(intervals, events)
@@ -281,10 +288,16 @@ def stability_batch(entries: dict[str, np.ndarray], g) -> StabilityBatch:
         return _stability_batch(arrays, g_array)
     flat = {k: np.broadcast_to(a, shape).reshape(size) for k, a in arrays.items()}
     g_flat = np.broadcast_to(g_array, shape).reshape(size)
-    parts = [_stability_batch({k: a[i:i + CHUNK] for k, a in flat.items()}, g_flat[i:i + CHUNK])
-             for i in range(0, size, CHUNK)]
-    return StabilityBatch(*(np.concatenate([getattr(p, f.name) for p in parts]).reshape(
-        shape + getattr(parts[0], f.name).shape[1:]) for f in fields(StabilityBatch)))
+    parts = [
+        _stability_batch({k: a[i : i + CHUNK] for k, a in flat.items()}, g_flat[i : i + CHUNK])
+        for i in range(0, size, CHUNK)
+    ]
+    return StabilityBatch(
+        *(
+            np.concatenate([getattr(p, f.name) for p in parts]).reshape(shape + getattr(parts[0], f.name).shape[1:])
+            for f in fields(StabilityBatch)
+        )
+    )
 
 
 CHUNK = 8192

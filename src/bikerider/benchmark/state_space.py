@@ -23,6 +23,7 @@ Shapes.  For speeds of shape ``V`` and a model of batch shape ``S`` (``()`` for 
 broadcast, read-only), ``C`` is ``(p, 4)`` (``S + V + (p, 4)`` when an acceleration is an output)
 and ``D`` is ``S + V + (p, m)``.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -41,11 +42,28 @@ INPUTS = STATE_SPACE_INPUTS
 """Input names (columns of the full input matrix), in order."""
 OUTPUTS = STATES + ("phi_ddot", "delta_ddot")
 """Output names that :func:`state_space` accepts."""
-UNITS = {"phi": "rad", "delta": "rad", "phi_dot": "rad/s", "delta_dot": "rad/s", "phi_ddot": "rad/s^2",
-         "delta_ddot": "rad/s^2", "T_phi": "N m", "T_delta": "N m", "F": "N"}
-LABELS = {"phi": "roll angle", "delta": "steer angle", "phi_dot": "roll rate", "delta_dot": "steer rate",
-          "phi_ddot": "roll acceleration", "delta_ddot": "steer acceleration", "T_phi": "roll torque",
-          "T_delta": "steer torque", "F": "lateral force"}
+UNITS = {
+    "phi": "rad",
+    "delta": "rad",
+    "phi_dot": "rad/s",
+    "delta_dot": "rad/s",
+    "phi_ddot": "rad/s^2",
+    "delta_ddot": "rad/s^2",
+    "T_phi": "N m",
+    "T_delta": "N m",
+    "F": "N",
+}
+LABELS = {
+    "phi": "roll angle",
+    "delta": "steer angle",
+    "phi_dot": "roll rate",
+    "delta_dot": "steer rate",
+    "phi_ddot": "roll acceleration",
+    "delta_ddot": "steer acceleration",
+    "T_phi": "roll torque",
+    "T_delta": "steer torque",
+    "F": "lateral force",
+}
 
 
 @dataclass(frozen=True)
@@ -82,10 +100,13 @@ class LateralForce:
 def lateral_force_vector(model: WhippleModel, force: LateralForce) -> np.ndarray:
     """``H`` of ``force`` on ``model`` (which needs its geometry, set by ``from_parameters``)."""
     if model.geometry is None:
-        raise InputError("lateral force", f"({force.x}, {force.z})",
-                         "a model built with WhippleModel.from_parameters (a lateral force needs the wheelbase, "
-                         "trail and steer axis tilt), or model.geometry = {'w': ..., 'c': ..., 'lam': ...}",
-                         model.source)
+        raise InputError(
+            "lateral force",
+            f"({force.x}, {force.z})",
+            "a model built with WhippleModel.from_parameters (a lateral force needs the wheelbase, "
+            "trail and steer axis tilt), or model.geometry = {'w': ..., 'c': ..., 'lam': ...}",
+            model.source,
+        )
     return force.vector(*(model.geometry[k] for k in LATERAL_FORCE_GEOMETRY))
 
 
@@ -99,8 +120,11 @@ def input_matrix(model: WhippleModel, force: LateralForce | None = None) -> np.n
         h = np.full(model.batch_shape + (2,), np.nan)
     else:
         h = np.broadcast_to(lateral_force_vector(model, force), model.batch_shape + (2,))
-    return gen.input_matrix(**{k: entries[k] for k in arguments("state_space.input_matrix") if k in entries},
-                            H_phiF=h[..., 0], H_deltaF=h[..., 1])
+    return gen.input_matrix(
+        **{k: entries[k] for k in arguments("state_space.input_matrix") if k in entries},
+        H_phiF=h[..., 0],
+        H_deltaF=h[..., 1],
+    )
 
 
 def _names(kind: str, names, allowed: tuple[str, ...]) -> tuple[str, ...]:
@@ -150,20 +174,36 @@ class StateSpace:
         try:
             import control
         except ImportError:
-            raise InputError("python-control", "not installed",
-                             "pip install 'bikerider[control]' (or pip install control) for to_control()") from None
+            raise InputError(
+                "python-control",
+                "not installed",
+                "pip install 'bikerider[control]' (or pip install control) for to_control()",
+            ) from None
         index = (index,) if isinstance(index, (int, np.integer)) else tuple(index)
         A = self.A[index]
         if A.shape != (4, 4):
             raise InputError("index", index, f"an index to one system of the leading shape {self.A.shape[:-2]}")
         v = float(np.broadcast_to(self.speeds, self.A.shape[:-2])[index])
         C = self.C if self.C.ndim == 2 else self.C[index]
-        return control.ss(A, self.B[index], C, self.D[index], states=list(self.states),
-                          inputs=list(self.inputs), outputs=list(self.outputs), name=f"whipple_v{v:g}")
+        return control.ss(
+            A,
+            self.B[index],
+            C,
+            self.D[index],
+            states=list(self.states),
+            inputs=list(self.inputs),
+            outputs=list(self.outputs),
+            name=f"whipple_v{v:g}",
+        )
 
 
-def state_space(model: WhippleModel, speeds, inputs=("T_phi", "T_delta"), outputs=("phi", "delta"),
-                lateral_force: LateralForce | None = None) -> StateSpace:
+def state_space(
+    model: WhippleModel,
+    speeds,
+    inputs=("T_phi", "T_delta"),
+    outputs=("phi", "delta"),
+    lateral_force: LateralForce | None = None,
+) -> StateSpace:
     """The state space of ``model`` at ``speeds``.
 
     Parameters
@@ -215,5 +255,13 @@ def state_space(model: WhippleModel, speeds, inputs=("T_phi", "T_delta"), output
     return StateSpace(v, A, B, C, D, STATES, inputs, outputs)
 
 
-__all__ = ["INPUTS", "OUTPUTS", "STATES", "LateralForce", "StateSpace", "input_matrix", "lateral_force_vector",
-           "state_space"]
+__all__ = [
+    "INPUTS",
+    "OUTPUTS",
+    "STATES",
+    "LateralForce",
+    "StateSpace",
+    "input_matrix",
+    "lateral_force_vector",
+    "state_space",
+]

@@ -12,6 +12,7 @@ parameters together are the inertia tensor of each body and the two inertias of 
 the two swept parameters share one of them every pair of values is checked, otherwise each value of
 each axis once (a pair is valid when both of its values are).
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field, fields
@@ -87,14 +88,22 @@ class Sweep:
             row: dict[str, object] = dict(self.design(index))
             row["valid"] = bool(self.valid[index])
             row["reason"] = str(self.reasons[index])
-            for key, array in (("weave_speed", s.weave), ("capsize_speed", s.capsize),
-                               ("weave_frequency", s.weave_frequency)):
+            for key, array in (
+                ("weave_speed", s.weave),
+                ("capsize_speed", s.capsize),
+                ("weave_frequency", s.weave_frequency),
+            ):
                 row[key] = _number(array[index])
             row["stable_intervals"] = [
-                {"lower": _number(s.lower[index][k]), "upper": _number(s.upper[index][k]),
-                 "lower_crossing": KIND_NAMES[int(s.lower_kind[index][k])],
-                 "upper_crossing": KIND_NAMES[int(s.upper_kind[index][k])]}
-                for k in range(s.lower.shape[-1]) if np.isfinite(s.lower[index][k])]
+                {
+                    "lower": _number(s.lower[index][k]),
+                    "upper": _number(s.upper[index][k]),
+                    "lower_crossing": KIND_NAMES[int(s.lower_kind[index][k])],
+                    "upper_crossing": KIND_NAMES[int(s.upper_kind[index][k])],
+                }
+                for k in range(s.lower.shape[-1])
+                if np.isfinite(s.lower[index][k])
+            ]
             rows.append(row)
         return rows
 
@@ -129,15 +138,20 @@ def _check_axes(base: BenchmarkParameters, axes: dict[str, object]) -> tuple[tup
     names, values = [], []
     for name, raw in axes.items():
         if name not in BENCHMARK_NAMES:
-            raise InputError(name, f"{np.size(raw)} values",
-                             f"one of the benchmark names {', '.join(BENCHMARK_NAMES)}", base.source)
+            raise InputError(
+                name, f"{np.size(raw)} values", f"one of the benchmark names {', '.join(BENCHMARK_NAMES)}", base.source
+            )
         if base.values[name] is None:
-            raise InputError(name, "not determined",
-                             f"a base parameter set that determines {name}, to vary it", base.source)
+            raise InputError(
+                name, "not determined", f"a base parameter set that determines {name}, to vary it", base.source
+            )
         array = np.atleast_1d(np.asarray(raw, dtype=float))
         if array.ndim != 1 or array.size == 0 or not np.all(np.isfinite(array)):
-            raise InputError(name, array.tolist() if array.size < 10 else f"array of shape {array.shape}",
-                             "a non-empty one-dimensional array of finite values")
+            raise InputError(
+                name,
+                array.tolist() if array.size < 10 else f"array of shape {array.shape}",
+                "a non-empty one-dimensional array of finite values",
+            )
         names.append(name)
         values.append(array)
     return tuple(names), tuple(values)
@@ -145,6 +159,7 @@ def _check_axes(base: BenchmarkParameters, axes: dict[str, object]) -> tuple[tup
 
 def _validity(base: BenchmarkParameters, names: tuple[str, ...], values: tuple[np.ndarray, ...]):
     """``valid`` and ``reasons`` of shape G (the module docstring's rules)."""
+
     def check(changes: dict[str, float]) -> str:
         try:
             base.with_values(**changes)
@@ -165,8 +180,13 @@ def _validity(base: BenchmarkParameters, names: tuple[str, ...], values: tuple[n
     return reasons == "", reasons
 
 
-def sweep(base: BenchmarkParameters, parameters: dict[str, object], speeds=(), eigenvalues: bool = True,
-          method: str = "quartic") -> Sweep:
+def sweep(
+    base: BenchmarkParameters,
+    parameters: dict[str, object],
+    speeds=(),
+    eigenvalues: bool = True,
+    method: str = "quartic",
+) -> Sweep:
     """Evaluate every design of a grid over one or two benchmark parameters.
 
     Parameters
@@ -207,8 +227,12 @@ def sweep(base: BenchmarkParameters, parameters: dict[str, object], speeds=(), e
         arguments[key] = value
     model = WhippleModel(*gen.canonical_matrices(**arguments), g=float(base.values["g"]))  # type: ignore[arg-type]
     result = stability_batch(model.entries(), model.g)
-    result = StabilityBatch(*(np.where(_expand(valid, a), a, np.nan if a.dtype.kind == "f" else 0)
-                              for a in (getattr(result, f.name) for f in fields(StabilityBatch))))
+    result = StabilityBatch(
+        *(
+            np.where(_expand(valid, a), a, np.nan if a.dtype.kind == "f" else 0)
+            for a in (getattr(result, f.name) for f in fields(StabilityBatch))
+        )
+    )
     ev = labels = None
     if eigenvalues and speeds.size:
         modal = model.eigenvalues(speeds, method=method)

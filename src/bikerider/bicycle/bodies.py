@@ -4,6 +4,7 @@ Every reader (the project's TOML files, BicycleParameters ``<Name>Measured.txt``
 :class:`BicycleBodies`; the estimate pipeline takes it from there.  Names are those of the symbol
 table (``derive/symbols.py``); angles are in radians.
 """
+
 from __future__ import annotations
 
 import math
@@ -14,11 +15,30 @@ from bikerider.inertia import check_plane_symmetric_inertia
 from bikerider.quantity import Quantity, check_degrees, check_magnitude
 
 BODY_NAMES: tuple[str, ...] = (
-    "w", "c", "lam_ht", "g",
-    "rR", "mR", "IRxx", "IRyy",
-    "rF", "mF", "IFxx", "IFyy",
-    "mBf", "xBf", "zBf", "IBfxx", "IBfzz", "IBfxz",
-    "mH", "xH", "zH", "IHxx", "IHzz", "IHxz",
+    "w",
+    "c",
+    "lam_ht",
+    "g",
+    "rR",
+    "mR",
+    "IRxx",
+    "IRyy",
+    "rF",
+    "mF",
+    "IFxx",
+    "IFyy",
+    "mBf",
+    "xBf",
+    "zBf",
+    "IBfxx",
+    "IBfzz",
+    "IBfxz",
+    "mH",
+    "xH",
+    "zH",
+    "IHxx",
+    "IHzz",
+    "IHxz",
 )
 """Needed for the benchmark parameters of the bicycle (with or without a rider)."""
 
@@ -26,15 +46,49 @@ OPTIONAL_BODY_NAMES: tuple[str, ...] = ("IBfyy", "IHyy")
 """Not needed by the linear model; reported when measured."""
 
 SEATING_NAMES: tuple[str, ...] = (
-    "h_bb", "l_cs", "l_f", "w_fh", "l_hb", "w_rh", "l_sp", "lam_st", "l_st", "l_s",
+    "h_bb",
+    "l_cs",
+    "l_f",
+    "w_fh",
+    "l_hb",
+    "w_rh",
+    "l_sp",
+    "lam_st",
+    "l_st",
+    "l_s",
 )
 """The rest of Table 1: needed only to seat the paper's rider model on the bicycle."""
 
-_POSITIVE = {"w", "g", "rR", "mR", "IRxx", "IRyy", "rF", "mF", "IFxx", "IFyy", "mBf", "mH",
-             "IBfyy", "IHyy", "h_bb", "l_cs", "l_f", "w_fh", "l_hb", "w_rh", "l_sp", "l_st", "l_s"}
+_POSITIVE = {
+    "w",
+    "g",
+    "rR",
+    "mR",
+    "IRxx",
+    "IRyy",
+    "rF",
+    "mF",
+    "IFxx",
+    "IFyy",
+    "mBf",
+    "mH",
+    "IBfyy",
+    "IHyy",
+    "h_bb",
+    "l_cs",
+    "l_f",
+    "w_fh",
+    "l_hb",
+    "w_rh",
+    "l_sp",
+    "l_st",
+    "l_s",
+}
 _ANGLES = {"lam_ht": (0.0, math.pi), "lam_st": (0.0, math.pi)}
 _LIMITS: dict[str, tuple[float, str]] = {
-    "w": (5.0, "m"), "c": (1.0, "m"), "g": (100.0, "m/s^2"),
+    "w": (5.0, "m"),
+    "c": (1.0, "m"),
+    "g": (100.0, "m/s^2"),
     **{k: (3.0, "m") for k in ("rR", "rF", "h_bb", "l_cs", "l_f", "w_fh", "l_hb", "w_rh", "l_sp", "l_st", "l_s")},
     **{k: (5.0, "m") for k in ("xBf", "zBf", "xH", "zH")},
     **{k: (500.0, "kg") for k in ("mR", "mF", "mBf", "mH")},
@@ -85,7 +139,9 @@ class BicycleBodies:
             if key in _ANGLES:
                 low, high = _ANGLES[key]
                 if not low < q.value < high:
-                    raise InputError(f"{key}_deg", math.degrees(q.value), "an angle between 0 and 180 degrees", self.source)
+                    raise InputError(
+                        f"{key}_deg", math.degrees(q.value), "an angle between 0 and 180 degrees", self.source
+                    )
                 check_degrees(f"{key}_deg", math.degrees(q.value), self.source)
             limit = _LIMITS.get(key)
             if limit is not None and not (abs(q.value) <= limit[0] and abs(q.sigma) <= limit[0]):
@@ -95,13 +151,23 @@ class BicycleBodies:
                 raise InputError(key, q.value, "at least 0.001 m (SI units: a length in metres)", self.source)
         for key in ("zBf", "zH"):
             if not self[key] < 0:
-                raise InputError(key, self[key], "a negative value: z points down in the benchmark frame, so a "
-                                 "centre of mass above the ground has z < 0", self.source)
+                raise InputError(
+                    key,
+                    self[key],
+                    "a negative value: z points down in the benchmark frame, so a "
+                    "centre of mass above the ground has z < 0",
+                    self.source,
+                )
         for body in ("Bf", "H"):
             yy = self.values.get(f"I{body}yy")
-            check_plane_symmetric_inertia(f"I{body} (I{body}xx, I{body}yy, I{body}zz, I{body}xz)", self[f"I{body}xx"],
-                                          None if yy is None else yy.value, self[f"I{body}zz"], self[f"I{body}xz"],
-                                          self.source)
+            check_plane_symmetric_inertia(
+                f"I{body} (I{body}xx, I{body}yy, I{body}zz, I{body}xz)",
+                self[f"I{body}xx"],
+                None if yy is None else yy.value,
+                self[f"I{body}zz"],
+                self[f"I{body}xz"],
+                self.source,
+            )
 
     def __getitem__(self, key: str) -> float:
         return self.values[key].value

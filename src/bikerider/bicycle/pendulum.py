@@ -13,6 +13,7 @@ them.  In the bicycle's XZ plane (x forward, z down) a line is ``n . p = d`` wit
 ``n = (sin(beta), cos(beta))``, ``beta`` the angle of the line rising from +x (the pendulum axis
 angle of ``derive/pendulum.py``); the signed distance of a point ``p`` from it is ``n . p - d``.
 """
+
 from __future__ import annotations
 
 import functools
@@ -100,8 +101,14 @@ def torsional_inertia(k_t: Quantity, period: Quantity, name: str = "period", sou
     return first_order(_TORSIONAL, {"k_t": k_t, "T": period}).quantity("J")
 
 
-def compound_inertia(period: Quantity, mass: Quantity, length: Quantity, g: Quantity,
-                     name: str = "compound_period", source: str | None = None) -> Quantity:
+def compound_inertia(
+    period: Quantity,
+    mass: Quantity,
+    length: Quantity,
+    g: Quantity,
+    name: str = "compound_period",
+    source: str | None = None,
+) -> Quantity:
     """Eq. 7: ``I = (T / 2 pi)^2 m g l - m l^2`` about the wheel axle."""
     _check_period(name, period, source)
     if not length.value > 0:
@@ -120,9 +127,13 @@ def compound_inertia(period: Quantity, mass: Quantity, length: Quantity, g: Quan
     value = result.quantity("Iyy")
     if not value.value > 0:
         shortest = 2 * math.pi * math.sqrt(length.value / g.value)
-        raise InputError(name, period.value,
-                         f"more than {shortest:.4f} s, the period of a point mass on a {length.value} m pendulum "
-                         "(a shorter period gives a negative moment of inertia)", source)
+        raise InputError(
+            name,
+            period.value,
+            f"more than {shortest:.4f} s, the period of a point mass on a {length.value} m pendulum "
+            "(a shorter period gives a negative moment of inertia)",
+            source,
+        )
     return value
 
 
@@ -134,12 +145,14 @@ def _orientation_stage(n: int, name: str = "orientations") -> GeneratedStage | L
     if n == 3:
         return GeneratedStage("three_orientations", name, checks={"determinant": f"{name}.determinant"})
     rows = [{"alpha": f"alpha_{i}", "T": f"T_{i}"} for i in range(1, n + 1)]
-    return LeastSquaresStage(name, "orientation_equation", rows, ("r_xx", "r_xz", "r_zz"), "J",
-                             STAGES["three_orientations"]["outputs"])
+    return LeastSquaresStage(
+        name, "orientation_equation", rows, ("r_xx", "r_xz", "r_zz"), "J", STAGES["three_orientations"]["outputs"]
+    )
 
 
-def inertia_from_orientations(k_t: Quantity, periods: list[Quantity], angles: list[Quantity],
-                              body: str, source: str | None = None) -> tuple[Quantity, Quantity, Quantity]:
+def inertia_from_orientations(
+    k_t: Quantity, periods: list[Quantity], angles: list[Quantity], body: str, source: str | None = None
+) -> tuple[Quantity, Quantity, Quantity]:
     """Eqs. 2-6: ``(Ixx, Ixz, Izz)`` (benchmark convention) from torsional periods at three or more
     pendulum-axis angles (radians); least squares for more than three.
 
@@ -150,26 +163,36 @@ def inertia_from_orientations(k_t: Quantity, periods: list[Quantity], angles: li
         Eq. 6 singular (two axes that coincide modulo 180 degrees).
     """
     if len(periods) != len(angles):
-        raise InputError(f"{body}.inertia", f"{len(periods)} periods, {len(angles)} angles",
-                         "one pendulum angle per period", source)
+        raise InputError(
+            f"{body}.inertia", f"{len(periods)} periods, {len(angles)} angles", "one pendulum angle per period", source
+        )
     if len(periods) < 3:
-        raise InputError(f"{body}.inertia.periods", len(periods),
-                         "at least three pendulum orientations (Eq. 6 has three unknowns)", source)
+        raise InputError(
+            f"{body}.inertia.periods",
+            len(periods),
+            "at least three pendulum orientations (Eq. 6 has three unknowns)",
+            source,
+        )
     for i, p in enumerate(periods):
         _check_period(f"{body}.inertia.periods[{i}]", p, source)
     _check_stiffness(k_t, source)
     n = len(periods)
     stage = _orientation_stage(n)
-    inputs = {"k_t": k_t, **{f"T_{i}": p for i, p in enumerate(periods, start=1)},
-              **{f"alpha_{i}": a for i, a in enumerate(angles, start=1)}}
+    inputs = {
+        "k_t": k_t,
+        **{f"T_{i}": p for i, p in enumerate(periods, start=1)},
+        **{f"alpha_{i}": a for i, a in enumerate(angles, start=1)},
+    }
     result = first_order((stage,), inputs)
     check = "orientations.determinant" if n == 3 else "orientations.smallest_singular"
     if not abs(float(result.nodes[check])) >= SINGULAR_DETERMINANT:
         shown = ", ".join(f"{math.degrees(a.value):.1f}" for a in angles)
         raise InputError(
-            f"{body}.inertia.alpha_deg", f"[{shown}]",
+            f"{body}.inertia.alpha_deg",
+            f"[{shown}]",
             "three pendulum axes that differ pairwise by more than a few degrees modulo 180 "
-            "(these leave Eq. 6 singular: two axes coincide)", source,
+            "(these leave Eq. 6 singular: two axes coincide)",
+            source,
         )
     return result.quantity("Ixx"), result.quantity("Ixz"), result.quantity("Izz")
 
@@ -181,9 +204,13 @@ def _lines_stage(n: int) -> LeastSquaresStage:
     return LeastSquaresStage("lines", "line_through_point", rows, ("s", "c"), "d", ("x", "z"))
 
 
-def centre_of_mass_from_lines(points: Sequence[tuple[Quantity, Quantity]], angles: Sequence[Quantity], name: str,
-                              source: str | None = None,
-                              tolerance: float = DEFAULT_LINE_TOLERANCE) -> tuple[Quantity, Quantity]:
+def centre_of_mass_from_lines(
+    points: Sequence[tuple[Quantity, Quantity]],
+    angles: Sequence[Quantity],
+    name: str,
+    source: str | None = None,
+    tolerance: float = DEFAULT_LINE_TOLERANCE,
+) -> tuple[Quantity, Quantity]:
     """The least-squares meeting point of pendulum-axis lines, each through a point at an angle
     (radians, rising from +x), with its first-order uncertainty.
 

@@ -78,6 +78,7 @@ length), which always exceeds the fork offset as the model requires.  The hub wi
 ``w_rh`` are not measured either; they place only the hub grid points, which no segment uses, and
 are left out.
 """
+
 from __future__ import annotations
 
 import functools
@@ -92,7 +93,12 @@ import numpy as np
 
 from bikerider.bicycle.bodies import BicycleBodies
 from bikerider.bicycle.pendulum import (
-    DEFAULT_LINE_TOLERANCE, PARALLEL, PARALLEL_CONDITIONING, SINGULAR_DETERMINANT, LineIntersection, check_lines_meet,
+    DEFAULT_LINE_TOLERANCE,
+    PARALLEL,
+    PARALLEL_CONDITIONING,
+    SINGULAR_DETERMINANT,
+    LineIntersection,
+    check_lines_meet,
 )
 from bikerider.engine import GeneratedStage, LeastSquaresStage, Stage, arguments, conditioning_2x2, first_order
 from bikerider.errors import FitError, InputError
@@ -109,8 +115,12 @@ BODIES = {
     "G": "handlebar (measured apart from the fork)",
     "S": "fork (measured apart from the handlebar)",
 }
-_REFERENCE = {"B": "rear wheel centre", "H": "front wheel centre", "S": "front wheel centre",
-              "G": "handlebar reference point"}
+_REFERENCE = {
+    "B": "rear wheel centre",
+    "H": "front wheel centre",
+    "S": "front wheel centre",
+    "G": "handlebar reference point",
+}
 
 FIELD_PURPOSES: dict[str, str] = {
     "dF": "distance rolled by the front wheel in nF turns, for its radius rF",
@@ -137,10 +147,14 @@ FIELD_PURPOSES: dict[str, str] = {
     "w": "wheelbase",
     "gamma": "head tube angle from the ground in degrees (with w and f)",
     "f": "fork offset (with w and gamma), for the trail",
-    **{f"h{i}": "a height of the heights-and-diameters frame geometry (steer axis tilt, wheelbase, trail)"
-       for i in range(1, 6)},
-    **{f"d{i}": "a diameter of the heights-and-diameters frame geometry (steer axis tilt, wheelbase, trail)"
-       for i in range(1, 5)},
+    **{
+        f"h{i}": "a height of the heights-and-diameters frame geometry (steer axis tilt, wheelbase, trail)"
+        for i in range(1, 6)
+    },
+    **{
+        f"d{i}": "a diameter of the heights-and-diameters frame geometry (steer axis tilt, wheelbase, trail)"
+        for i in range(1, 5)
+    },
     "d": "the axle distance of the heights-and-diameters frame geometry (steer axis tilt, wheelbase, trail)",
     "h6": "height of the front axle top, for the handlebar reference point (fork measured apart)",
     "h7": "height of the handlebar reference circle top, for the handlebar reference point",
@@ -154,8 +168,9 @@ _ROD = arguments("measured_reduction.wheels")[:4]
 """The calibration rod's fields (``mP, dP, lP, TtP1``): the first inputs of the ``wheels`` stage."""
 _WHEELBASE_GEOMETRY = ("w", "gamma", "f")
 _HEIGHTS_GEOMETRY = tuple(a for a in arguments("measured_reduction.frame_from_heights") if a not in ("rF", "rR"))
-_HANDLEBAR_REFERENCE = tuple(a for a in arguments("measured_reduction.handlebar_reference")
-                             if a not in ("w", "rF", "lam"))
+_HANDLEBAR_REFERENCE = tuple(
+    a for a in arguments("measured_reduction.handlebar_reference") if a not in ("w", "rF", "lam")
+)
 _POSITIVE = ("dF", "nF", "dR", "nR", "mR", "mF", "mB", "mH", "mG", "mS", "g", "lF", "lR", "mP", "dP", "lP", "w")
 _INDEXED = re.compile(r"^(alpha|a|Tt|Tc)([BHGS])(\d+)$")
 _KNOWN_EXTRAS = {"xcl", "zcl", "ds1", "ds3"}
@@ -279,10 +294,12 @@ def _detect_layout(values: Collection[str], source: str) -> MeasuredLayout:
         if len(ordered) < 3:
             missing = next(i for i in range(1, 4) if i not in indices)
             raise InputError(
-                f"alpha{body}{missing}", "missing",
+                f"alpha{body}{missing}",
+                "missing",
                 f"a value: the {BODIES[body]} must be hung in at least three orientations (alpha{body}i, "
                 f"a{body}i, Tt{body}i) to locate its centre of mass and in-plane inertia; "
-                f"found {len(ordered)}", source,
+                f"found {len(ordered)}",
+                source,
             )
         orientations[body] = ordered
     compound = {body: f"Tc{body}1" in values for body in hung}
@@ -309,8 +326,9 @@ def _raw_limit(name: str) -> tuple[float, str]:
     return 10.0, "m"  # every other value of a Measured file is a length
 
 
-def _check_values(values: Mapping[str, Quantity], where: Callable[[str], str],
-                  repeats: Mapping[str, tuple[Quantity, ...]]) -> None:
+def _check_values(
+    values: Mapping[str, Quantity], where: Callable[[str], str], repeats: Mapping[str, tuple[Quantity, ...]]
+) -> None:
     for name, q in values.items():
         limit, unit = _raw_limit(name)
         if not (abs(q.value) <= limit and abs(q.sigma) <= limit):  # check_magnitude passes these
@@ -323,8 +341,9 @@ def _check_values(values: Mapping[str, Quantity], where: Callable[[str], str],
             raise InputError(name, values[name].value, f"a positive value ({_purpose(name)})", where(name))
     for name, q in values.items():
         if name.startswith(("Tt", "Tc")) and not q.value > 1e-3:  # 1 ms: below, squares underflow
-            raise InputError(name, q.value, f"a positive period in seconds, above 0.001 s ({_purpose(name)})",
-                             where(name))
+            raise InputError(
+                name, q.value, f"a positive period in seconds, above 0.001 s ({_purpose(name)})", where(name)
+            )
     for name, trials in repeats.items():
         if not name.startswith(("Tt", "Tc")) or len(trials) < 2:
             continue
@@ -333,10 +352,12 @@ def _check_values(values: Mapping[str, Quantity], where: Callable[[str], str],
         if abs(worst.value - median) > PERIOD_TRIAL_TOLERANCE * median:
             shown = ", ".join(f"{t.value:.6g}" for t in trials)
             raise InputError(
-                name, f"[{shown}] s",
+                name,
+                f"[{shown}] s",
                 f"repeated trials within {PERIOD_TRIAL_TOLERANCE:.0%} of their median {median:.6g} s "
                 f"(trial {worst.value:.6g} s is {abs(worst.value - median) / median:.1%} off: a trial of "
-                "another orientation or body, or a slipping clamp?)", where(name),
+                "another orientation or body, or a slipping clamp?)",
+                where(name),
             )
 
 
@@ -349,17 +370,22 @@ SEATING_OUTPUTS: tuple[str, ...] = ("h_bb", "l_cs", "l_f", "l_hb", "lam_st", "l_
 HAND_OUTPUTS: tuple[str, ...] = ("x_hand", "z_hand")
 """The grip position in the benchmark frame [m] (an extra, for plots and checks)."""
 
-SEATING_NOTE = ("seating: l_s and l_hb are equivalent lengths that put the model's hands on the grips "
-                "(LhbF, LhbR); l_f drops out of the rider model; hub widths w_fh, w_rh not measured")
+SEATING_NOTE = (
+    "seating: l_s and l_hb are equivalent lengths that put the model's hands on the grips "
+    "(LhbF, LhbR); l_f drops out of the rider model; hub widths w_fh, w_rh not measured"
+)
 
 _REAR_BODY = STAGES["rear_body"]["outputs"]
 _HANDLEBAR = [name.replace("B", "H", 1) for name in _REAR_BODY]
 """The handlebar/fork H: the second body that the rear_body stage combines G and S into."""
-_SEATING_NODES = tuple(a for a in arguments("measured_reduction.seating") if a not in arguments(
-    "measured_reduction.frame_from_wheelbase") and a not in STAGES["frame_from_wheelbase"]["outputs"])
+_SEATING_NODES = tuple(
+    a
+    for a in arguments("measured_reduction.seating")
+    if a not in arguments("measured_reduction.frame_from_wheelbase")
+    and a not in STAGES["frame_from_wheelbase"]["outputs"]
+)
 """The seating stage's own inputs (``whb, LhbF, LhbR, h_bb, l_st, lam_st``)."""
-NODES = {"gamma": "lam_ht", "mB": "mBf", "lcs": "l_cs", "hbb": "h_bb", "lsp": "l_sp", "lst": "l_st",
-         "lamst": "lam_st"}
+NODES = {"gamma": "lam_ht", "mB": "mBf", "lcs": "l_cs", "hbb": "h_bb", "lsp": "l_sp", "lst": "l_st", "lamst": "lam_st"}
 """The reduction's node names (the symbol table's) of the file's fields that differ from them."""
 _IN_DEGREES = re.compile(r"^(gamma|alpha[A-Z]\d+)$")
 """Fields the file gives in degrees (their nodes are in radians)."""
@@ -370,8 +396,14 @@ def _node_name(body: str) -> str:
 
 
 def _layout_key(layout: MeasuredLayout, com_method: str) -> tuple:
-    return (layout.geometry, layout.split_fork, tuple(layout.orientations.items()), tuple(layout.compound.items()),
-            layout.seating, com_method)
+    return (
+        layout.geometry,
+        layout.split_fork,
+        tuple(layout.orientations.items()),
+        tuple(layout.compound.items()),
+        layout.seating,
+        com_method,
+    )
 
 
 def _is_standard(key: tuple) -> bool:
@@ -379,8 +411,13 @@ def _is_standard(key: tuple) -> bool:
     wheelbase geometry, the rear frame and handlebar/fork each hung in three orientations with their
     compound periods, and the least-squares centre of mass."""
     geometry, split_fork, orientations, compound, _, com_method = key
-    return (geometry == "wheelbase" and not split_fork and orientations == (("B", (1, 2, 3)), ("H", (1, 2, 3)))
-            and compound == (("B", True), ("H", True)) and com_method == "least_squares")
+    return (
+        geometry == "wheelbase"
+        and not split_fork
+        and orientations == (("B", (1, 2, 3)), ("H", (1, 2, 3)))
+        and compound == (("B", True), ("H", True))
+        and com_method == "least_squares"
+    )
 
 
 @functools.lru_cache(maxsize=64)
@@ -388,8 +425,11 @@ def _stages(key: tuple) -> tuple[Stage, ...]:
     """The stages of a layout (cached: files of one template share them)."""
     geometry, split_fork, orientations, compound, seating, com_method = key
     if _is_standard(key):  # every step in one generated stage: one call for the common layout
-        checks = {f"{body}_{check}": f"{body}.{check}" for body in "BH"
-                  for check in ("miss_1", "miss_2", "miss_3", "lines_det", "eq6_det")}
+        checks = {
+            f"{body}_{check}": f"{body}.{check}"
+            for body in "BH"
+            for check in ("miss_1", "miss_2", "miss_3", "lines_det", "eq6_det")
+        }
         checks.update({f"{body}_l_p": f"{body}.compound.l_p" for body in "BH"})
         return (GeneratedStage("standard_layout", "standard_layout", checks=checks),)
     compound = dict(compound)
@@ -397,39 +437,70 @@ def _stages(key: tuple) -> tuple[Stage, ...]:
         GeneratedStage("frame_from_wheelbase" if geometry == "wheelbase" else "frame_from_heights", "frame"),
         GeneratedStage("wheels"),
     ]
-    references = {"B": ("x_rear", "z_rear"), "H": ("x_front", "z_front"), "S": ("x_front", "z_front"),
-                  "G": ("x_refG", "z_refG")}
+    references = {
+        "B": ("x_rear", "z_rear"),
+        "H": ("x_front", "z_front"),
+        "S": ("x_front", "z_front"),
+        "G": ("x_refG", "z_refG"),
+    }
     if split_fork:
-        stages.append(GeneratedStage("handlebar_reference", "G_reference", outputs={"x_ref": "x_refG",
-                                                                                     "z_ref": "z_refG"}))
+        stages.append(
+            GeneratedStage("handlebar_reference", "G_reference", outputs={"x_ref": "x_refG", "z_ref": "z_refG"})
+        )
     for body, indices in orientations:
         name = _node_name(body)
         x_ref, z_ref = references[body]
         shared = {"x_ref": x_ref, "z_ref": z_ref}
         point = _least_squares_point(body, com_method)
         if len(indices) == 3:
-            hung = {**{f"hang_{k}": f"alpha{body}{i}" for k, i in enumerate(indices, start=1)},
-                    **{f"off_{k}": f"a{body}{i}" for k, i in enumerate(indices, start=1)},
-                    **{f"T_{k}": f"Tt{body}{i}" for k, i in enumerate(indices, start=1)}}
-            stages.append(GeneratedStage("hung_body_3", body, {**shared, **hung},
-                                         {"x": point[0], "z": point[1],
-                                          **{f"I{a}": f"I{name}{a}" for a in ("xx", "xz", "zz")}}))
+            hung = {
+                **{f"hang_{k}": f"alpha{body}{i}" for k, i in enumerate(indices, start=1)},
+                **{f"off_{k}": f"a{body}{i}" for k, i in enumerate(indices, start=1)},
+                **{f"T_{k}": f"Tt{body}{i}" for k, i in enumerate(indices, start=1)},
+            }
+            stages.append(
+                GeneratedStage(
+                    "hung_body_3",
+                    body,
+                    {**shared, **hung},
+                    {"x": point[0], "z": point[1], **{f"I{a}": f"I{name}{a}" for a in ("xx", "xz", "zz")}},
+                )
+            )
         else:
             lines = [{"hang": f"alpha{body}{i}", "off": f"a{body}{i}", **shared} for i in indices]
             stages += [
                 LeastSquaresStage(f"{body}.lines", "hanging_line", lines, ("s", "c"), "d", point),
-                LeastSquaresStage(f"{body}.tensor", "hung_orientation_equation",
-                                  [{"hang": f"alpha{body}{i}", "T": f"Tt{body}{i}"} for i in indices],
-                                  ("r_xx", "r_xz", "r_zz"), "J", tuple(f"I{name}{a}" for a in ("xx", "xz", "zz"))),
+                LeastSquaresStage(
+                    f"{body}.tensor",
+                    "hung_orientation_equation",
+                    [{"hang": f"alpha{body}{i}", "T": f"Tt{body}{i}"} for i in indices],
+                    ("r_xx", "r_xz", "r_zz"),
+                    "J",
+                    tuple(f"I{name}{a}" for a in ("xx", "xz", "zz")),
+                ),
             ]
         if com_method == "pairwise_mean":
             lines = [{"hang": f"alpha{body}{i}", "off": f"a{body}{i}", **shared} for i in indices]
-            stages.append(LeastSquaresStage(f"{body}.pairwise", "hanging_line", lines, ("s", "c"), "d",
-                                            (f"x{name}", f"z{name}"), method="pairwise_mean"))
+            stages.append(
+                LeastSquaresStage(
+                    f"{body}.pairwise",
+                    "hanging_line",
+                    lines,
+                    ("s", "c"),
+                    "d",
+                    (f"x{name}", f"z{name}"),
+                    method="pairwise_mean",
+                )
+            )
         if compound[body]:
-            stages.append(GeneratedStage("compound_about_point", f"{body}.compound",
-                                         {"T": f"Tc{body}1", "m_p": f"m{name}", "x_c": f"x{name}", "z_c": f"z{name}",
-                                          **shared}, {"Iyy": f"I{name}yy"}))
+            stages.append(
+                GeneratedStage(
+                    "compound_about_point",
+                    f"{body}.compound",
+                    {"T": f"Tc{body}1", "m_p": f"m{name}", "x_c": f"x{name}", "z_c": f"z{name}", **shared},
+                    {"Iyy": f"I{name}yy"},
+                )
+            )
     if split_fork:
         frame = {f"{p}Bf": f"{p}G" for p in ("m", "x", "z")} | {f"IBf{a}": f"IG{a}" for a in ("xx", "yy", "zz", "xz")}
         rider = {f"{p}Br": f"{p}S" for p in ("m", "x", "z")} | {f"IBr{a}": f"IS{a}" for a in ("xx", "yy", "zz", "xz")}
@@ -468,8 +539,11 @@ def measured_inputs(values: Mapping[str, Quantity], layout: MeasuredLayout) -> d
 def _line_fit(nodes: Mapping[str, object], point: tuple[str, str], misses: list[str]) -> LineIntersection:
     """The least-squares line fit of a hung body: point, signed distances and rms."""
     distances = np.array([float(nodes[m]) for m in misses])  # type: ignore[arg-type]
-    return LineIntersection(np.array([float(nodes[point[0]]), float(nodes[point[1]])]), distances,  # type: ignore[arg-type]
-                            math.sqrt(math.fsum(d * d for d in distances.tolist()) / len(misses)))
+    return LineIntersection(
+        np.array([float(nodes[point[0]]), float(nodes[point[1]])]),
+        distances,  # type: ignore[arg-type]
+        math.sqrt(math.fsum(d * d for d in distances.tolist()) / len(misses)),
+    )
 
 
 def _least_squares_point(body: str, com_method: str) -> tuple[str, str]:
@@ -479,23 +553,44 @@ def _least_squares_point(body: str, com_method: str) -> tuple[str, str]:
     return (f"x{name}", f"z{name}") if com_method == "least_squares" else (f"{body}.x", f"{body}.z")
 
 
-def _check(nodes: Mapping[str, object], layout: MeasuredLayout, com_method: str, line_tolerance: float,
-           source: str, lines: dict[str, LineIntersection]) -> None:
+def _check(
+    nodes: Mapping[str, object],
+    layout: MeasuredLayout,
+    com_method: str,
+    line_tolerance: float,
+    source: str,
+    lines: dict[str, LineIntersection],
+) -> None:
     """The checks of the reduction at the nominal point, in the order of its steps; fills ``lines``."""
     lam = float(nodes["lam"])  # type: ignore[arg-type]
     if layout.geometry == "heights" and not math.isfinite(lam):
         a, b = float(nodes["frame.a"]), float(nodes["frame.b"])  # type: ignore[arg-type]
-        raise InputError("d", float(nodes["d"]), "heights and diameters that close into a frame: "  # type: ignore[arg-type]
-                         f"offsets a = {a:.4f} m, b = {b:.4f} m give no steer axis tilt", source)
+        raise InputError(
+            "d",
+            float(nodes["d"]),
+            "heights and diameters that close into a frame: "  # type: ignore[arg-type]
+            f"offsets a = {a:.4f} m, b = {b:.4f} m give no steer axis tilt",
+            source,
+        )
     if not 0 < lam < math.pi / 2:
-        raise InputError("gamma" if layout.geometry == "wheelbase" else "h1", math.degrees(math.pi / 2 - lam),
-                         "a head tube angle between 0 and 90 degrees", source)
+        raise InputError(
+            "gamma" if layout.geometry == "wheelbase" else "h1",
+            math.degrees(math.pi / 2 - lam),
+            "a head tube angle between 0 and 90 degrees",
+            source,
+        )
     for wheel in ("R", "F"):
-        _check_compound(f"Tc{wheel}1", nodes[f"I{wheel}yy"], nodes[f"Tc{wheel}1"], nodes[f"l{wheel}"], nodes["g"],
-                        source)
+        _check_compound(
+            f"Tc{wheel}1", nodes[f"I{wheel}yy"], nodes[f"Tc{wheel}1"], nodes[f"l{wheel}"], nodes["g"], source
+        )
     if layout.split_fork and not math.isfinite(float(nodes["G_reference.l2"])):  # type: ignore[arg-type]
-        raise InputError("l", float(nodes["l"]), "an axle-to-reference-circle distance longer than the height "  # type: ignore[arg-type]
-                         f"difference l1 = {float(nodes['G_reference.l1']):.4f} m", source)  # type: ignore[arg-type]
+        raise InputError(
+            "l",
+            float(nodes["l"]),
+            "an axle-to-reference-circle distance longer than the height "  # type: ignore[arg-type]
+            f"difference l1 = {float(nodes['G_reference.l1']):.4f} m",
+            source,
+        )  # type: ignore[arg-type]
     for body, indices in layout.orientations.items():
         name, m = _node_name(body), len(indices)
         point = _least_squares_point(body, com_method)
@@ -513,18 +608,28 @@ def _check(nodes: Mapping[str, object], layout: MeasuredLayout, com_method: str,
             raise FitError(PARALLEL)
         check_lines_meet(f"the {BODIES[body]} ({body})", fit, line_tolerance, source)
         if not (math.isfinite(float(nodes[f"x{name}"])) and math.isfinite(float(nodes[f"z{name}"]))):  # type: ignore[arg-type]
-            raise FitError(f"{source}: the hanging lines are parallel: two lines of the {BODIES[body]} ({body}) "
-                           "meet nowhere, so the mean of their pairwise intersections is not defined")
+            raise FitError(
+                f"{source}: the hanging lines are parallel: two lines of the {BODIES[body]} ({body}) "
+                "meet nowhere, so the mean of their pairwise intersections is not defined"
+            )
         if singularity < SINGULAR_DETERMINANT:
             shown = ", ".join(f"{math.degrees(b) % 180:.1f}" for b in betas)
             raise InputError(
-                f"alpha{body}", f"pendulum axes at [{shown}] deg from +x",
+                f"alpha{body}",
+                f"pendulum axes at [{shown}] deg from +x",
                 f"orientations of the {BODIES[body]} whose pendulum axes differ pairwise by more than a few "
-                f"degrees modulo 180 (Eq. 6 is singular for these: determinant {singularity:.2g})", source,
+                f"degrees modulo 180 (Eq. 6 is singular for these: determinant {singularity:.2g})",
+                source,
             )
         if layout.compound[body]:
-            _check_compound(f"Tc{body}1", nodes[f"I{name}yy"], nodes[f"Tc{body}1"], nodes[f"{body}.compound.l_p"],
-                            nodes["g"], source)
+            _check_compound(
+                f"Tc{body}1",
+                nodes[f"I{name}yy"],
+                nodes[f"Tc{body}1"],
+                nodes[f"{body}.compound.l_p"],
+                nodes["g"],
+                source,
+            )
 
 
 def _check_compound(name: str, inertia, period, length, g, source: str) -> None:
@@ -532,9 +637,11 @@ def _check_compound(name: str, inertia, period, length, g, source: str) -> None:
     if not float(inertia) > 0:
         shortest = 2 * math.pi * math.sqrt(float(length) / float(g))
         raise InputError(
-            name, float(period),
+            name,
+            float(period),
             f"a compound pendulum period above {shortest:.4f} s, that of a point mass {float(length):.4f} m "
-            "from the pivot (a shorter one gives a negative moment of inertia)", source,
+            "from the pivot (a shorter one gives a negative moment of inertia)",
+            source,
         )
 
 
@@ -553,14 +660,44 @@ def _outputs(layout: MeasuredLayout) -> list[str]:
     return out
 
 
-_BODY_OUTPUTS = ("w", "c", "lam_ht", "g", "rR", "mR", "IRxx", "IRyy", "rF", "mF", "IFxx", "IFyy",
-                 "mBf", "xBf", "zBf", "IBfxx", "IBfzz", "IBfxz", "IBfyy",
-                 "mH", "xH", "zH", "IHxx", "IHzz", "IHxz", "IHyy")
+_BODY_OUTPUTS = (
+    "w",
+    "c",
+    "lam_ht",
+    "g",
+    "rR",
+    "mR",
+    "IRxx",
+    "IRyy",
+    "rF",
+    "mF",
+    "IFxx",
+    "IFyy",
+    "mBf",
+    "xBf",
+    "zBf",
+    "IBfxx",
+    "IBfzz",
+    "IBfxz",
+    "IBfyy",
+    "mH",
+    "xH",
+    "zH",
+    "IHxx",
+    "IHzz",
+    "IHxz",
+    "IHyy",
+)
 
 
-def reduce_values(values: Mapping[str, Quantity], layout: MeasuredLayout, *, com_method: str = "least_squares",
-                  line_tolerance: float = DEFAULT_LINE_TOLERANCE,
-                  source: str = "<memory>") -> tuple[dict[str, Quantity], dict[str, LineIntersection]]:
+def reduce_values(
+    values: Mapping[str, Quantity],
+    layout: MeasuredLayout,
+    *,
+    com_method: str = "least_squares",
+    line_tolerance: float = DEFAULT_LINE_TOLERANCE,
+    source: str = "<memory>",
+) -> tuple[dict[str, Quantity], dict[str, LineIntersection]]:
     """The reduction's outputs with first-order uncertainties (NaN where the file does not determine
     them), in the order of :func:`_outputs`, and each hung body's line fit; the checks of the
     reduction raise on the way (see :func:`reduce_measured`)."""
@@ -575,9 +712,14 @@ def reduce_values(values: Mapping[str, Quantity], layout: MeasuredLayout, *, com
     return reduced, lines
 
 
-def reduce_measured(values: Mapping[str, Quantity], *, source: object = "<memory>", name: str = "bicycle",
-                    line_tolerance: float = DEFAULT_LINE_TOLERANCE,
-                    com_method: str = "least_squares") -> MeasuredReduction:
+def reduce_measured(
+    values: Mapping[str, Quantity],
+    *,
+    source: object = "<memory>",
+    name: str = "bicycle",
+    line_tolerance: float = DEFAULT_LINE_TOLERANCE,
+    com_method: str = "least_squares",
+) -> MeasuredReduction:
     """Reduce BicycleParameters measurements to the bodies, with first-order uncertainties.
 
     Parameters
@@ -612,8 +754,7 @@ def reduce_measured(values: Mapping[str, Quantity], *, source: object = "<memory
     values = values.as_dict() if hasattr(values, "as_dict") else dict(values)  # fast lookups
     layout = detect_layout(values, label)
     _check_values(values, where, repeats)
-    reduced, lines = reduce_values(values, layout, com_method=com_method, line_tolerance=line_tolerance,
-                                   source=label)
+    reduced, lines = reduce_values(values, layout, com_method=com_method, line_tolerance=line_tolerance, source=label)
     notes = _notes(values, layout)
     body_values = {k: reduced[k] for k in _BODY_OUTPUTS if math.isfinite(reduced[k].value)}
     if layout.seating:
@@ -632,17 +773,25 @@ def reduce_measured(values: Mapping[str, Quantity], *, source: object = "<memory
 def seating_problem(values: Mapping[str, float], rR: float) -> str | None:
     """Why derived seating values cannot be used (``None`` when they can)."""
     if not all(math.isfinite(values[k]) for k in ("x_hand", "z_hand")):
-        return ("the grips cannot be located: LhbF and LhbR must each exceed whb/2 and the two "
-                "in-plane distances must reach each other across the wheelbase")
+        return (
+            "the grips cannot be located: LhbF and LhbR must each exceed whb/2 and the two "
+            "in-plane distances must reach each other across the wheelbase"
+        )
     if not values["l_s"] > 0:
-        return (f"the grips (z = {values['z_hand']:.3f} m) are not above the top of the seat tube, so the "
-                f"paper's stem length would be {values['l_s']:.3f} m (it must be positive)")
+        return (
+            f"the grips (z = {values['z_hand']:.3f} m) are not above the top of the seat tube, so the "
+            f"paper's stem length would be {values['l_s']:.3f} m (it must be positive)"
+        )
     if not values["l_hb"] > 0:
-        return (f"the grips (x = {values['x_hand']:.3f} m) are ahead of the equivalent stem top, so the "
-                f"paper's handlebar length would be {values['l_hb']:.3f} m (it must be positive)")
+        return (
+            f"the grips (x = {values['x_hand']:.3f} m) are ahead of the equivalent stem top, so the "
+            f"paper's handlebar length would be {values['l_hb']:.3f} m (it must be positive)"
+        )
     if not values["l_cs"] > abs(rR - values["h_bb"]):
-        return (f"the chain stay lcs = {values['l_cs']:.3f} m does not reach from the rear axle to the "
-                f"bottom bracket (height difference {abs(rR - values['h_bb']):.3f} m)")
+        return (
+            f"the chain stay lcs = {values['l_cs']:.3f} m does not reach from the rear axle to the "
+            f"bottom bracket (height difference {abs(rR - values['h_bb']):.3f} m)"
+        )
     return None
 
 
@@ -661,9 +810,11 @@ def _drop_inconsistent_yy(body_values: dict[str, Quantity], notes: list[str], so
         if inertia_problem(xx, yy.value, zz, xz) is not None:
             del body_values[f"I{body}yy"]
             principal = ", ".join(f"{p:.4g}" for p in plane_symmetric_principal_moments(xx, yy.value, zz, xz))
-            message = (f"I{body}yy = {yy} (compound pendulum) left out: with the torsional-pendulum "
-                       f"I{body}xx, I{body}xz, I{body}zz its principal moments {principal} break the triangle "
-                       "inequality (the linear model does not use it)")
+            message = (
+                f"I{body}yy = {yy} (compound pendulum) left out: with the torsional-pendulum "
+                f"I{body}xx, I{body}xz, I{body}zz its principal moments {principal} break the triangle "
+                "inequality (the linear model does not use it)"
+            )
             LOG.info("%s: %s", source, message)
             notes.append(message)
 
@@ -691,6 +842,16 @@ def _notes(values: Mapping[str, Quantity], layout: MeasuredLayout) -> list[str]:
 
 
 __all__ = [
-    "BODIES", "FIELD_PURPOSES", "PERIOD_TRIAL_TOLERANCE", "SEATING_FIELDS", "SEATING_OUTPUTS", "MeasuredLayout",
-    "MeasuredReduction", "detect_layout", "measured_inputs", "reduce_measured", "reduce_values", "seating_problem",
+    "BODIES",
+    "FIELD_PURPOSES",
+    "PERIOD_TRIAL_TOLERANCE",
+    "SEATING_FIELDS",
+    "SEATING_OUTPUTS",
+    "MeasuredLayout",
+    "MeasuredReduction",
+    "detect_layout",
+    "measured_inputs",
+    "reduce_measured",
+    "reduce_values",
+    "seating_problem",
 ]

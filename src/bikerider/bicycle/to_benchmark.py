@@ -9,6 +9,7 @@ Uncertainties are first order, treating the bodies' values as independent, throu
 generated Jacobians (the uncertainty engine, :mod:`bikerider.engine`): every value but the rear
 body's passes through with its own sigma (``lam`` takes that of ``lam_ht``: the slope is -1).
 """
+
 from __future__ import annotations
 
 import math
@@ -31,10 +32,13 @@ _REAR_BODY = STAGES["rear_body"]["outputs"]
 _STAGES = (GeneratedStage("rear_body"), GeneratedStage("steer_axis"))
 
 _LIMITS: dict[str, tuple[float, str]] = {
-    "mBr": (500.0, "kg"), "xBr": (5.0, "m"), "zBr": (5.0, "m"),
+    "mBr": (500.0, "kg"),
+    "xBr": (5.0, "m"),
+    "zBr": (5.0, "m"),
     **{k: (1e4, "kg m^2") for k in RIDER_BODY_NAMES if k.startswith("I")},
 }
 """Largest plausible magnitudes of a rigid rider: a larger value is a unit slip."""
+
 
 @dataclass(frozen=True)
 class LumpedRider:
@@ -56,8 +60,12 @@ class LumpedRider:
     def __post_init__(self) -> None:
         for key in RIDER_BODY_NAMES:
             if key not in self.values and key != "IBryy":
-                raise InputError(key, "missing", "a value: the lumped rider needs its mass, centre of mass "
-                                 "and in-plane inertia", self.source)
+                raise InputError(
+                    key,
+                    "missing",
+                    "a value: the lumped rider needs its mass, centre of mass and in-plane inertia",
+                    self.source,
+                )
         for key in ("mBr", "IBrxx", "IBrzz", "IBryy"):
             if key in self.values and not self.values[key].value > 0:
                 raise InputError(key, self.values[key].value, "a positive value", self.source)
@@ -67,14 +75,21 @@ class LumpedRider:
                 check_magnitude(key, self.values[key].value, limit, unit, self.source)
                 check_magnitude(f"{key} uncertainty", self.values[key].sigma, limit, unit, self.source)
         if not self.values["zBr"].value < 0:
-            raise InputError("zBr", self.values["zBr"].value, "a negative value: z points down in the benchmark "
-                             "frame, so a centre of mass above the ground has z < 0", self.source)
+            raise InputError(
+                "zBr",
+                self.values["zBr"].value,
+                "a negative value: z points down in the benchmark "
+                "frame, so a centre of mass above the ground has z < 0",
+                self.source,
+            )
         xx, zz, xz = (self.values[k].value for k in ("IBrxx", "IBrzz", "IBrxz"))
         if inertia_problem(xx, None, zz, xz) is not None:  # the in-plane block, without IBryy
-            raise InputError("IBrxz", xz, f"|IBrxz| < sqrt(IBrxx * IBrzz) = {math.sqrt(xx * zz):.6g} "
-                             "(a positive definite inertia tensor)", self.source)
-
-
+            raise InputError(
+                "IBrxz",
+                xz,
+                f"|IBrxz| < sqrt(IBrxx * IBrzz) = {math.sqrt(xx * zz):.6g} (a positive definite inertia tensor)",
+                self.source,
+            )
 
 
 _PASS_THROUGH = tuple(name for name in BENCHMARK_NAMES if name not in _REAR_BODY and name != "lam")

@@ -7,6 +7,7 @@ failure of that bicycle, not papered over with the Parameters file.  The table h
 benchmark values and the weave and capsize speeds; a bicycle that fails is listed with its error
 and the others still finish.  Input files are only read; outputs are written atomically.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -28,13 +29,18 @@ PROGRESS_AFTER = 1.0
 
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser(
-        "batch", help="benchmark values and critical speeds of every bicycle in a BicycleParameters folder",
+        "batch",
+        help="benchmark values and critical speeds of every bicycle in a BicycleParameters folder",
         description="Run every bicycle of a BicycleParameters data folder (bicycles/*/RawData/*Measured.txt, "
         "else bicycles/*/Parameters/*Benchmark.txt) and tabulate the 26 benchmark values with the weave "
         "and capsize speeds. Exit status 1 when some bicycle failed (the table still lists the others).",
     )
-    parser.add_argument("directory", type=Path, metavar="DIR",
-                        help="a BicycleParameters data folder (holding bicycles/) or its bicycles/ folder")
+    parser.add_argument(
+        "directory",
+        type=Path,
+        metavar="DIR",
+        help="a BicycleParameters data folder (holding bicycles/) or its bicycles/ folder",
+    )
     parser.add_argument("--out", metavar="PREFIX", help="write PREFIX.csv and PREFIX.txt (else print the table)")
     parser.set_defaults(run=run)
 
@@ -60,9 +66,15 @@ def bicycle_folders(directory: Path) -> list[Path]:
     root = directory / "bicycles" if (directory / "bicycles").is_dir() else directory
     if not root.is_dir():
         raise InputError("DIR", str(directory), "a BicycleParameters data folder (with bicycles/<Name>/ inside)")
-    folders = sorted(p for p in root.iterdir() if p.is_dir() and ((p / "RawData").is_dir() or (p / "Parameters").is_dir()))
+    folders = sorted(
+        p for p in root.iterdir() if p.is_dir() and ((p / "RawData").is_dir() or (p / "Parameters").is_dir())
+    )
     if not folders:
-        raise InputError("DIR", str(directory), "a BicycleParameters data folder with bicycles/<Name>/RawData or bicycles/<Name>/Parameters inside")
+        raise InputError(
+            "DIR",
+            str(directory),
+            "a BicycleParameters data folder with bicycles/<Name>/RawData or bicycles/<Name>/Parameters inside",
+        )
     return folders
 
 
@@ -142,7 +154,10 @@ def csv_text(rows: list[BatchRow]) -> str:
     for row in rows:
         line = [row.name, row.source]
         for name in BENCHMARK_NAMES:
-            line += [_number(row.values.get(name), 10), _number(row.sigmas.get(name) if row.values.get(name) is not None else None, 3)]
+            line += [
+                _number(row.values.get(name), 10),
+                _number(row.sigmas.get(name) if row.values.get(name) is not None else None, 3),
+            ]
         writer.writerow(line + [_number(row.weave, 8), _number(row.capsize, 8), row.error])
     return buffer.getvalue()
 

@@ -1,4 +1,5 @@
 """``bikerider benchmark FILE``: the Whipple model from the 25 benchmark parameters."""
+
 from __future__ import annotations
 
 import argparse
@@ -20,22 +21,34 @@ def add_parser(subparsers) -> None:
             "intervals and the eigenvalues against speed."
         ),
     )
-    p.add_argument("file", metavar="FILE", nargs="?",
-                   help="benchmark parameter file (.toml or name = value+/-sigma text); or --bicycle NAME")
+    p.add_argument(
+        "file",
+        metavar="FILE",
+        nargs="?",
+        help="benchmark parameter file (.toml or name = value+/-sigma text); or --bicycle NAME",
+    )
     add_shipped_options(p)
-    p.add_argument("--speeds", metavar="START:STOP:N", default="0:10:11",
-                   help="speeds for the eigenvalues, m/s, N points (default 0:10:11)")
+    p.add_argument(
+        "--speeds",
+        metavar="START:STOP:N",
+        default="0:10:11",
+        help="speeds for the eigenvalues, m/s, N points (default 0:10:11)",
+    )
     p.add_argument("--json", action="store_true", help="print one JSON object instead of text")
-    p.add_argument("--plot", metavar="DIR",
-                   help="write the figures eigenvalues, side_view, mode_shapes and bode into DIR")
+    p.add_argument(
+        "--plot", metavar="DIR", help="write the figures eigenvalues, side_view, mode_shapes and bode into DIR"
+    )
     add_figure_options(p)
     p.set_defaults(run=run)
 
 
 def add_shipped_options(p) -> None:
     """``--bicycle NAME`` and ``--rider NAME``: a parameter set shipped with bikerider (also ``sweep``)."""
-    p.add_argument("--bicycle", metavar="NAME",
-                   help=f"a shipped bicycle instead of FILE: {', '.join(BICYCLES)} (BicycleParameters data)")
+    p.add_argument(
+        "--bicycle",
+        metavar="NAME",
+        help=f"a shipped bicycle instead of FILE: {', '.join(BICYCLES)} (BicycleParameters data)",
+    )
     p.add_argument("--rider", metavar="NAME", help=f"with --bicycle: seat a shipped rider on it ({', '.join(RIDERS)})")
 
 
@@ -68,8 +81,17 @@ def run(args: argparse.Namespace) -> int:
     if args.plot:
         from bikerider import plotting  # matplotlib: only when figures are asked for
 
-        plotting.write_figures(args.plot, model, eig, None, title=name, parameters=params, figures=plotting.FIGURES,
-                               fmt=args.format, dpi=args.dpi)
+        plotting.write_figures(
+            args.plot,
+            model,
+            eig,
+            None,
+            title=name,
+            parameters=params,
+            figures=plotting.FIGURES,
+            fmt=args.format,
+            dpi=args.dpi,
+        )
     if args.json:
         print(json.dumps(report.model_json(params, model, eig), indent=2, allow_nan=False))
     else:

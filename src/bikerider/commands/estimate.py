@@ -1,4 +1,5 @@
 """``bikerider estimate``: the paper's whole method on a bicycle and rider (default: the paper's)."""
+
 from __future__ import annotations
 
 import argparse
@@ -18,19 +19,30 @@ def add_parser(subparsers) -> None:
             "the paper's 2008 Batavus Browser and 72 kg rider."
         ),
     )
-    p.add_argument("--bicycle", metavar="FILE",
-                   help="bicycle: project TOML, or BicycleParameters <Name>Measured.txt (raw measurements) or "
-                        "<Name>Benchmark.txt; the format is detected. Default: the paper's bicycle")
+    p.add_argument(
+        "--bicycle",
+        metavar="FILE",
+        help="bicycle: project TOML, or BicycleParameters <Name>Measured.txt (raw measurements) or "
+        "<Name>Benchmark.txt; the format is detected. Default: the paper's bicycle",
+    )
     rider = p.add_mutually_exclusive_group()
-    rider.add_argument("--rider", metavar="FILE",
-                       help="rider: project TOML (the paper's rider model, seated on the bicycle) or a "
-                            "BicycleParameters lumped rider <Rider><Bike>Benchmark.txt. Default: the paper's rider")
+    rider.add_argument(
+        "--rider",
+        metavar="FILE",
+        help="rider: project TOML (the paper's rider model, seated on the bicycle) or a "
+        "BicycleParameters lumped rider <Rider><Bike>Benchmark.txt. Default: the paper's rider",
+    )
     rider.add_argument("--no-rider", action="store_true", help="the bicycle alone")
-    p.add_argument("--speeds", metavar="START:STOP:N", default="0:10:11",
-                   help="speeds for the eigenvalues, m/s, N points (default 0:10:11)")
+    p.add_argument(
+        "--speeds",
+        metavar="START:STOP:N",
+        default="0:10:11",
+        help="speeds for the eigenvalues, m/s, N points (default 0:10:11)",
+    )
     p.add_argument("--json", action="store_true", help="print one JSON object instead of text")
-    p.add_argument("--plot", metavar="DIR",
-                   help="write the figures eigenvalues, side_view, mode_shapes and bode into DIR")
+    p.add_argument(
+        "--plot", metavar="DIR", help="write the figures eigenvalues, side_view, mode_shapes and bode into DIR"
+    )
     add_figure_options(p)
     p.set_defaults(run=run)
 
@@ -61,16 +73,31 @@ def run(args: argparse.Namespace) -> int:
     if args.plot:
         from bikerider import plotting  # matplotlib: only when figures are asked for
 
-        band = estimate_uncertainty(result, np.linspace(speeds.min(), speeds.max(), 101)).eigenvalues \
-            if speeds.max() > speeds.min() else None
-        plotting.write_figures(args.plot, result.model, eig, rm.grid_points if rm else None,
-                               title=f"{bicycle_name} + {rider_name}", parameters=result.parameters,
-                               figures=plotting.FIGURES, fmt=args.format, dpi=args.dpi, uncertainty=band)
+        band = (
+            estimate_uncertainty(result, np.linspace(speeds.min(), speeds.max(), 101)).eigenvalues
+            if speeds.max() > speeds.min()
+            else None
+        )
+        plotting.write_figures(
+            args.plot,
+            result.model,
+            eig,
+            rm.grid_points if rm else None,
+            title=f"{bicycle_name} + {rider_name}",
+            parameters=result.parameters,
+            figures=plotting.FIGURES,
+            fmt=args.format,
+            dpi=args.dpi,
+            uncertainty=band,
+        )
     if args.json:
         out = report.model_json(parameters, result.model, eig)
-        out["uncertainty"] = {"benchmark": uncertainty.benchmark, "speeds": uncertainty.speeds,
-                              "eigenvalues": uncertainty.eigenvalues.as_list(),
-                              "method": "first-order propagation of the uncertainties stated in the input files"}
+        out["uncertainty"] = {
+            "benchmark": uncertainty.benchmark,
+            "speeds": uncertainty.speeds,
+            "eigenvalues": uncertainty.eigenvalues.as_list(),
+            "method": "first-order propagation of the uncertainties stated in the input files",
+        }
         out["rider"] = _rider_json(result)
         out["notes"] = result.notes
         print(json.dumps(out, indent=2, allow_nan=False))
@@ -103,8 +130,9 @@ def _rider_json(result) -> dict | None:
     """The ``rider`` object of ``--json``: the rider model, a lumped rider, or None."""
     rm = result.rider_model
     if rm is not None:
-        points = {str(i + 1): (p.tolist() if all(math.isfinite(x) for x in p) else None)
-                  for i, p in enumerate(rm.grid_points)}
+        points = {
+            str(i + 1): (p.tolist() if all(math.isfinite(x) for x in p) else None) for i, p in enumerate(rm.grid_points)
+        }
         return {"mass": rm.mass, "com": rm.com.tolist(), "inertia": rm.inertia.tolist(), "grid_points": points}
     if result.rider is None:
         return None
@@ -113,6 +141,10 @@ def _rider_json(result) -> dict | None:
     return {
         "mass": v["mBr"].value,
         "com": [v["xBr"].value, 0.0, v["zBr"].value],
-        "inertia": [[v["IBrxx"].value, 0.0, v["IBrxz"].value], [0.0, yy, 0.0], [v["IBrxz"].value, 0.0, v["IBrzz"].value]],
+        "inertia": [
+            [v["IBrxx"].value, 0.0, v["IBrxz"].value],
+            [0.0, yy, 0.0],
+            [v["IBrxz"].value, 0.0, v["IBrzz"].value],
+        ],
         "grid_points": None,
     }

@@ -1,4 +1,5 @@
 """``bikerider gap``: where a bicycle's measurements depart from its model, and why."""
+
 from __future__ import annotations
 
 import argparse
@@ -17,26 +18,51 @@ def add_parser(subparsers) -> None:
             "See docs/gap.md."
         ),
     )
-    p.add_argument("--model", metavar="FILE", required=True,
-                   help="benchmark parameters: a TOML file with the 25 benchmark names (values 'v +/- sigma'; "
-                        "optional [rider], [upper_body], [grips] tables) or a BicycleParameters <Name>Benchmark.txt")
-    p.add_argument("--rider", metavar="FILE",
-                   help="BicycleParameters lumped rider (<Rider><Bike>Benchmark.txt) to add to the rear body")
-    p.add_argument("--rider-rel-sigma", metavar="X", type=float, default=0.0,
-                   help="relative standard uncertainty to give the rider's values when its file has none (default 0)")
-    p.add_argument("--data", metavar="FILE", nargs="+", required=True,
-                   help="data files (CSV): measured eigenvalues (speed, real, imag, ...), perturbation runs "
-                        "(time, roll_rate, ...) or identified canonical entries (rider, environment, coefficient, "
-                        "identified, sigma); the kind is detected from the header")
-    p.add_argument("--control", metavar="FILE",
-                   help="TOML with the known control gains k_phi, k_phid, k_delta, k_deltad for rows that give none")
-    p.add_argument("--speed", metavar="V", type=float,
-                   help="speed [m/s] of perturbation runs whose file gives none")
-    p.add_argument("--groups", metavar="G1,G2",
-                   help="keep only these rider-environment groups of identified canonical entries (e.g. J-H,J-P)")
-    p.add_argument("--effects", metavar="E1,E2",
-                   help="candidate effects (default: all of parameters, steer_damping, steer_inertia, steer_stiffness, "
-                        "passive_arms, rider_lean, tyre_slip)")
+    p.add_argument(
+        "--model",
+        metavar="FILE",
+        required=True,
+        help="benchmark parameters: a TOML file with the 25 benchmark names (values 'v +/- sigma'; "
+        "optional [rider], [upper_body], [grips] tables) or a BicycleParameters <Name>Benchmark.txt",
+    )
+    p.add_argument(
+        "--rider",
+        metavar="FILE",
+        help="BicycleParameters lumped rider (<Rider><Bike>Benchmark.txt) to add to the rear body",
+    )
+    p.add_argument(
+        "--rider-rel-sigma",
+        metavar="X",
+        type=float,
+        default=0.0,
+        help="relative standard uncertainty to give the rider's values when its file has none (default 0)",
+    )
+    p.add_argument(
+        "--data",
+        metavar="FILE",
+        nargs="+",
+        required=True,
+        help="data files (CSV): measured eigenvalues (speed, real, imag, ...), perturbation runs "
+        "(time, roll_rate, ...) or identified canonical entries (rider, environment, coefficient, "
+        "identified, sigma); the kind is detected from the header",
+    )
+    p.add_argument(
+        "--control",
+        metavar="FILE",
+        help="TOML with the known control gains k_phi, k_phid, k_delta, k_deltad for rows that give none",
+    )
+    p.add_argument("--speed", metavar="V", type=float, help="speed [m/s] of perturbation runs whose file gives none")
+    p.add_argument(
+        "--groups",
+        metavar="G1,G2",
+        help="keep only these rider-environment groups of identified canonical entries (e.g. J-H,J-P)",
+    )
+    p.add_argument(
+        "--effects",
+        metavar="E1,E2",
+        help="candidate effects (default: all of parameters, steer_damping, steer_inertia, steer_stiffness, "
+        "passive_arms, rider_lean, tyre_slip)",
+    )
     p.add_argument("--json", action="store_true", help="print one JSON object instead of text")
     p.add_argument("--report", metavar="DIR", help="write report.md and PNG figures into DIR")
     p.set_defaults(run=run)
@@ -74,8 +100,9 @@ def run(args: argparse.Namespace) -> int:
         effects = tuple(e.strip() for e in args.effects.split(","))
         for name in effects:
             effect(name)
-    diagnosis = diagnose(model, gap_data.EigenvalueData.concatenate(eigen),
-                         gap_data.CanonicalData.concatenate(canonical), effects)
+    diagnosis = diagnose(
+        model, gap_data.EigenvalueData.concatenate(eigen), gap_data.CanonicalData.concatenate(canonical), effects
+    )
     result = diagnosis.as_dict()
     if args.report:
         path = write_report(diagnosis, args.report, title=f"Sim-to-real gap: {args.model}")

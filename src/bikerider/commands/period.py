@@ -4,6 +4,7 @@ Each CSV file is one trial (columns time and angular rate, see ``docs/period.md`
 periods are combined into one value with an uncertainty that holds both the fits' standard errors
 and the scatter between trials.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -14,7 +15,8 @@ from pathlib import Path
 
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser(
-        "period", help="fit damped oscillations to rate records and report the period",
+        "period",
+        help="fit damped oscillations to rate records and report the period",
         description="Fit y = offset + exp(-sigma t)(A sin(omega_d t) + B cos(omega_d t)) to each CSV "
         "(columns time and rate; see docs/period.md) and combine the trials' periods.",
     )
@@ -26,9 +28,9 @@ def add_parser(subparsers) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from bikerider.errors import FitError
     from bikerider.fitting.damped_oscillation import fit_damped_oscillation, period_from_trials
     from bikerider.fitting.signal_csv import read_signal_csv
-    from bikerider.errors import FitError
 
     records, fits = [], []
     for path in args.files:
@@ -43,18 +45,28 @@ def run(args: argparse.Namespace) -> int:
     if args.plot:
         _plot(args.plot, records, fits)
     if args.json:
-        json.dump({
-            "period": combined.period, "sigma": combined.sigma, "scatter": combined.scatter,
-            "trials": [{"file": str(p), **f.as_dict()} for (p, _, _), f in zip(records, fits)],
-        }, sys.stdout, indent=2)
+        json.dump(
+            {
+                "period": combined.period,
+                "sigma": combined.sigma,
+                "scatter": combined.scatter,
+                "trials": [{"file": str(p), **f.as_dict()} for (p, _, _), f in zip(records, fits)],
+            },
+            sys.stdout,
+            indent=2,
+        )
         print()
         return 0
     for (path, _, _), fit in zip(records, fits):
-        print(f"{path}: T = {fit.period:.6f} +/- {fit.period_se:.2g} s, zeta = {fit.zeta:.4g} +/- {fit.zeta_se:.2g}, "
-              f"eigenvalues s = {fit.eigenvalue.real:.4g} +/- {fit.eigenvalue.imag:.5g}i 1/s, "
-              f"residual rms = {fit.residual_rms:.3g} ({fit.n_samples} samples)")
-    print(f"period = {combined.period:.6f} +/- {combined.sigma:.2g} s "
-          f"({combined.n_trials} trial{'s' if combined.n_trials > 1 else ''}, scatter {combined.scatter:.2g} s)")
+        print(
+            f"{path}: T = {fit.period:.6f} +/- {fit.period_se:.2g} s, zeta = {fit.zeta:.4g} +/- {fit.zeta_se:.2g}, "
+            f"eigenvalues s = {fit.eigenvalue.real:.4g} +/- {fit.eigenvalue.imag:.5g}i 1/s, "
+            f"residual rms = {fit.residual_rms:.3g} ({fit.n_samples} samples)"
+        )
+    print(
+        f"period = {combined.period:.6f} +/- {combined.sigma:.2g} s "
+        f"({combined.n_trials} trial{'s' if combined.n_trials > 1 else ''}, scatter {combined.scatter:.2g} s)"
+    )
     return 0
 
 
@@ -69,8 +81,9 @@ def _plot(target: Path, records, fits) -> None:
     for ax, (path, time, rate), fit in zip(axes[:, 0], records, fits):
         ax.plot(time, rate, ".", ms=2, color="0.5", label="data")
         fine = np.linspace(time[0], time[-1], max(2000, 10 * time.size))
-        ax.plot(fine, fit.evaluate(fine), "-", lw=1, color="C0",
-                label=f"fit: T = {fit.period:.5f} s, zeta = {fit.zeta:.3g}")
+        ax.plot(
+            fine, fit.evaluate(fine), "-", lw=1, color="C0", label=f"fit: T = {fit.period:.5f} s, zeta = {fit.zeta:.3g}"
+        )
         ax.set_title(path.name, fontsize=9)
         ax.set_xlabel("time [s]")
         ax.set_ylabel("rate")

@@ -1,4 +1,5 @@
 """``bikerider sensitivity OUTPUT [--wrt INPUT]``: closed-form sensitivities and uncertainty ranking."""
+
 from __future__ import annotations
 
 import argparse
@@ -39,16 +40,25 @@ def add_parser(subparsers) -> None:
     p.add_argument("--latex", action="store_true", help="print expressions as LaTeX")
     p.add_argument("--full", action="store_true", help="print long expressions in full")
     src = p.add_mutually_exclusive_group()
-    src.add_argument("--inputs", metavar="FILE",
-                     help="name = value+/-sigma file of chain inputs (e.g. a BicycleParameters Benchmark.txt)")
+    src.add_argument(
+        "--inputs",
+        metavar="FILE",
+        help="name = value+/-sigma file of chain inputs (e.g. a BicycleParameters Benchmark.txt)",
+    )
     src.add_argument("--bicycle", metavar="TOML", help="bicycle TOML file (with --rider)")
     p.add_argument("--rider", metavar="TOML", help="rider TOML file (with --bicycle)")
-    p.add_argument("--no-rider-sigmas", action="store_true",
-                   help="do not assume sigmas for rider measurements given without one")
+    p.add_argument(
+        "--no-rider-sigmas", action="store_true", help="do not assume sigmas for rider measurements given without one"
+    )
     p.add_argument("--speed", metavar="V", type=float, help="speed [m/s] for the characteristic coefficients a0..a4")
     p.add_argument("--top", metavar="N", type=int, default=None, help="show only the N largest contributions")
-    p.add_argument("--monte-carlo", metavar="N", type=int, default=None,
-                   help="also draw N input sets and compare the first-order sigma with the Monte Carlo one")
+    p.add_argument(
+        "--monte-carlo",
+        metavar="N",
+        type=int,
+        default=None,
+        help="also draw N input sets and compare the first-order sigma with the Monte Carlo one",
+    )
     p.add_argument("--seed", metavar="S", type=int, default=0, help="random seed for --monte-carlo (default 0)")
     p.set_defaults(run=run)
 

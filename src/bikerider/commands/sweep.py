@@ -1,4 +1,5 @@
 """``bikerider sweep``: stable speed intervals (and eigenvalues) against one or two benchmark parameters."""
+
 from __future__ import annotations
 
 import argparse
@@ -21,7 +22,7 @@ def add_parser(subparsers) -> None:
     p = subparsers.add_parser(
         "sweep",
         help="stable speeds and eigenvalues against one benchmark parameter, a stability map over two, or a design "
-             "space over many",
+        "space over many",
         description=(
             "Vary one or two of the 25 benchmark parameters of a base bicycle (a parameter file or a "
             "shipped bicycle) over a range and report, for every design, the self-stable speed intervals, "
@@ -34,18 +35,33 @@ def add_parser(subparsers) -> None:
     )
     p.add_argument("file", metavar="FILE", nargs="?", help="base benchmark parameter file (or --bicycle NAME)")
     add_shipped_options(p)
-    p.add_argument("--vary", metavar="NAME=START:STOP:N", action="append",
-                   help="a benchmark parameter and its range, SI units (NAME_deg for an angle in degrees, e.g. "
-                        "lam_deg=0:30:61); give --vary twice for a stability map, more often for a design space "
-                        "(with --random: NAME=LOW:HIGH or NAME=MEAN+/-SIGMA)")
-    p.add_argument("--speeds", metavar="START:STOP:N",
-                   help="speeds [m/s] at which to report stability (and with --rows speeds, eigenvalues)")
-    p.add_argument("--rows", choices=ROWS, default="designs",
-                   help="one row per design (default), or per design and speed (needs --speeds)")
+    p.add_argument(
+        "--vary",
+        metavar="NAME=START:STOP:N",
+        action="append",
+        help="a benchmark parameter and its range, SI units (NAME_deg for an angle in degrees, e.g. "
+        "lam_deg=0:30:61); give --vary twice for a stability map, more often for a design space "
+        "(with --random: NAME=LOW:HIGH or NAME=MEAN+/-SIGMA)",
+    )
+    p.add_argument(
+        "--speeds",
+        metavar="START:STOP:N",
+        help="speeds [m/s] at which to report stability (and with --rows speeds, eigenvalues)",
+    )
+    p.add_argument(
+        "--rows",
+        choices=ROWS,
+        default="designs",
+        help="one row per design (default), or per design and speed (needs --speeds)",
+    )
     p.add_argument("--json", action="store_true", help="print one JSON object instead of CSV")
     p.add_argument("--out", metavar="FILE", help="write the CSV or JSON to FILE instead of standard output")
-    p.add_argument("--plot", metavar="DIR", help="write sweep.<format>: stable speeds against the parameter, or the map "
-                   "(with --store: stable_fraction, sensitivity and map_<x>_<y>)")
+    p.add_argument(
+        "--plot",
+        metavar="DIR",
+        help="write sweep.<format>: stable speeds against the parameter, or the map "
+        "(with --store: stable_fraction, sensitivity and map_<x>_<y>)",
+    )
     add_figure_options(p)
     add_design_options(p)
     p.set_defaults(run=run)
@@ -75,11 +91,19 @@ def run(args: argparse.Namespace) -> int:
         from bikerider import plotting  # matplotlib: only when figures are asked for
 
         what = " and ".join(result.names)
-        plotting.save_figure(plotting.sweep_figure(result, f"{name}: {what}"),
-                             Path(args.plot) / f"sweep.{args.format}", args.format, args.dpi)
+        plotting.save_figure(
+            plotting.sweep_figure(result, f"{name}: {what}"),
+            Path(args.plot) / f"sweep.{args.format}",
+            args.format,
+            args.dpi,
+        )
     if args.json:
-        out = {"base": name, "parameters": {n: v.tolist() for n, v in zip(result.names, result.values)},
-               "speeds": speeds.tolist(), "designs": result.design_rows()}
+        out = {
+            "base": name,
+            "parameters": {n: v.tolist() for n, v in zip(result.names, result.values)},
+            "speeds": speeds.tolist(),
+            "designs": result.design_rows(),
+        }
         if speeds.size:
             out["stable"] = result.stable().tolist()
         if args.rows == "speeds":
@@ -91,7 +115,8 @@ def run(args: argparse.Namespace) -> int:
         for row in rows:
             if "stable_intervals" in row:
                 row["stable_intervals"] = ";".join(
-                    f"{cell(i['lower'])}:{cell(i['upper'])}" for i in row["stable_intervals"])  # type: ignore[union-attr]
+                    f"{cell(i['lower'])}:{cell(i['upper'])}" for i in row["stable_intervals"]
+                )  # type: ignore[union-attr]
         writer = csv.DictWriter(buffer, fieldnames=list(rows[0]), lineterminator="\n")
         writer.writeheader()
         writer.writerows({k: cell(v) for k, v in row.items()} for row in rows)
@@ -101,5 +126,3 @@ def run(args: argparse.Namespace) -> int:
     else:
         print(text, end="")
     return 0
-
-

@@ -5,6 +5,7 @@ The options here turn a sweep into a design-space run (:mod:`bikerider.design`):
 ``--weave-speeds``.  Without them ``bikerider sweep`` works as before (one parameter, or a map of
 two, in memory).
 """
+
 from __future__ import annotations
 
 import argparse
@@ -26,39 +27,83 @@ MAX_ROWS = 1_000_000
 def add_design_options(p) -> None:
     """The design-space options of ``bikerider sweep``."""
     g = p.add_argument_group("design spaces (docs/design_space.md)")
-    g.add_argument("--measured", nargs="*", metavar="FILE",
-                   help="vary raw measurements through the whole estimate: a bicycle and a rider TOML file "
-                        "(none: the paper's); --vary then names inputs of the estimate chain (l_sp, mBf, ...)")
-    g.add_argument("--random", type=int, metavar="N", help="N random designs instead of a grid; each --vary is "
-                   "NAME=LOW:HIGH (uniform) or NAME=MEAN+/-SIGMA (normal)")
-    g.add_argument("--monte-carlo", type=int, metavar="N",
-                   help="N random designs, every base value with an uncertainty drawn normally (no --vary)")
+    g.add_argument(
+        "--measured",
+        nargs="*",
+        metavar="FILE",
+        help="vary raw measurements through the whole estimate: a bicycle and a rider TOML file "
+        "(none: the paper's); --vary then names inputs of the estimate chain (l_sp, mBf, ...)",
+    )
+    g.add_argument(
+        "--random",
+        type=int,
+        metavar="N",
+        help="N random designs instead of a grid; each --vary is NAME=LOW:HIGH (uniform) or NAME=MEAN+/-SIGMA (normal)",
+    )
+    g.add_argument(
+        "--monte-carlo",
+        type=int,
+        metavar="N",
+        help="N random designs, every base value with an uncertainty drawn normally (no --vary)",
+    )
     g.add_argument("--seed", type=int, default=0, help="seed of the random designs (default 0)")
-    g.add_argument("--store", metavar="DIR", help="write the results chunk by chunk to a Zarr store in DIR and print a "
-                   "summary; an interrupted run given the same DIR resumes (needs bikerider[design])")
+    g.add_argument(
+        "--store",
+        metavar="DIR",
+        help="write the results chunk by chunk to a Zarr store in DIR and print a "
+        "summary; an interrupted run given the same DIR resumes (needs bikerider[design])",
+    )
     g.add_argument("--restart", action="store_true", help="with --store: discard what DIR holds and start again")
-    g.add_argument("--weave-speeds", metavar="START:STOP:N",
-                   help="speeds [m/s] at which to report the weave frequency and damping ratio")
+    g.add_argument(
+        "--weave-speeds",
+        metavar="START:STOP:N",
+        help="speeds [m/s] at which to report the weave frequency and damping ratio",
+    )
     g.add_argument("--chunk-size", type=int, metavar="N", help="designs per chunk (default 262144)")
-    g.add_argument("--engine", choices=("auto", "compiled", "numpy"), default="auto",
-                   help="fused C kernels (compiled at first use) or the NumPy reference (default: compiled where a "
-                        "C compiler is found)")
+    g.add_argument(
+        "--engine",
+        choices=("auto", "compiled", "numpy"),
+        default="auto",
+        help="fused C kernels (compiled at first use) or the NumPy reference (default: compiled where a "
+        "C compiler is found)",
+    )
     g.add_argument("--threads", type=int, metavar="N", help="threads of the compiled engine (default: every core)")
-    g.add_argument("--dask", nargs="?", const="local", metavar="ADDRESS",
-                   help="run on Dask: a LocalCluster on this machine, or the scheduler at ADDRESS "
-                        "(needs bikerider[distributed])")
-    g.add_argument("--workers", type=int, metavar="N", help="with --dask: workers of the local cluster (default: cores)")
-    g.add_argument("--target-weave-speed", type=float, metavar="V",
-                   help="also report the self-stable design whose weave speed is closest to V m/s")
-    g.add_argument("--slice", metavar="X,Y", help="with --plot: the two parameters of the stability map "
-                   "(default the first two varied; the others at the value nearest the base)")
+    g.add_argument(
+        "--dask",
+        nargs="?",
+        const="local",
+        metavar="ADDRESS",
+        help="run on Dask: a LocalCluster on this machine, or the scheduler at ADDRESS (needs bikerider[distributed])",
+    )
+    g.add_argument(
+        "--workers", type=int, metavar="N", help="with --dask: workers of the local cluster (default: cores)"
+    )
+    g.add_argument(
+        "--target-weave-speed",
+        type=float,
+        metavar="V",
+        help="also report the self-stable design whose weave speed is closest to V m/s",
+    )
+    g.add_argument(
+        "--slice",
+        metavar="X,Y",
+        help="with --plot: the two parameters of the stability map "
+        "(default the first two varied; the others at the value nearest the base)",
+    )
     g.add_argument("--quiet", action="store_true", help="no progress bar on standard error")
 
 
 def is_design_run(args: argparse.Namespace) -> bool:
     """Whether the options ask for a design-space run."""
-    return bool(args.store or args.random is not None or args.monte_carlo is not None or args.measured is not None
-                or args.dask or args.weave_speeds or (args.vary and len(args.vary) > 2))
+    return bool(
+        args.store
+        or args.random is not None
+        or args.monte_carlo is not None
+        or args.measured is not None
+        or args.dask
+        or args.weave_speeds
+        or (args.vary and len(args.vary) > 2)
+    )
 
 
 def parse_draw(text: str):
@@ -74,9 +119,11 @@ def parse_draw(text: str):
         if not name:
             raise ValueError
     except ValueError:
-        raise InputError("--vary", text, "NAME=LOW:HIGH (uniform) or NAME=MEAN+/-SIGMA (normal) with --random") from None
+        raise InputError(
+            "--vary", text, "NAME=LOW:HIGH (uniform) or NAME=MEAN+/-SIGMA (normal) with --random"
+        ) from None
     if name.endswith("_deg"):
-        name = name[:-len("_deg")]
+        name = name[: -len("_deg")]
         draw = (draw[0], math.radians(draw[1]), math.radians(draw[2]))
     return name.strip(), draw
 
@@ -86,8 +133,11 @@ def _base(args: argparse.Namespace):
     if args.measured is None:
         return load_parameters(args)
     if args.file or args.bicycle:
-        raise InputError("--measured", args.file or args.bicycle, "no FILE or --bicycle with --measured (the "
-                         "measurements are the bicycle)")
+        raise InputError(
+            "--measured",
+            args.file or args.bicycle,
+            "no FILE or --bicycle with --measured (the measurements are the bicycle)",
+        )
     if len(args.measured) not in (0, 2):
         raise InputError("--measured", args.measured, "a bicycle and a rider TOML file, or none for the paper's")
     from bikerider.estimate import estimate_from_files
@@ -98,10 +148,14 @@ def _base(args: argparse.Namespace):
 
 def _space(args: argparse.Namespace, base, name: str):
     from bikerider import design
+
     if args.monte_carlo is not None:
         if args.vary or args.random is not None:
-            raise InputError("--monte-carlo", args.monte_carlo, "no --vary and no --random with it (it draws every "
-                             "value that has an uncertainty)")
+            raise InputError(
+                "--monte-carlo",
+                args.monte_carlo,
+                "no --vary and no --random with it (it draws every value that has an uncertainty)",
+            )
         return design.monte_carlo(base, args.monte_carlo, args.seed, name)
     if not args.vary:
         raise InputError("--vary", "missing", "at least one parameter to vary (or --monte-carlo N)")
@@ -129,18 +183,35 @@ def run_design(args: argparse.Namespace) -> int:
     speeds = parse_speeds(args.speeds) if args.speeds else np.empty(0)
     weave_speeds = parse_speeds(args.weave_speeds) if args.weave_speeds else np.empty(0)
     if args.rows == "speeds":
-        raise InputError("--rows", "speeds", "--rows designs with a design space (the stability at each speed is the "
-                         "store's 'stable' array)")
+        raise InputError(
+            "--rows",
+            "speeds",
+            "--rows designs with a design space (the stability at each speed is the store's 'stable' array)",
+        )
     if args.store is None and space.size > MAX_ROWS:
-        raise InputError("--store", "missing", f"a folder for the results: {space.size:,} designs are more than "
-                         f"{MAX_ROWS:,} rows")
+        raise InputError(
+            "--store", "missing", f"a folder for the results: {space.size:,} designs are more than {MAX_ROWS:,} rows"
+        )
     if args.workers is not None and args.dask != "local":
         raise InputError("--workers", args.workers, "--dask without an address (a local cluster)")
-    store = design.explore(space, args.store, speeds, weave_speeds, chunk_size=args.chunk_size, engine=args.engine,
-                           threads=args.threads, restart=args.restart, quiet=args.quiet, scheduler=args.dask,
-                           workers=args.workers)
-    closest = (summaries.closest_to_weave_speed(store, args.target_weave_speed)
-               if args.target_weave_speed is not None else None)
+    store = design.explore(
+        space,
+        args.store,
+        speeds,
+        weave_speeds,
+        chunk_size=args.chunk_size,
+        engine=args.engine,
+        threads=args.threads,
+        restart=args.restart,
+        quiet=args.quiet,
+        scheduler=args.dask,
+        workers=args.workers,
+    )
+    closest = (
+        summaries.closest_to_weave_speed(store, args.target_weave_speed)
+        if args.target_weave_speed is not None
+        else None
+    )
     if args.plot:
         _plots(args, store, name)
     if args.store is None:
@@ -164,9 +235,13 @@ def run_design(args: argparse.Namespace) -> int:
 def _closest_dict(closest) -> dict | None:
     if closest is None:
         return None
-    return {"index": closest.index, "values": closest.values, "weave_speed": closest.weave_speed,
-            "capsize_speed": closest.capsize_speed if math.isfinite(closest.capsize_speed) else None,
-            "stable_intervals": [[lo, hi if math.isfinite(hi) else None] for lo, hi in closest.stable_intervals]}
+    return {
+        "index": closest.index,
+        "values": closest.values,
+        "weave_speed": closest.weave_speed,
+        "capsize_speed": closest.capsize_speed if math.isfinite(closest.capsize_speed) else None,
+        "stable_intervals": [[lo, hi if math.isfinite(hi) else None] for lo, hi in closest.stable_intervals],
+    }
 
 
 def _summary_text(store, summary, closest, target) -> str:
@@ -174,10 +249,12 @@ def _summary_text(store, summary, closest, target) -> str:
 
     space = store.spec.space
     lo, hi = summary.speed_range
-    lines = [f"{space.size:,} designs ({'grid ' + ' x '.join(map(str, space.shape)) if space.is_grid else 'random'}) "
-             f"over {', '.join(space.names)} of {space.name or 'the base'} ({space.kind}); store {store.path}",
-             f"valid: {summary.valid:,}; self-stable within {lo:g}-{hi:g} m/s: {summary.stable:,} "
-             f"({summary.stable / max(summary.valid, 1):.1%} of the valid)"]
+    lines = [
+        f"{space.size:,} designs ({'grid ' + ' x '.join(map(str, space.shape)) if space.is_grid else 'random'}) "
+        f"over {', '.join(space.names)} of {space.name or 'the base'} ({space.kind}); store {store.path}",
+        f"valid: {summary.valid:,}; self-stable within {lo:g}-{hi:g} m/s: {summary.stable:,} "
+        f"({summary.stable / max(summary.valid, 1):.1%} of the valid)",
+    ]
     for text, count in sorted(summary.reasons.items(), key=lambda kv: -kv[1]):
         lines.append(f"  invalid, {count:,}: {text}")
     lines.append("")
@@ -193,8 +270,10 @@ def _summary_text(store, summary, closest, target) -> str:
             lines.append(f"no self-stable design has a weave speed (target {target:g} m/s)")
         else:
             values = ", ".join(f"{k} = {v:.6g}" for k, v in closest.values.items())
-            lines.append(f"closest to a weave speed of {target:g} m/s: design {closest.index} ({values}): weave "
-                         f"{closest.weave_speed:.4f} m/s, capsize {closest.capsize_speed:.4f} m/s")
+            lines.append(
+                f"closest to a weave speed of {target:g} m/s: design {closest.index} ({values}): weave "
+                f"{closest.weave_speed:.4f} m/s, capsize {closest.capsize_speed:.4f} m/s"
+            )
     return "\n".join(lines) + "\n"
 
 
@@ -204,8 +283,20 @@ def _rows_text(args, store, closest) -> str:
 
     n = store.spec.space.size
     values = store.varied_values(0, n)
-    data = {name: store.read(name) for name in ("valid", "reason", "lower", "upper", "weave_speed", "capsize_speed",
-                                                "weave_frequency", "weave_frequency_at", "weave_damping_at")}
+    data = {
+        name: store.read(name)
+        for name in (
+            "valid",
+            "reason",
+            "lower",
+            "upper",
+            "weave_speed",
+            "capsize_speed",
+            "weave_frequency",
+            "weave_frequency_at",
+            "weave_damping_at",
+        )
+    }
     reasons = store.reason_texts(data["reason"])
     rows = []
     for i in range(n):
@@ -215,8 +306,11 @@ def _rows_text(args, store, closest) -> str:
         for key in ("weave_speed", "capsize_speed", "weave_frequency"):
             x = float(data[key][i])
             row[key] = x if np.isfinite(x) else None
-        row["stable_intervals"] = [[float(lo), float(hi) if np.isfinite(hi) else None]
-                                   for lo, hi in zip(data["lower"][i], data["upper"][i]) if np.isfinite(lo)]
+        row["stable_intervals"] = [
+            [float(lo), float(hi) if np.isfinite(hi) else None]
+            for lo, hi in zip(data["lower"][i], data["upper"][i])
+            if np.isfinite(lo)
+        ]
         for k, v in enumerate(store.spec.weave_speeds):
             for key, column in (("weave_frequency", "weave_frequency_at"), ("weave_damping_ratio", "weave_damping_at")):
                 x = float(data[column][i, k])
@@ -232,8 +326,9 @@ def _rows_text(args, store, closest) -> str:
         return json.dumps(out, indent=2, allow_nan=False) + "\n"
     buffer = io.StringIO()
     for row in rows:
-        row["stable_intervals"] = ";".join(f"{cell(lo)}:{cell(hi if hi is not None else float('inf'))}"
-                                           for lo, hi in row["stable_intervals"])  # type: ignore[union-attr]
+        row["stable_intervals"] = ";".join(
+            f"{cell(lo)}:{cell(hi if hi is not None else float('inf'))}" for lo, hi in row["stable_intervals"]
+        )  # type: ignore[union-attr]
     writer = csv.DictWriter(buffer, fieldnames=list(rows[0]), lineterminator="\n")
     writer.writeheader()
     writer.writerows({k: cell(v) for k, v in row.items()} for row in rows)
@@ -250,10 +345,18 @@ def _plots(args, store, name: str) -> None:
     space = store.spec.space
     summary = summaries.summarize(store)
     title = f"{name}: {space.size:,} designs"
-    save_figure(figures.stable_fraction_figure(summary, space.base, title), out / f"stable_fraction.{args.format}",
-                args.format, args.dpi)
-    save_figure(figures.interval_sensitivity_figure(summary, space.base, title), out / f"sensitivity.{args.format}",
-                args.format, args.dpi)
+    save_figure(
+        figures.stable_fraction_figure(summary, space.base, title),
+        out / f"stable_fraction.{args.format}",
+        args.format,
+        args.dpi,
+    )
+    save_figure(
+        figures.interval_sensitivity_figure(summary, space.base, title),
+        out / f"sensitivity.{args.format}",
+        args.format,
+        args.dpi,
+    )
     if space.is_grid and len(space.names) >= 2:
         if args.slice:
             x, _, y = args.slice.partition(",")
@@ -262,7 +365,11 @@ def _plots(args, store, name: str) -> None:
         else:
             x, y = space.names[:2]
         cut = summaries.design_slice(store, x.strip(), y.strip())
-        save_figure(figures.design_slice_figure(cut, store.spec.speeds, f"{name}: {cut.x[0]} and {cut.y[0]}"),
-                    out / f"map_{cut.x[0]}_{cut.y[0]}.{args.format}", args.format, args.dpi)
+        save_figure(
+            figures.design_slice_figure(cut, store.spec.speeds, f"{name}: {cut.x[0]} and {cut.y[0]}"),
+            out / f"map_{cut.x[0]}_{cut.y[0]}.{args.format}",
+            args.format,
+            args.dpi,
+        )
     elif args.slice:
         raise InputError("--slice", args.slice, "a grid over at least two parameters")

@@ -1,4 +1,5 @@
 """What ``bikerider sweep`` and its design-space runs share: ``--vary`` ranges and CSV cells."""
+
 from __future__ import annotations
 
 import math
@@ -22,7 +23,7 @@ def parse_vary(text: str):
         raise InputError("--vary", text, "a finite range START <= STOP and 1 <= N <= 100000 values")
     values = np.linspace(start, stop, n)
     if name.endswith("_deg"):
-        name, values = name[:-len("_deg")], np.radians(values)
+        name, values = name[: -len("_deg")], np.radians(values)
     return name.strip(), values
 
 

@@ -19,6 +19,7 @@ or on a Dask cluster.  See ``docs/design_space.md``.
 
 The store needs the extra ``bikerider[design]`` (Zarr), a Dask run ``bikerider[distributed]``.
 """
+
 from bikerider.design.run import explore
 from bikerider.design.space import DesignSpace, grid, monte_carlo, random_designs
 from bikerider.design.store import DesignStore, open_store

@@ -14,6 +14,7 @@ Every core: a call splits its designs into one contiguous range per thread and r
 on a :class:`concurrent.futures.ThreadPoolExecutor`; ctypes releases the GIL during a foreign call,
 so the threads run in parallel.
 """
+
 from __future__ import annotations
 
 import ctypes
@@ -90,8 +91,9 @@ def _cpu() -> str:
 
 
 def _compile(compiler: str, c_file: Path, target: Path, flags: tuple[str, ...]) -> subprocess.CompletedProcess:
-    return subprocess.run([compiler, *flags, "-o", str(target), str(c_file), "-lm"], capture_output=True, text=True,
-                          timeout=600)
+    return subprocess.run(
+        [compiler, *flags, "-o", str(target), str(c_file), "-lm"], capture_output=True, text=True, timeout=600
+    )
 
 
 @lru_cache(maxsize=1)
@@ -105,8 +107,10 @@ def library() -> ctypes.CDLL:
     """
     compiler = find_compiler()
     if compiler is None:
-        raise KernelUnavailable("the fused kernels need a C compiler (cc, gcc or clang on PATH, or $CC); "
-                                "without one use engine='numpy' (the same results, slower)")
+        raise KernelUnavailable(
+            "the fused kernels need a C compiler (cc, gcc or clang on PATH, or $CC); "
+            "without one use engine='numpy' (the same results, slower)"
+        )
     version = _compiler_version(compiler)
     folder = cache_dir()
     folder.mkdir(parents=True, exist_ok=True)
@@ -128,8 +132,10 @@ def library() -> ctypes.CDLL:
         lib = ctypes.CDLL(str(target))
         _declare(lib)
         return lib
-    raise KernelUnavailable(f"the C compiler {compiler} could not build the fused kernels ({error[0]}); "
-                            "use engine='numpy' (the same results, slower)")
+    raise KernelUnavailable(
+        f"the C compiler {compiler} could not build the fused kernels ({error[0]}); "
+        "use engine='numpy' (the same results, slower)"
+    )
 
 
 def available() -> bool:
@@ -201,12 +207,21 @@ def _shape(width: str, n: int, n_speeds: int) -> tuple[int, ...]:
 def stability_outputs(n: int, n_speeds: int) -> dict[str, np.ndarray]:
     """Empty output arrays of :func:`stability` for ``n`` designs (to reuse across calls; the
     stability bits zeroed, as the kernel sets only the stable ones)."""
-    return {name: np.zeros(_shape(width, n, n_speeds), dtype=dtype) if width == "bits"
-            else np.empty(_shape(width, n, n_speeds), dtype=dtype) for name, dtype, width in _STABILITY["outputs"]}
+    return {
+        name: np.zeros(_shape(width, n, n_speeds), dtype=dtype)
+        if width == "bits"
+        else np.empty(_shape(width, n, n_speeds), dtype=dtype)
+        for name, dtype, width in _STABILITY["outputs"]
+    }
 
 
-def stability(arguments: dict[str, np.ndarray], n: int, speeds=(), threads: int | None = None,
-              out: dict[str, np.ndarray] | None = None) -> dict[str, np.ndarray]:
+def stability(
+    arguments: dict[str, np.ndarray],
+    n: int,
+    speeds=(),
+    threads: int | None = None,
+    out: dict[str, np.ndarray] | None = None,
+) -> dict[str, np.ndarray]:
     """Stable intervals, crossing kinds, critical speeds, mass-matrix check and stability bits at
     the ascending ``speeds`` of ``n`` designs (the outputs of ``bikerider_stability``, as
     :func:`bikerider.design.engine.numpy_stability` returns them).
@@ -226,8 +241,16 @@ def stability(arguments: dict[str, np.ndarray], n: int, speeds=(), threads: int 
     *per_design, bits = (name for name, _, _ in _STABILITY["outputs"])  # the bits follow the speeds
 
     def call(start: int, stop: int) -> None:
-        lib.bikerider_stability(start, stop, ctypes.addressof(pointers), ctypes.addressof(strides),
-                                *(_ptr(out[name]) for name in per_design), v.size, _ptr(v), _ptr(out[bits]))
+        lib.bikerider_stability(
+            start,
+            stop,
+            ctypes.addressof(pointers),
+            ctypes.addressof(strides),
+            *(_ptr(out[name]) for name in per_design),
+            v.size,
+            _ptr(v),
+            _ptr(out[bits]),
+        )
 
     _run(call, n, threads)
     del keep
@@ -242,13 +265,30 @@ def weave_eigenvalues(arguments: dict[str, np.ndarray], n: int, speeds, threads:
     out = {name: np.empty(_shape(width, n, v.size), dtype=dtype) for name, dtype, width in _WEAVE["outputs"]}
 
     def call(start: int, stop: int) -> None:
-        lib.bikerider_weave(start, stop, ctypes.addressof(pointers), ctypes.addressof(strides), v.size, _ptr(v),
-                            *(_ptr(out[name]) for name, _, _ in _WEAVE["outputs"]))
+        lib.bikerider_weave(
+            start,
+            stop,
+            ctypes.addressof(pointers),
+            ctypes.addressof(strides),
+            v.size,
+            _ptr(v),
+            *(_ptr(out[name]) for name, _, _ in _WEAVE["outputs"]),
+        )
 
     _run(call, n, threads)
     del keep
     return out["real"] + 1j * out["imag"]
 
 
-__all__ = ["ARGUMENTS", "KernelUnavailable", "available", "cache_dir", "default_threads", "find_compiler", "library",
-           "stability", "stability_outputs", "weave_eigenvalues"]
+__all__ = [
+    "ARGUMENTS",
+    "KernelUnavailable",
+    "available",
+    "cache_dir",
+    "default_threads",
+    "find_compiler",
+    "library",
+    "stability",
+    "stability_outputs",
+    "weave_eigenvalues",
+]

@@ -8,6 +8,7 @@ run).  At most :data:`IN_FLIGHT` tasks per worker are submitted at once, so the 
 stays that of a few chunks.  ``scheduler="local"`` starts a ``LocalCluster`` on this machine (one
 single-threaded worker process per core); any other value is the address of a running scheduler.
 """
+
 from __future__ import annotations
 
 import logging
@@ -29,8 +30,9 @@ def dask_distributed():
     try:  # an optional extra: imported when a run asks for Dask
         import dask.distributed
     except ImportError:
-        raise InputError("--dask", "dask.distributed not installed",
-                         "pip install 'bikerider[distributed]' (runs on a Dask cluster)") from None
+        raise InputError(
+            "--dask", "dask.distributed not installed", "pip install 'bikerider[distributed]' (runs on a Dask cluster)"
+        ) from None
     return dask.distributed
 
 
@@ -45,8 +47,9 @@ def run_on_dask(store, pending: list[int], engine: str, scheduler, workers: int 
     spec = store.spec
     cluster = None
     if scheduler == "local":
-        cluster = distributed.LocalCluster(n_workers=workers or default_threads(), threads_per_worker=1,
-                                           processes=True, dashboard_address=None)
+        cluster = distributed.LocalCluster(
+            n_workers=workers or default_threads(), threads_per_worker=1, processes=True, dashboard_address=None
+        )
         address = cluster
     else:
         address = scheduler
@@ -64,8 +67,9 @@ def run_on_dask(store, pending: list[int], engine: str, scheduler, workers: int 
         def submit():
             k = queue.pop(0)
             start, stop = spec.chunk_range(k)
-            future = client.submit(evaluate_chunk, space, start, stop, spec.speeds, spec.weave_speeds, engine,
-                                   pure=False)
+            future = client.submit(
+                evaluate_chunk, space, start, stop, spec.speeds, spec.weave_speeds, engine, pure=False
+            )
             futures[future] = k
             return future
 

@@ -18,6 +18,7 @@ Designs over raw measurements go through the estimate chain's generated stages f
 ``valid = False``, a reason code (:mod:`bikerider.design.validity`) and NaN results: a run never
 stops on one.
 """
+
 from __future__ import annotations
 
 import logging
@@ -69,10 +70,18 @@ FIELDS = (
     Field("capsize_speed", "float64", "", "capsize speed [m/s] (NaN: none)"),
     Field("weave_frequency", "float64", "", "angular frequency of the weave pair at the weave speed [rad/s]"),
     Field("stable", "uint8", "bits", "self-stable at each map speed, packed (bit k % 8 of byte k // 8)"),
-    Field("weave_frequency_at", "float64", "speeds", "imaginary part of the weave eigenvalue at each weave speed "
-                                                       "[rad/s] (0: the weave pair is real there)"),
-    Field("weave_damping_at", "float64", "speeds", "damping ratio -Re/|lambda| of the weave eigenvalue at each weave "
-                                                     "speed (negative: unstable)"),
+    Field(
+        "weave_frequency_at",
+        "float64",
+        "speeds",
+        "imaginary part of the weave eigenvalue at each weave speed [rad/s] (0: the weave pair is real there)",
+    ),
+    Field(
+        "weave_damping_at",
+        "float64",
+        "speeds",
+        "damping ratio -Re/|lambda| of the weave eigenvalue at each weave speed (negative: unstable)",
+    ),
 )
 """Every output of a design, in the store's order."""
 _FIELD_NAMES = {"weave": "weave_speed", "capsize": "capsize_speed", "stable_bits": "stable"}
@@ -103,9 +112,15 @@ def numpy_stability(arguments: dict[str, np.ndarray], n: int, speeds=()) -> dict
         det = M[:, 0, 0] * M[:, 1, 1] - M[:, 0, 1] * M[:, 1, 0]
         out["mass_ok"][start:stop] = (M[:, 0, 0] > 0) & (det > 1e-12 * np.abs(M).max(axis=(-2, -1)) ** 2)
         result = stability_batch(matrix_entries(M, C1, K0, K2), _part(arguments["g"], start, stop))
-        for key, array in (("lower", result.lower), ("upper", result.upper), ("lower_kind", result.lower_kind),
-                           ("upper_kind", result.upper_kind), ("weave", result.weave), ("capsize", result.capsize),
-                           ("weave_frequency", result.weave_frequency)):
+        for key, array in (
+            ("lower", result.lower),
+            ("upper", result.upper),
+            ("lower_kind", result.lower_kind),
+            ("upper_kind", result.upper_kind),
+            ("weave", result.weave),
+            ("capsize", result.capsize),
+            ("weave_frequency", result.weave_frequency),
+        ):
             out[key][start:stop] = array
         if v.size:
             out["stable_bits"][start:stop] = np.packbits(result.is_stable(v), axis=-1, bitorder="little")
@@ -154,8 +169,15 @@ def _benchmark_values(space: DesignSpace, inputs: dict[str, np.ndarray], n: int)
     return bench, codes
 
 
-def evaluate(space: DesignSpace, start: int, stop: int, speeds=(), weave_speeds=(), engine: str = "auto",
-             threads: int | None = None) -> dict[str, np.ndarray]:
+def evaluate(
+    space: DesignSpace,
+    start: int,
+    stop: int,
+    speeds=(),
+    weave_speeds=(),
+    engine: str = "auto",
+    threads: int | None = None,
+) -> dict[str, np.ndarray]:
     """Every output of :data:`FIELDS` for designs ``start .. stop - 1`` of ``space``.
 
     Parameters

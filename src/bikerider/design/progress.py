@@ -3,6 +3,7 @@
 On a terminal the bar is redrawn in place at most :data:`INTERVAL` seconds apart; otherwise (a log
 file, CI) a line is printed every :data:`LOG_INTERVAL` seconds.  ``quiet`` prints nothing.
 """
+
 from __future__ import annotations
 
 import sys
@@ -52,8 +53,10 @@ class Progress:
         now = self.done + self.done_before
         fraction = now / whole if whole else 1.0
         bar = "#" * int(WIDTH * fraction) + "-" * (WIDTH - int(WIDTH * fraction))
-        return (f"[{bar}] {now:,}/{whole:,} {self.label} ({100 * fraction:.0f}%), {rate:,.0f}/s, "
-                f"{_duration(elapsed)} elapsed, {_duration(left)} left")
+        return (
+            f"[{bar}] {now:,}/{whole:,} {self.label} ({100 * fraction:.0f}%), {rate:,.0f}/s, "
+            f"{_duration(elapsed)} elapsed, {_duration(left)} left"
+        )
 
     def update(self, n: int) -> None:
         self.done += n

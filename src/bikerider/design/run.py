@@ -7,6 +7,7 @@ is stopped resumes where it stopped.  The next chunk is computed while the previ
 written (one writer thread).  ``scheduler`` sends the chunks to a Dask cluster instead
 (:mod:`bikerider.design.distributed`).
 """
+
 from __future__ import annotations
 
 import logging
@@ -33,8 +34,11 @@ def check_speeds(speeds, option: str) -> np.ndarray:
     """Ascending, finite, non-negative speeds, or an error naming the option."""
     v = np.atleast_1d(np.asarray(speeds, dtype=float)) if np.size(speeds) else np.empty(0)
     if v.ndim != 1 or not np.all(np.isfinite(v)) or np.any(v < 0) or np.any(np.diff(v) <= 0):
-        raise InputError(option, v.tolist() if v.size < 10 else f"{v.size} speeds",
-                         "finite, non-negative speeds [m/s] in ascending order")
+        raise InputError(
+            option,
+            v.tolist() if v.size < 10 else f"{v.size} speeds",
+            "finite, non-negative speeds [m/s] in ascending order",
+        )
     return v
 
 
@@ -44,13 +48,25 @@ def run_spec(space: DesignSpace, speeds=(), weave_speeds=(), chunk_size: int | N
         chunk_size = max(1, min(DEFAULT_CHUNK, space.size))
     if not (isinstance(chunk_size, (int, np.integer)) and 1 <= chunk_size <= MAX_CHUNK):
         raise InputError("--chunk-size", chunk_size, f"a whole number of designs between 1 and {MAX_CHUNK}")
-    return RunSpec(space, check_speeds(speeds, "--speeds"), check_speeds(weave_speeds, "--weave-speeds"),
-                   int(chunk_size))
+    return RunSpec(
+        space, check_speeds(speeds, "--speeds"), check_speeds(weave_speeds, "--weave-speeds"), int(chunk_size)
+    )
 
 
-def explore(space: DesignSpace, store: str | Path | None = None, speeds=(), weave_speeds=(), *,
-            chunk_size: int | None = None, engine: str = "auto", threads: int | None = None, restart: bool = False,
-            quiet: bool = True, scheduler=None, workers: int | None = None) -> DesignStore:
+def explore(
+    space: DesignSpace,
+    store: str | Path | None = None,
+    speeds=(),
+    weave_speeds=(),
+    *,
+    chunk_size: int | None = None,
+    engine: str = "auto",
+    threads: int | None = None,
+    restart: bool = False,
+    quiet: bool = True,
+    scheduler=None,
+    workers: int | None = None,
+) -> DesignStore:
     """Evaluate every design of ``space`` into a store.
 
     Parameters

@@ -18,6 +18,7 @@ A space never holds its designs: :meth:`DesignSpace.values` makes those of one c
 of any size costs nothing.  Random draws come in fixed blocks of :data:`RANDOM_BLOCK` designs,
 each from its own seeded stream, so the designs do not depend on the chunk size.
 """
+
 from __future__ import annotations
 
 import json
@@ -123,7 +124,7 @@ class DesignSpace:
             drawn = self._block(block, min(RANDOM_BLOCK, self.n_random - first))
             lo, hi = max(start, first), min(stop, first + RANDOM_BLOCK)
             for name, array in drawn.items():
-                out[name][lo - start:hi - start] = array[lo - first:hi - first]
+                out[name][lo - start : hi - start] = array[lo - first : hi - first]
         return out
 
     def _block(self, block: int, size: int) -> dict[str, np.ndarray]:
@@ -143,21 +144,34 @@ class DesignSpace:
     # -- metadata ---------------------------------------------------------------------------------
     def to_json(self) -> str:
         """The whole space as JSON (stored with the results; resuming checks it is the same)."""
-        return json.dumps({
-            "kind": self.kind, "name": self.name, "base": _finite_or_none(self.base),
-            "sigmas": self.sigmas, "seed": self.seed, "n_random": self.n_random,
-            "axes": [{"name": a.name, "values": a.values.tolist()} for a in self.axes],
-            "draws": [{"name": d.name, "distribution": d.distribution, "a": d.a, "b": d.b} for d in self.draws],
-        }, sort_keys=True)
+        return json.dumps(
+            {
+                "kind": self.kind,
+                "name": self.name,
+                "base": _finite_or_none(self.base),
+                "sigmas": self.sigmas,
+                "seed": self.seed,
+                "n_random": self.n_random,
+                "axes": [{"name": a.name, "values": a.values.tolist()} for a in self.axes],
+                "draws": [{"name": d.name, "distribution": d.distribution, "a": d.a, "b": d.b} for d in self.draws],
+            },
+            sort_keys=True,
+        )
 
     @classmethod
-    def from_json(cls, text: str) -> "DesignSpace":
+    def from_json(cls, text: str) -> DesignSpace:
         data = json.loads(text)
         base = {k: (math.nan if v is None else float(v)) for k, v in data["base"].items()}
-        return cls(data["kind"], base, {k: float(v) for k, v in data["sigmas"].items()},
-                   tuple(Axis(a["name"], np.asarray(a["values"], dtype=float)) for a in data["axes"]),
-                   tuple(Draw(d["name"], d["distribution"], float(d["a"]), float(d["b"])) for d in data["draws"]),
-                   int(data["n_random"]), int(data["seed"]), data["name"])
+        return cls(
+            data["kind"],
+            base,
+            {k: float(v) for k, v in data["sigmas"].items()},
+            tuple(Axis(a["name"], np.asarray(a["values"], dtype=float)) for a in data["axes"]),
+            tuple(Draw(d["name"], d["distribution"], float(d["a"]), float(d["b"])) for d in data["draws"]),
+            int(data["n_random"]),
+            int(data["seed"]),
+            data["name"],
+        )
 
 
 def _finite_or_none(values: dict[str, float]) -> dict[str, float | None]:
@@ -172,8 +186,11 @@ def _base_of(base) -> tuple[str, dict[str, float], dict[str, float], str]:
         return "benchmark", values, {k: float(base.sigmas.get(k, 0.0)) for k in BENCHMARK_NAMES}, base.source or ""
     inputs = getattr(base, "chain_inputs", None)
     if inputs is None:
-        raise InputError("base", type(base).__name__,
-                         "benchmark parameters, or the estimate of a bicycle with the rider model (raw measurements)")
+        raise InputError(
+            "base",
+            type(base).__name__,
+            "benchmark parameters, or the estimate of a bicycle with the rider model (raw measurements)",
+        )
     names = measurement_names()
     values = {k: float(inputs[k].value) for k in names}
     sigmas = {k: float(inputs[k].sigma) for k in names}
@@ -183,8 +200,11 @@ def _base_of(base) -> tuple[str, dict[str, float], dict[str, float], str]:
 def _check_name(kind: str, values: dict[str, float], name: str, option: str) -> None:
     known = BENCHMARK_NAMES if kind == "benchmark" else measurement_names()
     if name not in known:
-        what = ("one of the benchmark names " if kind == "benchmark"
-                else "a measurement of the estimate chain (with --measured): ")
+        what = (
+            "one of the benchmark names "
+            if kind == "benchmark"
+            else "a measurement of the estimate chain (with --measured): "
+        )
         raise InputError(option, name, what + ", ".join(known))
     if not math.isfinite(values[name]):
         raise InputError(option, name, f"a base that determines {name}, to vary it")
@@ -222,8 +242,11 @@ def grid(base, parameters: dict[str, object], name: str = "") -> DesignSpace:
         if array.size == 0:
             raise InputError(key, "an empty range", "at least one value (N >= 1)")
         if array.ndim != 1 or not np.all(np.isfinite(array)):
-            raise InputError(key, array.tolist() if array.size < 10 else f"array of shape {array.shape}",
-                             "a one-dimensional array of finite values")
+            raise InputError(
+                key,
+                array.tolist() if array.size < 10 else f"array of shape {array.shape}",
+                "a one-dimensional array of finite values",
+            )
         axes.append(Axis(key, array))
     space = DesignSpace(kind, values, sigmas, tuple(axes), name=name or source)
     if space.size > MAX_DESIGNS:
@@ -293,8 +316,9 @@ def monte_carlo(base, n: int, seed: int = 0, name: str = "") -> DesignSpace:
     """
     kind, values, sigmas, source = _base_of(base)
     n = _check_count(n)
-    draws = tuple(Draw(k, "normal", values[k], sigmas[k]) for k in values
-                  if sigmas.get(k, 0.0) > 0 and math.isfinite(values[k]))
+    draws = tuple(
+        Draw(k, "normal", values[k], sigmas[k]) for k in values if sigmas.get(k, 0.0) > 0 and math.isfinite(values[k])
+    )
     if not draws:
         raise InputError("--monte-carlo", "no uncertainties", "a base whose values carry standard uncertainties")
     return DesignSpace(kind, values, sigmas, draws=draws, n_random=n, seed=int(seed), name=name or source)
@@ -319,5 +343,14 @@ def _draw(name: str, distribution: str, a: float, b: float) -> Draw:
     return Draw(name, distribution, a, b)
 
 
-__all__ = ["Axis", "DesignSpace", "Draw", "KINDS", "RANDOM_BLOCK", "grid", "measurement_names", "monte_carlo",
-           "random_designs"]
+__all__ = [
+    "Axis",
+    "DesignSpace",
+    "Draw",
+    "KINDS",
+    "RANDOM_BLOCK",
+    "grid",
+    "measurement_names",
+    "monte_carlo",
+    "random_designs",
+]

@@ -15,6 +15,7 @@ leaves at most the chunks being written without markers, and the next run with t
 redoes those and only those.  A store is tied to its run: opening it for a different space, speeds
 or chunk size is an error, never a silent mix.  Without a folder the store lives in memory.
 """
+
 from __future__ import annotations
 
 import math
@@ -39,8 +40,9 @@ def zarr_module():
     try:  # an optional extra: imported when a run asks for a store
         import zarr
     except ImportError:
-        raise InputError("--store", "zarr not installed", "pip install 'bikerider[design]' (the Zarr store of a "
-                         "design-space run)") from None
+        raise InputError(
+            "--store", "zarr not installed", "pip install 'bikerider[design]' (the Zarr store of a design-space run)"
+        ) from None
     return zarr
 
 
@@ -62,10 +64,16 @@ class RunSpec:
         return start, min(self.space.size, start + self.chunk_size)
 
     def attributes(self) -> dict:
-        return {"format": FORMAT, "space": self.space.to_json(), "speeds": self.speeds.tolist(),
-                "weave_speeds": self.weave_speeds.tolist(), "chunk_size": self.chunk_size,
-                "reasons": [list(r) for r in REASONS], "fields": {f.name: f.doc for f in FIELDS},
-                "bikerider": __version__}
+        return {
+            "format": FORMAT,
+            "space": self.space.to_json(),
+            "speeds": self.speeds.tolist(),
+            "weave_speeds": self.weave_speeds.tolist(),
+            "chunk_size": self.chunk_size,
+            "reasons": [list(r) for r in REASONS],
+            "fields": {f.name: f.doc for f in FIELDS},
+            "bikerider": __version__,
+        }
 
 
 def _width(field, spec: RunSpec) -> tuple[int, ...]:
@@ -93,7 +101,7 @@ class DesignStore:
 
     # -- creation ----------------------------------------------------------------------------
     @classmethod
-    def create_or_resume(cls, path: str | Path | None, spec: RunSpec, restart: bool = False) -> "DesignStore":
+    def create_or_resume(cls, path: str | Path | None, spec: RunSpec, restart: bool = False) -> DesignStore:
         """Open the store of ``spec`` at ``path`` (created when missing; in memory when None).
 
         Raises
@@ -110,18 +118,26 @@ class DesignStore:
         path = Path(path)
         if path.exists() and not restart:
             if not (path / "zarr.json").exists():
-                raise InputError("--store", str(path), "a new folder or the store of this run (this folder is not "
-                                 "a bikerider design store)")
+                raise InputError(
+                    "--store",
+                    str(path),
+                    "a new folder or the store of this run (this folder is not a bikerider design store)",
+                )
             group = zarr.open_group(str(path), mode="a")
             attrs = dict(group.attrs)
             if attrs.get("format") != FORMAT:
-                raise InputError("--store", str(path), "a new folder or the store of this run (not a bikerider "
-                                 "design store)")
+                raise InputError(
+                    "--store", str(path), "a new folder or the store of this run (not a bikerider design store)"
+                )
             mine = spec.attributes()
             for key in ("space", "speeds", "weave_speeds", "chunk_size"):
                 if attrs.get(key) != mine[key]:
-                    raise InputError("--store", str(path), f"a new folder, or the same run to resume (its {key} "
-                                     "differ; remove the folder or give --restart to start again)")
+                    raise InputError(
+                        "--store",
+                        str(path),
+                        f"a new folder, or the same run to resume (its {key} "
+                        "differ; remove the folder or give --restart to start again)",
+                    )
             return cls(group, spec, path)
         if path.exists() and restart:
             shutil.rmtree(path)
@@ -134,12 +150,18 @@ class DesignStore:
         n, chunk = self.spec.space.size, self.spec.chunk_size
         for field in FIELDS:
             width = _width(field, self.spec)
-            self.group.create_array(field.name, shape=(n,) + width, chunks=(chunk,) + width, dtype=field.dtype,
-                                    fill_value=_FILL[field.dtype])
+            self.group.create_array(
+                field.name,
+                shape=(n,) + width,
+                chunks=(chunk,) + width,
+                dtype=field.dtype,
+                fill_value=_FILL[field.dtype],
+            )
         if not self.spec.space.is_grid:
             for name in self.spec.space.names:
-                self.group.create_array(f"value:{name}", shape=(n,), chunks=(chunk,), dtype="float64",
-                                        fill_value=math.nan)
+                self.group.create_array(
+                    f"value:{name}", shape=(n,), chunks=(chunk,), dtype="float64", fill_value=math.nan
+                )
         self.group.attrs.update(self.spec.attributes())
         if self.path is not None:
             (self.path / "done").mkdir(exist_ok=True)
@@ -176,7 +198,7 @@ class DesignStore:
 
     def read(self, name: str, start: int = 0, stop: int | None = None) -> np.ndarray:
         """Output ``name`` of designs ``start .. stop - 1``."""
-        return np.asarray(self.group[name][start:stop if stop is not None else self.spec.space.size])
+        return np.asarray(self.group[name][start : stop if stop is not None else self.spec.space.size])
 
     def take(self, name: str, index: np.ndarray) -> np.ndarray:
         """Output ``name`` of the designs at flat indices ``index`` (any order)."""
@@ -240,8 +262,12 @@ def open_store(path: str | Path) -> DesignStore:
     attrs = dict(group.attrs)
     if attrs.get("format") != FORMAT:
         raise InputError("--store", str(path), "the folder of a design-space run (bikerider sweep --store)")
-    spec = RunSpec(DesignSpace.from_json(attrs["space"]), np.asarray(attrs["speeds"], dtype=float),
-                   np.asarray(attrs["weave_speeds"], dtype=float), int(attrs["chunk_size"]))
+    spec = RunSpec(
+        DesignSpace.from_json(attrs["space"]),
+        np.asarray(attrs["speeds"], dtype=float),
+        np.asarray(attrs["weave_speeds"], dtype=float),
+        int(attrs["chunk_size"]),
+    )
     return DesignStore(group, spec, path)
 
 

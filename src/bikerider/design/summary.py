@@ -19,6 +19,7 @@ where it begins one, the capsize speed where it ends one (designs that are never
 weave and capsize speeds of their own, the modes' changes of stability, which are left out here);
 its width counts only intervals with an upper end.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -93,19 +94,28 @@ class Summary:
 
     def as_dict(self) -> dict:
         """JSON-ready."""
+
         def clean(a):
             return [None if not np.isfinite(x) else float(x) for x in np.asarray(a, dtype=float)]
 
         return {
-            "speed_range": list(self.speed_range), "designs": self.designs, "valid": self.valid,
-            "self_stable": self.stable, "invalid_reasons": self.reasons,
+            "speed_range": list(self.speed_range),
+            "designs": self.designs,
+            "valid": self.valid,
+            "self_stable": self.stable,
+            "invalid_reasons": self.reasons,
             "overall": {k: {"mean": _num(m), "std": _num(s), "n": n} for k, (m, s, n) in self.overall.items()},
-            "parameters": [{
-                "name": p.name, "values": clean(p.values), "valid": p.valid.tolist(),
-                "self_stable_fraction": clean(p.stable_fraction),
-                **{f"mean_{k}": clean(p.mean[k]) for k in OUTPUTS},
-                "sensitivity": {k: _num(v) for k, v in p.sensitivity.items()},
-            } for p in self.parameters],
+            "parameters": [
+                {
+                    "name": p.name,
+                    "values": clean(p.values),
+                    "valid": p.valid.tolist(),
+                    "self_stable_fraction": clean(p.stable_fraction),
+                    **{f"mean_{k}": clean(p.mean[k]) for k in OUTPUTS},
+                    "sensitivity": {k: _num(v) for k, v in p.sensitivity.items()},
+                }
+                for p in self.parameters
+            ],
         }
 
 
@@ -154,10 +164,16 @@ def summarize(store: DesignStore, speed_range=None) -> Summary:
     space = store.spec.space
     k_sizes = [values.size for _, values, _ in axes]
     n_hist = int(np.ceil((hi - lo) / SPEED_BIN))
-    acc = {name: {"count": np.zeros(k, np.int64), "valid": np.zeros(k, np.int64), "stable": np.zeros(k, np.int64),
-                  **{f"{o}_{m}": np.zeros(k) for o in OUTPUTS for m in ("n", "sum", "sq")},
-                  **{f"{o}_hist": np.zeros((k, n_hist), np.int64) for o in OUTPUTS[:2]}}
-           for (name, _, _), k in zip(axes, k_sizes)}
+    acc = {
+        name: {
+            "count": np.zeros(k, np.int64),
+            "valid": np.zeros(k, np.int64),
+            "stable": np.zeros(k, np.int64),
+            **{f"{o}_{m}": np.zeros(k) for o in OUTPUTS for m in ("n", "sum", "sq")},
+            **{f"{o}_hist": np.zeros((k, n_hist), np.int64) for o in OUTPUTS[:2]},
+        }
+        for (name, _, _), k in zip(axes, k_sizes)
+    }
     total = {o: np.zeros(3) for o in OUTPUTS}
     designs = valid_total = stable_total = 0
     reasons: dict[str, int] = {}
@@ -171,12 +187,21 @@ def summarize(store: DesignStore, speed_range=None) -> Summary:
         outputs = {  # the ends of the first stable interval (a design without one has none)
             "weave_speed": np.where(chunk["weave_speed"] == first_lower, first_lower, np.nan),
             "capsize_speed": np.where(chunk["capsize_speed"] == first_upper, first_upper, np.nan),
-            "width": np.where(np.isfinite(width), width, np.nan)}
+            "width": np.where(np.isfinite(width), width, np.nan),
+        }
         with np.errstate(invalid="ignore"):
-            outputs = {o: np.where((y >= lo) & (y <= hi) if o != "width" else (y <= hi - lo), y, np.nan)
-                       for o, y in outputs.items()}
-        bins = {o: np.clip(np.nan_to_num((outputs[o] - lo) / SPEED_BIN).astype(np.int64), 0, n_hist - 1)
-                for o in OUTPUTS[:2]} if n_hist else {}
+            outputs = {
+                o: np.where((y >= lo) & (y <= hi) if o != "width" else (y <= hi - lo), y, np.nan)
+                for o, y in outputs.items()
+            }
+        bins = (
+            {
+                o: np.clip(np.nan_to_num((outputs[o] - lo) / SPEED_BIN).astype(np.int64), 0, n_hist - 1)
+                for o in OUTPUTS[:2]
+            }
+            if n_hist
+            else {}
+        )
         designs += stop - start
         valid_total += int(valid.sum())
         stable_total += int(stable.sum())
@@ -190,8 +215,9 @@ def summarize(store: DesignStore, speed_range=None) -> Summary:
             index = np.unravel_index(np.arange(start, stop, dtype=np.int64), space.shape)
         else:
             drawn = store.varied_values(start, stop)
-            index = [np.clip(np.searchsorted(edges, drawn[name], side="right") - 1, 0, BINS - 1)
-                     for name, _, edges in axes]
+            index = [
+                np.clip(np.searchsorted(edges, drawn[name], side="right") - 1, 0, BINS - 1) for name, _, edges in axes
+            ]
             inside = [(drawn[name] >= edges[0]) & (drawn[name] <= edges[-1]) for name, _, edges in axes]
         for a, (name, _, _) in enumerate(axes):
             i = index[a]
@@ -234,8 +260,21 @@ def summarize(store: DesignStore, speed_range=None) -> Summary:
             else:
                 sensitivity[o] = np.nan
         quartiles = {o: _quartiles(a[f"{o}_hist"], lo) for o in OUTPUTS[:2]}
-        parameters.append(ParameterSummary(name, np.asarray(values, float), edges, a["count"], a["valid"], a["stable"],
-                                           mean, std, count, sensitivity, quartiles))
+        parameters.append(
+            ParameterSummary(
+                name,
+                np.asarray(values, float),
+                edges,
+                a["count"],
+                a["valid"],
+                a["stable"],
+                mean,
+                std,
+                count,
+                sensitivity,
+                quartiles,
+            )
+        )
     return Summary((lo, hi), designs, valid_total, stable_total, reasons, tuple(parameters), overall)
 
 
@@ -308,14 +347,28 @@ def design_slice(store: DesignStore, x: str, y: str, fixed: dict[str, float] | N
 
     def take(name: str) -> np.ndarray:
         values = store.take(name, flat)
-        values = values.reshape((shape[1], shape[0]) + values.shape[1:]) if transpose else values.reshape(shape + values.shape[1:])
+        values = (
+            values.reshape((shape[1], shape[0]) + values.shape[1:])
+            if transpose
+            else values.reshape(shape + values.shape[1:])
+        )
         return np.swapaxes(values, 0, 1) if transpose else values
 
     stable = np.unpackbits(take("stable"), axis=-1, count=store.spec.speeds.size, bitorder="little")
     fraction = stable.mean(axis=-1) if store.spec.speeds.size else np.full(shape, np.nan)
     lower, upper = take("lower"), take("upper")
-    return DesignSlice((x, space.axes[ix].values), (y, space.axes[iy].values), chosen, take("valid"),
-                       lower, upper, take("weave_speed"), take("capsize_speed"), fraction, dict(space.base))
+    return DesignSlice(
+        (x, space.axes[ix].values),
+        (y, space.axes[iy].values),
+        chosen,
+        take("valid"),
+        lower,
+        upper,
+        take("weave_speed"),
+        take("capsize_speed"),
+        fraction,
+        dict(space.base),
+    )
 
 
 @dataclass(frozen=True)
@@ -351,9 +404,22 @@ def closest_to_weave_speed(store: DesignStore, target: float, self_stable: bool 
     values = {k: float(v[0]) for k, v in store.varied_values(best, best + 1).items()}
     lower, upper = store.read("lower", best, best + 1)[0], store.read("upper", best, best + 1)[0]
     intervals = [(float(a), float(b)) for a, b in zip(lower, upper) if np.isfinite(a)]
-    return ClosestDesign(best, values, float(store.read("weave_speed", best, best + 1)[0]),
-                         float(store.read("capsize_speed", best, best + 1)[0]), intervals)
+    return ClosestDesign(
+        best,
+        values,
+        float(store.read("weave_speed", best, best + 1)[0]),
+        float(store.read("capsize_speed", best, best + 1)[0]),
+        intervals,
+    )
 
 
-__all__ = ["BINS", "ClosestDesign", "DesignSlice", "ParameterSummary", "Summary", "closest_to_weave_speed",
-           "design_slice", "summarize"]
+__all__ = [
+    "BINS",
+    "ClosestDesign",
+    "DesignSlice",
+    "ParameterSummary",
+    "Summary",
+    "closest_to_weave_speed",
+    "design_slice",
+    "summarize",
+]

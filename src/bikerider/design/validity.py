@@ -9,6 +9,7 @@ a code into the ``(name, expected)`` pair that ``validate`` would have raised (t
 two equal on random designs).  :func:`rider_reasons` adds the checks of seating a rider (limbs that
 reach the pedals and grips) for designs over raw measurements.
 """
+
 from __future__ import annotations
 
 import math
@@ -58,8 +59,9 @@ for _body in rules.BODIES:
 for _wheel in rules.WHEELS:
     _register(f"I{_wheel}yy", rules.wheel_expected(_wheel))
 SINGULAR = _register("M", "a positive definite mass matrix (the model is singular otherwise)")
-NOT_COMPUTED = _register("benchmark parameters", "finite values from the estimate chain (the measured geometry "
-                                                 "does not close)")
+NOT_COMPUTED = _register(
+    "benchmark parameters", "finite values from the estimate chain (the measured geometry does not close)"
+)
 _SIGNED = frozenset({"c", "xH", "zH", "xBf", "zBf", "IHxz", "IBfxz", "IHyy", "IBfyy"})
 """Measurements of the estimate chain that may be zero or negative (trail, coordinates, products of
 inertia; the I_yy that may be left undetermined)."""
@@ -141,8 +143,11 @@ def benchmark_reasons(values: dict[str, np.ndarray], sigmas: dict[str, float] | 
             xx, yy = v[f"I{wheel}xx"], v[f"I{wheel}yy"]
             excess = yy - 2 * xx
             allowed = math.hypot(sigmas.get(f"I{wheel}yy", 0.0), 2 * sigmas.get(f"I{wheel}xx", 0.0))
-            _assign(codes, (excess > TRIANGLE_TOLERANCE * yy) & (excess > allowed),
-                    _code(f"I{wheel}yy", rules.wheel_expected(wheel)))
+            _assign(
+                codes,
+                (excess > TRIANGLE_TOLERANCE * yy) & (excess > allowed),
+                _code(f"I{wheel}yy", rules.wheel_expected(wheel)),
+            )
     return codes
 
 
@@ -189,6 +194,13 @@ def reason_text(code: int) -> str:
     return f"{name}: expected {expected}" if name else ""
 
 
-__all__ = ["NOT_COMPUTED", "REASONS", "SINGULAR", "benchmark_reasons", "mass_matrix_reasons", "measurement_reasons",
-           "reason_text",
-           "rider_reasons"]
+__all__ = [
+    "NOT_COMPUTED",
+    "REASONS",
+    "SINGULAR",
+    "benchmark_reasons",
+    "mass_matrix_reasons",
+    "measurement_reasons",
+    "reason_text",
+    "rider_reasons",
+]

@@ -15,12 +15,22 @@ the one the derivations describe.
 :func:`first_order`, `propagate`  first-order standard uncertainties of named quantities
 ================================  ============================================================
 """
+
 from bikerider.engine.chain import Chain
 from bikerider.engine.first_order import FirstOrder, first_order, propagate
 from bikerider.engine.least_squares import LeastSquaresStage, conditioning_2x2
 from bikerider.engine.stage import DifferencedStage, GeneratedStage, Stage, arguments, generated_function
 
 __all__ = [
-    "Chain", "DifferencedStage", "FirstOrder", "GeneratedStage", "LeastSquaresStage", "Stage", "arguments",
-    "conditioning_2x2", "first_order", "generated_function", "propagate",
+    "Chain",
+    "DifferencedStage",
+    "FirstOrder",
+    "GeneratedStage",
+    "LeastSquaresStage",
+    "Stage",
+    "arguments",
+    "conditioning_2x2",
+    "first_order",
+    "generated_function",
+    "propagate",
 ]

@@ -5,6 +5,7 @@ stacked gradients of its inputs, so ``d node / d input`` is exact wherever the s
 are (generated ones are).  Values broadcast over any batch shape; plain floats stay floats, which
 lets generated stages use their plain-float twins for one bicycle.
 """
+
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping, Sequence
@@ -69,7 +70,8 @@ class Chain:
             if given:
                 raw = [n for n in stage.inputs if n not in ("g", "k_t") and n in self.provided][:3]
                 raise InputError(
-                    given[0], "given",
+                    given[0],
+                    "given",
                     f"either {given[0]} or the measurements it is computed from ({', '.join(raw)}, ...), not both",
                 )
             self.stages.append(stage)
@@ -82,8 +84,11 @@ class Chain:
         """Raise :class:`InputError` naming the first of ``names`` the inputs cannot give."""
         for name in names:
             if name not in self.available:
-                raise InputError(name, "not computable from the inputs given",
-                                 "the measurements it depends on (see bikerider sensitivity --help)")
+                raise InputError(
+                    name,
+                    "not computable from the inputs given",
+                    "the measurements it depends on (see bikerider sensitivity --help)",
+                )
 
     def evaluate(self, values: Mapping[str, object]) -> dict:
         """Value of every available node (checks included); arrays broadcast against each other."""
@@ -147,7 +152,9 @@ class Chain:
             for stage in self.stages:
                 for name in stage.outputs:
                     row[name] = len(row)
-            plan = [(stage, np.array([row[n] for n in stage.inputs]), np.array([row[n] for n in stage.outputs]))
-                    for stage in self.stages]
+            plan = [
+                (stage, np.array([row[n] for n in stage.inputs]), np.array([row[n] for n in stage.outputs]))
+                for stage in self.stages
+            ]
             self._plans[key] = (row, plan, np.array([row[n] for n in wrt], dtype=int))
         return self._plans[key]

@@ -6,6 +6,7 @@ Outputs that share an input (every inertia shares the pendulum stiffness, every 
 steer axis tilt) get their uncertainty from one derivative of the whole chain rather than from
 stacked independent steps.
 """
+
 from __future__ import annotations
 
 import functools
@@ -102,8 +103,12 @@ def _chain(stages: tuple[Stage, ...], names: frozenset[str]) -> Chain:
     return Chain(stages, names)
 
 
-def first_order(stages: Iterable[Stage], quantities: Mapping[str, Quantity], chain: Chain | None = None,
-                wrt: Sequence[str] | None = None) -> FirstOrder:
+def first_order(
+    stages: Iterable[Stage],
+    quantities: Mapping[str, Quantity],
+    chain: Chain | None = None,
+    wrt: Sequence[str] | None = None,
+) -> FirstOrder:
     """Evaluate the stages at the quantities' values and differentiate with respect to ``wrt``
     (default: every input with a positive uncertainty).  Floats stay floats (plain-float twins
     for one bicycle); arrays give a batch.  ``chain``: the stages already selected for these
@@ -125,8 +130,9 @@ def first_order(stages: Iterable[Stage], quantities: Mapping[str, Quantity], cha
     return FirstOrder(nodes, gradients, wrt, sigmas)
 
 
-def propagate(stages: Iterable[Stage], quantities: Mapping[str, Quantity],
-              outputs: Sequence[str] | None = None) -> dict[str, Quantity]:
+def propagate(
+    stages: Iterable[Stage], quantities: Mapping[str, Quantity], outputs: Sequence[str] | None = None
+) -> dict[str, Quantity]:
     """Every output of the stages (or those named) with its first-order standard uncertainty."""
     stages = list(stages)
     result = first_order(stages, quantities)

@@ -12,6 +12,7 @@ differentiates the solution exactly:
 The row Jacobians are generated, so the stage's Jacobian is exact; it is composed with the rest of
 a chain by :class:`bikerider.engine.Chain` like any other stage.
 """
+
 from __future__ import annotations
 
 import itertools
@@ -62,8 +63,16 @@ class LeastSquaresStage(Stage):
     of ``A`` and ``smallest_singular`` its smallest singular value.
     """
 
-    def __init__(self, name: str, row_kind: str, rows: Sequence[Mapping[str, str]], columns: Sequence[str],
-                 rhs: str, outputs: Sequence[str], method: str = "least_squares"):
+    def __init__(
+        self,
+        name: str,
+        row_kind: str,
+        rows: Sequence[Mapping[str, str]],
+        columns: Sequence[str],
+        rhs: str,
+        outputs: Sequence[str],
+        method: str = "least_squares",
+    ):
         if method not in METHODS:
             raise ValueError(f"method must be one of {METHODS}, not {method!r}")
         if method == "pairwise_mean" and len(columns) != 2:
@@ -75,8 +84,12 @@ class LeastSquaresStage(Stage):
         self.inputs = self.args = tuple(dict.fromkeys(node for row in bound for node in row))
         self.outputs = tuple(outputs)
         m = len(bound)
-        self.checks = (*(f"{name}.miss_{i}" for i in range(1, m + 1)), f"{name}.rms", f"{name}.conditioning",
-                       f"{name}.smallest_singular")
+        self.checks = (
+            *(f"{name}.miss_{i}" for i in range(1, m + 1)),
+            f"{name}.rms",
+            f"{name}.conditioning",
+            f"{name}.smallest_singular",
+        )
         self._local, self._bound = local, bound
         kind_outputs = STAGES[row_kind]["outputs"]
         self._columns = [kind_outputs.index(c) for c in columns]
@@ -89,8 +102,10 @@ class LeastSquaresStage(Stage):
 
     def _rows_kwargs(self, kw: Mapping[str, object]) -> dict[str, np.ndarray]:
         """Each local input of the row kind as an array over the rows (the last axis)."""
-        return {a: np.stack(np.broadcast_arrays(*(np.asarray(kw[row[k]], dtype=float) for row in self._bound)),
-                            axis=-1) for k, a in enumerate(self._local)}
+        return {
+            a: np.stack(np.broadcast_arrays(*(np.asarray(kw[row[k]], dtype=float) for row in self._bound)), axis=-1)
+            for k, a in enumerate(self._local)
+        }
 
     def _system(self, kw: Mapping[str, object]):
         rows_kw = self._rows_kwargs(kw)
@@ -112,13 +127,19 @@ class LeastSquaresStage(Stage):
             singular = np.linalg.svd(A, compute_uv=False)
         if A.shape[-1] == 2:
             N = np.swapaxes(A, -1, -2) @ A
-            conditioning = conditioning_2x2(N[..., 0, 0] * N[..., 1, 1] - N[..., 0, 1] ** 2, N[..., 0, 0] + N[..., 1, 1])
+            conditioning = conditioning_2x2(
+                N[..., 0, 0] * N[..., 1, 1] - N[..., 0, 1] ** 2, N[..., 0, 0] + N[..., 1, 1]
+            )
         else:
             conditioning = singular[..., -1] / singular[..., 0]
         rms = np.sqrt(np.mean(miss**2, axis=-1))
         outputs = [_plain(x[..., j]) for j in range(x.shape[-1])]
-        checks = [*(_plain(miss[..., i]) for i in range(miss.shape[-1])), _plain(rms), _plain(conditioning),
-                  _plain(singular[..., -1])]
+        checks = [
+            *(_plain(miss[..., i]) for i in range(miss.shape[-1])),
+            _plain(rms),
+            _plain(conditioning),
+            _plain(singular[..., -1]),
+        ]
         return outputs, checks
 
     def jacobian(self, kw: Mapping[str, object]) -> np.ndarray:

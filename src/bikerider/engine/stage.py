@@ -12,6 +12,7 @@ Every stage takes and returns arrays that broadcast over leading batch dimension
 stage given plain floats calls the generated functions' plain-float twins where there are any (one
 bicycle at a time is then not dominated by NumPy's per-call overhead).
 """
+
 from __future__ import annotations
 
 import importlib
@@ -32,7 +33,9 @@ def generated_function(name: str, scalar: bool = False) -> Callable:
     module, function = name.split(".")
     # The manifest names the function; its module is imported on first use (a chain that never
     # reaches the rider does not pay for importing the rider's large modules).
-    return getattr(importlib.import_module(f"bikerider.generated.{module}"), f"{function}_scalar" if scalar else function)
+    return getattr(
+        importlib.import_module(f"bikerider.generated.{module}"), f"{function}_scalar" if scalar else function
+    )
 
 
 class _Functions(dict):
@@ -128,13 +131,22 @@ class GeneratedStage(Stage):
         The node each of the kind's checks is written to; by default ``"<name>.<check>"``.
     """
 
-    def __init__(self, kind: str, name: str | None = None, inputs: Mapping[str, str] | None = None,
-                 outputs: Mapping[str, str] | None = None, checks: Mapping[str, str] | None = None):
+    def __init__(
+        self,
+        kind: str,
+        name: str | None = None,
+        inputs: Mapping[str, str] | None = None,
+        outputs: Mapping[str, str] | None = None,
+        checks: Mapping[str, str] | None = None,
+    ):
         entry = STAGES[kind]
         self.kind = self.symbolic = kind
         self.name = name or kind
-        for given, known, what in ((inputs, entry["inputs"], "input"), (outputs, entry["outputs"], "output"),
-                                   (checks, tuple(c[0] for c in entry["checks"]), "check")):
+        for given, known, what in (
+            (inputs, entry["inputs"], "input"),
+            (outputs, entry["outputs"], "output"),
+            (checks, tuple(c[0] for c in entry["checks"]), "check"),
+        ):
             unknown = set(given or ()) - set(known)
             if unknown:  # a binding the manifest does not know: the derivation changed
                 raise ValueError(f"stage {self.name}: {kind} has no {what} {sorted(unknown)[0]}")
@@ -157,8 +169,9 @@ class GeneratedStage(Stage):
         self._combined = [o[0] for o in jacobian["outputs"][:-1]] == names  # the values come with it
         self._nonzero = np.array(jacobian.get("nonzero", {}).get("jacobian", ()), dtype=int)
         vector = [("values", (i,)) for i in range(len(self.outputs))]
-        self._vector = (list(entry["picks"]) == vector and all(o == "checks" and index == (i,)
-                        for i, (_, o, index) in enumerate(entry["checks"])))
+        self._vector = list(entry["picks"]) == vector and all(
+            o == "checks" and index == (i,) for i, (_, o, index) in enumerate(entry["checks"])
+        )
 
     def _call(self, function: str, kw: Mapping[str, object], scalar: bool) -> tuple[object, bool]:
         """``(result, batched)``: the float twin on floats, else the NumPy function."""
@@ -227,9 +240,17 @@ class DifferencedStage(Stage):
     steps : mapping of str to float, optional
     """
 
-    def __init__(self, name: str, function: Callable[[dict], object], inputs, outputs,
-                 steps: Mapping[str, float] | None = None, relative_step: float = 1e-6, batched: bool = False,
-                 extra_dims: int = 0):
+    def __init__(
+        self,
+        name: str,
+        function: Callable[[dict], object],
+        inputs,
+        outputs,
+        steps: Mapping[str, float] | None = None,
+        relative_step: float = 1e-6,
+        batched: bool = False,
+        extra_dims: int = 0,
+    ):
         self.name, self.function = name, function
         self.inputs = self.args = tuple(inputs)
         self.outputs = tuple(outputs)

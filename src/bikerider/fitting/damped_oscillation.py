@@ -24,6 +24,7 @@ one cycle, the optimiser does not converge, the Jacobian is singular, or the osc
 is less than :data:`MIN_AMPLITUDE_SIGNIFICANCE` times its standard error (no oscillation in the
 noise).
 """
+
 from __future__ import annotations
 
 import math
@@ -164,11 +165,20 @@ class DampedOscillationFit:
     def as_dict(self) -> dict[str, float | None]:
         """Plain numbers, for JSON output."""
         return {
-            "period": self.period, "period_se": self.period_se, "omega_d": self.omega_d,
-            "omega_d_se": self.omega_d_se, "sigma": self.sigma, "sigma_se": self.sigma_se,
-            "zeta": self.zeta, "zeta_se": self.zeta_se, "amplitude": self.amplitude,
-            "amplitude_se": self.amplitude_se, "offset": self.offset, "drift": self.drift,
-            "residual_rms": self.residual_rms, "n_samples": self.n_samples,
+            "period": self.period,
+            "period_se": self.period_se,
+            "omega_d": self.omega_d,
+            "omega_d_se": self.omega_d_se,
+            "sigma": self.sigma,
+            "sigma_se": self.sigma_se,
+            "zeta": self.zeta,
+            "zeta_se": self.zeta_se,
+            "amplitude": self.amplitude,
+            "amplitude_se": self.amplitude_se,
+            "offset": self.offset,
+            "drift": self.drift,
+            "residual_rms": self.residual_rms,
+            "n_samples": self.n_samples,
         }
 
 
@@ -185,10 +195,10 @@ def _jacobian(p: np.ndarray, t: np.ndarray, drift: bool) -> np.ndarray:
     osc = a * s + b * c
     columns = [
         decay * t * (a * c - b * s),  # d/d omega
-        -t * decay * osc,             # d/d sigma
-        np.ones_like(t),              # d/d offset
-        decay * s,                    # d/d A
-        decay * c,                    # d/d B
+        -t * decay * osc,  # d/d sigma
+        np.ones_like(t),  # d/d offset
+        decay * s,  # d/d A
+        decay * c,  # d/d B
     ]
     if drift:
         columns.append(t)
@@ -201,8 +211,9 @@ MAX_MAGNITUDE = 1e100
 
 def _check_samples(time: np.ndarray, signal: np.ndarray) -> None:
     if time.ndim != 1 or signal.ndim != 1 or time.shape != signal.shape:
-        raise FitError(f"time and signal must be one-dimensional and of equal length (got shapes "
-                       f"{time.shape} and {signal.shape})")
+        raise FitError(
+            f"time and signal must be one-dimensional and of equal length (got shapes {time.shape} and {signal.shape})"
+        )
     if time.size < MIN_SAMPLES:
         raise FitError(f"too few samples to fit a damped oscillation: {time.size}, need at least {MIN_SAMPLES}")
     if not np.all(np.isfinite(time)):
@@ -213,13 +224,17 @@ def _check_samples(time: np.ndarray, signal: np.ndarray) -> None:
     for name, values in (("time", time), ("signal", signal)):
         largest = float(np.abs(values).max())
         if largest > MAX_MAGNITUDE:  # squares in the fit would overflow
-            raise FitError(f"{name} has values up to {largest:.3g}: too large to fit (at most {MAX_MAGNITUDE:g}; "
-                           "rescale it or check the column)")
+            raise FitError(
+                f"{name} has values up to {largest:.3g}: too large to fit (at most {MAX_MAGNITUDE:g}; "
+                "rescale it or check the column)"
+            )
     steps = np.diff(time)
     if np.any(steps <= 0):
         bad = int(np.flatnonzero(steps <= 0)[0])
-        raise FitError(f"time is not strictly increasing: sample {bad + 2} (t = {time[bad + 1]:g} s) does not "
-                       f"come after sample {bad + 1} (t = {time[bad]:g} s)")
+        raise FitError(
+            f"time is not strictly increasing: sample {bad + 2} (t = {time[bad + 1]:g} s) does not "
+            f"come after sample {bad + 1} (t = {time[bad]:g} s)"
+        )
 
 
 def _fft_frequency(t: np.ndarray, y: np.ndarray) -> float:
@@ -273,8 +288,9 @@ def _linear_start(t: np.ndarray, y: np.ndarray, omega: float, sigma: float, drif
     return np.array(start)
 
 
-def fit_damped_oscillation(time, signal, *, guess_frequency: float | None = None,
-                           drift: bool = False) -> DampedOscillationFit:
+def fit_damped_oscillation(
+    time, signal, *, guess_frequency: float | None = None, drift: bool = False
+) -> DampedOscillationFit:
     """Fit ``offset [+ drift t] + exp(-sigma t)(A sin(omega_d t) + B cos(omega_d t))`` to a signal.
 
     Parameters
@@ -314,8 +330,10 @@ def fit_damped_oscillation(time, signal, *, guess_frequency: float | None = None
             raise FitError("no oscillation found: the spectrum has no peak above zero frequency")
     cycles = omega0 * span / (2 * math.pi)
     if cycles < MIN_CYCLES:
-        raise FitError(f"the record ({span:.4g} s) holds {cycles:.2f} cycles at the signal's dominant frequency "
-                       f"{omega0 / (2 * math.pi):.4g} Hz; need at least {MIN_CYCLES:g} full cycle to fit a period")
+        raise FitError(
+            f"the record ({span:.4g} s) holds {cycles:.2f} cycles at the signal's dominant frequency "
+            f"{omega0 / (2 * math.pi):.4g} Hz; need at least {MIN_CYCLES:g} full cycle to fit a period"
+        )
     nyquist = math.pi * (t.size - 1) / span
     sigma0 = _decay_guess(t, y, omega0)
     sigma0 = float(np.clip(sigma0, -omega0, omega0))
@@ -326,8 +344,13 @@ def fit_damped_oscillation(time, signal, *, guess_frequency: float | None = None
     lower[0], upper[0] = 1e-9 * omega0, 2 * nyquist
     start[0] = float(np.clip(start[0], lower[0] * 10, upper[0] * 0.99))
     result = least_squares(
-        lambda p: _model(p, t, drift) - y, start, jac=lambda p: _jacobian(p, t, drift),
-        bounds=(lower, upper), method="trf", x_scale="jac", max_nfev=2000,
+        lambda p: _model(p, t, drift) - y,
+        start,
+        jac=lambda p: _jacobian(p, t, drift),
+        bounds=(lower, upper),
+        method="trf",
+        x_scale="jac",
+        max_nfev=2000,
     )
     if not result.success or not np.all(np.isfinite(result.x)):
         raise FitError(f"the damped oscillation fit did not converge ({result.message})")
@@ -341,13 +364,22 @@ def fit_damped_oscillation(time, signal, *, guess_frequency: float | None = None
     except np.linalg.LinAlgError:
         raise FitError("the fit's Jacobian could not be decomposed: no standard errors") from None
     if singular[-1] <= singular[0] * 1e-12:
-        raise FitError("the fit's parameters are not determined by the data (singular Jacobian): "
-                       "is there an oscillation in the record?")
+        raise FitError(
+            "the fit's parameters are not determined by the data (singular Jacobian): "
+            "is there an oscillation in the record?"
+        )
     covariance = (vt.T / singular**2) @ vt * s2
     fit = DampedOscillationFit(
-        omega_d=float(p[0]), sigma=float(p[1]), offset=float(p[2]), A=float(p[3]), B=float(p[4]),
-        drift=float(p[5]) if drift else None, covariance=covariance,
-        residual_rms=float(math.sqrt(np.mean(residual**2))), t0=float(t_abs[0]), n_samples=int(t.size),
+        omega_d=float(p[0]),
+        sigma=float(p[1]),
+        offset=float(p[2]),
+        A=float(p[3]),
+        B=float(p[4]),
+        drift=float(p[5]) if drift else None,
+        covariance=covariance,
+        residual_rms=float(math.sqrt(np.mean(residual**2))),
+        t0=float(t_abs[0]),
+        n_samples=int(t.size),
     )
     if not fit.amplitude > MIN_AMPLITUDE_SIGNIFICANCE * fit.amplitude_se:
         raise FitError(

@@ -9,6 +9,7 @@ parentheses (``time [s]``, ``rate (rad/s)``):
 Other columns are ignored.  A file without a header row is read as two columns, time then
 signal.  Separators ``,``, ``;`` or tab; lines starting with ``#`` are comments.
 """
+
 from __future__ import annotations
 
 import csv
@@ -52,16 +53,30 @@ def read_signal_csv(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
     try:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
-        raise FileFormatError(path, f"not UTF-8 text (byte 0x{raw[exc.start]:02x} at offset {exc.start})",
-                              raw.count(b"\n", 0, exc.start) + 1) from None
-    lines = [(n, line) for n, line in enumerate(text.splitlines(), start=1)
-             if line.strip() and not line.lstrip().startswith("#")]
+        raise FileFormatError(
+            path,
+            f"not UTF-8 text (byte 0x{raw[exc.start]:02x} at offset {exc.start})",
+            raw.count(b"\n", 0, exc.start) + 1,
+        ) from None
+    lines = [
+        (n, line)
+        for n, line in enumerate(text.splitlines(), start=1)
+        if line.strip() and not line.lstrip().startswith("#")
+    ]
     if not lines:
         raise FileFormatError(path, "no data: expected columns time and rate")
     sample = lines[0][1]
     delimiter = max((",", ";", "\t"), key=sample.count) if any(d in sample for d in ",;\t") else None
-    rows = [(n, [c.strip() for c in (next(csv.reader(io.StringIO(line), delimiter=delimiter))
-                                     if delimiter else line.split())]) for n, line in lines]
+    rows = [
+        (
+            n,
+            [
+                c.strip()
+                for c in (next(csv.reader(io.StringIO(line), delimiter=delimiter)) if delimiter else line.split())
+            ],
+        )
+        for n, line in lines
+    ]
     first_line, first = rows[0]
     if all(_is_number(c) for c in first if c):
         time_col, signal_col, data = 0, 1, rows
@@ -73,8 +88,11 @@ def read_signal_csv(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
         signal_col = next((i for i, h in enumerate(headers) if h in SIGNAL_NAMES), None)
         if time_col is None or signal_col is None:
             raise FileFormatError(
-                path, f"header {first!r} has no {'time' if time_col is None else 'rate'} column; accepted names: "
-                f"time: {', '.join(TIME_NAMES)}; rate: {', '.join(SIGNAL_NAMES)}", first_line)
+                path,
+                f"header {first!r} has no {'time' if time_col is None else 'rate'} column; accepted names: "
+                f"time: {', '.join(TIME_NAMES)}; rate: {', '.join(SIGNAL_NAMES)}",
+                first_line,
+            )
         data = rows[1:]
     if not data:
         raise FileFormatError(path, "a header but no data rows")
@@ -82,7 +100,9 @@ def read_signal_csv(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
     signal = np.empty(len(data))
     for k, (number, cells) in enumerate(data):
         if max(time_col, signal_col) >= len(cells):
-            raise FileFormatError(path, f"{len(cells)} columns, expected at least {max(time_col, signal_col) + 1}", number)
+            raise FileFormatError(
+                path, f"{len(cells)} columns, expected at least {max(time_col, signal_col) + 1}", number
+            )
         for target, col, what in ((time, time_col, "time"), (signal, signal_col, "rate")):
             try:
                 value = float(cells[col])

@@ -28,6 +28,7 @@ Identified canonical-matrix entries
 Every reader raises :class:`~bikerider.errors.FileFormatError` naming the file and line for a
 malformed line, and for a non-finite number or a speed that is not positive.
 """
+
 from __future__ import annotations
 
 import csv
@@ -48,8 +49,16 @@ LOG = logging.getLogger(__name__)
 MODES = ("weave", "capsize", "castor")
 EIGENVALUE_COLUMNS = ("speed", "real", "imag", "real_sigma", "imag_sigma", "speed_sigma", "group", "mode") + GAIN_NAMES
 TIME_SERIES_COLUMNS = ("time", "roll_rate", "steer_angle", "steer_rate", "speed")
-CANONICAL_ENTRIES = ("M_phidelta", "C1_phidelta", "K0_phidelta", "M_deltadelta", "C1_deltaphi",
-                     "C1_deltadelta", "K0_deltadelta", "K2_deltadelta")
+CANONICAL_ENTRIES = (
+    "M_phidelta",
+    "C1_phidelta",
+    "K0_phidelta",
+    "M_deltadelta",
+    "C1_deltaphi",
+    "C1_deltadelta",
+    "K0_deltadelta",
+    "K2_deltadelta",
+)
 """The canonical-matrix entries an identification may report (Moore 2012's free entries)."""
 _COORDS = {"phi": "phi", "delta": "delta"}
 
@@ -87,15 +96,20 @@ class EigenvalueData:
         return int(self.speed.size)
 
     @staticmethod
-    def concatenate(parts: list["EigenvalueData"]) -> "EigenvalueData":
+    def concatenate(parts: list[EigenvalueData]) -> EigenvalueData:
         if not parts:
-            return EigenvalueData(np.empty(0), np.empty(0, complex), np.empty(0), np.empty(0), np.empty(0), [], [],
-                                  np.empty((0, 4)), [])
+            return EigenvalueData(
+                np.empty(0), np.empty(0, complex), np.empty(0), np.empty(0), np.empty(0), [], [], np.empty((0, 4)), []
+            )
         return EigenvalueData(
-            np.concatenate([p.speed for p in parts]), np.concatenate([p.value for p in parts]),
-            np.concatenate([p.real_sigma for p in parts]), np.concatenate([p.imag_sigma for p in parts]),
-            np.concatenate([p.speed_sigma for p in parts]), sum((p.mode for p in parts), []),
-            sum((p.group for p in parts), []), np.concatenate([p.gains for p in parts]),
+            np.concatenate([p.speed for p in parts]),
+            np.concatenate([p.value for p in parts]),
+            np.concatenate([p.real_sigma for p in parts]),
+            np.concatenate([p.imag_sigma for p in parts]),
+            np.concatenate([p.speed_sigma for p in parts]),
+            sum((p.mode for p in parts), []),
+            sum((p.group for p in parts), []),
+            np.concatenate([p.gains for p in parts]),
             sum((p.source for p in parts), []),
         )
 
@@ -115,7 +129,7 @@ class CanonicalData:
         return len(self.entry)
 
     @staticmethod
-    def concatenate(parts: list["CanonicalData"]) -> "CanonicalData":
+    def concatenate(parts: list[CanonicalData]) -> CanonicalData:
         out = CanonicalData([], np.empty(0), np.empty(0), [], {}, [])
         for p in parts:
             out.entry += p.entry
@@ -125,7 +139,9 @@ class CanonicalData:
             out.sigma = np.concatenate([out.sigma, p.sigma])
             for g, r in p.speed_range.items():
                 if g in out.speed_range and out.speed_range[g] != r:
-                    raise InputError(f"speed range of group {g}", r, f"the same range in every file ({out.speed_range[g]})")
+                    raise InputError(
+                        f"speed range of group {g}", r, f"the same range in every file ({out.speed_range[g]})"
+                    )
                 out.speed_range[g] = r
         return out
 
@@ -176,8 +192,9 @@ def _read_table(path: str | Path) -> _Table:
                 raise FileFormatError(path, f"repeated column name in header {columns}", number)
             continue
         if len(cells) != len(columns):
-            raise FileFormatError(path, f"expected {len(columns)} comma-separated values ({', '.join(columns)}), "
-                                  f"got {len(cells)}", number)
+            raise FileFormatError(
+                path, f"expected {len(columns)} comma-separated values ({', '.join(columns)}), got {len(cells)}", number
+            )
         rows.append((number, cells))
     if columns is None:
         raise FileFormatError(path, "no header line (column names) found")
@@ -188,8 +205,16 @@ MAX_MAGNITUDE = 1e6
 """Largest magnitude of a number in a data file (speeds in m/s, eigenvalues in 1/s, times in s, gains)."""
 
 
-def _number(table: _Table, line: int, column: str, raw: str, *, positive: bool = False,
-            nonnegative: bool = False, optional: bool = False) -> float:
+def _number(
+    table: _Table,
+    line: int,
+    column: str,
+    raw: str,
+    *,
+    positive: bool = False,
+    nonnegative: bool = False,
+    optional: bool = False,
+) -> float:
     if raw == "":
         if optional:
             return math.nan
@@ -201,8 +226,11 @@ def _number(table: _Table, line: int, column: str, raw: str, *, positive: bool =
     if not math.isfinite(value):
         raise FileFormatError(table.path, f"{column} = {raw}: expected a finite number", line)
     if abs(value) > MAX_MAGNITUDE:  # no speed, eigenvalue, gain or time of a bicycle test; overflows later
-        raise FileFormatError(table.path, f"{column} = {raw}: expected a magnitude of at most {MAX_MAGNITUDE:g} "
-                              "(check the units and the column)", line)
+        raise FileFormatError(
+            table.path,
+            f"{column} = {raw}: expected a magnitude of at most {MAX_MAGNITUDE:g} (check the units and the column)",
+            line,
+        )
     if positive and not value > 0:
         raise FileFormatError(table.path, f"{column} = {raw}: expected a positive number", line)
     if nonnegative and value < 0:
@@ -217,16 +245,20 @@ def _meta_number(table: _Table, key: str, *, positive: bool = False, nonnegative
     return _number(table, line, key, raw, positive=positive, nonnegative=nonnegative)
 
 
-def _check_columns(table: _Table, allowed: tuple[str, ...], required: tuple[str, ...], ignored: tuple[str, ...] = ()) -> None:
+def _check_columns(
+    table: _Table, allowed: tuple[str, ...], required: tuple[str, ...], ignored: tuple[str, ...] = ()
+) -> None:
     header_line = min((n for n, _ in table.rows), default=2) - 1
     for name in table.columns:
         if name not in allowed and name not in ignored:
-            raise FileFormatError(table.path, f"unknown column {name!r}: expected some of {', '.join(allowed)}",
-                                  header_line)
+            raise FileFormatError(
+                table.path, f"unknown column {name!r}: expected some of {', '.join(allowed)}", header_line
+            )
     for name in required:
         if name not in table.columns:
-            raise FileFormatError(table.path, f"missing column {name!r} (columns are {', '.join(table.columns)})",
-                                  header_line)
+            raise FileFormatError(
+                table.path, f"missing column {name!r} (columns are {', '.join(table.columns)})", header_line
+            )
 
 
 def _file_gains(table: _Table) -> np.ndarray:
@@ -255,6 +287,7 @@ def read_eigenvalues(path: str | Path, gains=None) -> EigenvalueData:
     if not table.rows:
         raise FileFormatError(table.path, "no data rows")
     for line, cells in table.rows:
+
         def get(name, **kw):
             return _number(table, line, name, cells[cols[name]], **kw) if name in cols else math.nan
 
@@ -264,10 +297,16 @@ def read_eigenvalues(path: str | Path, gains=None) -> EigenvalueData:
         is_ = get("imag_sigma", positive=True, optional=True) if "imag_sigma" in cols else math.nan
         ss = get("speed_sigma", nonnegative=True, optional=True) if "speed_sigma" in cols else math.nan
         if ss >= speed:  # the diagnosis evaluates the model at speed +/- speed_sigma
-            raise FileFormatError(table.path, f"speed_sigma = {ss:g}: expected a standard uncertainty below the "
-                                  f"speed ({speed:g} m/s)", line)
-        mode = cells[cols["mode"]].strip().lower() if "mode" in cols and cells[cols["mode"]].strip() else (
-            "weave" if imag != 0 else "auto")
+            raise FileFormatError(
+                table.path,
+                f"speed_sigma = {ss:g}: expected a standard uncertainty below the speed ({speed:g} m/s)",
+                line,
+            )
+        mode = (
+            cells[cols["mode"]].strip().lower()
+            if "mode" in cols and cells[cols["mode"]].strip()
+            else ("weave" if imag != 0 else "auto")
+        )
         if mode not in MODES and mode != "auto":
             raise FileFormatError(table.path, f"mode = {mode!r}: expected one of {', '.join(MODES)}", line)
         if mode != "weave" and imag != 0:
@@ -287,9 +326,17 @@ def read_eigenvalues(path: str | Path, gains=None) -> EigenvalueData:
         out["group"].append(cells[cols["group"]] if "group" in cols and cells[cols["group"]] else file_group)
         out["gains"].append(row_gains)
         out["source"].append(f"{table.path}:{line}")
-    return EigenvalueData(np.array(out["speed"]), np.array(out["value"], complex), np.array(out["rs"]),
-                          np.array(out["is"]), np.array(out["ss"]), out["mode"], out["group"],
-                          np.array(out["gains"]), out["source"])
+    return EigenvalueData(
+        np.array(out["speed"]),
+        np.array(out["value"], complex),
+        np.array(out["rs"]),
+        np.array(out["is"]),
+        np.array(out["ss"]),
+        out["mode"],
+        out["group"],
+        np.array(out["gains"]),
+        out["source"],
+    )
 
 
 @dataclass(frozen=True)
@@ -302,8 +349,9 @@ class PerturbationRun:
     signals: dict[str, np.ndarray]
 
 
-def read_perturbation(path: str | Path, speed: float | None = None, gains=None,
-                      group: str | None = None) -> PerturbationRun:
+def read_perturbation(
+    path: str | Path, speed: float | None = None, gains=None, group: str | None = None
+) -> PerturbationRun:
     """Read one perturbation run and fit the weave eigenvalue (format in the module docstring).
 
     Raises
@@ -337,14 +385,19 @@ def read_perturbation(path: str | Path, speed: float | None = None, gains=None,
     else:
         v_meta = _meta_number(table, "speed", positive=True)
         if v_meta is None:
-            raise FileFormatError(table.path, "no speed: give a 'speed' column, a '# speed = ...' comment or the speed argument")
+            raise FileFormatError(
+                table.path, "no speed: give a 'speed' column, a '# speed = ...' comment or the speed argument"
+            )
         v, v_sigma = v_meta, 0.0
     meta_sigma = _meta_number(table, "speed_sigma", nonnegative=True)
     if meta_sigma is not None:
         v_sigma = max(v_sigma, meta_sigma)
     if v_sigma >= v:  # the diagnosis evaluates the model at speed +/- its uncertainty
-        raise FileFormatError(table.path, f"speed {v:g} m/s with uncertainty {v_sigma:g} m/s: expected an "
-                              "uncertainty below the speed (a run whose speed varies this much has no one weave eigenvalue)")
+        raise FileFormatError(
+            table.path,
+            f"speed {v:g} m/s with uncertainty {v_sigma:g} m/s: expected an "
+            "uncertainty below the speed (a run whose speed varies this much has no one weave eigenvalue)",
+        )
     fits: dict[str, object] = {}
     try:
         fits["roll_rate"] = weave_eigenvalue(data["time"], data["roll_rate"])
@@ -364,8 +417,17 @@ def read_perturbation(path: str | Path, speed: float | None = None, gains=None,
         if meta is not None:
             row_gains[k] = meta
     file_group = group or table.meta.get("group", (0, table.path.stem))[1]
-    eig = EigenvalueData(np.array([v]), np.array([value]), np.array([real_sigma]), np.array([imag_sigma]),
-                         np.array([v_sigma]), ["weave"], [file_group], row_gains[None, :], [str(table.path)])
+    eig = EigenvalueData(
+        np.array([v]),
+        np.array([value]),
+        np.array([real_sigma]),
+        np.array([imag_sigma]),
+        np.array([v_sigma]),
+        ["weave"],
+        [file_group],
+        row_gains[None, :],
+        [str(table.path)],
+    )
     return PerturbationRun(eig, fits, data["time"], {k: data[k] for k in data if k != "time"})
 
 
@@ -392,7 +454,7 @@ def _entry_name(raw: str) -> str | None:
     raw = raw.strip()
     for prefix in MATRIX_NAMES:
         if raw.startswith(prefix):
-            rest = raw[len(prefix):].lstrip("_")
+            rest = raw[len(prefix) :].lstrip("_")
             name = f"{prefix}_{rest}"
             return name if name in CANONICAL_ENTRIES else None
     return None
@@ -408,8 +470,12 @@ def read_canonical(path: str | Path, groups: list[str] | None = None) -> Canonic
     """
     table = _read_table(path)
     required = ("rider", "environment", "coefficient", "identified", "sigma")
-    _check_columns(table, required + ("speed_min", "speed_max"), required,
-                   ignored=tuple(c for c in table.columns if c not in required + ("speed_min", "speed_max")))
+    _check_columns(
+        table,
+        required + ("speed_min", "speed_max"),
+        required,
+        ignored=tuple(c for c in table.columns if c not in required + ("speed_min", "speed_max")),
+    )
     cols = {name: i for i, name in enumerate(table.columns)}
     v_min = _meta_number(table, "speed_min", positive=True)
     v_max = _meta_number(table, "speed_max", positive=True)
@@ -426,8 +492,12 @@ def read_canonical(path: str | Path, groups: list[str] | None = None) -> Canonic
             continue
         values.append(_number(table, line, "identified", cells[cols["identified"]]))
         sigmas.append(_number(table, line, "sigma", cells[cols["sigma"]], positive=True))
-        lo = _number(table, line, "speed_min", cells[cols["speed_min"]], positive=True) if "speed_min" in cols else v_min
-        hi = _number(table, line, "speed_max", cells[cols["speed_max"]], positive=True) if "speed_max" in cols else v_max
+        lo = (
+            _number(table, line, "speed_min", cells[cols["speed_min"]], positive=True) if "speed_min" in cols else v_min
+        )
+        hi = (
+            _number(table, line, "speed_max", cells[cols["speed_max"]], positive=True) if "speed_max" in cols else v_max
+        )
         if lo is None or hi is None:
             raise FileFormatError(table.path, "no speed range: give speed_min and speed_max columns or comments", line)
         if not hi > lo:
@@ -471,6 +541,9 @@ def detect_kind(path: str | Path) -> str:
         return "eigenvalues"
     if {"coefficient", "identified"} <= names:
         return "canonical"
-    raise FileFormatError(table.path, "cannot tell the kind of data: expected columns speed, real, imag "
-                          "(eigenvalues), time, roll_rate (perturbation run) or rider, environment, coefficient, "
-                          f"identified, sigma (identified matrices); found {', '.join(table.columns)}")
+    raise FileFormatError(
+        table.path,
+        "cannot tell the kind of data: expected columns speed, real, imag "
+        "(eigenvalues), time, roll_rate (perturbation run) or rider, environment, coefficient, "
+        f"identified, sigma (identified matrices); found {', '.join(table.columns)}",
+    )

@@ -26,6 +26,7 @@ How far.  For the selection, the held-out error before and after per fold and ov
 fraction of the gap above the noise floor removed: with ``G = mean(z^2) - 1`` (the noise floor of
 normalised residuals is ``E[z^2] = 1``), ``shrink = (G_before - G_after) / G_before``.
 """
+
 from __future__ import annotations
 
 import logging
@@ -130,13 +131,15 @@ class Diagnosis:
         Candidates (default: all of :data:`EFFECT_NAMES`).
     """
 
-    def __init__(self, model: GapModelInput, eigen: EigenvalueData, canonical: CanonicalData,
-                 effects=EFFECT_NAMES):
+    def __init__(self, model: GapModelInput, eigen: EigenvalueData, canonical: CanonicalData, effects=EFFECT_NAMES):
         start = time.perf_counter()
         self.problem = GapProblem(model, eigen, canonical)
         self.effects = [e for e in effects]
-        self.not_applicable = {e: "needs a rider on the bicycle (the model has none)"
-                               for e in self.effects if EFFECTS[e].needs_rider and model.geometry.upper_body is None}
+        self.not_applicable = {
+            e: "needs a rider on the bicycle (the model has none)"
+            for e in self.effects
+            if EFFECTS[e].needs_rider and model.geometry.upper_body is None
+        }
         if not self.problem.free and "parameters" in self.effects:
             self.not_applicable["parameters"] = "the model file gives no parameter uncertainties"
         self.candidates = [e for e in self.effects if e not in self.not_applicable]
@@ -188,8 +191,11 @@ class Diagnosis:
                 band_key = (float(band[0]), float(band[-1]))
             else:
                 band_key = tuple(float(x) for x in self.problem.predictor.canonical.speed_range[obs.group[i]])
-            key = (obs.mode[i], band_key, obs.quantity[i]) if obs.kind[i] == "eigenvalue" else (
-                "canonical", band_key, f"{obs.quantity[i]} ({obs.group[i]})")
+            key = (
+                (obs.mode[i], band_key, obs.quantity[i])
+                if obs.kind[i] == "eigenvalue"
+                else ("canonical", band_key, f"{obs.quantity[i]} ({obs.group[i]})")
+            )
             keys.append(key)
         unique = list(dict.fromkeys(keys))
         for key in unique:
@@ -197,16 +203,24 @@ class Diagnosis:
             zz = z[idx]
             stat = float(np.sum(zz**2))
             pval = float(chi2.sf(stat, len(idx)))
-            cells.append({
-                "mode": key[0], "speed_band": list(key[1]), "quantity": key[2], "n": len(idx),
-                "mean_residual": float(np.mean(p.y[idx] - p.baseline[idx])),
-                "mean_measured": float(np.mean(p.y[idx])), "mean_predicted": float(np.mean(p.baseline[idx])),
-                "combined_sigma": float(np.sqrt(np.mean(p.var_total[idx]))),
-                "data_sigma": float(np.sqrt(np.mean(p.var_data[idx]))),
-                "model_sigma": float(np.sqrt(np.mean(p.var_model[idx]))),
-                "rms_z": rms(zz), "chi2": stat, "p_value": pval,
-                "significant": bool(pval < ALPHA / max(len(unique), 1)),
-            })
+            cells.append(
+                {
+                    "mode": key[0],
+                    "speed_band": list(key[1]),
+                    "quantity": key[2],
+                    "n": len(idx),
+                    "mean_residual": float(np.mean(p.y[idx] - p.baseline[idx])),
+                    "mean_measured": float(np.mean(p.y[idx])),
+                    "mean_predicted": float(np.mean(p.baseline[idx])),
+                    "combined_sigma": float(np.sqrt(np.mean(p.var_total[idx]))),
+                    "data_sigma": float(np.sqrt(np.mean(p.var_data[idx]))),
+                    "model_sigma": float(np.sqrt(np.mean(p.var_model[idx]))),
+                    "rms_z": rms(zz),
+                    "chi2": stat,
+                    "p_value": pval,
+                    "significant": bool(pval < ALPHA / max(len(unique), 1)),
+                }
+            )
         return cells
 
     def _gap_test(self) -> dict:
@@ -217,8 +231,13 @@ class Diagnosis:
         cov = np.diag(p.var_data) + p.jacobian @ p.jacobian.T
         stat = float(r @ np.linalg.solve(cov, r))
         n = r.size
-        return {"chi2": stat, "dof": n, "p_value": float(chi2.sf(stat, n)),
-                "rms_z": rms(-p.z(p.baseline)), "significant": bool(chi2.sf(stat, n) < ALPHA)}
+        return {
+            "chi2": stat,
+            "dof": n,
+            "p_value": float(chi2.sf(stat, n)),
+            "rms_z": rms(-p.z(p.baseline)),
+            "significant": bool(chi2.sf(stat, n) < ALPHA),
+        }
 
     # -- whether ----------------------------------------------------------------------------------
     def _verdict(self) -> str:
@@ -230,8 +249,13 @@ class Diagnosis:
         if fit is None:
             return "structural"
         stat = fit.chi2 + fit.prior_chi2
-        self.parameter_test = {"chi2": stat, "dof": fit.n, "p_value": float(chi2.sf(stat, fit.n)),
-                               "prior_chi2": fit.prior_chi2, "prior_dof": len(self.problem.free)}
+        self.parameter_test = {
+            "chi2": stat,
+            "dof": fit.n,
+            "p_value": float(chi2.sf(stat, fit.n)),
+            "prior_chi2": fit.prior_chi2,
+            "prior_dof": len(self.problem.free),
+        }
         return "parameters" if chi2.sf(stat, fit.n) >= ALPHA else "structural"
 
     # -- which ------------------------------------------------------------------------------------
@@ -248,11 +272,26 @@ class Diagnosis:
             z_fold = p.z(p.predict_fit(fit))[held]
             # a model that cannot be evaluated (singular) predicts nothing: count it as far off
             z_after[held] = np.where(np.isfinite(z_fold), z_fold, UNPREDICTED_Z)
-            folds.append({"fold": name, "n": int(held.sum()), "error_before": rms(z_before[held]),
-                          "error_after": rms(z_after[held]), "fitted": _named_values(fit)})
+            folds.append(
+                {
+                    "fold": name,
+                    "n": int(held.sum()),
+                    "error_before": rms(z_before[held]),
+                    "error_after": rms(z_after[held]),
+                    "fitted": _named_values(fit),
+                }
+            )
         held_any = np.any([h for _, h in self.folds], axis=0)
-        result = CrossValidation(effects, folds, z_before[held_any], z_after[held_any], rms(z_before[held_any]),
-                                 rms(z_after[held_any]), gap_shrink(z_before[held_any], z_after[held_any]), fits)
+        result = CrossValidation(
+            effects,
+            folds,
+            z_before[held_any],
+            z_after[held_any],
+            rms(z_before[held_any]),
+            rms(z_after[held_any]),
+            gap_shrink(z_before[held_any], z_after[held_any]),
+            fits,
+        )
         self.cv[effects] = result
         return result
 
@@ -264,7 +303,7 @@ class Diagnosis:
             ordered.append(r)
         ties: dict[tuple, list[str]] = {r.effects: [] for r in results}
         for i, a in enumerate(results):
-            for b in results[i + 1:]:
+            for b in results[i + 1 :]:
                 better, _ = significantly_better(a.z_after, b.z_after)
                 if not better:
                     ties[a.effects].append("+".join(b.effects))
@@ -275,7 +314,9 @@ class Diagnosis:
             changed = False
             for i in range(len(ordered) - 1):
                 a, b = ordered[i], ordered[i + 1]
-                if "+".join(b.effects) in ties[a.effects] and _n_params(self.problem, b.effects) < _n_params(self.problem, a.effects):
+                if "+".join(b.effects) in ties[a.effects] and _n_params(self.problem, b.effects) < _n_params(
+                    self.problem, a.effects
+                ):
                     ordered[i], ordered[i + 1] = b, a
                     changed = True
         return [(r, ties[r.effects]) for r in ordered]
@@ -283,9 +324,17 @@ class Diagnosis:
     def _rank(self) -> None:
         results = [self.cross_validate((e,)) for e in self.candidates]
         for rank, (r, ties) in enumerate(self._order(results), start=1):
-            self.ranking.append({"rank": rank, "effect": r.effects[0], "heldout_error_before": r.error_before,
-                                 "heldout_error_after": r.error_after, "shrink": r.shrink, "tied_with": ties,
-                                 "folds": r.folds})
+            self.ranking.append(
+                {
+                    "rank": rank,
+                    "effect": r.effects[0],
+                    "heldout_error_before": r.error_before,
+                    "heldout_error_after": r.error_after,
+                    "shrink": r.shrink,
+                    "tied_with": ties,
+                    "folds": r.folds,
+                }
+            )
 
     def _select(self) -> None:
         if self.verdict != "structural":
@@ -302,8 +351,15 @@ class Diagnosis:
             best, _ = self._order(results)[0]
             better, pval = significantly_better(best.z_after, current_z)
             added = [e for e in best.effects if e not in current][0]
-            self.selection_steps.append({"added": added, "heldout_error": best.error_after,
-                                         "previous_error": rms(current_z), "p_value": pval, "accepted": better})
+            self.selection_steps.append(
+                {
+                    "added": added,
+                    "heldout_error": best.error_after,
+                    "previous_error": rms(current_z),
+                    "p_value": pval,
+                    "accepted": better,
+                }
+            )
             if not better:
                 break
             current = best.effects
@@ -320,8 +376,14 @@ class Diagnosis:
 
             limit = float(chi2.ppf(1 - ALPHA, max(len(self.problem.free), 1)))
             good = fit.prior_chi2 <= limit
-            checks.append({"name": "sum of squared shifts / sigma^2", "value": fit.prior_chi2,
-                           "literature": [0.0, limit], "plausible": bool(good)})
+            checks.append(
+                {
+                    "name": "sum of squared shifts / sigma^2",
+                    "value": fit.prior_chi2,
+                    "literature": [0.0, limit],
+                    "plausible": bool(good),
+                }
+            )
             return bool(good), checks
         for k, name in enumerate(fit.names):
             effect = next(e for e in fit.effects if any(p.name == name for p in EFFECTS[e].parameters))
@@ -334,11 +396,27 @@ class Diagnosis:
                 (ilo, ihi), unit, source = LITERATURE_EXTRA["I_arm_steer"]
                 scale = inertia / fit.values[k] if fit.values[k] > 0 else arm_inertia(self.problem, 1.0)
                 good = fit.ci_high[k] * scale >= ilo and fit.ci_low[k] * scale <= ihi
-                checks.append({"name": "I_arm_steer", "value": inertia, "unit": unit,
-                               "literature": [ilo, ihi], "plausible": bool(good), "source": source})
+                checks.append(
+                    {
+                        "name": "I_arm_steer",
+                        "value": inertia,
+                        "unit": unit,
+                        "literature": [ilo, ihi],
+                        "plausible": bool(good),
+                        "source": source,
+                    }
+                )
             else:
-                checks.append({"name": name, "value": float(fit.values[k]), "unit": param.unit,
-                               "literature": [lo, hi], "plausible": bool(good), "source": param.source})
+                checks.append(
+                    {
+                        "name": name,
+                        "value": float(fit.values[k]),
+                        "unit": param.unit,
+                        "literature": [lo, hi],
+                        "plausible": bool(good),
+                        "source": param.source,
+                    }
+                )
             ok = ok and bool(good)
         return ok, checks
 
@@ -349,13 +427,20 @@ class Diagnosis:
         for entry in self.ranking:
             fit = self.full_fits[entry["effect"]]
             plausible, checks = self.plausibility(fit)
-            ranking.append({**{k: entry[k] for k in ("rank", "effect")},
-                            "parameters": _named_values(fit),
-                            "heldout_error_before": entry["heldout_error_before"],
-                            "heldout_error_after": entry["heldout_error_after"],
-                            "shrink": entry["shrink"], "plausible": plausible, "plausibility": checks,
-                            "tied_with": entry["tied_with"], "n_parameters": len(fit.names),
-                            "folds": entry["folds"]})
+            ranking.append(
+                {
+                    **{k: entry[k] for k in ("rank", "effect")},
+                    "parameters": _named_values(fit),
+                    "heldout_error_before": entry["heldout_error_before"],
+                    "heldout_error_after": entry["heldout_error_after"],
+                    "shrink": entry["shrink"],
+                    "plausible": plausible,
+                    "plausibility": checks,
+                    "tied_with": entry["tied_with"],
+                    "n_parameters": len(fit.names),
+                    "folds": entry["folds"],
+                }
+            )
         out = {
             "verdict": self.verdict,
             "gap": {"test": self.gap_test, "map": self.gap_map},
@@ -367,23 +452,31 @@ class Diagnosis:
             "not_applicable": self.not_applicable,
             "folds": [name for name, _ in self.folds],
             "n_observations": len(p.obs),
-            "notes": list(p.notes) + ([] if len(self.folds) >= 2 else
-                                      ["fewer than two folds (groups or speeds): no held-out ranking"]),
-            "model": {"source": p.model_input.source, "geometry": p.geometry.notes,
-                      "uncertain_parameters": p.free},
+            "notes": list(p.notes)
+            + ([] if len(self.folds) >= 2 else ["fewer than two folds (groups or speeds): no held-out ranking"]),
+            "model": {"source": p.model_input.source, "geometry": p.geometry.notes, "uncertain_parameters": p.free},
             "elapsed_s": self.elapsed,
         }
         if self.parameter_fit is not None:
             fit = self.parameter_fit
             plausible, checks = self.plausibility(fit)
-            out["parameter_fit"] = {"shift": fit.shift, "shift_in_sigma": dict(zip(p.free, map(float, fit.values))),
-                                    "test": getattr(self, "parameter_test", None), "plausible": plausible}
+            out["parameter_fit"] = {
+                "shift": fit.shift,
+                "shift_in_sigma": dict(zip(p.free, map(float, fit.values))),
+                "test": getattr(self, "parameter_test", None),
+                "plausible": plausible,
+            }
         if self.selected and len(self.folds) >= 2:
             cv = self.cross_validate(tuple(self.selected))
             fit = self.selected_fit
-            out["how_far"] = {"effects": list(self.selected), "folds": cv.folds,
-                              "heldout_error_before": cv.error_before, "heldout_error_after": cv.error_after,
-                              "shrink": cv.shrink, "parameters": _named_values(fit) if fit else {}}
+            out["how_far"] = {
+                "effects": list(self.selected),
+                "folds": cv.folds,
+                "heldout_error_before": cv.error_before,
+                "heldout_error_after": cv.error_after,
+                "shrink": cv.shrink,
+                "parameters": _named_values(fit) if fit else {},
+            }
         return out
 
 
@@ -397,8 +490,10 @@ def _n_params(problem: GapProblem, effects: tuple[str, ...]) -> int:
 def _named_values(fit: EffectFit | None) -> dict:
     if fit is None:
         return {}
-    return {name: {"value": float(v), "stderr": float(s), "ci95": [float(lo), float(hi)], "unit": u}
-            for name, v, s, lo, hi, u in zip(fit.names, fit.values, fit.stderr, fit.ci_low, fit.ci_high, fit.units)}
+    return {
+        name: {"value": float(v), "stderr": float(s), "ci95": [float(lo), float(hi)], "unit": u}
+        for name, v, s, lo, hi, u in zip(fit.names, fit.values, fit.stderr, fit.ci_low, fit.ci_high, fit.units)
+    }
 
 
 def arm_inertia(problem: GapProblem, m_arm: float) -> float:
@@ -413,8 +508,12 @@ def arm_inertia(problem: GapProblem, m_arm: float) -> float:
     return float(m_arm * (perp @ perp))
 
 
-def diagnose(model: GapModelInput, eigen: EigenvalueData | None = None, canonical: CanonicalData | None = None,
-             effects=EFFECT_NAMES) -> Diagnosis:
+def diagnose(
+    model: GapModelInput,
+    eigen: EigenvalueData | None = None,
+    canonical: CanonicalData | None = None,
+    effects=EFFECT_NAMES,
+) -> Diagnosis:
     """Run the diagnosis (see the module docstring)."""
     eigen = eigen if eigen is not None else EigenvalueData.concatenate([])
     canonical = canonical if canonical is not None else CanonicalData.concatenate([])

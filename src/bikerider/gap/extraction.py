@@ -23,6 +23,7 @@ frequency errors of 4-12 white-noise standard errors).  When a fast-growing caps
 (a fall) swamps the record, the plain fit often fails and the two-mode fit alone finds the weave.  Standard errors are from ``s^2 (J^T J)^-1``.  Records should
 start after the perturbation (and after the castor transient, a few tenths of a second).
 """
+
 from __future__ import annotations
 
 import math
@@ -83,10 +84,10 @@ def _scan_start(t: np.ndarray, y: np.ndarray) -> np.ndarray:
     three one-dimensional families of basis functions.
     """
     tau = t - t[0]
-    decay = np.exp(-SCAN_DECAYS[:, None] * tau)                  # (D, n)
+    decay = np.exp(-SCAN_DECAYS[:, None] * tau)  # (D, n)
     sin, cos = np.sin(SCAN_OMEGAS[:, None] * tau), np.cos(SCAN_OMEGAS[:, None] * tau)  # (W, n)
-    extra = np.exp(np.asarray(SCAN_MODES)[:, None] * tau)         # (L, n)
-    osc_s = decay[None, :, :] * sin[:, None, :]                   # (W, D, n)
+    extra = np.exp(np.asarray(SCAN_MODES)[:, None] * tau)  # (L, n)
+    osc_s = decay[None, :, :] * sin[:, None, :]  # (W, D, n)
     osc_c = decay[None, :, :] * cos[:, None, :]
     W, D, L, n = SCAN_OMEGAS.size, SCAN_DECAYS.size, len(SCAN_MODES), tau.size
     basis = np.empty((W, D, L, 4, n))
@@ -127,8 +128,17 @@ def _two_mode_jacobian(p: np.ndarray, tau: np.ndarray) -> np.ndarray:
     decay = np.exp(-sigma * tau)
     s, co = np.sin(omega * tau), np.cos(omega * tau)
     grow = np.exp(lam * tau)
-    return np.column_stack([decay * tau * (a * co - b * s), -tau * decay * (a * s + b * co), decay * s, decay * co,
-                            np.ones_like(tau), grow, c * tau * grow])
+    return np.column_stack(
+        [
+            decay * tau * (a * co - b * s),
+            -tau * decay * (a * s + b * co),
+            decay * s,
+            decay * co,
+            np.ones_like(tau),
+            grow,
+            c * tau * grow,
+        ]
+    )
 
 
 def weave_eigenvalue(time, signal) -> WeaveEstimate:
@@ -175,14 +185,20 @@ def _weave_eigenvalue(time, signal) -> WeaveEstimate:
     n = t.size
     starts = [start]
     if base is not None:
-        starts += [np.array([base.omega_d, base.sigma, base.A, base.B, base.offset, 0.0, lam0])
-                   for lam0 in PLAIN_START_MODES]
+        starts += [
+            np.array([base.omega_d, base.sigma, base.A, base.B, base.offset, 0.0, lam0]) for lam0 in PLAIN_START_MODES
+        ]
     best = None
     for p0 in starts:
         try:
             with np.errstate(all="ignore"):
-                res = least_squares(lambda p: _two_mode(p, tau) - y, p0, jac=lambda p: _two_mode_jacobian(p, tau),
-                                    method="lm", max_nfev=200)
+                res = least_squares(
+                    lambda p: _two_mode(p, tau) - y,
+                    p0,
+                    jac=lambda p: _two_mode_jacobian(p, tau),
+                    method="lm",
+                    max_nfev=200,
+                )
         except (ValueError, np.linalg.LinAlgError):
             continue
         if np.all(np.isfinite(res.x)) and np.isfinite(res.cost) and (best is None or res.cost < best.cost):
@@ -230,8 +246,13 @@ def _accept_two_mode(res, n: int, tau: np.ndarray):
         amp_se = math.sqrt(max(grad @ cov[2:4, 2:4] @ grad, 0.0))
     else:
         amp_se = math.inf
-    if not (amplitude > MIN_AMPLITUDE_SIGNIFICANCE * amp_se and real_sigma > 0 and imag_sigma > 0
-            and math.isfinite(real_sigma) and math.isfinite(imag_sigma)):
+    if not (
+        amplitude > MIN_AMPLITUDE_SIGNIFICANCE * amp_se
+        and real_sigma > 0
+        and imag_sigma > 0
+        and math.isfinite(real_sigma)
+        and math.isfinite(imag_sigma)
+    ):
         return None
     k = _correlation_inflation(res.fun)
     return WeaveEstimate(complex(-sigma, omega), k * real_sigma, k * imag_sigma, float(lam), math.sqrt(rss / n)), rss

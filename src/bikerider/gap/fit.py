@@ -22,6 +22,7 @@ the Jacobian is a forward difference evaluated for all parameters in one batched
 Standard errors come from ``(J^T J)^-1``, scaled by the reduced chi-square when that exceeds one;
 95 % intervals are +-1.96 standard errors, clipped to the bounds.
 """
+
 from __future__ import annotations
 
 import itertools
@@ -90,7 +91,7 @@ class _Layout:
     """How a fit's parameter vector maps onto effect parameters and benchmark shifts."""
 
     effects: tuple[str, ...]
-    structural: list[tuple[str, str]] = field(default_factory=list)   # (effect, parameter)
+    structural: list[tuple[str, str]] = field(default_factory=list)  # (effect, parameter)
     lower: list[float] = field(default_factory=list)
     upper: list[float] = field(default_factory=list)
     starts: list[tuple[float, ...]] = field(default_factory=list)
@@ -122,7 +123,7 @@ class GapProblem:
         self.y = self.obs.value
         self.baseline = self.predictor.predict(EffectModel(self.nominal, self.geometry))
         self.notes: list[str] = []
-        self.jacobian = self._parameter_jacobian()                 # (n_obs, n_free), per sigma
+        self.jacobian = self._parameter_jacobian()  # (n_obs, n_free), per sigma
         self.var_model = np.sum(self.jacobian**2, axis=1)
         self.var_speed = self._speed_variance(eigen)
         self.sigma_data = self._data_sigma()
@@ -131,9 +132,12 @@ class GapProblem:
         bad = np.flatnonzero(~(self.var_total > 0))
         if bad.size:
             k = int(bad[0])
-            raise InputError(f"uncertainty of {self.obs.source[k]} ({self.obs.mode[k]} {self.obs.quantity[k]})", 0.0,
-                             "a data or parameter uncertainty: give real_sigma/imag_sigma (or sigma) in the data, "
-                             "or parameter uncertainties in the model file")
+            raise InputError(
+                f"uncertainty of {self.obs.source[k]} ({self.obs.mode[k]} {self.obs.quantity[k]})",
+                0.0,
+                "a data or parameter uncertainty: give real_sigma/imag_sigma (or sigma) in the data, "
+                "or parameter uncertainties in the model file",
+            )
 
     # -- uncertainties -------------------------------------------------------------------------
     def _parameter_jacobian(self) -> np.ndarray:
@@ -161,9 +165,20 @@ class GapProblem:
         base = EffectModel(self.nominal, self.geometry)
         slopes = []
         for sign in (1, -1):
-            shifted = EigenvalueData(eigen.speed + sign * h, eigen.value, eigen.real_sigma, eigen.imag_sigma,
-                                     eigen.speed_sigma, list(eigen.mode), eigen.group, eigen.gains, eigen.source)
-            pred = Predictor(shifted, CanonicalData([], np.empty(0), np.empty(0), [], {}, []), self.nominal, self.geometry)
+            shifted = EigenvalueData(
+                eigen.speed + sign * h,
+                eigen.value,
+                eigen.real_sigma,
+                eigen.imag_sigma,
+                eigen.speed_sigma,
+                list(eigen.mode),
+                eigen.group,
+                eigen.gains,
+                eigen.source,
+            )
+            pred = Predictor(
+                shifted, CanonicalData([], np.empty(0), np.empty(0), [], {}, []), self.nominal, self.geometry
+            )
             pred._reference = self.predictor._reference
             slopes.append(pred.predict(base))
         slope = (slopes[0] - slopes[1]) / 2  # per h, eigenvalue parts first
@@ -190,12 +205,16 @@ class GapProblem:
             if len(diffs) >= 2:
                 estimate = float(math.sqrt(np.sum(np.square(diffs)) / (2 * len(diffs))))
                 sigma[idx] = estimate
-                self.notes.append(f"{key[0]} {key[1]}: no stated uncertainty; {estimate:.3g} 1/s estimated from the "
-                                  f"scatter of {len(diffs)} successive residuals")
+                self.notes.append(
+                    f"{key[0]} {key[1]}: no stated uncertainty; {estimate:.3g} 1/s estimated from the "
+                    f"scatter of {len(diffs)} successive residuals"
+                )
             else:
                 sigma[idx] = 0.0
-                self.notes.append(f"{key[0]} {key[1]}: no stated uncertainty and too few points to estimate one; "
-                                  "only the speed and parameter uncertainties count")
+                self.notes.append(
+                    f"{key[0]} {key[1]}: no stated uncertainty and too few points to estimate one; "
+                    "only the speed and parameter uncertainties count"
+                )
         return sigma
 
     # -- models ------------------------------------------------------------------------------------
@@ -234,7 +253,7 @@ class GapProblem:
             if name != "parameters":
                 config[name] = dict(EFFECTS[name].fixed)
         for j, (name, param) in enumerate(lay.structural):
-            config[name][param] = x[:, j:j + 1]
+            config[name][param] = x[:, j : j + 1]
         if lay.n_shift:
             values = self._values_batch(x[:, n_struct:] * self.free_sigma)
         else:
@@ -298,8 +317,18 @@ class GapProblem:
         def fun(x: np.ndarray) -> np.ndarray:
             return residuals_batch(x[None, :])[0]
 
-        result = least_squares(fun, x0, jac=jac, bounds=(lower, upper), x_scale=np.where(scale > 0, scale, 1.0) * 0.1,
-                               method="trf", max_nfev=50 * p, ftol=1e-6, xtol=1e-6, gtol=1e-8)
+        result = least_squares(
+            fun,
+            x0,
+            jac=jac,
+            bounds=(lower, upper),
+            x_scale=np.where(scale > 0, scale, 1.0) * 0.1,
+            method="trf",
+            max_nfev=50 * p,
+            ftol=1e-6,
+            xtol=1e-6,
+            gtol=1e-8,
+        )
         J = jac(result.x)
         dof = max(result.fun.size - p, 1)
         reduced = float(np.sum(result.fun**2)) / dof
@@ -310,13 +339,16 @@ class GapProblem:
             stderr = np.full(p, np.inf)
         return self._result(lay, result.x, stderr, result.fun, int(mask.sum()), bool(result.success), result.message)
 
-    def _result(self, lay: _Layout, x: np.ndarray, stderr: np.ndarray, r: np.ndarray, n: int, ok: bool,
-                message: str) -> EffectFit:
+    def _result(
+        self, lay: _Layout, x: np.ndarray, stderr: np.ndarray, r: np.ndarray, n: int, ok: bool, message: str
+    ) -> EffectFit:
         n_struct = len(lay.structural)
         names = [f"{param}" for _, param in lay.structural] + [f"parameters.{k}" for k in self.free][: lay.n_shift]
         units = list(lay.units) + ["sigma"] * lay.n_shift
         values, config = self.configure(lay, x[None, :] if x.size else np.zeros((1, 0)))
-        config_out = {e: {k: float(np.asarray(v).ravel()[0]) for k, v in params.items()} for e, params in config.items()}
+        config_out = {
+            e: {k: float(np.asarray(v).ravel()[0]) for k, v in params.items()} for e, params in config.items()
+        }
         shift = {}
         if lay.n_shift:
             for j, name in enumerate(self.free):
@@ -327,8 +359,22 @@ class GapProblem:
         ci_high = np.clip(x + 1.96 * stderr, lo, hi) if x.size else x
         data_r = r[:n]
         prior = r[n:] if lay.n_shift else np.zeros(0)
-        return EffectFit(tuple(lay.effects), names, units, x, stderr, ci_low, ci_high, config_out, shift,
-                         float(np.sum(data_r**2)), float(np.sum(prior**2)), n, ok, str(message))
+        return EffectFit(
+            tuple(lay.effects),
+            names,
+            units,
+            x,
+            stderr,
+            ci_low,
+            ci_high,
+            config_out,
+            shift,
+            float(np.sum(data_r**2)),
+            float(np.sum(prior**2)),
+            n,
+            ok,
+            str(message),
+        )
 
     def predict_fit(self, fit: EffectFit) -> np.ndarray:
         """Predictions of every observation with a fitted set of effects."""

@@ -16,6 +16,7 @@ Default geometry, used when a file does not give it (documented approximations, 
 0.2 m above the rider's centre of mass, the hip axis 0.1 m below it; the grips sit at the
 handlebar-and-fork centre of mass, 0.29 m either side of the bicycle's plane.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -70,11 +71,18 @@ def default_geometry(parameters: BenchmarkParameters, rider: dict[str, float] | 
         m_u = UPPER_BODY_FRACTION * rider["mass"]
         kx, kz = UPPER_BODY_RADII
         upper = {
-            "m_u": m_u, "x_u": rider["x"], "z_u": rider["z"] - UPPER_BODY_RISE,
-            "IUxx": m_u * kx**2, "IUxz": 0.0, "IUzz": m_u * kz**2, "z_lean": rider["z"] + HIP_DROP,
+            "m_u": m_u,
+            "x_u": rider["x"],
+            "z_u": rider["z"] - UPPER_BODY_RISE,
+            "IUxx": m_u * kx**2,
+            "IUxz": 0.0,
+            "IUzz": m_u * kz**2,
+            "z_lean": rider["z"] + HIP_DROP,
         }
-        notes.append(f"upper body: {UPPER_BODY_FRACTION:.0%} of the rider's {rider['mass']:.1f} kg, "
-                     f"{UPPER_BODY_RISE} m above the rider's centre of mass, hip axis {HIP_DROP} m below it (default)")
+        notes.append(
+            f"upper body: {UPPER_BODY_FRACTION:.0%} of the rider's {rider['mass']:.1f} kg, "
+            f"{UPPER_BODY_RISE} m above the rider's centre of mass, hip axis {HIP_DROP} m below it (default)"
+        )
     else:
         notes.append("no rider: rider_lean and passive_arms do not apply")
     return RiderGeometry(upper, grips, "; ".join(notes))
@@ -94,7 +102,9 @@ def _table_numbers(table: object, name: str, keys: tuple[str, ...], source: str)
     return out
 
 
-def load_model(path: str | Path, rider_path: str | Path | None = None, *, rider_rel_sigma: float = 0.0) -> GapModelInput:
+def load_model(
+    path: str | Path, rider_path: str | Path | None = None, *, rider_rel_sigma: float = 0.0
+) -> GapModelInput:
     """Read the model file (and a lumped rider); build the default geometry where none is given.
 
     ``rider_rel_sigma`` gives the lumped rider's values a relative standard uncertainty where its
@@ -120,8 +130,12 @@ def load_model(path: str | Path, rider_path: str | Path | None = None, *, rider_
         data = read_toml(path)
         extra = {k: data[k] for k in ("rider", "upper_body", "grips") if k in data}
         if extra and "benchmark" not in data:
-            raise InputError("benchmark", "missing", "a [benchmark] table when the file also has "
-                             + ", ".join(f"[{k}]" for k in extra), source)
+            raise InputError(
+                "benchmark",
+                "missing",
+                "a [benchmark] table when the file also has " + ", ".join(f"[{k}]" for k in extra),
+                source,
+            )
         tables = extra
         parameters = parameters_from_table(data.get("benchmark", data), source)
     else:
@@ -132,19 +146,28 @@ def load_model(path: str | Path, rider_path: str | Path | None = None, *, rider_
             raise InputError("rider", str(rider_path), "one rider: the model file already has a [rider] table", source)
         parameters, rider = _merge_rider(parameters, Path(rider_path), rider_rel_sigma)
     if rider is not None and not (rider["mass"] > 0 and rider["mass"] < float(parameters["mB"])):  # type: ignore[operator]
-        raise InputError("rider.mass", rider["mass"], f"a positive mass below the rear body's {parameters['mB']} kg", source)
+        raise InputError(
+            "rider.mass", rider["mass"], f"a positive mass below the rear body's {parameters['mB']} kg", source
+        )
     geometry = default_geometry(parameters, rider)
     if "upper_body" in tables:
-        geometry = RiderGeometry(_table_numbers(tables["upper_body"], "upper_body", UPPER_BODY_KEYS, source),
-                                 geometry.grips, geometry.notes + "; upper body from the model file")
+        geometry = RiderGeometry(
+            _table_numbers(tables["upper_body"], "upper_body", UPPER_BODY_KEYS, source),
+            geometry.grips,
+            geometry.notes + "; upper body from the model file",
+        )
     if "grips" in tables:
-        geometry = RiderGeometry(geometry.upper_body, _table_numbers(tables["grips"], "grips", GRIP_KEYS, source),
-                                 geometry.notes + "; grips from the model file")
+        geometry = RiderGeometry(
+            geometry.upper_body,
+            _table_numbers(tables["grips"], "grips", GRIP_KEYS, source),
+            geometry.notes + "; grips from the model file",
+        )
     return GapModelInput(parameters, geometry, rider, source + (f" + rider {rider_path}" if rider_path else ""))
 
 
-def _merge_rider(parameters: BenchmarkParameters, rider_path: Path,
-                 rel_sigma: float = 0.0) -> tuple[BenchmarkParameters, dict[str, float]]:
+def _merge_rider(
+    parameters: BenchmarkParameters, rider_path: Path, rel_sigma: float = 0.0
+) -> tuple[BenchmarkParameters, dict[str, float]]:
     from dataclasses import replace
 
     from bikerider.io.bicycleparameters import merge_rider, read_lumped_rider
@@ -154,9 +177,19 @@ def _merge_rider(parameters: BenchmarkParameters, rider_path: Path,
         raise FileFormatError(rider_path, "no such file")
     lumped = read_lumped_rider(rider_path)
     if rel_sigma > 0:
-        lumped = replace(lumped, values={k: q if q.sigma > 0 else Quantity(q.value, rel_sigma * abs(q.value))
-                                         for k, q in lumped.values.items()})
+        lumped = replace(
+            lumped,
+            values={
+                k: q if q.sigma > 0 else Quantity(q.value, rel_sigma * abs(q.value)) for k, q in lumped.values.items()
+            },
+        )
     values = {k: q.value for k, q in lumped.values.items()}
-    rider = {"mass": values["mBr"], "x": values["xBr"], "z": values["zBr"], "Ixx": values["IBrxx"],
-             "Ixz": values["IBrxz"], "Izz": values["IBrzz"]}
+    rider = {
+        "mass": values["mBr"],
+        "x": values["xBr"],
+        "z": values["zBr"],
+        "Ixx": values["IBrxx"],
+        "Ixz": values["IBrxz"],
+        "Izz": values["IBrzz"],
+    }
     return merge_rider(parameters, lumped), rider

@@ -17,6 +17,7 @@ steer), closes the loop in every model alike.
 Every parameter value may carry a leading batch shape (e.g. ``(P, 1)``) that broadcasts against
 the speeds, which is how the diagnosis evaluates many parameter sets in one call.
 """
+
 from __future__ import annotations
 
 import math
@@ -222,8 +223,7 @@ class EffectModel:
         if not self.lean and not self.tyre:
             A, B = gen.whipple_extended_state_matrices(**args, v=speeds)
             return StateSpace(A, B, (0, 1, 2, 3), ("phi", "delta", "phid", "deltad"))
-        lean_args = dict(args, **self._upper(),
-                         k_lean=self._extra("k_lean", 1.0), c_lean=self._extra("c_lean", 0.0))
+        lean_args = dict(args, **self._upper(), k_lean=self._extra("k_lean", 1.0), c_lean=self._extra("c_lean", 0.0))
         if not self.tyre:
             M, C, K = gen.rider_lean_matrices(**lean_args, v=speeds)
             n = 3
@@ -278,8 +278,9 @@ class EffectModel:
         G = resolvent_B[..., list(ss.outputs[:2]), :]
         return np.linalg.inv(G)
 
-    def simulate(self, speed: float, time, *, initial: Mapping[str, float] | None = None,
-                 gains=None) -> dict[str, np.ndarray]:
+    def simulate(
+        self, speed: float, time, *, initial: Mapping[str, float] | None = None, gains=None
+    ) -> dict[str, np.ndarray]:
         """Free response from an initial state (e.g. a roll-rate kick), exact for the linear model.
 
         Parameters

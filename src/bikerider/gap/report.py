@@ -19,6 +19,7 @@
 :func:`plot_effect` draws any effect model on its own (eigenvalues against speed and a time
 response) for users exploring a candidate.
 """
+
 from __future__ import annotations
 
 import math
@@ -67,20 +68,28 @@ def summary_text(result: dict) -> str:
     lines = []
     test = result["gap"]["test"]
     lines.append(f"Verdict: {result['verdict']}")
-    lines.append(f"Gap: chi2 = {test['chi2']:.1f} on {test['dof']} observations (p = {test['p_value']:.2g}), "
-                 f"RMS normalised residual {test['rms_z']:.2f}")
+    lines.append(
+        f"Gap: chi2 = {test['chi2']:.1f} on {test['dof']} observations (p = {test['p_value']:.2g}), "
+        f"RMS normalised residual {test['rms_z']:.2f}"
+    )
     if result.get("parameter_fit") and result["parameter_fit"].get("test"):
         pt = result["parameter_fit"]["test"]
-        lines.append(f"Parameters alone (fitted within their uncertainty): chi2 = {pt['chi2']:.1f} "
-                     f"(p = {pt['p_value']:.2g}; prior {pt['prior_chi2']:.1f} on {pt['prior_dof']} parameters)")
+        lines.append(
+            f"Parameters alone (fitted within their uncertainty): chi2 = {pt['chi2']:.1f} "
+            f"(p = {pt['p_value']:.2g}; prior {pt['prior_chi2']:.1f} on {pt['prior_dof']} parameters)"
+        )
     lines.append("")
     lines.append("Where (gap map; significant cells):")
-    lines.append(f"  {'mode':<10} {'speed band':<14} {'quantity':<26} {'n':>3} {'measured-model':>15} {'sigma':>8} {'RMS z':>7}")
+    lines.append(
+        f"  {'mode':<10} {'speed band':<14} {'quantity':<26} {'n':>3} {'measured-model':>15} {'sigma':>8} {'RMS z':>7}"
+    )
     for cell in result["gap"]["map"]:
         if cell["significant"]:
             band = f"{cell['speed_band'][0]:.1f}-{cell['speed_band'][1]:.1f}"
-            lines.append(f"  {cell['mode']:<10} {band:<14} {cell['quantity']:<26} {cell['n']:>3} "
-                         f"{cell['mean_residual']:>15.4g} {cell['combined_sigma']:>8.3g} {cell['rms_z']:>7.2f}")
+            lines.append(
+                f"  {cell['mode']:<10} {band:<14} {cell['quantity']:<26} {cell['n']:>3} "
+                f"{cell['mean_residual']:>15.4g} {cell['combined_sigma']:>8.3g} {cell['rms_z']:>7.2f}"
+            )
     if not any(c["significant"] for c in result["gap"]["map"]):
         lines.append("  (none)")
     lines.append("")
@@ -88,13 +97,18 @@ def summary_text(result: dict) -> str:
         lines.append("Which (held-out error, RMS of normalised residuals; folds: " + ", ".join(result["folds"]) + "):")
         lines.append(f"  {'rank':<5}{'effect':<17}{'before':>8}{'after':>8}{'shrink':>8}  plausible  fitted")
         for r in result["ranking"]:
-            params = ", ".join(f"{k}={v['value']:.3g} [{v['ci95'][0]:.3g}, {v['ci95'][1]:.3g}] {v['unit']}"
-                               for k, v in r["parameters"].items() if not k.startswith("parameters."))
+            params = ", ".join(
+                f"{k}={v['value']:.3g} [{v['ci95'][0]:.3g}, {v['ci95'][1]:.3g}] {v['unit']}"
+                for k, v in r["parameters"].items()
+                if not k.startswith("parameters.")
+            )
             if r["effect"] == "parameters":
                 params = f"{len(r['parameters'])} benchmark parameters shifted"
             ties = f"  (tied with {', '.join(r['tied_with'])})" if r["tied_with"] else ""
-            lines.append(f"  {r['rank']:<5}{r['effect']:<17}{r['heldout_error_before']:>8.2f}{r['heldout_error_after']:>8.2f}"
-                         f"{_fmt(r['shrink'], 2):>8}  {'yes' if r['plausible'] else 'no':<9}  {params}{ties}")
+            lines.append(
+                f"  {r['rank']:<5}{r['effect']:<17}{r['heldout_error_before']:>8.2f}{r['heldout_error_after']:>8.2f}"
+                f"{_fmt(r['shrink'], 2):>8}  {'yes' if r['plausible'] else 'no':<9}  {params}{ties}"
+            )
     else:
         lines.append("Which: no ranking (" + "; ".join(result["notes"][-1:]) + ")")
     for name, why in result.get("not_applicable", {}).items():
@@ -103,8 +117,10 @@ def summary_text(result: dict) -> str:
     lines.append("Selected: " + (", ".join(result["selected"]) if result["selected"] else "nothing"))
     hf = result.get("how_far")
     if hf:
-        lines.append(f"How far: held-out error {hf['heldout_error_before']:.2f} -> {hf['heldout_error_after']:.2f}; "
-                     f"gap above the noise floor removed: {_fmt(hf['shrink'], 2)}")
+        lines.append(
+            f"How far: held-out error {hf['heldout_error_before']:.2f} -> {hf['heldout_error_after']:.2f}; "
+            f"gap above the noise floor removed: {_fmt(hf['shrink'], 2)}"
+        )
         for f in hf["folds"]:
             lines.append(f"  {f['fold']}: {f['error_before']:.2f} -> {f['error_after']:.2f} ({f['n']} observations)")
     for note in result["notes"]:
@@ -160,12 +176,21 @@ def plot_eigenvalues(diagnosis, path: Path) -> None:
         axes[1].plot(grid, before.imag, "--", color=colours[k % 10])
         if selected is not None:
             after = _weave_curve(selected, grid, g, nominal)
-            axes[0].plot(grid, after.real, "-", color=colours[k % 10], label=f"with {'+'.join(diagnosis.selected)}{label}")
+            axes[0].plot(
+                grid, after.real, "-", color=colours[k % 10], label=f"with {'+'.join(diagnosis.selected)}{label}"
+            )
             axes[1].plot(grid, after.imag, "-", color=colours[k % 10])
         rows = [i for i in range(len(e)) if tuple(e.gains[i]) == gains]
         for ax, part, sig in ((axes[0], e.value.real, e.real_sigma), (axes[1], e.value.imag, e.imag_sigma)):
-            ax.errorbar(e.speed[rows], part[rows], yerr=np.nan_to_num(sig[rows]), fmt="o", ms=4,
-                        color=colours[k % 10], capsize=2)
+            ax.errorbar(
+                e.speed[rows],
+                part[rows],
+                yerr=np.nan_to_num(sig[rows]),
+                fmt="o",
+                ms=4,
+                color=colours[k % 10],
+                capsize=2,
+            )
     axes[0].axhline(0, color="0.6", lw=0.8)
     axes[0].set_ylabel("weave real part [1/s]")
     axes[1].set_ylabel("weave imaginary part [rad/s]")
@@ -173,7 +198,9 @@ def plot_eigenvalues(diagnosis, path: Path) -> None:
         ax.set_xlabel("speed [m/s]")
         ax.grid(alpha=0.3)
     axes[0].legend(fontsize=7)
-    fig.suptitle("Measured (points) and predicted weave eigenvalues: nominal (dashed), selected effects (solid)", fontsize=9)
+    fig.suptitle(
+        "Measured (points) and predicted weave eigenvalues: nominal (dashed), selected effects (solid)", fontsize=9
+    )
     fig.tight_layout()
     _save(fig, path)
 
@@ -185,8 +212,9 @@ def plot_gap_map(result: dict, path: Path) -> None:
     cols = list(dict.fromkeys(f"{c['speed_band'][0]:.1f}-{c['speed_band'][1]:.1f}" for c in cells))
     table = np.full((len(rows), len(cols)), np.nan)
     for c in cells:
-        table[rows.index(f"{c['mode']} {c['quantity']}"), cols.index(f"{c['speed_band'][0]:.1f}-{c['speed_band'][1]:.1f}")] = (
-            np.sign(c["mean_residual"]) * c["rms_z"])
+        table[
+            rows.index(f"{c['mode']} {c['quantity']}"), cols.index(f"{c['speed_band'][0]:.1f}-{c['speed_band'][1]:.1f}")
+        ] = np.sign(c["mean_residual"]) * c["rms_z"]
     fig, ax = plt.subplots(figsize=(max(5, 1.2 * len(cols) + 3), max(2.5, 0.4 * len(rows) + 1.5)))
     limit = max(3.0, float(np.nanmax(np.abs(table)))) if np.any(np.isfinite(table)) else 3.0
     im = ax.imshow(table, cmap="RdBu_r", vmin=-limit, vmax=limit, aspect="auto")
@@ -220,7 +248,9 @@ def plot_ranking(result: dict, path: Path) -> None:
     ax.set_xscale("log")
     ax.set_xlabel("held-out error (RMS normalised residual)")
     ax.legend(fontsize=7)
-    ax.set_title("Candidates fitted on training folds, scored on held-out folds (orange: implausible values)", fontsize=8)
+    ax.set_title(
+        "Candidates fitted on training folds, scored on held-out folds (orange: implausible values)", fontsize=8
+    )
     fig.tight_layout()
     _save(fig, path)
 
@@ -352,8 +382,15 @@ def write_report(diagnosis, folder: str | Path, title: str = "Sim-to-real gap di
         figures.append(("ranking.png", "Held-out ranking"))
     plot_time_response(diagnosis, folder / "time_response.png")
     figures.append(("time_response.png", "Time response"))
-    md = [f"# {title}", "", f"Model: `{result['model']['source']}`  ", f"Rider geometry: {result['model']['geometry']}",
-          "", f"**Verdict: {result['verdict']}** — selected: {', '.join(result['selected']) or 'nothing'}", ""]
+    md = [
+        f"# {title}",
+        "",
+        f"Model: `{result['model']['source']}`  ",
+        f"Rider geometry: {result['model']['geometry']}",
+        "",
+        f"**Verdict: {result['verdict']}** — selected: {', '.join(result['selected']) or 'nothing'}",
+        "",
+    ]
     md += ["```", summary_text(result), "```", ""]
     md += ["## Candidates", "", "| effect | what it is |", "|---|---|"]
     md += [f"| {e.name} | {e.description} |" for e in EFFECTS.values()]

@@ -6,6 +6,7 @@ Every output bikerider writes (figures, tables) goes through :func:`atomic_write
 :func:`os.replace`.  If anything fails before the rename, the temporary file is removed and the
 target is left as it was.
 """
+
 from __future__ import annotations
 
 import io

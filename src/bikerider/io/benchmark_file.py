@@ -1,4 +1,5 @@
 """Read the 25 benchmark parameters from a TOML file or a ``name = value+/-sigma`` text file."""
+
 from __future__ import annotations
 
 from pathlib import Path

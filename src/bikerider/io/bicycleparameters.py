@@ -22,6 +22,7 @@ A lumped rider file gives the rider as one rigid body (``mB, xB, yB, zB, IBxx, I
 benchmark frame, ``IBxz`` the tensor entry); :func:`merge_rider` combines it with the bicycle's rear
 body as the paper does (Eqs. 15-16, generated ``combination.rear_body``).
 """
+
 from __future__ import annotations
 
 import logging
@@ -47,17 +48,23 @@ LOG = logging.getLogger(__name__)
 LATERAL_TOLERANCE = 1e-3
 
 SPLIT_FORK_NAMES = tuple(f"{p}{b}" for b in "GS" for p in ("m", "x", "z")) + tuple(
-    f"I{b}{ax}" for b in "GS" for ax in ("xx", "xz", "yy", "zz"))
+    f"I{b}{ax}" for b in "GS" for ax in ("xx", "xz", "yy", "zz")
+)
 """Handlebar (G) and fork (S) measured apart: kept as extras."""
 
 LUMPED_RIDER_NAMES = ("mB", "xB", "yB", "zB", "IBxx", "IBxz", "IByy", "IBzz")
 """Names of a lumped rider file."""
 _LUMPED_RIDER_SET = frozenset(LUMPED_RIDER_NAMES)
-_RIDER_BODY_NAME = {name: f"{name}r" if name in ("mB", "xB", "zB") else name.replace("IB", "IBr")
-                    for name in LUMPED_RIDER_NAMES if name != "yB"}
+_RIDER_BODY_NAME = {
+    name: f"{name}r" if name in ("mB", "xB", "zB") else name.replace("IB", "IBr")
+    for name in LUMPED_RIDER_NAMES
+    if name != "yB"
+}
 """A lumped rider file's name to the rider's in :data:`bikerider.bicycle.to_benchmark.RIDER_BODY_NAMES`."""
 
-_MEASURED_MARKERS = re.compile(r"^(Tt|Tc|alpha|a)[A-Z]\d+$|^(dF|dR|nF|nR|mP|dP|lP|lF|lR|gamma|h\d|d\d|LhbF|LhbR|lamst|whb|lcs|hbb|lsp|lst)$")
+_MEASURED_MARKERS = re.compile(
+    r"^(Tt|Tc|alpha|a)[A-Z]\d+$|^(dF|dR|nF|nR|mP|dP|lP|lF|lR|gamma|h\d|d\d|LhbF|LhbR|lamst|whb|lcs|hbb|lsp|lst)$"
+)
 _FLYWHEEL = re.compile(r"^(m|x|z|I)D")
 
 
@@ -108,23 +115,42 @@ def benchmark_from_values(data: NameValueFile) -> BenchmarkFile:
             extras[name] = q
         elif name in ("yB", "yH"):
             if abs(q.value) > LATERAL_TOLERANCE:
-                raise InputError(name, q.value, f"0 within {LATERAL_TOLERANCE} m: the benchmark bodies are "
-                                 "symmetric about the bicycle's XZ plane", where)
+                raise InputError(
+                    name,
+                    q.value,
+                    f"0 within {LATERAL_TOLERANCE} m: the benchmark bodies are symmetric about the bicycle's XZ plane",
+                    where,
+                )
             notes.append(f"{name} = {q.value:g} m dropped (the benchmark bodies lie in the XZ plane)")
         elif name in ("IRzz", "IFzz"):
             xx = values.get(f"I{name[1]}xx")
             if xx is not None:
                 allowed = max(math.hypot(q.sigma, xx.sigma), 1e-9 * abs(xx.value))
                 if abs(q.value - xx.value) > allowed:
-                    raise InputError(name, q.value, f"equal to I{name[1]}xx = {xx.value:g}: the benchmark's wheels "
-                                     "are axisymmetric", where)
+                    raise InputError(
+                        name,
+                        q.value,
+                        f"equal to I{name[1]}xx = {xx.value:g}: the benchmark's wheels are axisymmetric",
+                        where,
+                    )
             notes.append(f"{name} dropped (equal to I{name[1]}xx for the benchmark's axisymmetric wheel)")
         elif _FLYWHEEL.match(name):
-            raise InputError(name, q.value, "no flywheel body: the Whipple benchmark model has four bodies "
-                             "(R, B, H, F), and leaving the flywheel out would give a wrong model", where)
+            raise InputError(
+                name,
+                q.value,
+                "no flywheel body: the Whipple benchmark model has four bodies "
+                "(R, B, H, F), and leaving the flywheel out would give a wrong model",
+                where,
+            )
         else:
-            raise InputError(name, q.value, "a benchmark parameter (" + ", ".join(BENCHMARK_NAMES)
-                             + ") or a known BicycleParameters extra (yB, yH, IRzz, IFzz, G and S bodies)", where)
+            raise InputError(
+                name,
+                q.value,
+                "a benchmark parameter ("
+                + ", ".join(BENCHMARK_NAMES)
+                + ") or a known BicycleParameters extra (yB, yH, IRzz, IFzz, G and S bodies)",
+                where,
+            )
     for body in ("B", "H"):
         if all(f"I{body}{ax}" in mapping for ax in ("xx", "yy", "zz", "xz")):
             problem = _tensor_problem(mapping, body)
@@ -136,8 +162,12 @@ def benchmark_from_values(data: NameValueFile) -> BenchmarkFile:
                 notes.append(message)
     missing = [n for n in BENCHMARK_NAMES if n not in mapping and n not in ("IByy", "IHyy", "g")]
     if missing:
-        raise InputError(missing[0], "missing", "a value: a benchmark file needs all 25 parameters "
-                         f"(missing: {', '.join(missing)})", data.path)
+        raise InputError(
+            missing[0],
+            "missing",
+            f"a value: a benchmark file needs all 25 parameters (missing: {', '.join(missing)})",
+            data.path,
+        )
     return BenchmarkFile(BenchmarkParameters.from_mapping(mapping, source=data.path), extras, notes)
 
 
@@ -158,19 +188,30 @@ def read_lumped_rider(path: str | Path) -> LumpedRider:
     values = data.as_dict()
     if not _LUMPED_RIDER_SET.issuperset(values):
         name = next(name for name in values if name not in _LUMPED_RIDER_SET)  # the first, in file order
-        raise InputError(name, values[name].value, "one of the lumped rider entries " + ", ".join(LUMPED_RIDER_NAMES),
-                         data.where(name))
+        raise InputError(
+            name,
+            values[name].value,
+            "one of the lumped rider entries " + ", ".join(LUMPED_RIDER_NAMES),
+            data.where(name),
+        )
     y = values.pop("yB", None)
     if y is not None and abs(y.value) > LATERAL_TOLERANCE:
-        raise InputError("yB", y.value, f"0 within {LATERAL_TOLERANCE} m: a rider centred on the bicycle's XZ plane",
-                         data.where("yB"))
+        raise InputError(
+            "yB",
+            y.value,
+            f"0 within {LATERAL_TOLERANCE} m: a rider centred on the bicycle's XZ plane",
+            data.where("yB"),
+        )
     renamed = {_RIDER_BODY_NAME[name]: q for name, q in values.items()}
     stem = (path if isinstance(path, PurePath) else PurePath(path)).stem
-    return LumpedRider(renamed, source=str(path), name=stem[:-len("Benchmark")] if stem.endswith("Benchmark") else stem)
+    return LumpedRider(
+        renamed, source=str(path), name=stem[: -len("Benchmark")] if stem.endswith("Benchmark") else stem
+    )
 
 
-def read_measured_file(path: str | Path, *, line_tolerance: float = DEFAULT_LINE_TOLERANCE,
-                       com_method: str = "least_squares") -> MeasuredReduction:
+def read_measured_file(
+    path: str | Path, *, line_tolerance: float = DEFAULT_LINE_TOLERANCE, com_method: str = "least_squares"
+) -> MeasuredReduction:
     """Read and reduce a ``<Name>Measured.txt`` file (messages name its lines).
 
     Parameters
@@ -236,9 +277,11 @@ def detect_format(path: str | Path) -> str:
     if names & {"w", "c", "lam", "rR", "rF"}:
         return "benchmark"
     raise FileFormatError(
-        path, "cannot tell the kind of file: expected raw measurements (e.g. TtP1, dF, alphaB1), "
+        path,
+        "cannot tell the kind of file: expected raw measurements (e.g. TtP1, dF, alphaB1), "
         "benchmark parameters (w, c, lam, ...) or a lumped rider (mB, xB, zB, IBxx, ...); found "
-        + ", ".join(sorted(names)[:8]))
+        + ", ".join(sorted(names)[:8]),
+    )
 
 
 def load_bicycle_file(path: str | Path) -> BicycleBodies | BenchmarkParameters:
@@ -264,12 +307,22 @@ def load_bicycle_file(path: str | Path) -> BicycleBodies | BenchmarkParameters:
         return load_measured_bicycle(path)
     if kind == "benchmark":
         return read_benchmark_file(path).parameters
-    raise FileFormatError(path, "this is a lumped rider file (mB, xB, zB, IBxx, ...), not a bicycle; "
-                          "give it as the rider")
+    raise FileFormatError(
+        path, "this is a lumped rider file (mB, xB, zB, IBxx, ...), not a bicycle; give it as the rider"
+    )
 
 
 __all__ = [
-    "BenchmarkFile", "LATERAL_TOLERANCE", "benchmark_from_values", "bodies_from_benchmark", "detect_format",
-    "load_bicycle_file", "load_measured_bicycle", "merge_rider", "parse_name_value_text", "read_benchmark_file",
-    "read_lumped_rider", "read_measured_file",
+    "BenchmarkFile",
+    "LATERAL_TOLERANCE",
+    "benchmark_from_values",
+    "bodies_from_benchmark",
+    "detect_format",
+    "load_bicycle_file",
+    "load_measured_bicycle",
+    "merge_rider",
+    "parse_name_value_text",
+    "read_benchmark_file",
+    "read_lumped_rider",
+    "read_measured_file",
 ]

@@ -8,6 +8,7 @@ paper's bicycle and rider with the accuracies the paper states, and - where it s
 rider, Table 7) - the assumed sigmas of :data:`bikerider.uncertainty.inputs.ASSUMED_RIDER_SIGMAS`,
 every one reported with its source.
 """
+
 from __future__ import annotations
 
 from importlib import resources
@@ -48,8 +49,10 @@ def paper_inputs(assume_rider_sigmas: bool = True) -> InputSet:
     bicycle_file, rider_file = paper_files()
     rider = load_rider_toml(rider_file)
     quantities = chain_raw_inputs(load_bicycle_toml(bicycle_file), rider)
-    sources = {name: (f"stated: {bicycle_file.name}" if q.sigma else "exact (no sigma given)")
-               for name, q in quantities.items()}
+    sources = {
+        name: (f"stated: {bicycle_file.name}" if q.sigma else "exact (no sigma given)")
+        for name, q in quantities.items()
+    }
     for name in (*rider.values, *rider.fractions):
         sources[name] = "exact (no sigma given)" if quantities[name].sigma == 0 else f"stated: {rider_file.name}"
     if assume_rider_sigmas:

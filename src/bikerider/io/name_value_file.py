@@ -26,6 +26,7 @@ values can be smaller than ours).  The individual repeats stay available
 (:attr:`NameValueEntry.repeats`) for callers that apply a rule of their own, such as the
 period-trial check of :mod:`bikerider.bicycle.raw_measurements`.
 """
+
 from __future__ import annotations
 
 import math
@@ -139,9 +140,7 @@ def mean_of_repeats(repeats: list[Quantity] | tuple[Quantity, ...]) -> Quantity:
 def _parse_value(text: str, path: str, line: int, name: str) -> Quantity:
     match = _VALUE.match(text)
     if not match:
-        raise FileFormatError(
-            path, f"{name}: cannot read {text.strip()!r} as a number or 'value+/-sigma'", line
-        )
+        raise FileFormatError(path, f"{name}: cannot read {text.strip()!r} as a number or 'value+/-sigma'", line)
     value = float(match.group(1))
     sigma = float(match.group(2)) if match.group(2) is not None else 0.0
     if not (math.isfinite(value) and math.isfinite(sigma)):
@@ -191,7 +190,9 @@ def parse_name_value_text(text: str, path: str = "<text>") -> NameValueFile:
         name, _, rhs = content.partition("=")
         name = name.strip()
         if not _NAME.match(name):
-            raise FileFormatError(path, f"{name!r} is not a name (letters, digits and _, not starting with a digit)", number)
+            raise FileFormatError(
+                path, f"{name!r} is not a name (letters, digits and _, not starting with a digit)", number
+            )
         if not rhs.strip():
             raise FileFormatError(path, f"{name}: no value after '='", number)
         if name in entries:
@@ -223,10 +224,15 @@ def read_name_value_file(path: str | Path) -> NameValueFile:
     except UnicodeDecodeError as exc:
         line = data.count(b"\n", 0, exc.start) + 1
         raise FileFormatError(
-            path, f"not UTF-8 text (byte 0x{data[exc.start]:02x} at offset {exc.start}); "
-            "save the file as UTF-8 or plain ASCII", line,
+            path,
+            f"not UTF-8 text (byte 0x{data[exc.start]:02x} at offset {exc.start}); "
+            "save the file as UTF-8 or plain ASCII",
+            line,
         ) from None
     if "\x00" in text:
-        raise FileFormatError(path, "contains NUL bytes: a binary file, not a name = value text file",
-                              text.count("\n", 0, text.index("\x00")) + 1)
+        raise FileFormatError(
+            path,
+            "contains NUL bytes: a binary file, not a name = value text file",
+            text.count("\n", 0, text.index("\x00")) + 1,
+        )
     return parse_name_value_text(text, str(path))

@@ -6,6 +6,7 @@ bicycle as ``bicycles/<Name>/Parameters/<Name>Benchmark.txt`` and each lumped ri
 those of the files, so a set added to the data is known without a list to edit.  Light enough for
 the command line's ``--help`` (:mod:`bikerider.shipped` reads the files).
 """
+
 from __future__ import annotations
 
 from importlib import resources

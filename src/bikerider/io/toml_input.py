@@ -4,6 +4,7 @@ Every value may be a number, a ``"value +/- sigma"`` string or ``{ value = ..., 
 ``docs/input_format.md`` documents the layout; ``bikerider/data/paper/`` holds the paper's bicycle
 and rider as examples.  Files are only read, never written.
 """
+
 from __future__ import annotations
 
 import re
@@ -20,7 +21,14 @@ from bikerider.rider.measurements import DEFAULT_MASS_FRACTIONS, RiderMeasuremen
 _GEOMETRY_KEYS = ("w", "c", "rR", "rF", "h_bb", "l_cs", "l_f", "w_fh", "l_hb", "w_rh", "l_sp", "l_st", "l_s")
 _GEOMETRY_ANGLES = ("lam_ht", "lam_st")
 _RIDER_KEYS = ("c_ch", "c_h", "l_hh", "c_la", "l_la", "c_ll", "l_ll", "l_ss", "l_to", "c_ua", "l_ua", "c_ul", "l_ul")
-_FRACTION_KEYS = {"head": "f_h", "lower_arm": "f_la", "lower_leg": "f_ll", "torso": "f_to", "upper_arm": "f_ua", "upper_leg": "f_ul"}
+_FRACTION_KEYS = {
+    "head": "f_h",
+    "lower_arm": "f_la",
+    "lower_leg": "f_ll",
+    "torso": "f_to",
+    "upper_arm": "f_ua",
+    "upper_leg": "f_ul",
+}
 
 
 def read_toml(path: str | Path) -> dict[str, Any]:
@@ -56,7 +64,9 @@ class _Section:
             raise InputError(name, data, "a table", source)
         unknown = sorted(set(data) - allowed)
         if unknown:
-            raise InputError(_join(name, unknown[0]), data[unknown[0]], f"one of the keys {', '.join(sorted(allowed))}", source)
+            raise InputError(
+                _join(name, unknown[0]), data[unknown[0]], f"one of the keys {', '.join(sorted(allowed))}", source
+            )
         self.data, self.name, self.source = data, name, source
 
     def has(self, key: str) -> bool:
@@ -69,7 +79,7 @@ class _Section:
             return None
         return parse_quantity(self.data[key], _join(self.name, key), self.source).scaled(scale)
 
-    def section(self, key: str, allowed: set[str]) -> "_Section":
+    def section(self, key: str, allowed: set[str]) -> _Section:
         if key not in self.data:
             raise InputError(_join(self.name, key), MISSING, "a table", self.source)
         return _Section(self.data[key], _join(self.name, key), self.source, allowed)
@@ -78,11 +88,14 @@ class _Section:
         items = self.data.get(key)
         if not isinstance(items, list):
             raise InputError(_join(self.name, key), items, "a list of values", self.source)
-        return [parse_quantity(x, f"{_join(self.name, key)}[{i}]", self.source).scaled(scale) for i, x in enumerate(items)]
+        return [
+            parse_quantity(x, f"{_join(self.name, key)}[{i}]", self.source).scaled(scale) for i, x in enumerate(items)
+        ]
 
 
-def _wheel(section: _Section, k_t: Quantity | None, g: Quantity, prefix: str,
-           raw: dict[str, Quantity]) -> dict[str, Quantity]:
+def _wheel(
+    section: _Section, k_t: Quantity | None, g: Quantity, prefix: str, raw: dict[str, Quantity]
+) -> dict[str, Quantity]:
     mass = section.quantity("mass")
     out = {f"m{prefix}": mass}
     source = section.source
@@ -90,9 +103,13 @@ def _wheel(section: _Section, k_t: Quantity | None, g: Quantity, prefix: str,
     if isinstance(section.data.get("Ixx"), dict) and "torsional_period" in section.data["Ixx"]:
         sub = section.section("Ixx", {"torsional_period"})
         if k_t is None:
-            raise InputError("torsional_pendulum.k_t", "missing", "the pendulum stiffness, to reduce torsional periods", source)
+            raise InputError(
+                "torsional_pendulum.k_t", "missing", "the pendulum stiffness, to reduce torsional periods", source
+            )
         raw[f"T_{prefix}xx"] = sub.quantity("torsional_period")  # type: ignore[assignment]
-        out[f"I{prefix}xx"] = pendulum.torsional_inertia(k_t, raw[f"T_{prefix}xx"], f"{sub.name}.torsional_period", source)
+        out[f"I{prefix}xx"] = pendulum.torsional_inertia(
+            k_t, raw[f"T_{prefix}xx"], f"{sub.name}.torsional_period", source
+        )
     else:
         out[f"I{prefix}xx"] = section.quantity("Ixx")  # type: ignore[assignment]
     # I_yy: given, or from a compound pendulum (Eq. 7).
@@ -101,7 +118,12 @@ def _wheel(section: _Section, k_t: Quantity | None, g: Quantity, prefix: str,
         raw[f"T_{prefix}yy"] = sub.quantity("compound_period")  # type: ignore[assignment]
         raw[f"l_p{prefix}"] = sub.quantity("pendulum_length")  # type: ignore[assignment]
         out[f"I{prefix}yy"] = pendulum.compound_inertia(
-            raw[f"T_{prefix}yy"], mass, raw[f"l_p{prefix}"], g, f"{sub.name}.compound_period", source,
+            raw[f"T_{prefix}yy"],
+            mass,
+            raw[f"l_p{prefix}"],
+            g,
+            f"{sub.name}.compound_period",
+            source,
         )
     else:
         out[f"I{prefix}yy"] = section.quantity("Iyy")  # type: ignore[assignment]
@@ -116,15 +138,21 @@ def _com_from_lines(com: _Section) -> tuple[Quantity, Quantity]:
     """
     lines = com.data["lines"]
     if not isinstance(lines, list) or len(lines) < 3:
-        raise InputError(_join(com.name, "lines"), lines, "a list of three or more {point = [x, z], angle_deg = ...}", com.source)
+        raise InputError(
+            _join(com.name, "lines"), lines, "a list of three or more {point = [x, z], angle_deg = ...}", com.source
+        )
     points, angles = [], []
     for i, line in enumerate(lines):
         entry = _Section(line, f"{_join(com.name, 'lines')}[{i}]", com.source, {"point", "angle_deg"})
         point = entry.data.get("point")
         if not isinstance(point, list) or len(point) != 2:
             raise InputError(_join(entry.name, "point"), point, "[x, z] in metres", com.source)
-        points.append((parse_quantity(point[0], f"{entry.name}.point[0]", com.source),
-                       parse_quantity(point[1], f"{entry.name}.point[1]", com.source)))
+        points.append(
+            (
+                parse_quantity(point[0], f"{entry.name}.point[0]", com.source),
+                parse_quantity(point[1], f"{entry.name}.point[1]", com.source),
+            )
+        )
         angles.append(entry.quantity("angle_deg", scale=DEG))
     return pendulum.centre_of_mass_from_lines(points, angles, com.name, com.source)  # type: ignore[arg-type]
 
@@ -140,7 +168,12 @@ def _frame(section: _Section, k_t: Quantity | None, prefix: str, raw: dict[str, 
     if isinstance(inertia_raw, dict) and "periods" in inertia_raw:
         sub = section.section("inertia", {"periods", "alpha_deg", "Iyy"})
         if k_t is None:
-            raise InputError("torsional_pendulum.k_t", "missing", "the pendulum stiffness, to reduce torsional periods", section.source)
+            raise InputError(
+                "torsional_pendulum.k_t",
+                "missing",
+                "the pendulum stiffness, to reduce torsional periods",
+                section.source,
+            )
         periods, angles = sub.quantities("periods"), sub.quantities("alpha_deg", DEG)
         Ixx, Ixz, Izz = pendulum.inertia_from_orientations(k_t, periods, angles, section.name, section.source)
         if len(periods) == 3:  # the closed form of Eq. 6 the sensitivities differentiate
@@ -175,9 +208,21 @@ def load_bicycle_toml(path: str | Path) -> BicycleBodies:
     """
     source = str(path)
     data = read_toml(path)
-    top = _Section(data, "", source,
-                   {"bicycle", "environment", "geometry", "torsional_pendulum", "rear_wheel", "front_wheel",
-                    "rear_frame", "handlebar_fork"})
+    top = _Section(
+        data,
+        "",
+        source,
+        {
+            "bicycle",
+            "environment",
+            "geometry",
+            "torsional_pendulum",
+            "rear_wheel",
+            "front_wheel",
+            "rear_frame",
+            "handlebar_fork",
+        },
+    )
     meta = data.get("bicycle", {})
     name = meta.get("name", Path(path).stem) if isinstance(meta, dict) else Path(path).stem
     g = Quantity(9.81)

@@ -19,6 +19,7 @@ is imported here only, with the non-interactive Agg backend.  The gallery (``doc
                                               interval sensitivity against each parameter, slices
 ============================================  ===================================================
 """
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -38,9 +39,19 @@ FIGURES = ("eigenvalues", "side_view", "mode_shapes", "bode")
 """The figures :func:`write_figures` can write, by file stem."""
 
 
-def write_figures(directory: str | Path, model, eig, grid_points: np.ndarray | None, title: str = "", *,
-                  parameters=None, figures=("eigenvalues", "side_view"), fmt: str = "png", dpi: float | None = None,
-                  uncertainty=None) -> list[Path]:
+def write_figures(
+    directory: str | Path,
+    model,
+    eig,
+    grid_points: np.ndarray | None,
+    title: str = "",
+    *,
+    parameters=None,
+    figures=("eigenvalues", "side_view"),
+    fmt: str = "png",
+    dpi: float | None = None,
+    uncertainty=None,
+) -> list[Path]:
     """Write figures of one bicycle into ``directory``; return their paths.
 
     Parameters
@@ -109,7 +120,24 @@ def _bode_speeds(model, speeds) -> tuple[float, ...]:
     return tuple(float(np.round(x, 1)) for x in np.linspace(lo + 0.25 * (hi - lo), hi - 0.15 * (hi - lo), 3))
 
 
-__all__ = ["DEFAULT_DPI", "FIGURES", "FORMATS", "bode_figure", "eigenvalue_comparison_figure", "eigenvalue_figure",
-           "mode_shape_figure", "plot_bode", "plot_eigenvalues", "plot_mode_phasors", "plot_mode_shape_speeds",
-           "plot_side_view", "plot_stability_map", "plot_stability_sweep", "pyplot", "save_figure",
-           "side_view_figure", "sweep_figure", "write_figures"]
+__all__ = [
+    "DEFAULT_DPI",
+    "FIGURES",
+    "FORMATS",
+    "bode_figure",
+    "eigenvalue_comparison_figure",
+    "eigenvalue_figure",
+    "mode_shape_figure",
+    "plot_bode",
+    "plot_eigenvalues",
+    "plot_mode_phasors",
+    "plot_mode_shape_speeds",
+    "plot_side_view",
+    "plot_stability_map",
+    "plot_stability_sweep",
+    "pyplot",
+    "save_figure",
+    "side_view_figure",
+    "sweep_figure",
+    "write_figures",
+]

@@ -1,4 +1,5 @@
 """Bode diagrams: magnitude and phase from steer torque and a lateral force to roll and steer."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -12,8 +13,16 @@ from bikerider.plotting.common import CYCLE, WIDTH, new_figure
 OUTPUT_STYLES = {"phi": "-", "delta": "--", "phi_dot": "-.", "delta_dot": ":"}
 
 
-def plot_bode(ax, response: FrequencyResponse, output: str, input: str, *, phase_ax=None, hertz: bool = False,
-              label_speeds: bool = True):
+def plot_bode(
+    ax,
+    response: FrequencyResponse,
+    output: str,
+    input: str,
+    *,
+    phase_ax=None,
+    hertz: bool = False,
+    label_speeds: bool = True,
+):
     """Magnitude (``ax``, dB) and phase (``phase_ax``, degrees) from ``input`` to ``output``, one line
     per speed of ``response``.
 
@@ -44,8 +53,14 @@ def plot_bode(ax, response: FrequencyResponse, output: str, input: str, *, phase
     return ax
 
 
-def bode_figure(model: WhippleModel, speeds=(3.0, 5.0, 7.0), frequencies=None, *,
-                lateral_force: LateralForce | None = None, title: str = ""):
+def bode_figure(
+    model: WhippleModel,
+    speeds=(3.0, 5.0, 7.0),
+    frequencies=None,
+    *,
+    lateral_force: LateralForce | None = None,
+    title: str = "",
+):
     """Bode diagrams from steer torque (left) and, given ``lateral_force``, a lateral force (right)
     to roll (solid) and steer (dashed) at a few speeds (:func:`plot_bode`)."""
     w = np.logspace(-1, 2, 300) if frequencies is None else np.asarray(frequencies, dtype=float)
@@ -63,10 +78,15 @@ def bode_figure(model: WhippleModel, speeds=(3.0, 5.0, 7.0), frequencies=None, *
     handles += [Line2D([], [], color="0.2", ls=OUTPUT_STYLES[o]) for o in ("phi", "delta")]
     labels = [f"{v:g} m/s" + (" (self-stable)" if stable.is_stable(v) else "") for v in response.speeds]
     labels += ["to roll angle", "to steer angle"]
-    note = "" if lateral_force is None else (f"\n\n$F$ acts at x = {lateral_force.x:.2f} m,\nheight "
-                                             f"{-lateral_force.z:.2f} m ({lateral_force.body} frame)")
-    axes[0, -1].legend(handles, labels, loc="upper left", bbox_to_anchor=(1.04, 1.0), borderaxespad=0.0,
-                       title=None)
+    note = (
+        ""
+        if lateral_force is None
+        else (
+            f"\n\n$F$ acts at x = {lateral_force.x:.2f} m,\nheight "
+            f"{-lateral_force.z:.2f} m ({lateral_force.body} frame)"
+        )
+    )
+    axes[0, -1].legend(handles, labels, loc="upper left", bbox_to_anchor=(1.04, 1.0), borderaxespad=0.0, title=None)
     if note:
         axes[1, -1].text(1.04, 1.0, note.strip(), transform=axes[1, -1].transAxes, va="top", fontsize=7)
     if title:

@@ -4,6 +4,7 @@ Figures are sized for a journal page (``WIDTH`` inches wide, two columns) and us
 are saved with ``bbox_inches="tight"`` so that a legend or a key placed outside the axes is kept,
 and written atomically (a partial file never replaces a good one).
 """
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -27,10 +28,23 @@ CYCLE = ("#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#e37
 """Colours for several bicycles or speeds on one figure."""
 STABLE_SHADE = "#e8f3e8"
 """Background of the self-stable speed intervals."""
-RC = {"font.size": 9, "axes.titlesize": 9, "axes.labelsize": 9, "legend.fontsize": 8, "xtick.labelsize": 8,
-      "ytick.labelsize": 8, "axes.spines.top": False, "axes.spines.right": False, "figure.dpi": 100,
-      "savefig.dpi": DEFAULT_DPI, "lines.linewidth": 1.4, "legend.frameon": False, "svg.fonttype": "none",
-      "pdf.fonttype": 42, "svg.hashsalt": "bikerider"}
+RC = {
+    "font.size": 9,
+    "axes.titlesize": 9,
+    "axes.labelsize": 9,
+    "legend.fontsize": 8,
+    "xtick.labelsize": 8,
+    "ytick.labelsize": 8,
+    "axes.spines.top": False,
+    "axes.spines.right": False,
+    "figure.dpi": 100,
+    "savefig.dpi": DEFAULT_DPI,
+    "lines.linewidth": 1.4,
+    "legend.frameon": False,
+    "svg.fonttype": "none",
+    "pdf.fonttype": 42,
+    "svg.hashsalt": "bikerider",
+}
 """matplotlib settings of every bikerider figure."""
 
 
@@ -65,8 +79,9 @@ def save_figure(fig, path: str | Path, fmt: str | None = None, dpi: float | None
     fmt = fmt or path.suffix.lstrip(".") or "png"
     check_format(fmt, dpi)
     try:
-        data = figure_bytes(fig, format=fmt, dpi=dpi or DEFAULT_DPI, bbox_inches="tight", pad_inches=0.04,
-                            metadata=_metadata(fmt))
+        data = figure_bytes(
+            fig, format=fmt, dpi=dpi or DEFAULT_DPI, bbox_inches="tight", pad_inches=0.04, metadata=_metadata(fmt)
+        )
     finally:
         pyplot().close(fig)
     atomic_write_bytes(path, data)
@@ -90,8 +105,15 @@ def legend_outside(ax, handles=None, labels=None, title: str | None = None, anch
     unique = dict(zip(labels, handles))
     if notes:
         unique["\n".join(notes)] = Line2D([], [], ls="none")
-    legend = ax.legend(unique.values(), unique.keys(), loc="upper left", bbox_to_anchor=anchor, borderaxespad=0.0,
-                       title=title, alignment="left")
+    legend = ax.legend(
+        unique.values(),
+        unique.keys(),
+        loc="upper left",
+        bbox_to_anchor=anchor,
+        borderaxespad=0.0,
+        title=title,
+        alignment="left",
+    )
     if notes:
         text = legend.get_texts()[-1]
         text.set_fontsize(7)

@@ -3,6 +3,7 @@ parameter, and two-dimensional stability maps (slices of a grid).
 
 Angles are drawn in degrees (the store keeps radians).
 """
+
 from __future__ import annotations
 
 import math
@@ -53,8 +54,9 @@ def _scaled(name: str, values) -> np.ndarray:
 def _panels(n: int, height_each: float = 2.0):
     cols = min(3, n)
     rows = -(-n // cols)
-    fig, axes = new_figure(width=WIDTH, height=height_each * rows + 0.4, nrows=rows, ncols=cols, squeeze=False,
-                           constrained_layout=True)
+    fig, axes = new_figure(
+        width=WIDTH, height=height_each * rows + 0.4, nrows=rows, ncols=cols, squeeze=False, constrained_layout=True
+    )
     for ax in axes.ravel()[n:]:
         ax.set_visible(False)
     return fig, axes.ravel()[:n]
@@ -89,9 +91,11 @@ def stable_fraction_figure(summary, base: dict[str, float] | None = None, title:
     for ax, p in zip(axes, parameters):
         plot_stable_fraction(ax, p, (base or {}).get(p.name))
     lo, hi = summary.speed_range
-    note = (f"self-stable: a stable speed interval within {lo:g}-{hi:g} m/s; {summary.valid:,} of "
-            f"{summary.designs:,} designs valid,\n{summary.stable / max(summary.valid, 1):.1%} of them self-stable"
-            + (f"; {which}" if which else ""))
+    note = (
+        f"self-stable: a stable speed interval within {lo:g}-{hi:g} m/s; {summary.valid:,} of "
+        f"{summary.designs:,} designs valid,\n{summary.stable / max(summary.valid, 1):.1%} of them self-stable"
+        + (f"; {which}" if which else "")
+    )
     fig.suptitle(f"{title}\n{note}" if title else note, x=0.01, ha="left", fontsize=9)
     handles, labels = axes[0].get_legend_handles_labels()
     for ax in axes[1:]:
@@ -113,8 +117,10 @@ def plot_interval_sensitivity(ax, parameter, base: float | None = None):
     matplotlib.axes.Axes
     """
     x = _scaled(parameter.name, parameter.values)
-    for output, colour, label in (("weave_speed", MODE_COLOURS["weave"], "weave speed"),
-                                  ("capsize_speed", MODE_COLOURS["capsize"], "capsize speed")):
+    for output, colour, label in (
+        ("weave_speed", MODE_COLOURS["weave"], "weave speed"),
+        ("capsize_speed", MODE_COLOURS["capsize"], "capsize speed"),
+    ):
         q = parameter.quartiles[output]
         ax.plot(x, q[:, 1], color=colour, label=f"{label}: median")
         ax.fill_between(x, q[:, 0], q[:, 2], color=colour, alpha=0.18, lw=0, label=f"{label}: 25-75 %")
@@ -143,9 +149,11 @@ def interval_sensitivity_figure(summary, base: dict[str, float] | None = None, t
     for ax, p in zip(axes, parameters):
         plot_interval_sensitivity(ax, p, (base or {}).get(p.name))
     lo, hi = summary.speed_range
-    note = (f"ends of the first self-stable interval (speeds within {lo:g}-{hi:g} m/s) over the other parameters;\n"
-            "S: first-order sensitivity index, the share of a speed's variance the parameter explains alone"
-            + (f";\n{which}" if which else ""))
+    note = (
+        f"ends of the first self-stable interval (speeds within {lo:g}-{hi:g} m/s) over the other parameters;\n"
+        "S: first-order sensitivity index, the share of a speed's variance the parameter explains alone"
+        + (f";\n{which}" if which else "")
+    )
     fig.suptitle(f"{title}\n{note}" if title else note, x=0.01, ha="left", fontsize=9)
     handles, labels = axes[0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="outside lower center", ncols=len(handles), fontsize=7)
@@ -156,8 +164,16 @@ def _hatch_cells(ax, x, y, mask: np.ndarray, face: str, hatch: str | None = None
     """Fill (and hatch) the grid cells where ``mask`` (shape (ny, nx)), aligned with a
     ``shading="nearest"`` mesh."""
     if mask.any():
-        ax.pcolor(x, y, np.ma.masked_where(~mask, np.ones(mask.shape)), shading="nearest",
-                  cmap=ListedColormap([face]), hatch=hatch, edgecolor="0.45", linewidth=0.0)
+        ax.pcolor(
+            x,
+            y,
+            np.ma.masked_where(~mask, np.ones(mask.shape)),
+            shading="nearest",
+            cmap=ListedColormap([face]),
+            hatch=hatch,
+            edgecolor="0.45",
+            linewidth=0.0,
+        )
 
 
 def plot_design_slice(ax, design_slice, colorbar: bool = True, legend: bool = True):
@@ -197,10 +213,12 @@ def plot_design_slice(ax, design_slice, colorbar: bool = True, legend: bool = Tr
 
 def slice_legend_handles(ax) -> list:
     """The key of :func:`plot_design_slice`."""
-    return [mpatches.Patch(facecolor="white", edgecolor="0.45", hatch=_NEVER, label="never self-stable"),
-            mpatches.Patch(color="0.8", label="impossible design"),
-            ax.plot([], [], color="k", lw=0.6, label="self-stable up to [m/s] (capsize speed)")[0],
-            ax.plot([], [], "w*", mec="k", ms=8, label="base design")[0]]
+    return [
+        mpatches.Patch(facecolor="white", edgecolor="0.45", hatch=_NEVER, label="never self-stable"),
+        mpatches.Patch(color="0.8", label="impossible design"),
+        ax.plot([], [], color="k", lw=0.6, label="self-stable up to [m/s] (capsize speed)")[0],
+        ax.plot([], [], "w*", mec="k", ms=8, label="base design")[0],
+    ]
 
 
 def plot_stable_speed_share(ax, design_slice, speeds, colorbar: bool = True):
@@ -229,8 +247,9 @@ def plot_stable_speed_share(ax, design_slice, speeds, colorbar: bool = True):
 def design_slice_figure(design_slice, speeds=(), title: str = ""):
     """:func:`plot_design_slice` and, with map speeds, :func:`plot_stable_speed_share` beside it."""
     two = np.size(speeds) > 0
-    fig, axes = new_figure(width=WIDTH if two else 5.6, height=4.6, ncols=2 if two else 1, squeeze=False,
-                           constrained_layout=True)
+    fig, axes = new_figure(
+        width=WIDTH if two else 5.6, height=4.6, ncols=2 if two else 1, squeeze=False, constrained_layout=True
+    )
     plot_design_slice(axes[0, 0], design_slice, legend=False)
     if two:
         plot_stable_speed_share(axes[0, 1], design_slice, speeds)
@@ -242,5 +261,13 @@ def design_slice_figure(design_slice, speeds=(), title: str = ""):
     return fig
 
 
-__all__ = ["axis_label", "design_slice_figure", "interval_sensitivity_figure", "plot_design_slice",
-           "plot_interval_sensitivity", "plot_stable_fraction", "plot_stable_speed_share", "stable_fraction_figure"]
+__all__ = [
+    "axis_label",
+    "design_slice_figure",
+    "interval_sensitivity_figure",
+    "plot_design_slice",
+    "plot_interval_sensitivity",
+    "plot_stable_fraction",
+    "plot_stable_speed_share",
+    "stable_fraction_figure",
+]

@@ -6,6 +6,7 @@ capsize speeds marked, an optional first-order uncertainty band, the legend outs
 Nothing is clipped silently: where a line leaves the vertical range a marker sits on the axis edge
 and a note beside the legend says which mode, from which speed and how far it goes.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -56,9 +57,22 @@ def auto_limits(shapes: ModeShapes, uncertainty=None) -> tuple[float, float]:
     return lo - pad, hi + pad
 
 
-def plot_eigenvalues(ax, model: WhippleModel, speeds=None, *, imag_ax=None, shapes: ModeShapes | None = None,
-                     uncertainty=None, ylim="auto", color: str | None = None, label: str | None = None,
-                     shade: bool = True, critical: bool = True, legend: bool = True, notes: bool = True):
+def plot_eigenvalues(
+    ax,
+    model: WhippleModel,
+    speeds=None,
+    *,
+    imag_ax=None,
+    shapes: ModeShapes | None = None,
+    uncertainty=None,
+    ylim="auto",
+    color: str | None = None,
+    label: str | None = None,
+    shade: bool = True,
+    critical: bool = True,
+    legend: bool = True,
+    notes: bool = True,
+):
     """Draw the eigenvalues of one bicycle against speed on ``ax``.
 
     Parameters
@@ -118,14 +132,24 @@ def plot_eigenvalues(ax, model: WhippleModel, speeds=None, *, imag_ax=None, shap
             for k, interval in enumerate(stability.intervals):
                 lo, hi = max(interval.lower, v[0]), min(interval.upper, v[-1])
                 if hi > lo:
-                    target.axvspan(lo, hi, color=STABLE_SHADE, zorder=-1,
-                                   label=f"{prefix}self-stable" if k == 0 and target is ax else None)
+                    target.axvspan(
+                        lo,
+                        hi,
+                        color=STABLE_SHADE,
+                        zorder=-1,
+                        label=f"{prefix}self-stable" if k == 0 and target is ax else None,
+                    )
         if critical:
             marks = ((stability.weave, "weave", (0, (1, 1.5))), (stability.capsize, "capsize", (0, (4, 2))))
             for value, name, style in marks:
                 if value is not None and v[0] <= value <= v[-1]:
-                    target.axvline(value, color=color or MODE_COLOURS[name], lw=0.9, ls=style,
-                                   label=f"{prefix}{name} speed {value:.2f} m/s" if target is ax else None)
+                    target.axvline(
+                        value,
+                        color=color or MODE_COLOURS[name],
+                        lw=0.9,
+                        ls=style,
+                        label=f"{prefix}{name} speed {value:.2f} m/s" if target is ax else None,
+                    )
     if imag_ax is None:
         ax.set_xlabel("speed $v$ [m/s]")
     ax.set_ylabel("eigenvalue, real and imaginary parts [1/s]" if imag_ax is None else "real part [1/s]")
@@ -133,8 +157,13 @@ def plot_eigenvalues(ax, model: WhippleModel, speeds=None, *, imag_ax=None, shap
         imag_ax.set_xlabel("speed $v$ [m/s]")
         imag_ax.set_ylabel("imaginary part [1/s]")
         imag_ax.set_ylim(bottom=0)
-    limits = (auto_limits(shapes, uncertainty) if isinstance(ylim, str) and ylim == "auto"
-              else None if isinstance(ylim, str) else ylim)
+    limits = (
+        auto_limits(shapes, uncertainty)
+        if isinstance(ylim, str) and ylim == "auto"
+        else None
+        if isinstance(ylim, str)
+        else ylim
+    )
     clipped = _limit(ax, shapes, limits, imag_ax is None, color) if limits is not None else []
     notes_text = ["marked on the edge:"] + clipped if notes and clipped else []
     if legend:
@@ -142,8 +171,17 @@ def plot_eigenvalues(ax, model: WhippleModel, speeds=None, *, imag_ax=None, shap
         if imag_ax is not None:
             legend_outside(imag_ax)
     elif notes_text:
-        ax.text(1.02, 0.0, "\n".join(notes_text), transform=ax.transAxes, ha="left", va="bottom", fontsize=7,
-                style="italic", color="0.25")
+        ax.text(
+            1.02,
+            0.0,
+            "\n".join(notes_text),
+            transform=ax.transAxes,
+            ha="left",
+            va="bottom",
+            fontsize=7,
+            style="italic",
+            color="0.25",
+        )
     return ax
 
 
@@ -169,10 +207,19 @@ def _limit(ax, shapes: ModeShapes, limits, with_imag: bool, color) -> list[str]:
                 start = int(np.argmax(outside))
                 column = np.nanmin(values, axis=0) if side == "below" else np.nanmax(values, axis=0)
                 extreme = int(np.nanargmin(column) if side == "below" else np.nanargmax(column))
-                ax.plot([v[start]], [edge], marker="v" if side == "below" else "^", ms=5, clip_on=False,
-                        color=color or MODE_COLOURS.get(name, "0.5"), zorder=5)
-                notes.append(f"{name} {part} part {side} the axes\nfrom {v[start]:.1f} m/s on "
-                             f"(to {column[extreme]:.3g} 1/s at {v[extreme]:.1f} m/s)")
+                ax.plot(
+                    [v[start]],
+                    [edge],
+                    marker="v" if side == "below" else "^",
+                    ms=5,
+                    clip_on=False,
+                    color=color or MODE_COLOURS.get(name, "0.5"),
+                    zorder=5,
+                )
+                notes.append(
+                    f"{name} {part} part {side} the axes\nfrom {v[start]:.1f} m/s on "
+                    f"(to {column[extreme]:.3g} 1/s at {v[extreme]:.1f} m/s)"
+                )
     return notes
 
 
@@ -191,17 +238,26 @@ def _band(ax, imag_ax, uncertainty, color) -> None:
             colour = color or MODE_COLOURS[name]
             sr, si = uncertainty.sigma_real[mine, k], uncertainty.sigma_imag[mine, k]
             ok = np.isfinite(sr)
-            ax.fill_between(x[ok], (z.real - sr)[ok], (z.real + sr)[ok], color=colour, alpha=0.22, lw=0,
-                            label="one standard uncertainty (first order)" if first else None)
+            ax.fill_between(
+                x[ok],
+                (z.real - sr)[ok],
+                (z.real + sr)[ok],
+                color=colour,
+                alpha=0.22,
+                lw=0,
+                label="one standard uncertainty (first order)" if first else None,
+            )
             first = False
             if name == "weave" and np.any(np.abs(z.imag) > 0):
                 ok = np.isfinite(si) & (np.abs(z.imag) > 0)
-                imag_ax.fill_between(x[ok], (np.abs(z.imag) - si)[ok], (np.abs(z.imag) + si)[ok], color=colour,
-                                     alpha=0.22, lw=0)
+                imag_ax.fill_between(
+                    x[ok], (np.abs(z.imag) - si)[ok], (np.abs(z.imag) + si)[ok], color=colour, alpha=0.22, lw=0
+                )
 
 
-def eigenvalue_figure(model: WhippleModel, speeds=None, title: str = "", *, uncertainty=None,
-                      two_panel: bool = False, ylim="auto"):
+def eigenvalue_figure(
+    model: WhippleModel, speeds=None, title: str = "", *, uncertainty=None, two_panel: bool = False, ylim="auto"
+):
     """A figure of :func:`plot_eigenvalues` (``speeds`` may be a :class:`ModalEigenvalues`, whose
     speed range is used)."""
     if isinstance(speeds, ModalEigenvalues):
@@ -222,8 +278,9 @@ COMPARISON_STYLES = {"weave": "-", "capsize": "--", "castor": ":", "other": "-."
 """Line style of each mode's real part when several bicycles share an axes."""
 
 
-def plot_eigenvalue_comparison(ax, models: dict[str, WhippleModel], speeds=None, *, imag_ax=None, bar_ax=None,
-                               ylim="auto"):
+def plot_eigenvalue_comparison(
+    ax, models: dict[str, WhippleModel], speeds=None, *, imag_ax=None, bar_ax=None, ylim="auto"
+):
     """Several bicycles on one axes: real parts (one colour per bicycle, one line style per mode),
     the weave frequency on ``imag_ax`` and the self-stable intervals as bars on ``bar_ax``.
 
@@ -245,8 +302,9 @@ def plot_eigenvalue_comparison(ax, models: dict[str, WhippleModel], speeds=None,
         labels.append(name)
         if bar_ax is not None:
             for interval in models[name].stability().intervals:
-                bar_ax.plot([interval.lower, min(interval.upper, grid[-1])], [n, n], color=colour, lw=4,
-                            solid_capstyle="butt")
+                bar_ax.plot(
+                    [interval.lower, min(interval.upper, grid[-1])], [n, n], color=colour, lw=4, solid_capstyle="butt"
+                )
     for target in (ax, imag_ax, bar_ax):
         if target is not None:
             target.set_xlim(grid[0], grid[-1])
@@ -255,8 +313,14 @@ def plot_eigenvalue_comparison(ax, models: dict[str, WhippleModel], speeds=None,
     clipped = []
     if ylim is not None:
         if isinstance(ylim, str):
-            reals = np.concatenate([real for shapes in every.values() for mode, _, real, _ in _lines(shapes)
-                                    if mode in ("weave", "capsize")])
+            reals = np.concatenate(
+                [
+                    real
+                    for shapes in every.values()
+                    for mode, _, real, _ in _lines(shapes)
+                    if mode in ("weave", "capsize")
+                ]
+            )
             top = max(float(np.nanmax(np.abs(reals))), 1.0) * 1.08
             ylim = (-top, top)
         for name, shapes in every.items():
@@ -265,8 +329,17 @@ def plot_eigenvalue_comparison(ax, models: dict[str, WhippleModel], speeds=None,
     legend_outside(ax, handles + modes, labels + ["weave", "capsize", "castor"], title="bicycle; mode (real parts)")
     if clipped:
         target = imag_ax if imag_ax is not None else ax
-        target.text(1.02, 1.0, "marked on the edge:\n" + "\n".join(clipped), transform=target.transAxes,
-                    ha="left", va="top", fontsize=7, style="italic", color="0.25")
+        target.text(
+            1.02,
+            1.0,
+            "marked on the edge:\n" + "\n".join(clipped),
+            transform=target.transAxes,
+            ha="left",
+            va="top",
+            fontsize=7,
+            style="italic",
+            color="0.25",
+        )
     if imag_ax is not None:
         imag_ax.set_ylabel("weave frequency,\nimaginary part [1/s]")
         imag_ax.set_ylim(bottom=0)
@@ -282,8 +355,9 @@ def plot_eigenvalue_comparison(ax, models: dict[str, WhippleModel], speeds=None,
 
 def eigenvalue_comparison_figure(models: dict[str, WhippleModel], speeds=None, title: str = ""):
     """A figure of :func:`plot_eigenvalue_comparison`: real parts, weave frequency, stable intervals."""
-    fig, (ax, imag_ax, bar_ax) = new_figure(height=5.6, nrows=3, sharex=True,
-                                            gridspec_kw={"height_ratios": (3.0, 1.6, 0.25 + 0.22 * len(models))})
+    fig, (ax, imag_ax, bar_ax) = new_figure(
+        height=5.6, nrows=3, sharex=True, gridspec_kw={"height_ratios": (3.0, 1.6, 0.25 + 0.22 * len(models))}
+    )
     fig.subplots_adjust(left=0.1, right=0.7, hspace=0.12, top=0.94, bottom=0.09)
     plot_eigenvalue_comparison(ax, models, speeds, imag_ax=imag_ax, bar_ax=bar_ax)
     if title:
@@ -292,5 +366,11 @@ def eigenvalue_comparison_figure(models: dict[str, WhippleModel], speeds=None, t
     return fig
 
 
-__all__ = ["auto_limits", "eigenvalue_comparison_figure", "eigenvalue_figure", "plot_eigenvalue_comparison",
-           "plot_eigenvalues", "speed_grid"]
+__all__ = [
+    "auto_limits",
+    "eigenvalue_comparison_figure",
+    "eigenvalue_figure",
+    "plot_eigenvalue_comparison",
+    "plot_eigenvalues",
+    "speed_grid",
+]

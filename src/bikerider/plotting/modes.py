@@ -4,6 +4,7 @@ The shapes are those of :func:`bikerider.benchmark.mode_shapes.mode_shapes` (uni
 positive): a phasor's length is the relative amplitude of roll or steer in the mode and its angle
 the phase (steer relative to roll; counter-clockwise: steer leads).
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -29,8 +30,12 @@ def plot_mode_phasors(ax, shapes: ModeShapes, speed: float, mode: str = "weave")
     roll, steer = shapes.shapes[k, column]
     for name, z in (("roll", roll), ("steer", steer)):
         colour, _ = PARTS[name]
-        ax.annotate("", xy=(np.angle(z), abs(z)), xytext=(0, 0),
-                    arrowprops={"arrowstyle": "-|>", "color": colour, "lw": 1.6, "shrinkA": 0, "shrinkB": 0})
+        ax.annotate(
+            "",
+            xy=(np.angle(z), abs(z)),
+            xytext=(0, 0),
+            arrowprops={"arrowstyle": "-|>", "color": colour, "lw": 1.6, "shrinkA": 0, "shrinkB": 0},
+        )
         angle = np.degrees(np.angle(z))
         angle = 0.0 if abs(angle) < 0.5 else (180.0 if abs(angle) > 179.5 else angle)
         ax.plot([], [], color=colour, lw=1.6, label=f"{name} {abs(z):.2f}, {angle:+.0f} deg")
@@ -89,8 +94,9 @@ def mode_shape_figure(model: WhippleModel, speed: float, speeds=None, title: str
     plt = pyplot()
     shapes = mode_shapes(model, speed_grid(speeds))
     fig = plt.figure(figsize=(WIDTH, 5.6))
-    grid = fig.add_gridspec(2, 3, height_ratios=(1.2, 1.0), hspace=0.62, wspace=0.45, left=0.09, right=0.86,
-                            top=0.88, bottom=0.09)
+    grid = fig.add_gridspec(
+        2, 3, height_ratios=(1.2, 1.0), hspace=0.62, wspace=0.45, left=0.09, right=0.86, top=0.88, bottom=0.09
+    )
     for i, mode in enumerate(m for m in ("weave", "capsize", "castor") if m in tuple(shapes.names)):
         plot_mode_phasors(fig.add_subplot(grid[0, i], projection="polar"), shapes, speed, mode)
     bottom = grid[1, :].subgridspec(1, 2, wspace=0.3)
@@ -99,8 +105,12 @@ def mode_shape_figure(model: WhippleModel, speed: float, speeds=None, title: str
     k = int(np.argmin(np.abs(shapes.speeds - speed)))
     for target in (ax, phase_ax):
         target.axvline(shapes.speeds[k], color="0.5", lw=0.7, ls=":")
-    fig.suptitle((title + ": " if title else "") + f"mode shapes at {shapes.speeds[k]:.2f} m/s (top) and against speed",
-                 x=0.02, ha="left", fontsize=9)
+    fig.suptitle(
+        (title + ": " if title else "") + f"mode shapes at {shapes.speeds[k]:.2f} m/s (top) and against speed",
+        x=0.02,
+        ha="left",
+        fontsize=9,
+    )
     return fig
 
 

@@ -12,6 +12,7 @@ mass and inertia tensor (principal moments ``I1``, ``I2`` in the plane and ``Iyy
 ``sqrt(5 (I2 + Iyy - I1) / 2m)`` along the first principal direction and ``sqrt(5 (I1 + Iyy - I2) /
 2m)`` along the second); where ``Iyy`` is not determined, that of a flat body (``Iyy = I1 + I2``).
 """
+
 from __future__ import annotations
 
 import math
@@ -49,8 +50,15 @@ def _com_symbol(ax, x: float, y: float, radius: float, colour: str, zorder: int 
     ax.add_patch(Circle((x, y), radius, fill=False, edgecolor=colour, lw=0.9, zorder=zorder + 1))
 
 
-def plot_side_view(ax, parameters: BenchmarkParameters, grid_points: np.ndarray | None = None, *,
-                   inertia: bool = True, key: bool = True, label_points: bool = False):
+def plot_side_view(
+    ax,
+    parameters: BenchmarkParameters,
+    grid_points: np.ndarray | None = None,
+    *,
+    inertia: bool = True,
+    key: bool = True,
+    label_points: bool = False,
+):
     """Draw the side view of ``parameters`` (and the rider of ``grid_points``) on ``ax``.
 
     Parameters
@@ -73,12 +81,18 @@ def plot_side_view(ax, parameters: BenchmarkParameters, grid_points: np.ndarray 
     """
     p = parameters.values
     w, c, lam, rR, rF = (float(p[k]) for k in ("w", "c", "lam", "rR", "rF"))  # type: ignore[arg-type]
-    bodies = {"B": (float(p["mB"]), float(p["xB"]), -float(p["zB"])),  # type: ignore[arg-type]
-              "H": (float(p["mH"]), float(p["xH"]), -float(p["zH"])),  # type: ignore[arg-type]
-              "R": (float(p["mR"]), 0.0, rR), "F": (float(p["mF"]), w, rF)}  # type: ignore[arg-type]
+    bodies = {
+        "B": (float(p["mB"]), float(p["xB"]), -float(p["zB"])),  # type: ignore[arg-type]
+        "H": (float(p["mH"]), float(p["xH"]), -float(p["zH"])),  # type: ignore[arg-type]
+        "R": (float(p["mR"]), 0.0, rR),
+        "F": (float(p["mF"]), w, rF),
+    }  # type: ignore[arg-type]
     mass = sum(m for m, _, _ in bodies.values())
-    bodies["T"] = (mass, sum(m * x for m, x, _ in bodies.values()) / mass,
-                   sum(m * y for m, _, y in bodies.values()) / mass)
+    bodies["T"] = (
+        mass,
+        sum(m * x for m, x, _ in bodies.values()) / mass,
+        sum(m * y for m, _, y in bodies.values()) / mass,
+    )
     wheel_style = {"fill": False, "edgecolor": "0.25", "lw": 1.4}
     ax.add_patch(Circle((0.0, rR), rR, **wheel_style))
     ax.add_patch(Circle((w, rF), rF, **wheel_style))
@@ -92,22 +106,44 @@ def plot_side_view(ax, parameters: BenchmarkParameters, grid_points: np.ndarray 
     top = ground + (top_height / up[1]) * up
     ax.plot(*np.c_[ground, top], color="0.45", lw=0.8, ls=(0, (6, 3)), label="steer axis")
     if grid_points is None:
-        ax.plot(*np.c_[axle, crown, top], color=BODY_COLOURS["H"], lw=2.2, solid_capstyle="round",
-                label="fork and handlebar (schematic)")
+        ax.plot(
+            *np.c_[axle, crown, top],
+            color=BODY_COLOURS["H"],
+            lw=2.2,
+            solid_capstyle="round",
+            label="fork and handlebar (schematic)",
+        )
         head = crown + 0.35 * (top - crown)
-        ax.plot(*np.c_[[0.0, rR], head], color=BODY_COLOURS["B"], lw=2.2, solid_capstyle="round",
-                label="rear frame (schematic)")
+        ax.plot(
+            *np.c_[[0.0, rR], head],
+            color=BODY_COLOURS["B"],
+            lw=2.2,
+            solid_capstyle="round",
+            label="rear frame (schematic)",
+        )
     else:
         g = np.asarray(grid_points, dtype=float)
         for k, (a, b) in enumerate(_FRAME_POINTS):
-            ax.plot(g[[a - 1, b - 1], 0], -g[[a - 1, b - 1], 2], color="0.2", lw=1.8,
-                    label="bicycle (grid points)" if k == 0 else None)
+            ax.plot(
+                g[[a - 1, b - 1], 0],
+                -g[[a - 1, b - 1], 2],
+                color="0.2",
+                lw=1.8,
+                label="bicycle (grid points)" if k == 0 else None,
+            )
         first = True
         for name, a, b in SEGMENT_LINES:
             if "left" in name:
                 continue
-            ax.plot(g[[a - 1, b - 1], 0], -g[[a - 1, b - 1], 2], color="#c44e52", lw=5, alpha=0.55,
-                    solid_capstyle="round", label="rider (right side)" if first else None)
+            ax.plot(
+                g[[a - 1, b - 1], 0],
+                -g[[a - 1, b - 1], 2],
+                color="#c44e52",
+                lw=5,
+                alpha=0.55,
+                solid_capstyle="round",
+                label="rider (right side)" if first else None,
+            )
             first = False
         head = g[24]
         ax.add_patch(Circle((head[0], -head[2]), float(np.linalg.norm(g[24] - g[14])), color="#c44e52", alpha=0.35))
@@ -123,14 +159,37 @@ def plot_side_view(ax, parameters: BenchmarkParameters, grid_points: np.ndarray 
             _com_symbol(ax, x, y, radius * 0.7, colour)
             continue
         _com_symbol(ax, x, y, radius if name != "T" else radius * 1.15, colour)
-        ax.plot([], [], "o", mfc="white", mec=colour, ms=6, label=f"{_BODY_NAMES[name]}: centre of mass"
-                + (" and inertia ellipse" if inertia and name != "T" else ""))
+        ax.plot(
+            [],
+            [],
+            "o",
+            mfc="white",
+            mec=colour,
+            ms=6,
+            label=f"{_BODY_NAMES[name]}: centre of mass" + (" and inertia ellipse" if inertia and name != "T" else ""),
+        )
         if inertia and name != "T":
             iyy = p[f"I{name}yy"]
-            a, b, angle = inertia_ellipse(m, float(p[f"I{name}xx"]), float(p[f"I{name}zz"]),  # type: ignore[arg-type]
-                                          float(p[f"I{name}xz"]), None if iyy is None else float(iyy))  # type: ignore[arg-type]
-            ax.add_patch(Ellipse((x, y), 2 * a, 2 * b, angle=math.degrees(angle), fill=True, facecolor=colour,
-                                 alpha=0.12, edgecolor=colour, lw=0.9))
+            a, b, angle = inertia_ellipse(
+                m,
+                float(p[f"I{name}xx"]),
+                float(p[f"I{name}zz"]),  # type: ignore[arg-type]
+                float(p[f"I{name}xz"]),
+                None if iyy is None else float(iyy),
+            )  # type: ignore[arg-type]
+            ax.add_patch(
+                Ellipse(
+                    (x, y),
+                    2 * a,
+                    2 * b,
+                    angle=math.degrees(angle),
+                    fill=True,
+                    facecolor=colour,
+                    alpha=0.12,
+                    edgecolor=colour,
+                    lw=0.9,
+                )
+            )
     ax.plot([], [], "o", mfc="white", mec="0.3", ms=4, label="wheel centres of mass")
     ax.set_aspect("equal")
     xs = [-rR, w + rF, top[0]]
@@ -148,8 +207,9 @@ def plot_side_view(ax, parameters: BenchmarkParameters, grid_points: np.ndarray 
     return ax
 
 
-def side_view_figure(parameters: BenchmarkParameters, grid_points: np.ndarray | None = None, title: str = "",
-                     **options):
+def side_view_figure(
+    parameters: BenchmarkParameters, grid_points: np.ndarray | None = None, title: str = "", **options
+):
     """A figure of :func:`plot_side_view`."""
     fig, ax = new_figure(width=7.0, height=4.0)
     fig.subplots_adjust(left=0.08, right=0.56, bottom=0.12, top=0.92)

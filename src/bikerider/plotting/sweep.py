@@ -1,4 +1,5 @@
 """Sweeps: the self-stable speeds against one parameter, and stability maps over two."""
+
 from __future__ import annotations
 
 import matplotlib.patches as mpatches
@@ -7,8 +8,22 @@ import numpy as np
 from bikerider.benchmark.sweep import Sweep
 from bikerider.plotting.common import MODE_COLOURS, STABLE_SHADE, legend_outside, new_figure
 
-UNITS = {"w": "m", "c": "m", "lam": "rad", "g": "m/s^2", "rR": "m", "rF": "m", "xB": "m", "zB": "m", "xH": "m",
-         "zH": "m", "mR": "kg", "mB": "kg", "mH": "kg", "mF": "kg"}
+UNITS = {
+    "w": "m",
+    "c": "m",
+    "lam": "rad",
+    "g": "m/s^2",
+    "rR": "m",
+    "rF": "m",
+    "xB": "m",
+    "zB": "m",
+    "xH": "m",
+    "zH": "m",
+    "mR": "kg",
+    "mB": "kg",
+    "mH": "kg",
+    "mF": "kg",
+}
 
 
 def _axis_label(name: str) -> str:
@@ -16,8 +31,10 @@ def _axis_label(name: str) -> str:
 
 
 def _top(result: Sweep) -> float:
-    finite = np.r_[result.stability.lower[np.isfinite(result.stability.lower)],
-                   result.stability.upper[np.isfinite(result.stability.upper)]]
+    finite = np.r_[
+        result.stability.lower[np.isfinite(result.stability.lower)],
+        result.stability.upper[np.isfinite(result.stability.upper)],
+    ]
     if result.speeds.size:
         return float(result.speeds.max())
     return float(finite.max() * 1.15) if finite.size else 10.0
@@ -39,14 +56,29 @@ def plot_stability_sweep(ax, result: Sweep):
         lower, upper = s.lower[:, k], np.minimum(s.upper[:, k], top)
         present = np.isfinite(lower)
         if present.any():
-            ax.fill_between(x, np.where(present, lower, np.nan), np.where(present, upper, np.nan), color=STABLE_SHADE,
-                            edgecolor="#7fbf7f", lw=0.5, label="self-stable" if k == 0 else None, step=None)
+            ax.fill_between(
+                x,
+                np.where(present, lower, np.nan),
+                np.where(present, upper, np.nan),
+                color=STABLE_SHADE,
+                edgecolor="#7fbf7f",
+                lw=0.5,
+                label="self-stable" if k == 0 else None,
+                step=None,
+            )
     ax.plot(x, s.weave, color=MODE_COLOURS["weave"], label="weave speed")
     ax.plot(x, s.capsize, color=MODE_COLOURS["capsize"], label="capsize speed")
     unbounded = np.isinf(s.upper).any(axis=-1) & result.valid
     if unbounded.any():
-        ax.plot(x[unbounded], np.full(unbounded.sum(), top), "^", color="#7fbf7f", ms=4, clip_on=False,
-                label="stable at every higher speed")
+        ax.plot(
+            x[unbounded],
+            np.full(unbounded.sum(), top),
+            "^",
+            color="#7fbf7f",
+            ms=4,
+            clip_on=False,
+            label="stable at every higher speed",
+        )
     for value in x[~result.valid]:
         ax.axvline(value, color="0.75", lw=2, zorder=0)
     if (~result.valid).any():
@@ -89,10 +121,12 @@ def plot_stability_map(ax, result: Sweep, colorbar: bool = True):
     if colorbar:
         bar = ax.figure.colorbar(mesh, ax=ax, pad=0.02)
         bar.set_label("self-stable from [m/s] (weave speed)")
-    handles = [mpatches.Patch(facecolor="white", edgecolor="0.3", hatch="////", label="never self-stable"),
-               mpatches.Patch(color="0.8", label="impossible design"),
-               ax.plot([], [], color="k", lw=0.6, label="self-stable up to [m/s] (capsize speed)")[0],
-               ax.plot([], [], "w*", mec="k", ms=8, label="base design")[0]]
+    handles = [
+        mpatches.Patch(facecolor="white", edgecolor="0.3", hatch="////", label="never self-stable"),
+        mpatches.Patch(color="0.8", label="impossible design"),
+        ax.plot([], [], color="k", lw=0.6, label="self-stable up to [m/s] (capsize speed)")[0],
+        ax.plot([], [], "w*", mec="k", ms=8, label="base design")[0],
+    ]
     ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(0.0, -0.16), ncols=2, fontsize=7)
     return ax
 

@@ -4,6 +4,7 @@ Wraps ``bikerider.generated.rider_model`` (derived in ``derive/rider_model.py``)
 generated function runs, the closures' preconditions are checked so that an impossible rider gets
 a message naming the measurement and the distance needed, never a NaN.
 """
+
 from __future__ import annotations
 
 import math
@@ -40,9 +41,15 @@ _LIMB_LENGTHS = (("l_ll", "l_ul"), ("l_ua", "l_la"))
 """Legs then arms, the order of ``limb_reach``."""
 
 SEGMENT_LINES: tuple[tuple[str, int, int], ...] = (
-    ("torso", 13, 15), ("right lower leg", 26, 28), ("left lower leg", 27, 29),
-    ("right upper leg", 28, 30), ("left upper leg", 29, 31), ("right upper arm", 21, 23),
-    ("left upper arm", 22, 24), ("right lower arm", 19, 23), ("left lower arm", 20, 24),
+    ("torso", 13, 15),
+    ("right lower leg", 26, 28),
+    ("left lower leg", 27, 29),
+    ("right upper leg", 28, 30),
+    ("left upper leg", 29, 31),
+    ("right upper arm", 21, 23),
+    ("left upper arm", 22, 24),
+    ("right lower arm", 19, 23),
+    ("left lower arm", 20, 24),
 )
 """Segments drawn as lines between grid points (1-based); the head is a sphere at point 25."""
 
@@ -84,9 +91,10 @@ def model_arguments(bicycle: BicycleBodies, rider: RiderMeasurements) -> dict[st
     missing = [k for k in bicycle.missing_seating() if k not in _HUB_WIDTHS]
     if missing:
         raise InputError(
-            missing[0], MISSING,
-            "a value: seating the rider model needs every Table 1 measurement "
-            f"(missing: {', '.join(missing)})", bicycle.source,
+            missing[0],
+            MISSING,
+            f"a value: seating the rider model needs every Table 1 measurement (missing: {', '.join(missing)})",
+            bicycle.source,
         )
     args = {k: bicycle[k] if k in bicycle.values else math.nan for k in GEOMETRY}
     args.update({k: rider[k] for k in RIDER_PLACEMENT + RIDER_SEGMENTS if k not in rider.fractions})
@@ -97,43 +105,69 @@ def model_arguments(bicycle: BicycleBodies, rider: RiderMeasurements) -> dict[st
 def check_closures(args: dict[str, float], bicycle_source: str, rider_source: str) -> None:
     """Raise a clear error when the skeleton cannot be built for these measurements."""
     if args["l_cs"] <= abs(args["rR"] - args["h_bb"]):
-        raise InputError("l_cs", args["l_cs"],
-                         f"more than |rR - h_bb| = {abs(args['rR'] - args['h_bb']):.3f} m (chain stay must reach the bottom bracket)",
-                         bicycle_source)
+        raise InputError(
+            "l_cs",
+            args["l_cs"],
+            f"more than |rR - h_bb| = {abs(args['rR'] - args['h_bb']):.3f} m (chain stay must reach the bottom bracket)",
+            bicycle_source,
+        )
     fork_offset = args["rF"] * math.cos(args["lam_ht"]) - args["c"] * math.sin(args["lam_ht"])
     if args["l_f"] <= abs(fork_offset):
-        raise InputError("l_f", args["l_f"], f"more than the fork offset |f_o| = {abs(fork_offset):.3f} m", bicycle_source)
+        raise InputError(
+            "l_f", args["l_f"], f"more than the fork offset |f_o| = {abs(fork_offset):.3f} m", bicycle_source
+        )
     reach_args = {k: args[k] for k in _REACH}
     leg_span, leg_len, arm_span, arm_len = (float(x) for x in gen.limb_reach(**reach_args))
     if leg_span > leg_len * (1 + STRAIGHT_LIMB_TOLERANCE):
         raise ReachError(
-            "l_ll + l_ul", round(leg_len, 4),
+            "l_ll + l_ul",
+            round(leg_len, 4),
             f"at least {leg_span:.3f} m, the distance from the hip (top of the seat) to the pedal axis: "
             f"the legs are {leg_span - leg_len:.3f} m too short to reach the pedals "
-            "(lower the seat post l_sp or check l_ll and l_ul)", rider_source,
+            "(lower the seat post l_sp or check l_ll and l_ul)",
+            rider_source,
         )
     if leg_span <= abs(args["l_ll"] - args["l_ul"]) * (1 + STRAIGHT_LIMB_TOLERANCE):
-        raise ReachError("|l_ll - l_ul|", round(abs(args["l_ll"] - args["l_ul"]), 4),
-                         f"at most {leg_span:.3f} m, the hip to pedal-axis distance (the knee cannot close)", rider_source)
+        raise ReachError(
+            "|l_ll - l_ul|",
+            round(abs(args["l_ll"] - args["l_ul"]), 4),
+            f"at most {leg_span:.3f} m, the hip to pedal-axis distance (the knee cannot close)",
+            rider_source,
+        )
     if arm_span > arm_len * (1 + STRAIGHT_LIMB_TOLERANCE):
         raise ReachError(
-            "l_ua + l_la", round(arm_len, 4),
+            "l_ua + l_la",
+            round(arm_len, 4),
             f"at least {arm_span:.3f} m, the distance from the shoulder to the handlebar grip: "
             f"the arms are {arm_span - arm_len:.3f} m too short to reach the grips "
-            "(check l_ua, l_la, l_to, lam_fl, or the stem and handlebar lengths)", rider_source,
+            "(check l_ua, l_la, l_to, lam_fl, or the stem and handlebar lengths)",
+            rider_source,
         )
     if arm_span <= abs(args["l_ua"] - args["l_la"]) * (1 + STRAIGHT_LIMB_TOLERANCE):
-        raise ReachError("|l_ua - l_la|", round(abs(args["l_ua"] - args["l_la"]), 4),
-                         f"at most {arm_span:.3f} m, the shoulder to grip distance (the elbow cannot close)", rider_source)
+        raise ReachError(
+            "|l_ua - l_la|",
+            round(abs(args["l_ua"] - args["l_la"]), 4),
+            f"at most {arm_span:.3f} m, the shoulder to grip distance (the elbow cannot close)",
+            rider_source,
+        )
     points = gen.grid_points(**{**{k: args[k] for k in _GRID}, **straight_limb_lengths(args)})
     # Preconditions of the branch rule (derive/rider_model.py): hip above the pedal axis,
     # shoulder behind the hand.
     hip, foot, shoulder, hand = points[12], points[4], points[20], points[18]
     if not hip[2] < foot[2]:
-        raise InputError("l_sp", args["l_sp"], "a seat above the pedal axis (the hip must be higher than the bottom bracket)", bicycle_source)
+        raise InputError(
+            "l_sp",
+            args["l_sp"],
+            "a seat above the pedal axis (the hip must be higher than the bottom bracket)",
+            bicycle_source,
+        )
     if not shoulder[0] < hand[0]:
-        raise InputError("lam_fl_deg", math.degrees(args["lam_fl"]),
-                         "a forward lean that keeps the shoulders behind the hands", rider_source)
+        raise InputError(
+            "lam_fl_deg",
+            math.degrees(args["lam_fl"]),
+            "a forward lean that keeps the shoulders behind the hands",
+            rider_source,
+        )
 
 
 def straight_limb_lengths(args: dict[str, float]) -> dict[str, float]:

@@ -21,11 +21,18 @@ Typical use::
 
 ``symbolic`` imports SymPy; import it by name when symbolic expressions are wanted.
 """
+
 from bikerider.uncertainty.inputs import InputSet, benchmark_inputs
 from bikerider.uncertainty.montecarlo import MonteCarloResult, compare, monte_carlo
 from bikerider.uncertainty.propagation import Contribution, UncertaintyResult, propagate
 
 __all__ = [
-    "Contribution", "InputSet", "MonteCarloResult", "UncertaintyResult", "benchmark_inputs", "compare",
-    "monte_carlo", "propagate",
+    "Contribution",
+    "InputSet",
+    "MonteCarloResult",
+    "UncertaintyResult",
+    "benchmark_inputs",
+    "compare",
+    "monte_carlo",
+    "propagate",
 ]

@@ -1,4 +1,5 @@
 """The estimate chain's stages run by the uncertainty engine, and its inputs checked by name."""
+
 from __future__ import annotations
 
 import logging

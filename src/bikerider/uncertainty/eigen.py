@@ -12,6 +12,7 @@ chain rule carries it to the measurements.  The left eigenvectors are the rows o
 (``|y| |x| / |y^H x|``) grows without bound there, and first-order sigmas near it are not to be
 trusted.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass

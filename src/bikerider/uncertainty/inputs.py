@@ -8,6 +8,7 @@ paper's rider, Table 7) :func:`with_assumed_rider_sigmas` gives the assumed sigm
 :data:`ASSUMED_RIDER_SIGMAS`, every one reported with its source.  Reading the files is
 :mod:`bikerider.io.chain_inputs`' job (``paper_inputs``, ``raw_inputs_from_toml``).
 """
+
 from __future__ import annotations
 
 from collections.abc import Mapping
@@ -18,8 +19,24 @@ from bikerider.quantity import DEG, Quantity
 ASSUMED_RIDER_SIGMAS: dict[str, tuple[float, str]] = {
     # The paper states no accuracy for Table 7 ("measured as accurately as possible with basic
     # tools"); these are assumptions, reported as such wherever they are used.
-    **{name: (0.01, "assumed: one unit of the last digit Table 7 prints (0.01 m)") for name in (
-        "c_ch", "c_h", "l_hh", "c_la", "l_la", "c_ll", "l_ll", "l_ss", "l_to", "c_ua", "l_ua", "c_ul", "l_ul")},
+    **{
+        name: (0.01, "assumed: one unit of the last digit Table 7 prints (0.01 m)")
+        for name in (
+            "c_ch",
+            "c_h",
+            "l_hh",
+            "c_la",
+            "l_la",
+            "c_ll",
+            "l_ll",
+            "l_ss",
+            "l_to",
+            "c_ua",
+            "l_ua",
+            "c_ul",
+            "l_ul",
+        )
+    },
     "lam_fl": (1.0 * DEG, "assumed: 1 deg, the accuracy Table 4 states for angles read off photographs"),
     "mBr": (0.1, "assumed: one unit of the last digit Table 8 prints (0.1 kg)"),
 }
@@ -58,8 +75,11 @@ def chain_raw_inputs(bicycle, rider) -> dict[str, Quantity]:
 def benchmark_inputs(parameters) -> dict[str, Quantity]:
     """The benchmark parameters (a :class:`bikerider.benchmark.BenchmarkParameters`) as chain inputs,
     each with its sigma; undetermined values (``IByy``/``IHyy`` = None) are left out."""
-    return {name: Quantity(float(value), float(parameters.sigmas.get(name, 0.0)))
-            for name, value in parameters.values.items() if value is not None}
+    return {
+        name: Quantity(float(value), float(parameters.sigmas.get(name, 0.0)))
+        for name, value in parameters.values.items()
+        if value is not None
+    }
 
 
 def with_assumed_rider_sigmas(quantities: Mapping[str, Quantity], sources: dict[str, str]) -> dict[str, Quantity]:

@@ -15,6 +15,7 @@ threshold and says why, from three diagnostics:
   propagation ignores;
 * the skewness of the Monte Carlo samples.
 """
+
 from __future__ import annotations
 
 import math
@@ -30,8 +31,12 @@ from bikerider.uncertainty.chain import Chain, prepare_values
 from bikerider.uncertainty.propagation import UncertaintyResult
 
 DEFAULT_OUTPUTS = ("v_weave", "v_capsize")
-_FAILURES = (("knee closure", STAGES["knee"]["outputs"][0]), ("elbow closure", STAGES["elbow"]["outputs"][0]),
-             ("no weave speed", "v_weave"), ("no capsize speed", "v_capsize"))
+_FAILURES = (
+    ("knee closure", STAGES["knee"]["outputs"][0]),
+    ("elbow closure", STAGES["elbow"]["outputs"][0]),
+    ("no weave speed", "v_weave"),
+    ("no capsize speed", "v_capsize"),
+)
 """Why a sample has no value: the node that is NaN then."""
 MISSING_LIMIT = 0.005
 """A fraction of samples without a value above which it is named as a cause of disagreement."""
@@ -73,8 +78,13 @@ def _sigma_inputs(quantities: Mapping[str, Quantity]) -> tuple[dict[str, np.ndar
     return values, varied
 
 
-def sample_outputs(quantities: Mapping[str, Quantity], n: int, outputs: Sequence[str] = DEFAULT_OUTPUTS,
-                   seed: int | None = 0, chunk: int = CHUNK) -> tuple[dict[str, np.ndarray], dict[str, int]]:
+def sample_outputs(
+    quantities: Mapping[str, Quantity],
+    n: int,
+    outputs: Sequence[str] = DEFAULT_OUTPUTS,
+    seed: int | None = 0,
+    chunk: int = CHUNK,
+) -> tuple[dict[str, np.ndarray], dict[str, int]]:
     """Draw ``n`` input sets and evaluate ``outputs`` for each; also count failures.
 
     Raises
@@ -97,15 +107,20 @@ def sample_outputs(quantities: Mapping[str, Quantity], n: int, outputs: Sequence
             batch[name] = values[name] + quantities[name].sigma * rng.standard_normal(size)
         nodes = chain.evaluate(batch)
         for name in outputs:
-            out[name][start:start + size] = np.broadcast_to(nodes[name], (size,))
+            out[name][start : start + size] = np.broadcast_to(nodes[name], (size,))
         for label, node in _FAILURES:
             if node in nodes:
                 failures[label] += int(np.sum(~np.isfinite(np.broadcast_to(nodes[node], (size,)))))
     return out, {k: v for k, v in failures.items() if v}
 
 
-def monte_carlo(quantities: Mapping[str, Quantity], n: int, outputs: Sequence[str] = DEFAULT_OUTPUTS,
-                seed: int | None = 0, keep_samples: bool = False) -> MonteCarloResult:
+def monte_carlo(
+    quantities: Mapping[str, Quantity],
+    n: int,
+    outputs: Sequence[str] = DEFAULT_OUTPUTS,
+    seed: int | None = 0,
+    keep_samples: bool = False,
+) -> MonteCarloResult:
     """Monte Carlo statistics of ``outputs`` from ``n`` independent normal draws of the inputs.
 
     Parameters
@@ -167,12 +182,15 @@ def curvature(quantities: Mapping[str, Quantity], output: str) -> dict[str, tupl
         batch[name][2 * j + 1] -= s
     y = np.broadcast_to(chain.evaluate(batch)[output], (2 * m + 1,))
     y0 = y[-1]
-    return {name: (float((y[2 * j] - y[2 * j + 1]) / 2), float((y[2 * j] + y[2 * j + 1] - 2 * y0) / 2))
-            for j, name in enumerate(varied)}
+    return {
+        name: (float((y[2 * j] - y[2 * j + 1]) / 2), float((y[2 * j] + y[2 * j + 1] - 2 * y0) / 2))
+        for j, name in enumerate(varied)
+    }
 
 
-def compare(result: UncertaintyResult, mc: MonteCarloResult, quantities: Mapping[str, Quantity],
-            threshold: float = 0.10) -> list[Comparison]:
+def compare(
+    result: UncertaintyResult, mc: MonteCarloResult, quantities: Mapping[str, Quantity], threshold: float = 0.10
+) -> list[Comparison]:
     """First-order against Monte Carlo sigma for each Monte Carlo output, with reasons."""
     out = []
     for name in mc.std:
@@ -192,8 +210,10 @@ def _diagnose(name: str, fo: float | None, mc: MonteCarloResult, quantities: Map
     missing = mc.n - mc.valid[name]
     causes = ", ".join(f"{k} {v}" for k, v in mc.failures.items())
     if missing >= MISSING_LIMIT * mc.n:
-        parts.append(f"{missing / mc.n:.2%} of samples have no value ({causes}): the chain is near a limit "
-                     "(a limb closure at full stretch or a root that vanishes), where no linearisation holds")
+        parts.append(
+            f"{missing / mc.n:.2%} of samples have no value ({causes}): the chain is near a limit "
+            "(a limb closure at full stretch or a root that vanishes), where no linearisation holds"
+        )
     terms = curvature(quantities, name)
     finite = {k: v for k, v in terms.items() if math.isfinite(v[0]) and math.isfinite(v[1])}
     broken = sorted(set(terms) - set(finite))

@@ -1,4 +1,5 @@
 """Names, units and LaTeX of the chain's nodes (the one symbol table), and the aliases the command line accepts."""
+
 from __future__ import annotations
 
 import re
@@ -7,8 +8,10 @@ from bikerider.errors import InputError
 from bikerider.generated.symbol_table import SYMBOLS
 
 ALIASES = {
-    "weave_speed": "v_weave", "weave": "v_weave",
-    "capsize_speed": "v_capsize", "capsize": "v_capsize",
+    "weave_speed": "v_weave",
+    "weave": "v_weave",
+    "capsize_speed": "v_capsize",
+    "capsize": "v_capsize",
 }
 """User-facing output names for the speed nodes."""
 
@@ -42,5 +45,7 @@ def check_name(name: str, known: set[str], what: str) -> str:
     if node not in known:
         close = sorted(n for n in known if n.lower().startswith(name[:2].lower()))[:10]
         hint = f"; names starting alike: {', '.join(close)}" if close else ""
-        raise InputError(what, name, f"a node of the estimate chain (e.g. weave_speed, capsize_speed, M_phidelta, xB{hint})")
+        raise InputError(
+            what, name, f"a node of the estimate chain (e.g. weave_speed, capsize_speed, M_phidelta, xB{hint})"
+        )
     return node

@@ -8,6 +8,7 @@ its compound pendulum) are carried exactly when the raw measurements are given (
 :mod:`bikerider.uncertainty.stages`); when already-reduced values are given their correlations
 are not known and are taken as zero.
 """
+
 from __future__ import annotations
 
 import math
@@ -74,12 +75,17 @@ class EigenvalueUncertainty:
         s = self.sensitivity
         for n, v in enumerate(s.speeds):
             for k in range(4):
-                out.append({
-                    "speed": float(v), "mode": str(s.labels[n, k]),
-                    "real": _finite(s.values[n, k].real), "imag": _finite(s.values[n, k].imag),
-                    "sigma_real": _finite(self.sigma_real[n, k]), "sigma_imag": _finite(self.sigma_imag[n, k]),
-                    "condition": _finite(s.condition[n, k]),
-                })
+                out.append(
+                    {
+                        "speed": float(v),
+                        "mode": str(s.labels[n, k]),
+                        "real": _finite(s.values[n, k].real),
+                        "imag": _finite(s.values[n, k].imag),
+                        "sigma_real": _finite(self.sigma_real[n, k]),
+                        "sigma_imag": _finite(self.sigma_imag[n, k]),
+                        "condition": _finite(s.condition[n, k]),
+                    }
+                )
         return out
 
 
@@ -162,8 +168,19 @@ class UncertaintyResult:
             elasticity = q.value / y * d if y not in (None, 0.0) and math.isfinite(q.value) else None
             out.append(Contribution(name, q.value, q.sigma, d, elasticity, var, 0.0, self.sources.get(name, "")))
         total = sum(c.variance for c in out)
-        out = [Contribution(c.name, c.value, c.sigma, c.derivative, c.elasticity, c.variance,
-                            c.variance / total if total > 0 else 0.0, c.source) for c in out]
+        out = [
+            Contribution(
+                c.name,
+                c.value,
+                c.sigma,
+                c.derivative,
+                c.elasticity,
+                c.variance,
+                c.variance / total if total > 0 else 0.0,
+                c.source,
+            )
+            for c in out
+        ]
         out.sort(key=lambda c: (-c.share, -abs(c.elasticity or 0.0)))
         return out
 
@@ -175,8 +192,14 @@ class UncertaintyResult:
             "matrices": self.matrices,
             "speeds": self.speeds,
             "speed_values": {key: self.values.get(node) for key, node in SPEED_NODES.items()},
-            "inputs": {n: {"value": q.value if math.isfinite(q.value) else None, "sigma": q.sigma,
-                           "source": self.sources.get(n, "")} for n, q in self.inputs.items()},
+            "inputs": {
+                n: {
+                    "value": q.value if math.isfinite(q.value) else None,
+                    "sigma": q.sigma,
+                    "source": self.sources.get(n, ""),
+                }
+                for n, q in self.inputs.items()
+            },
         }
         if self.eigenvalues is not None:
             out["eigenvalues"] = self.eigenvalues.as_list()
@@ -197,8 +220,11 @@ def _as_quantity(name: str, raw: object) -> Quantity:
     return q
 
 
-def propagate(inputs: Mapping[str, Quantity | float], speeds: Sequence[float] | None = None,
-              sources: Mapping[str, str] | None = None) -> UncertaintyResult:
+def propagate(
+    inputs: Mapping[str, Quantity | float],
+    speeds: Sequence[float] | None = None,
+    sources: Mapping[str, str] | None = None,
+) -> UncertaintyResult:
     """First-order uncertainty of every output of the chain.
 
     Parameters
@@ -228,8 +254,12 @@ def propagate(inputs: Mapping[str, Quantity | float], speeds: Sequence[float] | 
     chain = Chain(values)
     chain.require(ENTRIES)
     input_names = tuple(values)
-    result = first_order(chain.stages, {name: Quantity(values[name], quantities[name].sigma) for name in input_names},
-                         chain, wrt=input_names)  # every input: derivatives of the exact ones too
+    result = first_order(
+        chain.stages,
+        {name: Quantity(values[name], quantities[name].sigma) for name in input_names},
+        chain,
+        wrt=input_names,
+    )  # every input: derivatives of the exact ones too
     nodes, grads = result.nodes, result.gradients
     output_names = tuple(n for n in _output_order(chain.available))
     J = result.jacobian(output_names)
@@ -248,8 +278,9 @@ def propagate(inputs: Mapping[str, Quantity | float], speeds: Sequence[float] | 
     eig = None
     if speeds is not None:
         eig = _eigen_uncertainty(nodes, grads, input_names, sig, speeds)
-    return UncertaintyResult(input_names, output_names, quantities, dict(sources or {}), out_values, sigmas, J,
-                             eig, notes)
+    return UncertaintyResult(
+        input_names, output_names, quantities, dict(sources or {}), out_values, sigmas, J, eig, notes
+    )
 
 
 def _output_order(available: set[str]) -> list[str]:

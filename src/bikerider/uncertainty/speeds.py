@@ -6,6 +6,7 @@ bound the first self-stable interval; NaN where there is no such speed), for one
 floats or for any batch shape at once; the Jacobian is the implicit derivative
 ``dv/dp = -(dF/dp)/(dF/dv)`` at the root, emitted by ``derive/sensitivities.py``.
 """
+
 from __future__ import annotations
 
 from collections.abc import Mapping
@@ -31,7 +32,11 @@ def critical_speeds_from_entries(entries: Mapping[str, np.ndarray], g) -> dict[s
             one = stability({k: float(v) for k, v in entries.items()}, float(g))
         except (OverflowError, ValueError):  # polynomials beyond floating point: no speed, as in a batch
             return {"v_weave": np.nan, "v_capsize": np.nan, "weave_frequency": np.nan}
-        return {"v_weave": _nan(one.weave), "v_capsize": _nan(one.capsize), "weave_frequency": _nan(one.weave_frequency)}
+        return {
+            "v_weave": _nan(one.weave),
+            "v_capsize": _nan(one.capsize),
+            "weave_frequency": _nan(one.weave_frequency),
+        }
     result = stability_batch(entries, g)
     return {"v_weave": result.weave, "v_capsize": result.capsize, "weave_frequency": result.weave_frequency}
 
@@ -48,8 +53,9 @@ class CriticalSpeedsStage(Stage):
 
     def __init__(self):
         self.inputs = self.args = arguments("benchmark_model.critical_speed_polynomials")
-        self._gradients = [generated_function(f"sensitivities.{speed.removeprefix('v_')}_speed_gradient")
-                           for speed in SPEEDS]
+        self._gradients = [
+            generated_function(f"sensitivities.{speed.removeprefix('v_')}_speed_gradient") for speed in SPEEDS
+        ]
 
     def evaluate(self, kw: Mapping[str, object]) -> tuple[list, list]:
         entries = {k: np.asarray(kw[k], dtype=float) for k in MATRIX_ENTRIES}

@@ -18,6 +18,7 @@ reductions would otherwise hide their correlations; described in ``derive/symbol
 ``l_pR``, ``l_pF``              compound pendulum lengths (the pendulum mass is the wheel's)
 =============================  =============================================================
 """
+
 from __future__ import annotations
 
 from functools import cache
@@ -39,16 +40,24 @@ __all__ = ["CANONICAL", "COEFFICIENTS", "ENTRIES", "FRAME", "OPTIONAL_NAN", "REA
 def _pendulum_stage(body: str, prefix: str) -> GeneratedStage:
     """Eq. 6 of a body hung in three orientations (Table 4)."""
     inputs = {f"{kind}_{i}": f"{kind}_{prefix}{i}" for kind in ("T", "alpha") for i in (1, 2, 3)}
-    return GeneratedStage("three_orientations", f"{body}_pendulum", inputs,
-                          {f"I{axes}": f"I{prefix}{axes}" for axes in ("xx", "xz", "zz")})
+    return GeneratedStage(
+        "three_orientations",
+        f"{body}_pendulum",
+        inputs,
+        {f"I{axes}": f"I{prefix}{axes}" for axes in ("xx", "xz", "zz")},
+    )
 
 
 def _wheel_stages(wheel: str) -> tuple[GeneratedStage, GeneratedStage]:
     """Eq. 1 about a diameter and Eq. 7 about the axle (Table 6)."""
     return (
         GeneratedStage("torsional", f"{wheel}_wheel_torsional", {"T": f"T_{wheel}xx"}, {"J": f"I{wheel}xx"}),
-        GeneratedStage("compound", f"{wheel}_wheel_compound", {"T": f"T_{wheel}yy", "m_p": f"m{wheel}",
-                                                               "l_p": f"l_p{wheel}"}, {"Iyy": f"I{wheel}yy"}),
+        GeneratedStage(
+            "compound",
+            f"{wheel}_wheel_compound",
+            {"T": f"T_{wheel}yy", "m_p": f"m{wheel}", "l_p": f"l_p{wheel}"},
+            {"Iyy": f"I{wheel}yy"},
+        ),
     )
 
 

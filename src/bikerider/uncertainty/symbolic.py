@@ -13,6 +13,7 @@ whole substitution stays small it is also given in one piece (:attr:`closed_form
 root of its condition ``F = 0``; its step is the implicit derivative ``-(dF/dx) / (dF/dv)``, with
 the characteristic coefficients evaluated at that speed.
 """
+
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
@@ -67,8 +68,13 @@ class SymbolicStage:
     solves: str | None = None
 
 
-def _renamed(key: str, local_inputs: tuple[str, ...], nodes_in: tuple[str, ...], nodes_out: tuple[str, ...],
-             solves: str | None = None) -> SymbolicStage:
+def _renamed(
+    key: str,
+    local_inputs: tuple[str, ...],
+    nodes_in: tuple[str, ...],
+    nodes_out: tuple[str, ...],
+    solves: str | None = None,
+) -> SymbolicStage:
     inputs, outputs, exprs = _stage_expressions(key)
     if tuple(inputs) != tuple(local_inputs):
         raise RuntimeError(f"stage {key}: generated inputs {inputs} differ from {local_inputs}; run make derive")
@@ -94,14 +100,16 @@ def symbolic_stages(chain: Chain, output: str) -> dict[str, SymbolicStage]:
     args = EXPRESSIONS["characteristic"][0]  # the matrix entries, g and the speed v
     at_speed = {"v": output}  # a speed's condition is taken at that speed
     if output == "v_capsize":
-        producers["v_capsize"] = _renamed("capsize_condition", args, tuple(at_speed.get(a, a) for a in args), (),
-                                          solves="v_capsize")
+        producers["v_capsize"] = _renamed(
+            "capsize_condition", args, tuple(at_speed.get(a, a) for a in args), (), solves="v_capsize"
+        )
     elif output == "v_weave":
         s = _renamed("characteristic", args, tuple(at_speed.get(a, a) for a in args), COEFFICIENTS)
         producers.update({o: s for o in COEFFICIENTS})
         weave_args = EXPRESSIONS["weave_condition"][0]  # the coefficients and v
-        producers["v_weave"] = _renamed("weave_condition", weave_args, tuple(at_speed.get(a, a) for a in weave_args),
-                                        (), solves="v_weave")
+        producers["v_weave"] = _renamed(
+            "weave_condition", weave_args, tuple(at_speed.get(a, a) for a in weave_args), (), solves="v_weave"
+        )
     elif output in COEFFICIENTS and "characteristic" in {st.name for st in chain.stages}:
         s = _renamed("characteristic", args, args, COEFFICIENTS)
         producers.update({o: s for o in COEFFICIENTS})
@@ -201,7 +209,8 @@ def _with_coefficients(point: Mapping[str, float], output: str) -> Mapping[str, 
     if output != "v_weave" or "a0" in point or "v_weave" not in point:
         return point
     coefficients = gen_model.characteristic_coefficients(
-        **{k: np.asarray(point[k], dtype=float) for k in ENTRIES}, g=float(point["g"]), v=float(point["v_weave"]))
+        **{k: np.asarray(point[k], dtype=float) for k in ENTRIES}, g=float(point["g"]), v=float(point["v_weave"])
+    )
     return {**point, **{name: float(c) for name, c in zip(COEFFICIENTS, coefficients)}}
 
 
@@ -279,7 +288,6 @@ class _Deriver:
             self.steps[node] = total
             self.order.append(node)
         return lhs
-
 
     def _is_zero(self, node: str) -> sp.Integer:
         """Record that ``node`` does not depend on ``wrt`` after all (its partials cancel)."""

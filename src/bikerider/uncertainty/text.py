@@ -1,4 +1,5 @@
 """Plain-text and Markdown rendering of sensitivities, rankings and Monte Carlo comparisons."""
+
 from __future__ import annotations
 
 import math
@@ -45,11 +46,18 @@ def ranking_rows(contributions: list[Contribution], output: str, top: int | None
     for rank, c in enumerate(contributions[:top] if top else contributions, start=1):
         value, sigma = _value_text(c.name, c.value, c.sigma)
         in_unit = names.unit(c.name)
-        rows.append([
-            str(rank), c.name, value, sigma if c.sigma else "0",
-            f"{c.derivative:.4g} {out_unit}/{in_unit}".rstrip("/ "),
-            _fmt(c.elasticity, 3), f"{c.share:.1%}", c.source,
-        ])
+        rows.append(
+            [
+                str(rank),
+                c.name,
+                value,
+                sigma if c.sigma else "0",
+                f"{c.derivative:.4g} {out_unit}/{in_unit}".rstrip("/ "),
+                _fmt(c.elasticity, 3),
+                f"{c.share:.1%}",
+                c.source,
+            ]
+        )
     return rows
 
 
@@ -74,19 +82,38 @@ def ranking_text(result: UncertaintyResult, output: str, top: int | None = None,
     lines.append(table(RANKING_HEADER, ranking_rows(contributions, output, top), markdown))
     leader = next((c for c in contributions if c.share > 0), None)
     if leader is not None:
-        lines += ["", f"Measurement that matters most: {leader.name} ({names.describe(leader.name)[0]}), "
-                      f"{leader.share:.1%} of the first-order variance."]
+        lines += [
+            "",
+            f"Measurement that matters most: {leader.name} ({names.describe(leader.name)[0]}), "
+            f"{leader.share:.1%} of the first-order variance.",
+        ]
     return "\n".join(lines)
 
 
 def comparison_rows(comparisons: list[Comparison]) -> list[list[str]]:
-    return [[c.name, _fmt(c.value, 5), _fmt(c.first_order, 3), _fmt(c.monte_carlo, 3), _fmt(c.mc_mean, 5),
-             f"{c.relative_difference:+.1%}" if math.isfinite(c.relative_difference) else "-",
-             ("> 10 %: " if c.flagged else "") + c.reason] for c in comparisons]
+    return [
+        [
+            c.name,
+            _fmt(c.value, 5),
+            _fmt(c.first_order, 3),
+            _fmt(c.monte_carlo, 3),
+            _fmt(c.mc_mean, 5),
+            f"{c.relative_difference:+.1%}" if math.isfinite(c.relative_difference) else "-",
+            ("> 10 %: " if c.flagged else "") + c.reason,
+        ]
+        for c in comparisons
+    ]
 
 
-COMPARISON_HEADER = ["output", "value", "first-order sigma", "Monte Carlo sigma", "Monte Carlo mean",
-                     "|FO - MC| / MC", "verdict"]
+COMPARISON_HEADER = [
+    "output",
+    "value",
+    "first-order sigma",
+    "Monte Carlo sigma",
+    "Monte Carlo mean",
+    "|FO - MC| / MC",
+    "verdict",
+]
 
 
 def _print(expr: sp.Expr, latex: bool, symbol_names: dict, full: bool) -> str:
@@ -98,8 +125,7 @@ def _print(expr: sp.Expr, latex: bool, symbol_names: dict, full: bool) -> str:
     return sp.sstr(expr)
 
 
-def expression_text(expr: SensitivityExpression, value: float | None, latex: bool = False,
-                    full: bool = False) -> str:
+def expression_text(expr: SensitivityExpression, value: float | None, latex: bool = False, full: bool = False) -> str:
     """The derivative's steps, the conditions of speeds, and its closed form when small."""
     symbol_names = expr.latex_names()
     lines = []
@@ -114,8 +140,9 @@ def expression_text(expr: SensitivityExpression, value: float | None, latex: boo
         lhs_text = symbol_names.get(lhs, str(lhs)) if latex else str(lhs)
         lines.append(f"{lhs_text}{eq}{_print(expr.closed_form, latex, symbol_names, full)}")
     else:
-        lines.append(f"Chain rule, {len(expr.steps)} steps (a closed form in one piece would have about "
-                     f"{expr.size} operations):")
+        lines.append(
+            f"Chain rule, {len(expr.steps)} steps (a closed form in one piece would have about {expr.size} operations):"
+        )
         for lhs, rhs in expr.steps:
             lhs_text = symbol_names.get(lhs, str(lhs)) if latex else str(lhs)
             lines.append(f"  {lhs_text}{eq}{_print(rhs, latex, symbol_names, full)}")
