@@ -91,7 +91,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from bikerider.bicycle.bodies import BicycleBodies
+from bikerider.bicycle.bodies import BODY_NAMES, OPTIONAL_BODY_NAMES, BicycleBodies
 from bikerider.bicycle.pendulum import (
     DEFAULT_LINE_TOLERANCE,
     PARALLEL,
@@ -660,34 +660,7 @@ def _outputs(layout: MeasuredLayout) -> list[str]:
     return out
 
 
-_BODY_OUTPUTS = (
-    "w",
-    "c",
-    "lam_ht",
-    "g",
-    "rR",
-    "mR",
-    "IRxx",
-    "IRyy",
-    "rF",
-    "mF",
-    "IFxx",
-    "IFyy",
-    "mBf",
-    "xBf",
-    "zBf",
-    "IBfxx",
-    "IBfzz",
-    "IBfxz",
-    "IBfyy",
-    "mH",
-    "xH",
-    "zH",
-    "IHxx",
-    "IHzz",
-    "IHxz",
-    "IHyy",
-)
+_BODY_OUTPUTS = BODY_NAMES + OPTIONAL_BODY_NAMES
 
 
 def reduce_values(

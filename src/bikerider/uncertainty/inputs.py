@@ -15,27 +15,15 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 
 from bikerider.quantity import DEG, Quantity
+from bikerider.rider.measurements import RIDER_NAMES
 
 ASSUMED_RIDER_SIGMAS: dict[str, tuple[float, str]] = {
     # The paper states no accuracy for Table 7 ("measured as accurately as possible with basic
     # tools"); these are assumptions, reported as such wherever they are used.
     **{
         name: (0.01, "assumed: one unit of the last digit Table 7 prints (0.01 m)")
-        for name in (
-            "c_ch",
-            "c_h",
-            "l_hh",
-            "c_la",
-            "l_la",
-            "c_ll",
-            "l_ll",
-            "l_ss",
-            "l_to",
-            "c_ua",
-            "l_ua",
-            "c_ul",
-            "l_ul",
-        )
+        for name in RIDER_NAMES
+        if name not in ("mBr", "lam_fl")
     },
     "lam_fl": (1.0 * DEG, "assumed: 1 deg, the accuracy Table 4 states for angles read off photographs"),
     "mBr": (0.1, "assumed: one unit of the last digit Table 8 prints (0.1 kg)"),
