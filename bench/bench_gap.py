@@ -22,7 +22,7 @@ def workload():
 
     from bikerider.gap import validation as V
     from bikerider.gap.data import CanonicalData
-    from bikerider.gap.model_input import load_model
+    from bikerider.io.gap_model import load_model
 
     bp = ROOT / "src" / "bikerider" / "data" / "bicycleparameters"
     model = load_model(bp / "bicycles/Rigid/Parameters/RigidBenchmark.txt", bp / "riders/Jason/Parameters/JasonRigidBenchmark.txt")

@@ -8,7 +8,7 @@ import pytest
 
 from bikerider.benchmark.model import label_modes
 from bikerider.errors import InputError
-from bikerider.gap.model_input import load_model
+from bikerider.io.gap_model import load_model
 from bikerider.gap.models import BENCH_ARGS, EffectModel, RiderGeometry
 from bikerider.generated import benchmark_model as bm
 from bikerider.generated import gap_effects as gen
@@ -215,5 +215,6 @@ def test_each_effect_can_be_plotted_on_its_own(bench, geometry, tmp_path):
     for name, params in {"rider_lean": {"k_lean": 128.0, "c_lean": 50.0},
                          "tyre_slip": {"c_alpha": 13.0, "c_gamma": 0.8, "sigma_t": 0.2, "t_p": 0.02}}.items():
         path = tmp_path / f"{name}.png"
-        plot_effect(EffectModel(values, geometry, {name: params}), np.linspace(1, 8, 15), path, title=name)
+        figure = plot_effect(EffectModel(values, geometry, {name: params}), np.linspace(1, 8, 15), title=name)
+        figure.savefig(path)
         assert path.read_bytes()[:4] == b"\x89PNG" and path.stat().st_size > 5000

@@ -56,7 +56,7 @@ def _shown(x: float, ci95) -> str:
 
 def build() -> str:
     """The text of docs/gap_real_data.md."""
-    from bikerider.gap.model_input import load_model
+    from bikerider.io.gap_model import load_model
 
     kooijman = load_model(DATA / "gap" / "kooijman2008_bicycle.toml")
     k = _diagnose(kooijman, eigen_file=DATA / "gap" / "kooijman2008_run52.csv").as_dict()

@@ -33,7 +33,7 @@ def _f(x, digits=2):
 
 def main() -> int:
     from bikerider.gap import validation as V
-    from bikerider.gap.model_input import load_model
+    from bikerider.io.gap_model import load_model
 
     logging.basicConfig(level=logging.INFO, format="%(message)s")
     model = load_model(BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt", BP / "riders/Jason/Parameters/JasonRigidBenchmark.txt")

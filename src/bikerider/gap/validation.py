@@ -266,11 +266,18 @@ class TruthSimulator:
 
     def run(self, speed: float, gains, kick: tuple[float, float], duration: float, rate: float):
         """Simulate a kick ``(phid, deltad)`` at ``speed``; return sample times and roll rate."""
+        t, states = self.states(speed, gains, {"phid": kick[0], "deltad": kick[1]}, duration, rate)
+        return t, states["phid"]
+
+    def states(self, speed: float, gains, initial: dict[str, float], duration: float, rate: float):
+        """Simulate from an initial state (``phi, delta, phid, deltad``); sample times and those four
+        signals (the run stops if the bicycle falls past 0.5 rad)."""
         from scipy.integrate import solve_ivp
 
         f, n, idx = self.rhs(speed, gains)
         x0 = np.zeros(n)
-        x0[idx[2]], x0[idx[3]] = kick
+        for k, name in enumerate(("phi", "delta", "phid", "deltad")):
+            x0[idx[k]] = initial.get(name, 0.0)
         times = np.arange(0.0, duration, 1.0 / rate)
 
         def fall(_, x):
@@ -278,7 +285,7 @@ class TruthSimulator:
 
         fall.terminal = True
         sol = solve_ivp(f, (0.0, duration), x0, t_eval=times, method="LSODA", rtol=1e-6, atol=1e-8, events=fall)
-        return sol.t, sol.y[idx[2]]
+        return sol.t, {name: sol.y[idx[k]] for k, name in enumerate(("phi", "delta", "phid", "deltad"))}
 
 
 def _truth_geometry(model: GapModelInput) -> dict:
