@@ -42,8 +42,12 @@ def test_parameter_error_alone_raises_no_structural_verdict(suite):
 @pytest.mark.slow
 def test_predicted_shrinkage_holds_on_fresh_data(suite):
     errors = suite.shrink_errors
-    # the friction case selects nothing (next test); the other two effect cases select their effect
-    assert errors.size == 2
+    # the friction case selects nothing (next test); the other two effect cases select their effect, and
+    # a null case may select `parameters` (its verdict): every selection's predicted shrinkage holds
+    selecting = [c for c in suite.cases if c.selected]
+    assert errors.size == len(selecting) >= 2
+    assert {c.truth for c in selecting if c.hidden} == {"rider_lean", "tyre_slip"}
+    assert all(c.selected == ["parameters"] for c in selecting if not c.hidden)
     assert max(abs(errors)) <= 0.15
 
 
@@ -64,3 +68,45 @@ def test_confusion_matrix_counts_every_case(suite):
     assert rows == ["null", "steer_damping", "rider_lean", "tyre_slip"]
     for truth in ("steer_damping", "rider_lean", "tyre_slip"):
         assert table[rows.index(truth), cols.index(truth)] == 1
+
+
+# -- records of the steer-by-wire kind (part 2 of docs/gap_validation.md, reduced) ----------------
+@pytest.fixture(scope="module")
+def record_cases():
+    riderless = load_model(BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt")
+    return {truth: V.run_record_case(riderless, truth, seed, V.QUICK_RECORDS)
+            for truth, seed in (("sbw_inertia+damping", 22), ("sbw_null", 23))}
+
+
+@pytest.mark.slow
+def test_two_effects_at_once_are_found_from_short_records(record_cases):
+    # 0.03 kg m^2 of steer inertia and 0.3 N m s/rad of damping, 12 records of 1.2-2.5 s at 2.5-4.5 m/s
+    # under the speed-scheduled control: the pair is selected with both values within 20 %
+    case = record_cases["sbw_inertia+damping"]
+    assert case.verdict == "structural"
+    assert set(case.selected) == {"steer_damping", "steer_inertia"}
+    assert case.first_parameters["c_steer"] == pytest.approx(0.3, rel=0.2)
+    assert case.first_parameters["I_steer"] == pytest.approx(0.03, rel=0.2)
+    assert abs(case.predicted_shrink - case.actual_shrink) <= 0.15
+
+
+@pytest.mark.slow
+def test_parameter_error_alone_in_records_selects_no_effect(record_cases):
+    case = record_cases["sbw_null"]
+    assert case.verdict != "structural" and set(case.selected) <= {"parameters"}
+
+
+def test_the_truths_whipple_matrices_are_meijaards(tmp_path):
+    # the hand-typed Appendix A of Meijaard et al. (2007) against the generated benchmark model, on
+    # two bicycles: the truth shares no code with the candidates but agrees on the meaning
+    from bikerider.generated import benchmark_model as bm
+    from bikerider.gap.models import BENCH_ARGS
+
+    import numpy as np
+
+    for path in (BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt",
+                 Path(bikerider.__file__).parent / "data" / "gap" / "kooijman2008_bicycle.toml"):
+        model = load_model(path)
+        values = {k: float(model.parameters.values[k]) for k in BENCH_ARGS}
+        for mine, generated in zip(V.meijaard_matrices(values), bm.canonical_matrices(**values)):
+            np.testing.assert_allclose(mine, generated, rtol=1e-12, atol=1e-12)

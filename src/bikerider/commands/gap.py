@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import functools
 
 
 def add_parser(subparsers) -> None:
@@ -60,14 +61,7 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
 
     from bikerider.errors import InputError
-    from bikerider.gap.data import CanonicalData, EigenvalueData
-    from bikerider.gap.diagnosis import diagnose
-    from bikerider.gap.effects import EFFECT_NAMES, effect
-    from bikerider.gap.records import fit_records
     from bikerider.gap.report import summary_text
-    from bikerider.io import gap_data
-    from bikerider.io.experiment import load_records, read_experiment
-    from bikerider.io.gap_model import load_model
 
     if not (math.isfinite(args.rider_rel_sigma) and 0 <= args.rider_rel_sigma < 1):
         raise InputError("--rider-rel-sigma", args.rider_rel_sigma, "a relative uncertainty in [0, 1)")
@@ -75,29 +69,10 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("--data/--experiment", "missing", "data files (--data) or a manifest of records (--experiment)")
     if args.sample_rate is not None and not (math.isfinite(args.sample_rate) and args.sample_rate > 0):
         raise InputError("--sample-rate", args.sample_rate, "a positive sampling rate [Hz]")
-    model = load_model(args.model, args.rider, rider_rel_sigma=args.rider_rel_sigma)
-    laws = gap_data.read_control(args.control) if args.control else {}
-    default_law = next(iter(laws.values())) if len(laws) == 1 else None
-    groups = [g.strip() for g in args.groups.split(",")] if args.groups else None
-    eigen, canonical, records = [], [], []
-    for path in args.data:
-        kind = gap_data.detect_kind(path)
-        if kind == "eigenvalues":
-            eigen.append(gap_data.read_eigenvalues(path, default_law, laws))
-        elif kind == "perturbation":
-            records.append(gap_data.read_perturbation(path, args.speed, default_law))
-        else:
-            canonical.append(gap_data.read_canonical(path, groups))
-    for path in args.experiment:
-        settings, windows = read_experiment(path, args.columns, args.sample_rate, laws)
-        records += load_records(settings, windows)
-    effects = EFFECT_NAMES
-    if args.effects:
-        effects = tuple(e.strip() for e in args.effects.split(","))
-        for name in effects:
-            effect(name)
-    diagnosis = diagnose(model, EigenvalueData.concatenate(eigen), CanonicalData.concatenate(canonical), effects,
-                         fit_records(records))
+    diagnosis = diagnose_files(args.model, tuple(args.data), tuple(args.experiment), rider=args.rider,
+                               rider_rel_sigma=args.rider_rel_sigma, control=args.control, speed=args.speed,
+                               groups=args.groups, effects=args.effects, columns=args.columns,
+                               sample_rate=args.sample_rate)
     result = diagnosis.as_dict()
     if args.report:
         from bikerider.io.gap_report import write_report
@@ -111,6 +86,61 @@ def run(args: argparse.Namespace) -> int:
         if args.report:
             print(f"\nReport: {result['report']}")
     return 0
+
+
+def diagnose_files(model: str, data: tuple[str, ...] = (), experiment: tuple[str, ...] = (), *, rider: str | None = None,
+                   rider_rel_sigma: float = 0.0, control: str | None = None, speed: float | None = None,
+                   groups: str | None = None, effects: str | None = None, columns: str | None = None,
+                   sample_rate: float | None = None):
+    """Read every input of a diagnosis from its files and run it (the command's work, without output).
+
+    Arguments as the command's options (``groups`` and ``effects`` comma-separated).  The result is
+    cached within a process for the same arguments and unchanged input files (the documents and the
+    tests of the shipped steer-by-wire experiment share one run).
+    """
+    import os
+
+    files = [model, rider, control, *data, *experiment]
+    stamp = tuple((str(f), os.stat(f).st_mtime_ns, os.stat(f).st_size) if f and os.path.isfile(f) else (str(f), None)
+                  for f in files)
+    return _diagnose_files(stamp, model, tuple(data), tuple(experiment), rider, rider_rel_sigma, control, speed, groups,
+                           effects, columns, sample_rate)
+
+
+@functools.lru_cache(maxsize=4)
+def _diagnose_files(stamp, model, data, experiment, rider, rider_rel_sigma, control, speed, groups, effects, columns,
+                    sample_rate):
+    from bikerider.gap.data import CanonicalData, EigenvalueData
+    from bikerider.gap.diagnosis import diagnose
+    from bikerider.gap.effects import EFFECT_NAMES, effect
+    from bikerider.gap.records import fit_records
+    from bikerider.io import gap_data
+    from bikerider.io.experiment import load_records, read_experiment
+    from bikerider.io.gap_model import load_model
+
+    loaded = load_model(model, rider, rider_rel_sigma=rider_rel_sigma)
+    laws = gap_data.read_control(control) if control else {}
+    default_law = next(iter(laws.values())) if len(laws) == 1 else None
+    keep = [g.strip() for g in groups.split(",")] if groups else None
+    eigen, canonical, records = [], [], []
+    for path in data:
+        kind = gap_data.detect_kind(path)
+        if kind == "eigenvalues":
+            eigen.append(gap_data.read_eigenvalues(path, default_law, laws))
+        elif kind == "perturbation":
+            records.append(gap_data.read_perturbation(path, speed, default_law))
+        else:
+            canonical.append(gap_data.read_canonical(path, keep))
+    for path in experiment:
+        settings, windows = read_experiment(path, columns, sample_rate, laws)
+        records += load_records(settings, windows)
+    candidates = EFFECT_NAMES
+    if effects:
+        candidates = tuple(e.strip() for e in effects.split(","))
+        for name in candidates:
+            effect(name)
+    return diagnose(loaded, EigenvalueData.concatenate(eigen), CanonicalData.concatenate(canonical), candidates,
+                    fit_records(records))
 
 
 def _plain(value, np):

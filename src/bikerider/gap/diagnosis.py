@@ -22,7 +22,9 @@ held-out points.  Candidates are ranked by it; a candidate within :data:`TIE_REL
 one, or not significantly better at :data:`TIE_P`, is
 tied with it, and within a tie the candidate with fewer fitted parameters ranks first (Occam).
 "Better" is a paired bootstrap of the held-out points' RMS error (:func:`significantly_better`).
-Every pair of candidates is cross-validated as well (fitted jointly on the same folds).
+Pairs are cross-validated as well (fitted jointly on the same folds): every pair of candidates that
+each, alone, predict the held-out folds better than the nominal model (an effect that makes the
+held-out predictions worse on its own is not searched further).
 
 Plausible.  A candidate fitted to all the data is plausible when every fitted value's 95 % interval
 reaches its plausible range (the literature's, or the bicycle's own ``[plausible]`` table), no value
@@ -33,10 +35,12 @@ parts are, fitted jointly.
 
 Selection (structural verdict).  The first plausible single candidate of the ranking that beats the
 nominal model significantly on the held-out folds is selected; a plausible pair replaces it when the
-pair beats it significantly.  An implausible candidate is never selected: when the best held-out
+single leaves a gap above the noise floor (held-out RMS error against the data's noise above one) and
+the pair beats it significantly.  An implausible candidate is never selected: when the best held-out
 fit needs implausible values the result says so, with the values (``best_implausible``); and when
-an implausible fit of no more effects beats the plausible choice significantly, nothing is selected
-(a plausible candidate that explains clearly less than the data ask for would mislead).
+an implausible fit with no more fitted parameters beats the plausible choice significantly, nothing
+is selected (a plausible candidate that explains clearly less than an equally simple one would
+mislead).
 
 How far.  For the selection, the held-out error before and after per fold and overall, and the
 fraction of the gap above the noise floor removed: with ``G = mean(z^2) - 1`` (the noise floor of
@@ -69,6 +73,10 @@ TIE_P = 0.05
 """One-sided p-value a better held-out error must reach to break a tie."""
 MAX_SELECTED = 2
 """Most effects selected together (pairs are searched on the held-out folds)."""
+TIME_DOMAIN_PARTNERS = ("steer_inertia", "steer_stiffness", "speed_sensor")
+"""Linear candidates searched together with steer friction in the time domain: a steer motor's rotor
+inertia, a spring, and an error of the speed sensor (the other pairs are searched between linear
+candidates only, to keep the time-domain fits few)."""
 UNDETERMINED = 1.0
 """A fitted value whose standard error exceeds this many times the width of its plausible range is
 not determined by the data (the data narrow it down less than the literature already does)."""
@@ -176,7 +184,7 @@ class Diagnosis:
         self.model_input = model
         self.records = list(records or [])
         self.record_rows: dict[int, int] = {}   # index in self.records -> eigenvalue row
-        self._friction_full: EffectFit | None = None
+        self._time_domain_full: dict[tuple[str, ...], EffectFit] = {}
         self.bias = np.zeros(0, complex)
         eigen = self._with_records(model, eigen)
         if len(eigen) + len(canonical) == 0:
@@ -268,8 +276,8 @@ class Diagnosis:
         """The fit of a set of effects to all the data (cached)."""
         effects = tuple(effects)
         if effects not in self.full_fits:
-            if effects == ("steer_friction",):
-                self.full_fits[effects] = self._friction_fit(None)
+            if _time_domain(effects):
+                self.full_fits[effects] = self._time_domain_fit(effects, None)
             else:
                 self.full_fits[effects] = self.problem.fit(effects)
         return self.full_fits[effects]
@@ -294,50 +302,54 @@ class Diagnosis:
             k += n
         return out
 
-    def _friction_fit(self, mask: np.ndarray | None, start=None, jackknife: bool = True) -> EffectFit:
-        """Coulomb and viscous steer friction fitted in the time domain to the records in ``mask``.
+    def _time_domain_fit(self, effects: tuple[str, ...], mask: np.ndarray | None, start=None,
+                         jackknife: bool = True) -> EffectFit:
+        """A time-domain candidate (steer friction, alone or with one linear effect) fitted to the records
+        in ``mask`` (:func:`bikerider.gap.timedomain.fit_time_domain`).
 
         The fit to all the data gets standard errors by the jackknife over the held-out folds' fits
         (leave one group out), when there are three folds or more.
         """
-        from bikerider.gap.timedomain import fit_friction
+        from bikerider.gap.timedomain import Layout, fit_time_domain
 
-        if mask is None and self._friction_full is not None:
-            if not jackknife or np.all(np.isfinite(self._friction_full.stderr)):
-                return self._friction_full
-        idx = self._record_indices(mask)
-        params = EFFECTS["steer_friction"].parameters
-        lower = np.array([p.bounds[0] for p in params])
-        upper = np.array([p.bounds[1] for p in params])
-        if mask is None and self._friction_full is not None:
-            values, cost, n, success = (self._friction_full.values, self._friction_full.chi2, self._friction_full.n,
-                                        self._friction_full.success)
+        cached = self._time_domain_full.get(effects) if mask is None else None
+        if cached is not None and (not jackknife or np.all(np.isfinite(cached.stderr))):
+            return cached
+        layout = Layout.of(effects)
+        lower, upper = np.array(layout.lower), np.array(layout.upper)
+        if cached is not None:
+            values, cost, n, success = cached.values, cached.chi2, cached.n, cached.success
         else:
-            fit = fit_friction([self.records[k].record for k in idx], self.problem.nominal, self.problem.geometry,
-                               bounds=(lower, upper), start=start)
+            records = [self.records[k] for k in self._record_indices(mask)]
+            fit = fit_time_domain([f.record for f in records], self.problem.nominal, self.problem.geometry, layout,
+                                  start=start)
             values, cost, n, success = fit.values, fit.cost, fit.n_samples, fit.success
-        stderr = np.full(2, np.inf)
+        stderr = np.full(values.size, np.inf)
         if mask is None and jackknife and len(self.folds) >= 3:  # jackknife over the held-out folds' fits
-            folds = [self.cross_validate(("steer_friction",)).fits[j].values for j in range(len(self.folds))]
+            folds = np.array([f.values for f in self.cross_validate(effects).fits])
             g = len(folds)
-            stderr = np.sqrt((g - 1) / g * np.sum((np.array(folds) - np.mean(folds, axis=0)) ** 2, axis=0))
+            stderr = np.sqrt((g - 1) / g * np.sum((folds - folds.mean(axis=0)) ** 2, axis=0))
         ci_low = np.clip(values - 1.96 * stderr, lower, upper)
         ci_high = np.clip(values + 1.96 * stderr, lower, upper)
-        out = EffectFit(("steer_friction",), [p.name for p in params], [p.unit for p in params], values, stderr,
-                        ci_low, ci_high, {"steer_friction": dict(zip([p.name for p in params], map(float, values)))},
-                        {}, cost, 0.0, n, success, "time-domain fit", lower, upper)
+        config: dict[str, dict[str, float]] = {}
+        for (effect, param), value in zip(layout.names, values):
+            config.setdefault(effect, {})[param] = float(value)
+        units = [next(p.unit for p in EFFECTS[e].parameters if p.name == n) for e, n in layout.names]
+        out = EffectFit(effects, [n for _, n in layout.names], units, values, stderr, ci_low, ci_high, config, {},
+                        cost, 0.0, n, success, "time-domain fit", lower, upper)
         if mask is None:
-            self._friction_full = out
+            self._time_domain_full[effects] = out
         return out
 
-    def _friction_predict(self, fit: EffectFit, mask: np.ndarray) -> np.ndarray:
-        """Predicted (bias-corrected) observations of the records in ``mask`` under a friction fit."""
-        from bikerider.gap.timedomain import apparent_eigenvalues
+    def _time_domain_predict(self, fit: EffectFit, mask: np.ndarray) -> np.ndarray:
+        """Predicted (bias-corrected) observations of the records in ``mask`` under a time-domain fit."""
+        from bikerider.gap.timedomain import Layout, apparent_eigenvalues
 
         idx = self._record_indices(mask)
         pred = np.full(len(self.problem.obs), np.nan)
-        apparent, _ = apparent_eigenvalues([self.records[k].record for k in idx], self.problem.nominal,
-                                           self.problem.geometry, float(fit.values[0]), float(fit.values[1]))
+        layout = Layout.of(fit.effects)
+        apparent, _ = apparent_eigenvalues([self.records[k] for k in idx], self.problem.nominal, self.problem.geometry,
+                                           layout, fit.values)
         obs_row = self._obs_rows()
         rows = list(self.record_rows)
         for j, k in enumerate(idx):
@@ -354,10 +366,10 @@ class Diagnosis:
 
         ``None`` when the selection is not a time-domain effect (its predictions are curves in speed).
         """
-        if self.selected != ["steer_friction"] or self.selected_fit is None:
+        if not _time_domain(tuple(self.selected)) or self.selected_fit is None:
             return None
         if not hasattr(self, "_selected_predictions"):
-            pred = self._friction_predict(self.selected_fit, np.ones(len(self.problem.obs), bool))
+            pred = self._time_domain_predict(self.selected_fit, np.ones(len(self.problem.obs), bool))
             out = np.full(len(self.problem.eigen), np.nan + 1j * np.nan)
             for row, parts in self._obs_rows().items():
                 out[row] = complex(pred[parts[0]], pred[parts[1]] if len(parts) > 1 else 0.0)
@@ -456,11 +468,21 @@ class Diagnosis:
         z_before = p.z(p.baseline)
         z_after = np.full(len(p.obs), np.nan)
         folds, fits = [], []
-        full = self.fit_of(effects) if effects != ("steer_friction",) else self._friction_fit(None, jackknife=False)
+        timed = _time_domain(effects)
+        if timed:
+            start = None
+            if len(effects) > 1 and ("steer_friction",) in self._time_domain_full:  # from the friction alone
+                from bikerider.gap.timedomain import Layout
+
+                alone = self._time_domain_full[("steer_friction",)].values
+                start = list(alone) + [1.0 if n == "speed_scale" else 0.0 for _, n in Layout.of(effects).names[2:]]
+            full = self._time_domain_fit(effects, None, start=start, jackknife=False)
+        else:
+            full = self.fit_of(effects)
         for name, held in self.folds:  # every fold starts from the fit to all the data
-            if effects == ("steer_friction",):
-                fit = self._friction_fit(~held, start=full.values)
-                pred = self._friction_predict(fit, held)
+            if timed:
+                fit = self._time_domain_fit(effects, ~held, start=full.values)
+                pred = self._time_domain_predict(fit, held)
             else:
                 fit = p.fit(effects, ~held, start=full.values)
                 pred = p.predict_fit(fit)
@@ -512,11 +534,18 @@ class Diagnosis:
                                  "data_shrink": r.data_shrink})
 
     def pair_candidates(self) -> list[tuple[str, str]]:
-        """Pairs searched on the held-out folds: any two candidates fitted jointly (not the time-domain ones)."""
+        """Pairs searched on the held-out folds (module docstring): any two linear candidates that each,
+        alone, predict the held-out folds better than the nominal model, fitted jointly; and steer
+        friction (in the time domain) with each such one of :data:`TIME_DOMAIN_PARTNERS`."""
         import itertools
 
-        linear = [e for e in self.candidates if e not in TIME_DOMAIN_EFFECTS]
-        return [tuple(sorted(pair, key=EFFECT_NAMES.index)) for pair in itertools.combinations(linear, 2)]
+        helpful = [e for e in self.candidates if (e,) in self.cv and self.cv[(e,)].error_after < self.cv[(e,)].error_before]
+        linear = [e for e in helpful if e not in TIME_DOMAIN_EFFECTS]
+        pairs = [tuple(sorted(pair, key=EFFECT_NAMES.index)) for pair in itertools.combinations(linear, 2)]
+        if "steer_friction" in helpful:
+            pairs += [tuple(sorted((e, "steer_friction"), key=EFFECT_NAMES.index)) for e in TIME_DOMAIN_PARTNERS
+                      if e in helpful]
+        return pairs
 
     def _search_pairs(self) -> None:
         self.pairs = []
@@ -562,7 +591,11 @@ class Diagnosis:
         chosen = best_single
         reference = best_single.z_after if best_single is not None else z_nominal
         best_pair = None
-        for r in sorted(getattr(self, "pairs", []), key=lambda r: r.error_after):
+        # a pair only where the single leaves a gap above the noise floor (Occam: nothing left to explain)
+        left = None if best_single is None else (best_single.data_after if best_single.data_after is not None
+                                                  else best_single.error_after)
+        pairs = [] if left is not None and left <= 1.0 else getattr(self, "pairs", [])
+        for r in sorted(pairs, key=lambda r: r.error_after):
             better, pval = significantly_better(r.z_after, reference)
             entry = {"effects": list(r.effects), "heldout_error": r.error_after, "plausible": None,
                      "beats_single" if best_single is not None else "beats_nominal": better, "p_value": pval}
@@ -588,9 +621,10 @@ class Diagnosis:
                                         "why": _implausible_reasons(checks)})
         if self.best_single_implausible == self.best_implausible:
             self.best_single_implausible = None
-        # ... and select nothing that an implausible fit of no more effects beats significantly
+        # ... and select nothing that an implausible fit of no more fitted parameters beats significantly
         if chosen is not None:
-            rivals = [r for r in every if len(r.effects) <= len(chosen.effects) and r.effects != chosen.effects
+            size = _n_params(self.problem, chosen.effects)
+            rivals = [r for r in every if _n_params(self.problem, r.effects) <= size and r.effects != chosen.effects
                       and r.error_after < chosen.error_after]
             for r in sorted(rivals, key=lambda r: r.error_after):
                 ok, checks = self.plausibility(self.fit_of(r.effects))
@@ -702,10 +736,9 @@ class Diagnosis:
             entry = {"effects": list(r.effects), "heldout_error_before": r.error_before,
                      "heldout_error_after": r.error_after, "shrink": r.shrink, "data_error_after": r.data_after,
                      "data_shrink": r.data_shrink}
-            if r.effects in self.full_fits:
-                ok, checks = self.plausibility(self.full_fits[r.effects])
-                entry.update({"plausible": ok, "parameters": _named_values(self.full_fits[r.effects]),
-                              "plausibility": checks})
+            fit = self.fit_of(r.effects)
+            ok, checks = self.plausibility(fit)
+            entry.update({"plausible": ok, "parameters": _named_values(fit), "plausibility": checks})
             pairs.append(entry)
         out = {
             "verdict": self.verdict,
@@ -800,6 +833,11 @@ def arm_inertia(problem: GapProblem, m_arm: float) -> float:
     axis = np.array([math.sin(lam), 0.0, math.cos(lam)])
     perp = rel - (rel @ axis) * axis
     return float(m_arm * (perp @ perp))
+
+
+def _time_domain(effects: tuple[str, ...]) -> bool:
+    """Whether a set of effects is fitted in the time domain (it holds a nonlinear candidate)."""
+    return any(e in TIME_DOMAIN_EFFECTS for e in effects)
 
 
 def _implausible_reasons(checks: list[dict]) -> list[str]:

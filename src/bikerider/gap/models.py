@@ -239,10 +239,27 @@ class EffectModel:
 
         Returns ``(..., S, F, 2, 2)``: the 2x2 dynamic stiffness the roll and steer coordinates
         show with every other degree of freedom free.  For the two-degree-of-freedom models it is
-        ``M s^2 + C s + K`` at ``s = i omega``.
+        ``M s^2 + C s + K`` at ``s = i omega``; with the leaning upper body, the Schur complement of
+        that 3x3 matrix on the lean; with tyres, the inverse of the transfer function.
         """
-        ss = self.state_space(speeds)
         omegas = _as_float(omegas)
+        if not self.tyre:  # second-order models: assemble M s^2 + C s + K, eliminate the lean
+            speeds = _as_float(speeds)
+            if speeds.ndim != 1 or speeds.size == 0 or not np.all(np.isfinite(speeds)) or np.any(speeds <= 0):
+                raise InputError("speeds", speeds.tolist(), "a one-dimensional array of finite, positive speeds [m/s]")
+            args = self._args()
+            if self.lean:
+                args = dict(args, **self._upper(), k_lean=self._extra("k_lean", 1.0), c_lean=self._extra("c_lean", 0.0))
+                M, C, K = gen.rider_lean_matrices(**args, v=speeds)
+            else:
+                M, C, K = gen.whipple_extended_matrices(**args, v=speeds)
+            s = (1j * omegas)[:, None, None]
+            Z = M[..., None, :, :] * s**2 + C[..., None, :, :] * s + K[..., None, :, :]   # (..., S, F, n, n)
+            if not self.lean:
+                return Z
+            # the upper body is free: D = Z_qq - Z_q,theta Z_theta,theta^-1 Z_theta,q
+            return Z[..., :2, :2] - Z[..., :2, 2:3] @ Z[..., 2:3, :2] / Z[..., 2:3, 2:3]
+        ss = self.state_space(speeds)
         n = ss.A.shape[-1]
         s = 1j * omegas[:, None, None]
         A = ss.A[..., None, :, :]

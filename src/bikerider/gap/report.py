@@ -229,12 +229,13 @@ def _selected_model(diagnosis):
         return None
     p = diagnosis.problem
     scale = fit.config.get("speed_sensor", {}).get("speed_scale", 1.0)
-    if fit.effects == ("steer_friction",):
+    if "steer_friction" in fit.effects:
         from bikerider.gap.models import EffectModel
 
         c = fit.config["steer_friction"]["c_viscous"]
-        model = EffectModel(p.nominal, p.geometry, {"steer_damping": {"c_steer": c}})
-        return model, 1.0, f"viscous part of steer_friction alone (c = {c:.3g} N m s/rad; no Coulomb)"
+        linear = {e: v for e, v in fit.config.items() if e not in ("steer_friction", "speed_sensor")}
+        model = EffectModel(p.nominal, p.geometry, {"steer_damping": {"c_steer": c}, **linear})
+        return model, scale, f"{'+'.join(fit.effects)} without its Coulomb friction (viscous c = {c:.3g} N m s/rad)"
     return p.fitted_model(fit), scale, "with " + "+".join(diagnosis.selected)
 
 
@@ -303,8 +304,8 @@ def plot_records(diagnosis, columns: int = 6):
     """Contact sheet: every record's roll rate, its fitted decay and the model's response."""
     plt = pyplot()
     from bikerider.errors import FitError
-    from bikerider.gap.timedomain import (OBSERVED, closed_loop, friction_states, initial_states, make_batches,
-                                          simulate_linear)
+    from bikerider.gap.timedomain import (OBSERVED, Layout, closed_loop, friction_states, initial_states, make_batches,
+                                          simulate_linear, systems)
 
     fits = diagnosis.records
     if not fits:
@@ -319,18 +320,19 @@ def plot_records(diagnosis, columns: int = 6):
         model, model_label = EffectModel(p.nominal, p.geometry), "nominal model"
     responses = {}
     used = [k for k, f in enumerate(fits) if f.used]
-    friction = (diagnosis.selected_fit.config["steer_friction"]
-                if diagnosis.selected_fit is not None and diagnosis.selected == ["steer_friction"] else None)
-    if friction is not None:
-        model_label = (f"steer_friction (Coulomb {friction['T_coulomb']:.3g} N m, viscous "
-                       f"{friction['c_viscous']:.3g} N m s/rad)")
+    fit = diagnosis.selected_fit
+    timed = fit is not None and "steer_friction" in fit.effects
+    if timed:
+        model_label = "+".join(fit.effects) + " (" + ", ".join(f"{n} {v:.3g}" for n, v in zip(fit.names, fit.values)) + ")"
     try:
         records = [fits[k].record for k in used]
         for idx, batch in make_batches(records, max_duration=math.inf):
-            A, _, outputs = closed_loop(model, batch.records)
-            if friction is not None:
-                states, _ = friction_states(batch, model, friction["T_coulomb"])
+            if timed:
+                layout = Layout.of(fit.effects)
+                A, b, outputs, T = systems(p.nominal, p.geometry, batch.records, layout, fit.values)
+                states = friction_states(batch, A, b, outputs, T)[0][0]
             else:
+                A, _, outputs = closed_loop(model, batch.records)
                 states = simulate_linear(A, initial_states(batch, A, outputs), batch.dt, batch.N)
             for j, k in enumerate(idx):
                 L = batch.length[j]
@@ -451,9 +453,9 @@ def plot_effects(diagnosis):
     base = weave_curve(nominal, grid, law, nominal)
     axes[0].plot(grid, base.real, "k--", label="nominal")
     axes[1].plot(grid, base.imag, "k--")
-    sets = [(name,) for name in diagnosis.candidates if name != "steer_friction"]
-    sets += [pr.effects for pr in sorted(getattr(diagnosis, "pairs", []), key=lambda r: r.error_after)[:2]
-             if pr.effects in diagnosis.full_fits]
+    linear = [pr for pr in sorted(getattr(diagnosis, "pairs", []), key=lambda r: r.error_after)
+              if pr.effects in diagnosis.full_fits and "steer_friction" not in pr.effects]
+    sets = [(name,) for name in diagnosis.candidates if name != "steer_friction"] + [pr.effects for pr in linear[:2]]
     for effects in sets:
         fit = diagnosis.fit_of(effects)
         scale = fit.config.get("speed_sensor", {}).get("speed_scale", 1.0)
@@ -472,8 +474,8 @@ def plot_effects(diagnosis):
         ax.set_xlabel("speed [m/s]")
         ax.grid(alpha=0.3)
     axes[0].legend(fontsize=7)
-    fig.suptitle(f"Every candidate fitted to all the data, on its own, and the best pairs (dotted); control law {main}",
-                 fontsize=9)
+    fig.suptitle(f"Every linear candidate fitted to all the data, on its own, and the best two linear pairs (dotted); "
+                 f"control law {main}", fontsize=9)
     fig.tight_layout()
     return fig
 

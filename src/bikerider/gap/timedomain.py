@@ -53,6 +53,8 @@ zero steer rate, ``T_coulomb / eps``, would make the explicit friction term stif
 slope over the steer inertia kept below one)."""
 MAX_DURATION = 2.5
 """Longest part of a record the time-domain fits use [s] (the weave has decayed by then)."""
+FIT_STEP = 0.02
+"""Sampling step of the time-domain fits [s]: records sampled faster are compared at every k-th sample."""
 MAX_RELATIVE_BIAS = 0.2
 """Largest extraction bias, as a fraction of the model's weave eigenvalue, for which a record's
 eigenvalue is compared with the model's."""
@@ -109,11 +111,12 @@ class Batch:
         return int(self.length.max())
 
 
-def make_batches(records: list[Record], signals=TIME_DOMAIN_SIGNALS,
-                 max_duration: float = MAX_DURATION) -> list[tuple[list[int], Batch]]:
+def make_batches(records: list[Record], signals=TIME_DOMAIN_SIGNALS, max_duration: float = MAX_DURATION,
+                 min_step: float = 0.0) -> list[tuple[list[int], Batch]]:
     """Group records by sampling step (uniformly sampled records only); ``[(indices, batch)]``.
 
-    Each record is used up to ``max_duration`` seconds.
+    Each record is used up to ``max_duration`` seconds, every ``k``-th sample where the sampling step
+    is shorter than ``min_step`` (the fits compare the weave, a few hertz, at 50 Hz).
     """
     groups: dict[float, list[int]] = {}
     for k, r in enumerate(records):
@@ -123,9 +126,11 @@ def make_batches(records: list[Record], signals=TIME_DOMAIN_SIGNALS,
         groups.setdefault(round(float(steps[0]), 9), []).append(k)
     out = []
     for dt, idx in groups.items():
+        every = max(1, int(round(min_step / dt))) if min_step > dt else 1
+        step = dt * every
         recs = [records[k] for k in idx]
-        limit = int(round(max_duration / dt)) + 1 if math.isfinite(max_duration) else 1 << 30
-        length = np.array([min(r.time.size, limit) for r in recs])
+        limit = int(round(max_duration / step)) + 1 if math.isfinite(max_duration) else 1 << 30
+        length = np.array([min((r.time.size - 1) // every + 1, limit) for r in recs])
         N = int(length.max())
         y, weight = {}, {}
         for name in signals:
@@ -133,19 +138,89 @@ def make_batches(records: list[Record], signals=TIME_DOMAIN_SIGNALS,
             W = np.zeros(len(recs))
             for j, r in enumerate(recs):
                 if name in r.signals:
-                    values = r.signals[name][: length[j]]
+                    values = r.signals[name][::every][: length[j]]
                     if np.all(np.isfinite(values)):
                         Y[j, : length[j]] = values
                         spread = float(np.std(values))
                         W[j] = 1.0 / spread if spread > 0 else 0.0
             if np.any(W > 0):
                 y[name], weight[name] = Y, W
-        out.append((idx, Batch(recs, dt, length, y, weight)))
+        out.append((idx, Batch(recs, step, length, y, weight)))
     return out
 
 
+@dataclass(frozen=True)
+class Layout:
+    """The fitted parameters of a time-domain candidate: ``(effect, parameter)`` pairs with bounds.
+
+    ``steer_friction``'s ``T_coulomb`` and ``c_viscous`` come first; an added linear effect's
+    parameters follow (``steer_inertia``, ``steer_stiffness``, ``speed_sensor``).
+    """
+
+    names: tuple[tuple[str, str], ...]
+    lower: tuple[float, ...]
+    upper: tuple[float, ...]
+    start: tuple[float, ...]
+
+    @staticmethod
+    def of(effects: tuple[str, ...]) -> "Layout":
+        from bikerider.gap.effects import EFFECTS
+
+        names, lower, upper, start = [], [], [], []
+        for effect in sorted(effects, key=lambda e: e != "steer_friction"):
+            for p in EFFECTS[effect].parameters:
+                names.append((effect, p.name))
+                lower.append(p.bounds[0])
+                upper.append(p.bounds[1])
+                start.append(p.start)
+        return Layout(tuple(names), tuple(lower), tuple(upper), tuple(start))
+
+    def value(self, theta: np.ndarray, name: str, default: float = 0.0) -> np.ndarray:
+        """Column ``name`` of parameter vectors ``theta (P, k)`` (``default`` when not fitted)."""
+        for k, (_, param) in enumerate(self.names):
+            if param == name:
+                return theta[:, k]
+        return np.full(theta.shape[0], default)
+
+
+NOMINAL = Layout((), (), (), ())
+"""The nominal linear model (nothing fitted)."""
+
+
+def systems(values: dict, geometry, records: list[Record], layout: Layout, theta: np.ndarray):
+    """Closed-loop systems of every record for parameter vectors ``theta (P, k)``.
+
+    Returns ``A (P, R, n, n)``, the steer-torque column ``b (P, R, n)``, the output state indices
+    and the Coulomb friction ``T (P,)``.  A speed scale (``speed_sensor``) multiplies the speed of
+    the records whose speed a sensor read; the control gains stay those of the recorded speed.
+    """
+    theta = np.atleast_2d(np.asarray(theta, dtype=float))
+    P, R = theta.shape[0], len(records)
+    config: dict[str, dict[str, np.ndarray]] = {}
+    c = layout.value(theta, "c_viscous")
+    if np.any(c != 0):
+        config["steer_damping"] = {"c_steer": c}
+    for effect, param in layout.names:
+        if effect not in ("steer_friction", "speed_sensor"):
+            config.setdefault(effect, {})[param] = layout.value(theta, param)
+    scale = layout.value(theta, "speed_scale", 1.0)
+    measured = np.array([r.speed_measured for r in records])
+    speeds = np.array([r.speed for r in records])
+    gains = np.array([r.gains for r in records])
+    # one model call for every (parameter vector, record) pair
+    flat_speeds = (np.where(measured[None, :], scale[:, None], 1.0) * speeds[None, :]).ravel()
+    flat_values = {k: v for k, v in values.items()}
+    flat_config = {e: {k: np.repeat(v, R) for k, v in p.items()} for e, p in config.items()}
+    from bikerider.gap.models import EffectModel
+
+    ss = EffectModel(flat_values, geometry, flat_config).state_space(flat_speeds)
+    A = ss.closed_loop(np.tile(gains, (P, 1)))
+    n = A.shape[-1]
+    return (A.reshape(P, R, n, n), ss.B[..., :, 1].reshape(P, R, n), ss.outputs, layout.value(theta, "T_coulomb"))
+
+
 def closed_loop(model: EffectModel, records: list[Record]) -> tuple[np.ndarray, np.ndarray, tuple[int, ...]]:
-    """Closed-loop ``A (..., R, n, n)``, steer-torque column ``b (..., R, n)`` and output states."""
+    """Closed-loop ``A (R, n, n)``, steer-torque column ``b (R, n)`` and output states of any linear model."""
     speeds = np.array([r.speed for r in records])
     gains = np.array([r.gains for r in records])
     ss = model.state_space(speeds)
@@ -162,33 +237,45 @@ def _transitions(A: np.ndarray, dt: float, N: int) -> np.ndarray:
     return out
 
 
+def _stack(batch: Batch, sensitivity: np.ndarray, outputs: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
+    """Weighted design ``(..., R, M, n + S)`` (state columns, then one offset per signal) and data ``(R, M)``.
+
+    ``sensitivity`` is ``(..., R, N, n_out, n)``: each output state's response to the initial state.
+    Samples beyond a record's length, and signals it lacks, are zero rows.
+    """
+    names = list(batch.y)
+    mask = np.arange(batch.N)[None, :] < batch.length[:, None]           # (R, N)
+    lead = sensitivity.shape[:-4]
+    R, N, n = batch.y[names[0]].shape[0], batch.N, sensitivity.shape[-1]
+    S = len(names)
+    design = np.zeros(lead + (R, S, N, n + S))
+    data = np.zeros((R, S, N))
+    for m, s in enumerate(names):
+        w = (batch.weight[s][:, None] * mask)                             # (R, N)
+        design[..., m, :, :n] = sensitivity[..., :, outputs[OBSERVED[s]], :] * w[..., None]
+        design[..., m, :, n + m] = w
+        data[:, m, :] = np.where(mask, np.nan_to_num(batch.y[s]), 0.0) * w
+    return design.reshape(lead + (R, S * N, n + S)), data.reshape(R, S * N)
+
+
+def _solve(design: np.ndarray, data: np.ndarray) -> np.ndarray:
+    """Least squares of every ``(..., R)`` design at once (normal equations with a tiny ridge)."""
+    gram = np.swapaxes(design, -1, -2) @ design
+    rhs = np.einsum("...mk,...m->...k", design, data)
+    scale = np.maximum(np.trace(gram, axis1=-2, axis2=-1) / gram.shape[-1], 1e-300)
+    gram = gram + 1e-12 * scale[..., None, None] * np.eye(gram.shape[-1])
+    return np.linalg.solve(gram, rhs[..., None])[..., 0]
+
+
 def initial_states(batch: Batch, A: np.ndarray, outputs: tuple[int, ...]) -> np.ndarray:
     """Initial states ``(..., R, n)`` fitted to each record for linear models ``A (..., R, n, n)``.
 
     Each signal ``s`` is modelled as ``C_s Phi(t) x0 + offset_s`` (an offset per signal, solved
     with the state), every signal weighted by its scatter over the record.
     """
-    Phi = _transitions(A, batch.dt, batch.N)  # (..., R, N, n, n)
-    lead, R, n = A.shape[:-3], A.shape[-3], A.shape[-1]
-    flat = Phi.reshape((-1, R, batch.N, n, n))
-    names = list(batch.y)
-    x0 = np.zeros((flat.shape[0], R, n))
-    for j in range(R):
-        L = batch.length[j]
-        active = [s for s in names if batch.weight[s][j] > 0]
-        if not active:
-            continue
-        rhs = np.concatenate([batch.y[s][j, :L] * batch.weight[s][j] for s in active])
-        for p in range(flat.shape[0]):
-            blocks = []
-            for m, s in enumerate(active):
-                w = batch.weight[s][j]
-                off = np.zeros((L, len(active)))
-                off[:, m] = w
-                blocks.append(np.hstack([flat[p, j, :L, outputs[OBSERVED[s]], :] * w, off]))
-            sol, *_ = np.linalg.lstsq(np.vstack(blocks), rhs, rcond=None)
-            x0[p, j] = sol[:n]
-    return x0.reshape(lead + (R, n))
+    Phi = _transitions(A, batch.dt, batch.N)                              # (..., R, N, n, n)
+    design, data = _stack(batch, Phi, outputs)
+    return _solve(design, data)[..., : A.shape[-1]]
 
 
 def simulate_linear(A: np.ndarray, x0: np.ndarray, dt: float, N: int) -> np.ndarray:
@@ -244,43 +331,33 @@ def _residuals(batch: Batch, states: np.ndarray, outputs: tuple[int, ...]) -> tu
     return res, offsets
 
 
-def friction_states(batch: Batch, model: EffectModel, T_c) -> tuple[np.ndarray, np.ndarray]:
-    """Each record's response under ``model`` plus Coulomb friction ``T_c``, from refitted initial states.
+def friction_states(batch: Batch, A: np.ndarray, b: np.ndarray, outputs: tuple[int, ...],
+                    T_c) -> tuple[np.ndarray, np.ndarray]:
+    """Each record's response to ``A (P, R, n, n)`` plus Coulomb friction ``T_c (P,)`` through ``b``.
 
-    ``model`` may carry a batch of values ``(P, 1)`` and ``T_c`` then has shape ``(P,)``.  Returns
-    the states ``(..., R, N, n)`` and the weighted residuals ``(..., R, S, N)``.
+    The initial states are fitted to the records: linear least squares for the linear part, then
+    :data:`GN_STEPS` Gauss-Newton steps on the nonlinear response.  Returns the states
+    ``(P, R, N, n)`` and the weighted residuals ``(P, R, S, N)``.
     """
-    A, b, outputs = closed_loop(model, batch.records)
-    lead = A.shape[:-3]
-    T = np.broadcast_to(np.asarray(T_c, dtype=float), lead).reshape(lead + (1,))
+    T = np.asarray(T_c, dtype=float).reshape(A.shape[:-3] + (1,))
     x0 = initial_states(batch, A, outputs)
     rate = outputs[3]
     nonlinear = bool(np.any(T > 0))
     for _ in range(GN_STEPS if nonlinear else 0):
         n = x0.shape[-1]
-        scale = np.maximum(np.abs(x0), 1e-3)
-        h = 1e-4 * scale
+        h = 1e-4 * np.maximum(np.abs(x0), 1e-3)
         unit = np.eye(n).reshape((n,) + (1,) * (x0.ndim - 1) + (n,))
-        trial = np.concatenate([x0[None], x0[None] + unit * h[None]], axis=0)  # (n+1, ..., R, n)
+        trial = np.concatenate([x0[None], x0[None] + unit * h[None]], axis=0)  # (n+1, P, R, n)
         states = simulate_friction(A[None], b[None], trial, T[None], batch.dt, batch.N, rate)
-        res, _ = _residuals(batch, states, outputs)  # (n+1, ..., R, S, N)
-        r0 = res[0].reshape(res.shape[1:-2] + (-1,))            # (..., R, M)
-        J = (res[1:] - res[0]).reshape((n,) + r0.shape) / np.moveaxis(h, -1, 0)[..., None]  # (n, ..., R, M)
-        Jf = J.reshape(n, -1, r0.shape[-1])
-        rf = r0.reshape(-1, r0.shape[-1])
-        steps = np.array([np.linalg.lstsq(Jf[:, k, :].T, -rf[k], rcond=None)[0] for k in range(rf.shape[0])])
-        x0 = x0 + steps.reshape(x0.shape)
+        res, _ = _residuals(batch, states, outputs)                         # (n+1, P, R, S, N)
+        r0 = res[0].reshape(res.shape[1:-2] + (-1,))                        # (P, R, M)
+        J = ((res[1:] - res[0]).reshape((n,) + r0.shape) / np.moveaxis(h, -1, 0)[..., None])  # (n, P, R, M)
+        J = np.moveaxis(J, 0, -1)                                           # (P, R, M, n)
+        x0 = x0 + _solve(J, -r0)
     states = simulate_friction(A, b, x0, T, batch.dt, batch.N, rate) if nonlinear else simulate_linear(A, x0, batch.dt,
                                                                                                       batch.N)
     res, _ = _residuals(batch, states, outputs)
     return states, res
-
-
-def _model_with(base_values, geometry, c_viscous) -> EffectModel:
-    """The nominal bicycle with viscous steer damping ``c_viscous`` (a number or a batch ``(P, 1)``)."""
-    if np.ndim(c_viscous) == 0 and not c_viscous:
-        return EffectModel(base_values, geometry)
-    return EffectModel(base_values, geometry, {"steer_damping": {"c_steer": c_viscous}})
 
 
 @dataclass
@@ -305,28 +382,28 @@ class FrictionFit:
     success: bool
 
 
-def fit_friction(records: list[Record], values: dict, geometry, start=None,
-                 bounds=((0.0, 0.0), (2.0, 5.0))) -> FrictionFit:
-    """Fit ``T_coulomb`` and ``c_viscous`` to records in the time domain (module docstring).
+def fit_time_domain(records: list[Record], values: dict, geometry, layout: Layout, start=None) -> FrictionFit:
+    """Fit a time-domain candidate (``layout``) to records (module docstring).
 
-    Starts from ``start`` when given (a fit to more of the records), else from the best of a small
-    grid over the literature ranges.
+    Starts from ``start`` when given (a fit to more of the records, or the friction alone with the
+    partner absent), else from the best of a small grid over the literature ranges of the friction
+    with the partner absent.
     """
     from scipy.optimize import least_squares
 
-    batches = make_batches(records)
-    lower, upper = np.asarray(bounds[0], float), np.asarray(bounds[1], float)
+    batches = make_batches(records, min_step=FIT_STEP)
+    lower, upper = np.asarray(layout.lower, float), np.asarray(layout.upper, float)
 
     def costs(thetas: np.ndarray) -> np.ndarray:
-        """Weighted residuals ``(P, M)`` for parameter vectors ``(P, 2)``, in one batched simulation."""
-        model = _model_with(values, geometry, thetas[:, 1:2])
+        """Weighted residuals ``(P, M)`` for parameter vectors ``(P, k)``, in one batched simulation."""
         parts = []
         for _, batch in batches:
-            _, res = friction_states(batch, model, thetas[:, 0])
+            A, b, outputs, T = systems(values, geometry, batch.records, layout, thetas)
+            _, res = friction_states(batch, A, b, outputs, T)
             parts.append(res.reshape(thetas.shape[0], -1))
         return np.concatenate(parts, axis=1)
 
-    steps = np.array([2e-3, 2e-3])
+    steps = np.full(len(layout.names), 2e-3)
 
     def fun(theta: np.ndarray) -> np.ndarray:
         return costs(theta[None, :])[0]
@@ -339,45 +416,48 @@ def fit_friction(records: list[Record], values: dict, geometry, start=None,
     if start is not None:
         x0 = np.clip(np.asarray(start, dtype=float), lower, upper)
     else:
-        grid = np.array([(t, c) for t in (0.02, 0.15) for c in (0.05, 0.3)] + [(0.05, 0.2)])
+        rest = [1.0 if name == "speed_scale" else 0.0 for _, name in layout.names[2:]]  # the partner absent
+        grid = np.array([[t, c] + rest for t in (0.02, 0.15) for c in (0.05, 0.3)] + [list(layout.start)])
         x0 = np.clip(grid[int(np.argmin(np.sum(costs(grid) ** 2, axis=1)))], lower, upper)
-    result = least_squares(fun, x0, jac=jac, bounds=(lower, upper), method="trf", x_scale=np.array([0.05, 0.2]),
+    scale = np.maximum(np.asarray(layout.start, float), 0.05) * 0.5
+    result = least_squares(fun, x0, jac=jac, bounds=(lower, upper), method="trf", x_scale=scale,
                            max_nfev=40, xtol=1e-3, ftol=1e-5)
     n_samples = int(sum(batch.length.sum() for _, batch in batches))
     return FrictionFit(result.x, float(np.sum(result.fun**2)), n_samples, [r.name for r in records], bool(result.success))
 
 
-def apparent_eigenvalues(records: list[Record], values: dict, geometry, T_c: float = 0.0,
-                         c_viscous: float = 0.0) -> tuple[np.ndarray, list[str | None]]:
-    """What the record fit finds in the model's own response over each record (NaN where nothing).
+def apparent_eigenvalues(fits: list[RecordFit], values: dict, geometry, layout: Layout = NOMINAL,
+                         theta=()) -> tuple[np.ndarray, list[str | None]]:
+    """What the record fit finds in a model's own response over each record (NaN where nothing).
 
-    The model is the nominal bicycle with Coulomb ``T_c`` and viscous ``c_viscous`` steer friction
-    (both zero: the linear nominal model); its response starts from the initial state fitted to
-    each record; the signals the record's eigenvalue was fitted to are simulated and fitted alike.
+    The model is the nominal bicycle with the time-domain candidate ``layout`` at ``theta`` (the
+    nominal linear model by default); its response starts from the initial state fitted to each
+    record, and the signals the record's eigenvalue was fitted to are simulated and fitted alike
+    (:func:`bikerider.gap.extraction.refit_like`, started from the record's own fit).
     """
-    from bikerider.gap.extraction import weave_eigenvalue
+    from bikerider.gap.extraction import refit_like
 
+    records = [f.record for f in fits]
     out = np.full(len(records), np.nan + 1j * np.nan)
     why: list[str | None] = [None] * len(records)
-    model = _model_with(values, geometry, c_viscous)
     signals = tuple(dict.fromkeys(TIME_DOMAIN_SIGNALS + tuple(s for r in records for s in r.fit_signals
                                                               if s in OBSERVED)))
+    theta = np.asarray(theta, dtype=float).reshape(1, -1)
     for idx, batch in make_batches(records, signals, max_duration=math.inf):
-        states, _ = friction_states(batch, model, T_c)
-        _, _, outputs = closed_loop(model, batch.records[:1])
+        A, b, outputs, T = systems(values, geometry, batch.records, layout, theta)
+        states, _ = friction_states(batch, A, b, outputs, T)
         for j, k in enumerate(idx):
-            r = records[k]
+            r, f = records[k], fits[k]
             L = batch.length[j]
-            sim, t = states[j, :L], r.time[:L]
-            fits = {}
-            for name in r.fit_signals:
-                if name in r.signals and name in OBSERVED:
-                    try:
-                        fits[name] = weave_eigenvalue(t, sim[:, outputs[OBSERVED[name]]])
-                    except FitError as exc:
-                        why[k] = f"{name}: {exc}"
-            if fits:
-                out[k] = combine_fits(fits)[0].eigenvalue
+            sim, t = states[0, j, :L], r.time[:L]
+            estimates = {}
+            for name, like in f.fits.items():
+                try:
+                    estimates[name] = refit_like(t, sim[:, outputs[OBSERVED[name]]], like)
+                except FitError as exc:
+                    why[k] = f"{name}: {exc}"
+            if estimates:
+                out[k] = combine_fits(estimates)[0].eigenvalue
     return out, why
 
 
@@ -387,7 +467,7 @@ def extraction_bias(fits: list[RecordFit], values: dict, geometry, matched: np.n
     ``matched`` holds the model's weave eigenvalue of each used record.  Returns the bias (NaN
     where the record cannot be compared) and the reason for each record that cannot.
     """
-    used = [f.record for f in fits if f.used]
+    used = [f for f in fits if f.used]
     apparent, why = apparent_eigenvalues(used, values, geometry)
     bias = apparent - matched
     reasons: list[str | None] = []
