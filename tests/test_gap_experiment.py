@@ -127,14 +127,15 @@ def test_short_strongly_damped_records_fit(sbw):
 
 
 def test_the_detector_finds_the_experimenters_windows():
+    # every one of the experimenter's 59 windows starts within 0.05 s of a detected record (the detector
+    # also finds the perturbations they did not use)
     settings, windows = read_manifest(SBW / "experiment.toml")
-    path = SBW / "logs" / "eigen_normal_sil6.5n2_14.4kph.log.gz"
-    log = read_log(path, ["lean_rate"])
-    found = detect_windows(log.columns["lean_rate"], 100.0, DetectorSettings())
-    starts = [w.start for w in windows if w.file.name == "eigen_normal_sil6.5n2_14.4kph.log"]
-    # each of the experimenter's 8 windows starts within 0.1 s of a detected one
-    assert all(min(abs(s - f[0]) for f in found) <= 10 for s in starts)
-    assert all(0.8 <= (e - s) / 100 <= 3.5 for s, e in found)
+    for path in sorted({w.file for w in windows}):
+        log = read_log(path.with_name(path.name + ".gz"), ["lean_rate"])
+        found = detect_windows(log.columns["lean_rate"], 100.0, DetectorSettings())
+        starts = [w.start for w in windows if w.file == path]
+        assert all(min(abs(s - f[0]) for f in found) <= 5 for s in starts), path.name
+        assert all(0.8 <= (e - s) / 100 <= 3.5 for s, e in found)
 
 
 # -- bad manifests and logs ----------------------------------------------------------------------

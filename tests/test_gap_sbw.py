@@ -14,7 +14,6 @@ import bikerider
 from bikerider.cli import main
 
 SBW = Path(bikerider.__file__).parent / "data" / "gap" / "pasma2024_sbw"
-ARGS = ["gap", "--model", str(SBW / "sbw_bicycle.toml"), "--experiment", str(SBW / "experiment.toml")]
 
 
 @pytest.fixture(scope="module")
@@ -81,11 +80,19 @@ def test_the_report_shows_the_records_and_one_curve_per_law(sbw, tmp_path):
 
 
 @pytest.mark.slow
-def test_the_command_line_reports_the_records_left_out(capsys):
-    assert main(ARGS + ["--json"]) == 0
+def test_the_command_line_on_part_of_the_experiment(tmp_path, capsys):
+    # the command as a user types it, on a manifest of two of the logs (the whole experiment runs above)
+    text = (SBW / "experiment.toml").read_text().replace('logs = "logs"', f'logs = "{SBW / "logs"}"')
+    text = text.replace('windows = "windows.csv"', 'windows = "two.csv"')
+    rows = (SBW / "windows.csv").read_text().splitlines()
+    (tmp_path / "two.csv").write_text("\n".join([rows[0]] + [r for r in rows[1:] if "_14.4kph" in r or "_18kph" in r]) + "\n")
+    (tmp_path / "m.toml").write_text(text)
+    args = ["gap", "--model", str(SBW / "sbw_bicycle.toml"), "--experiment", str(tmp_path / "m.toml"),
+            "--effects", "steer_damping,steer_friction"]
+    assert main(args + ["--json", "--report", str(tmp_path / "rep")]) == 0
     out = json.loads(capsys.readouterr().out)
-    assert out["records"]["left_out"] == len(out["records"]["reasons"])
-    assert main(ARGS) == 0
-    text = capsys.readouterr().out
-    assert "Records: " in text and "left out eigen_normal_sil6.5n2_5.4kph.log.gz" in text
-    assert "Selected: steer_friction" in text
+    assert out["records"]["total"] == 17 and out["records"]["left_out"] == 0
+    assert out["folds"] == ["group eigen_normal_sil6.5n2_14.4kph.log", "group eigen_normal_sil6.5n2_18kph.log"]
+    assert (tmp_path / "rep" / "records.png").stat().st_size > 10_000
+    assert main(args) == 0
+    assert "Records: 17 of 17 used, 0 left out" in capsys.readouterr().out

@@ -72,10 +72,10 @@ def _why(r: dict) -> str:
 
 
 def _shown(x: float, ci95) -> str:
-    """``x`` to 3 digits; 0 where it is a billionth of its interval's width or less (an optimiser's
+    """``x`` to 3 digits; 0 where it is a millionth of its interval's width or less (an optimiser's
     round-off at a bound, whose digits change with the last bit of any input)."""
     width = abs(ci95[1] - ci95[0]) or 1.0
-    return "0" if abs(x) <= 1e-9 * width else f"{x:.3g}"
+    return "0" if abs(x) <= 1e-6 * width else f"{x:.3g}"
 
 
 def build() -> str:
@@ -352,6 +352,23 @@ def _sbw_section() -> list[str]:
     pairs = {"+".join(p["effects"]): p for p in r["pairs"]}
     sel = r["how_far"]
     bias = np.array([e["bias"] for e in rec["list"] if e.get("bias")])
+    packed = sum(f.stat().st_size for f in (SBW / "logs").glob("*.log.gz"))
+    gain, offset = CALIBRATION
+    ratios = [(gain * v + offset) / v for v, _, _ in checks["per_file"]]
+    imag_cells = [c for c in r["gap"]["map"] if c["quantity"] == "imag" and c["speed_band"][0] >= 2.4]
+    real_cells = [c for c in r["gap"]["map"] if c["quantity"] == "real"]
+    law = d.problem.eigen.laws["sil"]
+    slow = [f for f in rec["list"] if f["speed"] < 2.6]
+    gains_slow = law(np.array([min(f["speed"] for f in slow), max(f["speed"] for f in slow)]))[:, 1]
+    left_slowest = [e for e in rec["reasons"] if "5.4kph" in e["record"]]
+    n_slowest = sum(1 for f in rec["list"] if "5.4kph" in f["record"])
+    amplitude = d.steer_rate_amplitude()
+    scatter = []
+    for group in {f["group"] for f in rec["list"] if f["used"]}:
+        values = np.array([f["imag"] for f in rec["list"] if f["used"] and f["group"] == group])
+        if values.size >= 3:
+            scatter.append(float(np.std(values, ddof=1)))
+    pinned = r["parameter_fit"]["at_bound"]
     lines = [
         "## 3. The steer-by-wire bicycle on a treadmill (Pasma 2024), from the raw logs",
         "",
@@ -363,7 +380,7 @@ def _sbw_section() -> list[str]:
         "A riderless bicycle whose fork is driven by a motor through a gearbox, on a treadmill at 1.5-5 m/s, under",
         "the speed-scheduled steer-into-lean controller `sil` (`T = 2 (6.5 - v) phid` below 6.5 m/s), kicked",
         "sideways again and again. The project ships the eight raw 100 Hz logs (six of their thirteen columns,",
-        "copied cell for cell, gzipped: 1.4 MB), the experimenter's 59 windows and the parameters",
+        f"copied cell for cell, gzipped: {packed / 1e6:.1f} MB), the experimenter's 59 windows and the parameters",
         "(`src/bikerider/data/gap/pasma2024_sbw/`, MIT licence of the source repository). The manifest maps the",
         "columns (`lean_rate` is the roll rate, `fork_angle` the steer angle, `speed` the wheel encoder), gives",
         "the sampling rate (no time column), the windows and the law; the model file is the experimenter's",
@@ -412,8 +429,8 @@ def _sbw_section() -> list[str]:
         f"{np.median(bias[:, 1]):+.2f} rad/s on the imaginary part (median),",
         f"{bias[:, 0].min():+.2f} to {bias[:, 0].max():+.2f} and {bias[:, 1].min():+.2f} to {bias[:, 1].max():+.2f}; "
         "it is removed from the measured values. The noise of each value is the larger of its fit's standard",
-        "error and the scatter of the records at its speed (the scatter raised most of them: records of one",
-        "speed differ by 0.2-1 rad/s, more than their fits' errors).",
+        "error and the scatter of the records at its speed (the scatter raised most of them: the records of one",
+        f"speed scatter by {min(scatter):.1f}-{max(scatter):.1f} rad/s in frequency, more than their fits' errors).",
         "",
         "### What the tool concludes",
         "",
@@ -423,9 +440,13 @@ def _sbw_section() -> list[str]:
         f"{unc['data']:.2f} for the data; most from "
         + ", ".join(f"{u['parameter']}" for u in unc["largest"][:4]) + "),",
         f"yet the parameter fit (prior chi2 {r['parameter_fit']['test']['prior_chi2']:.1f} on "
-        f"{r['parameter_fit']['test']['prior_dof']} parameters) needs "
-        + ", ".join(r["parameter_fit"]["at_bound"]) + " at its bound (a fork of zero roll inertia): implausible.",
-        "The measured weave is slower than the nominal model's by 1-1.5 rad/s from 2.5 m/s up and more damped",
+        f"{r['parameter_fit']['test']['prior_dof']} parameters) "
+        + (f"needs {', '.join(pinned)} at its bound"
+           + (" (a fork of zero roll inertia)" if pinned == ["IHxx"] else "") + ": implausible."
+           if pinned else ("is plausible." if r["parameter_fit"]["plausible"] else "is implausible.")),
+        f"The measured weave is slower than the nominal model's by {min(-c['mean_residual'] for c in imag_cells):.1f}-"
+        f"{max(-c['mean_residual'] for c in imag_cells):.1f} rad/s from 2.5 m/s up (speed bands of the gap map) and "
+        f"more damped by {min(-c['mean_residual'] for c in real_cells):.1f}-{max(-c['mean_residual'] for c in real_cells):.1f} 1/s",
         "(`eigenvalues.png` of the report).",
         "",
         "Held-out speeds (each file left out in turn; errors are RMS residuals over the combined uncertainty, and",
@@ -453,11 +474,12 @@ def _sbw_section() -> list[str]:
         f"data's noise from {sel['data_error_before']:.2f} to {sel['data_error_after']:.2f}: "
         f"{sel['data_shrink']:.0%} of the gap above the noise; per file:",
         "",
-        "| left out | records' values | error before | after |",
-        "|---|---|---|---|",
+        "| left out | values | error before | after | against data noise: before | after |",
+        "|---|---|---|---|---|---|",
     ]
     for f in sel["folds"]:
-        lines.append(f"| {f['fold'].removeprefix('group ')} | {f['n']} | {f['error_before']:.2f} | {f['error_after']:.2f} |")
+        lines.append(f"| {f['fold'].removeprefix('group ')} | {f['n']} | {f['error_before']:.2f} | {f['error_after']:.2f} | "
+                     f"{f['data_error_before']:.2f} | {f['data_error_after']:.2f} |")
     lines += [
         "",
         "The contact sheet (`records.png`) overlays each record with its fitted decay and the friction model's",
@@ -474,32 +496,37 @@ def _sbw_section() -> list[str]:
         f"{friction['c_viscous']['ci95'][1]:.2f}] |",
         f"| smoothed Coulomb friction, about 0.02 N m | {friction['T_coulomb']['value']:.2f} "
         f"[{friction['T_coulomb']['ci95'][0]:.2f}, {friction['T_coulomb']['ci95'][1]:.2f}] N m, fitted in the time "
-        "domain: ten times the hypothesis, above the bearings' 0.02-0.15 N m of the literature (its interval reaches "
-        "it); plausible for a geared steer motor, which a bench test of the fork's friction could confirm |",
+        f"domain: {friction['T_coulomb']['value'] / 0.02:.0f} times the hypothesis, above the bearings' 0.02-0.15 N m "
+        "of the literature (its interval reaches it); plausible for a geared steer motor, which a bench test of the "
+        "fork's friction could confirm |",
         f"| speed-sensor error | a speed scale alone would have to be {speed['value']:.2f} "
-        f"[{speed['ci95'][0]:.2f}, {speed['ci95'][1]:.2f}], far beyond the encoder's calibration (2-3 %): "
-        "implausible; with friction it adds nothing"
+        f"[{speed['ci95'][0]:.2f}, {speed['ci95'][1]:.2f}], far beyond the encoder's calibration (recorded over "
+        f"treadmill speed {min(ratios):.3f}-{max(ratios):.3f}): implausible; with friction it adds nothing"
         + (f" (held-out {pairs['speed_sensor+steer_friction']['data_error_after']:.2f})" if "speed_sensor+steer_friction" in pairs else "")
         + " |",
         f"| parameter error | within their uncertainty the parameters can bend the weave this far (held-out "
         f"{ranking['parameters']['data_error_after']:.2f}), but only with "
         + ", ".join(r["parameter_fit"]["at_bound"]) + " at zero: implausible |",
-        f"| (the motor's rotor inertia) | added steer inertia fits at {inertia['value']:.3g} "
-        f"[{inertia['ci95'][0]:.3g}, {inertia['ci95'][1]:.3g}] kg m^2: none is needed |",
+        f"| (the motor's rotor inertia) | added steer inertia fits at {_shown(inertia['value'], inertia['ci95'])} "
+        f"[{_shown(inertia['ci95'][0], inertia['ci95'])}, {_shown(inertia['ci95'][1], inertia['ci95'])}] kg m^2: "
+        "none is needed |",
         "",
         "### What stays unexplained",
         "",
     ]
-    low = [f for f in sel["folds"] if f["error_after"] > 0.5 * f["error_before"]]
+    low = [f for f in sel["folds"] if f["data_error_after"] > 0.5 * f["data_error_before"]]
     lines += [
-        "* The slowest files: " + ", ".join(f"{f['fold'].removeprefix('group ')} ({f['error_before']:.2f} -> "
-                                            f"{f['error_after']:.2f})" for f in low)
-        + ". At 1.5-2.5 m/s the controller's gain is largest (7-10 N m s/rad) and the friction model leaves",
+        "* The slowest files (held-out error against the data's noise): "
+        + ", ".join(f"{f['fold'].removeprefix('group ')} ({f['data_error_before']:.2f} -> "
+                    f"{f['data_error_after']:.2f})" for f in low)
+        + f". Below 2.6 m/s the controller's gain is largest ({gains_slow.min():.0f}-{gains_slow.max():.0f} N m s/rad) "
+        "and the friction model leaves",
         "  the departures there; a torque bandwidth or delay of the steer motor, which acts most where the gain",
         "  is largest, is not among the candidates. At 1.5 m/s the model's weave shares the record with a second",
-        "  oscillating mode, and three of the seven records cannot be compared by their eigenvalue at all.",
+        f"  oscillating mode, and {len(left_slowest)} of the {n_slowest} records there are left out.",
         "* The fitted friction is an effective value for the fork, gearbox and motor together and at these",
-        "  records' steer rates (about 1-3 rad/s); a different smoothing or friction law (Stribeck) is not tested.",
+        f"  records' steer rates (median amplitude {amplitude:.1f} rad/s); a different smoothing or friction law "
+        "(Stribeck) is not tested.",
         "",
     ]
     return lines

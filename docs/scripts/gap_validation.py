@@ -157,7 +157,8 @@ def main() -> int:
             lines.append(f"* False alarm: null case, seed {c.seed}, verdict {c.verdict}.")
     unselected = [c for c in suite.effect_cases if c.correct and not c.selected]
     lines += [
-        f"* {len(unselected)} effect cases rank the hidden effect first but select nothing "
+        f"* {len(unselected)} effect case{'s' if len(unselected) != 1 else ''} rank{'' if len(unselected) != 1 else 's'} "
+        f"the hidden effect first but select{'' if len(unselected) != 1 else 's'} nothing "
         f"({', '.join(sorted({c.truth for c in unselected})) or '-'}): every plausible candidate is beaten by "
         "an implausible one as simple, or the best fit needs implausible values. Above all the Coulomb-plus-viscous",
         "  friction truths: at the small steer rates of these runs Coulomb friction acts like a viscous damping",
@@ -241,14 +242,20 @@ def _record_cases() -> list[str]:
         lines.append(f"| {c.truth} | {c.seed} | {c.n_measured} | {c.verdict} | {', '.join(c.selected) or '-'} | "
                      f"{fitted} | {_f(c.predicted_shrink)} | {_f(c.actual_shrink)} | "
                      f"{'yes' if _found(c) else '**no**'} |")
+    extra = [c for c in cases if c.hidden and _found(c) and len(c.selected) > len(c.hidden)]
     lines += [
         "",
         "The shrinkage is that of the gap above the data's own noise (held-out records, and fresh records from",
         "the same truth). Fitted values are those of the selection (for a null case, of the first-ranked",
-        "candidate). A records-left-out column would show the records whose model response holds no weave the",
-        "fit can tell from the other modes (at 2 m/s, where the castor mode is slow).",
+        "candidate). Records left out (each case diagnoses the others):",
         "",
     ]
+    lines += [f"* {c.truth}, seed {c.seed}: {note}" for c in cases for note in c.notes] or ["* none"]
+    if extra:
+        lines += ["", "Selections with more effects than the truth: " + "; ".join(
+            f"{c.truth} (seed {c.seed}) adds {', '.join(e for e in c.selected if not any(e in EQUIVALENT.get(h, (h,)) for h in c.hidden))}"
+            for c in extra) + " (see the fitted values: a partner near its neutral value changes little)."]
+    lines.append("")
     return lines
 
 

@@ -69,10 +69,8 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("--data/--experiment", "missing", "data files (--data) or a manifest of records (--experiment)")
     if args.sample_rate is not None and not (math.isfinite(args.sample_rate) and args.sample_rate > 0):
         raise InputError("--sample-rate", args.sample_rate, "a positive sampling rate [Hz]")
-    diagnosis = diagnose_files(args.model, tuple(args.data), tuple(args.experiment), rider=args.rider,
-                               rider_rel_sigma=args.rider_rel_sigma, control=args.control, speed=args.speed,
-                               groups=args.groups, effects=args.effects, columns=args.columns,
-                               sample_rate=args.sample_rate)
+    diagnosis = _diagnose_files(args.model, tuple(args.data), tuple(args.experiment), args.rider, args.rider_rel_sigma,
+                                args.control, args.speed, args.groups, args.effects, args.columns, args.sample_rate)
     result = diagnosis.as_dict()
     if args.report:
         from bikerider.io.gap_report import write_report
@@ -96,19 +94,23 @@ def diagnose_files(model: str, data: tuple[str, ...] = (), experiment: tuple[str
 
     Arguments as the command's options (``groups`` and ``effects`` comma-separated).  The result is
     cached within a process for the same arguments and unchanged input files (the documents and the
-    tests of the shipped steer-by-wire experiment share one run).
+    tests of the shipped steer-by-wire experiment share one run; the command itself does not cache).
     """
     import os
 
     files = [model, rider, control, *data, *experiment]
     stamp = tuple((str(f), os.stat(f).st_mtime_ns, os.stat(f).st_size) if f and os.path.isfile(f) else (str(f), None)
                   for f in files)
-    return _diagnose_files(stamp, model, tuple(data), tuple(experiment), rider, rider_rel_sigma, control, speed, groups,
-                           effects, columns, sample_rate)
+    return _cached(stamp, model, tuple(data), tuple(experiment), rider, rider_rel_sigma, control, speed, groups,
+                   effects, columns, sample_rate)
 
 
-@functools.lru_cache(maxsize=4)
-def _diagnose_files(stamp, model, data, experiment, rider, rider_rel_sigma, control, speed, groups, effects, columns,
+@functools.lru_cache(maxsize=2)
+def _cached(stamp, *args):
+    return _diagnose_files(*args)
+
+
+def _diagnose_files(model, data, experiment, rider, rider_rel_sigma, control, speed, groups, effects, columns,
                     sample_rate):
     from bikerider.gap.data import CanonicalData, EigenvalueData
     from bikerider.gap.diagnosis import diagnose

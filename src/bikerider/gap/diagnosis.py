@@ -51,7 +51,7 @@ from __future__ import annotations
 import logging
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -182,18 +182,18 @@ class Diagnosis:
                  effects=EFFECT_NAMES, records: list[RecordFit] | None = None):
         start = time.perf_counter()
         self.model_input = model
-        self.records = list(records or [])
+        self.records = [replace(f) for f in records or []]  # copies: records left out here get their reason
         self.record_rows: dict[int, int] = {}   # index in self.records -> eigenvalue row
         self._time_domain_full: dict[tuple[str, ...], EffectFit] = {}
         self.bias = np.zeros(0, complex)
         eigen = self._with_records(model, eigen)
         if len(eigen) + len(canonical) == 0:
+            if not self.records:
+                raise InputError("data", "empty", "at least one measured eigenvalue or identified entry")
             left = [f for f in self.records if not f.used]
-            raise InputError("data", f"{len(left)} of {len(self.records)} records left out" if self.records else "empty",
-                             "enough records for a diagnosis: none could be used ("
-                             + "; ".join(f"{f.record.name}: {f.reason}" for f in left[:3])
-                             + (" ..." if len(left) > 3 else "") + ")" if self.records else
-                             "at least one measured eigenvalue or identified entry")
+            reasons = "; ".join(f"{f.record.name}: {f.reason}" for f in left[:3]) + (" ..." if len(left) > 3 else "")
+            raise InputError("data", f"{len(left)} of {len(self.records)} records left out",
+                             f"enough records for a diagnosis: none could be used ({reasons})")
         self.problem = GapProblem(model, eigen, canonical)
         self.effects = [e for e in effects]
         self.not_applicable = {}
@@ -423,6 +423,7 @@ class Diagnosis:
                 "model_sigma": float(np.sqrt(np.mean(p.var_model[idx]))),
                 "rms_z": rms(zz), "chi2": stat, "p_value": pval,
                 "significant": bool(pval < ALPHA / max(len(unique), 1)),
+                **_data_only_cell(p, idx, ALPHA / max(len(unique), 1)),
             })
         return cells
 
@@ -490,8 +491,13 @@ class Diagnosis:
             z_fold = p.z(pred)[held]
             # a model that cannot be evaluated (singular) predicts nothing: count it as far off
             z_after[held] = np.where(np.isfinite(z_fold), z_fold, UNPREDICTED_Z)
-            folds.append({"fold": name, "n": int(held.sum()), "error_before": rms(z_before[held]),
-                          "error_after": rms(z_after[held]), "fitted": _named_values(fit)})
+            entry = {"fold": name, "n": int(held.sum()), "error_before": rms(z_before[held]),
+                     "error_after": rms(z_after[held]), "fitted": _named_values(fit)}
+            if np.all(p.var_data[held] > 0):
+                scale = np.sqrt(p.var_total[held] / p.var_data[held])
+                entry["data_error_before"] = rms(z_before[held] * scale)
+                entry["data_error_after"] = rms(z_after[held] * scale)
+            folds.append(entry)
         held_any = np.any([h for _, h in self.folds], axis=0)
         result = CrossValidation(effects, folds, z_before[held_any], z_after[held_any], rms(z_before[held_any]),
                                  rms(z_after[held_any]), gap_shrink(z_before[held_any], z_after[held_any]), fits)
@@ -833,6 +839,17 @@ def arm_inertia(problem: GapProblem, m_arm: float) -> float:
     axis = np.array([math.sin(lam), 0.0, math.cos(lam)])
     perp = rel - (rel @ axis) * axis
     return float(m_arm * (perp @ perp))
+
+
+def _data_only_cell(problem: GapProblem, idx: list[int], alpha: float) -> dict:
+    """A gap-map cell's RMS residual and significance against the data's uncertainty alone."""
+    from scipy.stats import chi2
+
+    var = problem.var_data[idx]
+    if not np.all(var > 0):
+        return {"rms_z_data": None, "significant_data": None}
+    z = (problem.y[idx] - problem.baseline[idx]) / np.sqrt(var)
+    return {"rms_z_data": rms(z), "significant_data": bool(chi2.sf(float(np.sum(z**2)), len(idx)) < alpha)}
 
 
 def _time_domain(effects: tuple[str, ...]) -> bool:

@@ -1,4 +1,4 @@
-"""The weave eigenvalue of a perturbation run, from a rate signal.
+"""The weave eigenvalue of a free decay (a record), from a rate or angle signal.
 
 A bicycle's free response after a perturbation holds every mode: the weave oscillation, the fast
 castor decay and the slow capsize drift.  :func:`fit_damped_oscillation` fits one damped
@@ -13,15 +13,21 @@ one more mode::
 
 by Levenberg-Marquardt, started from a least-squares scan over frequency, decay and
 ``lambda_c`` (the FFT peak can be the slow mode's leakage) and from the plain fit.  The two-mode fit
-is kept when it converges to a distinct real mode within :data:`EXTRA_MODE_RANGE`, holds half a cycle (a full one unless the decay is clear, :data:`CLEAR_DECAY`), shows an oscillation ten
-standard errors above zero and (if the plain fit succeeded) lowers the residual sum of squares
-significantly (F-test at 1 %); otherwise the plain fit stands.  Standard errors are scaled up by
-``sqrt((1 + rho) / (1 - rho))`` with ``rho`` the lag-one autocorrelation of the residuals: a fit
-that misses part of the signal leaves correlated residuals, and the white-noise errors would then
-be too small (simulated free responses at high speed, where the weave dies within a cycle, showed
-frequency errors of 4-12 white-noise standard errors).  When a fast-growing capsize mode
-(a fall) swamps the record, the plain fit often fails and the two-mode fit alone finds the weave.  Standard errors are from ``s^2 (J^T J)^-1``.  Records should
-start after the perturbation (and after the castor transient, a few tenths of a second).
+is kept when it converges to a distinct real mode within :data:`EXTRA_MODE_RANGE`, spans at least
+:data:`MIN_CYCLES` of a cycle (below one cycle only when the decay is clear, :data:`CLEAR_DECAY`),
+shows an oscillation ten standard errors above zero and (if the plain fit succeeded) lowers the
+residual sum of squares significantly (F-test at 1 %); otherwise the plain fit stands.  A fit that
+explains less than :data:`MIN_R2` of the record is refused.  Standard errors are from
+``s^2 (J^T J)^-1``, scaled up by ``sqrt((1 + rho) / (1 - rho))`` with ``rho`` the lag-one
+autocorrelation of the residuals: a fit that misses part of the signal leaves correlated
+residuals, and the white-noise errors would then be too small (simulated free responses at high
+speed, where the weave dies within a cycle, showed frequency errors of 4-12 white-noise standard
+errors).  When a fast-growing capsize mode (a fall) swamps the record, the plain fit often fails and
+the two-mode fit alone finds the weave.  Records should start after the perturbation.
+
+Every refusal is a :class:`~bikerider.errors.FitError` whose message says why; the records of an
+experiment turn it into the record's reason for being left out (:mod:`bikerider.gap.records`).
+:func:`refit_like` fits a model's own response over a record the way the record was fitted.
 """
 from __future__ import annotations
 

@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 
 from bikerider.benchmark import BenchmarkParameters
 from bikerider.errors import InputError
-from bikerider.gap.models import GRIP_KEYS, UPPER_BODY_KEYS, RiderGeometry
+from bikerider.gap.models import RiderGeometry
 from bikerider.quantity import parse_quantity
 
 UPPER_BODY_FRACTION = 0.5

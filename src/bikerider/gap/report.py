@@ -46,6 +46,11 @@ def _fmt(x, digits: int = 3) -> str:
     return str(x)
 
 
+def _num(x) -> str:
+    """A held-out error or shrinkage to two decimals (``-`` when there is none)."""
+    return "-" if x is None or (isinstance(x, float) and not math.isfinite(x)) else f"{x:.2f}"
+
+
 def _values(params: dict) -> str:
     return ", ".join(f"{k} = {v['value']:.3g} [{v['ci95'][0]:.3g}, {v['ci95'][1]:.3g}] {v['unit']}"
                      for k, v in params.items() if not k.startswith("parameters."))
@@ -80,14 +85,17 @@ def summary_text(result: dict) -> str:
         if text != "no control":
             lines.append(f"Control law {name}: {text}")
     lines.append("")
-    lines.append("Where (gap map; significant cells):")
-    lines.append(f"  {'mode':<10} {'speed band':<14} {'quantity':<26} {'n':>3} {'measured-model':>15} {'sigma':>8} {'RMS z':>7}")
-    for cell in result["gap"]["map"]:
-        if cell["significant"]:
-            band = f"{cell['speed_band'][0]:.1f}-{cell['speed_band'][1]:.1f}"
-            lines.append(f"  {cell['mode']:<10} {band:<14} {cell['quantity']:<26} {cell['n']:>3} "
-                         f"{cell['mean_residual']:>15.4g} {cell['combined_sigma']:>8.3g} {cell['rms_z']:>7.2f}")
-    if not any(c["significant"] for c in result["gap"]["map"]):
+    lines.append("Where (gap map; cells significant against the combined uncertainty, or * against the data's alone):")
+    lines.append(f"  {'mode':<10} {'speed band':<14} {'quantity':<26} {'n':>3} {'measured-model':>15} {'sigma':>8} "
+                 f"{'RMS z':>7} {'data z':>7}")
+    shown = [c for c in result["gap"]["map"] if c["significant"] or c.get("significant_data")]
+    for cell in shown:
+        band = f"{cell['speed_band'][0]:.1f}-{cell['speed_band'][1]:.1f}"
+        star = "" if cell["significant"] else " *"
+        data_z = "-" if cell.get("rms_z_data") is None else f"{cell['rms_z_data']:.2f}"
+        lines.append(f"  {cell['mode']:<10} {band:<14} {cell['quantity']:<26} {cell['n']:>3} "
+                     f"{cell['mean_residual']:>15.4g} {cell['combined_sigma']:>8.3g} {cell['rms_z']:>7.2f} {data_z:>7}{star}")
+    if not shown:
         lines.append("  (none)")
     lines.append("")
     if result["ranking"]:
@@ -97,21 +105,21 @@ def summary_text(result: dict) -> str:
                      f"{'shrink':>8}  plausible  fitted")
         first = result["ranking"][0]
         lines.append(f"  {'':<5}{'(nominal)':<17}{first['heldout_error_before']:>8.2f}{'':>16}"
-                     f"{_fmt(first.get('data_error_before'), 3):>12}")
+                     f"{_num(first.get('data_error_before')):>12}")
         for r in result["ranking"]:
             params = _values(r["parameters"])
             if r["effect"] == "parameters":
                 params = f"{len(r['parameters'])} benchmark parameters shifted"
             ties = f"  (tied with {', '.join(r['tied_with'])})" if r["tied_with"] else ""
             lines.append(f"  {r['rank']:<5}{r['effect']:<17}{r['heldout_error_before']:>8.2f}{r['heldout_error_after']:>8.2f}"
-                         f"{_fmt(r['shrink'], 2):>8}{_fmt(r.get('data_error_after'), 3):>12}{_fmt(r.get('data_shrink'), 2):>8}"
+                         f"{_num(r['shrink']):>8}{_num(r.get('data_error_after')):>12}{_num(r.get('data_shrink')):>8}"
                          f"  {'yes' if r['plausible'] else 'no':<9}  {params}{ties}")
         if result.get("pairs"):
             lines.append("  pairs (fitted jointly), best first:")
             for p in result["pairs"][:5]:
                 plaus = {True: "yes", False: "no", None: "-"}[p.get("plausible")]
-                lines.append(f"       {'+'.join(p['effects']):<30}{p['heldout_error_after']:>8.2f}{_fmt(p['shrink'], 2):>8}"
-                             f"{_fmt(p.get('data_error_after'), 3):>12}{_fmt(p.get('data_shrink'), 2):>8}  {plaus:<9}  "
+                lines.append(f"       {'+'.join(p['effects']):<30}{p['heldout_error_after']:>8.2f}{_num(p['shrink']):>8}"
+                             f"{_num(p.get('data_error_after')):>12}{_num(p.get('data_shrink')):>8}  {plaus:<9}  "
                              f"{_values(p.get('parameters', {}))}")
     else:
         lines.append("Which: no ranking (" + "; ".join(result["notes"][-1:]) + ")")
@@ -389,48 +397,64 @@ def _wrap(text: str, width: int) -> str:
 
 
 def plot_gap_map(result: dict):
+    """Signed RMS residual of every gap-map cell, over the combined uncertainty and over the data's alone."""
     plt = pyplot()
     cells = result["gap"]["map"]
     rows = list(dict.fromkeys(f"{c['mode']} {c['quantity']}" for c in cells))
     cols = list(dict.fromkeys(f"{c['speed_band'][0]:.1f}-{c['speed_band'][1]:.1f}" for c in cells))
-    table = np.full((len(rows), len(cols)), np.nan)
-    for c in cells:
-        table[rows.index(f"{c['mode']} {c['quantity']}"), cols.index(f"{c['speed_band'][0]:.1f}-{c['speed_band'][1]:.1f}")] = (
-            np.sign(c["mean_residual"]) * c["rms_z"])
-    fig, ax = plt.subplots(figsize=(max(5, 1.2 * len(cols) + 3), max(2.5, 0.4 * len(rows) + 1.5)))
-    limit = max(3.0, float(np.nanmax(np.abs(table)))) if np.any(np.isfinite(table)) else 3.0
-    im = ax.imshow(table, cmap="RdBu_r", vmin=-limit, vmax=limit, aspect="auto")
-    ax.set_xticks(range(len(cols)), cols, fontsize=7, rotation=30)
-    ax.set_yticks(range(len(rows)), rows, fontsize=7)
-    ax.set_xlabel("speed band [m/s]")
-    for i in range(len(rows)):
-        for j in range(len(cols)):
-            if np.isfinite(table[i, j]):
-                ax.text(j, i, f"{table[i, j]:.1f}", ha="center", va="center", fontsize=7)
-    fig.colorbar(im, ax=ax, label="signed RMS z (measured - model)")
-    ax.set_title("Gap map: residuals in units of the combined uncertainty", fontsize=9)
+    panels = [("rms_z", "combined uncertainty")]
+    if all(c.get("rms_z_data") is not None for c in cells):
+        panels.append(("rms_z_data", "the data's uncertainty alone"))
+    fig, axes = plt.subplots(1, len(panels), figsize=(max(5, 1.2 * len(cols) + 3) * len(panels),
+                                                      max(2.6, 0.4 * len(rows) + 1.6)), squeeze=False)
+    for ax, (key, what) in zip(axes[0], panels):
+        table = np.full((len(rows), len(cols)), np.nan)
+        for c in cells:
+            table[rows.index(f"{c['mode']} {c['quantity']}"),
+                  cols.index(f"{c['speed_band'][0]:.1f}-{c['speed_band'][1]:.1f}")] = np.sign(c["mean_residual"]) * c[key]
+        limit = max(3.0, float(np.nanmax(np.abs(table)))) if np.any(np.isfinite(table)) else 3.0
+        im = ax.imshow(table, cmap="RdBu_r", vmin=-limit, vmax=limit, aspect="auto")
+        ax.set_xticks(range(len(cols)), cols, fontsize=7, rotation=30)
+        ax.set_yticks(range(len(rows)), rows, fontsize=7)
+        ax.set_xlabel("speed band [m/s]")
+        for i in range(len(rows)):
+            for j in range(len(cols)):
+                if np.isfinite(table[i, j]):
+                    ax.text(j, i, f"{table[i, j]:.1f}", ha="center", va="center", fontsize=7,
+                            color="white" if abs(table[i, j]) > 0.6 * limit else "black")
+        fig.colorbar(im, ax=ax, label="signed RMS z")
+        ax.set_title(f"measured - model, over {what}", fontsize=8)
+    fig.suptitle("Gap map: residuals by mode, quantity and speed band", fontsize=9)
     fig.tight_layout()
     return fig
 
 
 def plot_ranking(result: dict):
+    """Held-out errors of every candidate and the best pairs: over the combined uncertainty, and over the
+    data's alone (where every row has one)."""
     plt = pyplot()
-    entries = [(r["effect"], r["heldout_error_after"], r["plausible"]) for r in result["ranking"]]
-    entries += [("+".join(p["effects"]), p["heldout_error_after"], p.get("plausible")) for p in result.get("pairs", [])[:6]]
+    entries = [(r["effect"], r["heldout_error_after"], r.get("data_error_after"), r["plausible"]) for r in result["ranking"]]
+    entries += [("+".join(p["effects"]), p["heldout_error_after"], p.get("data_error_after"), p.get("plausible"))
+                for p in result.get("pairs", [])[:6]]
     if not entries:
         return None
-    before = result["ranking"][0]["heldout_error_before"]
-    fig, ax = plt.subplots(figsize=(7.5, 0.32 * len(entries) + 1.4))
+    first = result["ranking"][0]
+    panels = [("combined uncertainty", 1, first["heldout_error_before"])]
+    if all(e[2] is not None for e in entries) and first.get("data_error_before") is not None:
+        panels.append(("the data's uncertainty alone", 2, first["data_error_before"]))
+    fig, axes = plt.subplots(1, len(panels), figsize=(5.2 * len(panels) + 1.5, 0.32 * len(entries) + 1.6), squeeze=False)
     colour = {True: "tab:green", False: "tab:orange", None: "0.7"}
-    ax.barh(range(len(entries)), [e[1] for e in entries], color=[colour[e[2]] for e in entries])
-    ax.axvline(before, color="k", ls="--", label=f"nominal model ({before:.2f})")
-    ax.axvline(1.0, color="0.5", ls=":", label="noise floor (1)")
-    ax.set_yticks(range(len(entries)), [e[0] for e in entries], fontsize=7)
-    ax.invert_yaxis()
-    ax.set_xscale("log")
-    ax.set_xlabel("held-out error (RMS normalised residual)")
-    ax.legend(fontsize=7)
-    ax.set_title("Candidates and pairs fitted on training folds, scored on held-out folds\n"
+    for ax, (what, col, before) in zip(axes[0], panels):
+        ax.barh(range(len(entries)), [e[col] for e in entries], color=[colour[e[3]] for e in entries])
+        ax.axvline(before, color="k", ls="--", label=f"nominal model ({before:.2f})")
+        ax.axvline(1.0, color="0.5", ls=":", label="noise floor (1)")
+        ax.set_yticks(range(len(entries)), [e[0] for e in entries] if ax is axes[0][0] else [""] * len(entries),
+                      fontsize=7)
+        ax.invert_yaxis()
+        ax.set_xscale("log")
+        ax.set_xlabel(f"held-out error: RMS residual over {what}", fontsize=8)
+        ax.legend(fontsize=7)
+    fig.suptitle("Candidates and pairs fitted on training folds, scored on held-out folds "
                  "(green: plausible values; orange: implausible; grey: pair not judged)", fontsize=8)
     fig.tight_layout()
     return fig
@@ -481,6 +505,7 @@ def plot_effects(diagnosis):
 
 
 def plot_time_response(diagnosis):
+    """Roll rate after a kick at the median speed: the nominal model and the selection (with its friction)."""
     plt = pyplot()
     from bikerider.gap.models import EffectModel
 
@@ -496,8 +521,20 @@ def plot_time_response(diagnosis):
     chosen = _selected_model(diagnosis)
     if chosen is not None:
         model, scale, label = chosen
-        sel = model.simulate(speed * scale, t, gains=gains)
-        ax.plot(t, sel["phid"], label=label)
+        fit = diagnosis.selected_fit
+        if "steer_friction" in fit.effects:
+            from bikerider.gap.timedomain import simulate_friction
+
+            ss = model.state_space([speed * scale])
+            A = ss.closed_loop(None if gains is None else np.asarray(gains)[None, :])[0]
+            x0 = np.zeros(A.shape[-1])
+            x0[ss.outputs[2]] = 0.5
+            T = fit.config["steer_friction"]["T_coulomb"]
+            states = simulate_friction(A, ss.B[0][:, 1], x0, T, t[1] - t[0], t.size, ss.outputs[3])
+            ax.plot(t, states[:, ss.outputs[2]], label="+".join(fit.effects) + f" (Coulomb {T:.3g} N m, as fitted)")
+        else:
+            sel = model.simulate(speed * scale, t, gains=gains)
+            ax.plot(t, sel["phid"], label=label)
     ax.set_xlabel("time [s]")
     ax.set_ylabel("roll rate [rad/s]")
     ax.set_title(f"Response to a 0.5 rad/s roll-rate kick at {speed:.1f} m/s"

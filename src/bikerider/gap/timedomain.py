@@ -18,7 +18,7 @@ the same window, from the same initial state, shows how far (the *extraction bia
   eigenvalue and is left out with that reason.
 
 Nonlinear steer friction, ``T = -T_coulomb tanh(deltad / eps) - c_viscous deltad`` on the steer
-axis, is fitted in the time domain (:func:`fit_friction`): the closed-loop bicycle (nominal
+axis, is fitted in the time domain (:func:`fit_time_domain`): the closed-loop bicycle (nominal
 parameters, the records' control law and speed) is simulated from each record's initial state and
 its roll rate and steer angle (the signals the record holds among them) are compared with the
 record's, every signal weighted by its own scatter.  The simulation is an exponential integrator:
@@ -361,13 +361,14 @@ def friction_states(batch: Batch, A: np.ndarray, b: np.ndarray, outputs: tuple[i
 
 
 @dataclass
-class FrictionFit:
-    """Coulomb and viscous steer friction fitted in the time domain.
+class TimeDomainFit:
+    """A time-domain candidate (steer friction, alone or with a linear partner) fitted to records.
 
     Attributes
     ----------
     values : ndarray
-        ``[T_coulomb, c_viscous]``.
+        The parameters in the order of the candidate's :class:`Layout` (``T_coulomb``, ``c_viscous``,
+        then the partner's).
     cost : float
         Sum of squared weighted residuals.
     n_samples : int
@@ -382,7 +383,7 @@ class FrictionFit:
     success: bool
 
 
-def fit_time_domain(records: list[Record], values: dict, geometry, layout: Layout, start=None) -> FrictionFit:
+def fit_time_domain(records: list[Record], values: dict, geometry, layout: Layout, start=None) -> TimeDomainFit:
     """Fit a time-domain candidate (``layout``) to records (module docstring).
 
     Starts from ``start`` when given (a fit to more of the records, or the friction alone with the
@@ -423,7 +424,7 @@ def fit_time_domain(records: list[Record], values: dict, geometry, layout: Layou
     result = least_squares(fun, x0, jac=jac, bounds=(lower, upper), method="trf", x_scale=scale,
                            max_nfev=40, xtol=1e-3, ftol=1e-5)
     n_samples = int(sum(batch.length.sum() for _, batch in batches))
-    return FrictionFit(result.x, float(np.sum(result.fun**2)), n_samples, [r.name for r in records], bool(result.success))
+    return TimeDomainFit(result.x, float(np.sum(result.fun**2)), n_samples, [r.name for r in records], bool(result.success))
 
 
 def apparent_eigenvalues(fits: list[RecordFit], values: dict, geometry, layout: Layout = NOMINAL,
