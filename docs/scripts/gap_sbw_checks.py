@@ -83,7 +83,21 @@ def build() -> str:
         ("The selection is the same in every run." if not changed else
          "The selection changes in: " + "; ".join(changed) + "."),
         "",
+        "Reading the table:",
+        "",
+        "* The friction columns are fitted in the time domain to the records' roll rate and steer angle with",
+        "  the nominal model, whatever signals the records' eigenvalues are fitted to and whatever the",
+        "  parameters' uncertainty: they change only when the records' speeds change (the treadmill run).",
+        "  `c_steer alone` and `speed_scale alone` are fitted to the records' eigenvalues, with the",
+        "  parameters' uncertainty in their intervals.",
+        "* The held-out error is the root mean square of the held-out eigenvalue residuals over the data's own",
+        "  noise (records' standard errors, or the scatter of replicates), before and after the selection.",
     ]
+    for name, r in runs:
+        note = r["selection"].get("note")
+        if note:
+            lines.append(f"* {name}: verdict `{r['verdict']}`: {note}.")
+    lines.append("")
     return "\n".join(lines)
 
 

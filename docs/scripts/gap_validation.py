@@ -234,20 +234,26 @@ def _record_cases() -> list[str]:
         f"* Null cases without a structural effect selected: **{sum(_found(c) for c in nulls)} of {len(nulls)}**.",
         f"* {len(cases)} cases in {elapsed:.0f} s.",
         "",
-        "| truth | seed | records used | verdict | selected | fitted values | predicted shrink | achieved shrink | found |",
-        "|---|---|---|---|---|---|---|---|---|",
+        "| truth | seed | records used | verdict | selected | fitted values | held-out error | predicted shrink "
+        "| achieved shrink | found |",
+        "|---|---|---|---|---|---|---|---|---|---|",
     ]
     for c in cases:
         fitted = ", ".join(f"{k} {_fitted(v)}" for k, v in c.first_parameters.items()) or "-"
+        held = "-" if c.data_errors is None else f"{c.data_errors[0]:.2f} -> {c.data_errors[1]:.2f}"
         lines.append(f"| {c.truth} | {c.seed} | {c.n_measured} | {c.verdict} | {', '.join(c.selected) or '-'} | "
-                     f"{fitted} | {_f(c.predicted_shrink)} | {_f(c.actual_shrink)} | "
+                     f"{fitted} | {held} | {_f(c.predicted_shrink)} | {_f(c.actual_shrink)} | "
                      f"{'yes' if _found(c) else '**no**'} |")
     extra = [c for c in cases if c.hidden and _found(c) and len(c.selected) > len(c.hidden)]
     lines += [
         "",
-        "The shrinkage is that of the gap above the data's own noise (held-out records, and fresh records from",
-        "the same truth). Fitted values are those of the selection (for a null case, of the first-ranked",
-        "candidate). Records left out (each case diagnoses the others):",
+        "The held-out error is the selection's root mean square of held-out residuals over the data's own noise",
+        "(each record's standard error), before and after; 1 is the noise floor. The shrinkage is the fraction",
+        "of the gap above that floor removed, `(G_before - G_after) / G_before` with `G = mean(z^2) - 1` and",
+        "`G_after` clipped at zero: 1.00 means the selection leaves nothing above the noise, on the held-out",
+        "records (predicted) and on fresh records from the same truth (achieved). Fitted values are those of",
+        "the selection (the shifts of a `parameters` selection are not listed). Records left out (each case",
+        "diagnoses the others):",
         "",
     ]
     lines += [f"* {c.truth}, seed {c.seed}: {note}" for c in cases for note in c.notes] or ["* none"]

@@ -420,6 +420,8 @@ class CaseResult:
     notes: list[str] = field(default_factory=list)
     first_parameters: dict[str, float] = field(default_factory=dict)
     """Fitted values of the first-ranked effect (structural parameters only)."""
+    data_errors: tuple[float, float] | None = None
+    """The selection's held-out RMS error over the data's own noise, before and after (record cases)."""
 
     @property
     def top(self) -> str:
@@ -657,8 +659,12 @@ def run_record_case(model: GapModelInput, truth_name: str, seed: int,
         first = {k: float(v) for k, v in zip(diagnosis.selected_fit.names, diagnosis.selected_fit.values)
                  if not k.startswith("parameters.")}
     notes = [f"{r['record']}: {r['reason']}" for r in result["records"]["reasons"]] if result["records"] else []
+    how = result["how_far"] or {}
+    errors = ((how["data_error_before"], how["data_error_after"])
+              if how.get("data_error_before") is not None and how.get("data_error_after") is not None else None)
     return CaseResult(truth_name, truth.effects, seed, result["verdict"], ranking, ties, list(diagnosis.selected),
-                      predicted, actual, len(diagnosis.record_rows), time.perf_counter() - start, notes, first)
+                      predicted, actual, len(diagnosis.record_rows), time.perf_counter() - start, notes, first,
+                      errors)
 
 
 RECORD_CASES = [("sbw_friction", 300), ("sbw_friction", 301), ("sbw_inertia+damping", 302),
