@@ -14,6 +14,7 @@ three held-out folds, selection, full-data fits) and ``as_dict``.  Goal: at most
 
 Run alone: ``.venv/bin/python bench/bench_gap.py``.
 """
+
 from __future__ import annotations
 
 import sys
@@ -34,12 +35,16 @@ def workload():
     from bikerider.io.gap_model import load_model
 
     bp = ROOT / "src" / "bikerider" / "data" / "bicycleparameters"
-    model = load_model(bp / "bicycles/Rigid/Parameters/RigidBenchmark.txt", bp / "riders/Jason/Parameters/JasonRigidBenchmark.txt")
-    protocol = V.Protocol((
-        V.Session("day1", (5.5, 6.1, 6.7, 7.3, 7.9, 8.5, 9.1)),
-        V.Session("day2", (5.7, 6.3, 6.9, 7.5, 8.1, 8.7, 9.3)),
-        V.Session("day3-controlled", (4.0, 4.6, 5.2, 5.8, 6.4, 7.0, 7.6), V.CONTROL),
-    ))
+    model = load_model(
+        bp / "bicycles/Rigid/Parameters/RigidBenchmark.txt", bp / "riders/Jason/Parameters/JasonRigidBenchmark.txt"
+    )
+    protocol = V.Protocol(
+        (
+            V.Session("day1", (5.5, 6.1, 6.7, 7.3, 7.9, 8.5, 9.1)),
+            V.Session("day2", (5.7, 6.3, 6.9, 7.5, 8.1, 8.7, 9.3)),
+            V.Session("day3-controlled", (4.0, 4.6, 5.2, 5.8, 6.4, 7.0, 7.6), V.CONTROL),
+        )
+    )
     rng = np.random.default_rng(2024)
     truth = V.TruthSimulator(model, V.TRUTHS["rider_lean+steer_damping"], rng)
     data, _ = V.measure(truth, protocol, rng)
@@ -83,29 +88,47 @@ def run(ctx):
     from common import Row, fmt_time
 
     seconds, n, result = time_diagnosis()
-    rows = [Row(f"gap diagnosis, {n} weave eigenvalues in 3 groups, 7 candidates", fmt_time(seconds),
-                goal=f"<= {GOAL_SECONDS:.0f} s", met=seconds <= GOAL_SECONDS,
-                notes=[f"verdict {result['verdict']}, selected {', '.join(result['selected']) or 'nothing'}"])]
+    rows = [
+        Row(
+            f"gap diagnosis, {n} weave eigenvalues in 3 groups, 7 candidates",
+            fmt_time(seconds),
+            goal=f"<= {GOAL_SECONDS:.0f} s",
+            met=seconds <= GOAL_SECONDS,
+            notes=[f"verdict {result['verdict']}, selected {', '.join(result['selected']) or 'nothing'}"],
+        )
+    ]
     stages, sbw = time_sbw()
-    rows.append(Row(f"gap diagnosis of the SBW experiment from raw logs, {sbw['records']['total']} records",
-                    fmt_time(stages["total"]), ratio=f"{stages['total'] / SBW_GOAL_SECONDS:.2f} of the goal",
-                    goal=f"<= {SBW_GOAL_SECONDS:.0f} s", met=stages["total"] <= SBW_GOAL_SECONDS,
-                    notes=[", ".join(f"{k} {fmt_time(v)}" for k, v in stages.items() if k != "total")
-                           + f"; {sbw['records']['used']} records used, verdict {sbw['verdict']}, selected "
-                           f"{', '.join(sbw['selected']) or 'nothing'}"]))
+    rows.append(
+        Row(
+            f"gap diagnosis of the SBW experiment from raw logs, {sbw['records']['total']} records",
+            fmt_time(stages["total"]),
+            ratio=f"{stages['total'] / SBW_GOAL_SECONDS:.2f} of the goal",
+            goal=f"<= {SBW_GOAL_SECONDS:.0f} s",
+            met=stages["total"] <= SBW_GOAL_SECONDS,
+            notes=[
+                ", ".join(f"{k} {fmt_time(v)}" for k, v in stages.items() if k != "total")
+                + f"; {sbw['records']['used']} records used, verdict {sbw['verdict']}, selected "
+                f"{', '.join(sbw['selected']) or 'nothing'}"
+            ],
+        )
+    )
     return rows
 
 
 def main() -> int:
     seconds, n, result = time_diagnosis()
-    print(f"gap diagnosis of {n} weave eigenvalues in 3 groups with all candidates: {seconds:.1f} s "
-          f"(goal <= {GOAL_SECONDS:.0f} s: {'met' if seconds <= GOAL_SECONDS else 'NOT met'}); "
-          f"verdict {result['verdict']}, selected {', '.join(result['selected']) or 'nothing'}")
+    print(
+        f"gap diagnosis of {n} weave eigenvalues in 3 groups with all candidates: {seconds:.1f} s "
+        f"(goal <= {GOAL_SECONDS:.0f} s: {'met' if seconds <= GOAL_SECONDS else 'NOT met'}); "
+        f"verdict {result['verdict']}, selected {', '.join(result['selected']) or 'nothing'}"
+    )
     stages, sbw = time_sbw()
-    print(f"SBW experiment from raw logs ({sbw['records']['total']} records): {stages['total']:.1f} s "
-          f"(goal <= {SBW_GOAL_SECONDS:.0f} s: {'met' if stages['total'] <= SBW_GOAL_SECONDS else 'NOT met'}; "
-          + ", ".join(f"{k} {v:.1f} s" for k, v in stages.items() if k != "total")
-          + f"); verdict {sbw['verdict']}, selected {', '.join(sbw['selected']) or 'nothing'}")
+    print(
+        f"SBW experiment from raw logs ({sbw['records']['total']} records): {stages['total']:.1f} s "
+        f"(goal <= {SBW_GOAL_SECONDS:.0f} s: {'met' if stages['total'] <= SBW_GOAL_SECONDS else 'NOT met'}; "
+        + ", ".join(f"{k} {v:.1f} s" for k, v in stages.items() if k != "total")
+        + f"); verdict {sbw['verdict']}, selected {', '.join(sbw['selected']) or 'nothing'}"
+    )
     return 0
 
 

@@ -6,6 +6,7 @@ swapped or junk lines; bytes that are not UTF-8.  Each reader, and the chain beh
 give finite results or raise a BikeriderError that names the file; never another exception and
 never a RuntimeWarning (an error under this project's pytest settings).
 """
+
 from __future__ import annotations
 
 import math
@@ -16,15 +17,15 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from strategies import assert_all_finite, assert_names_file, meijaard_values, mutated, run_cli, signal_csv
 
 from bikerider.benchmark import WhippleModel
 from bikerider.errors import BikeriderError
 from bikerider.estimate import default_files, estimate
 
-from strategies import assert_all_finite, assert_names_file, meijaard_values, mutated, run_cli, signal_csv
-
-FUZZ = settings(max_examples=60, deadline=None,
-                suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+FUZZ = settings(
+    max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture]
+)
 BP = Path(str(resources.files("bikerider") / "data" / "bicycleparameters"))
 BICYCLE_TOML, RIDER_TOML = default_files()
 TESTS = Path(__file__).parent
@@ -232,10 +233,15 @@ def test_signal_csv_and_fit(tmp_path_factory, data):
 HUGE = b"w = 1.02\n" + b"# padding " * 200_000 + b"\n" + b"x" * 2_000_000
 
 
-@pytest.mark.parametrize("content", [b"", b"\x00" * 64, bytes(range(256)), b"\xef\xbb\xbf", HUGE],
-                         ids=["empty", "nul", "all-bytes", "bom-only", "huge"])
-@pytest.mark.parametrize("reader", ["bicycle_toml", "rider_toml", "benchmark_toml", "benchmark_text",
-                                    "measured", "lumped_rider", "signal_csv"])
+@pytest.mark.parametrize(
+    "content",
+    [b"", b"\x00" * 64, bytes(range(256)), b"\xef\xbb\xbf", HUGE],
+    ids=["empty", "nul", "all-bytes", "bom-only", "huge"],
+)
+@pytest.mark.parametrize(
+    "reader",
+    ["bicycle_toml", "rider_toml", "benchmark_toml", "benchmark_text", "measured", "lumped_rider", "signal_csv"],
+)
 def test_readers_on_files_that_are_not_input(tmp_path, content, reader):
     from bikerider.bicycle.raw_measurements import read_measured_file
     from bikerider.fitting.signal_csv import read_signal_csv
@@ -244,9 +250,12 @@ def test_readers_on_files_that_are_not_input(tmp_path, content, reader):
     from bikerider.io.toml_input import load_bicycle_toml, load_rider_toml
 
     readers = {
-        "bicycle_toml": (load_bicycle_toml, "b.toml"), "rider_toml": (load_rider_toml, "r.toml"),
-        "benchmark_toml": (load_benchmark_parameters, "p.toml"), "benchmark_text": (load_benchmark_parameters, "p.txt"),
-        "measured": (read_measured_file, "XMeasured.txt"), "lumped_rider": (read_lumped_rider, "JXBenchmark.txt"),
+        "bicycle_toml": (load_bicycle_toml, "b.toml"),
+        "rider_toml": (load_rider_toml, "r.toml"),
+        "benchmark_toml": (load_benchmark_parameters, "p.toml"),
+        "benchmark_text": (load_benchmark_parameters, "p.txt"),
+        "measured": (read_measured_file, "XMeasured.txt"),
+        "lumped_rider": (read_lumped_rider, "JXBenchmark.txt"),
         "signal_csv": (read_signal_csv, "t.csv"),
     }
     function, name = readers[reader]
@@ -305,8 +314,9 @@ def test_gap_data_readers(tmp_path_factory, data, kind):
     assert_all_finite(values, f"{kind}: {what}")
 
 
-@settings(max_examples=25, deadline=None,
-          suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+@settings(
+    max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture]
+)
 @given(st.data())
 def test_gap_perturbation_run(tmp_path_factory, data):
     from bikerider.io import gap_data
@@ -336,18 +346,40 @@ def test_gap_speed_uncertainty_larger_than_the_speed_is_refused(tmp_path):
     from bikerider.errors import FileFormatError
 
     path = _write(tmp_path, "run.csv", b"speed,real,imag,speed_sigma,group\n5.1,-1.16,5.44,1120,run52\n")
-    code, out, err = run_cli(["gap", "--model", str(GAP / "gap" / "kooijman2008_bicycle.toml"), "--data", str(path),
-                              "--effects", "parameters"])
+    code, out, err = run_cli(
+        [
+            "gap",
+            "--model",
+            str(GAP / "gap" / "kooijman2008_bicycle.toml"),
+            "--data",
+            str(path),
+            "--effects",
+            "parameters",
+        ]
+    )
     assert code == 2 and f"{path}:2" in err and "speed_sigma = 1120" in err and "below the speed" in err
     with pytest.raises(FileFormatError, match="uncertainty below the speed"):
         from bikerider.io.gap_data import read_perturbation
 
-        run = (GAP / "gap_examples" / "perturbation_run.csv").read_text().replace("# speed = 7.0", "# speed = 7.0\n# speed_sigma = 7.5")
+        run = (
+            (GAP / "gap_examples" / "perturbation_run.csv")
+            .read_text()
+            .replace("# speed = 7.0", "# speed = 7.0\n# speed_sigma = 7.5")
+        )
         read_perturbation(_write(tmp_path, "run7.csv", run.encode()))
 
 
 def test_gap_with_a_crawling_speed_names_the_file(tmp_path):
     path = _write(tmp_path, "run.csv", b"speed,real,imag,speed_sigma,group\n0.0005,-1.16,5.44,0.0001,run52\n")
-    code, out, err = run_cli(["gap", "--model", str(GAP / "gap" / "kooijman2008_bicycle.toml"), "--data", str(path),
-                              "--effects", "parameters"])
+    code, out, err = run_cli(
+        [
+            "gap",
+            "--model",
+            str(GAP / "gap" / "kooijman2008_bicycle.toml"),
+            "--data",
+            str(path),
+            "--effects",
+            "parameters",
+        ]
+    )
     assert code == 0 or str(path) in err, err

@@ -1,4 +1,5 @@
 """``bikerider gap`` end to end: JSON contract, text, report files, errors."""
+
 from __future__ import annotations
 
 import json
@@ -11,8 +12,12 @@ from bikerider.cli import main
 
 DATA = Path(bikerider.__file__).parent / "data"
 BP = DATA / "bicycleparameters"
-MODEL = ["--model", str(BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt"),
-         "--rider", str(BP / "riders/Jason/Parameters/JasonRigidBenchmark.txt")]
+MODEL = [
+    "--model",
+    str(BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt"),
+    "--rider",
+    str(BP / "riders/Jason/Parameters/JasonRigidBenchmark.txt"),
+]
 EXAMPLE = str(DATA / "gap_examples" / "eigenvalues.csv")
 RUN = str(DATA / "gap_examples" / "perturbation_run.csv")
 FEW = ["--effects", "parameters,steer_damping,steer_inertia"]
@@ -28,8 +33,17 @@ def test_json_has_the_documented_keys_and_finds_the_hidden_friction(capsys):
     assert {"test", "map"} <= set(out["gap"]) and "data_only" in out["gap"]["test"]
     first = out["ranking"][0]
     assert first["effect"] == "steer_damping"
-    for key in ("effect", "parameters", "heldout_error_before", "heldout_error_after", "shrink", "plausible",
-                "plausibility", "data_error_after", "data_shrink"):
+    for key in (
+        "effect",
+        "parameters",
+        "heldout_error_before",
+        "heldout_error_after",
+        "shrink",
+        "plausible",
+        "plausibility",
+        "data_error_after",
+        "data_shrink",
+    ):
         assert key in first
     assert out["selected"] == ["steer_damping"]
     assert out["how_far"]["heldout_error_after"] < out["how_far"]["heldout_error_before"]
@@ -62,8 +76,19 @@ def test_text_and_report(tmp_path, capsys):
 
 def test_kooijman_run_52_shows_no_gap(capsys):
     # Kooijman et al. (2008): their model fits the measured weave eigenvalue -1.16 +/- 5.44i of run 52
-    assert main(["gap", "--model", str(DATA / "gap/kooijman2008_bicycle.toml"),
-                 "--data", str(DATA / "gap/kooijman2008_run52.csv"), "--json"]) == 0
+    assert (
+        main(
+            [
+                "gap",
+                "--model",
+                str(DATA / "gap/kooijman2008_bicycle.toml"),
+                "--data",
+                str(DATA / "gap/kooijman2008_run52.csv"),
+                "--json",
+            ]
+        )
+        == 0
+    )
     out = json.loads(capsys.readouterr().out)
     assert out["verdict"] == "none"
     assert set(out["not_applicable"]) == {"passive_arms", "rider_lean", "speed_sensor", "steer_friction"}
@@ -77,10 +102,13 @@ def test_bad_data_exits_2_naming_file_and_line(tmp_path, capsys):
     assert f"{bad}:3" in err and "speed = -2" in err and "Traceback" not in err
 
 
-@pytest.mark.parametrize("args, message", [
-    (["--effects", "wobble"], "effect = 'wobble'"),
-    (["--rider-rel-sigma", "-1"], "--rider-rel-sigma"),
-])
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["--effects", "wobble"], "effect = 'wobble'"),
+        (["--rider-rel-sigma", "-1"], "--rider-rel-sigma"),
+    ],
+)
 def test_bad_options_exit_2(capsys, args, message):
     assert main(["gap", *MODEL, "--data", EXAMPLE, *args]) == 2
     assert message in capsys.readouterr().err

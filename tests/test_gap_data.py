@@ -1,4 +1,5 @@
 """Readers of gap data, the project's copies of published data, and the weave extraction."""
+
 from __future__ import annotations
 
 import math
@@ -27,8 +28,12 @@ def _write(tmp_path: Path, name: str, text: str) -> Path:
 
 # -- eigenvalues ---------------------------------------------------------------------------------
 def test_eigenvalue_file_with_comments_gains_and_defaults(tmp_path):
-    path = _write(tmp_path, "e.csv", "# group = dayA\n# k_phid = 1.5\nspeed,real,imag,real_sigma,imag_sigma,mode\n"
-                  "4.0,-0.5,3.0,0.1,0.2,\n5.0,-2.0,0,0.1,,\n")
+    path = _write(
+        tmp_path,
+        "e.csv",
+        "# group = dayA\n# k_phid = 1.5\nspeed,real,imag,real_sigma,imag_sigma,mode\n"
+        "4.0,-0.5,3.0,0.1,0.2,\n5.0,-2.0,0,0.1,,\n",
+    )
     e = gd.read_eigenvalues(path)
     assert e.speed.tolist() == [4.0, 5.0]
     assert e.value[0] == complex(-0.5, 3.0)
@@ -41,20 +46,23 @@ def test_eigenvalue_file_with_comments_gains_and_defaults(tmp_path):
     assert e.source[1].endswith("e.csv:5")
 
 
-@pytest.mark.parametrize("text, message, line", [
-    ("speed,real,imag\n4.0,-0.5\n", "expected 3 comma-separated values", 2),
-    ("speed,real,imag\n4.0,abc,1\n", "real = 'abc': expected a number", 2),
-    ("speed,real,imag\n4.0,nan,1\n", "real = nan: expected a finite number", 2),
-    ("speed,real,imag\n4.0,1,inf\n", "imag = inf: expected a finite number", 2),
-    ("speed,real,imag\n-3.0,1,1\n", "speed = -3.0: expected a positive number", 2),
-    ("speed,real,imag\n0,1,1\n", "speed = 0: expected a positive number", 2),
-    ("speed,real,imag,real_sigma\n3,1,1,-0.1\n", "real_sigma = -0.1: expected a positive number", 2),
-    ("speed,real,imag,colour\n3,1,1,red\n", "unknown column 'colour'", 1),
-    ("speed,real\n3,1\n", "missing column 'imag'", 1),
-    ("speed,real,imag,mode\n3,1,1,capsize\n", "only the weave mode oscillates", 2),
-    ("speed,real,imag,mode\n3,1,0,wobble\n", "mode = 'wobble'", 2),
-    ("# nothing\n", "no header line", None),
-])
+@pytest.mark.parametrize(
+    "text, message, line",
+    [
+        ("speed,real,imag\n4.0,-0.5\n", "expected 3 comma-separated values", 2),
+        ("speed,real,imag\n4.0,abc,1\n", "real = 'abc': expected a number", 2),
+        ("speed,real,imag\n4.0,nan,1\n", "real = nan: expected a finite number", 2),
+        ("speed,real,imag\n4.0,1,inf\n", "imag = inf: expected a finite number", 2),
+        ("speed,real,imag\n-3.0,1,1\n", "speed = -3.0: expected a positive number", 2),
+        ("speed,real,imag\n0,1,1\n", "speed = 0: expected a positive number", 2),
+        ("speed,real,imag,real_sigma\n3,1,1,-0.1\n", "real_sigma = -0.1: expected a positive number", 2),
+        ("speed,real,imag,colour\n3,1,1,red\n", "unknown column 'colour'", 1),
+        ("speed,real\n3,1\n", "missing column 'imag'", 1),
+        ("speed,real,imag,mode\n3,1,1,capsize\n", "only the weave mode oscillates", 2),
+        ("speed,real,imag,mode\n3,1,0,wobble\n", "mode = 'wobble'", 2),
+        ("# nothing\n", "no header line", None),
+    ],
+)
 def test_malformed_eigenvalue_files_name_file_and_line(tmp_path, text, message, line):
     path = _write(tmp_path, "bad.csv", text)
     with pytest.raises(FileFormatError) as info:
@@ -73,7 +81,11 @@ def test_missing_file_is_a_file_format_error(tmp_path):
 def _run(omega=3.0, sigma=0.8, capsize=-0.3, noise=0.005, seed=0):
     rng = np.random.default_rng(seed)
     t = np.arange(0.3, 6.0, 0.01)
-    y = 0.3 * np.exp(-sigma * t) * np.sin(omega * t + 0.4) + 0.08 * np.exp(capsize * t) + noise * rng.standard_normal(t.size)
+    y = (
+        0.3 * np.exp(-sigma * t) * np.sin(omega * t + 0.4)
+        + 0.08 * np.exp(capsize * t)
+        + noise * rng.standard_normal(t.size)
+    )
     return t, y
 
 
@@ -110,7 +122,9 @@ def test_perturbation_file_gives_one_record_and_its_weave(tmp_path):
 
 def test_perturbation_speed_column_and_errors(tmp_path):
     t, y = _run(seed=3)
-    text = "time,roll_rate,speed\n" + "\n".join(f"{a:.3f},{b:.6f},{5 + 0.01 * (k % 3)}" for k, (a, b) in enumerate(zip(t, y)))
+    text = "time,roll_rate,speed\n" + "\n".join(
+        f"{a:.3f},{b:.6f},{5 + 0.01 * (k % 3)}" for k, (a, b) in enumerate(zip(t, y))
+    )
     run = gd.read_perturbation(_write(tmp_path, "run.csv", text))
     assert run.speed == pytest.approx(5.01, abs=0.001)
     assert run.speed_sigma > 0
@@ -127,8 +141,15 @@ def test_perturbation_speed_column_and_errors(tmp_path):
 
 def test_a_run_of_noise_is_left_out_with_its_reason(tmp_path):
     # before: read_perturbation raised FitError and the whole diagnosis stopped
-    noisy = _write(tmp_path, "noise.csv", "# speed = 5\ntime,roll_rate\n" + "\n".join(
-        f"{a:.2f},{b:.5f}" for a, b in zip(np.arange(0, 5, 0.01), 0.01 * np.random.default_rng(0).standard_normal(500))))
+    noisy = _write(
+        tmp_path,
+        "noise.csv",
+        "# speed = 5\ntime,roll_rate\n"
+        + "\n".join(
+            f"{a:.2f},{b:.5f}"
+            for a, b in zip(np.arange(0, 5, 0.01), 0.01 * np.random.default_rng(0).standard_normal(500))
+        ),
+    )
     fit = fit_record(gd.read_perturbation(noisy))
     assert not fit.used and "no oscillation" in fit.reason
 
@@ -153,9 +174,13 @@ def test_canonical_file_errors(tmp_path):
     with pytest.raises(FileFormatError, match="no speed range"):
         gd.read_canonical(_write(tmp_path, "a.csv", head + "J,P,Mphidelta,2.5,0.02\n"))
     with pytest.raises(FileFormatError, match="sigma = 0"):
-        gd.read_canonical(_write(tmp_path, "b.csv", "# speed_min = 1\n# speed_max = 5\n" + head + "J,P,Mphidelta,2.5,0\n"))
+        gd.read_canonical(
+            _write(tmp_path, "b.csv", "# speed_min = 1\n# speed_max = 5\n" + head + "J,P,Mphidelta,2.5,0\n")
+        )
     with pytest.raises(FileFormatError, match="speed_max = 1.0 is not above"):
-        gd.read_canonical(_write(tmp_path, "c.csv", "# speed_min = 2\n# speed_max = 1\n" + head + "J,P,Mphidelta,2.5,1\n"))
+        gd.read_canonical(
+            _write(tmp_path, "c.csv", "# speed_min = 2\n# speed_max = 1\n" + head + "J,P,Mphidelta,2.5,1\n")
+        )
 
 
 def test_control_file(tmp_path):
@@ -194,7 +219,7 @@ def test_kooijman_bicycle_reproduces_their_equation_5():
 def test_model_file_errors(tmp_path):
     with pytest.raises(FileFormatError, match="no such file"):
         load_model(tmp_path / "absent.toml")
-    bad = _write(tmp_path, "m.toml", '[benchmark]\nw = 1.0\n\n[grips]\nx_grip = 0.8\n')
+    bad = _write(tmp_path, "m.toml", "[benchmark]\nw = 1.0\n\n[grips]\nx_grip = 0.8\n")
     with pytest.raises(InputError):
         load_model(bad)
     text = (GAP / "kooijman2008_bicycle.toml").read_text() + "\n[upper_body]\nm_u = 1.0\n"

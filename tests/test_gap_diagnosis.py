@@ -1,4 +1,5 @@
 """The diagnosis on synthetic data whose answer is known, and the predictor's building blocks."""
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -9,12 +10,12 @@ import pytest
 import bikerider
 from bikerider.errors import InputError
 from bikerider.gap.data import CanonicalData, EigenvalueData
-from bikerider.io.gap_data import read_canonical
 from bikerider.gap.diagnosis import Diagnosis, gap_shrink, significantly_better
 from bikerider.gap.fit import GapProblem
-from bikerider.io.gap_model import load_model
 from bikerider.gap.models import BENCH_ARGS, EffectModel
 from bikerider.gap.predict import Predictor
+from bikerider.io.gap_data import read_canonical
+from bikerider.io.gap_model import load_model
 
 DATA = Path(bikerider.__file__).parent / "data"
 BP = DATA / "bicycleparameters"
@@ -23,7 +24,9 @@ EMPTY = CanonicalData([], np.empty(0), np.empty(0), [], {}, [])
 
 @pytest.fixture(scope="module")
 def davis():
-    return load_model(BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt", BP / "riders/Jason/Parameters/JasonRigidBenchmark.txt")
+    return load_model(
+        BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt", BP / "riders/Jason/Parameters/JasonRigidBenchmark.txt"
+    )
 
 
 def _nominal(model):
@@ -35,22 +38,45 @@ def _synthetic(model, effects, seed, sigma=0.04, n_per_group=5):
     rng = np.random.default_rng(seed)
     truth = EffectModel(_nominal(model), model.geometry, effects)
     rows = {"speed": [], "value": [], "group": [], "gains": []}
-    for group, lo, hi, gains in (("a", 5.5, 9.0, (0, 0, 0, 0)), ("b", 5.7, 9.2, (0, 0, 0, 0)),
-                                 ("c", 4.0, 7.5, (0, 5.0, -2.0, -0.5))):
+    for group, lo, hi, gains in (
+        ("a", 5.5, 9.0, (0, 0, 0, 0)),
+        ("b", 5.7, 9.2, (0, 0, 0, 0)),
+        ("c", 4.0, 7.5, (0, 5.0, -2.0, -0.5)),
+    ):
         speeds = np.linspace(lo, hi, n_per_group)
-        reference = Predictor(EigenvalueData(speeds, np.zeros(speeds.size, complex), np.ones(speeds.size),
-                                             np.ones(speeds.size), np.zeros(speeds.size), ["weave"] * speeds.size,
-                                             [group] * speeds.size, np.tile(gains, (speeds.size, 1)),
-                                             ["x"] * speeds.size), EMPTY, _nominal(model), model.geometry)
+        reference = Predictor(
+            EigenvalueData(
+                speeds,
+                np.zeros(speeds.size, complex),
+                np.ones(speeds.size),
+                np.ones(speeds.size),
+                np.zeros(speeds.size),
+                ["weave"] * speeds.size,
+                [group] * speeds.size,
+                np.tile(gains, (speeds.size, 1)),
+                ["x"] * speeds.size,
+            ),
+            EMPTY,
+            _nominal(model),
+            model.geometry,
+        )
         weave = reference.eigenvalues(truth)
         rows["speed"] += list(speeds)
         rows["value"] += list(weave + sigma * (rng.standard_normal(weave.size) + 1j * rng.standard_normal(weave.size)))
         rows["group"] += [group] * speeds.size
         rows["gains"] += [gains] * speeds.size
     n = len(rows["speed"])
-    return EigenvalueData(np.array(rows["speed"]), np.array(rows["value"]), np.full(n, sigma), np.full(n, sigma),
-                          np.zeros(n), ["weave"] * n, rows["group"], np.array(rows["gains"], float),
-                          [f"synthetic:{k}" for k in range(n)])
+    return EigenvalueData(
+        np.array(rows["speed"]),
+        np.array(rows["value"]),
+        np.full(n, sigma),
+        np.full(n, sigma),
+        np.zeros(n),
+        ["weave"] * n,
+        rows["group"],
+        np.array(rows["gains"], float),
+        [f"synthetic:{k}" for k in range(n)],
+    )
 
 
 def test_hidden_steer_damping_is_found_ranked_and_shrinks_the_gap(davis):
@@ -82,8 +108,17 @@ def test_no_effect_gives_no_structural_verdict(davis):
 
 def test_one_point_gets_a_gap_map_but_no_ranking(davis):
     data = _synthetic(davis, {}, seed=3)
-    one = EigenvalueData(data.speed[:1], data.value[:1], data.real_sigma[:1], data.imag_sigma[:1], data.speed_sigma[:1],
-                         data.mode[:1], data.group[:1], data.gains[:1], data.source[:1])
+    one = EigenvalueData(
+        data.speed[:1],
+        data.value[:1],
+        data.real_sigma[:1],
+        data.imag_sigma[:1],
+        data.speed_sigma[:1],
+        data.mode[:1],
+        data.group[:1],
+        data.gains[:1],
+        data.source[:1],
+    )
     result = Diagnosis(davis, one, EMPTY).as_dict()
     assert result["ranking"] == [] and len(result["gap"]["map"]) == 2
     assert any("fewer than two folds" in n for n in result["notes"])
@@ -91,10 +126,25 @@ def test_one_point_gets_a_gap_map_but_no_ranking(davis):
 
 def test_observations_without_any_uncertainty_are_refused(davis):
     riderless = load_model(DATA / "gap" / "kooijman2008_bicycle.toml")
-    no_sigma = type(riderless)(riderless.parameters.__class__.from_mapping(
-        {k: v for k, v in riderless.parameters.values.items()}, "no sigmas"), riderless.geometry, None, "test")
-    data = EigenvalueData(np.array([5.0]), np.array([complex(-1, 5)]), np.array([np.nan]), np.array([np.nan]),
-                          np.zeros(1), ["weave"], ["g"], np.zeros((1, 4)), ["f.csv:2"])
+    no_sigma = type(riderless)(
+        riderless.parameters.__class__.from_mapping(
+            {k: v for k, v in riderless.parameters.values.items()}, "no sigmas"
+        ),
+        riderless.geometry,
+        None,
+        "test",
+    )
+    data = EigenvalueData(
+        np.array([5.0]),
+        np.array([complex(-1, 5)]),
+        np.array([np.nan]),
+        np.array([np.nan]),
+        np.zeros(1),
+        ["weave"],
+        ["g"],
+        np.zeros((1, 4)),
+        ["f.csv:2"],
+    )
     with pytest.raises(InputError, match="f.csv:2"):
         GapProblem(no_sigma, data, EMPTY)
 
@@ -112,12 +162,20 @@ def test_predicted_identification_of_the_whipple_model_is_itself(davis):
     for entry in can.entry:
         name, coords = entry.split("_")
         row = "phi" if coords.startswith("phi") else "delta"
-        expected.append(mats[name][idx[row], idx[coords[len(row):]]])
+        expected.append(mats[name][idx[row], idx[coords[len(row) :]]])
     np.testing.assert_allclose(predictor.predict(EffectModel(nominal, davis.geometry)), expected, rtol=1e-9, atol=1e-12)
     # Moore (2012) back-computed Whipple values for J-P (canonical_id_coefficients.csv): our model agrees
     # to 0.3 %, so the rider and bicycle files are the ones he used.
-    moore = {"M_phidelta": 2.43973, "C1_phidelta": 44.63596, "K0_phidelta": -2.48295, "M_deltadelta": 0.22437,
-             "C1_deltaphi": -0.31448, "C1_deltadelta": 1.46183, "K0_deltadelta": -0.77462, "K2_deltadelta": 2.29263}
+    moore = {
+        "M_phidelta": 2.43973,
+        "C1_phidelta": 44.63596,
+        "K0_phidelta": -2.48295,
+        "M_deltadelta": 0.22437,
+        "C1_deltaphi": -0.31448,
+        "C1_deltadelta": 1.46183,
+        "K0_deltadelta": -0.77462,
+        "K2_deltadelta": 2.29263,
+    }
     for entry, value in zip(can.entry, expected):
         assert value == pytest.approx(moore[entry], rel=3e-3)
 

@@ -1,17 +1,18 @@
 """The candidate-effect models of derive/gap_effects.py: limits, cross-checks, time response, control."""
+
 from __future__ import annotations
 
 import math
 
 import numpy as np
 import pytest
+from bikerider.generated import benchmark_model as bm
+from bikerider.generated import gap_effects as gen
 
 from bikerider.benchmark.model import label_modes
 from bikerider.errors import InputError
-from bikerider.io.gap_model import load_model
 from bikerider.gap.models import BENCH_ARGS, EffectModel, RiderGeometry
-from bikerider.generated import benchmark_model as bm
-from bikerider.generated import gap_effects as gen
+from bikerider.io.gap_model import load_model
 
 ZERO_EXTRAS = dict(I_steer=0.0, c_steer=0.0, k_steer=0.0, m_arm=0.0, k_arm=0.0, c_arm=0.0)
 GRIPS = dict(x_grip=0.85, z_grip=-1.05, b_grip=0.3)
@@ -59,8 +60,12 @@ def test_added_steer_inertia_equals_a_front_frame_inertia_about_the_steer_axis(b
     I = 0.25
     lam = bench["lam"]
     n = np.array([math.sin(lam), math.cos(lam)])
-    moved = dict(bench, IHxx=bench["IHxx"] + I * n[0] ** 2, IHzz=bench["IHzz"] + I * n[1] ** 2,
-                 IHxz=bench["IHxz"] + I * n[0] * n[1])
+    moved = dict(
+        bench,
+        IHxx=bench["IHxx"] + I * n[0] ** 2,
+        IHzz=bench["IHzz"] + I * n[1] ** 2,
+        IHxz=bench["IHxz"] + I * n[0] * n[1],
+    )
     for v in (1.0, 6.0):
         M, C, K = gen.whipple_extended_matrices(**bench, **dict(ZERO_EXTRAS, I_steer=I), **GRIPS, g=9.81, v=v)
         Mr, Cr, Kr = _whipple(moved, v)
@@ -86,7 +91,7 @@ def test_arm_masses_equal_moving_point_masses_from_rear_body_to_handlebar(bench)
 def test_rider_lean_matches_the_hand_derived_coupling(bench):
     # The validation truth assembles the lean coupling by Newton-Euler; the candidate comes from the
     # Lagrangian with the nonholonomic projection.  Their leading 2x2 blocks are Meijaard's.
-    from bikerider.gap.validation import TruthSimulator, TRUTHS
+    from bikerider.gap.validation import TRUTHS, TruthSimulator
 
     sim = TruthSimulator.__new__(TruthSimulator)  # only the parts _lean_terms reads
     sim.values = dict(bench, g=9.81)
@@ -131,8 +136,9 @@ def test_stiff_tyres_reproduce_the_whipple_eigenvalues(bench, geometry, relaxati
     values = dict(bench, g=9.81)
     whipple = EffectModel(values, geometry).eigenvalues(speeds)
     for c_alpha, tol in ((1e4, 2e-2), (1e6, 2e-4)):
-        tyre = EffectModel(values, geometry, {"tyre_slip": {"c_alpha": c_alpha, "c_gamma": 0.8, "sigma_t": relaxation,
-                                                            "t_p": 0.0}}).eigenvalues(speeds)
+        tyre = EffectModel(
+            values, geometry, {"tyre_slip": {"c_alpha": c_alpha, "c_gamma": 0.8, "sigma_t": relaxation, "t_p": 0.0}}
+        ).eigenvalues(speeds)
         for w, t in zip(whipple, tyre):
             near = _weave_capsize_castor(t, w)
             np.testing.assert_allclose(near, w, atol=tol * max(1.0, np.abs(w).max()))
@@ -175,8 +181,14 @@ def test_time_response_matches_an_independent_integration(bench, geometry):
     out = model.simulate(5.0, t, initial={"phid": 0.4})
     M, C, K = _whipple(bench, 5.0)
     C = C + np.array([[0, 0], [0, 0.5]])
-    sol = solve_ivp(lambda _, x: np.concatenate([x[2:], np.linalg.solve(M, -C @ x[2:] - K @ x[:2])]), (0, 3),
-                    [0, 0, 0.4, 0], t_eval=t, rtol=1e-10, atol=1e-12)
+    sol = solve_ivp(
+        lambda _, x: np.concatenate([x[2:], np.linalg.solve(M, -C @ x[2:] - K @ x[:2])]),
+        (0, 3),
+        [0, 0, 0.4, 0],
+        t_eval=t,
+        rtol=1e-10,
+        atol=1e-12,
+    )
     np.testing.assert_allclose(out["phid"], sol.y[2], atol=1e-7)
     np.testing.assert_allclose(out["delta"], sol.y[1], atol=1e-7)
 
@@ -199,8 +211,9 @@ def test_default_rider_geometry_from_the_davis_bicycle_and_jason():
     import bikerider
 
     root = Path(bikerider.__file__).parent / "data" / "bicycleparameters"
-    model = load_model(root / "bicycles/Rigid/Parameters/RigidBenchmark.txt",
-                       root / "riders/Jason/Parameters/JasonRigidBenchmark.txt")
+    model = load_model(
+        root / "bicycles/Rigid/Parameters/RigidBenchmark.txt", root / "riders/Jason/Parameters/JasonRigidBenchmark.txt"
+    )
     upper = model.geometry.upper_body
     # JasonRigidBenchmark.txt: mB = 83.5 kg, zB = -1.10674939861 m
     assert upper["m_u"] == pytest.approx(0.5 * 83.5)
@@ -212,8 +225,10 @@ def test_each_effect_can_be_plotted_on_its_own(bench, geometry, tmp_path):
     from bikerider.gap.report import plot_effect
 
     values = dict(bench, g=9.81)
-    for name, params in {"rider_lean": {"k_lean": 128.0, "c_lean": 50.0},
-                         "tyre_slip": {"c_alpha": 13.0, "c_gamma": 0.8, "sigma_t": 0.2, "t_p": 0.02}}.items():
+    for name, params in {
+        "rider_lean": {"k_lean": 128.0, "c_lean": 50.0},
+        "tyre_slip": {"c_alpha": 13.0, "c_gamma": 0.8, "sigma_t": 0.2, "t_p": 0.02},
+    }.items():
         path = tmp_path / f"{name}.png"
         figure = plot_effect(EffectModel(values, geometry, {name: params}), np.linspace(1, 8, 15), title=name)
         figure.savefig(path)

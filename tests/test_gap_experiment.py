@@ -3,6 +3,7 @@
 The shipped steer-by-wire data (Pasma 2024, bikerider/data/gap/pasma2024_sbw/) are checked against
 themselves: the logged steer command is the documented controller, the windows are inside the logs.
 """
+
 from __future__ import annotations
 
 import gzip
@@ -28,8 +29,9 @@ def _write(path: Path, text: str) -> Path:
 # -- control laws ----------------------------------------------------------------------------------
 def test_ramp_laws_are_the_steer_into_lean_controller():
     # Pasma (2024) / the SBW README: T = K_L (v0 - v) phid below v0 = 6.5 m/s, K_H (v - v0) phi above
-    law = ControlLaw("sil", {"k_phid": GainSchedule.make_ramp(2.0, 6.5, "below"),
-                             "k_phi": GainSchedule.make_ramp(0.7, 6.5, "above")})
+    law = ControlLaw(
+        "sil", {"k_phid": GainSchedule.make_ramp(2.0, 6.5, "below"), "k_phi": GainSchedule.make_ramp(0.7, 6.5, "above")}
+    )
     gains = law([1.5, 5.0, 6.5, 8.5])
     np.testing.assert_allclose(gains[:, 1], [10.0, 3.0, 0.0, 0.0])
     np.testing.assert_allclose(gains[:, 0], [0.0, 0.0, 0.0, 1.4])
@@ -43,13 +45,16 @@ def test_piecewise_linear_gains_hold_their_end_values():
     assert GainSchedule.constant(5.0)(np.array([1.0, 7.0])).tolist() == [5.0, 5.0]
 
 
-@pytest.mark.parametrize("make, message", [
-    (lambda: GainSchedule.piecewise([0.0, 6.5, 6.0], [1, 2, 3], "control.a.k_phid"), "increasing speeds"),
-    (lambda: GainSchedule.piecewise([0.0], [1.0], "control.a.k_phid"), "at least two"),
-    (lambda: GainSchedule.piecewise([0.0, 1.0], [1.0, float("nan")], "control.a.k_phid"), "a finite number"),
-    (lambda: GainSchedule.make_ramp(2.0, 6.5, "sideways", "control.a.k_phid"), '"below" or "above"'),
-    (lambda: GainSchedule.make_ramp(2.0, -1.0, "below", "control.a.k_phid"), "a positive speed"),
-])
+@pytest.mark.parametrize(
+    "make, message",
+    [
+        (lambda: GainSchedule.piecewise([0.0, 6.5, 6.0], [1, 2, 3], "control.a.k_phid"), "increasing speeds"),
+        (lambda: GainSchedule.piecewise([0.0], [1.0], "control.a.k_phid"), "at least two"),
+        (lambda: GainSchedule.piecewise([0.0, 1.0], [1.0, float("nan")], "control.a.k_phid"), "a finite number"),
+        (lambda: GainSchedule.make_ramp(2.0, 6.5, "sideways", "control.a.k_phid"), '"below" or "above"'),
+        (lambda: GainSchedule.make_ramp(2.0, -1.0, "below", "control.a.k_phid"), "a positive speed"),
+    ],
+)
 def test_a_law_that_cannot_be_evaluated_is_refused(make, message):
     with pytest.raises(InputError, match=message) as info:
         make()
@@ -59,8 +64,10 @@ def test_a_law_that_cannot_be_evaluated_is_refused(make, message):
 def test_a_law_in_a_toml_file_names_file_line_and_value(tmp_path):
     from bikerider.io.gap_data import read_control
 
-    path = _write(tmp_path / "c.toml", '[control.sil]\ndescription = "x"\nk_phid = { speed = [0.0, 6.5, 3.0], '
-                  'gain = [13.0, 0.0, 1.0] }\n')
+    path = _write(
+        tmp_path / "c.toml",
+        '[control.sil]\ndescription = "x"\nk_phid = { speed = [0.0, 6.5, 3.0], gain = [13.0, 0.0, 1.0] }\n',
+    )
     with pytest.raises(InputError) as info:
         read_control(path)
     assert f"{path}:3" in str(info.value) and "control.sil.k_phid.speed" in str(info.value)
@@ -80,8 +87,9 @@ def sbw():
 def test_the_sbw_copy_is_the_documented_experiment(sbw):
     settings, windows, records = sbw
     assert len(windows) == 59 and len(records) == 59  # the experimenter's 59 windows (windows.csv)
-    assert {r.group for r in records} == {f"eigen_normal_sil6.5n2_{v}kph.log" for v in
-                                          ("5.4", "7.2", "9", "10.8", "12.6", "14.4", "16.2", "18")}
+    assert {r.group for r in records} == {
+        f"eigen_normal_sil6.5n2_{v}kph.log" for v in ("5.4", "7.2", "9", "10.8", "12.6", "14.4", "16.2", "18")
+    }
     first = records[0]
     assert first.name == "eigen_normal_sil6.5n2_5.4kph.log.gz[4486:4775]" and first.time.size == 289
     assert first.time[1] == pytest.approx(0.01)  # 100 Hz, no time column
@@ -98,8 +106,11 @@ def test_the_logged_steer_command_is_the_documented_controller():
     for path in sorted({w.file for w in windows}):
         log = read_log(path.with_name(path.name + ".gz"), ["sil_command", "speed", "lean_rate"])
         for w in (w for w in windows if w.file == path):
-            cmd = log.columns["sil_command"][w.start:w.end]
-            law = settings.laws["sil"](log.columns["speed"][w.start:w.end])[:, 1] * log.columns["lean_rate"][w.start:w.end]
+            cmd = log.columns["sil_command"][w.start : w.end]
+            law = (
+                settings.laws["sil"](log.columns["speed"][w.start : w.end])[:, 1]
+                * log.columns["lean_rate"][w.start : w.end]
+            )
             np.testing.assert_allclose(cmd, law, atol=1e-4)
 
 
@@ -141,30 +152,70 @@ def test_the_detector_finds_the_experimenters_windows():
 # -- bad manifests and logs ----------------------------------------------------------------------
 def _manifest(tmp_path: Path, body: str, log_text: str = "a,rate,v\n0,0.1,2\n0,0.2,2\n0,0.1,2\n0,0.0,2\n") -> Path:
     (tmp_path / "run.log").write_text(log_text)
-    return _write(tmp_path / "m.toml", '[experiment]\nsample_rate = 100.0\n' + body)
+    return _write(tmp_path / "m.toml", "[experiment]\nsample_rate = 100.0\n" + body)
 
 
-@pytest.mark.parametrize("body, error, message, line", [
-    ('[columns]\nroll_rate = "rate"\nspeed = "v"\n[[file]]\npath = "run.log"\nwindows = [[0, 9]]\n',
-     FileFormatError, "ends after the last sample of run.log (4 samples)", 8),
-    ('[columns]\nroll_rate = "rate"\nspeed = "v"\n[[file]]\npath = "run.log"\nwindows = [[3, 1]]\n',
-     FileFormatError, "expected 0 <= start < end", 8),
-    ('[columns]\nroll_rate = "gyro"\nspeed = "v"\n[[file]]\npath = "run.log"\nwindows = [[0, 3]]\n',
-     FileFormatError, "run.log:1: no column 'gyro': the log's columns are a, rate, v", None),
-    ('[columns]\nroll_rate = "rate"\nspeed = "v"\n[[file]]\npath = "run.log"\nwindows = [[0, 2.5]]\n',
-     InputError, "file.windows = [0, 2.5]: expected a window [start, end] of two whole sample numbers", 8),
-    ('[columns]\nroll_rate = "rate"\nspeed = "v"\nyaw_rate = "a"\n[[file]]\npath = "run.log"\nwindows = [[0, 3]]\n',
-     InputError, "columns.yaw_rate = 'a': expected one of the signals", None),
-    ('control = "sil"\n[columns]\nroll_rate = "rate"\nspeed = "v"\n[[file]]\npath = "run.log"\nwindows = [[0, 3]]\n',
-     InputError, "control = 'sil': expected the name of a law defined under [control.<name>] (none defined)", None),
-    ('[columns]\nroll_rate = "rate"\nspeed = "v"\n[control.sil]\nk_phid = { K = 2.0, v0 = 6.5, when = "never" }\n'
-     '[[file]]\npath = "run.log"\nwindows = [[0, 3]]\n', InputError, 'control.sil.k_phid.when = \'never\'', 7),
-    ('[columns]\nroll_rate = "rate"\n[speed]\nsource = "column"\n[[file]]\npath = "run.log"\nwindows = [[0, 3]]\n',
-     InputError, "columns.speed = missing", None),
-    ('[columns]\nroll_rate = "rate"\nspeed = "v"\n[[file]]\npath = "run.log"\n', InputError,
-     "file.windows = missing: expected a list of [start, end] sample windows, or detect = true", 6),
-    ('[columns\nroll_rate = "rate"\n', FileFormatError, "not valid TOML", 3),
-])
+@pytest.mark.parametrize(
+    "body, error, message, line",
+    [
+        (
+            '[columns]\nroll_rate = "rate"\nspeed = "v"\n[[file]]\npath = "run.log"\nwindows = [[0, 9]]\n',
+            FileFormatError,
+            "ends after the last sample of run.log (4 samples)",
+            8,
+        ),
+        (
+            '[columns]\nroll_rate = "rate"\nspeed = "v"\n[[file]]\npath = "run.log"\nwindows = [[3, 1]]\n',
+            FileFormatError,
+            "expected 0 <= start < end",
+            8,
+        ),
+        (
+            '[columns]\nroll_rate = "gyro"\nspeed = "v"\n[[file]]\npath = "run.log"\nwindows = [[0, 3]]\n',
+            FileFormatError,
+            "run.log:1: no column 'gyro': the log's columns are a, rate, v",
+            None,
+        ),
+        (
+            '[columns]\nroll_rate = "rate"\nspeed = "v"\n[[file]]\npath = "run.log"\nwindows = [[0, 2.5]]\n',
+            InputError,
+            "file.windows = [0, 2.5]: expected a window [start, end] of two whole sample numbers",
+            8,
+        ),
+        (
+            '[columns]\nroll_rate = "rate"\nspeed = "v"\nyaw_rate = "a"\n[[file]]\npath = "run.log"\nwindows = [[0, 3]]\n',
+            InputError,
+            "columns.yaw_rate = 'a': expected one of the signals",
+            None,
+        ),
+        (
+            'control = "sil"\n[columns]\nroll_rate = "rate"\nspeed = "v"\n[[file]]\npath = "run.log"\nwindows = [[0, 3]]\n',
+            InputError,
+            "control = 'sil': expected the name of a law defined under [control.<name>] (none defined)",
+            None,
+        ),
+        (
+            '[columns]\nroll_rate = "rate"\nspeed = "v"\n[control.sil]\nk_phid = { K = 2.0, v0 = 6.5, when = "never" }\n'
+            '[[file]]\npath = "run.log"\nwindows = [[0, 3]]\n',
+            InputError,
+            "control.sil.k_phid.when = 'never'",
+            7,
+        ),
+        (
+            '[columns]\nroll_rate = "rate"\n[speed]\nsource = "column"\n[[file]]\npath = "run.log"\nwindows = [[0, 3]]\n',
+            InputError,
+            "columns.speed = missing",
+            None,
+        ),
+        (
+            '[columns]\nroll_rate = "rate"\nspeed = "v"\n[[file]]\npath = "run.log"\n',
+            InputError,
+            "file.windows = missing: expected a list of [start, end] sample windows, or detect = true",
+            6,
+        ),
+        ('[columns\nroll_rate = "rate"\n', FileFormatError, "not valid TOML", 3),
+    ],
+)
 def test_bad_manifests_name_file_line_and_value(tmp_path, body, error, message, line):
     path = _manifest(tmp_path, body)
     with pytest.raises(error) as info:
@@ -177,8 +228,11 @@ def test_bad_manifests_name_file_line_and_value(tmp_path, body, error, message, 
 
 
 def test_a_bad_log_cell_names_the_log_and_its_line(tmp_path):
-    path = _manifest(tmp_path, '[columns]\nroll_rate = "rate"\nspeed = "v"\n[[file]]\npath = "run.log"\n'
-                     'windows = [[0, 3]]\n', "a,rate,v\n0,0.1,2\n0,x,2\n0,0.1,2\n")
+    path = _manifest(
+        tmp_path,
+        '[columns]\nroll_rate = "rate"\nspeed = "v"\n[[file]]\npath = "run.log"\nwindows = [[0, 3]]\n',
+        "a,rate,v\n0,0.1,2\n0,x,2\n0,0.1,2\n",
+    )
     settings, windows = read_manifest(path)
     with pytest.raises(FileFormatError) as info:
         load_records(settings, windows)
@@ -192,9 +246,12 @@ def test_missing_values_leave_a_record_out_not_the_run(tmp_path):
     rows[150] = ",3.0"  # an empty cell, as the SBW logs have before the controller starts
     (tmp_path / "a.log").write_text("rate,v\n" + "\n".join(rows[:200]) + "\n")
     (tmp_path / "b.log").write_text("rate,v\n" + "\n".join(f"{x:.6f},3.0" for x in rate) + "\n")
-    path = _write(tmp_path / "m.toml", '[experiment]\nsample_rate = 100.0\n[columns]\nroll_rate = "rate"\n'
-                  'speed = "v"\n[[file]]\npath = "a.log"\nwindows = [[0, 200]]\n[[file]]\npath = "b.log"\n'
-                  'windows = [[0, 300]]\n')
+    path = _write(
+        tmp_path / "m.toml",
+        '[experiment]\nsample_rate = 100.0\n[columns]\nroll_rate = "rate"\n'
+        'speed = "v"\n[[file]]\npath = "a.log"\nwindows = [[0, 200]]\n[[file]]\npath = "b.log"\n'
+        "windows = [[0, 300]]\n",
+    )
     settings, windows = read_manifest(path)
     fits = fit_records(load_records(settings, windows))
     assert [f.used for f in fits] == [False, True]

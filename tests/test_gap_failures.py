@@ -8,6 +8,7 @@
 6. tyre fits at their search bounds were flagged plausible, and `parameters` failing its own prior
    test was selected.
 """
+
 from __future__ import annotations
 
 import json
@@ -29,8 +30,12 @@ from bikerider.io.gap_model import load_model
 
 DATA = Path(bikerider.__file__).parent / "data"
 BP = DATA / "bicycleparameters"
-MODEL = ["--model", str(BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt"),
-         "--rider", str(BP / "riders/Jason/Parameters/JasonRigidBenchmark.txt")]
+MODEL = [
+    "--model",
+    str(BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt"),
+    "--rider",
+    str(BP / "riders/Jason/Parameters/JasonRigidBenchmark.txt"),
+]
 EXAMPLES = DATA / "gap_examples"
 SIL = ControlLaw("sil", {"k_phid": GainSchedule.make_ramp(2.0, 6.5, "below")})
 
@@ -48,26 +53,62 @@ def _record(model, speed: float, group: str, effects=None, noise=0.01, seed=0, d
     """The roll rate of a linear model under the SIL law after a roll-rate kick (a synthetic record)."""
     rng = np.random.default_rng(seed)
     t = np.arange(0.0, duration, 0.01)
-    out = EffectModel(_nominal(model), model.geometry, effects or {}).simulate(speed, t, initial={"phid": 0.6, "deltad": 0.3},
-                                                                                gains=SIL(speed))
-    return Record(f"{group}[{seed}]", "test", t, {"roll_rate": out["phid"] + noise * rng.standard_normal(t.size),
-                                                  "steer_angle": out["delta"]},
-                  speed, 0.01, group, SIL, speed, None, None, ("roll_rate",), True)
+    out = EffectModel(_nominal(model), model.geometry, effects or {}).simulate(
+        speed, t, initial={"phid": 0.6, "deltad": 0.3}, gains=SIL(speed)
+    )
+    return Record(
+        f"{group}[{seed}]",
+        "test",
+        t,
+        {"roll_rate": out["phid"] + noise * rng.standard_normal(t.size), "steer_angle": out["delta"]},
+        speed,
+        0.01,
+        group,
+        SIL,
+        speed,
+        None,
+        None,
+        ("roll_rate",),
+        True,
+    )
 
 
 # 1 ----------------------------------------------------------------------------------------------
 def test_1_a_record_that_cannot_be_fitted_is_left_out_with_its_reason(riderless):
-    good = [_record(riderless, v, f"{v} m/s", {"steer_damping": {"c_steer": 0.3}}, seed=k)
-            for v in (3.0, 4.0, 5.0) for k in range(3)]
+    good = [
+        _record(riderless, v, f"{v} m/s", {"steer_damping": {"c_steer": 0.3}}, seed=k)
+        for v in (3.0, 4.0, 5.0)
+        for k in range(3)
+    ]
     t = np.arange(0.0, 1.5, 0.01)
-    noise = Record("noise", "test", t, {"roll_rate": 0.01 * np.random.default_rng(9).standard_normal(t.size)}, 4.0, 0.0,
-                   "4.0 m/s", SIL, 4.0)
+    noise = Record(
+        "noise",
+        "test",
+        t,
+        {"roll_rate": 0.01 * np.random.default_rng(9).standard_normal(t.size)},
+        4.0,
+        0.0,
+        "4.0 m/s",
+        SIL,
+        4.0,
+    )
     short = Record("blip", "test", t[:10], {"roll_rate": np.sin(7 * t[:10])}, 4.0, 0.0, "4.0 m/s", SIL, 4.0)
-    gap = Record("gap", "test", t, {"roll_rate": np.sin(7 * t)}, 4.0, 0.0, "4.0 m/s", SIL, 4.0,
-                 problem="roll_rate has 3 missing values in the window (first at sample 12)")
+    gap = Record(
+        "gap",
+        "test",
+        t,
+        {"roll_rate": np.sin(7 * t)},
+        4.0,
+        0.0,
+        "4.0 m/s",
+        SIL,
+        4.0,
+        problem="roll_rate has 3 missing values in the window (first at sample 12)",
+    )
     fits = fit_records(good + [noise, short, gap])
-    result = Diagnosis(riderless, EigenvalueData.empty(), CanonicalData.empty(),
-                       ("steer_damping", "steer_inertia"), fits).as_dict()
+    result = Diagnosis(
+        riderless, EigenvalueData.empty(), CanonicalData.empty(), ("steer_damping", "steer_inertia"), fits
+    ).as_dict()
     records = result["records"]
     assert records["total"] == 12 and records["used"] == 9 and records["left_out"] == 3
     reasons = {r["record"]: r["reason"] for r in records["reasons"]}
@@ -79,8 +120,17 @@ def test_1_a_record_that_cannot_be_fitted_is_left_out_with_its_reason(riderless)
 
 def test_1_only_no_record_left_stops_and_says_so(riderless):
     t = np.arange(0.0, 1.5, 0.01)
-    noise = Record("noise", "test", t, {"roll_rate": 0.01 * np.random.default_rng(9).standard_normal(t.size)}, 4.0, 0.0,
-                   "g", SIL, 4.0)
+    noise = Record(
+        "noise",
+        "test",
+        t,
+        {"roll_rate": 0.01 * np.random.default_rng(9).standard_normal(t.size)},
+        4.0,
+        0.0,
+        "g",
+        SIL,
+        4.0,
+    )
     from bikerider.errors import InputError
 
     with pytest.raises(InputError, match="enough records for a diagnosis: none could be used .*noise: "):
@@ -89,10 +139,24 @@ def test_1_only_no_record_left_stops_and_says_so(riderless):
 
 def test_1_the_command_goes_on_past_a_run_it_cannot_fit(tmp_path, capsys):
     text = "# speed = 5\ntime,roll_rate\n" + "\n".join(
-        f"{a:.2f},{b:.5f}" for a, b in zip(np.arange(0, 5, 0.01), 0.01 * np.random.default_rng(0).standard_normal(500)))
+        f"{a:.2f},{b:.5f}" for a, b in zip(np.arange(0, 5, 0.01), 0.01 * np.random.default_rng(0).standard_normal(500))
+    )
     (tmp_path / "noise.csv").write_text(text)
-    assert main(["gap", *MODEL, "--data", str(EXAMPLES / "eigenvalues.csv"), str(tmp_path / "noise.csv"),
-                 "--effects", "steer_damping", "--json"]) == 0
+    assert (
+        main(
+            [
+                "gap",
+                *MODEL,
+                "--data",
+                str(EXAMPLES / "eigenvalues.csv"),
+                str(tmp_path / "noise.csv"),
+                "--effects",
+                "steer_damping",
+                "--json",
+            ]
+        )
+        == 0
+    )
     out = json.loads(capsys.readouterr().out)
     assert out["records"]["left_out"] == 1 and "no oscillation" in out["records"]["reasons"][0]["reason"]
 
@@ -102,12 +166,40 @@ def test_2_one_predicted_curve_per_control_law(riderless):
     from bikerider.gap.report import plot_eigenvalues
 
     speeds = np.linspace(2.0, 5.0, 13)  # 13 rows, 13 different gains of one speed-scheduled law
-    reference = Predictor(EigenvalueData(speeds, np.zeros(13, complex), np.ones(13), np.ones(13), np.zeros(13),
-                                         ["weave"] * 13, ["a"] * 7 + ["b"] * 6, SIL(speeds), ["x"] * 13, ["sil"] * 13,
-                                         {"sil": SIL}), CanonicalData.empty(), _nominal(riderless), riderless.geometry)
-    weave = reference.eigenvalues(EffectModel(_nominal(riderless), riderless.geometry, {"steer_damping": {"c_steer": 0.3}}))
-    data = EigenvalueData(speeds, weave, np.full(13, 0.05), np.full(13, 0.05), np.zeros(13), ["weave"] * 13,
-                          ["a"] * 7 + ["b"] * 6, SIL(speeds), [f"r{k}" for k in range(13)], ["sil"] * 13, {"sil": SIL})
+    reference = Predictor(
+        EigenvalueData(
+            speeds,
+            np.zeros(13, complex),
+            np.ones(13),
+            np.ones(13),
+            np.zeros(13),
+            ["weave"] * 13,
+            ["a"] * 7 + ["b"] * 6,
+            SIL(speeds),
+            ["x"] * 13,
+            ["sil"] * 13,
+            {"sil": SIL},
+        ),
+        CanonicalData.empty(),
+        _nominal(riderless),
+        riderless.geometry,
+    )
+    weave = reference.eigenvalues(
+        EffectModel(_nominal(riderless), riderless.geometry, {"steer_damping": {"c_steer": 0.3}})
+    )
+    data = EigenvalueData(
+        speeds,
+        weave,
+        np.full(13, 0.05),
+        np.full(13, 0.05),
+        np.zeros(13),
+        ["weave"] * 13,
+        ["a"] * 7 + ["b"] * 6,
+        SIL(speeds),
+        [f"r{k}" for k in range(13)],
+        ["sil"] * 13,
+        {"sil": SIL},
+    )
     diagnosis = Diagnosis(riderless, data, CanonicalData.empty(), ("steer_damping",))
     fig = plot_eigenvalues(diagnosis)
     labels = fig.axes[0].get_legend_handles_labels()[1]
@@ -124,8 +216,19 @@ def example(tmp_path_factory):
 
     buffer = io.StringIO()
     with contextlib.redirect_stdout(buffer):
-        assert main(["gap", *MODEL, "--data", str(EXAMPLES / "eigenvalues.csv"), str(EXAMPLES / "perturbation_run.csv"),
-                     "--json"]) == 0
+        assert (
+            main(
+                [
+                    "gap",
+                    *MODEL,
+                    "--data",
+                    str(EXAMPLES / "eigenvalues.csv"),
+                    str(EXAMPLES / "perturbation_run.csv"),
+                    "--json",
+                ]
+            )
+            == 0
+        )
     return json.loads(buffer.getvalue())
 
 
@@ -153,19 +256,56 @@ def test_4_the_noise_never_comes_from_residuals_against_the_model(riderless, tmp
     # error of a few rad/s.  Now it comes from the data (replicates) or the rows are taken as exact.
     speeds = np.array([2.5, 3.0, 3.5, 4.0, 4.5, 5.0])
     truth = EffectModel(_nominal(riderless), riderless.geometry, {"steer_inertia": {"I_steer": 0.2}})
-    reference = Predictor(EigenvalueData(speeds, np.zeros(6, complex), np.ones(6), np.ones(6), np.zeros(6), ["weave"] * 6,
-                                         ["t"] * 6, SIL(speeds), ["x"] * 6, ["sil"] * 6, {"sil": SIL}),
-                          CanonicalData.empty(), _nominal(riderless), riderless.geometry)
+    reference = Predictor(
+        EigenvalueData(
+            speeds,
+            np.zeros(6, complex),
+            np.ones(6),
+            np.ones(6),
+            np.zeros(6),
+            ["weave"] * 6,
+            ["t"] * 6,
+            SIL(speeds),
+            ["x"] * 6,
+            ["sil"] * 6,
+            {"sil": SIL},
+        ),
+        CanonicalData.empty(),
+        _nominal(riderless),
+        riderless.geometry,
+    )
     measured = reference.eigenvalues(truth)
-    table = EigenvalueData(speeds, measured, np.full(6, np.nan), np.full(6, np.nan), np.zeros(6), ["weave"] * 6,
-                           ["t"] * 6, SIL(speeds), [f"table:{k + 2}" for k in range(6)], ["sil"] * 6, {"sil": SIL})
+    table = EigenvalueData(
+        speeds,
+        measured,
+        np.full(6, np.nan),
+        np.full(6, np.nan),
+        np.zeros(6),
+        ["weave"] * 6,
+        ["t"] * 6,
+        SIL(speeds),
+        [f"table:{k + 2}" for k in range(6)],
+        ["sil"] * 6,
+        {"sil": SIL},
+    )
     result = Diagnosis(riderless, table, CanonicalData.empty(), ("steer_inertia", "steer_damping")).as_dict()
     assert result["verdict"] != "none"
     assert any("taken as exact" in n for n in result["notes"])
     # the estimate does not change with the model under test
     other = EffectModel(_nominal(riderless), riderless.geometry, {"steer_damping": {"c_steer": 2.0}})
-    shifted = EigenvalueData(speeds, reference.eigenvalues(other), table.real_sigma, table.imag_sigma, np.zeros(6),
-                             ["weave"] * 6, ["t"] * 6, SIL(speeds), table.source, ["sil"] * 6, {"sil": SIL})
+    shifted = EigenvalueData(
+        speeds,
+        reference.eigenvalues(other),
+        table.real_sigma,
+        table.imag_sigma,
+        np.zeros(6),
+        ["weave"] * 6,
+        ["t"] * 6,
+        SIL(speeds),
+        table.source,
+        ["sil"] * 6,
+        {"sil": SIL},
+    )
     assert np.all(GapProblem(riderless, table, CanonicalData.empty()).sigma_data == 0)
     assert np.all(GapProblem(riderless, shifted, CanonicalData.empty()).sigma_data == 0)
 
@@ -173,8 +313,19 @@ def test_4_the_noise_never_comes_from_residuals_against_the_model(riderless, tmp
 def test_4_replicates_give_the_noise_and_say_so(riderless):
     speeds = np.repeat([3.0, 4.0], 3)
     values = np.array([-2.0 + 8j, -2.2 + 8.3j, -1.9 + 7.8j, -1.8 + 9j, -1.9 + 9.2j, -1.7 + 8.9j])
-    table = EigenvalueData(speeds, values, np.full(6, np.nan), np.full(6, np.nan), np.zeros(6), ["weave"] * 6, ["t"] * 6,
-                           SIL(speeds), [f"r{k}" for k in range(6)], ["sil"] * 6, {"sil": SIL})
+    table = EigenvalueData(
+        speeds,
+        values,
+        np.full(6, np.nan),
+        np.full(6, np.nan),
+        np.zeros(6),
+        ["weave"] * 6,
+        ["t"] * 6,
+        SIL(speeds),
+        [f"r{k}" for k in range(6)],
+        ["sil"] * 6,
+        {"sil": SIL},
+    )
     p = GapProblem(riderless, table, CanonicalData.empty())
     real = [k for k, q in enumerate(p.obs.quantity) if q == "real"]
     pooled = np.sqrt((np.var(values.real[:3], ddof=1) * 2 + np.var(values.real[3:], ddof=1) * 2) / 4)

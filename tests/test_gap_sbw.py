@@ -3,6 +3,7 @@
 One run of ``bikerider gap`` on the project's copy (its manifest and model file), shared with the
 document that reports it (``docs/gap_real_data.md``, section 3) through the command's cache.
 """
+
 from __future__ import annotations
 
 import json
@@ -85,10 +86,19 @@ def test_the_command_line_on_part_of_the_experiment(tmp_path, capsys):
     text = (SBW / "experiment.toml").read_text().replace('logs = "logs"', f'logs = "{SBW / "logs"}"')
     text = text.replace('windows = "windows.csv"', 'windows = "two.csv"')
     rows = (SBW / "windows.csv").read_text().splitlines()
-    (tmp_path / "two.csv").write_text("\n".join([rows[0]] + [r for r in rows[1:] if "_14.4kph" in r or "_18kph" in r]) + "\n")
+    (tmp_path / "two.csv").write_text(
+        "\n".join([rows[0]] + [r for r in rows[1:] if "_14.4kph" in r or "_18kph" in r]) + "\n"
+    )
     (tmp_path / "m.toml").write_text(text)
-    args = ["gap", "--model", str(SBW / "sbw_bicycle.toml"), "--experiment", str(tmp_path / "m.toml"),
-            "--effects", "steer_damping,steer_friction"]
+    args = [
+        "gap",
+        "--model",
+        str(SBW / "sbw_bicycle.toml"),
+        "--experiment",
+        str(tmp_path / "m.toml"),
+        "--effects",
+        "steer_damping,steer_friction",
+    ]
     assert main(args + ["--json", "--report", str(tmp_path / "rep")]) == 0
     out = json.loads(capsys.readouterr().out)
     assert out["records"]["total"] == 17 and out["records"]["left_out"] == 0

@@ -7,6 +7,7 @@ alone raises no structural verdict in at least 9 of 10 null cases.  This reduced
 protocol: 3 sessions of 4 runs) demands every case right, with fixed seeds, and the predicted
 shrinkage within 0.15 of the shrinkage achieved on fresh data.
 """
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -23,7 +24,9 @@ CASES = [("null", 11), ("null", 12), ("steer_damping", 13), ("rider_lean", 14), 
 
 @pytest.fixture(scope="module")
 def suite():
-    model = load_model(BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt", BP / "riders/Jason/Parameters/JasonRigidBenchmark.txt")
+    model = load_model(
+        BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt", BP / "riders/Jason/Parameters/JasonRigidBenchmark.txt"
+    )
     return V.run_suite(model, CASES, V.QUICK)
 
 
@@ -74,8 +77,10 @@ def test_confusion_matrix_counts_every_case(suite):
 @pytest.fixture(scope="module")
 def record_cases():
     riderless = load_model(BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt")
-    return {truth: V.run_record_case(riderless, truth, seed, V.QUICK_RECORDS)
-            for truth, seed in (("sbw_inertia+damping", 22), ("sbw_null", 23))}
+    return {
+        truth: V.run_record_case(riderless, truth, seed, V.QUICK_RECORDS)
+        for truth, seed in (("sbw_inertia+damping", 22), ("sbw_null", 23))
+    }
 
 
 @pytest.mark.slow
@@ -99,13 +104,15 @@ def test_parameter_error_alone_in_records_selects_no_effect(record_cases):
 def test_the_truths_whipple_matrices_are_meijaards(tmp_path):
     # the hand-typed Appendix A of Meijaard et al. (2007) against the generated benchmark model, on
     # two bicycles: the truth shares no code with the candidates but agrees on the meaning
+    import numpy as np
     from bikerider.generated import benchmark_model as bm
+
     from bikerider.gap.models import BENCH_ARGS
 
-    import numpy as np
-
-    for path in (BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt",
-                 Path(bikerider.__file__).parent / "data" / "gap" / "kooijman2008_bicycle.toml"):
+    for path in (
+        BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt",
+        Path(bikerider.__file__).parent / "data" / "gap" / "kooijman2008_bicycle.toml",
+    ):
         model = load_model(path)
         values = {k: float(model.parameters.values[k]) for k in BENCH_ARGS}
         for mine, generated in zip(V.meijaard_matrices(values), bm.canonical_matrices(**values)):

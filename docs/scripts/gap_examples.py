@@ -7,6 +7,7 @@ Coulomb), so a user can see the diagnosis find it.  Run from the project root::
 
     .venv/bin/python docs/scripts/gap_examples.py
 """
+
 from __future__ import annotations
 
 import sys
@@ -40,9 +41,11 @@ def main() -> int:
     rows = ["speed,real,imag,real_sigma,imag_sigma,speed_sigma,group,k_phi,k_phid,k_delta,k_deltad"]
     for k in range(len(data)):
         g = data.gains[k]
-        rows.append(f"{data.speed[k]:.3f},{data.value[k].real:.4f},{data.value[k].imag:.4f},"
-                    f"{data.real_sigma[k]:.2g},{data.imag_sigma[k]:.2g},{data.speed_sigma[k]:.2g},{data.group[k]},"
-                    f"{g[0]:g},{g[1]:g},{g[2]:g},{g[3]:g}")
+        rows.append(
+            f"{data.speed[k]:.3f},{data.value[k].real:.4f},{data.value[k].imag:.4f},"
+            f"{data.real_sigma[k]:.2g},{data.imag_sigma[k]:.2g},{data.speed_sigma[k]:.2g},{data.group[k]},"
+            f"{g[0]:g},{g[1]:g},{g[2]:g},{g[3]:g}"
+        )
     (OUT / "eigenvalues.csv").write_text("\n".join(header + rows) + "\n", encoding="utf-8")
 
     # One perturbation run at 7 m/s, the raw time series a user would record: roll and steer rate.
@@ -66,16 +69,25 @@ def main() -> int:
         "# Known control acting during the test: steer torque T_delta = k_phi phi + k_phid phid + k_delta delta\n"
         "# + k_deltad deltad [N m], benchmark sign convention (positive torque turns the handlebar to positive\n"
         "# steer).  Used for data rows that give no gains of their own.\n"
-        "[control]\nk_phi = 0.0\nk_phid = 5.0\nk_delta = -2.0\nk_deltad = -0.5\n", encoding="utf-8")
+        "[control]\nk_phi = 0.0\nk_phid = 5.0\nk_delta = -2.0\nk_deltad = -0.5\n",
+        encoding="utf-8",
+    )
 
     canonical = (ROOT / "src" / "bikerider" / "data" / "gap" / "moore2012_canonical_id.csv").read_text().splitlines()
-    keep_lines = [ln for ln in canonical if ln.startswith("#") or ln.startswith("rider,")
-                  or ln.startswith("J,P,") or ln.startswith("J,H,")]
-    keep_lines.insert(0, "# Excerpt of bikerider/data/gap/moore2012_canonical_id.csv: rider J(ason), treadmill and floor.")
+    keep_lines = [
+        ln
+        for ln in canonical
+        if ln.startswith("#") or ln.startswith("rider,") or ln.startswith("J,P,") or ln.startswith("J,H,")
+    ]
+    keep_lines.insert(
+        0, "# Excerpt of bikerider/data/gap/moore2012_canonical_id.csv: rider J(ason), treadmill and floor."
+    )
     (OUT / "canonical.csv").write_text("\n".join(keep_lines) + "\n", encoding="utf-8")
     for note in notes:
         print(note, file=sys.stderr)
-    print(f"wrote {len(data)} eigenvalues, one run of {int(keep.sum())} samples, control and canonical examples to {OUT}")
+    print(
+        f"wrote {len(data)} eigenvalues, one run of {int(keep.sum())} samples, control and canonical examples to {OUT}"
+    )
     return 0
 
 

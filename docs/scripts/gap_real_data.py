@@ -14,11 +14,11 @@ Run from the project root::
 
     .venv/bin/python docs/scripts/gap_real_data.py
 """
+
 from __future__ import annotations
 
 import sys
 from pathlib import Path
-
 
 ROOT = Path(__file__).resolve().parents[2]
 DATA = ROOT / "src" / "bikerider" / "data"
@@ -32,8 +32,8 @@ TREADMILL2ENC_GAIN and TREADMILL2ENC_BIAS)."""
 
 
 def _diagnose(model, groups=None, eigen_file=None):
-    from bikerider.io import gap_data as gd
     from bikerider.gap.diagnosis import diagnose
+    from bikerider.io import gap_data as gd
 
     eigen = gd.read_eigenvalues(eigen_file) if eigen_file else None
     canonical = gd.read_canonical(DATA / "gap" / "moore2012_canonical_id.csv", groups) if groups else None
@@ -41,17 +41,24 @@ def _diagnose(model, groups=None, eigen_file=None):
 
 
 def _ranking_table(result) -> list[str]:
-    lines = ["| rank | effect | held-out before | after | shrink | plausible | fitted (95 % interval) | tied with |",
-             "|---|---|---|---|---|---|---|---|"]
+    lines = [
+        "| rank | effect | held-out before | after | shrink | plausible | fitted (95 % interval) | tied with |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
     for r in result["ranking"]:
         if r["effect"] == "parameters":
             fitted = f"{len(r['parameters'])} shifts"
         else:
-            fitted = ", ".join(f"{k} = {_shown(v['value'], v['ci95'])} [{_shown(v['ci95'][0], v['ci95'])}, "
-                               f"{_shown(v['ci95'][1], v['ci95'])}] {v['unit']}" for k, v in r["parameters"].items())
+            fitted = ", ".join(
+                f"{k} = {_shown(v['value'], v['ci95'])} [{_shown(v['ci95'][0], v['ci95'])}, "
+                f"{_shown(v['ci95'][1], v['ci95'])}] {v['unit']}"
+                for k, v in r["parameters"].items()
+            )
         shrink = "-" if r["shrink"] is None else f"{r['shrink']:+.2f}"
-        lines.append(f"| {r['rank']} | {r['effect']} | {r['heldout_error_before']:.1f} | {r['heldout_error_after']:.1f} | "
-                     f"{shrink} | {'yes' if r['plausible'] else 'no'} | {fitted} | {', '.join(r['tied_with']) or '-'} |")
+        lines.append(
+            f"| {r['rank']} | {r['effect']} | {r['heldout_error_before']:.1f} | {r['heldout_error_after']:.1f} | "
+            f"{shrink} | {'yes' if r['plausible'] else 'no'} | {fitted} | {', '.join(r['tied_with']) or '-'} |"
+        )
     return lines
 
 
@@ -125,9 +132,11 @@ def build() -> str:
     ]
     for q in ("real", "imag"):
         c = cells[q]
-        lines.append(f"| weave {q} part [1/s] | {c['mean_measured']:.2f} | {c['mean_predicted']:.3f} | "
-                     f"{c['combined_sigma']:.3f} | {c['data_sigma']:.3f} | {c['model_sigma']:.3f} | "
-                     f"{(c['mean_measured'] - c['mean_predicted']) / c['combined_sigma']:+.2f} |")
+        lines.append(
+            f"| weave {q} part [1/s] | {c['mean_measured']:.2f} | {c['mean_predicted']:.3f} | "
+            f"{c['combined_sigma']:.3f} | {c['data_sigma']:.3f} | {c['model_sigma']:.3f} | "
+            f"{(c['mean_measured'] - c['mean_predicted']) / c['combined_sigma']:+.2f} |"
+        )
     lines += [
         "",
         f"Gap test: chi2 = {k['gap']['test']['chi2']:.2f} on {k['gap']['test']['dof']} (p = {k['gap']['test']['p_value']:.2f}):",
@@ -162,8 +171,10 @@ def build() -> str:
         entry, group = c["quantity"].split(" ")
         diff = c["mean_measured"] - c["mean_predicted"]
         rel = diff / abs(c["mean_predicted"])
-        lines.append(f"| {entry} | {group.strip('()')} | {c['mean_measured']:.4g} | {c['mean_predicted']:.4g} | "
-                     f"{rel:+.0%} | {diff / c['combined_sigma']:+.0f} |")
+        lines.append(
+            f"| {entry} | {group.strip('()')} | {c['mean_measured']:.4g} | {c['mean_predicted']:.4g} | "
+            f"{rel:+.0%} | {diff / c['combined_sigma']:+.0f} |"
+        )
     t = jj["gap"]["test"]
     pt = jj["parameter_fit"]["test"]
     pt5 = runs["J-H,J-P (rider 5 %)"]["parameter_fit"]["test"]
@@ -194,12 +205,21 @@ def build() -> str:
     lines += [
         "",
         f"Selected: {', '.join(jj['selected']) or 'nothing'}. "
-        + (("Only " + ", ".join(f"{r['effect']} ({r['heldout_error_before']:.1f} -> {r['heldout_error_after']:.1f}; "
-                                 f"{'plausible' if r['plausible'] else 'implausible: ' + _why(r)})" for r in better)
-            + " predicts the other environment more than 5 % better than the Whipple model; for the others, whatever "
-            "one environment's fit does, the other environment moves the opposite way.") if better else
-           "No candidate predicts the other environment better than the Whipple model: whatever one environment's fit "
-           "does, the other environment moves the opposite way."),
+        + (
+            (
+                "Only "
+                + ", ".join(
+                    f"{r['effect']} ({r['heldout_error_before']:.1f} -> {r['heldout_error_after']:.1f}; "
+                    f"{'plausible' if r['plausible'] else 'implausible: ' + _why(r)})"
+                    for r in better
+                )
+                + " predicts the other environment more than 5 % better than the Whipple model; for the others, whatever "
+                "one environment's fit does, the other environment moves the opposite way."
+            )
+            if better
+            else "No candidate predicts the other environment better than the Whipple model: whatever one environment's fit "
+            "does, the other environment moves the opposite way."
+        ),
         "Across the three riders within one environment (Jason's model for all three riders, whose back-computed",
         "Whipple entries differ from his by up to 11 %, small beside the gaps):",
         "",
@@ -223,10 +243,16 @@ def build() -> str:
         "",
         f"On the floor the best held-out fit, {best['effect']}, takes {cut(best):.0%} off the held-out error"
         + (f" but needs implausible values ({_why(best)})" if not best["plausible"] else "")
-        + (f"; the best plausible one, {best_ok['effect']}, takes {cut(best_ok):.0%}" if best_ok and best_ok is not best
-           else "")
-        + ("; it is not significantly better than any other" if len(best["tied_with"]) == len(floor) - 1 else
-           f"; it is tied with {', '.join(best['tied_with']) or 'none'}")
+        + (
+            f"; the best plausible one, {best_ok['effect']}, takes {cut(best_ok):.0%}"
+            if best_ok and best_ok is not best
+            else ""
+        )
+        + (
+            "; it is not significantly better than any other"
+            if len(best["tied_with"]) == len(floor) - 1
+            else f"; it is tied with {', '.join(best['tied_with']) or 'none'}"
+        )
         + f" (selected: {', '.join(runs['C-P,J-P,L-P']['selected']) or 'nothing'}).",
         f"On the treadmill the best, {best_tread['effect']}, takes {cut(best_tread):.0%} (selected: "
         f"{', '.join(runs['C-H,J-H,L-H']['selected']) or 'nothing'}). The tyre model with literature values moves",
@@ -271,9 +297,9 @@ def _sbw_checks() -> dict:
         mine = [w for w in windows if w.file == path]
         speeds = []
         for w in mine:
-            cmd = log.columns["sil_command"][w.start:w.end]
-            v = log.columns["speed"][w.start:w.end]
-            rate = log.columns["lean_rate"][w.start:w.end]
+            cmd = log.columns["sil_command"][w.start : w.end]
+            v = log.columns["speed"][w.start : w.end]
+            rate = log.columns["lean_rate"][w.start : w.end]
             speeds.append(np.mean(v))
             for key, speed in (("logged", v), ("treadmill", (v - offset) / gain)):
                 x = (6.5 - speed) * rate
@@ -313,8 +339,14 @@ def _sign_and_shape(diagnosis) -> dict:
             continue
         lam = f.estimate.eigenvalue
         t = r.time
-        basis = np.column_stack([np.exp(lam.real * t) * np.cos(lam.imag * t), np.exp(lam.real * t) * np.sin(lam.imag * t),
-                                 np.ones_like(t), t])
+        basis = np.column_stack(
+            [
+                np.exp(lam.real * t) * np.cos(lam.imag * t),
+                np.exp(lam.real * t) * np.sin(lam.imag * t),
+                np.ones_like(t),
+                t,
+            ]
+        )
         amp = {}
         for name in ("roll_rate", "steer_angle"):
             c = np.linalg.lstsq(basis, r.signals[name], rcond=None)[0]
@@ -325,8 +357,7 @@ def _sign_and_shape(diagnosis) -> dict:
         j = int(np.argmin(np.abs(ev - lam)))
         model_ratio = vec[ss.outputs[1], j] / vec[ss.outputs[2], j]
         measured = amp["steer_angle"] / amp["roll_rate"]
-        phases.append((np.angle(measured, deg=True), np.angle(model_ratio, deg=True),
-                       abs(measured) / abs(model_ratio)))
+        phases.append((np.angle(measured, deg=True), np.angle(model_ratio, deg=True), abs(measured) / abs(model_ratio)))
     out["phases"] = np.array(phases)
     return out
 
@@ -390,13 +421,13 @@ def _sbw_section() -> list[str]:
         "",
         "### What the logs say before any model",
         "",
-        f"* **The controller.** Regressing the logged command `sil_command` on `(6.5 - v) lean_rate` over the",
+        "* **The controller.** Regressing the logged command `sil_command` on `(6.5 - v) lean_rate` over the",
         f"  {sum(n for *_, n in checks['per_file'])} windows' samples, with `v` the logged encoder speed, gives",
         f"  K = {K:.4f} N m s/rad per m/s (the README's K_L = 2), residual RMS {rms_res:.1e} N m (the logs' 5",
         f"  decimals); with the treadmill's speed from the experimenter's calibration instead, K = {Kt:.3f} and",
         f"  residual RMS {rms_t:.3f} N m. The controller used the encoder's speed, so the law is evaluated at the",
         "  recorded speed, whatever speed the bicycle ran at.",
-        f"* **The sign.** The command is `+K (v0 - v) phid` and the logged `fork_angle` and `lean_rate` are in the",
+        "* **The sign.** The command is `+K (v0 - v) phid` and the logged `fork_angle` and `lean_rate` are in the",
         "  benchmark convention: over the records at 3 m/s and up, the steer angle's phase relative to the roll",
         f"  rate in the weave is {np.median(shape['phases'][:, 0]):.0f} degrees (median) against the model's "
         f"{np.median(shape['phases'][:, 1]):.0f}, its",
@@ -404,8 +435,10 @@ def _sbw_section() -> list[str]:
         f"largest real part at 3 m/s would be {shape[3.0][1]:+.2f} 1/s",
         f"  (unstable) instead of {shape[3.0][0]:+.2f}; every record decays.",
         "* **The speed.** The encoder reads, per file, "
-        + ", ".join(f"{m:.2f}" for _, m, _ in checks["per_file"]) + " m/s at the set speeds "
-        + ", ".join(f"{s:.2f}" for s, _, _ in checks["per_file"]) + " m/s:",
+        + ", ".join(f"{m:.2f}" for _, m, _ in checks["per_file"])
+        + " m/s at the set speeds "
+        + ", ".join(f"{s:.2f}" for s, _, _ in checks["per_file"])
+        + " m/s:",
         "  the experimenter's calibration `recorded = 1.0662 treadmill - 0.128 m/s` to within a few cm/s. Which",
         "  of the two the bicycle saw is the `speed_sensor` candidate's question (a scale of the recorded speed).",
         "",
@@ -438,12 +471,17 @@ def _sbw_section() -> list[str]:
         f"(p = {t['p_value']:.1g}), against the data's noise alone chi2 = {t['data_only']['chi2']:.0f}. The",
         f"parameters' uncertainty is large (typically {unc['parameters']:.2f} on the weave eigenvalue, against "
         f"{unc['data']:.2f} for the data; most from "
-        + ", ".join(f"{u['parameter']}" for u in unc["largest"][:4]) + "),",
+        + ", ".join(f"{u['parameter']}" for u in unc["largest"][:4])
+        + "),",
         f"yet the parameter fit (prior chi2 {r['parameter_fit']['test']['prior_chi2']:.1f} on "
         f"{r['parameter_fit']['test']['prior_dof']} parameters) "
-        + (f"needs {', '.join(pinned)} at its bound"
-           + (" (a fork of zero roll inertia)" if pinned == ["IHxx"] else "") + ": implausible."
-           if pinned else ("is plausible." if r["parameter_fit"]["plausible"] else "is implausible.")),
+        + (
+            f"needs {', '.join(pinned)} at its bound"
+            + (" (a fork of zero roll inertia)" if pinned == ["IHxx"] else "")
+            + ": implausible."
+            if pinned
+            else ("is plausible." if r["parameter_fit"]["plausible"] else "is implausible.")
+        ),
         f"The measured weave is slower than the nominal model's by {min(-c['mean_residual'] for c in imag_cells):.1f}-"
         f"{max(-c['mean_residual'] for c in imag_cells):.1f} rad/s from 2.5 m/s up (speed bands of the gap map) and "
         f"more damped by {min(-c['mean_residual'] for c in real_cells):.1f}-{max(-c['mean_residual'] for c in real_cells):.1f} 1/s",
@@ -459,11 +497,20 @@ def _sbw_section() -> list[str]:
     ]
     rows = [(e["effect"], e) for e in r["ranking"]] + [("+".join(p["effects"]), p) for p in r["pairs"][:6]]
     for name, e in rows:
-        fitted = "23 shifts" if name == "parameters" else ", ".join(
-            f"{k} = {_shown(v['value'], v['ci95'])} [{_shown(v['ci95'][0], v['ci95'])}, {_shown(v['ci95'][1], v['ci95'])}]"
-            f" {v['unit']}" for k, v in e.get("parameters", {}).items() if not k.startswith("parameters."))
-        lines.append(f"| {name} | {e['heldout_error_after']:.2f} | {e['data_error_after']:.2f} | "
-                     f"{e['data_shrink']:.2f} | {'yes' if e.get('plausible') else 'no'} | {fitted or '-'} |")
+        fitted = (
+            "23 shifts"
+            if name == "parameters"
+            else ", ".join(
+                f"{k} = {_shown(v['value'], v['ci95'])} [{_shown(v['ci95'][0], v['ci95'])}, {_shown(v['ci95'][1], v['ci95'])}]"
+                f" {v['unit']}"
+                for k, v in e.get("parameters", {}).items()
+                if not k.startswith("parameters.")
+            )
+        )
+        lines.append(
+            f"| {name} | {e['heldout_error_after']:.2f} | {e['data_error_after']:.2f} | "
+            f"{e['data_shrink']:.2f} | {'yes' if e.get('plausible') else 'no'} | {fitted or '-'} |"
+        )
     friction = ranking["steer_friction"]["parameters"]
     damping = ranking["steer_damping"]["parameters"]["c_steer"]
     speed = ranking["speed_sensor"]["parameters"]["speed_scale"]
@@ -478,8 +525,10 @@ def _sbw_section() -> list[str]:
         "|---|---|---|---|---|---|",
     ]
     for f in sel["folds"]:
-        lines.append(f"| {f['fold'].removeprefix('group ')} | {f['n']} | {f['error_before']:.2f} | {f['error_after']:.2f} | "
-                     f"{f['data_error_before']:.2f} | {f['data_error_after']:.2f} |")
+        lines.append(
+            f"| {f['fold'].removeprefix('group ')} | {f['n']} | {f['error_before']:.2f} | {f['error_after']:.2f} | "
+            f"{f['data_error_before']:.2f} | {f['data_error_after']:.2f} |"
+        )
     lines += [
         "",
         "The contact sheet (`records.png`) overlays each record with its fitted decay and the friction model's",
@@ -502,11 +551,16 @@ def _sbw_section() -> list[str]:
         f"| speed-sensor error | a speed scale alone would have to be {speed['value']:.2f} "
         f"[{speed['ci95'][0]:.2f}, {speed['ci95'][1]:.2f}], far beyond the encoder's calibration (recorded over "
         f"treadmill speed {min(ratios):.3f}-{max(ratios):.3f}): implausible; with friction it adds nothing"
-        + (f" (held-out {pairs['speed_sensor+steer_friction']['data_error_after']:.2f})" if "speed_sensor+steer_friction" in pairs else "")
+        + (
+            f" (held-out {pairs['speed_sensor+steer_friction']['data_error_after']:.2f})"
+            if "speed_sensor+steer_friction" in pairs
+            else ""
+        )
         + " |",
         f"| parameter error | within their uncertainty the parameters can bend the weave this far (held-out "
         f"{ranking['parameters']['data_error_after']:.2f}), but only with "
-        + ", ".join(r["parameter_fit"]["at_bound"]) + " at zero: implausible |",
+        + ", ".join(r["parameter_fit"]["at_bound"])
+        + " at zero: implausible |",
         f"| (the motor's rotor inertia) | added steer inertia fits at {_shown(inertia['value'], inertia['ci95'])} "
         f"[{_shown(inertia['ci95'][0], inertia['ci95'])}, {_shown(inertia['ci95'][1], inertia['ci95'])}] kg m^2: "
         "none is needed |",
@@ -517,8 +571,10 @@ def _sbw_section() -> list[str]:
     low = [f for f in sel["folds"] if f["data_error_after"] > 0.5 * f["data_error_before"]]
     lines += [
         "* The slowest files (held-out error against the data's noise): "
-        + ", ".join(f"{f['fold'].removeprefix('group ')} ({f['data_error_before']:.2f} -> "
-                    f"{f['data_error_after']:.2f})" for f in low)
+        + ", ".join(
+            f"{f['fold'].removeprefix('group ')} ({f['data_error_before']:.2f} -> {f['data_error_after']:.2f})"
+            for f in low
+        )
         + f". Below 2.6 m/s the controller's gain is largest ({gains_slow.min():.0f}-{gains_slow.max():.0f} N m s/rad) "
         "and the friction model leaves",
         "  the departures there; a torque bandwidth or delay of the steer motor, which acts most where the gain",

@@ -11,6 +11,7 @@ Each run takes about half a minute; ``make docs`` runs this script.  Run from th
 
     .venv/bin/python docs/scripts/gap_sbw_checks.py
 """
+
 from __future__ import annotations
 
 import sys
@@ -51,15 +52,20 @@ def _row(name: str, r: dict) -> str:
 
     hf = r["how_far"] or {}
     held = "-" if not hf else f"{hf['data_error_before']:.2f} -> {hf['data_error_after']:.2f}"
-    return (f"| {name} | {r['records']['used']} | {r['verdict']} | {', '.join(r['selected']) or 'nothing'} | "
-            f"{value(friction.get('T_coulomb'))} | {value(friction.get('c_viscous'))} | {value(damping)} | "
-            f"{value(speed, 3)} | {held} |")
+    return (
+        f"| {name} | {r['records']['used']} | {r['verdict']} | {', '.join(r['selected']) or 'nothing'} | "
+        f"{value(friction.get('T_coulomb'))} | {value(friction.get('c_viscous'))} | {value(damping)} | "
+        f"{value(speed, 3)} | {held} |"
+    )
 
 
 def build() -> str:
     runs = [
         ("as shipped (encoder speed, ranges as uncertainty, roll rate)", _run("sbw_bicycle.toml")),
-        ("the bicycle at the treadmill's speed (calibration applied)", _run("sbw_bicycle.toml", calibration=CALIBRATION)),
+        (
+            "the bicycle at the treadmill's speed (calibration applied)",
+            _run("sbw_bicycle.toml", calibration=CALIBRATION),
+        ),
         ("the experimenter's SbwBenchmark.txt (borrowed inertias exact)", _run("SbwBenchmark.txt")),
         ("roll rate and steer angle fitted together", _run("sbw_bicycle.toml", fit=("roll_rate", "steer_angle"))),
     ]
@@ -80,8 +86,11 @@ def build() -> str:
     changed = [name for name, r in runs[1:] if r["selected"] != base["selected"]]
     lines += [
         "",
-        ("The selection is the same in every run." if not changed else
-         "The selection changes in: " + "; ".join(changed) + "."),
+        (
+            "The selection is the same in every run."
+            if not changed
+            else "The selection changes in: " + "; ".join(changed) + "."
+        ),
         "",
         "Reading the table:",
         "",

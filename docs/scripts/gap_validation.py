@@ -10,6 +10,7 @@ Run from the project root (takes several minutes)::
 
     .venv/bin/python docs/scripts/gap_validation.py
 """
+
 from __future__ import annotations
 
 import logging
@@ -60,7 +61,9 @@ def main() -> int:
     from bikerider.io.gap_model import load_model
 
     logging.basicConfig(level=logging.INFO, format="%(message)s")
-    model = load_model(BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt", BP / "riders/Jason/Parameters/JasonRigidBenchmark.txt")
+    model = load_model(
+        BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt", BP / "riders/Jason/Parameters/JasonRigidBenchmark.txt"
+    )
     start = time.perf_counter()
     suite = V.run_suite(model, V.FULL_CASES, V.FULL)
     elapsed = time.perf_counter() - start
@@ -126,33 +129,50 @@ def main() -> int:
         f"(goal: at most 1 of 10); rate {alarms / max(n_null, 1):.0%}.",
     ]
     if errors.size:
-        lines.append(f"* Error of the predicted shrinkage (predicted minus achieved on fresh data), {errors.size} cases "
-                     f"with a selection: mean {errors.mean():+.3f}, RMS {np.sqrt(np.mean(errors**2)):.3f}, "
-                     f"largest {errors[np.argmax(np.abs(errors))]:+.3f}.")
-    lines += [f"* {len(suite.cases)} cases in {elapsed:.0f} s (data generation, diagnosis and fresh test data).", "",
-              "#### Confusion matrix", "",
-              "Rows: hidden truth; columns: the first-ranked effect when the verdict is structural, otherwise the "
-              "verdict.", "", "| truth | " + " | ".join(cols) + " |", "|---|" + "---|" * len(cols)]
+        lines.append(
+            f"* Error of the predicted shrinkage (predicted minus achieved on fresh data), {errors.size} cases "
+            f"with a selection: mean {errors.mean():+.3f}, RMS {np.sqrt(np.mean(errors**2)):.3f}, "
+            f"largest {errors[np.argmax(np.abs(errors))]:+.3f}."
+        )
+    lines += [
+        f"* {len(suite.cases)} cases in {elapsed:.0f} s (data generation, diagnosis and fresh test data).",
+        "",
+        "#### Confusion matrix",
+        "",
+        "Rows: hidden truth; columns: the first-ranked effect when the verdict is structural, otherwise the verdict.",
+        "",
+        "| truth | " + " | ".join(cols) + " |",
+        "|---|" + "---|" * len(cols),
+    ]
     for i, r in enumerate(rows):
         lines.append(f"| {r} | " + " | ".join(str(x) if x else "." for x in table[i]) + " |")
     before = _before_selected()
-    lines += ["", "#### Every case", "",
-              "`selected before` is what the diagnosis selected at commit 780e89d (quoted below).", "",
-              "| truth | seed | measured | verdict | ranking (first three) | first's fitted values | tied with first | "
-              "selected | selected before | predicted shrink | achieved shrink | correct |",
-              "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    lines += [
+        "",
+        "#### Every case",
+        "",
+        "`selected before` is what the diagnosis selected at commit 780e89d (quoted below).",
+        "",
+        "| truth | seed | measured | verdict | ranking (first three) | first's fitted values | tied with first | "
+        "selected | selected before | predicted shrink | achieved shrink | correct |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
     for c in suite.cases:
         fitted = ", ".join(f"{k} {_fitted(v)}" for k, v in c.first_parameters.items()) or "-"
-        lines.append(f"| {c.truth} | {c.seed} | {c.n_measured} | {c.verdict} | {', '.join(c.ranking[:3])} | {fitted} | "
-                     f"{', '.join(c.ties_with_first) or '-'} | {', '.join(c.selected) or '-'} | "
-                     f"{before.get((c.truth, c.seed), '?')} | "
-                     f"{_f(c.predicted_shrink)} | {_f(c.actual_shrink)} | {'yes' if c.correct else '**no**'} |")
+        lines.append(
+            f"| {c.truth} | {c.seed} | {c.n_measured} | {c.verdict} | {', '.join(c.ranking[:3])} | {fitted} | "
+            f"{', '.join(c.ties_with_first) or '-'} | {', '.join(c.selected) or '-'} | "
+            f"{before.get((c.truth, c.seed), '?')} | "
+            f"{_f(c.predicted_shrink)} | {_f(c.actual_shrink)} | {'yes' if c.correct else '**no**'} |"
+        )
     misses = [c for c in suite.cases if not c.correct]
     lines += ["", "### Reading the results", ""]
     for c in misses:
         if c.hidden:
-            lines.append(f"* Miss: `{c.truth}` (seed {c.seed}) gave `{c.top}` first"
-                         + (f" and selected {', '.join(c.selected)}." if c.selected else " and selected nothing."))
+            lines.append(
+                f"* Miss: `{c.truth}` (seed {c.seed}) gave `{c.top}` first"
+                + (f" and selected {', '.join(c.selected)}." if c.selected else " and selected nothing.")
+            )
         else:
             lines.append(f"* False alarm: null case, seed {c.seed}, verdict {c.verdict}.")
     unselected = [c for c in suite.effect_cases if c.correct and not c.selected]
@@ -216,7 +236,7 @@ def _record_cases() -> list[str]:
         f"* speeds {', '.join(f'{v:g}' for v in P.speeds)} m/s (one group each), {P.per_speed} records per speed, "
         f"{P.duration[0]:g}-{P.duration[1]:g} s long at {P.rate:g} Hz (no time column), from a random post-push",
         "  state (roll rate 0.4-0.9 rad/s either way, steer rate up to 1 rad/s, steer angle up to 0.08 rad);",
-        f"* the control law of the SBW experiment, `sil` (T = 2 (6.5 - v) phid), at the *recorded* speed;",
+        "* the control law of the SBW experiment, `sil` (T = 2 (6.5 - v) phid), at the *recorded* speed;",
         f"* roll-rate noise {P.gyro_noise} rad/s, steer angle quantised to a 13-bit encoder, recorded speed with "
         f"{P.speed_noise} m/s noise per sample.",
         "",
@@ -241,9 +261,11 @@ def _record_cases() -> list[str]:
     for c in cases:
         fitted = ", ".join(f"{k} {_fitted(v)}" for k, v in c.first_parameters.items()) or "-"
         held = "-" if c.data_errors is None else f"{c.data_errors[0]:.2f} -> {c.data_errors[1]:.2f}"
-        lines.append(f"| {c.truth} | {c.seed} | {c.n_measured} | {c.verdict} | {', '.join(c.selected) or '-'} | "
-                     f"{fitted} | {held} | {_f(c.predicted_shrink)} | {_f(c.actual_shrink)} | "
-                     f"{'yes' if _found(c) else '**no**'} |")
+        lines.append(
+            f"| {c.truth} | {c.seed} | {c.n_measured} | {c.verdict} | {', '.join(c.selected) or '-'} | "
+            f"{fitted} | {held} | {_f(c.predicted_shrink)} | {_f(c.actual_shrink)} | "
+            f"{'yes' if _found(c) else '**no**'} |"
+        )
     extra = [c for c in cases if c.hidden and _found(c) and len(c.selected) > len(c.hidden)]
     lines += [
         "",
@@ -258,9 +280,15 @@ def _record_cases() -> list[str]:
     ]
     lines += [f"* {c.truth}, seed {c.seed}: {note}" for c in cases for note in c.notes] or ["* none"]
     if extra:
-        lines += ["", "Selections with more effects than the truth: " + "; ".join(
-            f"{c.truth} (seed {c.seed}) adds {', '.join(e for e in c.selected if not any(e in EQUIVALENT.get(h, (h,)) for h in c.hidden))}"
-            for c in extra) + " (see the fitted values: a partner near its neutral value changes little)."]
+        lines += [
+            "",
+            "Selections with more effects than the truth: "
+            + "; ".join(
+                f"{c.truth} (seed {c.seed}) adds {', '.join(e for e in c.selected if not any(e in EQUIVALENT.get(h, (h,)) for h in c.hidden))}"
+                for c in extra
+            )
+            + " (see the fitted values: a partner near its neutral value changes little).",
+        ]
     lines.append("")
     return lines
 

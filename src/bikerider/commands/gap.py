@@ -1,4 +1,5 @@
 """``bikerider gap``: where a bicycle's measurements depart from its model, and why."""
+
 from __future__ import annotations
 
 import argparse
@@ -19,36 +20,73 @@ def add_parser(subparsers) -> None:
             "effects remove. See docs/gap.md."
         ),
     )
-    p.add_argument("--model", metavar="FILE", required=True,
-                   help="benchmark parameters: a TOML file with the 25 benchmark names (values 'v +/- sigma'; "
-                        "optional [rider], [upper_body], [grips], [plausible] tables) or a BicycleParameters "
-                        "<Name>Benchmark.txt")
-    p.add_argument("--rider", metavar="FILE",
-                   help="BicycleParameters lumped rider (<Rider><Bike>Benchmark.txt) to add to the rear body")
-    p.add_argument("--rider-rel-sigma", metavar="X", type=float, default=0.0,
-                   help="relative standard uncertainty to give the rider's values when its file has none (default 0)")
-    p.add_argument("--data", metavar="FILE", nargs="+", default=[],
-                   help="data files (CSV): measured eigenvalues (speed, real, imag, ...), perturbation runs "
-                        "(time, roll_rate, ...) or identified canonical entries (rider, environment, coefficient, "
-                        "identified, sigma); the kind is detected from the header")
-    p.add_argument("--experiment", metavar="FILE", nargs="+", default=[],
-                   help="manifests of raw records: a TOML file (logs, column map, sampling rate, windows or "
-                        "detection, speed source, groups, control laws) or a CSV of windows (file, start, end "
-                        "[, group, control, speed]) with --columns and --sample-rate")
-    p.add_argument("--columns", metavar="MAP",
-                   help="for a CSV manifest: the logs' columns, e.g. roll_rate=lean_rate,steer_angle=fork_angle,speed=speed")
-    p.add_argument("--sample-rate", metavar="HZ", type=float,
-                   help="for a CSV manifest whose logs have no time column: samples per second")
-    p.add_argument("--control", metavar="FILE",
-                   help="TOML with the known control: [control] constant gains k_phi, k_phid, k_delta, k_deltad, or "
-                        "named laws [control.<name>] whose gains may change with speed; acts where the data name none")
-    p.add_argument("--speed", metavar="V", type=float,
-                   help="speed [m/s] of perturbation runs whose file gives none")
-    p.add_argument("--groups", metavar="G1,G2",
-                   help="keep only these rider-environment groups of identified canonical entries (e.g. J-H,J-P)")
-    p.add_argument("--effects", metavar="E1,E2",
-                   help="candidate effects (default: all of parameters, steer_damping, steer_inertia, steer_stiffness, "
-                        "passive_arms, rider_lean, tyre_slip, speed_sensor, steer_friction)")
+    p.add_argument(
+        "--model",
+        metavar="FILE",
+        required=True,
+        help="benchmark parameters: a TOML file with the 25 benchmark names (values 'v +/- sigma'; "
+        "optional [rider], [upper_body], [grips], [plausible] tables) or a BicycleParameters "
+        "<Name>Benchmark.txt",
+    )
+    p.add_argument(
+        "--rider",
+        metavar="FILE",
+        help="BicycleParameters lumped rider (<Rider><Bike>Benchmark.txt) to add to the rear body",
+    )
+    p.add_argument(
+        "--rider-rel-sigma",
+        metavar="X",
+        type=float,
+        default=0.0,
+        help="relative standard uncertainty to give the rider's values when its file has none (default 0)",
+    )
+    p.add_argument(
+        "--data",
+        metavar="FILE",
+        nargs="+",
+        default=[],
+        help="data files (CSV): measured eigenvalues (speed, real, imag, ...), perturbation runs "
+        "(time, roll_rate, ...) or identified canonical entries (rider, environment, coefficient, "
+        "identified, sigma); the kind is detected from the header",
+    )
+    p.add_argument(
+        "--experiment",
+        metavar="FILE",
+        nargs="+",
+        default=[],
+        help="manifests of raw records: a TOML file (logs, column map, sampling rate, windows or "
+        "detection, speed source, groups, control laws) or a CSV of windows (file, start, end "
+        "[, group, control, speed]) with --columns and --sample-rate",
+    )
+    p.add_argument(
+        "--columns",
+        metavar="MAP",
+        help="for a CSV manifest: the logs' columns, e.g. roll_rate=lean_rate,steer_angle=fork_angle,speed=speed",
+    )
+    p.add_argument(
+        "--sample-rate",
+        metavar="HZ",
+        type=float,
+        help="for a CSV manifest whose logs have no time column: samples per second",
+    )
+    p.add_argument(
+        "--control",
+        metavar="FILE",
+        help="TOML with the known control: [control] constant gains k_phi, k_phid, k_delta, k_deltad, or "
+        "named laws [control.<name>] whose gains may change with speed; acts where the data name none",
+    )
+    p.add_argument("--speed", metavar="V", type=float, help="speed [m/s] of perturbation runs whose file gives none")
+    p.add_argument(
+        "--groups",
+        metavar="G1,G2",
+        help="keep only these rider-environment groups of identified canonical entries (e.g. J-H,J-P)",
+    )
+    p.add_argument(
+        "--effects",
+        metavar="E1,E2",
+        help="candidate effects (default: all of parameters, steer_damping, steer_inertia, steer_stiffness, "
+        "passive_arms, rider_lean, tyre_slip, speed_sensor, steer_friction)",
+    )
     p.add_argument("--json", action="store_true", help="print one JSON object instead of text")
     p.add_argument("--report", metavar="DIR", help="write report.md and PNG figures into DIR")
     p.set_defaults(run=run)
@@ -66,11 +104,24 @@ def run(args: argparse.Namespace) -> int:
     if not (math.isfinite(args.rider_rel_sigma) and 0 <= args.rider_rel_sigma < 1):
         raise InputError("--rider-rel-sigma", args.rider_rel_sigma, "a relative uncertainty in [0, 1)")
     if not args.data and not args.experiment:
-        raise InputError("--data/--experiment", "missing", "data files (--data) or a manifest of records (--experiment)")
+        raise InputError(
+            "--data/--experiment", "missing", "data files (--data) or a manifest of records (--experiment)"
+        )
     if args.sample_rate is not None and not (math.isfinite(args.sample_rate) and args.sample_rate > 0):
         raise InputError("--sample-rate", args.sample_rate, "a positive sampling rate [Hz]")
-    diagnosis = _diagnose_files(args.model, tuple(args.data), tuple(args.experiment), args.rider, args.rider_rel_sigma,
-                                args.control, args.speed, args.groups, args.effects, args.columns, args.sample_rate)
+    diagnosis = _diagnose_files(
+        args.model,
+        tuple(args.data),
+        tuple(args.experiment),
+        args.rider,
+        args.rider_rel_sigma,
+        args.control,
+        args.speed,
+        args.groups,
+        args.effects,
+        args.columns,
+        args.sample_rate,
+    )
     result = diagnosis.as_dict()
     if args.report:
         from bikerider.io.gap_report import write_report
@@ -86,10 +137,20 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def diagnose_files(model: str, data: tuple[str, ...] = (), experiment: tuple[str, ...] = (), *, rider: str | None = None,
-                   rider_rel_sigma: float = 0.0, control: str | None = None, speed: float | None = None,
-                   groups: str | None = None, effects: str | None = None, columns: str | None = None,
-                   sample_rate: float | None = None):
+def diagnose_files(
+    model: str,
+    data: tuple[str, ...] = (),
+    experiment: tuple[str, ...] = (),
+    *,
+    rider: str | None = None,
+    rider_rel_sigma: float = 0.0,
+    control: str | None = None,
+    speed: float | None = None,
+    groups: str | None = None,
+    effects: str | None = None,
+    columns: str | None = None,
+    sample_rate: float | None = None,
+):
     """Read every input of a diagnosis from its files and run it (the command's work, without output).
 
     Arguments as the command's options (``groups`` and ``effects`` comma-separated).  The result is
@@ -99,10 +160,24 @@ def diagnose_files(model: str, data: tuple[str, ...] = (), experiment: tuple[str
     import os
 
     files = [model, rider, control, *data, *experiment]
-    stamp = tuple((str(f), os.stat(f).st_mtime_ns, os.stat(f).st_size) if f and os.path.isfile(f) else (str(f), None)
-                  for f in files)
-    return _cached(stamp, model, tuple(data), tuple(experiment), rider, rider_rel_sigma, control, speed, groups,
-                   effects, columns, sample_rate)
+    stamp = tuple(
+        (str(f), os.stat(f).st_mtime_ns, os.stat(f).st_size) if f and os.path.isfile(f) else (str(f), None)
+        for f in files
+    )
+    return _cached(
+        stamp,
+        model,
+        tuple(data),
+        tuple(experiment),
+        rider,
+        rider_rel_sigma,
+        control,
+        speed,
+        groups,
+        effects,
+        columns,
+        sample_rate,
+    )
 
 
 @functools.lru_cache(maxsize=2)
@@ -110,8 +185,9 @@ def _cached(stamp, *args):
     return _diagnose_files(*args)
 
 
-def _diagnose_files(model, data, experiment, rider, rider_rel_sigma, control, speed, groups, effects, columns,
-                    sample_rate):
+def _diagnose_files(
+    model, data, experiment, rider, rider_rel_sigma, control, speed, groups, effects, columns, sample_rate
+):
     from bikerider.gap.data import CanonicalData, EigenvalueData
     from bikerider.gap.diagnosis import diagnose
     from bikerider.gap.effects import EFFECT_NAMES, effect
@@ -141,8 +217,13 @@ def _diagnose_files(model, data, experiment, rider, rider_rel_sigma, control, sp
         candidates = tuple(e.strip() for e in effects.split(","))
         for name in candidates:
             effect(name)
-    return diagnose(loaded, EigenvalueData.concatenate(eigen), CanonicalData.concatenate(canonical), candidates,
-                    fit_records(records))
+    return diagnose(
+        loaded,
+        EigenvalueData.concatenate(eigen),
+        CanonicalData.concatenate(canonical),
+        candidates,
+        fit_records(records),
+    )
 
 
 def _plain(value, np):

@@ -21,6 +21,7 @@ The speed a law is evaluated at is the controller's own speed: for records, the 
 in the log (the controller reads the same sensor); for tables, the row's speed.  A law has a name,
 used in every table and figure legend.
 """
+
 from __future__ import annotations
 
 import math
@@ -56,18 +57,19 @@ class GainSchedule:
     """``(K, v0, side)`` for a ramp (unbounded on its side, so not held at an end point)."""
 
     @staticmethod
-    def constant(value: float, name: str = "gain", source: str | None = None) -> "GainSchedule":
+    def constant(value: float, name: str = "gain", source: str | None = None) -> GainSchedule:
         value = _finite(value, name, source)
         return GainSchedule((0.0,), (value,), f"{value:g}")
 
     @staticmethod
-    def piecewise(speeds, values, name: str = "gain", source: str | None = None) -> "GainSchedule":
+    def piecewise(speeds, values, name: str = "gain", source: str | None = None) -> GainSchedule:
         """Values at increasing speeds (at least two), linear in between, held beyond the ends."""
         if not isinstance(speeds, (list, tuple)) or not isinstance(values, (list, tuple)):
             raise InputError(name, {"speed": speeds, "gain": values}, "lists speed = [...] and gain = [...]", source)
         if len(speeds) != len(values) or len(speeds) < 2:
-            raise InputError(name, {"speed": speeds, "gain": values},
-                             "as many gains as speeds, at least two of each", source)
+            raise InputError(
+                name, {"speed": speeds, "gain": values}, "as many gains as speeds, at least two of each", source
+            )
         s = [_finite(x, f"{name}.speed", source) for x in speeds]
         g = [_finite(x, f"{name}.gain", source) for x in values]
         if any(b <= a for a, b in zip(s, s[1:])):
@@ -78,7 +80,7 @@ class GainSchedule:
         return GainSchedule(tuple(s), tuple(g), text)
 
     @staticmethod
-    def make_ramp(K, v0, side: str, name: str = "gain", source: str | None = None) -> "GainSchedule":
+    def make_ramp(K, v0, side: str, name: str = "gain", source: str | None = None) -> GainSchedule:
         """``K (v0 - v)`` for ``v < v0`` (``side = "below"``) or ``K (v - v0)`` for ``v > v0`` (``"above"``)."""
         K = _finite(K, f"{name}.K", source)
         v0 = _finite(v0, f"{name}.v0", source)
@@ -129,11 +131,15 @@ class ControlLaw:
             raise InputError("control law name", self.name, "a non-empty name", self.source or None)
         for key in self.gains:
             if key not in GAIN_NAMES:
-                raise InputError(f"control.{self.name}.{key}", "given", "one of the gains " + ", ".join(GAIN_NAMES),
-                                 self.source or None)
+                raise InputError(
+                    f"control.{self.name}.{key}",
+                    "given",
+                    "one of the gains " + ", ".join(GAIN_NAMES),
+                    self.source or None,
+                )
 
     @staticmethod
-    def constant(gains, name: str | None = None) -> "ControlLaw":
+    def constant(gains, name: str | None = None) -> ControlLaw:
         """A law of constant gains ``[k_phi, k_phid, k_delta, k_deltad]``, named by its gains unless named."""
         values = np.asarray(gains, dtype=float).reshape(-1)
         if values.size != 4 or not np.all(np.isfinite(values)):

@@ -4,6 +4,7 @@ The readers of the files these come from are in :mod:`bikerider.io.gap_data` (ta
 :mod:`bikerider.io.experiment` (raw records and the manifests that describe them); records become
 eigenvalue rows through :mod:`bikerider.gap.records`.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -14,8 +15,16 @@ from bikerider.errors import InputError
 from bikerider.gap.control import ControlLaw, constant_law_name
 
 MODES = ("weave", "capsize", "castor")
-CANONICAL_ENTRIES = ("M_phidelta", "C1_phidelta", "K0_phidelta", "M_deltadelta", "C1_deltaphi",
-                     "C1_deltadelta", "K0_deltadelta", "K2_deltadelta")
+CANONICAL_ENTRIES = (
+    "M_phidelta",
+    "C1_phidelta",
+    "K0_phidelta",
+    "M_deltadelta",
+    "C1_deltaphi",
+    "C1_deltadelta",
+    "K0_deltadelta",
+    "K2_deltadelta",
+)
 """The canonical-matrix entries an identification may report (Moore 2012's free entries)."""
 SIGMA_SOURCES = ("stated", "record", "none")
 """Where a row's standard uncertainty comes from: the file states it, the fit of the row's own record
@@ -75,8 +84,10 @@ class EigenvalueData:
             for g, name in zip(self.gains, self.law):
                 self.laws.setdefault(name, ControlLaw.constant(g, name))
         if not self.sigma_source:
-            self.sigma_source = ["stated" if np.isfinite(r) and np.isfinite(i) else "none"
-                                 for r, i in zip(np.atleast_1d(self.real_sigma), np.atleast_1d(self.imag_sigma))]
+            self.sigma_source = [
+                "stated" if np.isfinite(r) and np.isfinite(i) else "none"
+                for r, i in zip(np.atleast_1d(self.real_sigma), np.atleast_1d(self.imag_sigma))
+            ]
         missing = sorted(set(self.law) - set(self.laws))
         if missing:
             raise InputError("control law", missing[0], "a law defined for the data (" + ", ".join(self.laws) + ")")
@@ -85,12 +96,13 @@ class EigenvalueData:
         return int(self.speed.size)
 
     @staticmethod
-    def empty() -> "EigenvalueData":
-        return EigenvalueData(np.empty(0), np.empty(0, complex), np.empty(0), np.empty(0), np.empty(0), [], [],
-                              np.empty((0, 4)), [])
+    def empty() -> EigenvalueData:
+        return EigenvalueData(
+            np.empty(0), np.empty(0, complex), np.empty(0), np.empty(0), np.empty(0), [], [], np.empty((0, 4)), []
+        )
 
     @staticmethod
-    def concatenate(parts: list["EigenvalueData"]) -> "EigenvalueData":
+    def concatenate(parts: list[EigenvalueData]) -> EigenvalueData:
         parts = [p for p in parts if len(p)]
         if not parts:
             return EigenvalueData.empty()
@@ -101,22 +113,39 @@ class EigenvalueData:
                     raise InputError("control law", name, "one definition of each law name across the data")
                 laws[name] = law
         return EigenvalueData(
-            np.concatenate([p.speed for p in parts]), np.concatenate([p.value for p in parts]),
-            np.concatenate([p.real_sigma for p in parts]), np.concatenate([p.imag_sigma for p in parts]),
-            np.concatenate([p.speed_sigma for p in parts]), sum((p.mode for p in parts), []),
-            sum((p.group for p in parts), []), np.concatenate([p.gains for p in parts]),
-            sum((p.source for p in parts), []), sum((p.law for p in parts), []), laws,
-            sum((p.sigma_source for p in parts), []), np.concatenate([p.speed_sensor for p in parts]),
+            np.concatenate([p.speed for p in parts]),
+            np.concatenate([p.value for p in parts]),
+            np.concatenate([p.real_sigma for p in parts]),
+            np.concatenate([p.imag_sigma for p in parts]),
+            np.concatenate([p.speed_sigma for p in parts]),
+            sum((p.mode for p in parts), []),
+            sum((p.group for p in parts), []),
+            np.concatenate([p.gains for p in parts]),
+            sum((p.source for p in parts), []),
+            sum((p.law for p in parts), []),
+            laws,
+            sum((p.sigma_source for p in parts), []),
+            np.concatenate([p.speed_sensor for p in parts]),
         )
 
-    def subset(self, rows) -> "EigenvalueData":
+    def subset(self, rows) -> EigenvalueData:
         """The rows ``rows`` (indices or a boolean mask)."""
         idx = np.arange(len(self))[rows]
-        return EigenvalueData(self.speed[idx], self.value[idx], self.real_sigma[idx], self.imag_sigma[idx],
-                              self.speed_sigma[idx], [self.mode[i] for i in idx], [self.group[i] for i in idx],
-                              self.gains[idx], [self.source[i] for i in idx], [self.law[i] for i in idx],
-                              {k: v for k, v in self.laws.items() if k in {self.law[i] for i in idx}},
-                              [self.sigma_source[i] for i in idx], self.speed_sensor[idx])
+        return EigenvalueData(
+            self.speed[idx],
+            self.value[idx],
+            self.real_sigma[idx],
+            self.imag_sigma[idx],
+            self.speed_sigma[idx],
+            [self.mode[i] for i in idx],
+            [self.group[i] for i in idx],
+            self.gains[idx],
+            [self.source[i] for i in idx],
+            [self.law[i] for i in idx],
+            {k: v for k, v in self.laws.items() if k in {self.law[i] for i in idx}},
+            [self.sigma_source[i] for i in idx],
+            self.speed_sensor[idx],
+        )
 
 
 @dataclass
@@ -134,11 +163,11 @@ class CanonicalData:
         return len(self.entry)
 
     @staticmethod
-    def empty() -> "CanonicalData":
+    def empty() -> CanonicalData:
         return CanonicalData([], np.empty(0), np.empty(0), [], {}, [])
 
     @staticmethod
-    def concatenate(parts: list["CanonicalData"]) -> "CanonicalData":
+    def concatenate(parts: list[CanonicalData]) -> CanonicalData:
         out = CanonicalData.empty()
         for p in parts:
             out.entry += p.entry
@@ -148,7 +177,9 @@ class CanonicalData:
             out.sigma = np.concatenate([out.sigma, p.sigma])
             for g, r in p.speed_range.items():
                 if g in out.speed_range and out.speed_range[g] != r:
-                    raise InputError(f"speed range of group {g}", r, f"the same range in every file ({out.speed_range[g]})")
+                    raise InputError(
+                        f"speed range of group {g}", r, f"the same range in every file ({out.speed_range[g]})"
+                    )
                 out.speed_range[g] = r
         return out
 
@@ -158,7 +189,7 @@ def entry_name(raw: str) -> str | None:
     raw = raw.strip()
     for prefix in ("C1", "K0", "K2", "M"):
         if raw.startswith(prefix):
-            rest = raw[len(prefix):].lstrip("_")
+            rest = raw[len(prefix) :].lstrip("_")
             name = f"{prefix}_{rest}"
             return name if name in CANONICAL_ENTRIES else None
     return None

@@ -46,6 +46,7 @@ How far.  For the selection, the held-out error before and after per fold and ov
 fraction of the gap above the noise floor removed: with ``G = mean(z^2) - 1`` (the noise floor of
 normalised residuals is ``E[z^2] = 1``), ``shrink = (G_before - G_after) / G_before``.
 """
+
 from __future__ import annotations
 
 import logging
@@ -57,8 +58,14 @@ import numpy as np
 
 from bikerider.errors import InputError
 from bikerider.gap.data import CanonicalData, EigenvalueData
-from bikerider.gap.effects import (COULOMB_RANGE, EFFECT_NAMES, EFFECTS, LITERATURE_EXTRA, OBSERVATION_EFFECTS,
-                                   TIME_DOMAIN_EFFECTS)
+from bikerider.gap.effects import (
+    COULOMB_RANGE,
+    EFFECT_NAMES,
+    EFFECTS,
+    LITERATURE_EXTRA,
+    OBSERVATION_EFFECTS,
+    TIME_DOMAIN_EFFECTS,
+)
 from bikerider.gap.fit import EffectFit, GapProblem
 from bikerider.gap.model_input import GapModelInput
 from bikerider.gap.records import RecordFit, eigenvalues_of
@@ -178,12 +185,18 @@ class Diagnosis:
         When no observation remains (every record left out): too few records for a diagnosis.
     """
 
-    def __init__(self, model: GapModelInput, eigen: EigenvalueData, canonical: CanonicalData,
-                 effects=EFFECT_NAMES, records: list[RecordFit] | None = None):
+    def __init__(
+        self,
+        model: GapModelInput,
+        eigen: EigenvalueData,
+        canonical: CanonicalData,
+        effects=EFFECT_NAMES,
+        records: list[RecordFit] | None = None,
+    ):
         start = time.perf_counter()
         self.model_input = model
         self.records = [replace(f) for f in records or []]  # copies: records left out here get their reason
-        self.record_rows: dict[int, int] = {}   # index in self.records -> eigenvalue row
+        self.record_rows: dict[int, int] = {}  # index in self.records -> eigenvalue row
         self._time_domain_full: dict[tuple[str, ...], EffectFit] = {}
         self.bias = np.zeros(0, complex)
         eigen = self._with_records(model, eigen)
@@ -192,8 +205,11 @@ class Diagnosis:
                 raise InputError("data", "empty", "at least one measured eigenvalue or identified entry")
             left = [f for f in self.records if not f.used]
             reasons = "; ".join(f"{f.record.name}: {f.reason}" for f in left[:3]) + (" ..." if len(left) > 3 else "")
-            raise InputError("data", f"{len(left)} of {len(self.records)} records left out",
-                             f"enough records for a diagnosis: none could be used ({reasons})")
+            raise InputError(
+                "data",
+                f"{len(left)} of {len(self.records)} records left out",
+                f"enough records for a diagnosis: none could be used ({reasons})",
+            )
         self.problem = GapProblem(model, eigen, canonical)
         self.effects = [e for e in effects]
         self.not_applicable = {}
@@ -201,11 +217,15 @@ class Diagnosis:
             if EFFECTS[e].needs_rider and model.geometry.upper_body is None:
                 self.not_applicable[e] = "needs a rider on the bicycle (the model has none)"
             elif e in OBSERVATION_EFFECTS and not np.any(eigen.speed_sensor):
-                self.not_applicable[e] = ("needs records whose speed a sensor read during the test (a speed column); "
-                                          "the speeds given are taken as the speeds the bicycle ran at")
+                self.not_applicable[e] = (
+                    "needs records whose speed a sensor read during the test (a speed column); "
+                    "the speeds given are taken as the speeds the bicycle ran at"
+                )
             elif EFFECTS[e].needs_records and not self._time_domain_ready():
-                self.not_applicable[e] = ("fitted in the time domain: needs every eigenvalue to come from a record "
-                                          "(uniformly sampled) and records in at least two groups")
+                self.not_applicable[e] = (
+                    "fitted in the time domain: needs every eigenvalue to come from a record "
+                    "(uniformly sampled) and records in at least two groups"
+                )
         if not self.problem.free and "parameters" in self.effects:
             self.not_applicable["parameters"] = "the model file gives no parameter uncertainties"
         self.candidates = [e for e in self.effects if e not in self.not_applicable]
@@ -243,7 +263,8 @@ class Diagnosis:
         rows = eigenvalues_of(self.records)
         nominal = {k: float(model.parameters.values[k]) for k in BENCH_ARGS + ("g",)}  # type: ignore[arg-type]
         matched = Predictor(rows, CanonicalData.empty(), nominal, model.geometry).eigenvalues(
-            EffectModel(nominal, model.geometry))
+            EffectModel(nominal, model.geometry)
+        )
         bias, reasons = extraction_bias(self.records, nominal, model.geometry, matched)
         keep = []
         for j, k in enumerate(used):
@@ -302,8 +323,9 @@ class Diagnosis:
             k += n
         return out
 
-    def _time_domain_fit(self, effects: tuple[str, ...], mask: np.ndarray | None, start=None,
-                         jackknife: bool = True) -> EffectFit:
+    def _time_domain_fit(
+        self, effects: tuple[str, ...], mask: np.ndarray | None, start=None, jackknife: bool = True
+    ) -> EffectFit:
         """A time-domain candidate (steer friction, alone or with one linear effect) fitted to the records
         in ``mask`` (:func:`bikerider.gap.timedomain.fit_time_domain`).
 
@@ -321,8 +343,9 @@ class Diagnosis:
             values, cost, n, success = cached.values, cached.chi2, cached.n, cached.success
         else:
             records = [self.records[k] for k in self._record_indices(mask)]
-            fit = fit_time_domain([f.record for f in records], self.problem.nominal, self.problem.geometry, layout,
-                                  start=start)
+            fit = fit_time_domain(
+                [f.record for f in records], self.problem.nominal, self.problem.geometry, layout, start=start
+            )
             values, cost, n, success = fit.values, fit.cost, fit.n_samples, fit.success
         stderr = np.full(values.size, np.inf)
         if mask is None and jackknife and len(self.folds) >= 3:  # jackknife over the held-out folds' fits
@@ -335,8 +358,24 @@ class Diagnosis:
         for (effect, param), value in zip(layout.names, values):
             config.setdefault(effect, {})[param] = float(value)
         units = [next(p.unit for p in EFFECTS[e].parameters if p.name == n) for e, n in layout.names]
-        out = EffectFit(effects, [n for _, n in layout.names], units, values, stderr, ci_low, ci_high, config, {},
-                        cost, 0.0, n, success, "time-domain fit", lower, upper)
+        out = EffectFit(
+            effects,
+            [n for _, n in layout.names],
+            units,
+            values,
+            stderr,
+            ci_low,
+            ci_high,
+            config,
+            {},
+            cost,
+            0.0,
+            n,
+            success,
+            "time-domain fit",
+            lower,
+            upper,
+        )
         if mask is None:
             self._time_domain_full[effects] = out
         return out
@@ -348,8 +387,9 @@ class Diagnosis:
         idx = self._record_indices(mask)
         pred = np.full(len(self.problem.obs), np.nan)
         layout = Layout.of(fit.effects)
-        apparent, _ = apparent_eigenvalues([self.records[k] for k in idx], self.problem.nominal, self.problem.geometry,
-                                           layout, fit.values)
+        apparent, _ = apparent_eigenvalues(
+            [self.records[k] for k in idx], self.problem.nominal, self.problem.geometry, layout, fit.values
+        )
         obs_row = self._obs_rows()
         rows = list(self.record_rows)
         for j, k in enumerate(idx):
@@ -405,8 +445,11 @@ class Diagnosis:
                 band_key = (float(band[0]), float(band[-1]))
             else:
                 band_key = tuple(float(x) for x in self.problem.predictor.canonical.speed_range[obs.group[i]])
-            key = (obs.mode[i], band_key, obs.quantity[i]) if obs.kind[i] == "eigenvalue" else (
-                "canonical", band_key, f"{obs.quantity[i]} ({obs.group[i]})")
+            key = (
+                (obs.mode[i], band_key, obs.quantity[i])
+                if obs.kind[i] == "eigenvalue"
+                else ("canonical", band_key, f"{obs.quantity[i]} ({obs.group[i]})")
+            )
             keys.append(key)
         unique = list(dict.fromkeys(keys))
         for key in unique:
@@ -414,17 +457,25 @@ class Diagnosis:
             zz = z[idx]
             stat = float(np.sum(zz**2))
             pval = float(chi2.sf(stat, len(idx)))
-            cells.append({
-                "mode": key[0], "speed_band": list(key[1]), "quantity": key[2], "n": len(idx),
-                "mean_residual": float(np.mean(p.y[idx] - p.baseline[idx])),
-                "mean_measured": float(np.mean(p.y[idx])), "mean_predicted": float(np.mean(p.baseline[idx])),
-                "combined_sigma": float(np.sqrt(np.mean(p.var_total[idx]))),
-                "data_sigma": float(np.sqrt(np.mean(p.var_data[idx]))),
-                "model_sigma": float(np.sqrt(np.mean(p.var_model[idx]))),
-                "rms_z": rms(zz), "chi2": stat, "p_value": pval,
-                "significant": bool(pval < ALPHA / max(len(unique), 1)),
-                **_data_only_cell(p, idx, ALPHA / max(len(unique), 1)),
-            })
+            cells.append(
+                {
+                    "mode": key[0],
+                    "speed_band": list(key[1]),
+                    "quantity": key[2],
+                    "n": len(idx),
+                    "mean_residual": float(np.mean(p.y[idx] - p.baseline[idx])),
+                    "mean_measured": float(np.mean(p.y[idx])),
+                    "mean_predicted": float(np.mean(p.baseline[idx])),
+                    "combined_sigma": float(np.sqrt(np.mean(p.var_total[idx]))),
+                    "data_sigma": float(np.sqrt(np.mean(p.var_data[idx]))),
+                    "model_sigma": float(np.sqrt(np.mean(p.var_model[idx]))),
+                    "rms_z": rms(zz),
+                    "chi2": stat,
+                    "p_value": pval,
+                    "significant": bool(pval < ALPHA / max(len(unique), 1)),
+                    **_data_only_cell(p, idx, ALPHA / max(len(unique), 1)),
+                }
+            )
         return cells
 
     def _gap_test(self) -> dict:
@@ -438,12 +489,23 @@ class Diagnosis:
         if np.all(p.var_data > 0):
             data_stat = float(np.sum(r**2 / p.var_data))
         else:  # rows taken as exact: any residual is a gap against the data alone
-            data_stat = math.inf if np.any(r[p.var_data <= 0] != 0) else float(np.sum(r[p.var_data > 0] ** 2
-                                                                                      / p.var_data[p.var_data > 0]))
-        return {"chi2": stat, "dof": n, "p_value": float(chi2.sf(stat, n)),
-                "rms_z": rms(-p.z(p.baseline)), "significant": bool(chi2.sf(stat, n) < ALPHA),
-                "data_only": {"chi2": data_stat, "p_value": float(chi2.sf(data_stat, n)),
-                              "significant": bool(chi2.sf(data_stat, n) < ALPHA)}}
+            data_stat = (
+                math.inf
+                if np.any(r[p.var_data <= 0] != 0)
+                else float(np.sum(r[p.var_data > 0] ** 2 / p.var_data[p.var_data > 0]))
+            )
+        return {
+            "chi2": stat,
+            "dof": n,
+            "p_value": float(chi2.sf(stat, n)),
+            "rms_z": rms(-p.z(p.baseline)),
+            "significant": bool(chi2.sf(stat, n) < ALPHA),
+            "data_only": {
+                "chi2": data_stat,
+                "p_value": float(chi2.sf(data_stat, n)),
+                "significant": bool(chi2.sf(data_stat, n) < ALPHA),
+            },
+        }
 
     # -- whether ----------------------------------------------------------------------------------
     def _verdict(self) -> str:
@@ -452,8 +514,13 @@ class Diagnosis:
         fit = self.parameter_fit
         if fit is not None:
             stat = fit.chi2 + fit.prior_chi2
-            self.parameter_test = {"chi2": stat, "dof": fit.n, "p_value": float(chi2.sf(stat, fit.n)),
-                                   "prior_chi2": fit.prior_chi2, "prior_dof": len(self.problem.free)}
+            self.parameter_test = {
+                "chi2": stat,
+                "dof": fit.n,
+                "p_value": float(chi2.sf(stat, fit.n)),
+                "prior_chi2": fit.prior_chi2,
+                "prior_dof": len(self.problem.free),
+            }
         if not self.gap_test["significant"]:
             # within the combined uncertainty: no gap at all, or one the parameters' uncertainty covers
             return "parameters" if self.gap_test["data_only"]["significant"] and self.problem.free else "none"
@@ -491,16 +558,29 @@ class Diagnosis:
             z_fold = p.z(pred)[held]
             # a model that cannot be evaluated (singular) predicts nothing: count it as far off
             z_after[held] = np.where(np.isfinite(z_fold), z_fold, UNPREDICTED_Z)
-            entry = {"fold": name, "n": int(held.sum()), "error_before": rms(z_before[held]),
-                     "error_after": rms(z_after[held]), "fitted": _named_values(fit)}
+            entry = {
+                "fold": name,
+                "n": int(held.sum()),
+                "error_before": rms(z_before[held]),
+                "error_after": rms(z_after[held]),
+                "fitted": _named_values(fit),
+            }
             if np.all(p.var_data[held] > 0):
                 scale = np.sqrt(p.var_total[held] / p.var_data[held])
                 entry["data_error_before"] = rms(z_before[held] * scale)
                 entry["data_error_after"] = rms(z_after[held] * scale)
             folds.append(entry)
         held_any = np.any([h for _, h in self.folds], axis=0)
-        result = CrossValidation(effects, folds, z_before[held_any], z_after[held_any], rms(z_before[held_any]),
-                                 rms(z_after[held_any]), gap_shrink(z_before[held_any], z_after[held_any]), fits)
+        result = CrossValidation(
+            effects,
+            folds,
+            z_before[held_any],
+            z_after[held_any],
+            rms(z_before[held_any]),
+            rms(z_after[held_any]),
+            gap_shrink(z_before[held_any], z_after[held_any]),
+            fits,
+        )
         data_sigma = np.sqrt(p.var_data)[held_any]
         if np.all(data_sigma > 0):
             scale = np.sqrt(p.var_total)[held_any] / data_sigma
@@ -515,7 +595,7 @@ class Diagnosis:
         ordered: list[CrossValidation] = list(results)
         ties: dict[tuple, list[str]] = {r.effects: [] for r in results}
         for i, a in enumerate(results):
-            for b in results[i + 1:]:
+            for b in results[i + 1 :]:
                 better, _ = significantly_better(a.z_after, b.z_after)
                 if not better:
                     ties[a.effects].append("+".join(b.effects))
@@ -526,7 +606,9 @@ class Diagnosis:
             changed = False
             for i in range(len(ordered) - 1):
                 a, b = ordered[i], ordered[i + 1]
-                if "+".join(b.effects) in ties[a.effects] and _n_params(self.problem, b.effects) < _n_params(self.problem, a.effects):
+                if "+".join(b.effects) in ties[a.effects] and _n_params(self.problem, b.effects) < _n_params(
+                    self.problem, a.effects
+                ):
                     ordered[i], ordered[i + 1] = b, a
                     changed = True
         return [(r, ties[r.effects]) for r in ordered]
@@ -534,10 +616,20 @@ class Diagnosis:
     def _rank(self) -> None:
         results = [self.cross_validate((e,)) for e in self.candidates]
         for rank, (r, ties) in enumerate(self._order(results), start=1):
-            self.ranking.append({"rank": rank, "effect": r.effects[0], "heldout_error_before": r.error_before,
-                                 "heldout_error_after": r.error_after, "shrink": r.shrink, "tied_with": ties,
-                                 "folds": r.folds, "data_error_before": r.data_before, "data_error_after": r.data_after,
-                                 "data_shrink": r.data_shrink})
+            self.ranking.append(
+                {
+                    "rank": rank,
+                    "effect": r.effects[0],
+                    "heldout_error_before": r.error_before,
+                    "heldout_error_after": r.error_after,
+                    "shrink": r.shrink,
+                    "tied_with": ties,
+                    "folds": r.folds,
+                    "data_error_before": r.data_before,
+                    "data_error_after": r.data_after,
+                    "data_shrink": r.data_shrink,
+                }
+            )
 
     def pair_candidates(self) -> list[tuple[str, str]]:
         """Pairs searched on the held-out folds (module docstring): any two linear candidates that each,
@@ -545,12 +637,17 @@ class Diagnosis:
         friction (in the time domain) with each such one of :data:`TIME_DOMAIN_PARTNERS`."""
         import itertools
 
-        helpful = [e for e in self.candidates if (e,) in self.cv and self.cv[(e,)].error_after < self.cv[(e,)].error_before]
+        helpful = [
+            e for e in self.candidates if (e,) in self.cv and self.cv[(e,)].error_after < self.cv[(e,)].error_before
+        ]
         linear = [e for e in helpful if e not in TIME_DOMAIN_EFFECTS]
         pairs = [tuple(sorted(pair, key=EFFECT_NAMES.index)) for pair in itertools.combinations(linear, 2)]
         if "steer_friction" in helpful:
-            pairs += [tuple(sorted((e, "steer_friction"), key=EFFECT_NAMES.index)) for e in TIME_DOMAIN_PARTNERS
-                      if e in helpful]
+            pairs += [
+                tuple(sorted((e, "steer_friction"), key=EFFECT_NAMES.index))
+                for e in TIME_DOMAIN_PARTNERS
+                if e in helpful
+            ]
         return pairs
 
     def _search_pairs(self) -> None:
@@ -572,12 +669,16 @@ class Diagnosis:
                     self.selected = ["parameters"]
                     self.selection = {"rule": "plausible parameter errors explain the gap"}
                     return
-                parameters_note = ("the gap lies within the parameters' uncertainty, but the parameter fit needs "
-                                   "implausible shifts (" + "; ".join(_implausible_reasons(checks)) + "): the candidates "
-                                   "are compared as for a structural gap")
+                parameters_note = (
+                    "the gap lies within the parameters' uncertainty, but the parameter fit needs "
+                    "implausible shifts (" + "; ".join(_implausible_reasons(checks)) + "): the candidates "
+                    "are compared as for a structural gap"
+                )
             else:
-                parameters_note = ("the gap lies within the parameters' uncertainty (parameters are not a candidate): "
-                                   "the candidates are compared as for a structural gap")
+                parameters_note = (
+                    "the gap lies within the parameters' uncertainty (parameters are not a candidate): "
+                    "the candidates are compared as for a structural gap"
+                )
         if len(self.folds) < 2:
             self.selection = {"rule": "fewer than two folds: no held-out comparison, nothing selected"}
             return
@@ -590,21 +691,36 @@ class Diagnosis:
         for r in singles:
             ok, checks = self.plausibility(self.fit_of(r.effects))
             better, pval = significantly_better(r.z_after, z_nominal)
-            considered.append({"effects": list(r.effects), "heldout_error": r.error_after, "plausible": ok,
-                               "beats_nominal": better, "p_value": pval})
+            considered.append(
+                {
+                    "effects": list(r.effects),
+                    "heldout_error": r.error_after,
+                    "plausible": ok,
+                    "beats_nominal": better,
+                    "p_value": pval,
+                }
+            )
             if ok and better and best_single is None:
                 best_single = r
         chosen = best_single
         reference = best_single.z_after if best_single is not None else z_nominal
         best_pair = None
         # a pair only where the single leaves a gap above the noise floor (Occam: nothing left to explain)
-        left = None if best_single is None else (best_single.data_after if best_single.data_after is not None
-                                                  else best_single.error_after)
+        left = (
+            None
+            if best_single is None
+            else (best_single.data_after if best_single.data_after is not None else best_single.error_after)
+        )
         pairs = [] if left is not None and left <= 1.0 else getattr(self, "pairs", [])
         for r in sorted(pairs, key=lambda r: r.error_after):
             better, pval = significantly_better(r.z_after, reference)
-            entry = {"effects": list(r.effects), "heldout_error": r.error_after, "plausible": None,
-                     "beats_single" if best_single is not None else "beats_nominal": better, "p_value": pval}
+            entry = {
+                "effects": list(r.effects),
+                "heldout_error": r.error_after,
+                "plausible": None,
+                "beats_single" if best_single is not None else "beats_nominal": better,
+                "p_value": pval,
+            }
             considered.append(entry)
             if not better or best_pair is not None:
                 continue
@@ -614,8 +730,10 @@ class Diagnosis:
                 best_pair = r
         if best_pair is not None:
             chosen = best_pair
-        rule = ("the best plausible single candidate that beats the nominal model on held-out folds, or a plausible "
-                "pair that beats that single; never one that a better, implausible fit beats significantly")
+        rule = (
+            "the best plausible single candidate that beats the nominal model on held-out folds, or a plausible "
+            "pair that beats that single; never one that a better, implausible fit beats significantly"
+        )
         # the best held-out fit overall, and the best single one: when implausible, say so
         every = singles + list(getattr(self, "pairs", []))
         for pool, key in ((every, "best_implausible"), (singles, "best_single_implausible")):
@@ -623,20 +741,36 @@ class Diagnosis:
             if best is not None and (chosen is None or best.effects != chosen.effects):
                 ok, checks = self.plausibility(self.fit_of(best.effects))
                 if not ok:
-                    setattr(self, key, {"effects": list(best.effects), "heldout_error": best.error_after,
-                                        "why": _implausible_reasons(checks)})
+                    setattr(
+                        self,
+                        key,
+                        {
+                            "effects": list(best.effects),
+                            "heldout_error": best.error_after,
+                            "why": _implausible_reasons(checks),
+                        },
+                    )
         if self.best_single_implausible == self.best_implausible:
             self.best_single_implausible = None
         # ... and select nothing that an implausible fit of no more fitted parameters beats significantly
         if chosen is not None:
             size = _n_params(self.problem, chosen.effects)
-            rivals = [r for r in every if _n_params(self.problem, r.effects) <= size and r.effects != chosen.effects
-                      and r.error_after < chosen.error_after]
+            rivals = [
+                r
+                for r in every
+                if _n_params(self.problem, r.effects) <= size
+                and r.effects != chosen.effects
+                and r.error_after < chosen.error_after
+            ]
             for r in sorted(rivals, key=lambda r: r.error_after):
                 ok, checks = self.plausibility(self.fit_of(r.effects))
                 if not ok and significantly_better(r.z_after, chosen.z_after)[0]:
-                    self.best_implausible = {"effects": list(r.effects), "heldout_error": r.error_after,
-                                             "why": _implausible_reasons(checks), "instead_of": list(chosen.effects)}
+                    self.best_implausible = {
+                        "effects": list(r.effects),
+                        "heldout_error": r.error_after,
+                        "why": _implausible_reasons(checks),
+                        "instead_of": list(chosen.effects),
+                    }
                     chosen = None
                     break
         self.selected = list(chosen.effects) if chosen is not None else []
@@ -658,7 +792,9 @@ class Diagnosis:
             if "steer_rate" in r.signals and np.all(np.isfinite(r.signals["steer_rate"])):
                 x = r.signals["steer_rate"]
                 amplitudes.append(math.sqrt(2) * float(np.std(x)))
-            elif "steer_angle" in r.signals and np.all(np.isfinite(r.signals["steer_angle"])) and f.estimate is not None:
+            elif (
+                "steer_angle" in r.signals and np.all(np.isfinite(r.signals["steer_angle"])) and f.estimate is not None
+            ):
                 x = r.signals["steer_angle"]
                 amplitudes.append(math.sqrt(2) * float(np.std(x)) * abs(f.estimate.eigenvalue))
         return float(np.median(amplitudes)) if amplitudes else None
@@ -673,9 +809,15 @@ class Diagnosis:
             amplitude = self.steer_rate_amplitude()
             if amplitude is not None and amplitude > 0:
                 extra = 4 * COULOMB_RANGE[1] / (math.pi * amplitude)
-                return lo, hi + extra, (f"{param.source}; above it, the linear equivalent 4 T / (pi A) of Coulomb "
-                                        f"friction T up to {COULOMB_RANGE[1]:g} N m at the records' steer-rate "
-                                        f"amplitude A = {amplitude:.3g} rad/s adds up to {extra:.3g} N m s/rad")
+                return (
+                    lo,
+                    hi + extra,
+                    (
+                        f"{param.source}; above it, the linear equivalent 4 T / (pi A) of Coulomb "
+                        f"friction T up to {COULOMB_RANGE[1]:g} N m at the records' steer-rate "
+                        f"amplitude A = {amplitude:.3g} rad/s adds up to {extra:.3g} N m s/rad"
+                    ),
+                )
         return lo, hi, param.source
 
     def plausibility(self, fit: EffectFit) -> tuple[bool, list[dict]]:
@@ -690,9 +832,16 @@ class Diagnosis:
             good = fit.prior_chi2 <= limit
             shifted = [n for n in fit.names if n.startswith("parameters.")]
             at = sorted(n.split(".", 1)[1] for n in shifted if n in pinned)
-            checks.append({"name": "sum of squared shifts / sigma^2", "value": fit.prior_chi2,
-                           "literature": [0.0, limit], "plausible": bool(good and not at),
-                           "at_bound": at, "source": "the parameters' stated uncertainties (chi-square at 1 %)"})
+            checks.append(
+                {
+                    "name": "sum of squared shifts / sigma^2",
+                    "value": fit.prior_chi2,
+                    "literature": [0.0, limit],
+                    "plausible": bool(good and not at),
+                    "at_bound": at,
+                    "source": "the parameters' stated uncertainties (chi-square at 1 %)",
+                }
+            )
             ok = ok and bool(good) and not at
         for k, name in enumerate(fit.names):
             if name.startswith("parameters."):
@@ -713,11 +862,21 @@ class Diagnosis:
                 value, rng, shown = float(fit.values[k]), [lo, hi], name
                 determined = math.isfinite(fit.stderr[k]) and fit.stderr[k] <= UNDETERMINED * max(hi - lo, 1e-12)
             good = bool(reach and determined and not at_bound)
-            checks.append({"name": shown, "value": value, "unit": unit, "literature": rng, "plausible": good,
-                           "in_range": bool(reach), "determined": bool(determined), "at_bound": bool(at_bound),
-                           "bounds": [float(fit.lower[k]), float(fit.upper[k])], "ci95": [float(fit.ci_low[k]),
-                                                                                         float(fit.ci_high[k])],
-                           "source": source})
+            checks.append(
+                {
+                    "name": shown,
+                    "value": value,
+                    "unit": unit,
+                    "literature": rng,
+                    "plausible": good,
+                    "in_range": bool(reach),
+                    "determined": bool(determined),
+                    "at_bound": bool(at_bound),
+                    "bounds": [float(fit.lower[k]), float(fit.upper[k])],
+                    "ci95": [float(fit.ci_low[k]), float(fit.ci_high[k])],
+                    "source": source,
+                }
+            )
             ok = ok and good
         return ok, checks
 
@@ -729,19 +888,33 @@ class Diagnosis:
         for entry in self.ranking:
             fit = self.fit_of((entry["effect"],))
             plausible, checks = self.plausibility(fit)
-            ranking.append({**{k: entry[k] for k in ("rank", "effect")},
-                            "parameters": _named_values(fit),
-                            "heldout_error_before": entry["heldout_error_before"],
-                            "heldout_error_after": entry["heldout_error_after"],
-                            "shrink": entry["shrink"], "plausible": plausible, "plausibility": checks,
-                            "tied_with": entry["tied_with"], "n_parameters": len(fit.names),
-                            "data_error_before": entry["data_error_before"], "data_error_after": entry["data_error_after"],
-                            "data_shrink": entry["data_shrink"], "folds": entry["folds"]})
+            ranking.append(
+                {
+                    **{k: entry[k] for k in ("rank", "effect")},
+                    "parameters": _named_values(fit),
+                    "heldout_error_before": entry["heldout_error_before"],
+                    "heldout_error_after": entry["heldout_error_after"],
+                    "shrink": entry["shrink"],
+                    "plausible": plausible,
+                    "plausibility": checks,
+                    "tied_with": entry["tied_with"],
+                    "n_parameters": len(fit.names),
+                    "data_error_before": entry["data_error_before"],
+                    "data_error_after": entry["data_error_after"],
+                    "data_shrink": entry["data_shrink"],
+                    "folds": entry["folds"],
+                }
+            )
         pairs = []
         for r in sorted(getattr(self, "pairs", []), key=lambda r: r.error_after):
-            entry = {"effects": list(r.effects), "heldout_error_before": r.error_before,
-                     "heldout_error_after": r.error_after, "shrink": r.shrink, "data_error_after": r.data_after,
-                     "data_shrink": r.data_shrink}
+            entry = {
+                "effects": list(r.effects),
+                "heldout_error_before": r.error_before,
+                "heldout_error_after": r.error_after,
+                "shrink": r.shrink,
+                "data_error_after": r.data_after,
+                "data_shrink": r.data_shrink,
+            }
             fit = self.fit_of(r.effects)
             ok, checks = self.plausibility(fit)
             entry.update({"plausible": ok, "parameters": _named_values(fit), "plausibility": checks})
@@ -764,38 +937,52 @@ class Diagnosis:
             "noise": p.noise,
             "uncertainty": self._uncertainty_summary(),
             "laws": {name: law.describe() for name, law in p.eigen.laws.items()},
-            "notes": list(p.notes) + ([] if len(self.folds) >= 2 else
-                                      ["fewer than two folds (groups or speeds): no held-out ranking"]),
-            "model": {"source": p.model_input.source, "geometry": p.geometry.notes,
-                      "uncertain_parameters": p.free},
+            "notes": list(p.notes)
+            + ([] if len(self.folds) >= 2 else ["fewer than two folds (groups or speeds): no held-out ranking"]),
+            "model": {"source": p.model_input.source, "geometry": p.geometry.notes, "uncertain_parameters": p.free},
             "elapsed_s": self.elapsed,
         }
         if self.parameter_fit is not None:
             fit = self.parameter_fit
             plausible, checks = self.plausibility(fit)
-            out["parameter_fit"] = {"shift": fit.shift, "shift_in_sigma": dict(zip(p.free, map(float, fit.values))),
-                                    "test": getattr(self, "parameter_test", None), "plausible": plausible,
-                                    "at_bound": checks[0]["at_bound"]}
+            out["parameter_fit"] = {
+                "shift": fit.shift,
+                "shift_in_sigma": dict(zip(p.free, map(float, fit.values))),
+                "test": getattr(self, "parameter_test", None),
+                "plausible": plausible,
+                "at_bound": checks[0]["at_bound"],
+            }
         if self.selected and len(self.folds) >= 2:
             cv = self.cross_validate(tuple(self.selected))
             fit = self.selected_fit
-            out["how_far"] = {"effects": list(self.selected), "folds": cv.folds,
-                              "heldout_error_before": cv.error_before, "heldout_error_after": cv.error_after,
-                              "shrink": cv.shrink, "data_error_before": cv.data_before,
-                              "data_error_after": cv.data_after, "data_shrink": cv.data_shrink,
-                              "parameters": _named_values(fit) if fit else {}}
+            out["how_far"] = {
+                "effects": list(self.selected),
+                "folds": cv.folds,
+                "heldout_error_before": cv.error_before,
+                "heldout_error_after": cv.error_after,
+                "shrink": cv.shrink,
+                "data_error_before": cv.data_before,
+                "data_error_after": cv.data_after,
+                "data_shrink": cv.data_shrink,
+                "parameters": _named_values(fit) if fit else {},
+            }
         return out
 
     def _uncertainty_summary(self) -> dict:
         """Typical data and parameter standard uncertainties, and the parameters contributing most."""
         p = self.problem
-        out = {"data": float(np.median(np.sqrt(p.var_data))) if len(p.obs) else None,
-               "parameters": float(np.median(np.sqrt(p.var_model))) if len(p.obs) else None, "largest": []}
+        out = {
+            "data": float(np.median(np.sqrt(p.var_data))) if len(p.obs) else None,
+            "parameters": float(np.median(np.sqrt(p.var_model))) if len(p.obs) else None,
+            "largest": [],
+        }
         if p.free:
             contribution = np.sqrt(np.mean(p.jacobian**2, axis=0))
             order = np.argsort(-contribution)[:5]
-            out["largest"] = [{"parameter": p.free[k], "sigma": float(p.free_sigma[k]), "rms_effect": float(contribution[k])}
-                              for k in order]
+            out["largest"] = [
+                {"parameter": p.free[k], "sigma": float(p.free_sigma[k]), "rms_effect": float(contribution[k])}
+                for k in order
+            ]
         return out
 
     def _records_summary(self) -> dict | None:
@@ -810,9 +997,13 @@ class Diagnosis:
                 entry["bias"] = [float(b.real), float(b.imag)]
             out.append(entry)
         used = sum(1 for e in out if e["used"])
-        return {"total": len(out), "used": used, "left_out": len(out) - used,
-                "reasons": [{"record": e["record"], "reason": e["reason"]} for e in out if not e["used"]],
-                "list": out}
+        return {
+            "total": len(out),
+            "used": used,
+            "left_out": len(out) - used,
+            "reasons": [{"record": e["record"], "reason": e["reason"]} for e in out if not e["used"]],
+            "list": out,
+        }
 
 
 def _n_params(problem: GapProblem, effects: tuple[str, ...]) -> int:
@@ -825,8 +1016,10 @@ def _n_params(problem: GapProblem, effects: tuple[str, ...]) -> int:
 def _named_values(fit: EffectFit | None) -> dict:
     if fit is None:
         return {}
-    return {name: {"value": float(v), "stderr": float(s), "ci95": [float(lo), float(hi)], "unit": u}
-            for name, v, s, lo, hi, u in zip(fit.names, fit.values, fit.stderr, fit.ci_low, fit.ci_high, fit.units)}
+    return {
+        name: {"value": float(v), "stderr": float(s), "ci95": [float(lo), float(hi)], "unit": u}
+        for name, v, s, lo, hi, u in zip(fit.names, fit.values, fit.stderr, fit.ci_low, fit.ci_high, fit.units)
+    }
 
 
 def arm_inertia(problem: GapProblem, m_arm: float) -> float:
@@ -867,7 +1060,9 @@ def _implausible_reasons(checks: list[dict]) -> list[str]:
         if name.startswith("sum of squared shifts"):
             parts = []
             if c["value"] > c["literature"][1]:
-                parts.append(f"parameter shifts of chi-square {c['value']:.3g} (the prior allows {c['literature'][1]:.3g})")
+                parts.append(
+                    f"parameter shifts of chi-square {c['value']:.3g} (the prior allows {c['literature'][1]:.3g})"
+                )
             if c.get("at_bound"):
                 parts.append("shifts pinned at a bound: " + ", ".join(c["at_bound"]))
             out.append("; ".join(parts))
@@ -876,16 +1071,25 @@ def _implausible_reasons(checks: list[dict]) -> list[str]:
         if c.get("at_bound"):
             out.append(f"{name} = {c['value']:.3g} {unit} at its search bound {c['bounds']}")
         elif not c.get("determined", True):
-            out.append(f"{name} = {c['value']:.3g} {unit} not determined by the data (95 % interval "
-                       f"[{c['ci95'][0]:.3g}, {c['ci95'][1]:.3g}])")
+            out.append(
+                f"{name} = {c['value']:.3g} {unit} not determined by the data (95 % interval "
+                f"[{c['ci95'][0]:.3g}, {c['ci95'][1]:.3g}])"
+            )
         else:
-            out.append(f"{name} = {c['value']:.3g} {unit} outside the plausible {c['literature'][0]:g}-"
-                       f"{c['literature'][1]:.3g} {unit}")
+            out.append(
+                f"{name} = {c['value']:.3g} {unit} outside the plausible {c['literature'][0]:g}-"
+                f"{c['literature'][1]:.3g} {unit}"
+            )
     return out
 
 
-def diagnose(model: GapModelInput, eigen: EigenvalueData | None = None, canonical: CanonicalData | None = None,
-             effects=EFFECT_NAMES, records: list[RecordFit] | None = None) -> Diagnosis:
+def diagnose(
+    model: GapModelInput,
+    eigen: EigenvalueData | None = None,
+    canonical: CanonicalData | None = None,
+    effects=EFFECT_NAMES,
+    records: list[RecordFit] | None = None,
+) -> Diagnosis:
     """Run the diagnosis (see the module docstring)."""
     eigen = eigen if eigen is not None else EigenvalueData.empty()
     canonical = canonical if canonical is not None else CanonicalData.empty()

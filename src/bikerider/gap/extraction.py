@@ -29,6 +29,7 @@ Every refusal is a :class:`~bikerider.errors.FitError` whose message says why; t
 experiment turn it into the record's reason for being left out (:mod:`bikerider.gap.records`).
 :func:`refit_like` fits a model's own response over a record the way the record was fitted.
 """
+
 from __future__ import annotations
 
 import math
@@ -113,10 +114,10 @@ def _scan_start(t: np.ndarray, y: np.ndarray) -> np.ndarray:
     three one-dimensional families of basis functions.
     """
     tau = t - t[0]
-    decay = np.exp(-SCAN_DECAYS[:, None] * tau)                  # (D, n)
+    decay = np.exp(-SCAN_DECAYS[:, None] * tau)  # (D, n)
     sin, cos = np.sin(SCAN_OMEGAS[:, None] * tau), np.cos(SCAN_OMEGAS[:, None] * tau)  # (W, n)
-    extra = np.exp(np.asarray(SCAN_MODES)[:, None] * tau)         # (L, n)
-    osc_s = decay[None, :, :] * sin[:, None, :]                   # (W, D, n)
+    extra = np.exp(np.asarray(SCAN_MODES)[:, None] * tau)  # (L, n)
+    osc_s = decay[None, :, :] * sin[:, None, :]  # (W, D, n)
     osc_c = decay[None, :, :] * cos[:, None, :]
     W, D, L, n = SCAN_OMEGAS.size, SCAN_DECAYS.size, len(SCAN_MODES), tau.size
     basis = np.empty((W, D, L, 4, n))
@@ -157,8 +158,17 @@ def _two_mode_jacobian(p: np.ndarray, tau: np.ndarray) -> np.ndarray:
     decay = np.exp(-sigma * tau)
     s, co = np.sin(omega * tau), np.cos(omega * tau)
     grow = np.exp(lam * tau)
-    return np.column_stack([decay * tau * (a * co - b * s), -tau * decay * (a * s + b * co), decay * s, decay * co,
-                            np.ones_like(tau), grow, c * tau * grow])
+    return np.column_stack(
+        [
+            decay * tau * (a * co - b * s),
+            -tau * decay * (a * s + b * co),
+            decay * s,
+            decay * co,
+            np.ones_like(tau),
+            grow,
+            c * tau * grow,
+        ]
+    )
 
 
 MIN_CYCLES = 0.5
@@ -228,15 +238,21 @@ def _weave_eigenvalue(time, signal, min_cycles: float) -> WeaveEstimate:
     n = t.size
     starts = [start]
     if base is not None:
-        starts += [np.array([base.omega_d, base.sigma, base.A, base.B, base.offset, 0.0, lam0])
-                   for lam0 in PLAIN_START_MODES]
+        starts += [
+            np.array([base.omega_d, base.sigma, base.A, base.B, base.offset, 0.0, lam0]) for lam0 in PLAIN_START_MODES
+        ]
     total = float(np.sum((y - np.mean(y)) ** 2))
     best = None
     for p0 in starts:
         try:
             with np.errstate(all="ignore"):
-                res = least_squares(lambda p: _two_mode(p, tau) - y, p0, jac=lambda p: _two_mode_jacobian(p, tau),
-                                    method="lm", max_nfev=200)
+                res = least_squares(
+                    lambda p: _two_mode(p, tau) - y,
+                    p0,
+                    jac=lambda p: _two_mode_jacobian(p, tau),
+                    method="lm",
+                    max_nfev=200,
+                )
         except (ValueError, np.linalg.LinAlgError):
             continue
         if np.all(np.isfinite(res.x)) and np.isfinite(res.cost) and (best is None or res.cost < best.cost):
@@ -244,19 +260,36 @@ def _weave_eigenvalue(time, signal, min_cycles: float) -> WeaveEstimate:
     plain = None
     if base is not None:
         k = _correlation_inflation(base.evaluate(t) - y)
-        plain = WeaveEstimate(base.eigenvalue, k * base.sigma_se, k * base.omega_d_se, None, base.residual_rms,
-                              r2=1 - n * base.residual_rms**2 / total if total > 0 else math.nan,
-                              cycles=base.omega_d * tau[-1] / (2 * math.pi), kind="plain",
-                              params=(base.omega_d, base.sigma, base.offset, base.A, base.B, base.drift or 0.0),
-                              t0=float(t[0]))
+        plain = WeaveEstimate(
+            base.eigenvalue,
+            k * base.sigma_se,
+            k * base.omega_d_se,
+            None,
+            base.residual_rms,
+            r2=1 - n * base.residual_rms**2 / total if total > 0 else math.nan,
+            cycles=base.omega_d * tau[-1] / (2 * math.pi),
+            kind="plain",
+            params=(base.omega_d, base.sigma, base.offset, base.A, base.B, base.drift or 0.0),
+            t0=float(t[0]),
+        )
     two, why = _accept_two_mode(best, n, tau, total, min_cycles)
     if two is None:
         if plain is None:
             raise FitError(why or str(refusal))
         return _checked(plain)
     estimate, rss = two
-    estimate = WeaveEstimate(estimate.eigenvalue, estimate.real_sigma, estimate.imag_sigma, estimate.extra_mode,
-                             estimate.residual_rms, estimate.r2, estimate.cycles, "two-mode", estimate.params, float(t[0]))
+    estimate = WeaveEstimate(
+        estimate.eigenvalue,
+        estimate.real_sigma,
+        estimate.imag_sigma,
+        estimate.extra_mode,
+        estimate.residual_rms,
+        estimate.r2,
+        estimate.cycles,
+        "two-mode",
+        estimate.params,
+        float(t[0]),
+    )
     if plain is None:
         return _checked(estimate)
     rss_base = base.residual_rms**2 * n
@@ -290,24 +323,50 @@ def refit_like(time, signal, like: WeaveEstimate, min_cycles: float = MIN_CYCLES
     with np.errstate(all="ignore"):
         if like.kind == "two-mode" and t.size > 7 and np.all(np.isfinite(y)):
             try:
-                res = least_squares(lambda p: _two_mode(p, tau) - y, np.asarray(like.params, dtype=float),
-                                    jac=lambda p: _two_mode_jacobian(p, tau), method="lm", max_nfev=200)
+                res = least_squares(
+                    lambda p: _two_mode(p, tau) - y,
+                    np.asarray(like.params, dtype=float),
+                    jac=lambda p: _two_mode_jacobian(p, tau),
+                    method="lm",
+                    max_nfev=200,
+                )
                 two, _ = _accept_two_mode(res, t.size, tau, total, min_cycles)
                 if two is not None:
                     e = two[0]
-                    return _checked(WeaveEstimate(e.eigenvalue, e.real_sigma, e.imag_sigma, e.extra_mode,
-                                                  e.residual_rms, e.r2, e.cycles, "two-mode", e.params, float(t[0])))
+                    return _checked(
+                        WeaveEstimate(
+                            e.eigenvalue,
+                            e.real_sigma,
+                            e.imag_sigma,
+                            e.extra_mode,
+                            e.residual_rms,
+                            e.r2,
+                            e.cycles,
+                            "two-mode",
+                            e.params,
+                            float(t[0]),
+                        )
+                    )
             except (ValueError, np.linalg.LinAlgError):
                 pass
         elif like.kind == "plain":
             try:
                 base = fit_damped_oscillation(t, y, drift=True, guess_frequency=float(like.params[0]))
                 k = _correlation_inflation(base.evaluate(t) - y)
-                return _checked(WeaveEstimate(base.eigenvalue, k * base.sigma_se, k * base.omega_d_se, None,
-                                              base.residual_rms, 1 - t.size * base.residual_rms**2 / total,
-                                              base.omega_d * tau[-1] / (2 * math.pi), "plain",
-                                              (base.omega_d, base.sigma, base.offset, base.A, base.B, base.drift or 0.0),
-                                              float(t[0])))
+                return _checked(
+                    WeaveEstimate(
+                        base.eigenvalue,
+                        k * base.sigma_se,
+                        k * base.omega_d_se,
+                        None,
+                        base.residual_rms,
+                        1 - t.size * base.residual_rms**2 / total,
+                        base.omega_d * tau[-1] / (2 * math.pi),
+                        "plain",
+                        (base.omega_d, base.sigma, base.offset, base.A, base.B, base.drift or 0.0),
+                        float(t[0]),
+                    )
+                )
             except FitError:
                 pass
     return weave_eigenvalue(t, y, min_cycles=min_cycles)
@@ -317,8 +376,10 @@ def _checked(estimate: WeaveEstimate) -> WeaveEstimate:
     from bikerider.errors import FitError
 
     if not estimate.r2 >= MIN_R2:
-        raise FitError(f"poor fit: the damped oscillation explains r^2 = {estimate.r2:.2f} of the record "
-                       f"(need {MIN_R2:g}); the record holds something else (a disturbance, another perturbation)")
+        raise FitError(
+            f"poor fit: the damped oscillation explains r^2 = {estimate.r2:.2f} of the record "
+            f"(need {MIN_R2:g}); the record holds something else (a disturbance, another perturbation)"
+        )
     return estimate
 
 
@@ -331,8 +392,10 @@ def _accept_two_mode(res, n: int, tau: np.ndarray, total: float, min_cycles: flo
     if not (omega > 0 and abs(lam + sigma) > 0.05 * max(abs(sigma), 0.1) and c != 0):
         return None, "no oscillation found: the fitted modes are not a damped oscillation and a distinct real mode"
     if not EXTRA_MODE_RANGE[0] < lam < EXTRA_MODE_RANGE[1]:
-        return None, (f"no oscillation found: the extra real mode ({lam:.3g} 1/s) lies outside "
-                      f"{EXTRA_MODE_RANGE[0]:g} to {EXTRA_MODE_RANGE[1]:g} 1/s")
+        return None, (
+            f"no oscillation found: the extra real mode ({lam:.3g} 1/s) lies outside "
+            f"{EXTRA_MODE_RANGE[0]:g} to {EXTRA_MODE_RANGE[1]:g} 1/s"
+        )
     span = float(tau[-1] - tau[0])
     cycles = omega * span / (2 * math.pi)
     s2 = rss / (n - 7)
@@ -347,24 +410,44 @@ def _accept_two_mode(res, n: int, tau: np.ndarray, total: float, min_cycles: flo
         amp_se = math.sqrt(max(grad @ cov[2:4, 2:4] @ grad, 0.0))
     else:
         amp_se = math.inf
-    if not (amplitude > MIN_AMPLITUDE_SIGNIFICANCE * amp_se and real_sigma > 0 and imag_sigma > 0
-            and math.isfinite(real_sigma) and math.isfinite(imag_sigma)):
-        return None, (f"no oscillation found: the fitted amplitude {amplitude:.3g} is not "
-                      f"{MIN_AMPLITUDE_SIGNIFICANCE:g} times its standard error {amp_se:.3g}")
+    if not (
+        amplitude > MIN_AMPLITUDE_SIGNIFICANCE * amp_se
+        and real_sigma > 0
+        and imag_sigma > 0
+        and math.isfinite(real_sigma)
+        and math.isfinite(imag_sigma)
+    ):
+        return None, (
+            f"no oscillation found: the fitted amplitude {amplitude:.3g} is not "
+            f"{MIN_AMPLITUDE_SIGNIFICANCE:g} times its standard error {amp_se:.3g}"
+        )
     if cycles < min_cycles:
-        return None, (f"the record ({span:.3g} s) holds {cycles:.2f} cycles of the fitted oscillation; "
-                      f"need at least {min_cycles:g}")
+        return None, (
+            f"the record ({span:.3g} s) holds {cycles:.2f} cycles of the fitted oscillation; "
+            f"need at least {min_cycles:g}"
+        )
     if cycles < 1:
         significance, fraction = CLEAR_DECAY
         clear = sigma > significance * real_sigma and math.exp(-sigma * span) <= fraction
         if not clear:
-            return None, (f"the record ({span:.3g} s) holds {cycles:.2f} cycles and its decay is not clear "
-                          f"(decay rate {sigma:.3g} +/- {real_sigma:.2g} 1/s, envelope falls to "
-                          f"{math.exp(-sigma * span):.0%}); a record shorter than a cycle needs a decay rate "
-                          f"{significance:g} standard errors above zero and an envelope falling to "
-                          f"{fraction:.0%} or less")
+            return None, (
+                f"the record ({span:.3g} s) holds {cycles:.2f} cycles and its decay is not clear "
+                f"(decay rate {sigma:.3g} +/- {real_sigma:.2g} 1/s, envelope falls to "
+                f"{math.exp(-sigma * span):.0%}); a record shorter than a cycle needs a decay rate "
+                f"{significance:g} standard errors above zero and an envelope falling to "
+                f"{fraction:.0%} or less"
+            )
     k = _correlation_inflation(res.fun)
     r2 = 1 - rss / total if total > 0 else math.nan
-    estimate = WeaveEstimate(complex(-sigma, omega), k * real_sigma, k * imag_sigma, float(lam), math.sqrt(rss / n),
-                             r2=r2, cycles=cycles, kind="two-mode", params=tuple(float(x) for x in res.x))
+    estimate = WeaveEstimate(
+        complex(-sigma, omega),
+        k * real_sigma,
+        k * imag_sigma,
+        float(lam),
+        math.sqrt(rss / n),
+        r2=r2,
+        cycles=cycles,
+        kind="two-mode",
+        params=tuple(float(x) for x in res.x),
+    )
     return (estimate, rss), None

@@ -26,6 +26,7 @@ five standard deviations, and never to a non-positive mass, length, wheel radius
 inertia (:data:`POSITIVE`).  The ``speed_sensor`` candidate scales the speed the bicycle ran at
 (the control gains stay those of the recorded speed, which the controller used).
 """
+
 from __future__ import annotations
 
 import itertools
@@ -113,7 +114,7 @@ class _Layout:
     """How a fit's parameter vector maps onto effect parameters and benchmark shifts."""
 
     effects: tuple[str, ...]
-    structural: list[tuple[str, str]] = field(default_factory=list)   # (effect, parameter)
+    structural: list[tuple[str, str]] = field(default_factory=list)  # (effect, parameter)
     lower: list[float] = field(default_factory=list)
     upper: list[float] = field(default_factory=list)
     starts: list[tuple[float, ...]] = field(default_factory=list)
@@ -140,9 +141,14 @@ class GapProblem:
         self.nominal = {k: float(values[k]) for k in BENCH_ARGS + ("g",)}  # type: ignore[arg-type]
         self.free = [k for k in BENCH_ARGS if sigmas.get(k, 0.0) > 0]
         self.free_sigma = np.array([sigmas[k] for k in self.free])
-        self.shift_lower = np.array([max(-MAX_SHIFT, (0.01 * self.nominal[k] - self.nominal[k]) / s)
-                                     if k in POSITIVE and self.nominal[k] > 0 else -MAX_SHIFT
-                                     for k, s in zip(self.free, self.free_sigma)])
+        self.shift_lower = np.array(
+            [
+                max(-MAX_SHIFT, (0.01 * self.nominal[k] - self.nominal[k]) / s)
+                if k in POSITIVE and self.nominal[k] > 0
+                else -MAX_SHIFT
+                for k, s in zip(self.free, self.free_sigma)
+            ]
+        )
         self.shift_upper = np.full(len(self.free), MAX_SHIFT)
         self.eigen = eigen
         self.predictor = Predictor(eigen, canonical, self.nominal, self.geometry)
@@ -151,7 +157,7 @@ class GapProblem:
         self.baseline = self.predictor.predict(EffectModel(self.nominal, self.geometry))
         self.notes: list[str] = []
         self.noise: list[dict] = []
-        self.jacobian = self._parameter_jacobian()                 # (n_obs, n_free), per sigma
+        self.jacobian = self._parameter_jacobian()  # (n_obs, n_free), per sigma
         self.var_model = np.sum(self.jacobian**2, axis=1)
         self.var_speed = self._speed_variance(eigen)
         self.sigma_data = self.data_sigma()
@@ -160,9 +166,12 @@ class GapProblem:
         bad = np.flatnonzero(~(self.var_total > 0))
         if bad.size:
             k = int(bad[0])
-            raise InputError(f"uncertainty of {self.obs.source[k]} ({self.obs.mode[k]} {self.obs.quantity[k]})", 0.0,
-                             "a data or parameter uncertainty: give real_sigma/imag_sigma (or sigma) in the data, "
-                             "replicate rows, or parameter uncertainties in the model file")
+            raise InputError(
+                f"uncertainty of {self.obs.source[k]} ({self.obs.mode[k]} {self.obs.quantity[k]})",
+                0.0,
+                "a data or parameter uncertainty: give real_sigma/imag_sigma (or sigma) in the data, "
+                "replicate rows, or parameter uncertainties in the model file",
+            )
 
     # -- uncertainties -------------------------------------------------------------------------
     def _parameter_jacobian(self) -> np.ndarray:
@@ -223,11 +232,20 @@ class GapProblem:
                         if s > sigma[i]:
                             sigma[i] = s
                             raised += 1
-            self.noise.append({"rows": "record", "n": len(rec), "estimate": "record fit standard errors and replicate scatter",
-                               "replicates": scatter_used, "raised_by_replicates": raised})
-            self.notes.append(f"{len(rec)} record values: uncertainty the larger of the record's own fit standard error "
-                              f"and the scatter of its replicates (records of one group at one speed, at least "
-                              f"{MIN_REPLICATES}; {scatter_used} values had replicates, {raised} were raised by them)")
+            self.noise.append(
+                {
+                    "rows": "record",
+                    "n": len(rec),
+                    "estimate": "record fit standard errors and replicate scatter",
+                    "replicates": scatter_used,
+                    "raised_by_replicates": raised,
+                }
+            )
+            self.notes.append(
+                f"{len(rec)} record values: uncertainty the larger of the record's own fit standard error "
+                f"and the scatter of its replicates (records of one group at one speed, at least "
+                f"{MIN_REPLICATES}; {scatter_used} values had replicates, {raised} were raised by them)"
+            )
         # rows without any: the pooled scatter of replicate rows of the same mode and quantity
         none = [i for i in eig_rows if kind[i] == "none"]
         for key in sorted({(obs.mode[i], obs.quantity[i]) for i in none}):
@@ -241,16 +259,27 @@ class GapProblem:
             if dof >= 1:
                 estimate = math.sqrt(dev / dof)
                 sigma[idx] = estimate
-                self.noise.append({"rows": f"{key[0]} {key[1]}", "n": len(idx), "estimate": "pooled replicate scatter",
-                                   "value": estimate, "dof": dof})
-                self.notes.append(f"{key[0]} {key[1]}: no stated uncertainty; {estimate:.3g} 1/s from the pooled scatter "
-                                  f"of replicate rows (same group and speed; {dof} degrees of freedom)")
+                self.noise.append(
+                    {
+                        "rows": f"{key[0]} {key[1]}",
+                        "n": len(idx),
+                        "estimate": "pooled replicate scatter",
+                        "value": estimate,
+                        "dof": dof,
+                    }
+                )
+                self.notes.append(
+                    f"{key[0]} {key[1]}: no stated uncertainty; {estimate:.3g} 1/s from the pooled scatter "
+                    f"of replicate rows (same group and speed; {dof} degrees of freedom)"
+                )
             else:
                 sigma[idx] = 0.0
                 self.noise.append({"rows": f"{key[0]} {key[1]}", "n": len(idx), "estimate": "none"})
-                self.notes.append(f"{key[0]} {key[1]}: no stated uncertainty, no replicates and no records to estimate one "
-                                  "from; the rows are taken as exact and only the speed and parameter uncertainties count "
-                                  "(give real_sigma and imag_sigma, or the records)")
+                self.notes.append(
+                    f"{key[0]} {key[1]}: no stated uncertainty, no replicates and no records to estimate one "
+                    "from; the rows are taken as exact and only the speed and parameter uncertainties count "
+                    "(give real_sigma and imag_sigma, or the records)"
+                )
         stated = [i for i in range(len(obs)) if kind[i] == "stated"]
         if stated:
             self.noise.append({"rows": "stated", "n": len(stated), "estimate": "stated in the data"})
@@ -275,8 +304,9 @@ class GapProblem:
         cells: list[list[int]] = []
         keys = sorted({(obs.group[i], obs.mode[i], obs.quantity[i]) for i in rows})
         for key in keys:
-            members = sorted((i for i in rows if (obs.group[i], obs.mode[i], obs.quantity[i]) == key),
-                             key=lambda i: obs.speed[i])
+            members = sorted(
+                (i for i in rows if (obs.group[i], obs.mode[i], obs.quantity[i]) == key), key=lambda i: obs.speed[i]
+            )
             current: list[int] = []
             for i in members:
                 if current:
@@ -329,7 +359,7 @@ class GapProblem:
             if name == "speed_sensor":
                 scale = x[:, j]
             else:
-                config[name][param] = x[:, j:j + 1]
+                config[name][param] = x[:, j : j + 1]
         if lay.n_shift:
             values = self._values_batch(x[:, n_struct:] * self.free_sigma)
         else:
@@ -353,10 +383,13 @@ class GapProblem:
 
                     flat_values = {n: flat(v) for n, v in values.items()}
                     flat_config = {e: {n: flat(v) for n, v in p.items()} for e, p in config.items()}
-                    eigen_part = self.predictor.predict_scaled(EffectModel(flat_values, self.geometry, flat_config),
-                                                               np.asarray(scale, dtype=float))
+                    eigen_part = self.predictor.predict_scaled(
+                        EffectModel(flat_values, self.geometry, flat_config), np.asarray(scale, dtype=float)
+                    )
                     if len(self.predictor.canonical):
-                        rest = self.predictor.predict(EffectModel(values, self.geometry, config))[..., eigen_part.shape[-1]:]
+                        rest = self.predictor.predict(EffectModel(values, self.geometry, config))[
+                            ..., eigen_part.shape[-1] :
+                        ]
                         out = np.concatenate([eigen_part, np.broadcast_to(rest, (P, rest.shape[-1]))], axis=-1)
                     else:
                         out = eigen_part
@@ -377,7 +410,9 @@ class GapProblem:
         upper = np.array(lay.upper + (list(self.shift_upper) if lay.n_shift else []), dtype=float)
         return lower, upper
 
-    def fit(self, effects: tuple[str, ...], mask: np.ndarray | None = None, start: np.ndarray | None = None) -> EffectFit:
+    def fit(
+        self, effects: tuple[str, ...], mask: np.ndarray | None = None, start: np.ndarray | None = None
+    ) -> EffectFit:
         """Fit ``effects`` to the observations selected by ``mask`` (all by default).
 
         ``start`` (a parameter vector, e.g. the fit to all the data when fitting a fold) replaces
@@ -424,8 +459,18 @@ class GapProblem:
         def fun(x: np.ndarray) -> np.ndarray:
             return residuals_batch(x[None, :])[0]
 
-        result = least_squares(fun, x0, jac=jac, bounds=(lower, upper), x_scale=np.where(scale > 0, scale, 1.0) * 0.1,
-                               method="trf", max_nfev=50 * p, ftol=1e-6, xtol=1e-6, gtol=1e-8)
+        result = least_squares(
+            fun,
+            x0,
+            jac=jac,
+            bounds=(lower, upper),
+            x_scale=np.where(scale > 0, scale, 1.0) * 0.1,
+            method="trf",
+            max_nfev=50 * p,
+            ftol=1e-6,
+            xtol=1e-6,
+            gtol=1e-8,
+        )
         J = jac(result.x)
         dof = max(result.fun.size - p, 1)
         reduced = float(np.sum(result.fun**2)) / dof
@@ -438,13 +483,16 @@ class GapProblem:
             stderr = np.full(p, np.inf)
         return self._result(lay, result.x, stderr, result.fun, int(mask.sum()), bool(result.success), result.message)
 
-    def _result(self, lay: _Layout, x: np.ndarray, stderr: np.ndarray, r: np.ndarray, n: int, ok: bool,
-                message: str) -> EffectFit:
+    def _result(
+        self, lay: _Layout, x: np.ndarray, stderr: np.ndarray, r: np.ndarray, n: int, ok: bool, message: str
+    ) -> EffectFit:
         n_struct = len(lay.structural)
         names = [f"{param}" for _, param in lay.structural] + [f"parameters.{k}" for k in self.free][: lay.n_shift]
         units = list(lay.units) + ["sigma"] * lay.n_shift
         values, config, scale = self.configure(lay, x[None, :] if x.size else np.zeros((1, 0)))
-        config_out = {e: {k: float(np.asarray(v).ravel()[0]) for k, v in params.items()} for e, params in config.items()}
+        config_out = {
+            e: {k: float(np.asarray(v).ravel()[0]) for k, v in params.items()} for e, params in config.items()
+        }
         if scale is not None:
             config_out["speed_sensor"] = {"speed_scale": float(np.asarray(scale).ravel()[0])}
         shift = {}
@@ -456,8 +504,24 @@ class GapProblem:
         ci_high = np.clip(x + 1.96 * stderr, lo, hi) if x.size else x
         data_r = r[:n]
         prior = r[n:] if lay.n_shift else np.zeros(0)
-        return EffectFit(tuple(lay.effects), names, units, x, stderr, ci_low, ci_high, config_out, shift,
-                         float(np.sum(data_r**2)), float(np.sum(prior**2)), n, ok, str(message), lo, hi)
+        return EffectFit(
+            tuple(lay.effects),
+            names,
+            units,
+            x,
+            stderr,
+            ci_low,
+            ci_high,
+            config_out,
+            shift,
+            float(np.sum(data_r**2)),
+            float(np.sum(prior**2)),
+            n,
+            ok,
+            str(message),
+            lo,
+            hi,
+        )
 
     def predict_fit(self, fit: EffectFit) -> np.ndarray:
         """Predictions of every observation with a fitted set of effects."""

@@ -16,6 +16,7 @@ Default geometry, used when a file does not give it (documented approximations, 
 0.2 m above the rider's centre of mass, the hip axis 0.1 m below it; the grips sit at the
 handlebar-and-fork centre of mass, 0.29 m either side of the bicycle's plane.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -73,11 +74,18 @@ def default_geometry(parameters: BenchmarkParameters, rider: dict[str, float] | 
         m_u = UPPER_BODY_FRACTION * rider["mass"]
         kx, kz = UPPER_BODY_RADII
         upper = {
-            "m_u": m_u, "x_u": rider["x"], "z_u": rider["z"] - UPPER_BODY_RISE,
-            "IUxx": m_u * kx**2, "IUxz": 0.0, "IUzz": m_u * kz**2, "z_lean": rider["z"] + HIP_DROP,
+            "m_u": m_u,
+            "x_u": rider["x"],
+            "z_u": rider["z"] - UPPER_BODY_RISE,
+            "IUxx": m_u * kx**2,
+            "IUxz": 0.0,
+            "IUzz": m_u * kz**2,
+            "z_lean": rider["z"] + HIP_DROP,
         }
-        notes.append(f"upper body: {UPPER_BODY_FRACTION:.0%} of the rider's {rider['mass']:.1f} kg, "
-                     f"{UPPER_BODY_RISE} m above the rider's centre of mass, hip axis {HIP_DROP} m below it (default)")
+        notes.append(
+            f"upper body: {UPPER_BODY_FRACTION:.0%} of the rider's {rider['mass']:.1f} kg, "
+            f"{UPPER_BODY_RISE} m above the rider's centre of mass, hip axis {HIP_DROP} m below it (default)"
+        )
     else:
         notes.append("no rider: rider_lean and passive_arms do not apply")
     return RiderGeometry(upper, grips, "; ".join(notes))

@@ -17,6 +17,7 @@ steer), closes the loop in every model alike.
 Every parameter value may carry a leading batch shape (e.g. ``(P, 1)``) that broadcasts against
 the speeds, which is how the diagnosis evaluates many parameter sets in one call.
 """
+
 from __future__ import annotations
 
 import math
@@ -195,8 +196,7 @@ class EffectModel:
         if not self.lean and not self.tyre:
             A, B = gen.whipple_extended_state_matrices(**args, v=speeds)
             return StateSpace(A, B, (0, 1, 2, 3), ("phi", "delta", "phid", "deltad"))
-        lean_args = dict(args, **self._upper(),
-                         k_lean=self._extra("k_lean", 1.0), c_lean=self._extra("c_lean", 0.0))
+        lean_args = dict(args, **self._upper(), k_lean=self._extra("k_lean", 1.0), c_lean=self._extra("c_lean", 0.0))
         if not self.tyre:
             M, C, K = gen.rider_lean_matrices(**lean_args, v=speeds)
             n = 3
@@ -254,7 +254,7 @@ class EffectModel:
             else:
                 M, C, K = gen.whipple_extended_matrices(**args, v=speeds)
             s = (1j * omegas)[:, None, None]
-            Z = M[..., None, :, :] * s**2 + C[..., None, :, :] * s + K[..., None, :, :]   # (..., S, F, n, n)
+            Z = M[..., None, :, :] * s**2 + C[..., None, :, :] * s + K[..., None, :, :]  # (..., S, F, n, n)
             if not self.lean:
                 return Z
             # the upper body is free: D = Z_qq - Z_q,theta Z_theta,theta^-1 Z_theta,q
@@ -268,8 +268,9 @@ class EffectModel:
         G = resolvent_B[..., list(ss.outputs[:2]), :]
         return np.linalg.inv(G)
 
-    def simulate(self, speed: float, time, *, initial: Mapping[str, float] | None = None,
-                 gains=None) -> dict[str, np.ndarray]:
+    def simulate(
+        self, speed: float, time, *, initial: Mapping[str, float] | None = None, gains=None
+    ) -> dict[str, np.ndarray]:
         """Free response from an initial state (e.g. a roll-rate kick), exact for the linear model.
 
         Parameters

@@ -18,6 +18,7 @@ both count.  For a two-degree-of-freedom model the fit is exact at every frequen
 with more freedom it is an approximation of an identification with inputs spread evenly over the
 band (the real experiments' input spectra are not known here).
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -81,8 +82,9 @@ class Predictor:
     geometry : RiderGeometry
     """
 
-    def __init__(self, eigen: EigenvalueData, canonical: CanonicalData, nominal: dict[str, float],
-                 geometry: RiderGeometry):
+    def __init__(
+        self, eigen: EigenvalueData, canonical: CanonicalData, nominal: dict[str, float], geometry: RiderGeometry
+    ):
         self.eigen, self.canonical, self.nominal, self.geometry = eigen, canonical, dict(nominal), geometry
         self._reference = None
         if len(eigen):
@@ -118,15 +120,19 @@ class Predictor:
             kind.append("canonical"), mode.append("canonical"), quantity.append(c.entry[k])
             speed.append(0.5 * (lo + hi)), group.append(c.group[k]), value.append(c.value[k])
             sigma.append(c.sigma[k]), source.append(c.source[k])
-        return Observations(kind, mode, quantity, np.array(speed, float), group, np.array(value, float),
-                            np.array(sigma, float), source)
+        return Observations(
+            kind, mode, quantity, np.array(speed, float), group, np.array(value, float), np.array(sigma, float), source
+        )
 
     def _canonical_map(self, group: str) -> dict:
         """Linear map from the dynamic stiffness over the group's band to its identified entries."""
         lo, hi = self.canonical.speed_range[group]
         speeds = np.linspace(lo, hi, N_SPEEDS)
-        entries = [e for e in CANONICAL_ENTRIES if any(
-            en == e and g == group for en, g in zip(self.canonical.entry, self.canonical.group))]
+        entries = [
+            e
+            for e in CANONICAL_ENTRIES
+            if any(en == e and g == group for en, g in zip(self.canonical.entry, self.canonical.group))
+        ]
         g = self.nominal["g"]
         s = 1j * OMEGAS
         V, S = np.meshgrid(speeds, s, indexing="ij")  # (N, F)
@@ -143,8 +149,10 @@ class Predictor:
         }
         positions = [(0, 1), (1, 0), (1, 1)]
         nominal_D = EffectModel(self.nominal, self.geometry).dynamic_stiffness(speeds, OMEGAS)  # (N, F, 2, 2)
-        weights = {0: 1 / np.sqrt(np.mean(np.abs(nominal_D[..., 0, :]) ** 2)),
-                   1: 1 / np.sqrt(np.mean(np.abs(nominal_D[..., 1, :]) ** 2))}
+        weights = {
+            0: 1 / np.sqrt(np.mean(np.abs(nominal_D[..., 0, :]) ** 2)),
+            1: 1 / np.sqrt(np.mean(np.abs(nominal_D[..., 1, :]) ** 2)),
+        }
         columns = []
         for entry in entries:
             col = []
@@ -156,8 +164,15 @@ class Predictor:
         pinv = np.linalg.pinv(design_real)  # (m, 6 N F)
         row_weights = np.array([weights[p[0]] for p in positions])
         nominal_entries = _nominal_entries(self.nominal, entries)
-        return {"speeds": speeds, "entries": entries, "pinv": pinv, "positions": positions,
-                "row_weights": row_weights, "nominal_D": nominal_D, "nominal_entries": nominal_entries}
+        return {
+            "speeds": speeds,
+            "entries": entries,
+            "pinv": pinv,
+            "positions": positions,
+            "row_weights": row_weights,
+            "nominal_D": nominal_D,
+            "nominal_entries": nominal_entries,
+        }
 
     # -- prediction ------------------------------------------------------------------------------
     def predict(self, model: EffectModel, speed_scale=None) -> np.ndarray:
@@ -198,7 +213,7 @@ class Predictor:
         scale = 1e-9 * np.maximum(1.0, np.abs(ev).max(axis=-1, keepdims=True))
         upper = ev.imag > -scale
         oscillating = ev.imag > scale
-        ref_complex = (np.abs(ref.imag) > 1e-9 * np.maximum(1.0, np.abs(ref)))
+        ref_complex = np.abs(ref.imag) > 1e-9 * np.maximum(1.0, np.abs(ref))
         is_weave = np.array([m == "weave" for m in self.eigen.mode])
         want_complex = (is_weave & ref_complex)[:, None]
         allowed = np.where(want_complex, oscillating, upper)
@@ -224,8 +239,10 @@ class Predictor:
             cmap = self._canonical_maps[group]
             D = model.dynamic_stiffness(cmap["speeds"], OMEGAS)  # (..., N, F, 2, 2)
             delta = D - cmap["nominal_D"]
-            parts = [cmap["row_weights"][k] * delta[..., r, c].reshape(delta.shape[:-4] + (-1,))
-                     for k, (r, c) in enumerate(cmap["positions"])]
+            parts = [
+                cmap["row_weights"][k] * delta[..., r, c].reshape(delta.shape[:-4] + (-1,))
+                for k, (r, c) in enumerate(cmap["positions"])
+            ]
             stacked = np.concatenate(parts, axis=-1)
             stacked = np.concatenate([stacked.real, stacked.imag], axis=-1)
             theta = stacked @ cmap["pinv"].T + cmap["nominal_entries"]
@@ -236,8 +253,8 @@ class Predictor:
 
 
 def _nominal_entries(nominal: dict[str, float], entries: list[str]) -> np.ndarray:
-    from bikerider.generated import benchmark_model as bm
     from bikerider.gap.models import BENCH_ARGS
+    from bikerider.generated import benchmark_model as bm
 
     M, C1, K0, K2 = bm.canonical_matrices(**{k: nominal[k] for k in BENCH_ARGS})
     mats = {"M": M, "C1": C1, "K0": K0, "K2": K2}
@@ -246,6 +263,6 @@ def _nominal_entries(nominal: dict[str, float], entries: list[str]) -> np.ndarra
     for entry in entries:
         name, coords = entry.split("_")
         row = "phi" if coords.startswith("phi") else "delta"
-        col = coords[len(row):]
+        col = coords[len(row) :]
         out.append(mats[name][index[row], index[col]])
     return np.array(out)

@@ -15,6 +15,7 @@ r^2, the cycles it spans, standard errors.
 
 :func:`detect_windows` is the automatic alternative to an experimenter's list of windows.
 """
+
 from __future__ import annotations
 
 import logging
@@ -121,14 +122,32 @@ class RecordFit:
     def summary(self) -> dict:
         """Plain values for reports and JSON."""
         r = self.record
-        out = {"record": r.name, "source": r.source, "group": r.group, "law": r.law.name,
-               "speed": r.speed, "speed_sigma": r.speed_sigma, "controller_speed": r.controller_speed,
-               "duration": r.duration, "used": self.used, "reason": self.reason}
+        out = {
+            "record": r.name,
+            "source": r.source,
+            "group": r.group,
+            "law": r.law.name,
+            "speed": r.speed,
+            "speed_sigma": r.speed_sigma,
+            "controller_speed": r.controller_speed,
+            "duration": r.duration,
+            "used": self.used,
+            "reason": self.reason,
+        }
         if self.estimate is not None:
             e = self.estimate
-            out.update({"real": e.eigenvalue.real, "imag": e.eigenvalue.imag, "real_sigma": e.real_sigma,
-                        "imag_sigma": e.imag_sigma, "r2": e.r2, "cycles": e.cycles, "model": e.kind,
-                        "signals": list(self.fits)})
+            out.update(
+                {
+                    "real": e.eigenvalue.real,
+                    "imag": e.eigenvalue.imag,
+                    "real_sigma": e.real_sigma,
+                    "imag_sigma": e.imag_sigma,
+                    "r2": e.r2,
+                    "cycles": e.cycles,
+                    "model": e.kind,
+                    "signals": list(self.fits),
+                }
+            )
         return out
 
 
@@ -147,7 +166,9 @@ def fit_record(record: Record) -> RecordFit:
             reasons[name] = str(exc)
     if not fits:
         if not reasons:
-            return RecordFit(record, None, reason="none of the signals " + ", ".join(record.fit_signals) + " is in the record")
+            return RecordFit(
+                record, None, reason="none of the signals " + ", ".join(record.fit_signals) + " is in the record"
+            )
         return RecordFit(record, None, reason="; ".join(f"{k}: {v}" for k, v in reasons.items()))
     estimate, note = combine_fits(fits)
     out = RecordFit(record, estimate, fits)
@@ -184,12 +205,20 @@ def combine_fits(fits: dict[str, WeaveEstimate]) -> tuple[WeaveEstimate, str | N
         wr, wi = 1 / rs**2, 1 / is_**2
         real = float(np.sum(wr * [v.real for v in values]) / wr.sum())
         imag = float(np.sum(wi * [v.imag for v in values]) / wi.sum())
-        combined = WeaveEstimate(complex(real, imag), float(1 / math.sqrt(wr.sum())), float(1 / math.sqrt(wi.sum())),
-                                 first.extra_mode, first.residual_rms, first.r2, first.cycles, first.kind, first.params,
-                                 first.t0)
+        combined = WeaveEstimate(
+            complex(real, imag),
+            float(1 / math.sqrt(wr.sum())),
+            float(1 / math.sqrt(wi.sum())),
+            first.extra_mode,
+            first.residual_rms,
+            first.r2,
+            first.cycles,
+            first.kind,
+            first.params,
+            first.t0,
+        )
         return combined, None
-    return first, (f"{' and '.join(names)} fits disagree ({d_r:.1f}, {d_i:.1f} standard errors); "
-                   f"{names[0]} alone")
+    return first, (f"{' and '.join(names)} fits disagree ({d_r:.1f}, {d_i:.1f} standard errors); {names[0]} alone")
 
 
 def eigenvalues_of(fits: list[RecordFit]) -> EigenvalueData:
@@ -199,11 +228,20 @@ def eigenvalues_of(fits: list[RecordFit]) -> EigenvalueData:
         return EigenvalueData.empty()
     laws = {f.record.law.name: f.record.law for f in used}
     return EigenvalueData(
-        np.array([f.record.speed for f in used]), np.array([f.estimate.eigenvalue for f in used]),
-        np.array([f.estimate.real_sigma for f in used]), np.array([f.estimate.imag_sigma for f in used]),
-        np.array([f.record.speed_sigma for f in used]), ["weave"] * len(used), [f.record.group for f in used],
-        np.array([f.record.gains for f in used]), [f.record.name for f in used], [f.record.law.name for f in used],
-        laws, ["record"] * len(used), np.array([f.record.speed_measured for f in used], bool))
+        np.array([f.record.speed for f in used]),
+        np.array([f.estimate.eigenvalue for f in used]),
+        np.array([f.estimate.real_sigma for f in used]),
+        np.array([f.estimate.imag_sigma for f in used]),
+        np.array([f.record.speed_sigma for f in used]),
+        ["weave"] * len(used),
+        [f.record.group for f in used],
+        np.array([f.record.gains for f in used]),
+        [f.record.name for f in used],
+        [f.record.law.name for f in used],
+        laws,
+        ["record"] * len(used),
+        np.array([f.record.speed_measured for f in used], bool),
+    )
 
 
 # ---------------------------------------------------------------------------------------------

@@ -17,6 +17,7 @@ writes them with ``report.md`` into a folder:
 :func:`plot_effect` draws any effect model on its own (eigenvalues against speed and a time
 response) for users exploring a candidate.
 """
+
 from __future__ import annotations
 
 import math
@@ -52,8 +53,11 @@ def _num(x) -> str:
 
 
 def _values(params: dict) -> str:
-    return ", ".join(f"{k} = {v['value']:.3g} [{v['ci95'][0]:.3g}, {v['ci95'][1]:.3g}] {v['unit']}"
-                     for k, v in params.items() if not k.startswith("parameters."))
+    return ", ".join(
+        f"{k} = {v['value']:.3g} [{v['ci95'][0]:.3g}, {v['ci95'][1]:.3g}] {v['unit']}"
+        for k, v in params.items()
+        if not k.startswith("parameters.")
+    )
 
 
 # ---------------------------------------------------------------------------------------------
@@ -64,18 +68,23 @@ def summary_text(result: dict) -> str:
     lines = []
     test = result["gap"]["test"]
     lines.append(f"Verdict: {result['verdict']}")
-    lines.append(f"Gap: chi2 = {test['chi2']:.1f} on {test['dof']} observations (p = {test['p_value']:.2g}), "
-                 f"RMS normalised residual {test['rms_z']:.2f}; against the data's noise alone chi2 = "
-                 f"{test['data_only']['chi2']:.1f} (p = {test['data_only']['p_value']:.2g})")
+    lines.append(
+        f"Gap: chi2 = {test['chi2']:.1f} on {test['dof']} observations (p = {test['p_value']:.2g}), "
+        f"RMS normalised residual {test['rms_z']:.2f}; against the data's noise alone chi2 = "
+        f"{test['data_only']['chi2']:.1f} (p = {test['data_only']['p_value']:.2g})"
+    )
     unc = result.get("uncertainty") or {}
     if unc.get("largest"):
-        lines.append(f"Typical standard uncertainty: data {_fmt(unc['data'])}, model parameters {_fmt(unc['parameters'])} "
-                     "(largest: " + ", ".join(f"{u['parameter']} {_fmt(u['rms_effect'], 2)}" for u in unc["largest"][:4])
-                     + ")")
+        lines.append(
+            f"Typical standard uncertainty: data {_fmt(unc['data'])}, model parameters {_fmt(unc['parameters'])} "
+            "(largest: " + ", ".join(f"{u['parameter']} {_fmt(u['rms_effect'], 2)}" for u in unc["largest"][:4]) + ")"
+        )
     if result.get("parameter_fit") and result["parameter_fit"].get("test"):
         pt = result["parameter_fit"]["test"]
-        lines.append(f"Parameters alone (fitted within their uncertainty): chi2 = {pt['chi2']:.1f} "
-                     f"(p = {pt['p_value']:.2g}; prior {pt['prior_chi2']:.1f} on {pt['prior_dof']} parameters)")
+        lines.append(
+            f"Parameters alone (fitted within their uncertainty): chi2 = {pt['chi2']:.1f} "
+            f"(p = {pt['p_value']:.2g}; prior {pt['prior_chi2']:.1f} on {pt['prior_dof']} parameters)"
+        )
     records = result.get("records")
     if records:
         lines.append(f"Records: {records['used']} of {records['total']} used, {records['left_out']} left out")
@@ -86,41 +95,55 @@ def summary_text(result: dict) -> str:
             lines.append(f"Control law {name}: {text}")
     lines.append("")
     lines.append("Where (gap map; cells significant against the combined uncertainty, or * against the data's alone):")
-    lines.append(f"  {'mode':<10} {'speed band':<14} {'quantity':<26} {'n':>3} {'measured-model':>15} {'sigma':>8} "
-                 f"{'RMS z':>7} {'data z':>7}")
+    lines.append(
+        f"  {'mode':<10} {'speed band':<14} {'quantity':<26} {'n':>3} {'measured-model':>15} {'sigma':>8} "
+        f"{'RMS z':>7} {'data z':>7}"
+    )
     shown = [c for c in result["gap"]["map"] if c["significant"] or c.get("significant_data")]
     for cell in shown:
         band = f"{cell['speed_band'][0]:.1f}-{cell['speed_band'][1]:.1f}"
         star = "" if cell["significant"] else " *"
         data_z = "-" if cell.get("rms_z_data") is None else f"{cell['rms_z_data']:.2f}"
-        lines.append(f"  {cell['mode']:<10} {band:<14} {cell['quantity']:<26} {cell['n']:>3} "
-                     f"{cell['mean_residual']:>15.4g} {cell['combined_sigma']:>8.3g} {cell['rms_z']:>7.2f} {data_z:>7}{star}")
+        lines.append(
+            f"  {cell['mode']:<10} {band:<14} {cell['quantity']:<26} {cell['n']:>3} "
+            f"{cell['mean_residual']:>15.4g} {cell['combined_sigma']:>8.3g} {cell['rms_z']:>7.2f} {data_z:>7}{star}"
+        )
     if not shown:
         lines.append("  (none)")
     lines.append("")
     if result["ranking"]:
-        lines.append("Which (held-out error: RMS of residuals over the combined uncertainty, and over the data's alone; "
-                     "folds: " + ", ".join(result["folds"]) + "):")
-        lines.append(f"  {'rank':<5}{'effect':<17}{'before':>8}{'after':>8}{'shrink':>8}{'data: after':>12}"
-                     f"{'shrink':>8}  plausible  fitted")
+        lines.append(
+            "Which (held-out error: RMS of residuals over the combined uncertainty, and over the data's alone; "
+            "folds: " + ", ".join(result["folds"]) + "):"
+        )
+        lines.append(
+            f"  {'rank':<5}{'effect':<17}{'before':>8}{'after':>8}{'shrink':>8}{'data: after':>12}"
+            f"{'shrink':>8}  plausible  fitted"
+        )
         first = result["ranking"][0]
-        lines.append(f"  {'':<5}{'(nominal)':<17}{first['heldout_error_before']:>8.2f}{'':>16}"
-                     f"{_num(first.get('data_error_before')):>12}")
+        lines.append(
+            f"  {'':<5}{'(nominal)':<17}{first['heldout_error_before']:>8.2f}{'':>16}"
+            f"{_num(first.get('data_error_before')):>12}"
+        )
         for r in result["ranking"]:
             params = _values(r["parameters"])
             if r["effect"] == "parameters":
                 params = f"{len(r['parameters'])} benchmark parameters shifted"
             ties = f"  (tied with {', '.join(r['tied_with'])})" if r["tied_with"] else ""
-            lines.append(f"  {r['rank']:<5}{r['effect']:<17}{r['heldout_error_before']:>8.2f}{r['heldout_error_after']:>8.2f}"
-                         f"{_num(r['shrink']):>8}{_num(r.get('data_error_after')):>12}{_num(r.get('data_shrink')):>8}"
-                         f"  {'yes' if r['plausible'] else 'no':<9}  {params}{ties}")
+            lines.append(
+                f"  {r['rank']:<5}{r['effect']:<17}{r['heldout_error_before']:>8.2f}{r['heldout_error_after']:>8.2f}"
+                f"{_num(r['shrink']):>8}{_num(r.get('data_error_after')):>12}{_num(r.get('data_shrink')):>8}"
+                f"  {'yes' if r['plausible'] else 'no':<9}  {params}{ties}"
+            )
         if result.get("pairs"):
             lines.append("  pairs (fitted jointly), best first:")
             for p in result["pairs"][:5]:
                 plaus = {True: "yes", False: "no", None: "-"}[p.get("plausible")]
-                lines.append(f"       {'+'.join(p['effects']):<30}{p['heldout_error_after']:>8.2f}{_num(p['shrink']):>8}"
-                             f"{_num(p.get('data_error_after')):>12}{_num(p.get('data_shrink')):>8}  {plaus:<9}  "
-                             f"{_values(p.get('parameters', {}))}")
+                lines.append(
+                    f"       {'+'.join(p['effects']):<30}{p['heldout_error_after']:>8.2f}{_num(p['shrink']):>8}"
+                    f"{_num(p.get('data_error_after')):>12}{_num(p.get('data_shrink')):>8}  {plaus:<9}  "
+                    f"{_values(p.get('parameters', {}))}"
+                )
     else:
         lines.append("Which: no ranking (" + "; ".join(result["notes"][-1:]) + ")")
     for name, why in result.get("not_applicable", {}).items():
@@ -129,24 +152,35 @@ def summary_text(result: dict) -> str:
     lines.append("Selected: " + (", ".join(result["selected"]) if result["selected"] else "nothing"))
     single = result.get("best_single_implausible")
     if single:
-        lines.append(f"The best single candidate, {'+'.join(single['effects'])}, needs implausible values: "
-                     + "; ".join(single["why"]) + ".")
+        lines.append(
+            f"The best single candidate, {'+'.join(single['effects'])}, needs implausible values: "
+            + "; ".join(single["why"])
+            + "."
+        )
     bad = result.get("best_implausible")
     if bad:
-        lines.append(f"The best held-out fit, {'+'.join(bad['effects'])}, needs implausible values: "
-                     + "; ".join(bad["why"]) + ". It is not selected"
-                     + (f"; the plausible {'+'.join(bad['instead_of'])} explains significantly less and is not "
-                        "selected either." if bad.get("instead_of") else "."))
+        lines.append(
+            f"The best held-out fit, {'+'.join(bad['effects'])}, needs implausible values: "
+            + "; ".join(bad["why"])
+            + ". It is not selected"
+            + (
+                f"; the plausible {'+'.join(bad['instead_of'])} explains significantly less and is not selected either."
+                if bad.get("instead_of")
+                else "."
+            )
+        )
     if result["verdict"] == "none" and result["ranking"]:
         lines.append("No gap beyond the uncertainty of the data: nothing is selected.")
     if result.get("selection", {}).get("note"):
         lines.append("Note: " + result["selection"]["note"] + ".")
     hf = result.get("how_far")
     if hf:
-        lines.append(f"How far: held-out error {hf['heldout_error_before']:.2f} -> {hf['heldout_error_after']:.2f}; "
-                     f"gap above the noise floor removed: {_fmt(hf['shrink'], 2)} (against the data's own noise: "
-                     f"{_fmt(hf.get('data_error_before'))} -> {_fmt(hf.get('data_error_after'))}, "
-                     f"{_fmt(hf.get('data_shrink'), 2)} removed)")
+        lines.append(
+            f"How far: held-out error {hf['heldout_error_before']:.2f} -> {hf['heldout_error_after']:.2f}; "
+            f"gap above the noise floor removed: {_fmt(hf['shrink'], 2)} (against the data's own noise: "
+            f"{_fmt(hf.get('data_error_before'))} -> {_fmt(hf.get('data_error_after'))}, "
+            f"{_fmt(hf.get('data_shrink'), 2)} removed)"
+        )
         for f in hf["folds"]:
             lines.append(f"  {f['fold']}: {f['error_before']:.2f} -> {f['error_after']:.2f} ({f['n']} observations)")
     for note in result["notes"]:
@@ -156,24 +190,38 @@ def summary_text(result: dict) -> str:
 
 def markdown(result: dict, title: str, figures: list[tuple[str, str]]) -> str:
     """``report.md``: the summary, the candidates, the records and the figures."""
-    md = [f"# {title}", "", f"Model: `{result['model']['source']}`  ", f"Rider geometry: {result['model']['geometry']}",
-          "", f"**Verdict: {result['verdict']}** — selected: {', '.join(result['selected']) or 'nothing'}", ""]
+    md = [
+        f"# {title}",
+        "",
+        f"Model: `{result['model']['source']}`  ",
+        f"Rider geometry: {result['model']['geometry']}",
+        "",
+        f"**Verdict: {result['verdict']}** — selected: {', '.join(result['selected']) or 'nothing'}",
+        "",
+    ]
     md += ["```", summary_text(result), "```", ""]
     md += ["## Candidates", "", "| effect | what it is |", "|---|---|"]
     md += [f"| {e.name} | {e.description} |" for e in EFFECTS.values()]
     md += [""]
     records = result.get("records")
     if records:
-        md += ["## Records", "", "| record | group | law | speed [m/s] | eigenvalue [1/s] | r^2 | cycles | used |",
-               "|---|---|---|---|---|---|---|---|"]
+        md += [
+            "## Records",
+            "",
+            "| record | group | law | speed [m/s] | eigenvalue [1/s] | r^2 | cycles | used |",
+            "|---|---|---|---|---|---|---|---|",
+        ]
         for r in records["list"]:
             if r["used"]:
                 value = f"{r['real']:.2f} ± {r['real_sigma']:.2f} + ({r['imag']:.2f} ± {r['imag_sigma']:.2f}) i"
-                md.append(f"| {r['record']} | {r['group']} | {r['law']} | {r['speed']:.2f} | {value} | {r['r2']:.3f} | "
-                          f"{r['cycles']:.1f} | yes |")
+                md.append(
+                    f"| {r['record']} | {r['group']} | {r['law']} | {r['speed']:.2f} | {value} | {r['r2']:.3f} | "
+                    f"{r['cycles']:.1f} | yes |"
+                )
             else:
-                md.append(f"| {r['record']} | {r['group']} | {r['law']} | {r['speed']:.2f} | - | - | - | "
-                          f"no: {r['reason']} |")
+                md.append(
+                    f"| {r['record']} | {r['group']} | {r['law']} | {r['speed']:.2f} | - | - | - | no: {r['reason']} |"
+                )
         md += [""]
     for name, caption in figures:
         md += [f"## {caption}", "", f"![{caption}]({name})", ""]
@@ -262,9 +310,18 @@ def plot_eigenvalues(diagnosis):
     fig, axes = plt.subplots(1, 2, figsize=(11.5, 4.4), sharex=True)
     colours = _colours(plt)
     weave_rows = [i for i in range(len(e)) if e.mode[i] == "weave"]
-    sig = {"real": np.sqrt(p.var_data[[k for k, q in enumerate(p.obs.quantity) if q == "real" and p.obs.kind[k] == "eigenvalue"
-                                       and p.obs.mode[k] == "weave"]]),
-           "imag": np.sqrt(p.var_data[[k for k, q in enumerate(p.obs.quantity) if q == "imag"]])}
+    sig = {
+        "real": np.sqrt(
+            p.var_data[
+                [
+                    k
+                    for k, q in enumerate(p.obs.quantity)
+                    if q == "real" and p.obs.kind[k] == "eigenvalue" and p.obs.mode[k] == "weave"
+                ]
+            ]
+        ),
+        "imag": np.sqrt(p.var_data[[k for k, q in enumerate(p.obs.quantity) if q == "imag"]]),
+    }
     laws = list(dict.fromkeys(e.law[i] for i in weave_rows))
     for k, name in enumerate(laws):
         law = e.laws[name]
@@ -274,8 +331,15 @@ def plot_eigenvalues(diagnosis):
         axes[0].plot(grid, before.real, "--", color=colour, lw=1.2, label=f"{name}: nominal model")
         axes[1].plot(grid, before.imag, "--", color=colour, lw=1.2)
         if np.any(band != 0):
-            axes[0].fill_between(grid, before.real - band.real, before.real + band.real, color=colour, alpha=0.12, lw=0,
-                                 label=f"{name}: nominal, 1 sigma of the parameters")
+            axes[0].fill_between(
+                grid,
+                before.real - band.real,
+                before.real + band.real,
+                color=colour,
+                alpha=0.12,
+                lw=0,
+                label=f"{name}: nominal, 1 sigma of the parameters",
+            )
             axes[1].fill_between(grid, before.imag - band.imag, before.imag + band.imag, color=colour, alpha=0.12, lw=0)
         if chosen is not None:
             model, scale, label = chosen
@@ -285,15 +349,32 @@ def plot_eigenvalues(diagnosis):
         rows = [j for j, i in enumerate(weave_rows) if e.law[i] == name]
         idx = [weave_rows[j] for j in rows]
         what = "measured, extraction bias removed" if diagnosis.record_rows else "measured"
-        axes[0].errorbar(e.speed[idx], e.value.real[idx], yerr=sig["real"][rows], fmt="o", ms=3.5, color=colour,
-                         capsize=2, alpha=0.8, label=f"{name}: {what} ({len(idx)})")
+        axes[0].errorbar(
+            e.speed[idx],
+            e.value.real[idx],
+            yerr=sig["real"][rows],
+            fmt="o",
+            ms=3.5,
+            color=colour,
+            capsize=2,
+            alpha=0.8,
+            label=f"{name}: {what} ({len(idx)})",
+        )
         apparent = diagnosis.selected_predictions()
         if apparent is not None:
-            axes[0].plot(e.speed[idx], apparent[idx].real, "x", color="k", ms=5, mew=1,
-                         label=f"{name}: {'+'.join(diagnosis.selected)} as fitted, per record")
+            axes[0].plot(
+                e.speed[idx],
+                apparent[idx].real,
+                "x",
+                color="k",
+                ms=5,
+                mew=1,
+                label=f"{name}: {'+'.join(diagnosis.selected)} as fitted, per record",
+            )
             axes[1].plot(e.speed[idx], apparent[idx].imag, "x", color="k", ms=5, mew=1)
-        axes[1].errorbar(e.speed[idx], e.value.imag[idx], yerr=sig["imag"][rows], fmt="o", ms=3.5, color=colour,
-                         capsize=2, alpha=0.8)
+        axes[1].errorbar(
+            e.speed[idx], e.value.imag[idx], yerr=sig["imag"][rows], fmt="o", ms=3.5, color=colour, capsize=2, alpha=0.8
+        )
     axes[0].axhline(0, color="0.6", lw=0.8)
     axes[0].set_ylabel("weave real part [1/s]")
     axes[1].set_ylabel("weave imaginary part [rad/s]")
@@ -302,8 +383,10 @@ def plot_eigenvalues(diagnosis):
         ax.grid(alpha=0.3)
     axes[0].legend(fontsize=7, loc="best")
     verdict = f"verdict {diagnosis.verdict}; selected: {'+'.join(diagnosis.selected) or 'nothing'}"
-    fig.suptitle(f"Weave eigenvalue against speed, measured (points, 1 sigma) and predicted per control law ({verdict})",
-                 fontsize=9)
+    fig.suptitle(
+        f"Weave eigenvalue against speed, measured (points, 1 sigma) and predicted per control law ({verdict})",
+        fontsize=9,
+    )
     fig.tight_layout()
     return fig
 
@@ -312,8 +395,16 @@ def plot_records(diagnosis, columns: int = 6):
     """Contact sheet: every record's roll rate, its fitted decay and the model's response."""
     plt = pyplot()
     from bikerider.errors import FitError
-    from bikerider.gap.timedomain import (OBSERVED, Layout, closed_loop, friction_states, initial_states, make_batches,
-                                          simulate_linear, systems)
+    from bikerider.gap.timedomain import (
+        OBSERVED,
+        Layout,
+        closed_loop,
+        friction_states,
+        initial_states,
+        make_batches,
+        simulate_linear,
+        systems,
+    )
 
     fits = diagnosis.records
     if not fits:
@@ -331,7 +422,9 @@ def plot_records(diagnosis, columns: int = 6):
     fit = diagnosis.selected_fit
     timed = fit is not None and "steer_friction" in fit.effects
     if timed:
-        model_label = "+".join(fit.effects) + " (" + ", ".join(f"{n} {v:.3g}" for n, v in zip(fit.names, fit.values)) + ")"
+        model_label = (
+            "+".join(fit.effects) + " (" + ", ".join(f"{n} {v:.3g}" for n, v in zip(fit.names, fit.values)) + ")"
+        )
     try:
         records = [fits[k].record for k in used]
         for idx, batch in make_batches(records, max_duration=math.inf):
@@ -349,7 +442,7 @@ def plot_records(diagnosis, columns: int = 6):
         responses = {}
     rows = math.ceil(len(fits) / columns)
     fig, axes = plt.subplots(rows, columns, figsize=(2.9 * columns, 1.75 * rows + 0.6), squeeze=False)
-    for ax in axes.flat[len(fits):]:
+    for ax in axes.flat[len(fits) :]:
         ax.axis("off")
     for k, (ax, f) in enumerate(zip(axes.flat, fits)):
         r = f.record
@@ -363,19 +456,39 @@ def plot_records(diagnosis, columns: int = 6):
                 resp = responses[k]
                 offset = float(np.mean(y[: resp.size] - resp))
                 ax.plot(r.time[: resp.size], resp + offset, "--", color="tab:blue", lw=0.9)
-            ax.text(0.98, 0.95, f"{est.eigenvalue.real:.2f}{est.eigenvalue.imag:+.2f}i\nr2 {est.r2:.2f}",
-                    transform=ax.transAxes, ha="right", va="top", fontsize=6)
+            ax.text(
+                0.98,
+                0.95,
+                f"{est.eigenvalue.real:.2f}{est.eigenvalue.imag:+.2f}i\nr2 {est.r2:.2f}",
+                transform=ax.transAxes,
+                ha="right",
+                va="top",
+                fontsize=6,
+            )
         else:
             ax.set_facecolor("0.93")
-            ax.text(0.02, 0.05, "left out: " + _wrap(f.reason or "", 48), transform=ax.transAxes, fontsize=5.2,
-                    va="bottom", color="tab:red")
+            ax.text(
+                0.02,
+                0.05,
+                "left out: " + _wrap(f.reason or "", 48),
+                transform=ax.transAxes,
+                fontsize=5.2,
+                va="bottom",
+                color="tab:red",
+            )
         ax.set_title(title, fontsize=6.5)
         ax.tick_params(labelsize=5.5)
         ax.grid(alpha=0.25)
-    handles = [plt.Line2D([], [], color="k", lw=0.8), plt.Line2D([], [], color="tab:red", lw=1.2),
-               plt.Line2D([], [], color="tab:blue", ls="--", lw=1)]
-    labels = ["measured roll rate [rad/s] against time [s]", "fitted decay (weave + slow mode)",
-              f"{model_label}, from the record's initial state"]
+    handles = [
+        plt.Line2D([], [], color="k", lw=0.8),
+        plt.Line2D([], [], color="tab:red", lw=1.2),
+        plt.Line2D([], [], color="tab:blue", ls="--", lw=1),
+    ]
+    labels = [
+        "measured roll rate [rad/s] against time [s]",
+        "fitted decay (weave + slow mode)",
+        f"{model_label}, from the record's initial state",
+    ]
     fig.legend(handles, labels, loc="upper center", ncol=3, fontsize=8, frameon=False)
     fig.tight_layout(rect=(0, 0, 1, 1 - 0.45 / (1.75 * rows + 0.6)))
     return fig
@@ -405,13 +518,19 @@ def plot_gap_map(result: dict):
     panels = [("rms_z", "combined uncertainty")]
     if all(c.get("rms_z_data") is not None for c in cells):
         panels.append(("rms_z_data", "the data's uncertainty alone"))
-    fig, axes = plt.subplots(1, len(panels), figsize=(max(5, 1.2 * len(cols) + 3) * len(panels),
-                                                      max(2.6, 0.4 * len(rows) + 1.6)), squeeze=False)
+    fig, axes = plt.subplots(
+        1,
+        len(panels),
+        figsize=(max(5, 1.2 * len(cols) + 3) * len(panels), max(2.6, 0.4 * len(rows) + 1.6)),
+        squeeze=False,
+    )
     for ax, (key, what) in zip(axes[0], panels):
         table = np.full((len(rows), len(cols)), np.nan)
         for c in cells:
-            table[rows.index(f"{c['mode']} {c['quantity']}"),
-                  cols.index(f"{c['speed_band'][0]:.1f}-{c['speed_band'][1]:.1f}")] = np.sign(c["mean_residual"]) * c[key]
+            table[
+                rows.index(f"{c['mode']} {c['quantity']}"),
+                cols.index(f"{c['speed_band'][0]:.1f}-{c['speed_band'][1]:.1f}"),
+            ] = np.sign(c["mean_residual"]) * c[key]
         limit = max(3.0, float(np.nanmax(np.abs(table)))) if np.any(np.isfinite(table)) else 3.0
         im = ax.imshow(table, cmap="RdBu_r", vmin=-limit, vmax=limit, aspect="auto")
         ax.set_xticks(range(len(cols)), cols, fontsize=7, rotation=30)
@@ -420,8 +539,15 @@ def plot_gap_map(result: dict):
         for i in range(len(rows)):
             for j in range(len(cols)):
                 if np.isfinite(table[i, j]):
-                    ax.text(j, i, f"{table[i, j]:.1f}", ha="center", va="center", fontsize=7,
-                            color="white" if abs(table[i, j]) > 0.6 * limit else "black")
+                    ax.text(
+                        j,
+                        i,
+                        f"{table[i, j]:.1f}",
+                        ha="center",
+                        va="center",
+                        fontsize=7,
+                        color="white" if abs(table[i, j]) > 0.6 * limit else "black",
+                    )
         fig.colorbar(im, ax=ax, label="signed RMS z")
         ax.set_title(f"measured - model, over {what}", fontsize=8)
     fig.suptitle("Gap map: residuals by mode, quantity and speed band", fontsize=9)
@@ -433,29 +559,39 @@ def plot_ranking(result: dict):
     """Held-out errors of every candidate and the best pairs: over the combined uncertainty, and over the
     data's alone (where every row has one)."""
     plt = pyplot()
-    entries = [(r["effect"], r["heldout_error_after"], r.get("data_error_after"), r["plausible"]) for r in result["ranking"]]
-    entries += [("+".join(p["effects"]), p["heldout_error_after"], p.get("data_error_after"), p.get("plausible"))
-                for p in result.get("pairs", [])[:6]]
+    entries = [
+        (r["effect"], r["heldout_error_after"], r.get("data_error_after"), r["plausible"]) for r in result["ranking"]
+    ]
+    entries += [
+        ("+".join(p["effects"]), p["heldout_error_after"], p.get("data_error_after"), p.get("plausible"))
+        for p in result.get("pairs", [])[:6]
+    ]
     if not entries:
         return None
     first = result["ranking"][0]
     panels = [("combined uncertainty", 1, first["heldout_error_before"])]
     if all(e[2] is not None for e in entries) and first.get("data_error_before") is not None:
         panels.append(("the data's uncertainty alone", 2, first["data_error_before"]))
-    fig, axes = plt.subplots(1, len(panels), figsize=(5.2 * len(panels) + 1.5, 0.32 * len(entries) + 1.6), squeeze=False)
+    fig, axes = plt.subplots(
+        1, len(panels), figsize=(5.2 * len(panels) + 1.5, 0.32 * len(entries) + 1.6), squeeze=False
+    )
     colour = {True: "tab:green", False: "tab:orange", None: "0.7"}
     for ax, (what, col, before) in zip(axes[0], panels):
         ax.barh(range(len(entries)), [e[col] for e in entries], color=[colour[e[3]] for e in entries])
         ax.axvline(before, color="k", ls="--", label=f"nominal model ({before:.2f})")
         ax.axvline(1.0, color="0.5", ls=":", label="noise floor (1)")
-        ax.set_yticks(range(len(entries)), [e[0] for e in entries] if ax is axes[0][0] else [""] * len(entries),
-                      fontsize=7)
+        ax.set_yticks(
+            range(len(entries)), [e[0] for e in entries] if ax is axes[0][0] else [""] * len(entries), fontsize=7
+        )
         ax.invert_yaxis()
         ax.set_xscale("log")
         ax.set_xlabel(f"held-out error: RMS residual over {what}", fontsize=8)
         ax.legend(fontsize=7)
-    fig.suptitle("Candidates and pairs fitted on training folds, scored on held-out folds "
-                 "(green: plausible values; orange: implausible; grey: pair not judged)", fontsize=8)
+    fig.suptitle(
+        "Candidates and pairs fitted on training folds, scored on held-out folds "
+        "(green: plausible values; orange: implausible; grey: pair not judged)",
+        fontsize=8,
+    )
     fig.tight_layout()
     return fig
 
@@ -477,8 +613,11 @@ def plot_effects(diagnosis):
     base = weave_curve(nominal, grid, law, nominal)
     axes[0].plot(grid, base.real, "k--", label="nominal")
     axes[1].plot(grid, base.imag, "k--")
-    linear = [pr for pr in sorted(getattr(diagnosis, "pairs", []), key=lambda r: r.error_after)
-              if pr.effects in diagnosis.full_fits and "steer_friction" not in pr.effects]
+    linear = [
+        pr
+        for pr in sorted(getattr(diagnosis, "pairs", []), key=lambda r: r.error_after)
+        if pr.effects in diagnosis.full_fits and "steer_friction" not in pr.effects
+    ]
     sets = [(name,) for name in diagnosis.candidates if name != "steer_friction"] + [pr.effects for pr in linear[:2]]
     for effects in sets:
         fit = diagnosis.fit_of(effects)
@@ -498,8 +637,11 @@ def plot_effects(diagnosis):
         ax.set_xlabel("speed [m/s]")
         ax.grid(alpha=0.3)
     axes[0].legend(fontsize=7)
-    fig.suptitle(f"Every linear candidate fitted to all the data, on its own, and the best two linear pairs (dotted); "
-                 f"control law {main}", fontsize=9)
+    fig.suptitle(
+        f"Every linear candidate fitted to all the data, on its own, and the best two linear pairs (dotted); "
+        f"control law {main}",
+        fontsize=9,
+    )
     fig.tight_layout()
     return fig
 
@@ -537,8 +679,11 @@ def plot_time_response(diagnosis):
             ax.plot(t, sel["phid"], label=label)
     ax.set_xlabel("time [s]")
     ax.set_ylabel("roll rate [rad/s]")
-    ax.set_title(f"Response to a 0.5 rad/s roll-rate kick at {speed:.1f} m/s"
-                 + (f", control law {law.name}" if law is not None and not law.is_zero else ", no control"), fontsize=9)
+    ax.set_title(
+        f"Response to a 0.5 rad/s roll-rate kick at {speed:.1f} m/s"
+        + (f", control law {law.name}" if law is not None and not law.is_zero else ", no control"),
+        fontsize=9,
+    )
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7)
     fig.tight_layout()
@@ -601,11 +746,13 @@ def plot_effect(model, speeds, *, gains=None, speed: float | None = None, title:
 
 def figures(diagnosis, result: dict) -> list[tuple[str, str, object]]:
     """Every figure of a report: ``(file name, caption, figure)``, those that apply."""
-    out = [("records.png", "Records and their fitted decays", plot_records(diagnosis)),
-           ("eigenvalues.png", "Measured and predicted weave eigenvalues, per control law", plot_eigenvalues(diagnosis)),
-           ("effects.png", "Every candidate as fitted, on its own", plot_effects(diagnosis)),
-           ("canonical.png", "Identified canonical entries", plot_canonical(diagnosis)),
-           ("gap_map.png", "Gap map", plot_gap_map(result)),
-           ("ranking.png", "Held-out ranking", plot_ranking(result)),
-           ("time_response.png", "Time response", plot_time_response(diagnosis))]
+    out = [
+        ("records.png", "Records and their fitted decays", plot_records(diagnosis)),
+        ("eigenvalues.png", "Measured and predicted weave eigenvalues, per control law", plot_eigenvalues(diagnosis)),
+        ("effects.png", "Every candidate as fitted, on its own", plot_effects(diagnosis)),
+        ("canonical.png", "Identified canonical entries", plot_canonical(diagnosis)),
+        ("gap_map.png", "Gap map", plot_gap_map(result)),
+        ("ranking.png", "Held-out ranking", plot_ranking(result)),
+        ("time_response.png", "Time response", plot_time_response(diagnosis)),
+    ]
     return [(name, caption, fig) for name, caption, fig in out if fig is not None]

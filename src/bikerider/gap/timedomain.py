@@ -30,6 +30,7 @@ state is refitted for every trial friction (linear least squares, then Gauss-New
 nonlinear response).  The friction's prediction of a record's eigenvalue is what the extraction
 finds in the simulated response (its *apparent* eigenvalue, amplitude-dependent as friction is).
 """
+
 from __future__ import annotations
 
 import math
@@ -74,7 +75,7 @@ def expm(M: np.ndarray) -> np.ndarray:
     n = M.shape[-1]
     norm = np.max(np.sum(np.abs(M), axis=-2), axis=-1)
     s = np.ceil(np.log2(np.maximum(norm, 1e-300) / 0.5)).clip(0, None).astype(int)
-    X = M / (2.0 ** s)[..., None, None]
+    X = M / (2.0**s)[..., None, None]
     eye = np.eye(n)
     E = eye + X / 14.0
     for k in range(13, 0, -1):
@@ -111,8 +112,9 @@ class Batch:
         return int(self.length.max())
 
 
-def make_batches(records: list[Record], signals=TIME_DOMAIN_SIGNALS, max_duration: float = MAX_DURATION,
-                 min_step: float = 0.0) -> list[tuple[list[int], Batch]]:
+def make_batches(
+    records: list[Record], signals=TIME_DOMAIN_SIGNALS, max_duration: float = MAX_DURATION, min_step: float = 0.0
+) -> list[tuple[list[int], Batch]]:
     """Group records by sampling step (uniformly sampled records only); ``[(indices, batch)]``.
 
     Each record is used up to ``max_duration`` seconds, every ``k``-th sample where the sampling step
@@ -163,7 +165,7 @@ class Layout:
     start: tuple[float, ...]
 
     @staticmethod
-    def of(effects: tuple[str, ...]) -> "Layout":
+    def of(effects: tuple[str, ...]) -> Layout:
         from bikerider.gap.effects import EFFECTS
 
         names, lower, upper, start = [], [], [], []
@@ -244,14 +246,14 @@ def _stack(batch: Batch, sensitivity: np.ndarray, outputs: tuple[int, ...]) -> t
     Samples beyond a record's length, and signals it lacks, are zero rows.
     """
     names = list(batch.y)
-    mask = np.arange(batch.N)[None, :] < batch.length[:, None]           # (R, N)
+    mask = np.arange(batch.N)[None, :] < batch.length[:, None]  # (R, N)
     lead = sensitivity.shape[:-4]
     R, N, n = batch.y[names[0]].shape[0], batch.N, sensitivity.shape[-1]
     S = len(names)
     design = np.zeros(lead + (R, S, N, n + S))
     data = np.zeros((R, S, N))
     for m, s in enumerate(names):
-        w = (batch.weight[s][:, None] * mask)                             # (R, N)
+        w = batch.weight[s][:, None] * mask  # (R, N)
         design[..., m, :, :n] = sensitivity[..., :, outputs[OBSERVED[s]], :] * w[..., None]
         design[..., m, :, n + m] = w
         data[:, m, :] = np.where(mask, np.nan_to_num(batch.y[s]), 0.0) * w
@@ -273,7 +275,7 @@ def initial_states(batch: Batch, A: np.ndarray, outputs: tuple[int, ...]) -> np.
     Each signal ``s`` is modelled as ``C_s Phi(t) x0 + offset_s`` (an offset per signal, solved
     with the state), every signal weighted by its scatter over the record.
     """
-    Phi = _transitions(A, batch.dt, batch.N)                              # (..., R, N, n, n)
+    Phi = _transitions(A, batch.dt, batch.N)  # (..., R, N, n, n)
     design, data = _stack(batch, Phi, outputs)
     return _solve(design, data)[..., : A.shape[-1]]
 
@@ -289,8 +291,9 @@ def simulate_linear(A: np.ndarray, x0: np.ndarray, dt: float, N: int) -> np.ndar
     return out
 
 
-def simulate_friction(A: np.ndarray, b: np.ndarray, x0: np.ndarray, T_c, dt: float, N: int,
-                      rate_index: int) -> np.ndarray:
+def simulate_friction(
+    A: np.ndarray, b: np.ndarray, x0: np.ndarray, T_c, dt: float, N: int, rate_index: int
+) -> np.ndarray:
     """States ``(..., N, n)`` of ``x' = A x + b (-T_c tanh(x[rate] / eps))`` (exponential integrator).
 
     ``A (..., n, n)``, ``b (..., n)``, ``x0 (..., n)`` and ``T_c`` broadcast together.
@@ -311,7 +314,7 @@ def simulate_friction(A: np.ndarray, b: np.ndarray, x0: np.ndarray, T_c, dt: flo
     for k in range(N):
         out[..., k, :] = x
         for _ in range(substeps):
-            u = -T_c * np.tanh(x[..., rate_index:rate_index + 1] / SMOOTHING)
+            u = -T_c * np.tanh(x[..., rate_index : rate_index + 1] / SMOOTHING)
             x = np.einsum("...ij,...j->...i", Phi, x) + Gamma * u
     return out
 
@@ -331,8 +334,9 @@ def _residuals(batch: Batch, states: np.ndarray, outputs: tuple[int, ...]) -> tu
     return res, offsets
 
 
-def friction_states(batch: Batch, A: np.ndarray, b: np.ndarray, outputs: tuple[int, ...],
-                    T_c) -> tuple[np.ndarray, np.ndarray]:
+def friction_states(
+    batch: Batch, A: np.ndarray, b: np.ndarray, outputs: tuple[int, ...], T_c
+) -> tuple[np.ndarray, np.ndarray]:
     """Each record's response to ``A (P, R, n, n)`` plus Coulomb friction ``T_c (P,)`` through ``b``.
 
     The initial states are fitted to the records: linear least squares for the linear part, then
@@ -349,13 +353,16 @@ def friction_states(batch: Batch, A: np.ndarray, b: np.ndarray, outputs: tuple[i
         unit = np.eye(n).reshape((n,) + (1,) * (x0.ndim - 1) + (n,))
         trial = np.concatenate([x0[None], x0[None] + unit * h[None]], axis=0)  # (n+1, P, R, n)
         states = simulate_friction(A[None], b[None], trial, T[None], batch.dt, batch.N, rate)
-        res, _ = _residuals(batch, states, outputs)                         # (n+1, P, R, S, N)
-        r0 = res[0].reshape(res.shape[1:-2] + (-1,))                        # (P, R, M)
-        J = ((res[1:] - res[0]).reshape((n,) + r0.shape) / np.moveaxis(h, -1, 0)[..., None])  # (n, P, R, M)
-        J = np.moveaxis(J, 0, -1)                                           # (P, R, M, n)
+        res, _ = _residuals(batch, states, outputs)  # (n+1, P, R, S, N)
+        r0 = res[0].reshape(res.shape[1:-2] + (-1,))  # (P, R, M)
+        J = (res[1:] - res[0]).reshape((n,) + r0.shape) / np.moveaxis(h, -1, 0)[..., None]  # (n, P, R, M)
+        J = np.moveaxis(J, 0, -1)  # (P, R, M, n)
         x0 = x0 + _solve(J, -r0)
-    states = simulate_friction(A, b, x0, T, batch.dt, batch.N, rate) if nonlinear else simulate_linear(A, x0, batch.dt,
-                                                                                                      batch.N)
+    states = (
+        simulate_friction(A, b, x0, T, batch.dt, batch.N, rate)
+        if nonlinear
+        else simulate_linear(A, x0, batch.dt, batch.N)
+    )
     res, _ = _residuals(batch, states, outputs)
     return states, res
 
@@ -421,14 +428,18 @@ def fit_time_domain(records: list[Record], values: dict, geometry, layout: Layou
         grid = np.array([[t, c] + rest for t in (0.02, 0.15) for c in (0.05, 0.3)] + [list(layout.start)])
         x0 = np.clip(grid[int(np.argmin(np.sum(costs(grid) ** 2, axis=1)))], lower, upper)
     scale = np.maximum(np.asarray(layout.start, float), 0.05) * 0.5
-    result = least_squares(fun, x0, jac=jac, bounds=(lower, upper), method="trf", x_scale=scale,
-                           max_nfev=40, xtol=1e-3, ftol=1e-5)
+    result = least_squares(
+        fun, x0, jac=jac, bounds=(lower, upper), method="trf", x_scale=scale, max_nfev=40, xtol=1e-3, ftol=1e-5
+    )
     n_samples = int(sum(batch.length.sum() for _, batch in batches))
-    return TimeDomainFit(result.x, float(np.sum(result.fun**2)), n_samples, [r.name for r in records], bool(result.success))
+    return TimeDomainFit(
+        result.x, float(np.sum(result.fun**2)), n_samples, [r.name for r in records], bool(result.success)
+    )
 
 
-def apparent_eigenvalues(fits: list[RecordFit], values: dict, geometry, layout: Layout = NOMINAL,
-                         theta=()) -> tuple[np.ndarray, list[str | None]]:
+def apparent_eigenvalues(
+    fits: list[RecordFit], values: dict, geometry, layout: Layout = NOMINAL, theta=()
+) -> tuple[np.ndarray, list[str | None]]:
     """What the record fit finds in a model's own response over each record (NaN where nothing).
 
     The model is the nominal bicycle with the time-domain candidate ``layout`` at ``theta`` (the
@@ -441,8 +452,9 @@ def apparent_eigenvalues(fits: list[RecordFit], values: dict, geometry, layout: 
     records = [f.record for f in fits]
     out = np.full(len(records), np.nan + 1j * np.nan)
     why: list[str | None] = [None] * len(records)
-    signals = tuple(dict.fromkeys(TIME_DOMAIN_SIGNALS + tuple(s for r in records for s in r.fit_signals
-                                                              if s in OBSERVED)))
+    signals = tuple(
+        dict.fromkeys(TIME_DOMAIN_SIGNALS + tuple(s for r in records for s in r.fit_signals if s in OBSERVED))
+    )
     theta = np.asarray(theta, dtype=float).reshape(1, -1)
     for idx, batch in make_batches(records, signals, max_duration=math.inf):
         A, b, outputs, T = systems(values, geometry, batch.records, layout, theta)
@@ -462,7 +474,9 @@ def apparent_eigenvalues(fits: list[RecordFit], values: dict, geometry, layout: 
     return out, why
 
 
-def extraction_bias(fits: list[RecordFit], values: dict, geometry, matched: np.ndarray) -> tuple[np.ndarray, list[str | None]]:
+def extraction_bias(
+    fits: list[RecordFit], values: dict, geometry, matched: np.ndarray
+) -> tuple[np.ndarray, list[str | None]]:
     """Extraction bias of every used record under the nominal model (module docstring).
 
     ``matched`` holds the model's weave eigenvalue of each used record.  Returns the bias (NaN
@@ -474,12 +488,16 @@ def extraction_bias(fits: list[RecordFit], values: dict, geometry, matched: np.n
     reasons: list[str | None] = []
     for k in range(len(used)):
         if not np.isfinite(apparent[k]):
-            reasons.append("the model's own response over this window shows no weave the fit can find "
-                           f"({why[k]}); its eigenvalue cannot be compared with the model's")
+            reasons.append(
+                "the model's own response over this window shows no weave the fit can find "
+                f"({why[k]}); its eigenvalue cannot be compared with the model's"
+            )
         elif abs(bias[k]) > MAX_RELATIVE_BIAS * abs(matched[k]):
-            reasons.append(f"the fit applied to the model's own response over this window finds {_c(apparent[k])} "
-                           f"against its weave eigenvalue {_c(matched[k])} (more than {MAX_RELATIVE_BIAS:.0%} off: "
-                           "other modes share the record); its eigenvalue cannot be compared with the model's")
+            reasons.append(
+                f"the fit applied to the model's own response over this window finds {_c(apparent[k])} "
+                f"against its weave eigenvalue {_c(matched[k])} (more than {MAX_RELATIVE_BIAS:.0%} off: "
+                "other modes share the record); its eigenvalue cannot be compared with the model's"
+            )
         else:
             reasons.append(None)
     return np.where([r is None for r in reasons], bias, np.nan), reasons

@@ -23,6 +23,7 @@ the candidate models but the benchmark parameters' meaning, and the diagnosis ru
 The shrinkage the diagnosis predicts (held-out, on the data it has) is compared with the shrinkage
 the selected effects achieve on a fresh data set from the same truth (new kicks, noise, speeds).
 """
+
 from __future__ import annotations
 
 import logging
@@ -52,29 +53,74 @@ class Truth:
     description: str
 
 
-TRUTHS: dict[str, Truth] = {t.name: t for t in (
-    Truth("null", (), {}, "parameter error within the stated uncertainty only"),
-    Truth("steer_damping", ("steer_damping",), {"c_steer": 0.3, "T_coulomb": 0.05},
-          "viscous 0.3 N m s/rad and Coulomb 0.05 N m steer friction"),
-    Truth("steer_inertia", ("steer_inertia",), {"I_steer": 0.2},
-          "0.2 kg m^2 about the steer axis added to the front frame's inertia tensor"),
-    Truth("steer_stiffness", ("steer_stiffness",), {"k_steer": 6.0, "k3_steer": 20.0},
-          "steer spring 6 N m/rad plus 20 N m/rad^3 cubic"),
-    Truth("passive_arms", ("passive_arms",), {"m_arm": 2.5, "k_arm": 4.0, "c_arm": 1.5},
-          "2.5 kg of arms at the grips, 4 N m/rad and 1.5 N m s/rad about the steer axis"),
-    Truth("rider_lean", ("rider_lean",), {"k_lean": 128.0, "c_lean": 50.0, "k3_lean": 200.0},
-          "upper body leaning on 128 N m/rad (+200 N m/rad^3) and 50 N m s/rad (Moore 2012 values)"),
-    Truth("tyre_slip", ("tyre_slip",), {"c_alpha": 13.0, "c_gamma": 0.8, "sigma_t": 0.2, "t_p": 0.02, "mu": 1.0},
-          "tyres 13/rad cornering, 0.8/rad camber, 0.2 m relaxation, 20 mm pneumatic trail, saturating at mu = 1"),
-    Truth("steer_damping+tyre_slip", ("steer_damping", "tyre_slip"),
-          {"c_steer": 0.3, "T_coulomb": 0.05, "c_alpha": 13.0, "c_gamma": 0.8, "sigma_t": 0.2, "t_p": 0.02, "mu": 1.0},
-          "the steer friction and the tyres above together"),
-    Truth("rider_lean+steer_damping", ("rider_lean", "steer_damping"),
-          {"k_lean": 128.0, "c_lean": 50.0, "k3_lean": 200.0, "c_steer": 0.3, "T_coulomb": 0.05},
-          "the leaning upper body and the steer friction above together"),
-    Truth("strong_steer_damping", ("steer_damping",), {"c_steer": 0.5, "T_coulomb": 0.1},
-          "viscous 0.5 N m s/rad and Coulomb 0.1 N m steer friction"),
-)}
+TRUTHS: dict[str, Truth] = {
+    t.name: t
+    for t in (
+        Truth("null", (), {}, "parameter error within the stated uncertainty only"),
+        Truth(
+            "steer_damping",
+            ("steer_damping",),
+            {"c_steer": 0.3, "T_coulomb": 0.05},
+            "viscous 0.3 N m s/rad and Coulomb 0.05 N m steer friction",
+        ),
+        Truth(
+            "steer_inertia",
+            ("steer_inertia",),
+            {"I_steer": 0.2},
+            "0.2 kg m^2 about the steer axis added to the front frame's inertia tensor",
+        ),
+        Truth(
+            "steer_stiffness",
+            ("steer_stiffness",),
+            {"k_steer": 6.0, "k3_steer": 20.0},
+            "steer spring 6 N m/rad plus 20 N m/rad^3 cubic",
+        ),
+        Truth(
+            "passive_arms",
+            ("passive_arms",),
+            {"m_arm": 2.5, "k_arm": 4.0, "c_arm": 1.5},
+            "2.5 kg of arms at the grips, 4 N m/rad and 1.5 N m s/rad about the steer axis",
+        ),
+        Truth(
+            "rider_lean",
+            ("rider_lean",),
+            {"k_lean": 128.0, "c_lean": 50.0, "k3_lean": 200.0},
+            "upper body leaning on 128 N m/rad (+200 N m/rad^3) and 50 N m s/rad (Moore 2012 values)",
+        ),
+        Truth(
+            "tyre_slip",
+            ("tyre_slip",),
+            {"c_alpha": 13.0, "c_gamma": 0.8, "sigma_t": 0.2, "t_p": 0.02, "mu": 1.0},
+            "tyres 13/rad cornering, 0.8/rad camber, 0.2 m relaxation, 20 mm pneumatic trail, saturating at mu = 1",
+        ),
+        Truth(
+            "steer_damping+tyre_slip",
+            ("steer_damping", "tyre_slip"),
+            {
+                "c_steer": 0.3,
+                "T_coulomb": 0.05,
+                "c_alpha": 13.0,
+                "c_gamma": 0.8,
+                "sigma_t": 0.2,
+                "t_p": 0.02,
+                "mu": 1.0,
+            },
+            "the steer friction and the tyres above together",
+        ),
+        Truth(
+            "rider_lean+steer_damping",
+            ("rider_lean", "steer_damping"),
+            {"k_lean": 128.0, "c_lean": 50.0, "k3_lean": 200.0, "c_steer": 0.3, "T_coulomb": 0.05},
+            "the leaning upper body and the steer friction above together",
+        ),
+        Truth(
+            "strong_steer_damping",
+            ("steer_damping",),
+            {"c_steer": 0.5, "T_coulomb": 0.1},
+            "viscous 0.5 N m s/rad and Coulomb 0.1 N m steer friction",
+        ),
+    )
+}
 
 TRUTH_GEOMETRY = {"upper_mass_fraction": 0.45, "hip_shift": 0.05, "grip_rise": 0.08, "grip_widen": 0.02}
 """How the truth's rider differs from the diagnosis's default geometry (see the module docstring)."""
@@ -105,18 +151,22 @@ class Protocol:
 CONTROL = (0.0, 5.0, -2.0, -0.5)
 """Known stabilising control of the low-speed session (k_phi, k_phid, k_delta, k_deltad)."""
 
-FULL = Protocol((
-    Session("day1", (5.5, 6.2, 6.9, 7.6, 8.3, 9.0)),
-    Session("day2", (5.7, 6.4, 7.1, 7.8, 8.5, 9.2)),
-    Session("day3-controlled", (4.0, 4.7, 5.4, 6.1, 6.8, 7.5), CONTROL),
-))
+FULL = Protocol(
+    (
+        Session("day1", (5.5, 6.2, 6.9, 7.6, 8.3, 9.0)),
+        Session("day2", (5.7, 6.4, 7.1, 7.8, 8.5, 9.2)),
+        Session("day3-controlled", (4.0, 4.7, 5.4, 6.1, 6.8, 7.5), CONTROL),
+    )
+)
 """The documented protocol: three sessions of six runs (18 measured weave eigenvalues)."""
 
-QUICK = Protocol((
-    Session("day1", (5.5, 6.7, 7.9, 9.0)),
-    Session("day2", (5.8, 7.0, 8.2, 9.2)),
-    Session("day3-controlled", (4.0, 5.2, 6.4, 7.5), CONTROL),
-))
+QUICK = Protocol(
+    (
+        Session("day1", (5.5, 6.7, 7.9, 9.0)),
+        Session("day2", (5.8, 7.0, 8.2, 9.2)),
+        Session("day3-controlled", (4.0, 5.2, 6.4, 7.5), CONTROL),
+    )
+)
 """A reduced protocol for the unit test: three sessions of four runs."""
 
 
@@ -242,10 +292,28 @@ class TruthSimulator:
         v = dict(self._benchmark_values())
         upper = {"m_u": 0.0, "x_u": 0.0, "z_u": -1.0, "IUxx": 0.0, "IUxz": 0.0, "IUzz": 0.0, "z_lean": -0.5}
         bench = {k: v[k] for k in BENCH_ARGS}
-        zero = {"k_lean": 1.0, "c_lean": 0.0, "I_steer": 0.0, "c_steer": 0.0, "k_steer": 0.0, "m_arm": 0.0,
-                "k_arm": 0.0, "c_arm": 0.0, **{k: 0.3 for k in ("x_grip", "z_grip", "b_grip")}}
-        E, A, _ = gen.tyre_slip_descriptor(**bench, **upper, **zero, c_alpha=t["c_alpha"], c_gamma=t["c_gamma"],
-                                           sigma_t=t["sigma_t"], t_p=t["t_p"], g=self.g, v=speed)
+        zero = {
+            "k_lean": 1.0,
+            "c_lean": 0.0,
+            "I_steer": 0.0,
+            "c_steer": 0.0,
+            "k_steer": 0.0,
+            "m_arm": 0.0,
+            "k_arm": 0.0,
+            "c_arm": 0.0,
+            **{k: 0.3 for k in ("x_grip", "z_grip", "b_grip")},
+        }
+        E, A, _ = gen.tyre_slip_descriptor(
+            **bench,
+            **upper,
+            **zero,
+            c_alpha=t["c_alpha"],
+            c_gamma=t["c_gamma"],
+            sigma_t=t["sigma_t"],
+            t_p=t["t_p"],
+            g=self.g,
+            v=speed,
+        )
         slip, loads = gen.tyre_slip_contacts(**bench, **upper, g=self.g, v=speed)
         keep = [0, 1, 3, 4, 5, 6, 8, 9]
         E, A, slip = E[np.ix_(keep, keep)], A[np.ix_(keep, keep)], slip[:, keep]
@@ -325,8 +393,12 @@ def meijaard_matrices(v: dict[str, float]) -> tuple[np.ndarray, np.ndarray, np.n
     M = np.array([[ITxx, IAlx + mu * ITxz], [IAlx + mu * ITxz, IAll + 2 * mu * IAlz + mu**2 * ITzz]])
     K0 = np.array([[mT * zT, -SA], [-SA, -SA * sl]])
     K2 = np.array([[0.0, (ST - mT * zT) / w * cl], [0.0, (SA + SF * sl) / w * cl]])
-    C1 = np.array([[0.0, mu * ST + SF * cl + ITxz / w * cl - mu * mT * zT],
-                   [-(mu * ST + SF * cl), IAlz / w * cl + mu * (SA + ITzz / w * cl)]])
+    C1 = np.array(
+        [
+            [0.0, mu * ST + SF * cl + ITxz / w * cl - mu * mT * zT],
+            [-(mu * ST + SF * cl), IAlz / w * cl + mu * (SA + ITzz / w * cl)],
+        ]
+    )
     return M, C1, K0, K2
 
 
@@ -362,16 +434,20 @@ def _move_arms(v: dict[str, float], m_arm: float, grips: dict[str, float]) -> di
         return m2, x2, z2, Ixx2, Ixz2, Izz2
 
     out["mB"], out["xB"], out["zB"], out["IBxx"], out["IBxz"], out["IBzz"] = combine(
-        v["mB"], v["xB"], v["zB"], v["IBxx"], v["IBxz"], v["IBzz"], m_arm, -1)
+        v["mB"], v["xB"], v["zB"], v["IBxx"], v["IBxz"], v["IBzz"], m_arm, -1
+    )
     out["mH"], out["xH"], out["zH"], out["IHxx"], out["IHxz"], out["IHzz"] = combine(
-        v["mH"], v["xH"], v["zH"], v["IHxx"], v["IHxz"], v["IHzz"], m_arm, +1)
+        v["mH"], v["xH"], v["zH"], v["IHxx"], v["IHxz"], v["IHzz"], m_arm, +1
+    )
     return out
 
 
 # ---------------------------------------------------------------------------------------------
 # Measuring, diagnosing, scoring
 # ---------------------------------------------------------------------------------------------
-def measure(simulator: TruthSimulator, protocol: Protocol, rng: np.random.Generator) -> tuple[EigenvalueData, list[str]]:
+def measure(
+    simulator: TruthSimulator, protocol: Protocol, rng: np.random.Generator
+) -> tuple[EigenvalueData, list[str]]:
     """Run every session of the protocol and extract the weave eigenvalues as from real runs."""
     from bikerider.gap.extraction import weave_eigenvalue
 
@@ -396,9 +472,17 @@ def measure(simulator: TruthSimulator, protocol: Protocol, rng: np.random.Genera
             rows["group"].append(session.group)
             rows["gains"].append(session.gains)
     n = len(rows["speed"])
-    data = EigenvalueData(np.array(rows["speed"]), np.array(rows["value"], complex), np.array(rows["rs"]),
-                          np.array(rows["is"]), np.full(n, protocol.speed_noise), ["weave"] * n, rows["group"],
-                          np.array(rows["gains"], float).reshape(n, 4), [f"simulated run {k + 1}" for k in range(n)])
+    data = EigenvalueData(
+        np.array(rows["speed"]),
+        np.array(rows["value"], complex),
+        np.array(rows["rs"]),
+        np.array(rows["is"]),
+        np.full(n, protocol.speed_noise),
+        ["weave"] * n,
+        rows["group"],
+        np.array(rows["gains"], float).reshape(n, 4),
+        [f"simulated run {k + 1}" for k in range(n)],
+    )
     return data, notes
 
 
@@ -462,10 +546,26 @@ def run_case(model: GapModelInput, truth_name: str, seed: int, protocol: Protoco
         z_before = test.z(test.baseline)
         z_after = test.z(test.predictor.predict(fitted))
         actual = gap_shrink(z_before, z_after)
-    first = {k: v["value"] for k, v in result["ranking"][0]["parameters"].items()
-             if not k.startswith("parameters.")} if result["ranking"] else {}
-    return CaseResult(truth_name, truth.effects, seed, result["verdict"], ranking, ties, list(diagnosis.selected),
-                      predicted, actual, len(data), time.perf_counter() - start, notes + result["notes"], first)
+    first = (
+        {k: v["value"] for k, v in result["ranking"][0]["parameters"].items() if not k.startswith("parameters.")}
+        if result["ranking"]
+        else {}
+    )
+    return CaseResult(
+        truth_name,
+        truth.effects,
+        seed,
+        result["verdict"],
+        ranking,
+        ties,
+        list(diagnosis.selected),
+        predicted,
+        actual,
+        len(data),
+        time.perf_counter() - start,
+        notes + result["notes"],
+        first,
+    )
 
 
 @dataclass
@@ -497,8 +597,13 @@ class SuiteResult:
     @property
     def shrink_errors(self) -> np.ndarray:
         """Predicted minus actual shrinkage, for every case with a selection."""
-        return np.array([c.predicted_shrink - c.actual_shrink for c in self.cases
-                         if c.predicted_shrink is not None and c.actual_shrink is not None])
+        return np.array(
+            [
+                c.predicted_shrink - c.actual_shrink
+                for c in self.cases
+                if c.predicted_shrink is not None and c.actual_shrink is not None
+            ]
+        )
 
     def confusion(self) -> tuple[list[str], list[str], np.ndarray]:
         """Rows: truths; columns: predicted labels (first-ranked effect, or the verdict)."""
@@ -515,38 +620,68 @@ def run_suite(model: GapModelInput, cases: list[tuple[str, int]], protocol: Prot
     results = []
     for truth, seed in cases:
         result = run_case(model, truth, seed, protocol)
-        LOG.info("%s seed %d: verdict %s, first %s (%.1f s)", truth, seed, result.verdict,
-                 result.ranking[:1], result.seconds)
+        LOG.info(
+            "%s seed %d: verdict %s, first %s (%.1f s)", truth, seed, result.verdict, result.ranking[:1], result.seconds
+        )
         results.append(result)
     return SuiteResult(results)
 
 
-FULL_CASES = ([(name, 100 + k) for k, name in enumerate(
-    ["steer_damping", "steer_inertia", "steer_stiffness", "passive_arms", "rider_lean", "tyre_slip",
-     "steer_damping+tyre_slip", "rider_lean+steer_damping", "strong_steer_damping", "passive_arms"])]
-    + [("null", 200 + k) for k in range(10)])
+FULL_CASES = [
+    (name, 100 + k)
+    for k, name in enumerate(
+        [
+            "steer_damping",
+            "steer_inertia",
+            "steer_stiffness",
+            "passive_arms",
+            "rider_lean",
+            "tyre_slip",
+            "steer_damping+tyre_slip",
+            "rider_lean+steer_damping",
+            "strong_steer_damping",
+            "passive_arms",
+        ]
+    )
+] + [("null", 200 + k) for k in range(10)]
 """The documented case set: ten effect cases and ten null cases."""
 
 
 # ---------------------------------------------------------------------------------------------
 # Records of the steer-by-wire kind: short, strongly damped, under a speed-scheduled control
 # ---------------------------------------------------------------------------------------------
-SIL = ControlLaw("sil", {"k_phid": GainSchedule.make_ramp(2.0, 6.5, "below"),
-                         "k_phi": GainSchedule.make_ramp(0.7, 6.5, "above")},
-                 "steer into lean of the SBW experiment: 2 (6.5 - v) phid below 6.5 m/s, 0.7 (v - 6.5) phi above")
+SIL = ControlLaw(
+    "sil",
+    {"k_phid": GainSchedule.make_ramp(2.0, 6.5, "below"), "k_phi": GainSchedule.make_ramp(0.7, 6.5, "above")},
+    "steer into lean of the SBW experiment: 2 (6.5 - v) phid below 6.5 m/s, 0.7 (v - 6.5) phi above",
+)
 """The speed-scheduled control of the record cases, evaluated at the recorded speed (as the SBW's)."""
 
-RECORD_TRUTHS: dict[str, Truth] = {t.name: t for t in (
-    Truth("sbw_null", (), {}, "parameter error within the stated uncertainty only"),
-    Truth("sbw_friction", ("steer_friction",), {"T_coulomb": 0.12, "c_steer": 0.05},
-          "Coulomb 0.12 N m and viscous 0.05 N m s/rad steer friction (smoothed by tanh(deltad / 0.02))"),
-    Truth("sbw_inertia+damping", ("steer_inertia", "steer_damping"), {"I_steer": 0.03, "c_steer": 0.3},
-          "0.03 kg m^2 of steer inertia (a motor's rotor) and 0.3 N m s/rad viscous damping, together"),
-    Truth("sbw_speed+friction", ("speed_sensor", "steer_friction"), {"speed_scale": 1.04, "T_coulomb": 0.1,
-                                                                      "c_steer": 0.05},
-          "a speed sensor reading 4 % high (the controller uses it) and Coulomb 0.1 N m with viscous "
-          "0.05 N m s/rad steer friction, together"),
-)}
+RECORD_TRUTHS: dict[str, Truth] = {
+    t.name: t
+    for t in (
+        Truth("sbw_null", (), {}, "parameter error within the stated uncertainty only"),
+        Truth(
+            "sbw_friction",
+            ("steer_friction",),
+            {"T_coulomb": 0.12, "c_steer": 0.05},
+            "Coulomb 0.12 N m and viscous 0.05 N m s/rad steer friction (smoothed by tanh(deltad / 0.02))",
+        ),
+        Truth(
+            "sbw_inertia+damping",
+            ("steer_inertia", "steer_damping"),
+            {"I_steer": 0.03, "c_steer": 0.3},
+            "0.03 kg m^2 of steer inertia (a motor's rotor) and 0.3 N m s/rad viscous damping, together",
+        ),
+        Truth(
+            "sbw_speed+friction",
+            ("speed_sensor", "steer_friction"),
+            {"speed_scale": 1.04, "T_coulomb": 0.1, "c_steer": 0.05},
+            "a speed sensor reading 4 % high (the controller uses it) and Coulomb 0.1 N m with viscous "
+            "0.05 N m s/rad steer friction, together",
+        ),
+    )
+}
 """Hidden truths of the record cases (the candidate each stands for in ``effects``)."""
 
 
@@ -600,28 +735,50 @@ def measure_records(simulator: TruthSimulator, protocol: RecordProtocol, rng: np
         for k in range(protocol.per_speed):
             true_speed = set_speed + protocol.speed_jitter * float(rng.uniform(-1, 1))
             recorded = true_speed * scale
-            initial = {"phid": float(rng.choice([-1, 1]) * rng.uniform(0.4, 0.9)),
-                       "deltad": float(rng.uniform(-1.0, 1.0)), "delta": float(rng.uniform(-0.08, 0.08)),
-                       "phi": float(rng.uniform(-0.03, 0.03))}
+            initial = {
+                "phid": float(rng.choice([-1, 1]) * rng.uniform(0.4, 0.9)),
+                "deltad": float(rng.uniform(-1.0, 1.0)),
+                "delta": float(rng.uniform(-0.08, 0.08)),
+                "phi": float(rng.uniform(-0.03, 0.03)),
+            }
             duration = float(rng.uniform(*protocol.duration))
             t, states = simulator.states(true_speed, SIL(recorded), initial, duration, protocol.rate)
             roll_rate = states["phid"] + protocol.gyro_noise * rng.standard_normal(t.size)
             steer = np.round(states["delta"] / protocol.encoder_step) * protocol.encoder_step
             speed_column = recorded + protocol.speed_noise * rng.standard_normal(t.size)
             name = f"sim_{set_speed:.1f}mps[{k}]"
-            records.append(Record(name, "simulated", t - t[0], {"roll_rate": roll_rate, "steer_angle": steer},
-                                  float(np.mean(speed_column)), float(np.std(speed_column)), f"{set_speed:.1f} m/s",
-                                  SIL, float(np.mean(speed_column)), None, None, ("roll_rate",), True))
+            records.append(
+                Record(
+                    name,
+                    "simulated",
+                    t - t[0],
+                    {"roll_rate": roll_rate, "steer_angle": steer},
+                    float(np.mean(speed_column)),
+                    float(np.std(speed_column)),
+                    f"{set_speed:.1f} m/s",
+                    SIL,
+                    float(np.mean(speed_column)),
+                    None,
+                    None,
+                    ("roll_rate",),
+                    True,
+                )
+            )
     return records
 
 
-STEER_MOTOR = {"I_steer": (0.0, 0.1, "a steer motor's rotor through its gearbox (a steer-by-wire conversion, as the "
-                                     "SBW bicycle's [plausible] table)")}
+STEER_MOTOR = {
+    "I_steer": (
+        0.0,
+        0.1,
+        "a steer motor's rotor through its gearbox (a steer-by-wire conversion, as the "
+        "SBW bicycle's [plausible] table)",
+    )
+}
 """What the record cases' bicycle states as plausible: it is steer-by-wire, like the SBW bicycle."""
 
 
-def run_record_case(model: GapModelInput, truth_name: str, seed: int,
-                    protocol: RecordProtocol = RECORDS) -> CaseResult:
+def run_record_case(model: GapModelInput, truth_name: str, seed: int, protocol: RecordProtocol = RECORDS) -> CaseResult:
     """Simulate records from a hidden truth, diagnose them blind from the records, score on fresh records.
 
     The diagnosis sees ``model`` with :data:`STEER_MOTOR` as its ``[plausible]`` table.
@@ -653,21 +810,50 @@ def run_record_case(model: GapModelInput, truth_name: str, seed: int,
             after = p.predict_batch(p.layout(diagnosis.selected_fit.effects), diagnosis.selected_fit.values[None, :])[0]
         sigma = np.sqrt(p.var_data)
         actual = gap_shrink((p.baseline - p.y) / sigma, (after - p.y) / sigma)
-    first = {k: v["value"] for k, v in result["ranking"][0]["parameters"].items()
-             if not k.startswith("parameters.")} if result["ranking"] else {}
+    first = (
+        {k: v["value"] for k, v in result["ranking"][0]["parameters"].items() if not k.startswith("parameters.")}
+        if result["ranking"]
+        else {}
+    )
     if diagnosis.selected_fit is not None:
-        first = {k: float(v) for k, v in zip(diagnosis.selected_fit.names, diagnosis.selected_fit.values)
-                 if not k.startswith("parameters.")}
+        first = {
+            k: float(v)
+            for k, v in zip(diagnosis.selected_fit.names, diagnosis.selected_fit.values)
+            if not k.startswith("parameters.")
+        }
     notes = [f"{r['record']}: {r['reason']}" for r in result["records"]["reasons"]] if result["records"] else []
     how = result["how_far"] or {}
-    errors = ((how["data_error_before"], how["data_error_after"])
-              if how.get("data_error_before") is not None and how.get("data_error_after") is not None else None)
-    return CaseResult(truth_name, truth.effects, seed, result["verdict"], ranking, ties, list(diagnosis.selected),
-                      predicted, actual, len(diagnosis.record_rows), time.perf_counter() - start, notes, first,
-                      errors)
+    errors = (
+        (how["data_error_before"], how["data_error_after"])
+        if how.get("data_error_before") is not None and how.get("data_error_after") is not None
+        else None
+    )
+    return CaseResult(
+        truth_name,
+        truth.effects,
+        seed,
+        result["verdict"],
+        ranking,
+        ties,
+        list(diagnosis.selected),
+        predicted,
+        actual,
+        len(diagnosis.record_rows),
+        time.perf_counter() - start,
+        notes,
+        first,
+        errors,
+    )
 
 
-RECORD_CASES = [("sbw_friction", 300), ("sbw_friction", 301), ("sbw_inertia+damping", 302),
-                ("sbw_inertia+damping", 303), ("sbw_speed+friction", 304), ("sbw_speed+friction", 305),
-                ("sbw_null", 306), ("sbw_null", 307)]
+RECORD_CASES = [
+    ("sbw_friction", 300),
+    ("sbw_friction", 301),
+    ("sbw_inertia+damping", 302),
+    ("sbw_inertia+damping", 303),
+    ("sbw_speed+friction", 304),
+    ("sbw_speed+friction", 305),
+    ("sbw_null", 306),
+    ("sbw_null", 307),
+]
 """The documented record cases: three truths of two seeds and two null cases."""

@@ -49,6 +49,7 @@ Manifest (CSV)
 Every error names the file, the line and the value: a malformed manifest, a window outside its
 log, a column the log does not have, a control law that cannot be evaluated.
 """
+
 from __future__ import annotations
 
 import csv
@@ -62,15 +63,21 @@ from pathlib import Path
 import numpy as np
 
 from bikerider.errors import FileFormatError, InputError
-from bikerider.gap.control import GAIN_NAMES, ControlLaw, GainSchedule, NO_CONTROL
+from bikerider.gap.control import GAIN_NAMES, NO_CONTROL, ControlLaw, GainSchedule
 from bikerider.gap.records import SIGNALS, DetectorSettings, Record, detect_windows
 
 COLUMN_KEYS = SIGNALS + ("speed", "time")
 """Keys of a column map: the state signals, the speed and the time."""
 SPEED_SOURCES = ("column", "file_name", "value")
 SPEED_UNITS = {"m/s": 1.0, "km/h": 1 / 3.6}
-WINDOW_ALIASES = {"file": ("file", "path", "log"), "start": ("start", "start_sample"), "end": ("end", "end_sample"),
-                  "group": ("group",), "control": ("control", "law"), "speed": ("speed",)}
+WINDOW_ALIASES = {
+    "file": ("file", "path", "log"),
+    "start": ("start", "start_sample"),
+    "end": ("end", "end_sample"),
+    "group": ("group",),
+    "control": ("control", "law"),
+    "speed": ("speed",),
+}
 """Columns of a windows file (CSV manifest) and the names accepted for each."""
 
 
@@ -141,7 +148,7 @@ def read_log(path: str | Path, wanted: list[str], delimiter: str = ",") -> Log:
     width = max(index.values(), default=-1) + 1
     values = {name: [] for name in wanted}
     first = header_at + 2
-    for number, line in enumerate(lines[header_at + 1:], start=header_at + 2):
+    for number, line in enumerate(lines[header_at + 1 :], start=header_at + 2):
         if not line.strip() or line.lstrip().startswith("#"):
             continue
         cells = line.split(delimiter)
@@ -218,7 +225,9 @@ class ExperimentSettings:
         where = self.source or None
         for key in self.columns:
             if key not in COLUMN_KEYS:
-                raise InputError(f"columns.{key}", self.columns[key], "one of the signals " + ", ".join(COLUMN_KEYS), where)
+                raise InputError(
+                    f"columns.{key}", self.columns[key], "one of the signals " + ", ".join(COLUMN_KEYS), where
+                )
         if "roll_rate" not in self.columns:
             raise InputError("columns.roll_rate", "missing", "the log column of the roll rate", where)
         if "time" not in self.columns and self.sample_rate is None:
@@ -237,8 +246,12 @@ class ExperimentSettings:
             if name not in self.columns:
                 raise InputError("fit", name, "a signal the column map gives (columns." + name + ")", where)
         if self.default_law is not None and self.default_law not in self.laws:
-            raise InputError("control", self.default_law, "the name of a law defined under [control.<name>] ("
-                             + (", ".join(self.laws) or "none defined") + ")", where)
+            raise InputError(
+                "control",
+                self.default_law,
+                "the name of a law defined under [control.<name>] (" + (", ".join(self.laws) or "none defined") + ")",
+                where,
+            )
 
 
 @dataclass(frozen=True)
@@ -282,19 +295,36 @@ def read_manifest(path: str | Path) -> tuple[ExperimentSettings, list[Window]]:
     allowed = {"experiment", "columns", "speed", "control", "file"}
     for key in data:
         if key not in allowed:
-            raise InputError(key, data[key], "one of the tables " + ", ".join(f"[{k}]" for k in sorted(allowed)), where(key))
+            raise InputError(
+                key, data[key], "one of the tables " + ", ".join(f"[{k}]" for k in sorted(allowed)), where(key)
+            )
     exp = data.get("experiment", {})
     if not isinstance(exp, dict):
         raise InputError("experiment", exp, "a table", where("experiment"))
-    exp_keys = {"name", "description", "sample_rate", "time_column", "logs", "windows", "control", "group", "fit",
-                "delimiter", "detector"}
+    exp_keys = {
+        "name",
+        "description",
+        "sample_rate",
+        "time_column",
+        "logs",
+        "windows",
+        "control",
+        "group",
+        "fit",
+        "delimiter",
+        "detector",
+    }
     for key in exp:
         if key not in exp_keys:
             raise InputError(f"experiment.{key}", exp[key], "one of " + ", ".join(sorted(exp_keys)), where(key))
     columns = data.get("columns")
     if not isinstance(columns, dict):
-        raise InputError("columns", columns if columns is not None else "missing",
-                         "a table mapping signals to the logs' columns (roll_rate = \"...\")", where("columns"))
+        raise InputError(
+            "columns",
+            columns if columns is not None else "missing",
+            'a table mapping signals to the logs\' columns (roll_rate = "...")',
+            where("columns"),
+        )
     scale = columns.get("scale", {})
     columns = {k: v for k, v in columns.items() if k != "scale"}
     for key, value in columns.items():
@@ -342,11 +372,17 @@ def read_manifest(path: str | Path) -> tuple[ExperimentSettings, list[Window]]:
         here = f"{path}:{line}" if line else str(path)
         windows += _file_windows(entry, folder, here, text, line, path)
     if not windows:
-        raise FileFormatError(path, "no records: give [experiment] windows = \"FILE\" or [[file]] tables with windows")
+        raise FileFormatError(path, 'no records: give [experiment] windows = "FILE" or [[file]] tables with windows')
     for w in windows:
         if w.law is not None and w.law not in settings.laws:
-            raise InputError("control", w.law, "the name of a law defined under [control.<name>] ("
-                             + (", ".join(settings.laws) or "none defined") + ")", w.source)
+            raise InputError(
+                "control",
+                w.law,
+                "the name of a law defined under [control.<name>] ("
+                + (", ".join(settings.laws) or "none defined")
+                + ")",
+                w.source,
+            )
     return settings, windows
 
 
@@ -372,11 +408,19 @@ def _file_windows(entry: object, folder: Path, here: str, text: str, line: int, 
             raise InputError("file.windows", windows, "either windows or detect = true, not both", here)
         return [Window(file, None, None, here, group, law, speed, True)]
     if not isinstance(windows, list) or not windows:
-        raise InputError("file.windows", windows if windows is not None else "missing",
-                         "a list of [start, end] sample windows, or detect = true", here)
+        raise InputError(
+            "file.windows",
+            windows if windows is not None else "missing",
+            "a list of [start, end] sample windows, or detect = true",
+            here,
+        )
     out = []
     for pair in windows:
-        ok = isinstance(pair, list) and len(pair) == 2 and all(isinstance(x, int) and not isinstance(x, bool) for x in pair)
+        ok = (
+            isinstance(pair, list)
+            and len(pair) == 2
+            and all(isinstance(x, int) and not isinstance(x, bool) for x in pair)
+        )
         first = re.escape(str(pair[0])) if isinstance(pair, list) and pair else "windows"
         at = _line_of(text, rf"\[\s*{first}\s*,", line) or _line_of(text, r"^\s*windows\s*=", line)
         where = f"{manifest}:{at}" if at else here
@@ -386,8 +430,12 @@ def _file_windows(entry: object, folder: Path, here: str, text: str, line: int, 
     return out
 
 
-def read_experiment(path: str | Path, columns: str | None = None, sample_rate: float | None = None,
-                    laws: dict[str, ControlLaw] | None = None) -> tuple[ExperimentSettings, list[Window]]:
+def read_experiment(
+    path: str | Path,
+    columns: str | None = None,
+    sample_rate: float | None = None,
+    laws: dict[str, ControlLaw] | None = None,
+) -> tuple[ExperimentSettings, list[Window]]:
     """A manifest: TOML (everything in it), or a CSV of windows with the settings given here.
 
     ``columns`` is the column map as ``signal=column,...`` (``--columns``); ``laws`` the laws of
@@ -396,17 +444,26 @@ def read_experiment(path: str | Path, columns: str | None = None, sample_rate: f
     path = Path(path)
     if path.suffix.lower() == ".toml":
         if columns is not None or sample_rate is not None:
-            raise InputError("--columns/--sample-rate", "given", "no column map or sampling rate on the command line "
-                             "with a TOML manifest (it holds its own)", str(path))
+            raise InputError(
+                "--columns/--sample-rate",
+                "given",
+                "no column map or sampling rate on the command line with a TOML manifest (it holds its own)",
+                str(path),
+            )
         settings, windows = read_manifest(path)
         for name, law in (laws or {}).items():
             settings.laws.setdefault(name, law)
         return settings, windows
     if columns is None:
-        raise InputError("--columns", "missing", "the log columns of the signals (roll_rate=...,speed=...) for a CSV "
-                         "manifest", str(path))
-    settings = ExperimentSettings(parse_columns(columns), sample_rate=sample_rate, laws=dict(laws or {}),
-                                  source=str(path))
+        raise InputError(
+            "--columns",
+            "missing",
+            "the log columns of the signals (roll_rate=...,speed=...) for a CSV manifest",
+            str(path),
+        )
+    settings = ExperimentSettings(
+        parse_columns(columns), sample_rate=sample_rate, laws=dict(laws or {}), source=str(path)
+    )
     if len(settings.laws) == 1:
         settings.default_law = next(iter(settings.laws))
     if "speed" not in settings.columns:
@@ -415,11 +472,16 @@ def read_experiment(path: str | Path, columns: str | None = None, sample_rate: f
     windows = read_windows(path)
     for w in windows:
         if w.law is not None and w.law not in settings.laws:
-            raise InputError("control", w.law, "the name of a law given with --control ("
-                             + (", ".join(settings.laws) or "none given") + ")", w.source)
+            raise InputError(
+                "control",
+                w.law,
+                "the name of a law given with --control (" + (", ".join(settings.laws) or "none given") + ")",
+                w.source,
+            )
         if settings.speed_source == "value" and w.speed is None:
-            raise InputError("speed", "missing", "a speed column in the manifest or a speed column map (speed=...)",
-                             w.source)
+            raise InputError(
+                "speed", "missing", "a speed column in the manifest or a speed column map (speed=...)", w.source
+            )
     return settings, windows
 
 
@@ -444,7 +506,11 @@ def read_windows(path: str | Path, folder: Path | None = None) -> list[Window]:
     path = Path(path)
     folder = path.parent if folder is None else folder
     text = read_text(path)
-    rows = [(n, line) for n, line in enumerate(text.splitlines(), start=1) if line.strip() and not line.lstrip().startswith("#")]
+    rows = [
+        (n, line)
+        for n, line in enumerate(text.splitlines(), start=1)
+        if line.strip() and not line.lstrip().startswith("#")
+    ]
     if not rows:
         raise FileFormatError(path, "no header line (column names) found")
     header_line, header = rows[0]
@@ -456,21 +522,27 @@ def read_windows(path: str | Path, folder: Path | None = None) -> list[Window]:
             cols[key] = names.index(found[0])
     for key in ("file", "start", "end"):
         if key not in cols:
-            raise FileFormatError(path, f"missing column {key!r} (accepted: {', '.join(WINDOW_ALIASES[key])}; columns are "
-                                  f"{', '.join(names)})", header_line)
+            raise FileFormatError(
+                path,
+                f"missing column {key!r} (accepted: {', '.join(WINDOW_ALIASES[key])}; columns are {', '.join(names)})",
+                header_line,
+            )
     out = []
     for number, line in rows[1:]:
         cells = [c.strip() for c in next(csv.reader(io.StringIO(line)))]
         if len(cells) != len(names):
-            raise FileFormatError(path, f"expected {len(names)} comma-separated values ({', '.join(names)}), got {len(cells)}",
-                                  number)
+            raise FileFormatError(
+                path, f"expected {len(names)} comma-separated values ({', '.join(names)}), got {len(cells)}", number
+            )
         start, end = (_whole(cells[cols[k]], k, path, number) for k in ("start", "end"))
         speed = None
         if "speed" in cols and cells[cols["speed"]]:
             try:
                 speed = float(cells[cols["speed"]])
             except ValueError:
-                raise FileFormatError(path, f"speed = {cells[cols['speed']]!r}: expected a number [m/s]", number) from None
+                raise FileFormatError(
+                    path, f"speed = {cells[cols['speed']]!r}: expected a number [m/s]", number
+                ) from None
             if not (math.isfinite(speed) and speed > 0):
                 raise FileFormatError(path, f"speed = {cells[cols['speed']]}: expected a positive speed [m/s]", number)
         group = cells[cols["group"]] if "group" in cols and cells[cols["group"]] else None
@@ -503,7 +575,9 @@ def read_laws(table: object, path: Path | str, text: str | None = None) -> dict[
         line = _line_of(text, rf"^\s*\[\s*control\.{re.escape(name)}\s*\]") if text else None
         where = f"{path}:{line}" if line else path
         if not isinstance(entry, dict):
-            raise InputError(f"control.{name}", entry, "a table [control.<name>] of gains " + ", ".join(GAIN_NAMES), where)
+            raise InputError(
+                f"control.{name}", entry, "a table [control.<name>] of gains " + ", ".join(GAIN_NAMES), where
+            )
         gains = {}
         description = ""
         for key, raw in entry.items():
@@ -513,8 +587,9 @@ def read_laws(table: object, path: Path | str, text: str | None = None) -> dict[
                 description = _text(raw, f"control.{name}.description", here)
                 continue
             if key not in GAIN_NAMES:
-                raise InputError(f"control.{name}.{key}", raw, "one of the gains " + ", ".join(GAIN_NAMES) + " or description",
-                                 here)
+                raise InputError(
+                    f"control.{name}.{key}", raw, "one of the gains " + ", ".join(GAIN_NAMES) + " or description", here
+                )
             gains[key] = _schedule(raw, f"control.{name}.{key}", here)
         law = ControlLaw(name, gains, description, where)
         _check_law(law, where)
@@ -529,8 +604,9 @@ def _schedule(raw: object, name: str, where: str) -> GainSchedule:
             return GainSchedule.piecewise(raw["speed"], raw["gain"], name, where)
         if keys == {"K", "v0", "when"}:
             return GainSchedule.make_ramp(raw["K"], raw["v0"], raw["when"], name, where)
-        raise InputError(name, raw, 'a number, { speed = [...], gain = [...] } or { K = ..., v0 = ..., when = "below" }',
-                         where)
+        raise InputError(
+            name, raw, 'a number, { speed = [...], gain = [...] } or { K = ..., v0 = ..., when = "below" }', where
+        )
     return GainSchedule.constant(raw, name, where)  # type: ignore[arg-type]
 
 
@@ -540,8 +616,9 @@ def _check_law(law: ControlLaw, where: str) -> None:
     values = law(speeds)
     if not np.all(np.isfinite(values)):
         k = int(np.flatnonzero(~np.all(np.isfinite(values), axis=1))[0])
-        raise InputError(f"control.{law.name}", law.describe(), f"finite gains at every speed (not at {speeds[k]:g} m/s)",
-                         where)
+        raise InputError(
+            f"control.{law.name}", law.describe(), f"finite gains at every speed (not at {speeds[k]:g} m/s)", where
+        )
 
 
 def _read_speed(settings: ExperimentSettings, table: object, where) -> None:
@@ -569,8 +646,12 @@ def _read_speed(settings: ExperimentSettings, table: object, where) -> None:
     if "calibration" in table:
         cal = table["calibration"]
         if not (isinstance(cal, dict) and set(cal) == {"gain", "offset"}):
-            raise InputError("speed.calibration", cal, "{ gain = ..., offset = ... } (recorded = gain * true + offset)",
-                             where("calibration"))
+            raise InputError(
+                "speed.calibration",
+                cal,
+                "{ gain = ..., offset = ... } (recorded = gain * true + offset)",
+                where("calibration"),
+            )
         gain = _number(cal["gain"], "speed.calibration.gain", where("calibration"))
         offset = cal["offset"]
         if isinstance(offset, bool) or not isinstance(offset, (int, float)) or not math.isfinite(offset):
@@ -624,8 +705,11 @@ def load_records(settings: ExperimentSettings, windows: list[Window]) -> list[Re
         spans = [(window.start, window.end)]
         if window.detect:
             rate = settings.sample_rate or _rate_of(log, settings)
-            spans = detect_windows(log.columns[settings.columns["roll_rate"]] * settings.scale.get("roll_rate", 1.0),
-                                   rate, settings.detector)
+            spans = detect_windows(
+                log.columns[settings.columns["roll_rate"]] * settings.scale.get("roll_rate", 1.0),
+                rate,
+                settings.detector,
+            )
             if not spans:
                 continue
         for start, end in spans:
@@ -651,11 +735,17 @@ def _rate_of(log: Log, settings: ExperimentSettings) -> float:
 def _cut(log: Log, start: int, end: int, window: Window, settings: ExperimentSettings) -> Record:
     where = window.source
     if not (0 <= start < end):
-        raise FileFormatError(where.rsplit(":", 1)[0], f"window [{start}, {end}] of {log.path.name}: expected "
-                              "0 <= start < end", _line(where))
+        raise FileFormatError(
+            where.rsplit(":", 1)[0],
+            f"window [{start}, {end}] of {log.path.name}: expected 0 <= start < end",
+            _line(where),
+        )
     if end > log.n:
-        raise FileFormatError(where.rsplit(":", 1)[0], f"window [{start}, {end}] ends after the last sample of "
-                              f"{log.path.name} ({log.n} samples)", _line(where))
+        raise FileFormatError(
+            where.rsplit(":", 1)[0],
+            f"window [{start}, {end}] ends after the last sample of {log.path.name} ({log.n} samples)",
+            _line(where),
+        )
     name = f"{log.path.name}[{start}:{end}]"
     if "time" in settings.columns:
         t = log.columns[settings.columns["time"]][start:end]
@@ -670,8 +760,10 @@ def _cut(log: Log, start: int, end: int, window: Window, settings: ExperimentSet
             signals[signal] = values
             missing = np.flatnonzero(~np.isfinite(values))
             if missing.size and problem is None and signal in settings.fit + ("roll_rate",):
-                problem = (f"{signal} ({settings.columns[signal]}) has {missing.size} missing values in the window "
-                           f"(first at sample {start + int(missing[0])})")
+                problem = (
+                    f"{signal} ({settings.columns[signal]}) has {missing.size} missing values in the window "
+                    f"(first at sample {start + int(missing[0])})"
+                )
     if problem is None and not np.all(np.isfinite(time)):
         problem = "the time column has missing values in the window"
     elif problem is None and np.any(np.diff(time) <= 0):
@@ -683,8 +775,21 @@ def _cut(log: Log, start: int, end: int, window: Window, settings: ExperimentSet
     law = settings.laws[law_name] if law_name else NO_CONTROL
     group = window.group or (log.path.name.removesuffix(".gz") if settings.group == "file" else settings.group)
     measured = window.speed is None and settings.speed_source == "column"
-    return Record(name, where, time, signals, speed, speed_sigma, group, law, controller, (start, end), problem,
-                  tuple(settings.fit), measured)
+    return Record(
+        name,
+        where,
+        time,
+        signals,
+        speed,
+        speed_sigma,
+        group,
+        law,
+        controller,
+        (start, end),
+        problem,
+        tuple(settings.fit),
+        measured,
+    )
 
 
 def _line(where: str) -> int | None:
@@ -710,12 +815,20 @@ def _speed(log: Log, start: int, end: int, window: Window, settings: ExperimentS
     if settings.speed_source == "file_name":
         match = settings.speed_pattern.search(log.path.name)  # type: ignore[union-attr]
         if match is None:
-            raise FileFormatError(window.source.rsplit(":", 1)[0], f"speed.pattern {settings.speed_pattern.pattern!r} "
-                                  f"does not match the file name {log.path.name}", _line(window.source))
+            raise FileFormatError(
+                window.source.rsplit(":", 1)[0],
+                f"speed.pattern {settings.speed_pattern.pattern!r} does not match the file name {log.path.name}",
+                _line(window.source),
+            )
         try:
             value = float(match.group("speed")) * settings.speed_unit
         except ValueError:
-            raise FileFormatError(window.source.rsplit(":", 1)[0], f"speed {match.group('speed')!r} in the file name "
-                                  f"{log.path.name}: expected a number", _line(window.source)) from None
+            raise FileFormatError(
+                window.source.rsplit(":", 1)[0],
+                f"speed {match.group('speed')!r} in the file name {log.path.name}: expected a number",
+                _line(window.source),
+            ) from None
         return value, 0.0, value
-    raise InputError("speed", "missing", 'a speed for the file (speed.source = "value" needs file.speed)', window.source)
+    raise InputError(
+        "speed", "missing", 'a speed for the file (speed.source = "value" needs file.speed)', window.source
+    )

@@ -32,6 +32,7 @@ Identified canonical-matrix entries
 Every reader raises :class:`~bikerider.errors.FileFormatError` naming the file and line for a
 malformed line, and for a non-finite number or a speed that is not positive.
 """
+
 from __future__ import annotations
 
 import csv
@@ -50,8 +51,17 @@ from bikerider.gap.records import Record
 
 LOG = logging.getLogger(__name__)
 
-EIGENVALUE_COLUMNS = ("speed", "real", "imag", "real_sigma", "imag_sigma", "speed_sigma", "group", "mode",
-                      "control") + GAIN_NAMES
+EIGENVALUE_COLUMNS = (
+    "speed",
+    "real",
+    "imag",
+    "real_sigma",
+    "imag_sigma",
+    "speed_sigma",
+    "group",
+    "mode",
+    "control",
+) + GAIN_NAMES
 TIME_SERIES_COLUMNS = ("time", "roll_rate", "roll_angle", "steer_angle", "steer_rate", "speed")
 
 
@@ -101,8 +111,9 @@ def _read_table(path: str | Path) -> _Table:
                 raise FileFormatError(path, f"repeated column name in header {columns}", number)
             continue
         if len(cells) != len(columns):
-            raise FileFormatError(path, f"expected {len(columns)} comma-separated values ({', '.join(columns)}), "
-                                  f"got {len(cells)}", number)
+            raise FileFormatError(
+                path, f"expected {len(columns)} comma-separated values ({', '.join(columns)}), got {len(cells)}", number
+            )
         rows.append((number, cells))
     if columns is None:
         raise FileFormatError(path, "no header line (column names) found")
@@ -113,8 +124,16 @@ MAX_MAGNITUDE = 1e6
 """Largest magnitude of a number in a data file (speeds in m/s, eigenvalues in 1/s, times in s, gains)."""
 
 
-def _number(table: _Table, line: int, column: str, raw: str, *, positive: bool = False,
-            nonnegative: bool = False, optional: bool = False) -> float:
+def _number(
+    table: _Table,
+    line: int,
+    column: str,
+    raw: str,
+    *,
+    positive: bool = False,
+    nonnegative: bool = False,
+    optional: bool = False,
+) -> float:
     if raw == "":
         if optional:
             return math.nan
@@ -126,8 +145,11 @@ def _number(table: _Table, line: int, column: str, raw: str, *, positive: bool =
     if not math.isfinite(value):
         raise FileFormatError(table.path, f"{column} = {raw}: expected a finite number", line)
     if abs(value) > MAX_MAGNITUDE:  # no speed, eigenvalue, gain or time of a bicycle test; overflows later
-        raise FileFormatError(table.path, f"{column} = {raw}: expected a magnitude of at most {MAX_MAGNITUDE:g} "
-                              "(check the units and the column)", line)
+        raise FileFormatError(
+            table.path,
+            f"{column} = {raw}: expected a magnitude of at most {MAX_MAGNITUDE:g} (check the units and the column)",
+            line,
+        )
     if positive and not value > 0:
         raise FileFormatError(table.path, f"{column} = {raw}: expected a positive number", line)
     if nonnegative and value < 0:
@@ -142,20 +164,31 @@ def _meta_number(table: _Table, key: str, *, positive: bool = False, nonnegative
     return _number(table, line, key, raw, positive=positive, nonnegative=nonnegative)
 
 
-def _check_columns(table: _Table, allowed: tuple[str, ...], required: tuple[str, ...], ignored: tuple[str, ...] = ()) -> None:
+def _check_columns(
+    table: _Table, allowed: tuple[str, ...], required: tuple[str, ...], ignored: tuple[str, ...] = ()
+) -> None:
     header_line = min((n for n, _ in table.rows), default=2) - 1
     for name in table.columns:
         if name not in allowed and name not in ignored:
-            raise FileFormatError(table.path, f"unknown column {name!r}: expected some of {', '.join(allowed)}",
-                                  header_line)
+            raise FileFormatError(
+                table.path, f"unknown column {name!r}: expected some of {', '.join(allowed)}", header_line
+            )
     for name in required:
         if name not in table.columns:
-            raise FileFormatError(table.path, f"missing column {name!r} (columns are {', '.join(table.columns)})",
-                                  header_line)
+            raise FileFormatError(
+                table.path, f"missing column {name!r} (columns are {', '.join(table.columns)})", header_line
+            )
 
 
-def _row_law(table: _Table, line: int, cells: list[str], cols: dict[str, int], speed: float,
-             default: ControlLaw | None, laws: dict[str, ControlLaw]) -> tuple[np.ndarray, ControlLaw]:
+def _row_law(
+    table: _Table,
+    line: int,
+    cells: list[str],
+    cols: dict[str, int],
+    speed: float,
+    default: ControlLaw | None,
+    laws: dict[str, ControlLaw],
+) -> tuple[np.ndarray, ControlLaw]:
     """The control law of a row and its gains at the row's speed.
 
     A ``control`` column (or ``# control = NAME`` comment) names a law given with the data; gain
@@ -167,8 +200,12 @@ def _row_law(table: _Table, line: int, cells: list[str], cols: dict[str, int], s
         line, name = table.meta["control"]
     if name:
         if name not in laws:
-            raise FileFormatError(table.path, f"control = {name!r}: expected the name of a law given with --control "
-                                  f"({', '.join(laws) or 'none given'})", line)
+            raise FileFormatError(
+                table.path,
+                f"control = {name!r}: expected the name of a law given with --control "
+                f"({', '.join(laws) or 'none given'})",
+                line,
+            )
         law = laws[name]
         return law(speed), law
     given = {}
@@ -189,8 +226,9 @@ def _row_law(table: _Table, line: int, cells: list[str], cols: dict[str, int], s
 # ---------------------------------------------------------------------------------------------
 # Readers
 # ---------------------------------------------------------------------------------------------
-def read_eigenvalues(path: str | Path, law: ControlLaw | None = None,
-                     laws: dict[str, ControlLaw] | None = None) -> EigenvalueData:
+def read_eigenvalues(
+    path: str | Path, law: ControlLaw | None = None, laws: dict[str, ControlLaw] | None = None
+) -> EigenvalueData:
     """Read measured eigenvalues against speed (format in the module docstring).
 
     Parameters
@@ -213,6 +251,7 @@ def read_eigenvalues(path: str | Path, law: ControlLaw | None = None,
     if not table.rows:
         raise FileFormatError(table.path, "no data rows")
     for line, cells in table.rows:
+
         def get(name, **kw):
             return _number(table, line, name, cells[cols[name]], **kw) if name in cols else math.nan
 
@@ -222,10 +261,16 @@ def read_eigenvalues(path: str | Path, law: ControlLaw | None = None,
         is_ = get("imag_sigma", positive=True, optional=True) if "imag_sigma" in cols else math.nan
         ss = get("speed_sigma", nonnegative=True, optional=True) if "speed_sigma" in cols else math.nan
         if ss >= speed:  # the diagnosis evaluates the model at speed +/- speed_sigma
-            raise FileFormatError(table.path, f"speed_sigma = {ss:g}: expected a standard uncertainty below the "
-                                  f"speed ({speed:g} m/s)", line)
-        mode = cells[cols["mode"]].strip().lower() if "mode" in cols and cells[cols["mode"]].strip() else (
-            "weave" if imag != 0 else "auto")
+            raise FileFormatError(
+                table.path,
+                f"speed_sigma = {ss:g}: expected a standard uncertainty below the speed ({speed:g} m/s)",
+                line,
+            )
+        mode = (
+            cells[cols["mode"]].strip().lower()
+            if "mode" in cols and cells[cols["mode"]].strip()
+            else ("weave" if imag != 0 else "auto")
+        )
         if mode not in MODES and mode != "auto":
             raise FileFormatError(table.path, f"mode = {mode!r}: expected one of {', '.join(MODES)}", line)
         if mode != "weave" and imag != 0:
@@ -244,13 +289,24 @@ def read_eigenvalues(path: str | Path, law: ControlLaw | None = None,
         out["gains"].append(gains)
         out["source"].append(f"{table.path}:{line}")
         out["law"].append(row_law.name)
-    return EigenvalueData(np.array(out["speed"]), np.array(out["value"], complex), np.array(out["rs"]),
-                          np.array(out["is"]), np.array(out["ss"]), out["mode"], out["group"],
-                          np.array(out["gains"]), out["source"], out["law"], used_laws)
+    return EigenvalueData(
+        np.array(out["speed"]),
+        np.array(out["value"], complex),
+        np.array(out["rs"]),
+        np.array(out["is"]),
+        np.array(out["ss"]),
+        out["mode"],
+        out["group"],
+        np.array(out["gains"]),
+        out["source"],
+        out["law"],
+        used_laws,
+    )
 
 
-def read_perturbation(path: str | Path, speed: float | None = None, law: ControlLaw | None = None,
-                      group: str | None = None) -> Record:
+def read_perturbation(
+    path: str | Path, speed: float | None = None, law: ControlLaw | None = None, group: str | None = None
+) -> Record:
     """Read one perturbation run as a record (format in the module docstring).
 
     Raises
@@ -280,14 +336,19 @@ def read_perturbation(path: str | Path, speed: float | None = None, law: Control
     else:
         v_meta = _meta_number(table, "speed", positive=True)
         if v_meta is None:
-            raise FileFormatError(table.path, "no speed: give a 'speed' column, a '# speed = ...' comment or the speed argument")
+            raise FileFormatError(
+                table.path, "no speed: give a 'speed' column, a '# speed = ...' comment or the speed argument"
+            )
         v, v_sigma = v_meta, 0.0
     meta_sigma = _meta_number(table, "speed_sigma", nonnegative=True)
     if meta_sigma is not None:
         v_sigma = max(v_sigma, meta_sigma)
     if v_sigma >= v:  # the diagnosis evaluates the model at speed +/- its uncertainty
-        raise FileFormatError(table.path, f"speed {v:g} m/s with uncertainty {v_sigma:g} m/s: expected an "
-                              "uncertainty below the speed (a run whose speed varies this much has no one weave eigenvalue)")
+        raise FileFormatError(
+            table.path,
+            f"speed {v:g} m/s with uncertainty {v_sigma:g} m/s: expected an "
+            "uncertainty below the speed (a run whose speed varies this much has no one weave eigenvalue)",
+        )
     meta_gains = {k: _meta_number(table, k) for k in GAIN_NAMES}
     if any(g is not None for g in meta_gains.values()):
         run_law = ControlLaw.constant([meta_gains[k] or 0.0 for k in GAIN_NAMES])
@@ -299,8 +360,21 @@ def read_perturbation(path: str | Path, speed: float | None = None, law: Control
     time = data.pop("time")
     signals = {k: data[k] for k in ("roll_rate", "roll_angle", "steer_angle", "steer_rate") if k in data}
     fit = ("roll_rate", "steer_rate") if "steer_rate" in signals else ("roll_rate",)
-    return Record(table.path.name, str(table.path), time - time[0], signals, v, v_sigma, file_group, run_law, v,
-                  None, None, fit, "speed" in data)
+    return Record(
+        table.path.name,
+        str(table.path),
+        time - time[0],
+        signals,
+        v,
+        v_sigma,
+        file_group,
+        run_law,
+        v,
+        None,
+        None,
+        fit,
+        "speed" in data,
+    )
 
 
 def read_canonical(path: str | Path, groups: list[str] | None = None) -> CanonicalData:
@@ -313,8 +387,12 @@ def read_canonical(path: str | Path, groups: list[str] | None = None) -> Canonic
     """
     table = _read_table(path)
     required = ("rider", "environment", "coefficient", "identified", "sigma")
-    _check_columns(table, required + ("speed_min", "speed_max"), required,
-                   ignored=tuple(c for c in table.columns if c not in required + ("speed_min", "speed_max")))
+    _check_columns(
+        table,
+        required + ("speed_min", "speed_max"),
+        required,
+        ignored=tuple(c for c in table.columns if c not in required + ("speed_min", "speed_max")),
+    )
     cols = {name: i for i, name in enumerate(table.columns)}
     v_min = _meta_number(table, "speed_min", positive=True)
     v_max = _meta_number(table, "speed_max", positive=True)
@@ -331,8 +409,12 @@ def read_canonical(path: str | Path, groups: list[str] | None = None) -> Canonic
             continue
         values.append(_number(table, line, "identified", cells[cols["identified"]]))
         sigmas.append(_number(table, line, "sigma", cells[cols["sigma"]], positive=True))
-        lo = _number(table, line, "speed_min", cells[cols["speed_min"]], positive=True) if "speed_min" in cols else v_min
-        hi = _number(table, line, "speed_max", cells[cols["speed_max"]], positive=True) if "speed_max" in cols else v_max
+        lo = (
+            _number(table, line, "speed_min", cells[cols["speed_min"]], positive=True) if "speed_min" in cols else v_min
+        )
+        hi = (
+            _number(table, line, "speed_max", cells[cols["speed_max"]], positive=True) if "speed_max" in cols else v_max
+        )
         if lo is None or hi is None:
             raise FileFormatError(table.path, "no speed range: give speed_min and speed_max columns or comments", line)
         if not hi > lo:
@@ -365,8 +447,9 @@ def read_control(path: str | Path) -> dict[str, ControlLaw]:
     data = read_toml(path)
     table = data.get("control", data)
     if not isinstance(table, dict) or not table:
-        raise InputError("control", table, "a table of gains " + ", ".join(GAIN_NAMES) + " or laws [control.<name>]",
-                         str(path))
+        raise InputError(
+            "control", table, "a table of gains " + ", ".join(GAIN_NAMES) + " or laws [control.<name>]", str(path)
+        )
     if all(isinstance(v, dict) and "value" not in v for v in table.values()):
         return read_laws(table, path, read_text(path))
     unknown = sorted(set(table) - set(GAIN_NAMES))
@@ -387,6 +470,9 @@ def detect_kind(path: str | Path) -> str:
         return "eigenvalues"
     if {"coefficient", "identified"} <= names:
         return "canonical"
-    raise FileFormatError(table.path, "cannot tell the kind of data: expected columns speed, real, imag "
-                          "(eigenvalues), time, roll_rate (perturbation run) or rider, environment, coefficient, "
-                          f"identified, sigma (identified matrices); found {', '.join(table.columns)}")
+    raise FileFormatError(
+        table.path,
+        "cannot tell the kind of data: expected columns speed, real, imag "
+        "(eigenvalues), time, roll_rate (perturbation run) or rider, environment, coefficient, "
+        f"identified, sigma (identified matrices); found {', '.join(table.columns)}",
+    )

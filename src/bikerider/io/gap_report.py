@@ -1,4 +1,5 @@
 """Write a gap diagnosis's report: ``report.md`` and its PNG figures (see :mod:`bikerider.gap.report`)."""
+
 from __future__ import annotations
 
 from pathlib import Path
