@@ -45,6 +45,7 @@ docs: $(STAMP)
 	$(PY) docs/scripts/gap_real_data.py
 	$(PY) docs/scripts/gallery.py
 	$(PY) docs/scripts/gap_validation.py
+	$(PY) docs/scripts/gap_sbw_checks.py
 
 clean:
 	rm -rf $(VENV) build *.egg-info src/*.egg-info .pytest_cache

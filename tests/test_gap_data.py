@@ -10,9 +10,10 @@ import pytest
 
 import bikerider
 from bikerider.errors import FileFormatError, FitError, InputError
-from bikerider.gap import data as gd
 from bikerider.gap.extraction import weave_eigenvalue
-from bikerider.gap.model_input import load_model
+from bikerider.gap.records import fit_record
+from bikerider.io import gap_data as gd
+from bikerider.io.gap_model import load_model
 
 DATA = Path(bikerider.__file__).parent / "data"
 GAP = DATA / "gap"
@@ -39,7 +40,9 @@ def test_eigenvalue_file_with_comments_gains_and_defaults(tmp_path):
     assert e.mode == ["weave", "auto"]
     assert e.group == ["dayA", "dayA"]
     assert e.gains[:, 1].tolist() == [1.5, 1.5]
+    assert e.law == ["k_phid = 1.5", "k_phid = 1.5"]  # constant gains are a law named by its gains
     assert math.isnan(e.imag_sigma[1])
+    assert e.sigma_source == ["stated", "none"]
     assert e.source[1].endswith("e.csv:5")
 
 
@@ -107,13 +110,14 @@ def test_weave_extraction_refuses_noise():
         weave_eigenvalue(t, 0.01 * rng.standard_normal(t.size))
 
 
-def test_perturbation_file_gives_one_weave_row(tmp_path):
+def test_perturbation_file_gives_one_record_and_its_weave(tmp_path):
     t, y = _run(seed=2)
     text = "# speed = 6.5\n# group = r1\ntime,roll_rate\n" + "\n".join(f"{a:.3f},{b:.6f}" for a, b in zip(t, y))
     run = gd.read_perturbation(_write(tmp_path, "run.csv", text))
-    e = run.eigenvalues
-    assert e.speed.tolist() == [6.5] and e.group == ["r1"] and e.mode == ["weave"]
-    assert abs(e.value[0] - complex(-0.8, 3.0)) < 0.05
+    assert run.speed == 6.5 and run.group == "r1" and run.law.is_zero
+    fit = fit_record(run)
+    assert fit.used and abs(fit.estimate.eigenvalue - complex(-0.8, 3.0)) < 0.05
+    assert 0.9 < fit.estimate.r2 <= 1 and fit.estimate.cycles > 2
 
 
 def test_perturbation_speed_column_and_errors(tmp_path):
@@ -122,8 +126,8 @@ def test_perturbation_speed_column_and_errors(tmp_path):
         f"{a:.3f},{b:.6f},{5 + 0.01 * (k % 3)}" for k, (a, b) in enumerate(zip(t, y))
     )
     run = gd.read_perturbation(_write(tmp_path, "run.csv", text))
-    assert run.eigenvalues.speed[0] == pytest.approx(5.01, abs=0.001)
-    assert run.eigenvalues.speed_sigma[0] > 0
+    assert run.speed == pytest.approx(5.01, abs=0.001)
+    assert run.speed_sigma > 0
     no_speed = _write(tmp_path, "nospeed.csv", "time,roll_rate\n" + "\n".join(f"{a},{b}" for a, b in zip(t, y)))
     with pytest.raises(FileFormatError, match="no speed"):
         gd.read_perturbation(no_speed)
@@ -133,6 +137,10 @@ def test_perturbation_speed_column_and_errors(tmp_path):
     with pytest.raises(FileFormatError) as info:
         gd.read_perturbation(backwards)
     assert info.value.line == 5
+
+
+def test_a_run_of_noise_is_left_out_with_its_reason(tmp_path):
+    # before: read_perturbation raised FitError and the whole diagnosis stopped
     noisy = _write(
         tmp_path,
         "noise.csv",
@@ -142,14 +150,14 @@ def test_perturbation_speed_column_and_errors(tmp_path):
             for a, b in zip(np.arange(0, 5, 0.01), 0.01 * np.random.default_rng(0).standard_normal(500))
         ),
     )
-    with pytest.raises(FitError, match="noise.csv"):
-        gd.read_perturbation(noisy)
+    fit = fit_record(gd.read_perturbation(noisy))
+    assert not fit.used and "no oscillation" in fit.reason
 
 
 def test_example_perturbation_run_is_read():
-    run = gd.read_perturbation(EXAMPLES / "perturbation_run.csv")
-    assert run.eigenvalues.speed[0] == 7.0
-    assert run.eigenvalues.value[0].imag > 0 and run.eigenvalues.real_sigma[0] > 0
+    fit = fit_record(gd.read_perturbation(EXAMPLES / "perturbation_run.csv"))
+    assert fit.record.speed == 7.0
+    assert fit.used and fit.estimate.eigenvalue.imag > 0 and fit.estimate.real_sigma > 0
 
 
 # -- identified canonical entries ---------------------------------------------------------------
@@ -176,8 +184,9 @@ def test_canonical_file_errors(tmp_path):
 
 
 def test_control_file(tmp_path):
-    gains = gd.read_control(EXAMPLES / "control.toml")
-    assert gains.tolist() == [0.0, 5.0, -2.0, -0.5]
+    laws = gd.read_control(EXAMPLES / "control.toml")
+    (law,) = laws.values()
+    assert law([3.0, 6.0]).tolist() == [[0.0, 5.0, -2.0, -0.5]] * 2
     with pytest.raises(InputError, match="k_roll"):
         gd.read_control(_write(tmp_path, "c.toml", "[control]\nk_roll = 1\n"))
 

@@ -9,12 +9,13 @@ import pytest
 
 import bikerider
 from bikerider.errors import InputError
-from bikerider.gap.data import CanonicalData, EigenvalueData, read_canonical
+from bikerider.gap.data import CanonicalData, EigenvalueData
 from bikerider.gap.diagnosis import Diagnosis, gap_shrink, significantly_better
 from bikerider.gap.fit import GapProblem
-from bikerider.gap.model_input import load_model
 from bikerider.gap.models import BENCH_ARGS, EffectModel
 from bikerider.gap.predict import Predictor
+from bikerider.io.gap_data import read_canonical
+from bikerider.io.gap_model import load_model
 
 DATA = Path(bikerider.__file__).parent / "data"
 BP = DATA / "bicycleparameters"

@@ -11,8 +11,8 @@ from bikerider.generated import gap_effects as gen
 
 from bikerider.benchmark.model import label_modes
 from bikerider.errors import InputError
-from bikerider.gap.model_input import load_model
 from bikerider.gap.models import BENCH_ARGS, EffectModel, RiderGeometry
+from bikerider.io.gap_model import load_model
 
 ZERO_EXTRAS = dict(I_steer=0.0, c_steer=0.0, k_steer=0.0, m_arm=0.0, k_arm=0.0, c_arm=0.0)
 GRIPS = dict(x_grip=0.85, z_grip=-1.05, b_grip=0.3)
@@ -230,5 +230,6 @@ def test_each_effect_can_be_plotted_on_its_own(bench, geometry, tmp_path):
         "tyre_slip": {"c_alpha": 13.0, "c_gamma": 0.8, "sigma_t": 0.2, "t_p": 0.02},
     }.items():
         path = tmp_path / f"{name}.png"
-        plot_effect(EffectModel(values, geometry, {name: params}), np.linspace(1, 8, 15), path, title=name)
+        figure = plot_effect(EffectModel(values, geometry, {name: params}), np.linspace(1, 8, 15), title=name)
+        figure.savefig(path)
         assert path.read_bytes()[:4] == b"\x89PNG" and path.stat().st_size > 5000

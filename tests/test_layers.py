@@ -18,6 +18,7 @@ BELOW_IO = (
     "uncertainty",
     "engine",
     "fitting",
+    "gap",
     "inertia",
     "quantity",
     "errors",

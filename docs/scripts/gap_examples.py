@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[2]
-OUT = ROOT / "src" / "bikerider" / "data" / "gap_examples"
+OUT = Path(sys.argv[1]) if len(sys.argv) > 1 else ROOT / "src" / "bikerider" / "data" / "gap_examples"
 BP = ROOT / "src" / "bikerider" / "data" / "bicycleparameters"
 RIGID = BP / "bicycles" / "Rigid" / "Parameters" / "RigidBenchmark.txt"
 JASON = BP / "riders" / "Jason" / "Parameters" / "JasonRigidBenchmark.txt"
@@ -25,7 +25,7 @@ SEED = 7
 
 def main() -> int:
     from bikerider.gap import validation as V
-    from bikerider.gap.model_input import load_model
+    from bikerider.io.gap_model import load_model
 
     OUT.mkdir(parents=True, exist_ok=True)
     model = load_model(RIGID, JASON)
@@ -48,20 +48,21 @@ def main() -> int:
         )
     (OUT / "eigenvalues.csv").write_text("\n".join(header + rows) + "\n", encoding="utf-8")
 
-    # One perturbation run at 7 m/s, the raw time series a user would record.
+    # One perturbation run at 7 m/s, the raw time series a user would record: roll and steer rate.
     speed = 7.0
-    t, roll_rate = truth.run(speed, (0.0, 0.0, 0.0, 0.0), (0.3, 0.4), 6.0, 100.0)
-    noisy = roll_rate + V.FULL.gyro_noise * rng.standard_normal(roll_rate.size)
+    t, states = truth.states(speed, (0.0, 0.0, 0.0, 0.0), {"phid": 0.3, "deltad": 0.4}, 6.0, 100.0)
+    noisy = states["phid"] + V.FULL.gyro_noise * rng.standard_normal(t.size)
+    noisy_steer = states["deltad"] + V.FULL.gyro_noise * rng.standard_normal(t.size)
     keep = t >= V.FULL.start
     lines = [
-        "# Synthetic example (docs/scripts/gap_examples.py): roll rate of one perturbation run of the Davis",
-        "# bicycle with rider Jason and a hidden steer friction, after a roll-rate and steer-rate kick; gyro",
-        "# noise 0.01 rad/s; the first 0.3 s after the kick left out.",
+        "# Synthetic example (docs/scripts/gap_examples.py): roll and steer rate of one perturbation run of the",
+        "# Davis bicycle with rider Jason and a hidden steer friction, after a roll-rate and steer-rate kick;",
+        "# gyro noise 0.01 rad/s on both; the first 0.3 s after the kick left out.",
         f"# speed = {speed}",
         "# group = run7",
-        "time,roll_rate",
+        "time,roll_rate,steer_rate",
     ]
-    lines += [f"{tt:.2f},{yy:.5f}" for tt, yy in zip(t[keep], noisy[keep])]
+    lines += [f"{tt:.2f},{yy:.5f},{ss:.5f}" for tt, yy, ss in zip(t[keep], noisy[keep], noisy_steer[keep])]
     (OUT / "perturbation_run.csv").write_text("\n".join(lines) + "\n", encoding="utf-8")
 
     (OUT / "control.toml").write_text(

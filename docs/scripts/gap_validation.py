@@ -1,8 +1,12 @@
 """Run the gap diagnosis blind on data from hidden truths and write docs/gap_validation.md.
 
-Ten effect cases and ten null cases (:data:`bikerider.gap.validation.FULL_CASES`) on the Davis
-instrumented bicycle with rider Jason, each with the full protocol (three sessions of six runs).
-Run from the project root (takes a few minutes)::
+Part 1: ten effect cases and ten null cases (:data:`bikerider.gap.validation.FULL_CASES`) on the
+Davis instrumented bicycle with rider Jason, each with the full protocol (three sessions of six
+runs, weave eigenvalue tables); the results before issue 11 are quoted from
+``gap_validation_before.md`` beside this script.  Part 2: records of the steer-by-wire kind
+(:data:`bikerider.gap.validation.RECORD_CASES`): short, strongly damped decays under a
+speed-scheduled control, one or two effects at once, diagnosed from the records.
+Run from the project root (takes several minutes)::
 
     .venv/bin/python docs/scripts/gap_validation.py
 """
@@ -19,6 +23,26 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[2]
 BP = ROOT / "src" / "bikerider" / "data" / "bicycleparameters"
 OUT = ROOT / "docs" / "gap_validation.md"
+BEFORE = Path(__file__).with_name("gap_validation_before.md")
+EQUIVALENT = {"steer_damping": ("steer_damping", "steer_friction")}
+"""A hidden viscous damping is found when steer friction (which holds a viscous part) is selected."""
+
+
+def _before_selected() -> dict[tuple[str, int], str]:
+    """``(truth, seed) -> selected`` of the quoted results before this change."""
+    out = {}
+    for line in BEFORE.read_text(encoding="utf-8").splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if len(cells) == 11 and cells[1].isdigit():
+            out[(cells[0], int(cells[1]))] = cells[7]
+    return out
+
+
+def _found(case) -> bool:
+    """Records: every hidden effect stands in the selection (null: nothing structural selected)."""
+    if not case.hidden:
+        return case.verdict != "structural" and set(case.selected) <= {"parameters"}
+    return all(any(e in case.selected for e in EQUIVALENT.get(h, (h,))) for h in case.hidden)
 
 
 def _fitted(x: float) -> str:
@@ -34,7 +58,7 @@ def _f(x, digits=2):
 
 def main() -> int:
     from bikerider.gap import validation as V
-    from bikerider.gap.model_input import load_model
+    from bikerider.io.gap_model import load_model
 
     logging.basicConfig(level=logging.INFO, format="%(message)s")
     model = load_model(
@@ -53,7 +77,12 @@ def main() -> int:
         "Produced by `docs/scripts/gap_validation.py` (do not edit by hand). The unit test",
         "`tests/test_gap_validation.py` runs a reduced set of the same cases.",
         "",
-        "## Set-up",
+        "Part 1 diagnoses tables of weave eigenvalues; part 2 diagnoses raw records of the steer-by-wire",
+        "kind (short, strongly damped decays under a speed-scheduled control, two effects at once).",
+        "",
+        "## 1. Eigenvalue tables",
+        "",
+        "### Set-up",
         "",
         "The diagnosis (`bikerider gap`) sees only the nominal model (the Davis instrumented bicycle",
         "`RigidBenchmark.txt` with the lumped rider `JasonRigidBenchmark.txt`, BicycleParameters) and the",
@@ -92,7 +121,7 @@ def main() -> int:
         lines.append(f"| {name} | {V.TRUTHS[name].description} |")
     lines += [
         "",
-        "## Results",
+        "### Results",
         "",
         f"* Hidden effect ranked first, with a structural verdict: **{first} of {n_effect}** effect cases "
         "(goal: at least 9 of 10).",
@@ -108,7 +137,7 @@ def main() -> int:
     lines += [
         f"* {len(suite.cases)} cases in {elapsed:.0f} s (data generation, diagnosis and fresh test data).",
         "",
-        "### Confusion matrix",
+        "#### Confusion matrix",
         "",
         "Rows: hidden truth; columns: the first-ranked effect when the verdict is structural, otherwise the verdict.",
         "",
@@ -117,57 +146,151 @@ def main() -> int:
     ]
     for i, r in enumerate(rows):
         lines.append(f"| {r} | " + " | ".join(str(x) if x else "." for x in table[i]) + " |")
+    before = _before_selected()
     lines += [
         "",
-        "### Every case",
+        "#### Every case",
+        "",
+        "`selected before` is what the diagnosis selected at commit 780e89d (quoted below).",
         "",
         "| truth | seed | measured | verdict | ranking (first three) | first's fitted values | tied with first | "
-        "selected | predicted shrink | achieved shrink | correct |",
-        "|---|---|---|---|---|---|---|---|---|---|---|",
+        "selected | selected before | predicted shrink | achieved shrink | correct |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for c in suite.cases:
         fitted = ", ".join(f"{k} {_fitted(v)}" for k, v in c.first_parameters.items()) or "-"
         lines.append(
             f"| {c.truth} | {c.seed} | {c.n_measured} | {c.verdict} | {', '.join(c.ranking[:3])} | {fitted} | "
             f"{', '.join(c.ties_with_first) or '-'} | {', '.join(c.selected) or '-'} | "
+            f"{before.get((c.truth, c.seed), '?')} | "
             f"{_f(c.predicted_shrink)} | {_f(c.actual_shrink)} | {'yes' if c.correct else '**no**'} |"
         )
     misses = [c for c in suite.cases if not c.correct]
-    lines += ["", "## Reading the results", ""]
+    lines += ["", "### Reading the results", ""]
     for c in misses:
         if c.hidden:
             lines.append(
                 f"* Miss: `{c.truth}` (seed {c.seed}) gave `{c.top}` first"
-                + (
-                    f" and selected {', '.join(c.selected)}."
-                    if c.selected
-                    else " and selected nothing: no candidate "
-                    "predicted the held-out groups significantly better than the nominal model."
-                )
+                + (f" and selected {', '.join(c.selected)}." if c.selected else " and selected nothing.")
             )
         else:
             lines.append(f"* False alarm: null case, seed {c.seed}, verdict {c.verdict}.")
-    if any(c.truth == "strong_steer_damping" and not c.correct for c in misses):
-        lines += [
-            "  Coulomb friction of 0.1 N m is large against the steer torques of a small perturbation; its",
-            "  effect depends on the amplitude, which differs from run to run, and none of the linear candidates",
-            "  predicts the held-out sessions significantly better. The diagnosis reports a structural gap and",
-            "  selects nothing rather than naming an effect it cannot support.",
-        ]
+    unselected = [c for c in suite.effect_cases if c.correct and not c.selected]
     lines += [
+        f"* {len(unselected)} effect case{'s' if len(unselected) != 1 else ''} rank{'' if len(unselected) != 1 else 's'} "
+        f"the hidden effect first but select{'' if len(unselected) != 1 else 's'} nothing "
+        f"({', '.join(sorted({c.truth for c in unselected})) or '-'}): every plausible candidate is beaten by "
+        "an implausible one as simple, or the best fit needs implausible values. Above all the Coulomb-plus-viscous",
+        "  friction truths: at the small steer rates of these runs Coulomb friction acts like a viscous damping",
+        "  of about 1 N m s/rad, outside the viscous range (0.05-0.5), and a table of eigenvalues carries no steer",
+        "  rate to judge it as friction (with records, see part 2, it is fitted as friction in the time domain).",
+        "  Before this change the diagnosis selected such fits anyway, often together with `parameters` whose",
+        "  shifts failed their own prior test (the `selected before` column).",
         "* Ties are common between `steer_damping` and `passive_arms` (whose damping can stand in for it)",
         "  and between the steer effects and `rider_lean`; the tie rule ranks the simpler effect first.",
-        "* The fitted steer damping of the Coulomb-plus-viscous truths exceeds the viscous part: Coulomb",
-        "  friction acts as an amplitude-dependent viscous damping at the small steer rates of a",
-        "  perturbation run, which the plausibility check may then flag against the viscous literature range.",
         "* Compare the fitted values with the truths above: weave eigenvalues alone determine some parameters",
-        "  poorly (the tyres' cornering stiffness and relaxation length above all); the 95 % intervals and the",
-        "  plausibility flag in `bikerider gap`'s output say how well.",
+        "  poorly (the tyres' relaxation length above all); the 95 % intervals and the plausibility flags in",
+        "  `bikerider gap`'s output say how well.",
+        "",
+        "### Before this change (commit 780e89d)",
+        "",
+        "The same cases, diagnosed by the code before issue 11 (greedy selection, no plausibility rule on",
+        "selection, noise estimated from successive residuals where a table gives none):",
         "",
     ]
+    lines += [ln for ln in BEFORE.read_text(encoding="utf-8").splitlines() if not ln.startswith(("<!--", "     "))]
+    lines += _record_cases()
     OUT.write_text("\n".join(lines), encoding="utf-8")
     print(f"wrote {OUT}: first {first}/{n_effect}, false alarms {alarms}/{n_null}, {elapsed:.0f} s")
     return 0
+
+
+def _record_cases() -> list[str]:
+    """Part 2: the record cases (simulated, fitted and diagnosed from the records)."""
+    from bikerider.gap import validation as V
+    from bikerider.io.gap_model import load_model
+
+    model = load_model(BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt")
+    start = time.perf_counter()
+    cases = [V.run_record_case(model, truth, seed, V.RECORDS) for truth, seed in V.RECORD_CASES]
+    elapsed = time.perf_counter() - start
+    found = sum(_found(c) for c in cases if c.hidden)
+    n_effect = sum(1 for c in cases if c.hidden)
+    nulls = [c for c in cases if not c.hidden]
+    P = V.RECORDS
+    lines = [
+        "",
+        "## 2. Records of the steer-by-wire kind",
+        "",
+        "### Set-up",
+        "",
+        "The diagnosis sees the riderless Davis bicycle (`RigidBenchmark.txt`, BicycleParameters, its stated",
+        "uncertainties) with the steer-by-wire bicycle's `[plausible]` statement of a steer motor (added steer",
+        "inertia 0-0.1 kg m^2), and the raw records; it fits each record, removes the fit's bias, fits the",
+        "candidates (steer friction in the time domain) and searches singles and pairs on held-out speeds.",
+        "The records come from the same independent truth as part 1 (Meijaard's Appendix A typed in by hand,",
+        "`bikerider.gap.validation.meijaard_matrices`, integrated by LSODA; Coulomb friction smoothed by",
+        "`tanh(deltad / 0.02)`, not the diagnosis's 0.05), with the truth's parameters drawn within their",
+        "uncertainty:",
+        "",
+        f"* speeds {', '.join(f'{v:g}' for v in P.speeds)} m/s (one group each), {P.per_speed} records per speed, "
+        f"{P.duration[0]:g}-{P.duration[1]:g} s long at {P.rate:g} Hz (no time column), from a random post-push",
+        "  state (roll rate 0.4-0.9 rad/s either way, steer rate up to 1 rad/s, steer angle up to 0.08 rad);",
+        "* the control law of the SBW experiment, `sil` (T = 2 (6.5 - v) phid), at the *recorded* speed;",
+        f"* roll-rate noise {P.gyro_noise} rad/s, steer angle quantised to a 13-bit encoder, recorded speed with "
+        f"{P.speed_noise} m/s noise per sample.",
+        "",
+        "| truth | effects and values |",
+        "|---|---|",
+    ]
+    for name in dict.fromkeys(c.truth for c in cases):
+        lines.append(f"| {name} | {V.RECORD_TRUTHS[name].description} |")
+    lines += [
+        "",
+        "### Results",
+        "",
+        f"* Hidden effects all selected (steer friction standing for a viscous damping, which it holds): "
+        f"**{found} of {n_effect}** effect cases.",
+        f"* Null cases without a structural effect selected: **{sum(_found(c) for c in nulls)} of {len(nulls)}**.",
+        f"* {len(cases)} cases in {elapsed:.0f} s.",
+        "",
+        "| truth | seed | records used | verdict | selected | fitted values | held-out error | predicted shrink "
+        "| achieved shrink | found |",
+        "|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for c in cases:
+        fitted = ", ".join(f"{k} {_fitted(v)}" for k, v in c.first_parameters.items()) or "-"
+        held = "-" if c.data_errors is None else f"{c.data_errors[0]:.2f} -> {c.data_errors[1]:.2f}"
+        lines.append(
+            f"| {c.truth} | {c.seed} | {c.n_measured} | {c.verdict} | {', '.join(c.selected) or '-'} | "
+            f"{fitted} | {held} | {_f(c.predicted_shrink)} | {_f(c.actual_shrink)} | "
+            f"{'yes' if _found(c) else '**no**'} |"
+        )
+    extra = [c for c in cases if c.hidden and _found(c) and len(c.selected) > len(c.hidden)]
+    lines += [
+        "",
+        "The held-out error is the selection's root mean square of held-out residuals over the data's own noise",
+        "(each record's standard error), before and after; 1 is the noise floor. The shrinkage is the fraction",
+        "of the gap above that floor removed, `(G_before - G_after) / G_before` with `G = mean(z^2) - 1` and",
+        "`G_after` clipped at zero: 1.00 means the selection leaves nothing above the noise, on the held-out",
+        "records (predicted) and on fresh records from the same truth (achieved). Fitted values are those of",
+        "the selection (the shifts of a `parameters` selection are not listed). Records left out (each case",
+        "diagnoses the others):",
+        "",
+    ]
+    lines += [f"* {c.truth}, seed {c.seed}: {note}" for c in cases for note in c.notes] or ["* none"]
+    if extra:
+        lines += [
+            "",
+            "Selections with more effects than the truth: "
+            + "; ".join(
+                f"{c.truth} (seed {c.seed}) adds {', '.join(e for e in c.selected if not any(e in EQUIVALENT.get(h, (h,)) for h in c.hidden))}"
+                for c in extra
+            )
+            + " (see the fitted values: a partner near its neutral value changes little).",
+        ]
+    lines.append("")
+    return lines
 
 
 if __name__ == "__main__":

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import functools
 
 
 def add_parser(subparsers) -> None:
@@ -10,12 +11,13 @@ def add_parser(subparsers) -> None:
         "gap",
         help="diagnose the sim-to-real gap: where measurements depart from the model and which effect explains it",
         description=(
-            "Compare measured eigenvalues, perturbation runs or identified canonical matrices with the "
-            "Whipple model of the bicycle: map the gap against the combined uncertainty of data and "
-            "parameters, test whether plausible parameter errors explain it, rank candidate unmodelled "
-            "effects (steer damping, inertia, stiffness, passive arms, rider lean, tyre slip) by their "
-            "error on held-out groups of data, and report how much of the gap the selected effects remove. "
-            "See docs/gap.md."
+            "Compare measured eigenvalues, raw free-decay records (cut from an experiment's logs by a manifest), "
+            "perturbation runs or identified canonical matrices with the Whipple model of the bicycle under the "
+            "known control laws: map the gap against the combined uncertainty of data and parameters, test "
+            "whether plausible parameter errors explain it, rank candidate unmodelled effects (steer damping, "
+            "inertia, stiffness, friction, passive arms, rider lean, tyre slip, speed sensor) and pairs of them "
+            "by their error on held-out groups of data, and report how much of the gap the selected, plausible "
+            "effects remove. See docs/gap.md."
         ),
     )
     p.add_argument(
@@ -23,7 +25,8 @@ def add_parser(subparsers) -> None:
         metavar="FILE",
         required=True,
         help="benchmark parameters: a TOML file with the 25 benchmark names (values 'v +/- sigma'; "
-        "optional [rider], [upper_body], [grips] tables) or a BicycleParameters <Name>Benchmark.txt",
+        "optional [rider], [upper_body], [grips], [plausible] tables) or a BicycleParameters "
+        "<Name>Benchmark.txt",
     )
     p.add_argument(
         "--rider",
@@ -41,15 +44,36 @@ def add_parser(subparsers) -> None:
         "--data",
         metavar="FILE",
         nargs="+",
-        required=True,
+        default=[],
         help="data files (CSV): measured eigenvalues (speed, real, imag, ...), perturbation runs "
         "(time, roll_rate, ...) or identified canonical entries (rider, environment, coefficient, "
         "identified, sigma); the kind is detected from the header",
     )
     p.add_argument(
+        "--experiment",
+        metavar="FILE",
+        nargs="+",
+        default=[],
+        help="manifests of raw records: a TOML file (logs, column map, sampling rate, windows or "
+        "detection, speed source, groups, control laws) or a CSV of windows (file, start, end "
+        "[, group, control, speed]) with --columns and --sample-rate",
+    )
+    p.add_argument(
+        "--columns",
+        metavar="MAP",
+        help="for a CSV manifest: the logs' columns, e.g. roll_rate=lean_rate,steer_angle=fork_angle,speed=speed",
+    )
+    p.add_argument(
+        "--sample-rate",
+        metavar="HZ",
+        type=float,
+        help="for a CSV manifest whose logs have no time column: samples per second",
+    )
+    p.add_argument(
         "--control",
         metavar="FILE",
-        help="TOML with the known control gains k_phi, k_phid, k_delta, k_deltad for rows that give none",
+        help="TOML with the known control: [control] constant gains k_phi, k_phid, k_delta, k_deltad, or "
+        "named laws [control.<name>] whose gains may change with speed; acts where the data name none",
     )
     p.add_argument("--speed", metavar="V", type=float, help="speed [m/s] of perturbation runs whose file gives none")
     p.add_argument(
@@ -61,7 +85,7 @@ def add_parser(subparsers) -> None:
         "--effects",
         metavar="E1,E2",
         help="candidate effects (default: all of parameters, steer_damping, steer_inertia, steer_stiffness, "
-        "passive_arms, rider_lean, tyre_slip)",
+        "passive_arms, rider_lean, tyre_slip, speed_sensor, steer_friction)",
     )
     p.add_argument("--json", action="store_true", help="print one JSON object instead of text")
     p.add_argument("--report", metavar="DIR", help="write report.md and PNG figures into DIR")
@@ -75,36 +99,33 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
 
     from bikerider.errors import InputError
-    from bikerider.gap import data as gap_data
-    from bikerider.gap.diagnosis import diagnose
-    from bikerider.gap.effects import EFFECT_NAMES, effect
-    from bikerider.gap.model_input import load_model
-    from bikerider.gap.report import summary_text, write_report
+    from bikerider.gap.report import summary_text
 
     if not (math.isfinite(args.rider_rel_sigma) and 0 <= args.rider_rel_sigma < 1):
         raise InputError("--rider-rel-sigma", args.rider_rel_sigma, "a relative uncertainty in [0, 1)")
-    model = load_model(args.model, args.rider, rider_rel_sigma=args.rider_rel_sigma)
-    gains = gap_data.read_control(args.control) if args.control else None
-    groups = [g.strip() for g in args.groups.split(",")] if args.groups else None
-    eigen, canonical = [], []
-    for path in args.data:
-        kind = gap_data.detect_kind(path)
-        if kind == "eigenvalues":
-            eigen.append(gap_data.read_eigenvalues(path, gains))
-        elif kind == "perturbation":
-            eigen.append(gap_data.read_perturbation(path, args.speed, gains).eigenvalues)
-        else:
-            canonical.append(gap_data.read_canonical(path, groups))
-    effects = EFFECT_NAMES
-    if args.effects:
-        effects = tuple(e.strip() for e in args.effects.split(","))
-        for name in effects:
-            effect(name)
-    diagnosis = diagnose(
-        model, gap_data.EigenvalueData.concatenate(eigen), gap_data.CanonicalData.concatenate(canonical), effects
+    if not args.data and not args.experiment:
+        raise InputError(
+            "--data/--experiment", "missing", "data files (--data) or a manifest of records (--experiment)"
+        )
+    if args.sample_rate is not None and not (math.isfinite(args.sample_rate) and args.sample_rate > 0):
+        raise InputError("--sample-rate", args.sample_rate, "a positive sampling rate [Hz]")
+    diagnosis = _diagnose_files(
+        args.model,
+        tuple(args.data),
+        tuple(args.experiment),
+        args.rider,
+        args.rider_rel_sigma,
+        args.control,
+        args.speed,
+        args.groups,
+        args.effects,
+        args.columns,
+        args.sample_rate,
     )
     result = diagnosis.as_dict()
     if args.report:
+        from bikerider.io.gap_report import write_report
+
         path = write_report(diagnosis, args.report, title=f"Sim-to-real gap: {args.model}")
         result["report"] = str(path)
     if args.json:
@@ -114,6 +135,95 @@ def run(args: argparse.Namespace) -> int:
         if args.report:
             print(f"\nReport: {result['report']}")
     return 0
+
+
+def diagnose_files(
+    model: str,
+    data: tuple[str, ...] = (),
+    experiment: tuple[str, ...] = (),
+    *,
+    rider: str | None = None,
+    rider_rel_sigma: float = 0.0,
+    control: str | None = None,
+    speed: float | None = None,
+    groups: str | None = None,
+    effects: str | None = None,
+    columns: str | None = None,
+    sample_rate: float | None = None,
+):
+    """Read every input of a diagnosis from its files and run it (the command's work, without output).
+
+    Arguments as the command's options (``groups`` and ``effects`` comma-separated).  The result is
+    cached within a process for the same arguments and unchanged input files (the documents and the
+    tests of the shipped steer-by-wire experiment share one run; the command itself does not cache).
+    """
+    import os
+
+    files = [model, rider, control, *data, *experiment]
+    stamp = tuple(
+        (str(f), os.stat(f).st_mtime_ns, os.stat(f).st_size) if f and os.path.isfile(f) else (str(f), None)
+        for f in files
+    )
+    return _cached(
+        stamp,
+        model,
+        tuple(data),
+        tuple(experiment),
+        rider,
+        rider_rel_sigma,
+        control,
+        speed,
+        groups,
+        effects,
+        columns,
+        sample_rate,
+    )
+
+
+@functools.lru_cache(maxsize=2)
+def _cached(stamp, *args):
+    return _diagnose_files(*args)
+
+
+def _diagnose_files(
+    model, data, experiment, rider, rider_rel_sigma, control, speed, groups, effects, columns, sample_rate
+):
+    from bikerider.gap.data import CanonicalData, EigenvalueData
+    from bikerider.gap.diagnosis import diagnose
+    from bikerider.gap.effects import EFFECT_NAMES, effect
+    from bikerider.gap.records import fit_records
+    from bikerider.io import gap_data
+    from bikerider.io.experiment import load_records, read_experiment
+    from bikerider.io.gap_model import load_model
+
+    loaded = load_model(model, rider, rider_rel_sigma=rider_rel_sigma)
+    laws = gap_data.read_control(control) if control else {}
+    default_law = next(iter(laws.values())) if len(laws) == 1 else None
+    keep = [g.strip() for g in groups.split(",")] if groups else None
+    eigen, canonical, records = [], [], []
+    for path in data:
+        kind = gap_data.detect_kind(path)
+        if kind == "eigenvalues":
+            eigen.append(gap_data.read_eigenvalues(path, default_law, laws))
+        elif kind == "perturbation":
+            records.append(gap_data.read_perturbation(path, speed, default_law))
+        else:
+            canonical.append(gap_data.read_canonical(path, keep))
+    for path in experiment:
+        settings, windows = read_experiment(path, columns, sample_rate, laws)
+        records += load_records(settings, windows)
+    candidates = EFFECT_NAMES
+    if effects:
+        candidates = tuple(e.strip() for e in effects.split(","))
+        for name in candidates:
+            effect(name)
+    return diagnose(
+        loaded,
+        EigenvalueData.concatenate(eigen),
+        CanonicalData.concatenate(canonical),
+        candidates,
+        fit_records(records),
+    )
 
 
 def _plain(value, np):

@@ -45,8 +45,6 @@ MIN_CYCLES = 1.0
 MIN_AMPLITUDE_SIGNIFICANCE = 10.0
 """The fitted amplitude must exceed this many of its standard errors."""
 
-_PARAMETERS = ("omega_d", "sigma", "offset", "A", "B", "drift")
-
 
 @dataclass(frozen=True)
 class DampedOscillationFit:

@@ -6,10 +6,14 @@ summarised in a gap map by mode (weave, capsize, castor, or identified canonical
 band and quantity (real part, imaginary part, entry), each cell with its chi-square and p-value.
 
 Whether.  The whole gap is tested with the full covariance, ``chi2 = r^T (D + J J^T)^-1 r`` with
-``n`` degrees of freedom.  A gap below :data:`ALPHA` gives the verdict ``none``.  Otherwise the
-benchmark parameters are fitted with their uncertainties as a Gaussian prior (maximum a
-posteriori); if the fitted model passes the same test (data plus prior chi-square, ``n`` degrees
-of freedom) plausible parameter errors explain the gap (``parameters``), else it is ``structural``.
+``n`` degrees of freedom, and against the data's noise alone, ``r^T D^-1 r``.  Not significant at
+:data:`ALPHA` against either: verdict ``none``.  Significant against the data alone but within the
+combined uncertainty: the parameters' uncertainty covers the gap, verdict ``parameters``.  Otherwise
+the benchmark parameters are fitted with their uncertainties as a Gaussian prior (maximum a
+posteriori); if the fitted model passes the same test (data plus prior chi-square, ``n`` degrees of
+freedom) plausible parameter errors explain the gap (``parameters``), else it is ``structural``.
+With verdict ``parameters`` the parameter fit is selected when it is plausible; when it needs
+implausible shifts the candidates are compared as for a structural gap.
 
 Which.  Folds are the data's groups (runs, riders, environments), or, for a single group, contiguous
 speed bands; never random points.  Every candidate is fitted on the training folds and scored on
@@ -18,9 +22,25 @@ held-out points.  Candidates are ranked by it; a candidate within :data:`TIE_REL
 one, or not significantly better at :data:`TIE_P`, is
 tied with it, and within a tie the candidate with fewer fitted parameters ranks first (Occam).
 "Better" is a paired bootstrap of the held-out points' RMS error (:func:`significantly_better`).
-For a structural gap, effects are added greedily (each round the best-ranked candidate fitted
-jointly with those already chosen) while the held-out error improves significantly (the same
-paired test, and by more than :data:`TIE_RELATIVE`).
+Pairs are cross-validated as well (fitted jointly on the same folds): every pair of candidates that
+each, alone, predict the held-out folds better than the nominal model (an effect that makes the
+held-out predictions worse on its own is not searched further).
+
+Plausible.  A candidate fitted to all the data is plausible when every fitted value's 95 % interval
+reaches its plausible range (the literature's, or the bicycle's own ``[plausible]`` table), no value
+is pinned at a bound of the search, and every value is determined by the data (its standard error
+no larger than the width of its plausible range).  ``parameters`` is plausible when its shifts pass their
+prior test (chi-square at 1 %) with none pinned at a bound.  A set of two is plausible when both
+parts are, fitted jointly.
+
+Selection (structural verdict).  The first plausible single candidate of the ranking that beats the
+nominal model significantly on the held-out folds is selected; a plausible pair replaces it when the
+single leaves a gap above the noise floor (held-out RMS error against the data's noise above one) and
+the pair beats it significantly.  An implausible candidate is never selected: when the best held-out
+fit needs implausible values the result says so, with the values (``best_implausible``); and when
+an implausible fit with no more fitted parameters beats the plausible choice significantly, nothing
+is selected (a plausible candidate that explains clearly less than an equally simple one would
+mislead).
 
 How far.  For the selection, the held-out error before and after per fold and overall, and the
 fraction of the gap above the noise floor removed: with ``G = mean(z^2) - 1`` (the noise floor of
@@ -32,14 +52,23 @@ from __future__ import annotations
 import logging
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from bikerider.errors import InputError
 from bikerider.gap.data import CanonicalData, EigenvalueData
-from bikerider.gap.effects import EFFECT_NAMES, EFFECTS, LITERATURE_EXTRA
+from bikerider.gap.effects import (
+    COULOMB_RANGE,
+    EFFECT_NAMES,
+    EFFECTS,
+    LITERATURE_EXTRA,
+    OBSERVATION_EFFECTS,
+    TIME_DOMAIN_EFFECTS,
+)
 from bikerider.gap.fit import EffectFit, GapProblem
 from bikerider.gap.model_input import GapModelInput
+from bikerider.gap.records import RecordFit, eigenvalues_of
 
 LOG = logging.getLogger(__name__)
 
@@ -49,8 +78,15 @@ TIE_RELATIVE = 0.05
 """Held-out errors closer than this fraction of the better one are a tie."""
 TIE_P = 0.05
 """One-sided p-value a better held-out error must reach to break a tie."""
-MAX_SELECTED = 3
-"""Most effects the greedy selection adds."""
+MAX_SELECTED = 2
+"""Most effects selected together (pairs are searched on the held-out folds)."""
+TIME_DOMAIN_PARTNERS = ("steer_inertia", "steer_stiffness", "speed_sensor")
+"""Linear candidates searched together with steer friction in the time domain: a steer motor's rotor
+inertia, a spring, and an error of the speed sensor (the other pairs are searched between linear
+candidates only, to keep the time-domain fits few)."""
+UNDETERMINED = 1.0
+"""A fitted value whose standard error exceeds this many times the width of its plausible range is
+not determined by the data (the data narrow it down less than the literature already does)."""
 N_SPEED_BANDS = 3
 UNPREDICTED_Z = 1e3
 """Normalised residual given to a held-out point the fitted model cannot predict (singular model)."""
@@ -72,6 +108,11 @@ class CrossValidation:
     shrink : float or None
         Fraction of the gap above the noise floor removed (``None`` without a gap above it).
     fits : list of EffectFit
+    data_before, data_after, data_shrink : float or None
+        The same against the data's own uncertainty alone (residuals over the data's standard
+        uncertainty, the parameters' left out): how far the held-out predictions are from the
+        measurements in units of their noise, which stays meaningful when the parameters'
+        uncertainty covers the gap.
     """
 
     effects: tuple[str, ...]
@@ -82,6 +123,9 @@ class CrossValidation:
     error_after: float
     shrink: float | None
     fits: list[EffectFit] = field(default_factory=list)
+    data_before: float | None = None
+    data_after: float | None = None
+    data_shrink: float | None = None
 
 
 def rms(z: np.ndarray) -> float:
@@ -126,41 +170,251 @@ class Diagnosis:
     ----------
     model : GapModelInput
     eigen : EigenvalueData
+        Eigenvalue rows from tables.
     canonical : CanonicalData
     effects : sequence of str, optional
         Candidates (default: all of :data:`EFFECT_NAMES`).
+    records : list of RecordFit, optional
+        Fitted records (:func:`bikerider.gap.records.fit_records`); those fitted become eigenvalue
+        rows, corrected for the extraction's bias (:mod:`bikerider.gap.timedomain`), and the others
+        are left out with their reason.
+
+    Raises
+    ------
+    InputError
+        When no observation remains (every record left out): too few records for a diagnosis.
     """
 
-    def __init__(self, model: GapModelInput, eigen: EigenvalueData, canonical: CanonicalData, effects=EFFECT_NAMES):
+    def __init__(
+        self,
+        model: GapModelInput,
+        eigen: EigenvalueData,
+        canonical: CanonicalData,
+        effects=EFFECT_NAMES,
+        records: list[RecordFit] | None = None,
+    ):
         start = time.perf_counter()
+        self.model_input = model
+        self.records = [replace(f) for f in records or []]  # copies: records left out here get their reason
+        self.record_rows: dict[int, int] = {}  # index in self.records -> eigenvalue row
+        self._time_domain_full: dict[tuple[str, ...], EffectFit] = {}
+        self.bias = np.zeros(0, complex)
+        eigen = self._with_records(model, eigen)
+        if len(eigen) + len(canonical) == 0:
+            if not self.records:
+                raise InputError("data", "empty", "at least one measured eigenvalue or identified entry")
+            left = [f for f in self.records if not f.used]
+            reasons = "; ".join(f"{f.record.name}: {f.reason}" for f in left[:3]) + (" ..." if len(left) > 3 else "")
+            raise InputError(
+                "data",
+                f"{len(left)} of {len(self.records)} records left out",
+                f"enough records for a diagnosis: none could be used ({reasons})",
+            )
         self.problem = GapProblem(model, eigen, canonical)
         self.effects = [e for e in effects]
-        self.not_applicable = {
-            e: "needs a rider on the bicycle (the model has none)"
-            for e in self.effects
-            if EFFECTS[e].needs_rider and model.geometry.upper_body is None
-        }
+        self.not_applicable = {}
+        for e in self.effects:
+            if EFFECTS[e].needs_rider and model.geometry.upper_body is None:
+                self.not_applicable[e] = "needs a rider on the bicycle (the model has none)"
+            elif e in OBSERVATION_EFFECTS and not np.any(eigen.speed_sensor):
+                self.not_applicable[e] = (
+                    "needs records whose speed a sensor read during the test (a speed column); "
+                    "the speeds given are taken as the speeds the bicycle ran at"
+                )
+            elif EFFECTS[e].needs_records and not self._time_domain_ready():
+                self.not_applicable[e] = (
+                    "fitted in the time domain: needs every eigenvalue to come from a record "
+                    "(uniformly sampled) and records in at least two groups"
+                )
         if not self.problem.free and "parameters" in self.effects:
             self.not_applicable["parameters"] = "the model file gives no parameter uncertainties"
         self.candidates = [e for e in self.effects if e not in self.not_applicable]
         self.folds = self._folds()
         self.gap_map = self._gap_map()
         self.gap_test = self._gap_test()
-        self.parameter_fit = self.problem.fit(("parameters",)) if "parameters" in self.candidates else None
+        self.full_fits: dict[tuple[str, ...], EffectFit] = {}
+        self.parameter_fit = self.fit_of(("parameters",)) if "parameters" in self.candidates else None
         self.verdict = self._verdict()
         self.ranking: list[dict] = []
         self.cv: dict[tuple[str, ...], CrossValidation] = {}
         self.selected: list[str] = []
-        self.selection_steps: list[dict] = []
+        self.selection: dict = {}
+        self.best_implausible: dict | None = None
+        self.best_single_implausible: dict | None = None
         if len(self.folds) >= 2:
             self._rank()
-            self._select()
-        self.full_fits = {e: self.problem.fit((e,)) for e in self.candidates}
-        if self.selected:
-            self.selected_fit = self.problem.fit(tuple(self.selected))
-        else:
-            self.selected_fit = None
+            self._search_pairs()
+        for e in self.candidates:
+            self.fit_of((e,))
+        self._select()
+        self.selected_fit = self.fit_of(tuple(self.selected)) if self.selected else None
         self.elapsed = time.perf_counter() - start
+
+    # -- records -----------------------------------------------------------------------------------
+    def _with_records(self, model: GapModelInput, eigen: EigenvalueData) -> EigenvalueData:
+        """Table rows plus one bias-corrected row per comparable record (others get their reason)."""
+        from bikerider.gap.models import BENCH_ARGS, EffectModel
+        from bikerider.gap.predict import Predictor
+        from bikerider.gap.timedomain import extraction_bias
+
+        used = [k for k, f in enumerate(self.records) if f.used]
+        if not used:
+            return eigen
+        rows = eigenvalues_of(self.records)
+        nominal = {k: float(model.parameters.values[k]) for k in BENCH_ARGS + ("g",)}  # type: ignore[arg-type]
+        matched = Predictor(rows, CanonicalData.empty(), nominal, model.geometry).eigenvalues(
+            EffectModel(nominal, model.geometry)
+        )
+        bias, reasons = extraction_bias(self.records, nominal, model.geometry, matched)
+        keep = []
+        for j, k in enumerate(used):
+            if reasons[j] is not None:
+                self.records[k].reason = reasons[j]
+                self.records[k].estimate = None
+            else:
+                keep.append(j)
+        rows = rows.subset(np.array(keep, dtype=int))
+        rows.value = rows.value - bias[keep]
+        self.bias = bias[keep]
+        still = [k for k in used if self.records[k].used]
+        self.record_rows = {k: len(eigen) + j for j, k in enumerate(still)}
+        return EigenvalueData.concatenate([eigen, rows])
+
+    def _time_domain_ready(self) -> bool:
+        used = [f for f in self.records if f.used]
+        if not used or len(self.record_rows) != len(self.problem.eigen) or len(self.problem.predictor.canonical):
+            return False
+        if len({f.record.group for f in used}) < 2:
+            return False
+        for f in used:
+            steps = np.diff(f.record.time)
+            if steps.size == 0 or not np.allclose(steps, steps[0], rtol=1e-6):
+                return False
+        return True
+
+    # -- fits ---------------------------------------------------------------------------------------
+    def fit_of(self, effects: tuple[str, ...]) -> EffectFit:
+        """The fit of a set of effects to all the data (cached)."""
+        effects = tuple(effects)
+        if effects not in self.full_fits:
+            if _time_domain(effects):
+                self.full_fits[effects] = self._time_domain_fit(effects, None)
+            else:
+                self.full_fits[effects] = self.problem.fit(effects)
+        return self.full_fits[effects]
+
+    def _record_indices(self, mask: np.ndarray | None) -> list[int]:
+        """Records whose rows are (all) in the observation mask (every record when None)."""
+        obs_row = self._obs_rows()
+        out = []
+        for k, row in self.record_rows.items():
+            if mask is None or all(mask[i] for i in obs_row[row]):
+                out.append(k)
+        return out
+
+    def _obs_rows(self) -> dict[int, list[int]]:
+        """Eigenvalue row -> its observation indices (real part, and imaginary part for a weave)."""
+        out: dict[int, list[int]] = {}
+        k = 0
+        e = self.problem.eigen
+        for row in range(len(e)):
+            n = 2 if e.mode[row] == "weave" else 1
+            out[row] = list(range(k, k + n))
+            k += n
+        return out
+
+    def _time_domain_fit(
+        self, effects: tuple[str, ...], mask: np.ndarray | None, start=None, jackknife: bool = True
+    ) -> EffectFit:
+        """A time-domain candidate (steer friction, alone or with one linear effect) fitted to the records
+        in ``mask`` (:func:`bikerider.gap.timedomain.fit_time_domain`).
+
+        The fit to all the data gets standard errors by the jackknife over the held-out folds' fits
+        (leave one group out), when there are three folds or more.
+        """
+        from bikerider.gap.timedomain import Layout, fit_time_domain
+
+        cached = self._time_domain_full.get(effects) if mask is None else None
+        if cached is not None and (not jackknife or np.all(np.isfinite(cached.stderr))):
+            return cached
+        layout = Layout.of(effects)
+        lower, upper = np.array(layout.lower), np.array(layout.upper)
+        if cached is not None:
+            values, cost, n, success = cached.values, cached.chi2, cached.n, cached.success
+        else:
+            records = [self.records[k] for k in self._record_indices(mask)]
+            fit = fit_time_domain(
+                [f.record for f in records], self.problem.nominal, self.problem.geometry, layout, start=start
+            )
+            values, cost, n, success = fit.values, fit.cost, fit.n_samples, fit.success
+        stderr = np.full(values.size, np.inf)
+        if mask is None and jackknife and len(self.folds) >= 3:  # jackknife over the held-out folds' fits
+            folds = np.array([f.values for f in self.cross_validate(effects).fits])
+            g = len(folds)
+            stderr = np.sqrt((g - 1) / g * np.sum((folds - folds.mean(axis=0)) ** 2, axis=0))
+        ci_low = np.clip(values - 1.96 * stderr, lower, upper)
+        ci_high = np.clip(values + 1.96 * stderr, lower, upper)
+        config: dict[str, dict[str, float]] = {}
+        for (effect, param), value in zip(layout.names, values):
+            config.setdefault(effect, {})[param] = float(value)
+        units = [next(p.unit for p in EFFECTS[e].parameters if p.name == n) for e, n in layout.names]
+        out = EffectFit(
+            effects,
+            [n for _, n in layout.names],
+            units,
+            values,
+            stderr,
+            ci_low,
+            ci_high,
+            config,
+            {},
+            cost,
+            0.0,
+            n,
+            success,
+            "time-domain fit",
+            lower,
+            upper,
+        )
+        if mask is None:
+            self._time_domain_full[effects] = out
+        return out
+
+    def _time_domain_predict(self, fit: EffectFit, mask: np.ndarray) -> np.ndarray:
+        """Predicted (bias-corrected) observations of the records in ``mask`` under a time-domain fit."""
+        from bikerider.gap.timedomain import Layout, apparent_eigenvalues
+
+        idx = self._record_indices(mask)
+        pred = np.full(len(self.problem.obs), np.nan)
+        layout = Layout.of(fit.effects)
+        apparent, _ = apparent_eigenvalues(
+            [self.records[k] for k in idx], self.problem.nominal, self.problem.geometry, layout, fit.values
+        )
+        obs_row = self._obs_rows()
+        rows = list(self.record_rows)
+        for j, k in enumerate(idx):
+            row = self.record_rows[k]
+            value = apparent[j] - self.bias[rows.index(k)]
+            parts = obs_row[row]
+            pred[parts[0]] = value.real
+            if len(parts) > 1:
+                pred[parts[1]] = value.imag
+        return pred
+
+    def selected_predictions(self) -> np.ndarray | None:
+        """Predicted eigenvalue of each row under the selected time-domain effect (apparent, per record).
+
+        ``None`` when the selection is not a time-domain effect (its predictions are curves in speed).
+        """
+        if not _time_domain(tuple(self.selected)) or self.selected_fit is None:
+            return None
+        if not hasattr(self, "_selected_predictions"):
+            pred = self._time_domain_predict(self.selected_fit, np.ones(len(self.problem.obs), bool))
+            out = np.full(len(self.problem.eigen), np.nan + 1j * np.nan)
+            for row, parts in self._obs_rows().items():
+                out[row] = complex(pred[parts[0]], pred[parts[1]] if len(parts) > 1 else 0.0)
+            self._selected_predictions = out
+        return self._selected_predictions
 
     # -- folds --------------------------------------------------------------------------------------
     def _folds(self) -> list[tuple[str, np.ndarray]]:
@@ -219,6 +473,7 @@ class Diagnosis:
                     "chi2": stat,
                     "p_value": pval,
                     "significant": bool(pval < ALPHA / max(len(unique), 1)),
+                    **_data_only_cell(p, idx, ALPHA / max(len(unique), 1)),
                 }
             )
         return cells
@@ -231,32 +486,47 @@ class Diagnosis:
         cov = np.diag(p.var_data) + p.jacobian @ p.jacobian.T
         stat = float(r @ np.linalg.solve(cov, r))
         n = r.size
+        if np.all(p.var_data > 0):
+            data_stat = float(np.sum(r**2 / p.var_data))
+        else:  # rows taken as exact: any residual is a gap against the data alone
+            data_stat = (
+                math.inf
+                if np.any(r[p.var_data <= 0] != 0)
+                else float(np.sum(r[p.var_data > 0] ** 2 / p.var_data[p.var_data > 0]))
+            )
         return {
             "chi2": stat,
             "dof": n,
             "p_value": float(chi2.sf(stat, n)),
             "rms_z": rms(-p.z(p.baseline)),
             "significant": bool(chi2.sf(stat, n) < ALPHA),
+            "data_only": {
+                "chi2": data_stat,
+                "p_value": float(chi2.sf(data_stat, n)),
+                "significant": bool(chi2.sf(data_stat, n) < ALPHA),
+            },
         }
 
     # -- whether ----------------------------------------------------------------------------------
     def _verdict(self) -> str:
         from scipy.stats import chi2
 
-        if not self.gap_test["significant"]:
-            return "none"
         fit = self.parameter_fit
+        if fit is not None:
+            stat = fit.chi2 + fit.prior_chi2
+            self.parameter_test = {
+                "chi2": stat,
+                "dof": fit.n,
+                "p_value": float(chi2.sf(stat, fit.n)),
+                "prior_chi2": fit.prior_chi2,
+                "prior_dof": len(self.problem.free),
+            }
+        if not self.gap_test["significant"]:
+            # within the combined uncertainty: no gap at all, or one the parameters' uncertainty covers
+            return "parameters" if self.gap_test["data_only"]["significant"] and self.problem.free else "none"
         if fit is None:
             return "structural"
-        stat = fit.chi2 + fit.prior_chi2
-        self.parameter_test = {
-            "chi2": stat,
-            "dof": fit.n,
-            "p_value": float(chi2.sf(stat, fit.n)),
-            "prior_chi2": fit.prior_chi2,
-            "prior_dof": len(self.problem.free),
-        }
-        return "parameters" if chi2.sf(stat, fit.n) >= ALPHA else "structural"
+        return "parameters" if chi2.sf(self.parameter_test["chi2"], fit.n) >= ALPHA else "structural"
 
     # -- which ------------------------------------------------------------------------------------
     def cross_validate(self, effects: tuple[str, ...]) -> CrossValidation:
@@ -266,21 +536,40 @@ class Diagnosis:
         z_before = p.z(p.baseline)
         z_after = np.full(len(p.obs), np.nan)
         folds, fits = [], []
-        for name, held in self.folds:
-            fit = p.fit(effects, ~held)
+        timed = _time_domain(effects)
+        if timed:
+            start = None
+            if len(effects) > 1 and ("steer_friction",) in self._time_domain_full:  # from the friction alone
+                from bikerider.gap.timedomain import Layout
+
+                alone = self._time_domain_full[("steer_friction",)].values
+                start = list(alone) + [1.0 if n == "speed_scale" else 0.0 for _, n in Layout.of(effects).names[2:]]
+            full = self._time_domain_fit(effects, None, start=start, jackknife=False)
+        else:
+            full = self.fit_of(effects)
+        for name, held in self.folds:  # every fold starts from the fit to all the data
+            if timed:
+                fit = self._time_domain_fit(effects, ~held, start=full.values)
+                pred = self._time_domain_predict(fit, held)
+            else:
+                fit = p.fit(effects, ~held, start=full.values)
+                pred = p.predict_fit(fit)
             fits.append(fit)
-            z_fold = p.z(p.predict_fit(fit))[held]
+            z_fold = p.z(pred)[held]
             # a model that cannot be evaluated (singular) predicts nothing: count it as far off
             z_after[held] = np.where(np.isfinite(z_fold), z_fold, UNPREDICTED_Z)
-            folds.append(
-                {
-                    "fold": name,
-                    "n": int(held.sum()),
-                    "error_before": rms(z_before[held]),
-                    "error_after": rms(z_after[held]),
-                    "fitted": _named_values(fit),
-                }
-            )
+            entry = {
+                "fold": name,
+                "n": int(held.sum()),
+                "error_before": rms(z_before[held]),
+                "error_after": rms(z_after[held]),
+                "fitted": _named_values(fit),
+            }
+            if np.all(p.var_data[held] > 0):
+                scale = np.sqrt(p.var_total[held] / p.var_data[held])
+                entry["data_error_before"] = rms(z_before[held] * scale)
+                entry["data_error_after"] = rms(z_after[held] * scale)
+            folds.append(entry)
         held_any = np.any([h for _, h in self.folds], axis=0)
         result = CrossValidation(
             effects,
@@ -292,15 +581,18 @@ class Diagnosis:
             gap_shrink(z_before[held_any], z_after[held_any]),
             fits,
         )
+        data_sigma = np.sqrt(p.var_data)[held_any]
+        if np.all(data_sigma > 0):
+            scale = np.sqrt(p.var_total)[held_any] / data_sigma
+            zb, za = z_before[held_any] * scale, z_after[held_any] * scale
+            result.data_before, result.data_after, result.data_shrink = rms(zb), rms(za), gap_shrink(zb, za)
         self.cv[effects] = result
         return result
 
     def _order(self, results: list[CrossValidation]) -> list[tuple[CrossValidation, list[str]]]:
         """Sort by held-out error; ties (see module docstring) go to the simpler candidate."""
         results = sorted(results, key=lambda r: r.error_after)
-        ordered: list[CrossValidation] = []
-        for r in results:
-            ordered.append(r)
+        ordered: list[CrossValidation] = list(results)
         ties: dict[tuple, list[str]] = {r.effects: [] for r in results}
         for i, a in enumerate(results):
             for b in results[i + 1 :]:
@@ -333,99 +625,268 @@ class Diagnosis:
                     "shrink": r.shrink,
                     "tied_with": ties,
                     "folds": r.folds,
+                    "data_error_before": r.data_before,
+                    "data_error_after": r.data_after,
+                    "data_shrink": r.data_shrink,
                 }
             )
+
+    def pair_candidates(self) -> list[tuple[str, str]]:
+        """Pairs searched on the held-out folds (module docstring): any two linear candidates that each,
+        alone, predict the held-out folds better than the nominal model, fitted jointly; and steer
+        friction (in the time domain) with each such one of :data:`TIME_DOMAIN_PARTNERS`."""
+        import itertools
+
+        helpful = [
+            e for e in self.candidates if (e,) in self.cv and self.cv[(e,)].error_after < self.cv[(e,)].error_before
+        ]
+        linear = [e for e in helpful if e not in TIME_DOMAIN_EFFECTS]
+        pairs = [tuple(sorted(pair, key=EFFECT_NAMES.index)) for pair in itertools.combinations(linear, 2)]
+        if "steer_friction" in helpful:
+            pairs += [
+                tuple(sorted((e, "steer_friction"), key=EFFECT_NAMES.index))
+                for e in TIME_DOMAIN_PARTNERS
+                if e in helpful
+            ]
+        return pairs
+
+    def _search_pairs(self) -> None:
+        self.pairs = []
+        for pair in self.pair_candidates():
+            r = self.cross_validate(pair)
+            self.pairs.append(r)
 
     def _select(self) -> None:
-        if self.verdict != "structural":
-            if self.verdict == "parameters" and "parameters" in self.candidates:
-                self.selected = ["parameters"]
+        """Selection (module docstring): plausible only; a pair only when it beats the single."""
+        if self.verdict == "none":
+            self.selection = {"rule": "no gap above the noise: nothing to explain"}
             return
-        current: tuple[str, ...] = ()
-        current_z = self.problem.z(self.problem.baseline)[np.any([h for _, h in self.folds], axis=0)]
-        while len(current) < MAX_SELECTED:
-            remaining = [e for e in self.candidates if e not in current]
-            if not remaining:
-                break
-            results = [self.cross_validate(tuple(sorted(current + (e,), key=EFFECT_NAMES.index))) for e in remaining]
-            best, _ = self._order(results)[0]
-            better, pval = significantly_better(best.z_after, current_z)
-            added = [e for e in best.effects if e not in current][0]
-            self.selection_steps.append(
+        parameters_note = None
+        if self.verdict == "parameters":
+            if "parameters" in self.candidates:
+                ok, checks = self.plausibility(self.fit_of(("parameters",)))
+                if ok:
+                    self.selected = ["parameters"]
+                    self.selection = {"rule": "plausible parameter errors explain the gap"}
+                    return
+                parameters_note = (
+                    "the gap lies within the parameters' uncertainty, but the parameter fit needs "
+                    "implausible shifts (" + "; ".join(_implausible_reasons(checks)) + "): the candidates "
+                    "are compared as for a structural gap"
+                )
+            else:
+                parameters_note = (
+                    "the gap lies within the parameters' uncertainty (parameters are not a candidate): "
+                    "the candidates are compared as for a structural gap"
+                )
+        if len(self.folds) < 2:
+            self.selection = {"rule": "fewer than two folds: no held-out comparison, nothing selected"}
+            return
+        p = self.problem
+        held_any = np.any([h for _, h in self.folds], axis=0)
+        z_nominal = p.z(p.baseline)[held_any]
+        singles = [self.cv[(r["effect"],)] for r in self.ranking]
+        considered = []
+        best_single = None
+        for r in singles:
+            ok, checks = self.plausibility(self.fit_of(r.effects))
+            better, pval = significantly_better(r.z_after, z_nominal)
+            considered.append(
                 {
-                    "added": added,
-                    "heldout_error": best.error_after,
-                    "previous_error": rms(current_z),
+                    "effects": list(r.effects),
+                    "heldout_error": r.error_after,
+                    "plausible": ok,
+                    "beats_nominal": better,
                     "p_value": pval,
-                    "accepted": better,
                 }
             )
-            if not better:
-                break
-            current = best.effects
-            current_z = best.z_after
-        self.selected = list(current)
+            if ok and better and best_single is None:
+                best_single = r
+        chosen = best_single
+        reference = best_single.z_after if best_single is not None else z_nominal
+        best_pair = None
+        # a pair only where the single leaves a gap above the noise floor (Occam: nothing left to explain)
+        left = (
+            None
+            if best_single is None
+            else (best_single.data_after if best_single.data_after is not None else best_single.error_after)
+        )
+        pairs = [] if left is not None and left <= 1.0 else getattr(self, "pairs", [])
+        for r in sorted(pairs, key=lambda r: r.error_after):
+            better, pval = significantly_better(r.z_after, reference)
+            entry = {
+                "effects": list(r.effects),
+                "heldout_error": r.error_after,
+                "plausible": None,
+                "beats_single" if best_single is not None else "beats_nominal": better,
+                "p_value": pval,
+            }
+            considered.append(entry)
+            if not better or best_pair is not None:
+                continue
+            ok, checks = self.plausibility(self.fit_of(r.effects))
+            entry["plausible"] = ok
+            if ok:
+                best_pair = r
+        if best_pair is not None:
+            chosen = best_pair
+        rule = (
+            "the best plausible single candidate that beats the nominal model on held-out folds, or a plausible "
+            "pair that beats that single; never one that a better, implausible fit beats significantly"
+        )
+        # the best held-out fit overall, and the best single one: when implausible, say so
+        every = singles + list(getattr(self, "pairs", []))
+        for pool, key in ((every, "best_implausible"), (singles, "best_single_implausible")):
+            best = min(pool, key=lambda r: r.error_after) if pool else None
+            if best is not None and (chosen is None or best.effects != chosen.effects):
+                ok, checks = self.plausibility(self.fit_of(best.effects))
+                if not ok:
+                    setattr(
+                        self,
+                        key,
+                        {
+                            "effects": list(best.effects),
+                            "heldout_error": best.error_after,
+                            "why": _implausible_reasons(checks),
+                        },
+                    )
+        if self.best_single_implausible == self.best_implausible:
+            self.best_single_implausible = None
+        # ... and select nothing that an implausible fit of no more fitted parameters beats significantly
+        if chosen is not None:
+            size = _n_params(self.problem, chosen.effects)
+            rivals = [
+                r
+                for r in every
+                if _n_params(self.problem, r.effects) <= size
+                and r.effects != chosen.effects
+                and r.error_after < chosen.error_after
+            ]
+            for r in sorted(rivals, key=lambda r: r.error_after):
+                ok, checks = self.plausibility(self.fit_of(r.effects))
+                if not ok and significantly_better(r.z_after, chosen.z_after)[0]:
+                    self.best_implausible = {
+                        "effects": list(r.effects),
+                        "heldout_error": r.error_after,
+                        "why": _implausible_reasons(checks),
+                        "instead_of": list(chosen.effects),
+                    }
+                    chosen = None
+                    break
+        self.selected = list(chosen.effects) if chosen is not None else []
+        self.selection = {"rule": rule, "considered": considered}
+        if parameters_note:
+            self.selection["note"] = parameters_note
 
-    # -- report ---------------------------------------------------------------------------------
+    # -- plausibility --------------------------------------------------------------------------------
+    def steer_rate_amplitude(self) -> float | None:
+        """Median steer-rate amplitude of the records used [rad/s] (None without steer signals).
+
+        ``sqrt(2)`` times the RMS steer rate over the record, from a steer-rate signal, or from a
+        steer-angle signal times the record's weave frequency.
+        """
+        amplitudes = []
+        for k in self.record_rows:
+            f = self.records[k]
+            r = f.record
+            if "steer_rate" in r.signals and np.all(np.isfinite(r.signals["steer_rate"])):
+                x = r.signals["steer_rate"]
+                amplitudes.append(math.sqrt(2) * float(np.std(x)))
+            elif (
+                "steer_angle" in r.signals and np.all(np.isfinite(r.signals["steer_angle"])) and f.estimate is not None
+            ):
+                x = r.signals["steer_angle"]
+                amplitudes.append(math.sqrt(2) * float(np.std(x)) * abs(f.estimate.eigenvalue))
+        return float(np.median(amplitudes)) if amplitudes else None
+
+    def plausible_range(self, name: str) -> tuple[float, float, str]:
+        """The plausible range of a fitted parameter and where it comes from."""
+        if name in self.model_input.plausible:
+            return self.model_input.plausible[name]
+        param = next(p for e in EFFECTS.values() for p in e.parameters if p.name == name)
+        lo, hi = param.literature
+        if name == "c_steer":
+            amplitude = self.steer_rate_amplitude()
+            if amplitude is not None and amplitude > 0:
+                extra = 4 * COULOMB_RANGE[1] / (math.pi * amplitude)
+                return (
+                    lo,
+                    hi + extra,
+                    (
+                        f"{param.source}; above it, the linear equivalent 4 T / (pi A) of Coulomb "
+                        f"friction T up to {COULOMB_RANGE[1]:g} N m at the records' steer-rate "
+                        f"amplitude A = {amplitude:.3g} rad/s adds up to {extra:.3g} N m s/rad"
+                    ),
+                )
+        return lo, hi, param.source
+
     def plausibility(self, fit: EffectFit) -> tuple[bool, list[dict]]:
-        """Whether every fitted value's 95 % interval reaches its literature range."""
+        """Whether a fit is plausible (module docstring), with one check per fitted value."""
+        from scipy.stats import chi2
+
         checks = []
         ok = True
-        if fit.effects == ("parameters",):
-            from scipy.stats import chi2
-
+        pinned = set(fit.at_bound()) if fit.names else set()
+        if "parameters" in fit.effects:
             limit = float(chi2.ppf(1 - ALPHA, max(len(self.problem.free), 1)))
             good = fit.prior_chi2 <= limit
+            shifted = [n for n in fit.names if n.startswith("parameters.")]
+            at = sorted(n.split(".", 1)[1] for n in shifted if n in pinned)
             checks.append(
                 {
                     "name": "sum of squared shifts / sigma^2",
                     "value": fit.prior_chi2,
                     "literature": [0.0, limit],
-                    "plausible": bool(good),
+                    "plausible": bool(good and not at),
+                    "at_bound": at,
+                    "source": "the parameters' stated uncertainties (chi-square at 1 %)",
                 }
             )
-            return bool(good), checks
+            ok = ok and bool(good) and not at
         for k, name in enumerate(fit.names):
-            effect = next(e for e in fit.effects if any(p.name == name for p in EFFECTS[e].parameters))
-            param = next(p for p in EFFECTS[effect].parameters if p.name == name)
-            lo, hi = param.literature
-            good = fit.ci_high[k] >= lo and fit.ci_low[k] <= hi
+            if name.startswith("parameters."):
+                continue
+            lo, hi, source = self.plausible_range(name)
+            unit = fit.units[k]
+            at_bound = name in pinned
             if name == "m_arm":
                 # judge the arms by their inertia about the steer axis
                 inertia = arm_inertia(self.problem, fit.values[k])
                 (ilo, ihi), unit, source = LITERATURE_EXTRA["I_arm_steer"]
                 scale = inertia / fit.values[k] if fit.values[k] > 0 else arm_inertia(self.problem, 1.0)
-                good = fit.ci_high[k] * scale >= ilo and fit.ci_low[k] * scale <= ihi
-                checks.append(
-                    {
-                        "name": "I_arm_steer",
-                        "value": inertia,
-                        "unit": unit,
-                        "literature": [ilo, ihi],
-                        "plausible": bool(good),
-                        "source": source,
-                    }
-                )
+                reach = fit.ci_high[k] * scale >= ilo and fit.ci_low[k] * scale <= ihi
+                value, rng, shown = inertia, [ilo, ihi], "I_arm_steer"
+                determined = math.isfinite(fit.stderr[k]) and fit.stderr[k] * scale <= UNDETERMINED * (ihi - ilo)
             else:
-                checks.append(
-                    {
-                        "name": name,
-                        "value": float(fit.values[k]),
-                        "unit": param.unit,
-                        "literature": [lo, hi],
-                        "plausible": bool(good),
-                        "source": param.source,
-                    }
-                )
-            ok = ok and bool(good)
+                reach = fit.ci_high[k] >= lo and fit.ci_low[k] <= hi
+                value, rng, shown = float(fit.values[k]), [lo, hi], name
+                determined = math.isfinite(fit.stderr[k]) and fit.stderr[k] <= UNDETERMINED * max(hi - lo, 1e-12)
+            good = bool(reach and determined and not at_bound)
+            checks.append(
+                {
+                    "name": shown,
+                    "value": value,
+                    "unit": unit,
+                    "literature": rng,
+                    "plausible": good,
+                    "in_range": bool(reach),
+                    "determined": bool(determined),
+                    "at_bound": bool(at_bound),
+                    "bounds": [float(fit.lower[k]), float(fit.upper[k])],
+                    "ci95": [float(fit.ci_low[k]), float(fit.ci_high[k])],
+                    "source": source,
+                }
+            )
+            ok = ok and good
         return ok, checks
 
+    # -- report ---------------------------------------------------------------------------------
     def as_dict(self) -> dict:
         """Everything, as plain JSON-ready values."""
         p = self.problem
         ranking = []
         for entry in self.ranking:
-            fit = self.full_fits[entry["effect"]]
+            fit = self.fit_of((entry["effect"],))
             plausible, checks = self.plausibility(fit)
             ranking.append(
                 {
@@ -438,20 +899,44 @@ class Diagnosis:
                     "plausibility": checks,
                     "tied_with": entry["tied_with"],
                     "n_parameters": len(fit.names),
+                    "data_error_before": entry["data_error_before"],
+                    "data_error_after": entry["data_error_after"],
+                    "data_shrink": entry["data_shrink"],
                     "folds": entry["folds"],
                 }
             )
+        pairs = []
+        for r in sorted(getattr(self, "pairs", []), key=lambda r: r.error_after):
+            entry = {
+                "effects": list(r.effects),
+                "heldout_error_before": r.error_before,
+                "heldout_error_after": r.error_after,
+                "shrink": r.shrink,
+                "data_error_after": r.data_after,
+                "data_shrink": r.data_shrink,
+            }
+            fit = self.fit_of(r.effects)
+            ok, checks = self.plausibility(fit)
+            entry.update({"plausible": ok, "parameters": _named_values(fit), "plausibility": checks})
+            pairs.append(entry)
         out = {
             "verdict": self.verdict,
             "gap": {"test": self.gap_test, "map": self.gap_map},
             "parameter_fit": None,
             "ranking": ranking,
+            "pairs": pairs,
             "selected": list(self.selected),
-            "selection_steps": self.selection_steps,
+            "selection": self.selection,
+            "best_implausible": self.best_implausible,
+            "best_single_implausible": self.best_single_implausible,
             "how_far": None,
             "not_applicable": self.not_applicable,
             "folds": [name for name, _ in self.folds],
             "n_observations": len(p.obs),
+            "records": self._records_summary(),
+            "noise": p.noise,
+            "uncertainty": self._uncertainty_summary(),
+            "laws": {name: law.describe() for name, law in p.eigen.laws.items()},
             "notes": list(p.notes)
             + ([] if len(self.folds) >= 2 else ["fewer than two folds (groups or speeds): no held-out ranking"]),
             "model": {"source": p.model_input.source, "geometry": p.geometry.notes, "uncertain_parameters": p.free},
@@ -465,6 +950,7 @@ class Diagnosis:
                 "shift_in_sigma": dict(zip(p.free, map(float, fit.values))),
                 "test": getattr(self, "parameter_test", None),
                 "plausible": plausible,
+                "at_bound": checks[0]["at_bound"],
             }
         if self.selected and len(self.folds) >= 2:
             cv = self.cross_validate(tuple(self.selected))
@@ -475,9 +961,49 @@ class Diagnosis:
                 "heldout_error_before": cv.error_before,
                 "heldout_error_after": cv.error_after,
                 "shrink": cv.shrink,
+                "data_error_before": cv.data_before,
+                "data_error_after": cv.data_after,
+                "data_shrink": cv.data_shrink,
                 "parameters": _named_values(fit) if fit else {},
             }
         return out
+
+    def _uncertainty_summary(self) -> dict:
+        """Typical data and parameter standard uncertainties, and the parameters contributing most."""
+        p = self.problem
+        out = {
+            "data": float(np.median(np.sqrt(p.var_data))) if len(p.obs) else None,
+            "parameters": float(np.median(np.sqrt(p.var_model))) if len(p.obs) else None,
+            "largest": [],
+        }
+        if p.free:
+            contribution = np.sqrt(np.mean(p.jacobian**2, axis=0))
+            order = np.argsort(-contribution)[:5]
+            out["largest"] = [
+                {"parameter": p.free[k], "sigma": float(p.free_sigma[k]), "rms_effect": float(contribution[k])}
+                for k in order
+            ]
+        return out
+
+    def _records_summary(self) -> dict | None:
+        if not self.records:
+            return None
+        rows = list(self.record_rows)
+        out = []
+        for k, f in enumerate(self.records):
+            entry = f.summary()
+            if k in self.record_rows:
+                b = self.bias[rows.index(k)]
+                entry["bias"] = [float(b.real), float(b.imag)]
+            out.append(entry)
+        used = sum(1 for e in out if e["used"])
+        return {
+            "total": len(out),
+            "used": used,
+            "left_out": len(out) - used,
+            "reasons": [{"record": e["record"], "reason": e["reason"]} for e in out if not e["used"]],
+            "list": out,
+        }
 
 
 def _n_params(problem: GapProblem, effects: tuple[str, ...]) -> int:
@@ -508,13 +1034,63 @@ def arm_inertia(problem: GapProblem, m_arm: float) -> float:
     return float(m_arm * (perp @ perp))
 
 
+def _data_only_cell(problem: GapProblem, idx: list[int], alpha: float) -> dict:
+    """A gap-map cell's RMS residual and significance against the data's uncertainty alone."""
+    from scipy.stats import chi2
+
+    var = problem.var_data[idx]
+    if not np.all(var > 0):
+        return {"rms_z_data": None, "significant_data": None}
+    z = (problem.y[idx] - problem.baseline[idx]) / np.sqrt(var)
+    return {"rms_z_data": rms(z), "significant_data": bool(chi2.sf(float(np.sum(z**2)), len(idx)) < alpha)}
+
+
+def _time_domain(effects: tuple[str, ...]) -> bool:
+    """Whether a set of effects is fitted in the time domain (it holds a nonlinear candidate)."""
+    return any(e in TIME_DOMAIN_EFFECTS for e in effects)
+
+
+def _implausible_reasons(checks: list[dict]) -> list[str]:
+    """Why a fit is implausible, one phrase per failing value."""
+    out = []
+    for c in checks:
+        if c.get("plausible", True):
+            continue
+        name = c["name"]
+        if name.startswith("sum of squared shifts"):
+            parts = []
+            if c["value"] > c["literature"][1]:
+                parts.append(
+                    f"parameter shifts of chi-square {c['value']:.3g} (the prior allows {c['literature'][1]:.3g})"
+                )
+            if c.get("at_bound"):
+                parts.append("shifts pinned at a bound: " + ", ".join(c["at_bound"]))
+            out.append("; ".join(parts))
+            continue
+        unit = c.get("unit", "")
+        if c.get("at_bound"):
+            out.append(f"{name} = {c['value']:.3g} {unit} at its search bound {c['bounds']}")
+        elif not c.get("determined", True):
+            out.append(
+                f"{name} = {c['value']:.3g} {unit} not determined by the data (95 % interval "
+                f"[{c['ci95'][0]:.3g}, {c['ci95'][1]:.3g}])"
+            )
+        else:
+            out.append(
+                f"{name} = {c['value']:.3g} {unit} outside the plausible {c['literature'][0]:g}-"
+                f"{c['literature'][1]:.3g} {unit}"
+            )
+    return out
+
+
 def diagnose(
     model: GapModelInput,
     eigen: EigenvalueData | None = None,
     canonical: CanonicalData | None = None,
     effects=EFFECT_NAMES,
+    records: list[RecordFit] | None = None,
 ) -> Diagnosis:
     """Run the diagnosis (see the module docstring)."""
-    eigen = eigen if eigen is not None else EigenvalueData.concatenate([])
-    canonical = canonical if canonical is not None else CanonicalData.concatenate([])
-    return Diagnosis(model, eigen, canonical, effects)
+    eigen = eigen if eigen is not None else EigenvalueData.empty()
+    canonical = canonical if canonical is not None else CanonicalData.empty()
+    return Diagnosis(model, eigen, canonical, effects, records)

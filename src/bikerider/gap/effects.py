@@ -19,8 +19,17 @@ EFFECT_NAMES = (
     "passive_arms",
     "rider_lean",
     "tyre_slip",
+    "speed_sensor",
+    "steer_friction",
 )
 """Every candidate, in the order reports list them."""
+OBSERVATION_EFFECTS = ("speed_sensor",)
+"""Candidates that change how the data were taken rather than the bicycle (no model parameter)."""
+TIME_DOMAIN_EFFECTS = ("steer_friction",)
+"""Nonlinear candidates fitted in the time domain to records (:mod:`bikerider.gap.timedomain`)."""
+COULOMB_RANGE = (0.02, 0.15)
+"""Steer Coulomb friction of the literature [N m] (data/gap/README.md table; Davis bicycle 0.15 +/-
+0.05, Moore 2012)."""
 
 
 @dataclass(frozen=True)
@@ -72,6 +81,7 @@ class Effect:
     parameters: tuple[EffectParameter, ...]
     fixed: dict[str, float] = field(default_factory=dict)
     needs_rider: bool = False
+    needs_records: bool = False
 
 
 _TABLE = "data/gap/README.md literature table"
@@ -198,6 +208,47 @@ EFFECTS: dict[str, Effect] = {
             EffectParameter("t_p", "m", (0.0, 0.1), (0.012, 0.026), 0.019, f"{_TABLE}: pneumatic trail 12-26 mm"),
         ),
         fixed={"c_gamma": 0.8},
+    ),
+    "speed_sensor": Effect(
+        "speed_sensor",
+        "the bicycle ran at another speed than recorded (a wheel encoder's rolling radius, a treadmill's "
+        "calibration): its speed is the recorded one times speed_scale, while the controller keeps the recorded speed",
+        (
+            EffectParameter(
+                "speed_scale",
+                "-",
+                (0.7, 1.4),
+                (0.95, 1.05),
+                1.0,
+                "a wheel encoder reads the speed within a few per cent (tyre deflection changes the rolling "
+                "radius); the SBW bicycle's encoder against its treadmill: 0.97-1.02 (Pasma 2024 calibration, "
+                "recorded = 1.0662 true - 0.128 m/s, over 1.5-5 m/s)",
+            ),
+        ),
+    ),
+    "steer_friction": Effect(
+        "steer_friction",
+        "Coulomb and viscous friction about the steer axis (bearings, a steer motor's gearbox), "
+        "T = -T_coulomb tanh(deltad / eps) - c_viscous deltad, fitted in the time domain to the records",
+        (
+            EffectParameter(
+                "T_coulomb",
+                "N m",
+                (0.0, 2.0),
+                COULOMB_RANGE,
+                0.05,
+                f"{_TABLE}: steer Coulomb friction 0.02-0.15 N m (Davis bicycle 0.15, Moore 2012)",
+            ),
+            EffectParameter(
+                "c_viscous",
+                "N m s/rad",
+                (0.0, 5.0),
+                (0.05, 0.5),
+                0.2,
+                f"{_TABLE}: steer viscous damping 0.05-0.5 N m s/rad (Davis bicycle 0.34, Moore 2012)",
+            ),
+        ),
+        needs_records=True,
     ),
 }
 """The candidates.  ``tyre_slip`` holds the camber stiffness at 0.8 per rad (mid of the 0.6-0.95

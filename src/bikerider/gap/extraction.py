@@ -1,4 +1,4 @@
-"""The weave eigenvalue of a perturbation run, from a rate signal.
+"""The weave eigenvalue of a free decay (a record), from a rate or angle signal.
 
 A bicycle's free response after a perturbation holds every mode: the weave oscillation, the fast
 castor decay and the slow capsize drift.  :func:`fit_damped_oscillation` fits one damped
@@ -13,15 +13,21 @@ one more mode::
 
 by Levenberg-Marquardt, started from a least-squares scan over frequency, decay and
 ``lambda_c`` (the FFT peak can be the slow mode's leakage) and from the plain fit.  The two-mode fit
-is kept when it converges to a distinct real mode within :data:`EXTRA_MODE_RANGE`, holds a full cycle, shows an oscillation ten
-standard errors above zero and (if the plain fit succeeded) lowers the residual sum of squares
-significantly (F-test at 1 %); otherwise the plain fit stands.  Standard errors are scaled up by
-``sqrt((1 + rho) / (1 - rho))`` with ``rho`` the lag-one autocorrelation of the residuals: a fit
-that misses part of the signal leaves correlated residuals, and the white-noise errors would then
-be too small (simulated free responses at high speed, where the weave dies within a cycle, showed
-frequency errors of 4-12 white-noise standard errors).  When a fast-growing capsize mode
-(a fall) swamps the record, the plain fit often fails and the two-mode fit alone finds the weave.  Standard errors are from ``s^2 (J^T J)^-1``.  Records should
-start after the perturbation (and after the castor transient, a few tenths of a second).
+is kept when it converges to a distinct real mode within :data:`EXTRA_MODE_RANGE`, spans at least
+:data:`MIN_CYCLES` of a cycle (below one cycle only when the decay is clear, :data:`CLEAR_DECAY`),
+shows an oscillation ten standard errors above zero and (if the plain fit succeeded) lowers the
+residual sum of squares significantly (F-test at 1 %); otherwise the plain fit stands.  A fit that
+explains less than :data:`MIN_R2` of the record is refused.  Standard errors are from
+``s^2 (J^T J)^-1``, scaled up by ``sqrt((1 + rho) / (1 - rho))`` with ``rho`` the lag-one
+autocorrelation of the residuals: a fit that misses part of the signal leaves correlated
+residuals, and the white-noise errors would then be too small (simulated free responses at high
+speed, where the weave dies within a cycle, showed frequency errors of 4-12 white-noise standard
+errors).  When a fast-growing capsize mode (a fall) swamps the record, the plain fit often fails and
+the two-mode fit alone finds the weave.  Records should start after the perturbation.
+
+Every refusal is a :class:`~bikerider.errors.FitError` whose message says why; the records of an
+experiment turn it into the record's reason for being left out (:mod:`bikerider.gap.records`).
+:func:`refit_like` fits a model's own response over a record the way the record was fitted.
 """
 
 from __future__ import annotations
@@ -34,7 +40,7 @@ import numpy as np
 
 @dataclass(frozen=True)
 class WeaveEstimate:
-    """A fitted weave eigenvalue.
+    """A fitted weave eigenvalue and how well the record supports it.
 
     Attributes
     ----------
@@ -45,6 +51,16 @@ class WeaveEstimate:
     extra_mode : float or None
         The real eigenvalue of the extra exponential when the two-mode refinement was kept.
     residual_rms : float
+    r2 : float
+        Coefficient of determination of the fitted model over the record.
+    cycles : float
+        Weave cycles the record spans at the fitted frequency.
+    kind : str
+        ``two-mode`` or ``plain`` (the model that was kept).
+    params : tuple of float
+        Parameters of the kept model (see :meth:`evaluate`).
+    t0 : float
+        Time of the first sample [s].
     """
 
     eigenvalue: complex
@@ -52,6 +68,20 @@ class WeaveEstimate:
     imag_sigma: float
     extra_mode: float | None
     residual_rms: float
+    r2: float = math.nan
+    cycles: float = math.nan
+    kind: str = "two-mode"
+    params: tuple[float, ...] = ()
+    t0: float = 0.0
+
+    def evaluate(self, time) -> np.ndarray:
+        """The fitted curve at ``time`` [s]."""
+        tau = np.asarray(time, dtype=float) - self.t0
+        p = np.asarray(self.params, dtype=float)
+        if self.kind == "two-mode":
+            return _two_mode(p, tau)
+        omega, sigma, offset, a, b, drift = p
+        return offset + drift * tau + np.exp(-sigma * tau) * (a * np.sin(omega * tau) + b * np.cos(omega * tau))
 
 
 def _two_mode(p: np.ndarray, tau: np.ndarray) -> np.ndarray:
@@ -141,46 +171,69 @@ def _two_mode_jacobian(p: np.ndarray, tau: np.ndarray) -> np.ndarray:
     )
 
 
-def weave_eigenvalue(time, signal) -> WeaveEstimate:
-    """Fit the weave eigenvalue to a rate signal (see the module docstring).
+MIN_CYCLES = 0.5
+"""Fewest weave cycles a record must span: half a cycle, when the decay is clear (see
+:data:`CLEAR_DECAY`); a record of a full cycle or more needs no clear decay."""
+CLEAR_DECAY = (5.0, 0.5)
+"""A record shorter than one cycle is accepted when its decay rate is this many standard errors
+above zero and the oscillation's envelope falls to this fraction (or less) over the record."""
+MIN_R2 = 0.5
+"""Least coefficient of determination of the fitted model: below it the record is mostly something
+else (a disturbance, a second perturbation) and the fit is refused."""
+
+
+def weave_eigenvalue(time, signal, *, min_cycles: float = MIN_CYCLES) -> WeaveEstimate:
+    """Fit the weave eigenvalue to a rate (or angle) signal (see the module docstring).
 
     Trial parameters of the fits may overflow ``exp`` on the way; such steps are rejected by the
     optimisers, so floating-point warnings are silenced here rather than shown to the user.
 
+    Parameters
+    ----------
+    time, signal : array_like
+        The free decay (after the perturbation).
+    min_cycles : float
+        Fewest cycles accepted when the decay is clear (records of a full cycle or more are
+        always accepted if the oscillation is significant).
+
     Raises
     ------
     bikerider.errors.FitError
-        When neither fit finds an oscillation (the message is the plain fit's reason).
+        When no damped oscillation can be fitted; the message says why (too few samples, no
+        oscillation above the noise, too short a record, a poor fit).
     """
     with np.errstate(all="ignore"):
-        return _weave_eigenvalue(time, signal)
+        return _weave_eigenvalue(time, signal, min_cycles)
 
 
-def _weave_eigenvalue(time, signal) -> WeaveEstimate:
+def _weave_eigenvalue(time, signal, min_cycles: float) -> WeaveEstimate:
     from scipy.optimize import least_squares
     from scipy.stats import f as f_dist
 
     from bikerider.errors import FitError
-    from bikerider.fitting.damped_oscillation import fit_damped_oscillation
+    from bikerider.fitting.damped_oscillation import MIN_SAMPLES, fit_damped_oscillation
 
     t = np.asarray(time, dtype=float)
     y = np.asarray(signal, dtype=float)
-    usable = t.size >= 20 and np.all(np.isfinite(t)) and np.all(np.isfinite(y)) and np.all(np.diff(t) > 0)
-    start = _scan_start(t, y) if usable else None
+    if t.shape != y.shape or t.ndim != 1:
+        raise FitError(f"time and signal must be one-dimensional and of equal length (shapes {t.shape}, {y.shape})")
+    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(y))):
+        bad = int(np.flatnonzero(~(np.isfinite(t) & np.isfinite(y)))[0])
+        raise FitError(f"the record has missing or non-finite values (first at sample {bad + 1})")
+    if t.size < MIN_SAMPLES:
+        raise FitError(f"too few samples to fit a damped oscillation: {t.size}, need at least {MIN_SAMPLES}")
+    if np.any(np.diff(t) <= 0):
+        raise FitError("time is not strictly increasing")
+    start = _scan_start(t, y)
     base, refusal = None, None
     try:
-        base = fit_damped_oscillation(t, y, drift=True, guess_frequency=None if start is None else float(start[0]))
+        base = fit_damped_oscillation(t, y, drift=True, guess_frequency=float(start[0]))
     except FitError as exc:
         refusal = exc
         try:
             base = fit_damped_oscillation(t, y, drift=True)
         except FitError:
             pass
-    if start is None:
-        if base is None:
-            raise refusal  # type: ignore[misc]
-        k = _correlation_inflation(base.evaluate(t) - y)
-        return WeaveEstimate(base.eigenvalue, k * base.sigma_se, k * base.omega_d_se, None, base.residual_rms)
     tau = t - t[0]
     n = t.size
     starts = [start]
@@ -188,6 +241,7 @@ def _weave_eigenvalue(time, signal) -> WeaveEstimate:
         starts += [
             np.array([base.omega_d, base.sigma, base.A, base.B, base.offset, 0.0, lam0]) for lam0 in PLAIN_START_MODES
         ]
+    total = float(np.sum((y - np.mean(y)) ** 2))
     best = None
     for p0 in starts:
         try:
@@ -206,39 +260,149 @@ def _weave_eigenvalue(time, signal) -> WeaveEstimate:
     plain = None
     if base is not None:
         k = _correlation_inflation(base.evaluate(t) - y)
-        plain = WeaveEstimate(base.eigenvalue, k * base.sigma_se, k * base.omega_d_se, None, base.residual_rms)
-    two = _accept_two_mode(best, n, tau)
+        plain = WeaveEstimate(
+            base.eigenvalue,
+            k * base.sigma_se,
+            k * base.omega_d_se,
+            None,
+            base.residual_rms,
+            r2=1 - n * base.residual_rms**2 / total if total > 0 else math.nan,
+            cycles=base.omega_d * tau[-1] / (2 * math.pi),
+            kind="plain",
+            params=(base.omega_d, base.sigma, base.offset, base.A, base.B, base.drift or 0.0),
+            t0=float(t[0]),
+        )
+    two, why = _accept_two_mode(best, n, tau, total, min_cycles)
     if two is None:
         if plain is None:
-            raise refusal  # type: ignore[misc]
-        return plain
+            raise FitError(why or str(refusal))
+        return _checked(plain)
     estimate, rss = two
+    estimate = WeaveEstimate(
+        estimate.eigenvalue,
+        estimate.real_sigma,
+        estimate.imag_sigma,
+        estimate.extra_mode,
+        estimate.residual_rms,
+        estimate.r2,
+        estimate.cycles,
+        "two-mode",
+        estimate.params,
+        float(t[0]),
+    )
     if plain is None:
-        return estimate
+        return _checked(estimate)
     rss_base = base.residual_rms**2 * n
     dof = n - 7
     if rss >= rss_base or f_dist.sf((rss_base - rss) / (rss / dof), 1, dof) >= 0.01:
-        return plain
+        return _checked(plain)
+    return _checked(estimate)
+
+
+def refit_like(time, signal, like: WeaveEstimate, min_cycles: float = MIN_CYCLES) -> WeaveEstimate:
+    """The fit of :func:`weave_eigenvalue`, of the same kind (two-mode or plain) as ``like``, started from it.
+
+    For a model's own response over a record whose measured signal gave ``like``: one optimisation
+    from a start that is already close, instead of the search of a fresh fit.  Falls back to
+    :func:`weave_eigenvalue` when the refit is not a weave.
+
+    Raises
+    ------
+    bikerider.errors.FitError
+        As :func:`weave_eigenvalue`.
+    """
+    from scipy.optimize import least_squares
+
+    from bikerider.errors import FitError
+    from bikerider.fitting.damped_oscillation import fit_damped_oscillation
+
+    t = np.asarray(time, dtype=float)
+    y = np.asarray(signal, dtype=float)
+    tau = t - t[0]
+    total = float(np.sum((y - np.mean(y)) ** 2))
+    with np.errstate(all="ignore"):
+        if like.kind == "two-mode" and t.size > 7 and np.all(np.isfinite(y)):
+            try:
+                res = least_squares(
+                    lambda p: _two_mode(p, tau) - y,
+                    np.asarray(like.params, dtype=float),
+                    jac=lambda p: _two_mode_jacobian(p, tau),
+                    method="lm",
+                    max_nfev=200,
+                )
+                two, _ = _accept_two_mode(res, t.size, tau, total, min_cycles)
+                if two is not None:
+                    e = two[0]
+                    return _checked(
+                        WeaveEstimate(
+                            e.eigenvalue,
+                            e.real_sigma,
+                            e.imag_sigma,
+                            e.extra_mode,
+                            e.residual_rms,
+                            e.r2,
+                            e.cycles,
+                            "two-mode",
+                            e.params,
+                            float(t[0]),
+                        )
+                    )
+            except (ValueError, np.linalg.LinAlgError):
+                pass
+        elif like.kind == "plain":
+            try:
+                base = fit_damped_oscillation(t, y, drift=True, guess_frequency=float(like.params[0]))
+                k = _correlation_inflation(base.evaluate(t) - y)
+                return _checked(
+                    WeaveEstimate(
+                        base.eigenvalue,
+                        k * base.sigma_se,
+                        k * base.omega_d_se,
+                        None,
+                        base.residual_rms,
+                        1 - t.size * base.residual_rms**2 / total,
+                        base.omega_d * tau[-1] / (2 * math.pi),
+                        "plain",
+                        (base.omega_d, base.sigma, base.offset, base.A, base.B, base.drift or 0.0),
+                        float(t[0]),
+                    )
+                )
+            except FitError:
+                pass
+    return weave_eigenvalue(t, y, min_cycles=min_cycles)
+
+
+def _checked(estimate: WeaveEstimate) -> WeaveEstimate:
+    from bikerider.errors import FitError
+
+    if not estimate.r2 >= MIN_R2:
+        raise FitError(
+            f"poor fit: the damped oscillation explains r^2 = {estimate.r2:.2f} of the record "
+            f"(need {MIN_R2:g}); the record holds something else (a disturbance, another perturbation)"
+        )
     return estimate
 
 
-def _accept_two_mode(res, n: int, tau: np.ndarray):
-    """The two-mode estimate and its residual sum of squares, or ``None`` if it is not a weave."""
+def _accept_two_mode(res, n: int, tau: np.ndarray, total: float, min_cycles: float):
+    """``((estimate, rss), None)`` or ``(None, reason)`` when the two-mode fit is not a weave."""
     if res is None or n <= 7:
-        return None
+        return None, "no oscillation found: the fit did not converge"
     omega, sigma, a, b, _, c, lam = res.x
     rss = 2 * res.cost
     if not (omega > 0 and abs(lam + sigma) > 0.05 * max(abs(sigma), 0.1) and c != 0):
-        return None
+        return None, "no oscillation found: the fitted modes are not a damped oscillation and a distinct real mode"
     if not EXTRA_MODE_RANGE[0] < lam < EXTRA_MODE_RANGE[1]:
-        return None  # not a capsize mode: an exponential fitted to the record's ends
-    if omega * (tau[-1] - tau[0]) < 2 * math.pi:  # less than one cycle in the record
-        return None
+        return None, (
+            f"no oscillation found: the extra real mode ({lam:.3g} 1/s) lies outside "
+            f"{EXTRA_MODE_RANGE[0]:g} to {EXTRA_MODE_RANGE[1]:g} 1/s"
+        )
+    span = float(tau[-1] - tau[0])
+    cycles = omega * span / (2 * math.pi)
     s2 = rss / (n - 7)
     try:
         cov = np.linalg.pinv(res.jac.T @ res.jac) * s2
     except np.linalg.LinAlgError:
-        return None
+        return None, "no oscillation found: the fit's parameters are not determined"
     real_sigma, imag_sigma = math.sqrt(max(cov[1, 1], 0.0)), math.sqrt(max(cov[0, 0], 0.0))
     amplitude = math.hypot(a, b)
     if amplitude > 0:
@@ -253,6 +417,37 @@ def _accept_two_mode(res, n: int, tau: np.ndarray):
         and math.isfinite(real_sigma)
         and math.isfinite(imag_sigma)
     ):
-        return None
+        return None, (
+            f"no oscillation found: the fitted amplitude {amplitude:.3g} is not "
+            f"{MIN_AMPLITUDE_SIGNIFICANCE:g} times its standard error {amp_se:.3g}"
+        )
+    if cycles < min_cycles:
+        return None, (
+            f"the record ({span:.3g} s) holds {cycles:.2f} cycles of the fitted oscillation; "
+            f"need at least {min_cycles:g}"
+        )
+    if cycles < 1:
+        significance, fraction = CLEAR_DECAY
+        clear = sigma > significance * real_sigma and math.exp(-sigma * span) <= fraction
+        if not clear:
+            return None, (
+                f"the record ({span:.3g} s) holds {cycles:.2f} cycles and its decay is not clear "
+                f"(decay rate {sigma:.3g} +/- {real_sigma:.2g} 1/s, envelope falls to "
+                f"{math.exp(-sigma * span):.0%}); a record shorter than a cycle needs a decay rate "
+                f"{significance:g} standard errors above zero and an envelope falling to "
+                f"{fraction:.0%} or less"
+            )
     k = _correlation_inflation(res.fun)
-    return WeaveEstimate(complex(-sigma, omega), k * real_sigma, k * imag_sigma, float(lam), math.sqrt(rss / n)), rss
+    r2 = 1 - rss / total if total > 0 else math.nan
+    estimate = WeaveEstimate(
+        complex(-sigma, omega),
+        k * real_sigma,
+        k * imag_sigma,
+        float(lam),
+        math.sqrt(rss / n),
+        r2=r2,
+        cycles=cycles,
+        kind="two-mode",
+        params=tuple(float(x) for x in res.x),
+    )
+    return (estimate, rss), None

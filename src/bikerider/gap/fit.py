@@ -2,11 +2,12 @@
 
 Uncertainties.  Each measured scalar ``y_i`` has
 
-* a data variance: its stated standard uncertainty squared plus, for eigenvalues, the speed
-  uncertainty carried through the nominal model's slope ``d lambda / d v``.  Rows without a stated
-  uncertainty get one estimated from the scatter of successive residuals (sorted by speed within a
-  group) of the same mode and quantity, ``s^2 = sum(d^2) / (2 n_d)``, which a smooth gap does not
-  inflate;
+* a data variance from the data alone, never from residuals against a model (see
+  :meth:`GapProblem.data_sigma`): a stated standard uncertainty; for a row fitted from a record,
+  the larger of the fit's standard error and the scatter of the replicates (records of the same
+  group at the same speed, at least :data:`MIN_REPLICATES`); for a row without either, the pooled
+  scatter of replicate rows; plus, for eigenvalues, the speed uncertainty carried through the
+  nominal model's slope ``d lambda / d v``;
 * a model variance: the benchmark parameters' standard uncertainties carried through the model at
   first order (central differences of one standard deviation), with the full covariance
   ``J J^T`` across observations.
@@ -20,7 +21,10 @@ data variance alone.  Starts are the best of a grid over each fitted parameter's
 :data:`MAX_STARTS` points);
 the Jacobian is a forward difference evaluated for all parameters in one batched model call.
 Standard errors come from ``(J^T J)^-1``, scaled by the reduced chi-square when that exceeds one;
-95 % intervals are +-1.96 standard errors, clipped to the bounds.
+95 % intervals are +-1.96 standard errors, clipped to the bounds.  Benchmark parameters move at most
+five standard deviations, and never to a non-positive mass, length, wheel radius or moment of
+inertia (:data:`POSITIVE`).  The ``speed_sensor`` candidate scales the speed the bicycle ran at
+(the control gains stay those of the recorded speed, which the controller used).
 """
 
 from __future__ import annotations
@@ -32,9 +36,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from bikerider.engine import DifferencedStage
 from bikerider.errors import InputError
 from bikerider.gap.data import CanonicalData, EigenvalueData
-from bikerider.gap.effects import EFFECTS
+from bikerider.gap.effects import EFFECTS, OBSERVATION_EFFECTS
 from bikerider.gap.model_input import GapModelInput
 from bikerider.gap.models import BENCH_ARGS, STRUCTURAL_KEYS, EffectModel
 from bikerider.gap.predict import Predictor
@@ -44,6 +49,14 @@ MAX_STARTS = 32
 """Most grid points tried as starting values of one fit (a fixed random subset beyond that)."""
 _BAD = 1e3
 """Residual assigned to every observation when a model cannot be evaluated (singular matrices)."""
+MAX_SHIFT = 5.0
+"""Largest shift of a benchmark parameter in the ``parameters`` fit, in standard deviations."""
+POSITIVE = ("w", "rR", "rF", "mR", "mB", "mH", "mF", "IRxx", "IRyy", "IBxx", "IBzz", "IHxx", "IHzz", "IFxx", "IFyy")
+"""Benchmark parameters a shift must leave positive (at least 1 % of the nominal value)."""
+MIN_REPLICATES = 3
+"""Fewest records of one group and speed whose scatter counts as a replicate estimate."""
+REPLICATE_SPEED = (0.05, 0.03)
+"""Rows are replicates when their speeds differ by less than this many m/s or this fraction."""
 
 
 @dataclass
@@ -84,6 +97,17 @@ class EffectFit:
     n: int
     success: bool
     message: str = ""
+    lower: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    upper: np.ndarray = field(default_factory=lambda: np.zeros(0))
+
+    def at_bound(self) -> list[str]:
+        """Names of the fitted values pinned at a bound of the search."""
+        out = []
+        for k, name in enumerate(self.names):
+            span = max(self.upper[k] - self.lower[k], 1e-12)
+            if min(abs(self.values[k] - self.lower[k]), abs(self.upper[k] - self.values[k])) <= 1e-4 * span:
+                out.append(name)
+        return out
 
 
 @dataclass
@@ -118,15 +142,26 @@ class GapProblem:
         self.nominal = {k: float(values[k]) for k in BENCH_ARGS + ("g",)}  # type: ignore[arg-type]
         self.free = [k for k in BENCH_ARGS if sigmas.get(k, 0.0) > 0]
         self.free_sigma = np.array([sigmas[k] for k in self.free])
+        self.shift_lower = np.array(
+            [
+                max(-MAX_SHIFT, (0.01 * self.nominal[k] - self.nominal[k]) / s)
+                if k in POSITIVE and self.nominal[k] > 0
+                else -MAX_SHIFT
+                for k, s in zip(self.free, self.free_sigma)
+            ]
+        )
+        self.shift_upper = np.full(len(self.free), MAX_SHIFT)
+        self.eigen = eigen
         self.predictor = Predictor(eigen, canonical, self.nominal, self.geometry)
         self.obs = self.predictor.observations
         self.y = self.obs.value
         self.baseline = self.predictor.predict(EffectModel(self.nominal, self.geometry))
         self.notes: list[str] = []
+        self.noise: list[dict] = []
         self.jacobian = self._parameter_jacobian()  # (n_obs, n_free), per sigma
         self.var_model = np.sum(self.jacobian**2, axis=1)
         self.var_speed = self._speed_variance(eigen)
-        self.sigma_data = self._data_sigma()
+        self.sigma_data = self.data_sigma()
         self.var_data = self.sigma_data**2 + self.var_speed
         self.var_total = self.var_data + self.var_model
         bad = np.flatnonzero(~(self.var_total > 0))
@@ -136,18 +171,28 @@ class GapProblem:
                 f"uncertainty of {self.obs.source[k]} ({self.obs.mode[k]} {self.obs.quantity[k]})",
                 0.0,
                 "a data or parameter uncertainty: give real_sigma/imag_sigma (or sigma) in the data, "
-                "or parameter uncertainties in the model file",
+                "replicate rows, or parameter uncertainties in the model file",
             )
 
     # -- uncertainties -------------------------------------------------------------------------
     def _parameter_jacobian(self) -> np.ndarray:
-        n = len(self.free)
-        if n == 0:
+        """Slopes of the nominal predictions per standard uncertainty of each free parameter.
+
+        A secant over +-1 sigma (central differences by the uncertainty engine), so that the
+        model variance it gives is that of the parameters' plausible range, not of a tangent.
+        """
+        if not self.free:
             return np.zeros((len(self.obs), 0))
-        steps = np.concatenate([np.diag(self.free_sigma), -np.diag(self.free_sigma)])
-        values = self._values_batch(steps)
-        pred = self.predictor.predict(EffectModel(values, self.geometry))
-        return ((pred[:n] - pred[n:]) / 2).T
+        stage = DifferencedStage(
+            "gap predictions",
+            lambda v: self.predictor.predict(EffectModel({**self.nominal, **v}, self.geometry)),
+            inputs=self.free,
+            outputs=range(len(self.obs)),
+            steps=dict(zip(self.free, self.free_sigma)),
+            batched=True,
+            extra_dims=1,
+        )
+        return stage.jacobian({k: self.nominal[k] for k in self.free}) * self.free_sigma
 
     def _values_batch(self, shifts: np.ndarray) -> dict[str, object]:
         """Benchmark values with shifts ``(P, n_free)`` (SI) applied, shaped ``(P, 1)``."""
@@ -163,24 +208,7 @@ class GapProblem:
         # the step: the speed uncertainty, at least 1 mm/s, at most half the speed (never a negative speed)
         h = np.minimum(np.maximum(eigen.speed_sigma, 1e-3), 0.5 * eigen.speed)
         base = EffectModel(self.nominal, self.geometry)
-        slopes = []
-        for sign in (1, -1):
-            shifted = EigenvalueData(
-                eigen.speed + sign * h,
-                eigen.value,
-                eigen.real_sigma,
-                eigen.imag_sigma,
-                eigen.speed_sigma,
-                list(eigen.mode),
-                eigen.group,
-                eigen.gains,
-                eigen.source,
-            )
-            pred = Predictor(
-                shifted, CanonicalData([], np.empty(0), np.empty(0), [], {}, []), self.nominal, self.geometry
-            )
-            pred._reference = self.predictor._reference
-            slopes.append(pred.predict(base))
+        slopes = [self.predictor.predict(base, speed_scale=1 + sign * h / eigen.speed)[: len(out)] for sign in (1, -1)]
         slope = (slopes[0] - slopes[1]) / 2  # per h, eigenvalue parts first
         k = 0
         for row in range(len(eigen)):
@@ -190,32 +218,117 @@ class GapProblem:
                 k += 1
         return out
 
-    def _data_sigma(self) -> np.ndarray:
-        sigma = self.obs.sigma.copy()
-        missing = ~np.isfinite(sigma)
-        if not np.any(missing):
-            return sigma
-        residual = self.y - self.baseline
-        for key in sorted({(m, q) for m, q, miss in zip(self.obs.mode, self.obs.quantity, missing) if miss}):
-            idx = [i for i in range(len(sigma)) if missing[i] and (self.obs.mode[i], self.obs.quantity[i]) == key]
-            diffs = []
-            for group in sorted({self.obs.group[i] for i in idx}):
-                members = sorted((i for i in idx if self.obs.group[i] == group), key=lambda i: self.obs.speed[i])
-                diffs += list(np.diff(residual[members]))
-            if len(diffs) >= 2:
-                estimate = float(math.sqrt(np.sum(np.square(diffs)) / (2 * len(diffs))))
+    def data_sigma(self) -> np.ndarray:
+        """Standard uncertainty of every observation from the data alone (module docstring).
+
+        Never from residuals against a model: a model error must not become noise.  Which estimate
+        each kind of row got is in :attr:`noise` and :attr:`notes`.
+        """
+        obs = self.obs
+        sigma = obs.sigma.copy()
+        kind = self._sigma_source()
+        eig_rows = [i for i in range(len(obs)) if obs.kind[i] == "eigenvalue"]
+        cells = self._replicate_cells(eig_rows)
+        # records: the larger of each record's standard error and its cell's replicate scatter
+        rec = [i for i in eig_rows if kind[i] == "record"]
+        if rec:
+            raised = 0
+            scatter_used = 0
+            for cell in cells:
+                members = [i for i in cell if kind[i] == "record"]
+                if len(members) >= MIN_REPLICATES:
+                    s = float(np.std(self.y[members], ddof=1))
+                    scatter_used += len(members)
+                    for i in members:
+                        if s > sigma[i]:
+                            sigma[i] = s
+                            raised += 1
+            self.noise.append(
+                {
+                    "rows": "record",
+                    "n": len(rec),
+                    "estimate": "record fit standard errors and replicate scatter",
+                    "replicates": scatter_used,
+                    "raised_by_replicates": raised,
+                }
+            )
+            self.notes.append(
+                f"{len(rec)} record values: uncertainty the larger of the record's own fit standard error "
+                f"and the scatter of its replicates (records of one group at one speed, at least "
+                f"{MIN_REPLICATES}; {scatter_used} values had replicates, {raised} were raised by them)"
+            )
+        # rows without any: the pooled scatter of replicate rows of the same mode and quantity
+        none = [i for i in eig_rows if kind[i] == "none"]
+        for key in sorted({(obs.mode[i], obs.quantity[i]) for i in none}):
+            idx = [i for i in none if (obs.mode[i], obs.quantity[i]) == key]
+            dev, dof = 0.0, 0
+            for cell in cells:
+                members = [i for i in cell if i in idx]
+                if len(members) >= 2:
+                    dev += float(np.sum((self.y[members] - np.mean(self.y[members])) ** 2))
+                    dof += len(members) - 1
+            if dof >= 1:
+                estimate = math.sqrt(dev / dof)
                 sigma[idx] = estimate
+                self.noise.append(
+                    {
+                        "rows": f"{key[0]} {key[1]}",
+                        "n": len(idx),
+                        "estimate": "pooled replicate scatter",
+                        "value": estimate,
+                        "dof": dof,
+                    }
+                )
                 self.notes.append(
-                    f"{key[0]} {key[1]}: no stated uncertainty; {estimate:.3g} 1/s estimated from the "
-                    f"scatter of {len(diffs)} successive residuals"
+                    f"{key[0]} {key[1]}: no stated uncertainty; {estimate:.3g} 1/s from the pooled scatter "
+                    f"of replicate rows (same group and speed; {dof} degrees of freedom)"
                 )
             else:
                 sigma[idx] = 0.0
+                self.noise.append({"rows": f"{key[0]} {key[1]}", "n": len(idx), "estimate": "none"})
                 self.notes.append(
-                    f"{key[0]} {key[1]}: no stated uncertainty and too few points to estimate one; "
-                    "only the speed and parameter uncertainties count"
+                    f"{key[0]} {key[1]}: no stated uncertainty, no replicates and no records to estimate one "
+                    "from; the rows are taken as exact and only the speed and parameter uncertainties count "
+                    "(give real_sigma and imag_sigma, or the records)"
                 )
-        return sigma
+        stated = [i for i in range(len(obs)) if kind[i] == "stated"]
+        if stated:
+            self.noise.append({"rows": "stated", "n": len(stated), "estimate": "stated in the data"})
+        return np.where(np.isfinite(sigma), sigma, 0.0)
+
+    def _sigma_source(self) -> list[str]:
+        """Per observation: ``stated``, ``record`` or ``none`` (canonical entries state theirs)."""
+        out = []
+        e = self.eigen
+        for k in range(len(e)):
+            src = e.sigma_source[k] if e.sigma_source else "stated"
+            parts = 2 if e.mode[k] == "weave" else 1
+            for part in range(parts):
+                given = np.isfinite(e.real_sigma[k] if part == 0 else e.imag_sigma[k])
+                out.append(src if src != "stated" or given else "none")
+        out += ["stated"] * (len(self.obs) - len(out))
+        return out
+
+    def _replicate_cells(self, rows: list[int]) -> list[list[int]]:
+        """Observations of one group, mode and quantity at one speed (:data:`REPLICATE_SPEED`)."""
+        obs = self.obs
+        cells: list[list[int]] = []
+        keys = sorted({(obs.group[i], obs.mode[i], obs.quantity[i]) for i in rows})
+        for key in keys:
+            members = sorted(
+                (i for i in rows if (obs.group[i], obs.mode[i], obs.quantity[i]) == key), key=lambda i: obs.speed[i]
+            )
+            current: list[int] = []
+            for i in members:
+                if current:
+                    v0 = obs.speed[current[0]]
+                    if abs(obs.speed[i] - v0) > max(REPLICATE_SPEED[0], REPLICATE_SPEED[1] * v0):
+                        cells.append(current)
+                        current = []
+                current.append(i)
+            if current:
+                cells.append(current)
+        return cells
 
     # -- models ------------------------------------------------------------------------------------
     def layout(self, effects: tuple[str, ...]) -> _Layout:
@@ -245,31 +358,56 @@ class GapProblem:
             lay.starts = [mids] + [tuple(g[i] for g, i in zip(grids, pick)) for pick in sorted(picks)][: MAX_STARTS - 1]
         return lay
 
-    def configure(self, lay: _Layout, x: np.ndarray) -> tuple[dict[str, object], dict[str, dict[str, object]]]:
-        """Benchmark values and effect configuration for parameter vectors ``x`` of shape ``(P, p)``."""
+    def configure(self, lay: _Layout, x: np.ndarray) -> tuple[dict[str, object], dict[str, dict[str, object]], object]:
+        """Benchmark values, effect configuration and speed scale for parameter vectors ``x`` ``(P, p)``."""
         n_struct = len(lay.structural)
         config: dict[str, dict[str, object]] = {}
+        scale: object = None
         for name in lay.effects:
-            if name != "parameters":
+            if name != "parameters" and name not in OBSERVATION_EFFECTS:
                 config[name] = dict(EFFECTS[name].fixed)
         for j, (name, param) in enumerate(lay.structural):
-            config[name][param] = x[:, j : j + 1]
+            if name == "speed_sensor":
+                scale = x[:, j]
+            else:
+                config[name][param] = x[:, j : j + 1]
         if lay.n_shift:
             values = self._values_batch(x[:, n_struct:] * self.free_sigma)
         else:
             values = dict(self.nominal)
-        return values, config
+        return values, config, scale
 
     def predict_batch(self, lay: _Layout, x: np.ndarray) -> np.ndarray:
         """Predictions ``(P, n_obs)`` for parameter vectors ``x`` ``(P, p)``; NaN rows when singular."""
-        values, config = self.configure(lay, np.atleast_2d(x))
+        x = np.atleast_2d(x)
+        values, config, scale = self.configure(lay, x)
         try:
             with np.errstate(all="ignore"):
-                out = self.predictor.predict(EffectModel(values, self.geometry, config))
+                if scale is None:
+                    out = self.predictor.predict(EffectModel(values, self.geometry, config))
+                else:  # a speed scale per parameter vector: the (vector, row) pairs flattened into one call
+                    n_rows = len(self.eigen)
+                    P = x.shape[0]
+
+                    def flat(v):
+                        return np.repeat(np.broadcast_to(np.asarray(v, dtype=float), (P, 1))[:, 0], n_rows)
+
+                    flat_values = {n: flat(v) for n, v in values.items()}
+                    flat_config = {e: {n: flat(v) for n, v in p.items()} for e, p in config.items()}
+                    eigen_part = self.predictor.predict_scaled(
+                        EffectModel(flat_values, self.geometry, flat_config), np.asarray(scale, dtype=float)
+                    )
+                    if len(self.predictor.canonical):
+                        rest = self.predictor.predict(EffectModel(values, self.geometry, config))[
+                            ..., eigen_part.shape[-1] :
+                        ]
+                        out = np.concatenate([eigen_part, np.broadcast_to(rest, (P, rest.shape[-1]))], axis=-1)
+                    else:
+                        out = eigen_part
         except np.linalg.LinAlgError:
-            return np.full((np.atleast_2d(x).shape[0], len(self.obs)), np.nan)
+            return np.full((x.shape[0], len(self.obs)), np.nan)
         if out.ndim == 1:
-            out = np.broadcast_to(out, (np.atleast_2d(x).shape[0], out.size))
+            out = np.broadcast_to(out, (x.shape[0], out.size))
         return out
 
     def z(self, prediction: np.ndarray) -> np.ndarray:
@@ -277,8 +415,20 @@ class GapProblem:
         return (prediction - self.y) / np.sqrt(self.var_total)
 
     # -- fitting -------------------------------------------------------------------------------
-    def fit(self, effects: tuple[str, ...], mask: np.ndarray | None = None) -> EffectFit:
-        """Fit ``effects`` to the observations selected by ``mask`` (all by default)."""
+    def bounds(self, lay: _Layout) -> tuple[np.ndarray, np.ndarray]:
+        """Lower and upper bounds of a layout's parameter vector."""
+        lower = np.array(lay.lower + (list(self.shift_lower) if lay.n_shift else []), dtype=float)
+        upper = np.array(lay.upper + (list(self.shift_upper) if lay.n_shift else []), dtype=float)
+        return lower, upper
+
+    def fit(
+        self, effects: tuple[str, ...], mask: np.ndarray | None = None, start: np.ndarray | None = None
+    ) -> EffectFit:
+        """Fit ``effects`` to the observations selected by ``mask`` (all by default).
+
+        ``start`` (a parameter vector, e.g. the fit to all the data when fitting a fold) replaces
+        the grid of starting values.
+        """
         from scipy.optimize import least_squares
 
         mask = np.ones(len(self.obs), bool) if mask is None else np.asarray(mask, bool)
@@ -300,9 +450,12 @@ class GapProblem:
         if p == 0:
             r = residuals_batch(np.zeros((1, 0)))[0]
             return self._result(lay, np.zeros(0), np.zeros(0), r, int(mask.sum()), True, "nothing to fit")
-        lower = np.array(lay.lower + [-5.0] * lay.n_shift)
-        upper = np.array(lay.upper + [5.0] * lay.n_shift)
-        starts = np.array([list(s) + [0.0] * lay.n_shift for s in lay.starts])
+        lower, upper = self.bounds(lay)
+        if start is not None and np.size(start) == p:
+            starts = np.array([np.asarray(start, dtype=float)])
+        else:
+            starts = np.array([list(s) + [0.0] * lay.n_shift for s in lay.starts])
+        starts = np.clip(starts, lower, upper)
         costs = np.sum(residuals_batch(starts) ** 2, axis=1)
         x0 = starts[int(np.argmin(costs))]
         scale = np.array([max(hi - lo, 1e-6) for lo, hi in zip(lay.lower, lay.upper)] + [1.0] * lay.n_shift)
@@ -335,6 +488,8 @@ class GapProblem:
         try:
             cov = np.linalg.pinv(J.T @ J) * max(1.0, reduced)
             stderr = np.sqrt(np.clip(np.diag(cov), 0, None))
+            insensitive = ~np.any(J != 0, axis=0)
+            stderr = np.where(insensitive, np.inf, stderr)
         except np.linalg.LinAlgError:
             stderr = np.full(p, np.inf)
         return self._result(lay, result.x, stderr, result.fun, int(mask.sum()), bool(result.success), result.message)
@@ -345,16 +500,17 @@ class GapProblem:
         n_struct = len(lay.structural)
         names = [f"{param}" for _, param in lay.structural] + [f"parameters.{k}" for k in self.free][: lay.n_shift]
         units = list(lay.units) + ["sigma"] * lay.n_shift
-        values, config = self.configure(lay, x[None, :] if x.size else np.zeros((1, 0)))
+        values, config, scale = self.configure(lay, x[None, :] if x.size else np.zeros((1, 0)))
         config_out = {
             e: {k: float(np.asarray(v).ravel()[0]) for k, v in params.items()} for e, params in config.items()
         }
+        if scale is not None:
+            config_out["speed_sensor"] = {"speed_scale": float(np.asarray(scale).ravel()[0])}
         shift = {}
         if lay.n_shift:
             for j, name in enumerate(self.free):
                 shift[name] = float(x[n_struct + j] * self.free_sigma[j])
-        lo = np.array(lay.lower + [-5.0] * lay.n_shift)
-        hi = np.array(lay.upper + [5.0] * lay.n_shift)
+        lo, hi = self.bounds(lay)
         ci_low = np.clip(x - 1.96 * stderr, lo, hi) if x.size else x
         ci_high = np.clip(x + 1.96 * stderr, lo, hi) if x.size else x
         data_r = r[:n]
@@ -374,6 +530,8 @@ class GapProblem:
             n,
             ok,
             str(message),
+            lo,
+            hi,
         )
 
     def predict_fit(self, fit: EffectFit) -> np.ndarray:
@@ -382,11 +540,11 @@ class GapProblem:
         return self.predict_batch(lay, fit.values[None, :])[0]
 
     def fitted_model(self, fit: EffectFit) -> EffectModel:
-        """The :class:`EffectModel` of a fit (nominal parameters plus any fitted shift)."""
+        """The :class:`EffectModel` of a fit (nominal parameters plus any fitted shift; no speed scale)."""
         values = dict(self.nominal)
         for name, delta in fit.shift.items():
             values[name] = self.nominal[name] + delta
-        return EffectModel(values, self.geometry, fit.config)
+        return EffectModel(values, self.geometry, {e: p for e, p in fit.config.items() if e not in OBSERVATION_EFFECTS})
 
 
 def structural_parameter_names(effect: str) -> tuple[str, ...]:

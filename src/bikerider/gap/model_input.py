@@ -1,6 +1,6 @@
 """The model a diagnosis starts from: benchmark parameters with uncertainties, and where the rider is.
 
-``--model`` takes either
+The files are read by :func:`bikerider.io.gap_model.load_model`; ``--model`` takes either
 
 * a TOML file with the 25 benchmark parameters (plus ``g``) at top level or under ``[benchmark]``,
   values as numbers or ``"value +/- sigma"``; optional tables ``[rider]`` (the rider contained in
@@ -19,12 +19,11 @@ handlebar-and-fork centre of mass, 0.29 m either side of the bicycle's plane.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from pathlib import Path
+from dataclasses import dataclass, field
 
 from bikerider.benchmark import BenchmarkParameters
-from bikerider.errors import FileFormatError, InputError
-from bikerider.gap.models import GRIP_KEYS, UPPER_BODY_KEYS, RiderGeometry
+from bikerider.errors import InputError
+from bikerider.gap.models import RiderGeometry
 from bikerider.quantity import parse_quantity
 
 UPPER_BODY_FRACTION = 0.5
@@ -51,6 +50,10 @@ class GapModelInput:
     geometry: RiderGeometry
     rider: dict[str, float] | None
     source: str
+    plausible: dict[str, tuple[float, float, str]] = field(default_factory=dict)
+    """What this bicycle's own knowledge says is plausible for a candidate's parameter:
+    ``{parameter: (low, high, why)}``, replacing the literature range (``[plausible]`` in a TOML
+    model file)."""
 
 
 def default_geometry(parameters: BenchmarkParameters, rider: dict[str, float] | None) -> RiderGeometry:
@@ -88,7 +91,7 @@ def default_geometry(parameters: BenchmarkParameters, rider: dict[str, float] | 
     return RiderGeometry(upper, grips, "; ".join(notes))
 
 
-def _table_numbers(table: object, name: str, keys: tuple[str, ...], source: str) -> dict[str, float]:
+def table_numbers(table: object, name: str, keys: tuple[str, ...], source: str) -> dict[str, float]:
     if not isinstance(table, dict):
         raise InputError(name, table, "a table", source)
     unknown = sorted(set(table) - set(keys))
@@ -100,96 +103,3 @@ def _table_numbers(table: object, name: str, keys: tuple[str, ...], source: str)
             raise InputError(f"{name}.{key}", "missing", "a value", source)
         out[key] = parse_quantity(table[key], f"{name}.{key}", source).value
     return out
-
-
-def load_model(
-    path: str | Path, rider_path: str | Path | None = None, *, rider_rel_sigma: float = 0.0
-) -> GapModelInput:
-    """Read the model file (and a lumped rider); build the default geometry where none is given.
-
-    ``rider_rel_sigma`` gives the lumped rider's values a relative standard uncertainty where its
-    file states none (BicycleParameters rider files state none).
-
-    Raises
-    ------
-    FileFormatError
-        Unreadable file.
-    InputError
-        A missing or impossible value (names the file, the key and what was expected).
-    """
-    from bikerider.io.benchmark_file import load_benchmark_parameters, parameters_from_table
-
-    path = Path(path)
-    if not path.exists():
-        raise FileFormatError(path, "no such file")
-    source = str(path)
-    tables: dict[str, object] = {}
-    if path.suffix.lower() == ".toml":
-        from bikerider.io.toml_input import read_toml
-
-        data = read_toml(path)
-        extra = {k: data[k] for k in ("rider", "upper_body", "grips") if k in data}
-        if extra and "benchmark" not in data:
-            raise InputError(
-                "benchmark",
-                "missing",
-                "a [benchmark] table when the file also has " + ", ".join(f"[{k}]" for k in extra),
-                source,
-            )
-        tables = extra
-        parameters = parameters_from_table(data.get("benchmark", data), source)
-    else:
-        parameters = load_benchmark_parameters(path)
-    rider = _table_numbers(tables["rider"], "rider", RIDER_KEYS, source) if "rider" in tables else None
-    if rider_path is not None:
-        if rider is not None:
-            raise InputError("rider", str(rider_path), "one rider: the model file already has a [rider] table", source)
-        parameters, rider = _merge_rider(parameters, Path(rider_path), rider_rel_sigma)
-    if rider is not None and not (rider["mass"] > 0 and rider["mass"] < float(parameters["mB"])):  # type: ignore[operator]
-        raise InputError(
-            "rider.mass", rider["mass"], f"a positive mass below the rear body's {parameters['mB']} kg", source
-        )
-    geometry = default_geometry(parameters, rider)
-    if "upper_body" in tables:
-        geometry = RiderGeometry(
-            _table_numbers(tables["upper_body"], "upper_body", UPPER_BODY_KEYS, source),
-            geometry.grips,
-            geometry.notes + "; upper body from the model file",
-        )
-    if "grips" in tables:
-        geometry = RiderGeometry(
-            geometry.upper_body,
-            _table_numbers(tables["grips"], "grips", GRIP_KEYS, source),
-            geometry.notes + "; grips from the model file",
-        )
-    return GapModelInput(parameters, geometry, rider, source + (f" + rider {rider_path}" if rider_path else ""))
-
-
-def _merge_rider(
-    parameters: BenchmarkParameters, rider_path: Path, rel_sigma: float = 0.0
-) -> tuple[BenchmarkParameters, dict[str, float]]:
-    from dataclasses import replace
-
-    from bikerider.io.bicycleparameters import merge_rider, read_lumped_rider
-    from bikerider.quantity import Quantity
-
-    if not rider_path.exists():
-        raise FileFormatError(rider_path, "no such file")
-    lumped = read_lumped_rider(rider_path)
-    if rel_sigma > 0:
-        lumped = replace(
-            lumped,
-            values={
-                k: q if q.sigma > 0 else Quantity(q.value, rel_sigma * abs(q.value)) for k, q in lumped.values.items()
-            },
-        )
-    values = {k: q.value for k, q in lumped.values.items()}
-    rider = {
-        "mass": values["mBr"],
-        "x": values["xBr"],
-        "z": values["zBr"],
-        "Ixx": values["IBrxx"],
-        "Ixz": values["IBrxz"],
-        "Izz": values["IBrzz"],
-    }
-    return merge_rider(parameters, lumped), rider

@@ -175,18 +175,40 @@ class Predictor:
         }
 
     # -- prediction ------------------------------------------------------------------------------
-    def predict(self, model: EffectModel) -> np.ndarray:
-        """Predicted value of every observation, shape ``(..., n_obs)`` (batch of the model's values)."""
+    def predict(self, model: EffectModel, speed_scale=None) -> np.ndarray:
+        """Predicted value of every observation, shape ``(..., n_obs)`` (batch of the model's values).
+
+        ``speed_scale`` (a number or one per eigenvalue row) multiplies the speed the bicycle ran
+        at; the control gains stay those of the rows (the controller's own speed).
+        """
         parts = []
         if len(self.eigen):
-            parts.append(self._predict_eigen(model))
+            parts.append(self._predict_eigen(model, speed_scale))
         if len(self.canonical):
             parts.append(self._predict_canonical(model))
         return np.concatenate(parts, axis=-1)
 
-    def eigenvalues(self, model: EffectModel) -> np.ndarray:
+    def predict_scaled(self, flat_model: EffectModel, scales: np.ndarray) -> np.ndarray:
+        """Eigenvalue predictions ``(P, n_obs_eigen)`` for ``P`` speed scales in one model call.
+
+        A scale multiplies the speed of the rows a sensor read (``eigen.speed_sensor``) only.
+
+        ``flat_model`` holds, for every (scale, row) pair in that order, one value of each
+        parameter (shape ``(P * n_rows,)``).
+        """
+        P, S = scales.size, len(self.eigen)
+        per_row = np.where(self.eigen.speed_sensor[None, :], scales[:, None], 1.0)  # only the sensor's readings
+        speeds = (per_row * self.eigen.speed[None, :]).ravel()
+        ev = flat_model.eigenvalues(speeds, np.tile(self.eigen.gains, (P, 1))).reshape(P, S, -1)
+        return self._stack_eigen(self._match(ev))
+
+    def eigenvalues(self, model: EffectModel, speed_scale=None) -> np.ndarray:
         """Matched model eigenvalue for each eigenvalue row, ``(..., n_rows)`` complex."""
-        ev = model.eigenvalues(self.eigen.speed, self.eigen.gains)  # (..., S, n)
+        speeds = self.eigen.speed if speed_scale is None else self.eigen.speed * np.asarray(speed_scale, dtype=float)
+        return self._match(model.eigenvalues(speeds, self.eigen.gains))  # (..., S, n)
+
+    def _match(self, ev: np.ndarray) -> np.ndarray:
+        """The eigenvalue of each row's mode among a model's eigenvalues ``(..., S, n)``."""
         ref = np.array([self._reference[k, _MODE_INDEX[m]] for k, m in enumerate(self.eigen.mode)])  # (S,)
         scale = 1e-9 * np.maximum(1.0, np.abs(ev).max(axis=-1, keepdims=True))
         upper = ev.imag > -scale
@@ -200,8 +222,10 @@ class Predictor:
         matched = np.take_along_axis(ev, pick[..., None], axis=-1)[..., 0]
         return matched.real + 1j * np.abs(matched.imag)
 
-    def _predict_eigen(self, model: EffectModel) -> np.ndarray:
-        matched = self.eigenvalues(model)
+    def _predict_eigen(self, model: EffectModel, speed_scale=None) -> np.ndarray:
+        return self._stack_eigen(self.eigenvalues(model, speed_scale))
+
+    def _stack_eigen(self, matched: np.ndarray) -> np.ndarray:
         cols = []
         for k, mode in enumerate(self.eigen.mode):
             cols.append(matched[..., k].real)

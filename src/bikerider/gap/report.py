@@ -1,20 +1,18 @@
-"""Text summary, markdown report and figures of a gap diagnosis (matplotlib, Agg backend).
+"""Text summary, markdown and figures of a gap diagnosis (matplotlib, Agg backend).
 
-:func:`write_report` writes ``report.md`` and PNG figures into a folder:
+The figure functions return matplotlib figures; :func:`bikerider.io.gap_report.write_report`
+writes them with ``report.md`` into a folder:
 
+``records.png``
+    a contact sheet of the records: each record's roll rate with its fitted decay, the model's
+    own response from the record's initial state (selected effects, or the nominal model), and
+    the reason of every record left out;
 ``eigenvalues.png``
-    measured eigenvalues against speed (error bars: data uncertainty) with the nominal model and
-    the model with the selected effects, one line per control law in the data;
-``gap_map.png``
-    the normalised residual of every gap-map cell (mode and quantity by speed band);
-``ranking.png``
-    held-out error of every candidate before and after;
+    measured eigenvalues against speed (error bars: data uncertainty) and one predicted curve per
+    control law, nominal (dashed) and with the selected effects (solid), labelled by the law's name;
 ``effects.png``
-    the weave eigenvalue against speed of every candidate as fitted (each effect on its own);
-``time_response.png``
-    roll rate after a kick, nominal against the selected model;
-``canonical.png``
-    identified canonical entries against the nominal and selected models' equivalents.
+    the weave of every candidate (and the best pairs) as fitted, each on its own;
+``gap_map.png``, ``ranking.png``, ``time_response.png``, ``canonical.png``.
 
 :func:`plot_effect` draws any effect model on its own (eigenvalues against speed and a time
 response) for users exploring a candidate.
@@ -23,25 +21,14 @@ response) for users exploring a candidate.
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 
 from bikerider.gap.effects import EFFECTS
 
 
-def _save(fig, path: Path) -> None:
-    """Write a figure atomically (a failed render leaves the previous file) and close it."""
-    from bikerider.io.atomic import atomic_write_bytes, figure_bytes
-
-    plt = _pyplot()
-    try:
-        atomic_write_bytes(path, figure_bytes(fig, dpi=110, format="png"))
-    finally:
-        plt.close(fig)
-
-
-def _pyplot():
+def pyplot():
+    """matplotlib's pyplot on the Agg backend."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -60,6 +47,19 @@ def _fmt(x, digits: int = 3) -> str:
     return str(x)
 
 
+def _num(x) -> str:
+    """A held-out error or shrinkage to two decimals (``-`` when there is none)."""
+    return "-" if x is None or (isinstance(x, float) and not math.isfinite(x)) else f"{x:.2f}"
+
+
+def _values(params: dict) -> str:
+    return ", ".join(
+        f"{k} = {v['value']:.3g} [{v['ci95'][0]:.3g}, {v['ci95'][1]:.3g}] {v['unit']}"
+        for k, v in params.items()
+        if not k.startswith("parameters.")
+    )
+
+
 # ---------------------------------------------------------------------------------------------
 # Text
 # ---------------------------------------------------------------------------------------------
@@ -70,62 +70,162 @@ def summary_text(result: dict) -> str:
     lines.append(f"Verdict: {result['verdict']}")
     lines.append(
         f"Gap: chi2 = {test['chi2']:.1f} on {test['dof']} observations (p = {test['p_value']:.2g}), "
-        f"RMS normalised residual {test['rms_z']:.2f}"
+        f"RMS normalised residual {test['rms_z']:.2f}; against the data's noise alone chi2 = "
+        f"{test['data_only']['chi2']:.1f} (p = {test['data_only']['p_value']:.2g})"
     )
+    unc = result.get("uncertainty") or {}
+    if unc.get("largest"):
+        lines.append(
+            f"Typical standard uncertainty: data {_fmt(unc['data'])}, model parameters {_fmt(unc['parameters'])} "
+            "(largest: " + ", ".join(f"{u['parameter']} {_fmt(u['rms_effect'], 2)}" for u in unc["largest"][:4]) + ")"
+        )
     if result.get("parameter_fit") and result["parameter_fit"].get("test"):
         pt = result["parameter_fit"]["test"]
         lines.append(
             f"Parameters alone (fitted within their uncertainty): chi2 = {pt['chi2']:.1f} "
             f"(p = {pt['p_value']:.2g}; prior {pt['prior_chi2']:.1f} on {pt['prior_dof']} parameters)"
         )
+    records = result.get("records")
+    if records:
+        lines.append(f"Records: {records['used']} of {records['total']} used, {records['left_out']} left out")
+        for r in records["reasons"]:
+            lines.append(f"  left out {r['record']}: {r['reason']}")
+    for name, text in result.get("laws", {}).items():
+        if text != "no control":
+            lines.append(f"Control law {name}: {text}")
     lines.append("")
-    lines.append("Where (gap map; significant cells):")
+    lines.append("Where (gap map; cells significant against the combined uncertainty, or * against the data's alone):")
     lines.append(
-        f"  {'mode':<10} {'speed band':<14} {'quantity':<26} {'n':>3} {'measured-model':>15} {'sigma':>8} {'RMS z':>7}"
+        f"  {'mode':<10} {'speed band':<14} {'quantity':<26} {'n':>3} {'measured-model':>15} {'sigma':>8} "
+        f"{'RMS z':>7} {'data z':>7}"
     )
-    for cell in result["gap"]["map"]:
-        if cell["significant"]:
-            band = f"{cell['speed_band'][0]:.1f}-{cell['speed_band'][1]:.1f}"
-            lines.append(
-                f"  {cell['mode']:<10} {band:<14} {cell['quantity']:<26} {cell['n']:>3} "
-                f"{cell['mean_residual']:>15.4g} {cell['combined_sigma']:>8.3g} {cell['rms_z']:>7.2f}"
-            )
-    if not any(c["significant"] for c in result["gap"]["map"]):
+    shown = [c for c in result["gap"]["map"] if c["significant"] or c.get("significant_data")]
+    for cell in shown:
+        band = f"{cell['speed_band'][0]:.1f}-{cell['speed_band'][1]:.1f}"
+        star = "" if cell["significant"] else " *"
+        data_z = "-" if cell.get("rms_z_data") is None else f"{cell['rms_z_data']:.2f}"
+        lines.append(
+            f"  {cell['mode']:<10} {band:<14} {cell['quantity']:<26} {cell['n']:>3} "
+            f"{cell['mean_residual']:>15.4g} {cell['combined_sigma']:>8.3g} {cell['rms_z']:>7.2f} {data_z:>7}{star}"
+        )
+    if not shown:
         lines.append("  (none)")
     lines.append("")
     if result["ranking"]:
-        lines.append("Which (held-out error, RMS of normalised residuals; folds: " + ", ".join(result["folds"]) + "):")
-        lines.append(f"  {'rank':<5}{'effect':<17}{'before':>8}{'after':>8}{'shrink':>8}  plausible  fitted")
+        lines.append(
+            "Which (held-out error: RMS of residuals over the combined uncertainty, and over the data's alone; "
+            "folds: " + ", ".join(result["folds"]) + "):"
+        )
+        lines.append(
+            f"  {'rank':<5}{'effect':<17}{'before':>8}{'after':>8}{'shrink':>8}{'data: after':>12}"
+            f"{'shrink':>8}  plausible  fitted"
+        )
+        first = result["ranking"][0]
+        lines.append(
+            f"  {'':<5}{'(nominal)':<17}{first['heldout_error_before']:>8.2f}{'':>16}"
+            f"{_num(first.get('data_error_before')):>12}"
+        )
         for r in result["ranking"]:
-            params = ", ".join(
-                f"{k}={v['value']:.3g} [{v['ci95'][0]:.3g}, {v['ci95'][1]:.3g}] {v['unit']}"
-                for k, v in r["parameters"].items()
-                if not k.startswith("parameters.")
-            )
+            params = _values(r["parameters"])
             if r["effect"] == "parameters":
                 params = f"{len(r['parameters'])} benchmark parameters shifted"
             ties = f"  (tied with {', '.join(r['tied_with'])})" if r["tied_with"] else ""
             lines.append(
                 f"  {r['rank']:<5}{r['effect']:<17}{r['heldout_error_before']:>8.2f}{r['heldout_error_after']:>8.2f}"
-                f"{_fmt(r['shrink'], 2):>8}  {'yes' if r['plausible'] else 'no':<9}  {params}{ties}"
+                f"{_num(r['shrink']):>8}{_num(r.get('data_error_after')):>12}{_num(r.get('data_shrink')):>8}"
+                f"  {'yes' if r['plausible'] else 'no':<9}  {params}{ties}"
             )
+        if result.get("pairs"):
+            lines.append("  pairs (fitted jointly), best first:")
+            for p in result["pairs"][:5]:
+                plaus = {True: "yes", False: "no", None: "-"}[p.get("plausible")]
+                lines.append(
+                    f"       {'+'.join(p['effects']):<30}{p['heldout_error_after']:>8.2f}{_num(p['shrink']):>8}"
+                    f"{_num(p.get('data_error_after')):>12}{_num(p.get('data_shrink')):>8}  {plaus:<9}  "
+                    f"{_values(p.get('parameters', {}))}"
+                )
     else:
         lines.append("Which: no ranking (" + "; ".join(result["notes"][-1:]) + ")")
     for name, why in result.get("not_applicable", {}).items():
         lines.append(f"  {name}: not applicable ({why})")
     lines.append("")
     lines.append("Selected: " + (", ".join(result["selected"]) if result["selected"] else "nothing"))
+    single = result.get("best_single_implausible")
+    if single:
+        lines.append(
+            f"The best single candidate, {'+'.join(single['effects'])}, needs implausible values: "
+            + "; ".join(single["why"])
+            + "."
+        )
+    bad = result.get("best_implausible")
+    if bad:
+        lines.append(
+            f"The best held-out fit, {'+'.join(bad['effects'])}, needs implausible values: "
+            + "; ".join(bad["why"])
+            + ". It is not selected"
+            + (
+                f"; the plausible {'+'.join(bad['instead_of'])} explains significantly less and is not selected either."
+                if bad.get("instead_of")
+                else "."
+            )
+        )
+    if result["verdict"] == "none" and result["ranking"]:
+        lines.append("No gap beyond the uncertainty of the data: nothing is selected.")
+    if result.get("selection", {}).get("note"):
+        lines.append("Note: " + result["selection"]["note"] + ".")
     hf = result.get("how_far")
     if hf:
         lines.append(
             f"How far: held-out error {hf['heldout_error_before']:.2f} -> {hf['heldout_error_after']:.2f}; "
-            f"gap above the noise floor removed: {_fmt(hf['shrink'], 2)}"
+            f"gap above the noise floor removed: {_fmt(hf['shrink'], 2)} (against the data's own noise: "
+            f"{_fmt(hf.get('data_error_before'))} -> {_fmt(hf.get('data_error_after'))}, "
+            f"{_fmt(hf.get('data_shrink'), 2)} removed)"
         )
         for f in hf["folds"]:
             lines.append(f"  {f['fold']}: {f['error_before']:.2f} -> {f['error_after']:.2f} ({f['n']} observations)")
     for note in result["notes"]:
         lines.append(f"Note: {note}")
     return "\n".join(lines)
+
+
+def markdown(result: dict, title: str, figures: list[tuple[str, str]]) -> str:
+    """``report.md``: the summary, the candidates, the records and the figures."""
+    md = [
+        f"# {title}",
+        "",
+        f"Model: `{result['model']['source']}`  ",
+        f"Rider geometry: {result['model']['geometry']}",
+        "",
+        f"**Verdict: {result['verdict']}** — selected: {', '.join(result['selected']) or 'nothing'}",
+        "",
+    ]
+    md += ["```", summary_text(result), "```", ""]
+    md += ["## Candidates", "", "| effect | what it is |", "|---|---|"]
+    md += [f"| {e.name} | {e.description} |" for e in EFFECTS.values()]
+    md += [""]
+    records = result.get("records")
+    if records:
+        md += [
+            "## Records",
+            "",
+            "| record | group | law | speed [m/s] | eigenvalue [1/s] | r^2 | cycles | used |",
+            "|---|---|---|---|---|---|---|---|",
+        ]
+        for r in records["list"]:
+            if r["used"]:
+                value = f"{r['real']:.2f} ± {r['real_sigma']:.2f} + ({r['imag']:.2f} ± {r['imag_sigma']:.2f}) i"
+                md.append(
+                    f"| {r['record']} | {r['group']} | {r['law']} | {r['speed']:.2f} | {value} | {r['r2']:.3f} | "
+                    f"{r['cycles']:.1f} | yes |"
+                )
+            else:
+                md.append(
+                    f"| {r['record']} | {r['group']} | {r['law']} | {r['speed']:.2f} | - | - | - | no: {r['reason']} |"
+                )
+        md += [""]
+    for name, caption in figures:
+        md += [f"## {caption}", "", f"![{caption}]({name})", ""]
+    return "\n".join(md)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -135,63 +235,402 @@ def _speed_grid(diagnosis) -> np.ndarray:
     speeds = diagnosis.problem.obs.speed
     lo, hi = float(np.min(speeds)), float(np.max(speeds))
     pad = 0.1 * max(hi - lo, 1.0)
-    return np.linspace(max(lo - pad, 0.5), hi + pad, 80)
+    return np.linspace(max(lo - pad, 0.3), hi + pad, 80)
 
 
-def _weave_curve(model, speeds: np.ndarray, gains, reference_model) -> np.ndarray:
-    """Weave eigenvalue of ``model`` along ``speeds``, matched to ``reference_model``'s weave."""
+def weave_curve(model, speeds: np.ndarray, law, reference_model, speed_scale: float = 1.0) -> np.ndarray:
+    """Weave eigenvalue of ``model`` along the recorded ``speeds`` under a control law.
+
+    The law's gains are those at the recorded speed; the model runs at ``speed_scale`` times it.
+    Matched to ``reference_model``'s weave (the nominal model under the same law).
+    """
     from bikerider.benchmark.model import label_modes
 
+    gains = law(speeds)
     ref, _ = label_modes(reference_model.eigenvalues(speeds, gains))
-    ev = model.eigenvalues(speeds, gains)
+    ev = model.eigenvalues(speeds * speed_scale, gains)
     scale = 1e-9 * np.maximum(1.0, np.abs(ev).max(axis=-1, keepdims=True))
     ok = ev.imag > scale
     dist = np.abs(ev - ref[:, :1]) + 1e6 * ~ok
     pick = np.argmin(dist, axis=-1)
-    out = np.take_along_axis(ev, pick[:, None], axis=-1)[:, 0]
+    out = np.take_along_axis(ev, pick[..., None], axis=-1)[..., 0]
     none = ~np.any(ok, axis=-1)
-    out = np.where(none, np.nan + 1j * np.nan, out)
-    return out
+    return np.where(none, np.nan + 1j * np.nan, out)
 
 
-def plot_eigenvalues(diagnosis, path: Path) -> None:
-    plt = _pyplot()
+def parameter_band(problem, speeds: np.ndarray, law, reference_model) -> np.ndarray:
+    """Standard uncertainty of the nominal weave along ``speeds`` from the parameters' (first order).
+
+    Returns ``(S,)`` complex: the real part's uncertainty plus i times the imaginary part's.
+    """
+    from bikerider.gap.models import EffectModel
+
+    if not problem.free:
+        return np.zeros(speeds.size, complex)
+    n = len(problem.free)
+    steps = np.concatenate([np.diag(problem.free_sigma), -np.diag(problem.free_sigma)])
+    curves = weave_curve(EffectModel(problem._values_batch(steps), problem.geometry), speeds, law, reference_model)
+    half = (curves[:n] - curves[n:]) / 2
+    return np.sqrt(np.nansum(half.real**2, axis=0)) + 1j * np.sqrt(np.nansum(half.imag**2, axis=0))
+
+
+def _colours(plt) -> list[str]:
+    return plt.rcParams["axes.prop_cycle"].by_key()["color"]
+
+
+def _selected_model(diagnosis):
+    """``(model, speed_scale, label)`` of the selection's full fit (the linear part), or ``None``."""
+    fit = diagnosis.selected_fit
+    if fit is None:
+        return None
+    p = diagnosis.problem
+    scale = fit.config.get("speed_sensor", {}).get("speed_scale", 1.0)
+    if "steer_friction" in fit.effects:
+        from bikerider.gap.models import EffectModel
+
+        c = fit.config["steer_friction"]["c_viscous"]
+        linear = {e: v for e, v in fit.config.items() if e not in ("steer_friction", "speed_sensor")}
+        model = EffectModel(p.nominal, p.geometry, {"steer_damping": {"c_steer": c}, **linear})
+        return model, scale, f"{'+'.join(fit.effects)} without its Coulomb friction (viscous c = {c:.3g} N m s/rad)"
+    return p.fitted_model(fit), scale, "with " + "+".join(diagnosis.selected)
+
+
+def plot_eigenvalues(diagnosis):
+    """Measured and predicted weave against speed, one curve per control law (module docstring)."""
+    plt = pyplot()
     from bikerider.gap.models import EffectModel
 
     p = diagnosis.problem
     e = p.predictor.eigen
     if not len(e):
-        return
+        return None
     grid = _speed_grid(diagnosis)
     nominal = EffectModel(p.nominal, p.geometry)
-    selected = p.fitted_model(diagnosis.selected_fit) if diagnosis.selected_fit is not None else None
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), sharex=True)
-    gain_sets = {tuple(g) for g in e.gains}
-    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
-    for k, gains in enumerate(sorted(gain_sets)):
-        g = np.array(gains)
-        label = "" if not np.any(g) else f" (control {', '.join(f'{x:g}' for x in g)})"
-        before = _weave_curve(nominal, grid, g, nominal)
-        axes[0].plot(grid, before.real, "--", color=colours[k % 10], label=f"nominal{label}")
-        axes[1].plot(grid, before.imag, "--", color=colours[k % 10])
-        if selected is not None:
-            after = _weave_curve(selected, grid, g, nominal)
+    chosen = _selected_model(diagnosis)
+    fig, axes = plt.subplots(1, 2, figsize=(11.5, 4.4), sharex=True)
+    colours = _colours(plt)
+    weave_rows = [i for i in range(len(e)) if e.mode[i] == "weave"]
+    sig = {
+        "real": np.sqrt(
+            p.var_data[
+                [
+                    k
+                    for k, q in enumerate(p.obs.quantity)
+                    if q == "real" and p.obs.kind[k] == "eigenvalue" and p.obs.mode[k] == "weave"
+                ]
+            ]
+        ),
+        "imag": np.sqrt(p.var_data[[k for k, q in enumerate(p.obs.quantity) if q == "imag"]]),
+    }
+    laws = list(dict.fromkeys(e.law[i] for i in weave_rows))
+    for k, name in enumerate(laws):
+        law = e.laws[name]
+        colour = colours[k % len(colours)]
+        before = weave_curve(nominal, grid, law, nominal)
+        band = parameter_band(p, grid, law, nominal)
+        axes[0].plot(grid, before.real, "--", color=colour, lw=1.2, label=f"{name}: nominal model")
+        axes[1].plot(grid, before.imag, "--", color=colour, lw=1.2)
+        if np.any(band != 0):
+            axes[0].fill_between(
+                grid,
+                before.real - band.real,
+                before.real + band.real,
+                color=colour,
+                alpha=0.12,
+                lw=0,
+                label=f"{name}: nominal, 1 sigma of the parameters",
+            )
+            axes[1].fill_between(grid, before.imag - band.imag, before.imag + band.imag, color=colour, alpha=0.12, lw=0)
+        if chosen is not None:
+            model, scale, label = chosen
+            after = weave_curve(model, grid, law, nominal, scale)
+            axes[0].plot(grid, after.real, "-", color=colour, lw=1.8, label=f"{name}: {label}")
+            axes[1].plot(grid, after.imag, "-", color=colour, lw=1.8)
+        rows = [j for j, i in enumerate(weave_rows) if e.law[i] == name]
+        idx = [weave_rows[j] for j in rows]
+        what = "measured, extraction bias removed" if diagnosis.record_rows else "measured"
+        axes[0].errorbar(
+            e.speed[idx],
+            e.value.real[idx],
+            yerr=sig["real"][rows],
+            fmt="o",
+            ms=3.5,
+            color=colour,
+            capsize=2,
+            alpha=0.8,
+            label=f"{name}: {what} ({len(idx)})",
+        )
+        apparent = diagnosis.selected_predictions()
+        if apparent is not None:
             axes[0].plot(
-                grid, after.real, "-", color=colours[k % 10], label=f"with {'+'.join(diagnosis.selected)}{label}"
+                e.speed[idx],
+                apparent[idx].real,
+                "x",
+                color="k",
+                ms=5,
+                mew=1,
+                label=f"{name}: {'+'.join(diagnosis.selected)} as fitted, per record",
             )
-            axes[1].plot(grid, after.imag, "-", color=colours[k % 10])
-        rows = [i for i in range(len(e)) if tuple(e.gains[i]) == gains]
-        for ax, part, sig in ((axes[0], e.value.real, e.real_sigma), (axes[1], e.value.imag, e.imag_sigma)):
-            ax.errorbar(
-                e.speed[rows],
-                part[rows],
-                yerr=np.nan_to_num(sig[rows]),
-                fmt="o",
-                ms=4,
-                color=colours[k % 10],
-                capsize=2,
-            )
+            axes[1].plot(e.speed[idx], apparent[idx].imag, "x", color="k", ms=5, mew=1)
+        axes[1].errorbar(
+            e.speed[idx], e.value.imag[idx], yerr=sig["imag"][rows], fmt="o", ms=3.5, color=colour, capsize=2, alpha=0.8
+        )
     axes[0].axhline(0, color="0.6", lw=0.8)
+    axes[0].set_ylabel("weave real part [1/s]")
+    axes[1].set_ylabel("weave imaginary part [rad/s]")
+    for ax in axes:
+        ax.set_xlabel("speed [m/s]")
+        ax.grid(alpha=0.3)
+    axes[0].legend(fontsize=7, loc="best")
+    verdict = f"verdict {diagnosis.verdict}; selected: {'+'.join(diagnosis.selected) or 'nothing'}"
+    fig.suptitle(
+        f"Weave eigenvalue against speed, measured (points, 1 sigma) and predicted per control law ({verdict})",
+        fontsize=9,
+    )
+    fig.tight_layout()
+    return fig
+
+
+def plot_records(diagnosis, columns: int = 6):
+    """Contact sheet: every record's roll rate, its fitted decay and the model's response."""
+    plt = pyplot()
+    from bikerider.errors import FitError
+    from bikerider.gap.timedomain import (
+        OBSERVED,
+        Layout,
+        closed_loop,
+        friction_states,
+        initial_states,
+        make_batches,
+        simulate_linear,
+        systems,
+    )
+
+    fits = diagnosis.records
+    if not fits:
+        return None
+    chosen = _selected_model(diagnosis)
+    p = diagnosis.problem
+    if chosen is not None:
+        model, model_label = chosen[0], chosen[2]
+    else:
+        from bikerider.gap.models import EffectModel
+
+        model, model_label = EffectModel(p.nominal, p.geometry), "nominal model"
+    responses = {}
+    used = [k for k, f in enumerate(fits) if f.used]
+    fit = diagnosis.selected_fit
+    timed = fit is not None and "steer_friction" in fit.effects
+    if timed:
+        model_label = (
+            "+".join(fit.effects) + " (" + ", ".join(f"{n} {v:.3g}" for n, v in zip(fit.names, fit.values)) + ")"
+        )
+    try:
+        records = [fits[k].record for k in used]
+        for idx, batch in make_batches(records, max_duration=math.inf):
+            if timed:
+                layout = Layout.of(fit.effects)
+                A, b, outputs, T = systems(p.nominal, p.geometry, batch.records, layout, fit.values)
+                states = friction_states(batch, A, b, outputs, T)[0][0]
+            else:
+                A, _, outputs = closed_loop(model, batch.records)
+                states = simulate_linear(A, initial_states(batch, A, outputs), batch.dt, batch.N)
+            for j, k in enumerate(idx):
+                L = batch.length[j]
+                responses[used[k]] = states[j, :L, outputs[OBSERVED["roll_rate"]]]
+    except FitError:  # records not uniformly sampled: the sheet is still useful without the model's response
+        responses = {}
+    rows = math.ceil(len(fits) / columns)
+    fig, axes = plt.subplots(rows, columns, figsize=(2.9 * columns, 1.75 * rows + 0.6), squeeze=False)
+    for ax in axes.flat[len(fits) :]:
+        ax.axis("off")
+    for k, (ax, f) in enumerate(zip(axes.flat, fits)):
+        r = f.record
+        y = r.signals.get("roll_rate")
+        ax.plot(r.time, y, color="k", lw=0.7)
+        title = f"{_short(r.name)}  {r.speed:.2f} m/s"
+        if f.used:
+            est = f.estimate
+            ax.plot(r.time, est.evaluate(r.time), color="tab:red", lw=1.1)
+            if k in responses:
+                resp = responses[k]
+                offset = float(np.mean(y[: resp.size] - resp))
+                ax.plot(r.time[: resp.size], resp + offset, "--", color="tab:blue", lw=0.9)
+            ax.text(
+                0.98,
+                0.95,
+                f"{est.eigenvalue.real:.2f}{est.eigenvalue.imag:+.2f}i\nr2 {est.r2:.2f}",
+                transform=ax.transAxes,
+                ha="right",
+                va="top",
+                fontsize=6,
+            )
+        else:
+            ax.set_facecolor("0.93")
+            ax.text(
+                0.02,
+                0.05,
+                "left out: " + _wrap(f.reason or "", 48),
+                transform=ax.transAxes,
+                fontsize=5.2,
+                va="bottom",
+                color="tab:red",
+            )
+        ax.set_title(title, fontsize=6.5)
+        ax.tick_params(labelsize=5.5)
+        ax.grid(alpha=0.25)
+    handles = [
+        plt.Line2D([], [], color="k", lw=0.8),
+        plt.Line2D([], [], color="tab:red", lw=1.2),
+        plt.Line2D([], [], color="tab:blue", ls="--", lw=1),
+    ]
+    labels = [
+        "measured roll rate [rad/s] against time [s]",
+        "fitted decay (weave + slow mode)",
+        f"{model_label}, from the record's initial state",
+    ]
+    fig.legend(handles, labels, loc="upper center", ncol=3, fontsize=8, frameon=False)
+    fig.tight_layout(rect=(0, 0, 1, 1 - 0.45 / (1.75 * rows + 0.6)))
+    return fig
+
+
+def _short(name: str) -> str:
+    """A record's name without the common log-name clutter (``...5.4kph.log.gz[4486:4775]`` -> ``5.4kph[4486:4775]``)."""
+    base, _, window = name.partition("[")
+    base = base.removesuffix(".gz").removesuffix(".log").removesuffix(".csv")
+    if "_" in base:
+        base = base.rsplit("_", 1)[-1]
+    return f"{base}[{window}" if window else base
+
+
+def _wrap(text: str, width: int) -> str:
+    import textwrap
+
+    return "\n".join(textwrap.wrap(text, width)[:6])
+
+
+def plot_gap_map(result: dict):
+    """Signed RMS residual of every gap-map cell, over the combined uncertainty and over the data's alone."""
+    plt = pyplot()
+    cells = result["gap"]["map"]
+    rows = list(dict.fromkeys(f"{c['mode']} {c['quantity']}" for c in cells))
+    cols = list(dict.fromkeys(f"{c['speed_band'][0]:.1f}-{c['speed_band'][1]:.1f}" for c in cells))
+    panels = [("rms_z", "combined uncertainty")]
+    if all(c.get("rms_z_data") is not None for c in cells):
+        panels.append(("rms_z_data", "the data's uncertainty alone"))
+    fig, axes = plt.subplots(
+        1,
+        len(panels),
+        figsize=(max(5, 1.2 * len(cols) + 3) * len(panels), max(2.6, 0.4 * len(rows) + 1.6)),
+        squeeze=False,
+    )
+    for ax, (key, what) in zip(axes[0], panels):
+        table = np.full((len(rows), len(cols)), np.nan)
+        for c in cells:
+            table[
+                rows.index(f"{c['mode']} {c['quantity']}"),
+                cols.index(f"{c['speed_band'][0]:.1f}-{c['speed_band'][1]:.1f}"),
+            ] = np.sign(c["mean_residual"]) * c[key]
+        limit = max(3.0, float(np.nanmax(np.abs(table)))) if np.any(np.isfinite(table)) else 3.0
+        im = ax.imshow(table, cmap="RdBu_r", vmin=-limit, vmax=limit, aspect="auto")
+        ax.set_xticks(range(len(cols)), cols, fontsize=7, rotation=30)
+        ax.set_yticks(range(len(rows)), rows, fontsize=7)
+        ax.set_xlabel("speed band [m/s]")
+        for i in range(len(rows)):
+            for j in range(len(cols)):
+                if np.isfinite(table[i, j]):
+                    ax.text(
+                        j,
+                        i,
+                        f"{table[i, j]:.1f}",
+                        ha="center",
+                        va="center",
+                        fontsize=7,
+                        color="white" if abs(table[i, j]) > 0.6 * limit else "black",
+                    )
+        fig.colorbar(im, ax=ax, label="signed RMS z")
+        ax.set_title(f"measured - model, over {what}", fontsize=8)
+    fig.suptitle("Gap map: residuals by mode, quantity and speed band", fontsize=9)
+    fig.tight_layout()
+    return fig
+
+
+def plot_ranking(result: dict):
+    """Held-out errors of every candidate and the best pairs: over the combined uncertainty, and over the
+    data's alone (where every row has one)."""
+    plt = pyplot()
+    entries = [
+        (r["effect"], r["heldout_error_after"], r.get("data_error_after"), r["plausible"]) for r in result["ranking"]
+    ]
+    entries += [
+        ("+".join(p["effects"]), p["heldout_error_after"], p.get("data_error_after"), p.get("plausible"))
+        for p in result.get("pairs", [])[:6]
+    ]
+    if not entries:
+        return None
+    first = result["ranking"][0]
+    panels = [("combined uncertainty", 1, first["heldout_error_before"])]
+    if all(e[2] is not None for e in entries) and first.get("data_error_before") is not None:
+        panels.append(("the data's uncertainty alone", 2, first["data_error_before"]))
+    fig, axes = plt.subplots(
+        1, len(panels), figsize=(5.2 * len(panels) + 1.5, 0.32 * len(entries) + 1.6), squeeze=False
+    )
+    colour = {True: "tab:green", False: "tab:orange", None: "0.7"}
+    for ax, (what, col, before) in zip(axes[0], panels):
+        ax.barh(range(len(entries)), [e[col] for e in entries], color=[colour[e[3]] for e in entries])
+        ax.axvline(before, color="k", ls="--", label=f"nominal model ({before:.2f})")
+        ax.axvline(1.0, color="0.5", ls=":", label="noise floor (1)")
+        ax.set_yticks(
+            range(len(entries)), [e[0] for e in entries] if ax is axes[0][0] else [""] * len(entries), fontsize=7
+        )
+        ax.invert_yaxis()
+        ax.set_xscale("log")
+        ax.set_xlabel(f"held-out error: RMS residual over {what}", fontsize=8)
+        ax.legend(fontsize=7)
+    fig.suptitle(
+        "Candidates and pairs fitted on training folds, scored on held-out folds "
+        "(green: plausible values; orange: implausible; grey: pair not judged)",
+        fontsize=8,
+    )
+    fig.tight_layout()
+    return fig
+
+
+def plot_effects(diagnosis):
+    """Every candidate as fitted to all the data, on its own (and the best pairs), under the main law."""
+    plt = pyplot()
+    from bikerider.gap.models import EffectModel
+
+    p = diagnosis.problem
+    e = p.predictor.eigen
+    if not len(e):
+        return None
+    grid = _speed_grid(diagnosis)
+    nominal = EffectModel(p.nominal, p.geometry)
+    main = max(set(e.law), key=e.law.count)
+    law = e.laws[main]
+    fig, axes = plt.subplots(1, 2, figsize=(11.5, 4.4), sharex=True)
+    base = weave_curve(nominal, grid, law, nominal)
+    axes[0].plot(grid, base.real, "k--", label="nominal")
+    axes[1].plot(grid, base.imag, "k--")
+    linear = [
+        pr
+        for pr in sorted(getattr(diagnosis, "pairs", []), key=lambda r: r.error_after)
+        if pr.effects in diagnosis.full_fits and "steer_friction" not in pr.effects
+    ]
+    sets = [(name,) for name in diagnosis.candidates if name != "steer_friction"] + [pr.effects for pr in linear[:2]]
+    for effects in sets:
+        fit = diagnosis.fit_of(effects)
+        scale = fit.config.get("speed_sensor", {}).get("speed_scale", 1.0)
+        plausible, _ = diagnosis.plausibility(fit)
+        label = "+".join(effects) + ("" if plausible else " (implausible)")
+        curve = weave_curve(p.fitted_model(fit), grid, law, nominal, scale)
+        style = "-" if len(effects) == 1 else ":"
+        axes[0].plot(grid, curve.real, style, label=label)
+        axes[1].plot(grid, curve.imag, style)
+    rows = [i for i in range(len(e)) if e.law[i] == main and e.mode[i] == "weave"]
+    axes[0].plot(e.speed[rows], e.value.real[rows], "k.", ms=3, label=f"measured ({main})")
+    axes[1].plot(e.speed[rows], e.value.imag[rows], "k.", ms=3)
     axes[0].set_ylabel("weave real part [1/s]")
     axes[1].set_ylabel("weave imaginary part [rad/s]")
     for ax in axes:
@@ -199,118 +638,65 @@ def plot_eigenvalues(diagnosis, path: Path) -> None:
         ax.grid(alpha=0.3)
     axes[0].legend(fontsize=7)
     fig.suptitle(
-        "Measured (points) and predicted weave eigenvalues: nominal (dashed), selected effects (solid)", fontsize=9
+        f"Every linear candidate fitted to all the data, on its own, and the best two linear pairs (dotted); "
+        f"control law {main}",
+        fontsize=9,
     )
     fig.tight_layout()
-    _save(fig, path)
+    return fig
 
 
-def plot_gap_map(result: dict, path: Path) -> None:
-    plt = _pyplot()
-    cells = result["gap"]["map"]
-    rows = list(dict.fromkeys(f"{c['mode']} {c['quantity']}" for c in cells))
-    cols = list(dict.fromkeys(f"{c['speed_band'][0]:.1f}-{c['speed_band'][1]:.1f}" for c in cells))
-    table = np.full((len(rows), len(cols)), np.nan)
-    for c in cells:
-        table[
-            rows.index(f"{c['mode']} {c['quantity']}"), cols.index(f"{c['speed_band'][0]:.1f}-{c['speed_band'][1]:.1f}")
-        ] = np.sign(c["mean_residual"]) * c["rms_z"]
-    fig, ax = plt.subplots(figsize=(max(5, 1.2 * len(cols) + 3), max(2.5, 0.4 * len(rows) + 1.5)))
-    limit = max(3.0, float(np.nanmax(np.abs(table)))) if np.any(np.isfinite(table)) else 3.0
-    im = ax.imshow(table, cmap="RdBu_r", vmin=-limit, vmax=limit, aspect="auto")
-    ax.set_xticks(range(len(cols)), cols, fontsize=7, rotation=30)
-    ax.set_yticks(range(len(rows)), rows, fontsize=7)
-    ax.set_xlabel("speed band [m/s]")
-    for i in range(len(rows)):
-        for j in range(len(cols)):
-            if np.isfinite(table[i, j]):
-                ax.text(j, i, f"{table[i, j]:.1f}", ha="center", va="center", fontsize=7)
-    fig.colorbar(im, ax=ax, label="signed RMS z")
-    ax.set_title("Gap map: residuals in units of the combined uncertainty", fontsize=9)
-    fig.tight_layout()
-    _save(fig, path)
-
-
-def plot_ranking(result: dict, path: Path) -> None:
-    plt = _pyplot()
-    ranking = result["ranking"]
-    if not ranking:
-        return
-    names = [r["effect"] for r in ranking]
-    after = [r["heldout_error_after"] for r in ranking]
-    before = ranking[0]["heldout_error_before"]
-    fig, ax = plt.subplots(figsize=(7, 3.2))
-    ax.barh(range(len(names)), after, color=["tab:green" if r["plausible"] else "tab:orange" for r in ranking])
-    ax.axvline(before, color="k", ls="--", label=f"nominal model ({before:.2f})")
-    ax.axvline(1.0, color="0.5", ls=":", label="noise floor (1)")
-    ax.set_yticks(range(len(names)), names)
-    ax.invert_yaxis()
-    ax.set_xscale("log")
-    ax.set_xlabel("held-out error (RMS normalised residual)")
-    ax.legend(fontsize=7)
-    ax.set_title(
-        "Candidates fitted on training folds, scored on held-out folds (orange: implausible values)", fontsize=8
-    )
-    fig.tight_layout()
-    _save(fig, path)
-
-
-def plot_effects(diagnosis, path: Path) -> None:
-    plt = _pyplot()
+def plot_time_response(diagnosis):
+    """Roll rate after a kick at the median speed: the nominal model and the selection (with its friction)."""
+    plt = pyplot()
     from bikerider.gap.models import EffectModel
 
     p = diagnosis.problem
-    grid = _speed_grid(diagnosis)
-    nominal = EffectModel(p.nominal, p.geometry)
-    gains = p.predictor.eigen.gains[0] if len(p.predictor.eigen) else np.zeros(4)
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), sharex=True)
-    base = _weave_curve(nominal, grid, gains, nominal)
-    axes[0].plot(grid, base.real, "k--", label="nominal")
-    axes[1].plot(grid, base.imag, "k--")
-    for name, fit in diagnosis.full_fits.items():
-        curve = _weave_curve(p.fitted_model(fit), grid, gains, nominal)
-        axes[0].plot(grid, curve.real, label=name)
-        axes[1].plot(grid, curve.imag)
-    axes[0].set_ylabel("weave real part [1/s]")
-    axes[1].set_ylabel("weave imaginary part [rad/s]")
-    for ax in axes:
-        ax.set_xlabel("speed [m/s]")
-        ax.grid(alpha=0.3)
-    axes[0].legend(fontsize=7)
-    fig.suptitle("Every candidate fitted to all the data, on its own", fontsize=9)
-    fig.tight_layout()
-    _save(fig, path)
-
-
-def plot_time_response(diagnosis, path: Path) -> None:
-    plt = _pyplot()
-    from bikerider.gap.models import EffectModel
-
-    p = diagnosis.problem
+    e = p.predictor.eigen
     speed = float(np.median(p.obs.speed))
-    t = np.linspace(0, 5, 501)
+    law = e.laws[max(set(e.law), key=e.law.count)] if len(e) else None
+    gains = law(speed) if law is not None else None
+    t = np.linspace(0, 3, 301)
     fig, ax = plt.subplots(figsize=(7, 3.2))
-    nominal = EffectModel(p.nominal, p.geometry).simulate(speed, t)
+    nominal = EffectModel(p.nominal, p.geometry).simulate(speed, t, gains=gains)
     ax.plot(t, nominal["phid"], "k--", label="nominal")
-    if diagnosis.selected_fit is not None:
-        sel = p.fitted_model(diagnosis.selected_fit).simulate(speed, t)
-        ax.plot(t, sel["phid"], label="+".join(diagnosis.selected))
+    chosen = _selected_model(diagnosis)
+    if chosen is not None:
+        model, scale, label = chosen
+        fit = diagnosis.selected_fit
+        if "steer_friction" in fit.effects:
+            from bikerider.gap.timedomain import simulate_friction
+
+            ss = model.state_space([speed * scale])
+            A = ss.closed_loop(None if gains is None else np.asarray(gains)[None, :])[0]
+            x0 = np.zeros(A.shape[-1])
+            x0[ss.outputs[2]] = 0.5
+            T = fit.config["steer_friction"]["T_coulomb"]
+            states = simulate_friction(A, ss.B[0][:, 1], x0, T, t[1] - t[0], t.size, ss.outputs[3])
+            ax.plot(t, states[:, ss.outputs[2]], label="+".join(fit.effects) + f" (Coulomb {T:.3g} N m, as fitted)")
+        else:
+            sel = model.simulate(speed * scale, t, gains=gains)
+            ax.plot(t, sel["phid"], label=label)
     ax.set_xlabel("time [s]")
     ax.set_ylabel("roll rate [rad/s]")
-    ax.set_title(f"Free response to a 0.5 rad/s roll-rate kick at {speed:.1f} m/s (no control)", fontsize=9)
+    ax.set_title(
+        f"Response to a 0.5 rad/s roll-rate kick at {speed:.1f} m/s"
+        + (f", control law {law.name}" if law is not None and not law.is_zero else ", no control"),
+        fontsize=9,
+    )
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7)
     fig.tight_layout()
-    _save(fig, path)
+    return fig
 
 
-def plot_canonical(diagnosis, path: Path) -> None:
-    plt = _pyplot()
+def plot_canonical(diagnosis):
+    plt = pyplot()
     p = diagnosis.problem
     obs = p.obs
     idx = [i for i, k in enumerate(obs.kind) if k == "canonical"]
     if not idx:
-        return
+        return None
     after = p.predict_fit(diagnosis.selected_fit) if diagnosis.selected_fit is not None else None
     labels = [f"{obs.quantity[i]}\n{obs.group[i]}" for i in idx]
     fig, ax = plt.subplots(figsize=(max(7, 0.55 * len(idx)), 4))
@@ -327,12 +713,12 @@ def plot_canonical(diagnosis, path: Path) -> None:
     ax.legend(fontsize=7)
     ax.set_title("Identified canonical entries and what each model's identification would give", fontsize=9)
     fig.tight_layout()
-    _save(fig, path)
+    return fig
 
 
-def plot_effect(model, speeds, path: Path, *, gains=None, speed: float | None = None, title: str = "") -> None:
-    """Eigenvalues against speed and a roll-rate time response of one :class:`EffectModel`."""
-    plt = _pyplot()
+def plot_effect(model, speeds, *, gains=None, speed: float | None = None, title: str = ""):
+    """Eigenvalues against speed and a roll-rate time response of one :class:`EffectModel` (a figure)."""
+    plt = pyplot()
     speeds = np.asarray(speeds, dtype=float)
     ev = model.eigenvalues(speeds, gains)
     fig, axes = plt.subplots(1, 2, figsize=(11, 4))
@@ -355,50 +741,18 @@ def plot_effect(model, speeds, path: Path, *, gains=None, speed: float | None = 
     axes[1].grid(alpha=0.3)
     fig.suptitle(title, fontsize=9)
     fig.tight_layout()
-    _save(fig, path)
+    return fig
 
 
-# ---------------------------------------------------------------------------------------------
-# Markdown
-# ---------------------------------------------------------------------------------------------
-def write_report(diagnosis, folder: str | Path, title: str = "Sim-to-real gap diagnosis") -> Path:
-    """Write ``report.md`` and the figures into ``folder`` (created if needed); return the report path."""
-    folder = Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
-    result = diagnosis.as_dict()
-    figures = []
-    if len(diagnosis.problem.predictor.eigen):
-        plot_eigenvalues(diagnosis, folder / "eigenvalues.png")
-        figures.append(("eigenvalues.png", "Measured and predicted weave eigenvalues"))
-        plot_effects(diagnosis, folder / "effects.png")
-        figures.append(("effects.png", "Every candidate as fitted, on its own"))
-    if len(diagnosis.problem.predictor.canonical):
-        plot_canonical(diagnosis, folder / "canonical.png")
-        figures.append(("canonical.png", "Identified canonical entries"))
-    plot_gap_map(result, folder / "gap_map.png")
-    figures.append(("gap_map.png", "Gap map"))
-    if result["ranking"]:
-        plot_ranking(result, folder / "ranking.png")
-        figures.append(("ranking.png", "Held-out ranking"))
-    plot_time_response(diagnosis, folder / "time_response.png")
-    figures.append(("time_response.png", "Time response"))
-    md = [
-        f"# {title}",
-        "",
-        f"Model: `{result['model']['source']}`  ",
-        f"Rider geometry: {result['model']['geometry']}",
-        "",
-        f"**Verdict: {result['verdict']}** — selected: {', '.join(result['selected']) or 'nothing'}",
-        "",
+def figures(diagnosis, result: dict) -> list[tuple[str, str, object]]:
+    """Every figure of a report: ``(file name, caption, figure)``, those that apply."""
+    out = [
+        ("records.png", "Records and their fitted decays", plot_records(diagnosis)),
+        ("eigenvalues.png", "Measured and predicted weave eigenvalues, per control law", plot_eigenvalues(diagnosis)),
+        ("effects.png", "Every candidate as fitted, on its own", plot_effects(diagnosis)),
+        ("canonical.png", "Identified canonical entries", plot_canonical(diagnosis)),
+        ("gap_map.png", "Gap map", plot_gap_map(result)),
+        ("ranking.png", "Held-out ranking", plot_ranking(result)),
+        ("time_response.png", "Time response", plot_time_response(diagnosis)),
     ]
-    md += ["```", summary_text(result), "```", ""]
-    md += ["## Candidates", "", "| effect | what it is |", "|---|---|"]
-    md += [f"| {e.name} | {e.description} |" for e in EFFECTS.values()]
-    md += [""]
-    for name, caption in figures:
-        md += [f"## {caption}", "", f"![{caption}]({name})", ""]
-    from bikerider.io.atomic import atomic_write_text
-
-    path = folder / "report.md"
-    atomic_write_text(path, "\n".join(md))
-    return path
+    return [(name, caption, fig) for name, caption, fig in out if fig is not None]

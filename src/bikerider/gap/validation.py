@@ -34,7 +34,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from bikerider.errors import FitError
+from bikerider.gap.control import ControlLaw, GainSchedule
 from bikerider.gap.data import CanonicalData, EigenvalueData
+from bikerider.gap.fit import POSITIVE
 from bikerider.gap.model_input import GapModelInput
 from bikerider.gap.models import BENCH_ARGS
 
@@ -189,7 +191,10 @@ class TruthSimulator:
         self.values = {k: float(values[k]) for k in BENCH_ARGS + ("g",)}  # type: ignore[arg-type]
         for k in BENCH_ARGS:
             if sigmas.get(k, 0.0) > 0:
+                nominal = self.values[k]
                 self.values[k] += sigmas[k] * float(rng.standard_normal())
+                if k in POSITIVE and nominal > 0:  # a mass or inertia stays physical (at least 10 % of nominal)
+                    self.values[k] = max(self.values[k], 0.1 * nominal)
         self.geometry = _truth_geometry(model)
         self.g = self.values["g"]
 
@@ -208,10 +213,7 @@ class TruthSimulator:
         return v
 
     def canonical(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        from bikerider.generated import benchmark_model as bm
-
-        v = self._benchmark_values()
-        return bm.canonical_matrices(**{k: v[k] for k in BENCH_ARGS})
+        return meijaard_matrices(self._benchmark_values())
 
     def _lean_terms(self, speed: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Hand-derived coupling of an upper body leaning about a longitudinal hip axis.
@@ -334,11 +336,18 @@ class TruthSimulator:
 
     def run(self, speed: float, gains, kick: tuple[float, float], duration: float, rate: float):
         """Simulate a kick ``(phid, deltad)`` at ``speed``; return sample times and roll rate."""
+        t, states = self.states(speed, gains, {"phid": kick[0], "deltad": kick[1]}, duration, rate)
+        return t, states["phid"]
+
+    def states(self, speed: float, gains, initial: dict[str, float], duration: float, rate: float):
+        """Simulate from an initial state (``phi, delta, phid, deltad``); sample times and those four
+        signals (the run stops if the bicycle falls past 0.5 rad)."""
         from scipy.integrate import solve_ivp
 
         f, n, idx = self.rhs(speed, gains)
         x0 = np.zeros(n)
-        x0[idx[2]], x0[idx[3]] = kick
+        for k, name in enumerate(("phi", "delta", "phid", "deltad")):
+            x0[idx[k]] = initial.get(name, 0.0)
         times = np.arange(0.0, duration, 1.0 / rate)
 
         def fall(_, x):
@@ -346,7 +355,51 @@ class TruthSimulator:
 
         fall.terminal = True
         sol = solve_ivp(f, (0.0, duration), x0, t_eval=times, method="LSODA", rtol=1e-6, atol=1e-8, events=fall)
-        return sol.t, sol.y[idx[2]]
+        return sol.t, {name: sol.y[idx[k]] for k, name in enumerate(("phi", "delta", "phid", "deltad"))}
+
+
+def meijaard_matrices(v: dict[str, float]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``M, C1, K0, K2`` of the Whipple bicycle, typed in from Meijaard et al. (2007) Appendix A.
+
+    Written out by hand (no generated code), so the truth shares nothing with the candidates but the
+    meaning of the 23 parameters; ``tests/test_gap_validation.py`` holds it to the generated
+    benchmark model.  ``K0`` is per unit ``g``; the equations are
+    ``M q'' + v C1 q' + (g K0 + v^2 K2) q = f`` with ``q = [roll, steer]``.
+    """
+    w, c, lam, rR, rF = v["w"], v["c"], v["lam"], v["rR"], v["rF"]
+    mR, mB, mH, mF = v["mR"], v["mB"], v["mH"], v["mF"]
+    xB, zB, xH, zH = v["xB"], v["zB"], v["xH"], v["zH"]
+    sl, cl = math.sin(lam), math.cos(lam)
+    mT = mR + mB + mH + mF
+    xT = (xB * mB + xH * mH + w * mF) / mT
+    zT = (-rR * mR + zB * mB + zH * mH - rF * mF) / mT
+    ITxx = v["IRxx"] + v["IBxx"] + v["IHxx"] + v["IFxx"] + mR * rR**2 + mB * zB**2 + mH * zH**2 + mF * rF**2
+    ITxz = v["IBxz"] + v["IHxz"] - mB * xB * zB - mH * xH * zH + mF * w * rF
+    ITzz = v["IRxx"] + v["IBzz"] + v["IHzz"] + v["IFxx"] + mB * xB**2 + mH * xH**2 + mF * w**2
+    mA = mH + mF
+    xA = (xH * mH + w * mF) / mA
+    zA = (zH * mH - rF * mF) / mA
+    IAxx = v["IHxx"] + v["IFxx"] + mH * (zH - zA) ** 2 + mF * (rF + zA) ** 2
+    IAxz = v["IHxz"] - mH * (xH - xA) * (zH - zA) + mF * (w - xA) * (rF + zA)
+    IAzz = v["IHzz"] + v["IFxx"] + mH * (xH - xA) ** 2 + mF * (w - xA) ** 2
+    uA = (xA - w - c) * cl - zA * sl
+    IAll = mA * uA**2 + IAxx * sl**2 + 2 * IAxz * sl * cl + IAzz * cl**2
+    IAlx = -mA * uA * zA + IAxx * sl + IAxz * cl
+    IAlz = mA * uA * xA + IAxz * sl + IAzz * cl
+    mu = c / w * cl
+    SR, SF = v["IRyy"] / rR, v["IFyy"] / rF
+    ST = SR + SF
+    SA = mA * uA + mu * mT * xT
+    M = np.array([[ITxx, IAlx + mu * ITxz], [IAlx + mu * ITxz, IAll + 2 * mu * IAlz + mu**2 * ITzz]])
+    K0 = np.array([[mT * zT, -SA], [-SA, -SA * sl]])
+    K2 = np.array([[0.0, (ST - mT * zT) / w * cl], [0.0, (SA + SF * sl) / w * cl]])
+    C1 = np.array(
+        [
+            [0.0, mu * ST + SF * cl + ITxz / w * cl - mu * mT * zT],
+            [-(mu * ST + SF * cl), IAlz / w * cl + mu * (SA + ITzz / w * cl)],
+        ]
+    )
+    return M, C1, K0, K2
 
 
 def _truth_geometry(model: GapModelInput) -> dict:
@@ -451,6 +504,8 @@ class CaseResult:
     notes: list[str] = field(default_factory=list)
     first_parameters: dict[str, float] = field(default_factory=dict)
     """Fitted values of the first-ranked effect (structural parameters only)."""
+    data_errors: tuple[float, float] | None = None
+    """The selection's held-out RMS error over the data's own noise, before and after (record cases)."""
 
     @property
     def top(self) -> str:
@@ -590,3 +645,215 @@ FULL_CASES = [
     )
 ] + [("null", 200 + k) for k in range(10)]
 """The documented case set: ten effect cases and ten null cases."""
+
+
+# ---------------------------------------------------------------------------------------------
+# Records of the steer-by-wire kind: short, strongly damped, under a speed-scheduled control
+# ---------------------------------------------------------------------------------------------
+SIL = ControlLaw(
+    "sil",
+    {"k_phid": GainSchedule.make_ramp(2.0, 6.5, "below"), "k_phi": GainSchedule.make_ramp(0.7, 6.5, "above")},
+    "steer into lean of the SBW experiment: 2 (6.5 - v) phid below 6.5 m/s, 0.7 (v - 6.5) phi above",
+)
+"""The speed-scheduled control of the record cases, evaluated at the recorded speed (as the SBW's)."""
+
+RECORD_TRUTHS: dict[str, Truth] = {
+    t.name: t
+    for t in (
+        Truth("sbw_null", (), {}, "parameter error within the stated uncertainty only"),
+        Truth(
+            "sbw_friction",
+            ("steer_friction",),
+            {"T_coulomb": 0.12, "c_steer": 0.05},
+            "Coulomb 0.12 N m and viscous 0.05 N m s/rad steer friction (smoothed by tanh(deltad / 0.02))",
+        ),
+        Truth(
+            "sbw_inertia+damping",
+            ("steer_inertia", "steer_damping"),
+            {"I_steer": 0.03, "c_steer": 0.3},
+            "0.03 kg m^2 of steer inertia (a motor's rotor) and 0.3 N m s/rad viscous damping, together",
+        ),
+        Truth(
+            "sbw_speed+friction",
+            ("speed_sensor", "steer_friction"),
+            {"speed_scale": 1.04, "T_coulomb": 0.1, "c_steer": 0.05},
+            "a speed sensor reading 4 % high (the controller uses it) and Coulomb 0.1 N m with viscous "
+            "0.05 N m s/rad steer friction, together",
+        ),
+    )
+}
+"""Hidden truths of the record cases (the candidate each stands for in ``effects``)."""
+
+
+@dataclass(frozen=True)
+class RecordProtocol:
+    """Short free-decay records of a riderless bicycle under :data:`SIL` (the SBW experiment's kind).
+
+    Attributes
+    ----------
+    speeds : tuple of float
+        Set speeds [m/s]; each is a group.
+    per_speed : int
+        Records per speed.
+    duration : tuple of float
+        Range of record lengths [s] (drawn uniformly).
+    rate : float
+        Samples per second (no time column).
+    gyro_noise : float
+        Roll-rate noise [rad/s].
+    encoder_step : float
+        Quantisation of the steer angle [rad] (a 13-bit encoder).
+    speed_noise : float
+        Noise of each speed sample [m/s].
+    speed_jitter : float
+        Spread of a record's true speed about the set speed [m/s].
+    """
+
+    speeds: tuple[float, ...] = (2.0, 2.5, 3.0, 3.5, 4.0, 4.5, 5.0)
+    per_speed: int = 4
+    duration: tuple[float, float] = (1.2, 2.5)
+    rate: float = 100.0
+    gyro_noise: float = 0.015
+    encoder_step: float = 2 * math.pi / 8192
+    speed_noise: float = 0.02
+    speed_jitter: float = 0.05
+
+
+RECORDS = RecordProtocol()
+"""The documented record protocol: seven speeds of four records (28 records)."""
+QUICK_RECORDS = RecordProtocol(speeds=(2.5, 3.5, 4.5), per_speed=4)
+"""A reduced record protocol for the unit test."""
+
+
+def measure_records(simulator: TruthSimulator, protocol: RecordProtocol, rng: np.random.Generator):
+    """Records of every speed: the truth simulated from a random post-push state, noisy and quantised."""
+    from bikerider.gap.records import Record
+
+    scale = simulator.truth.values.get("speed_scale", 1.0)
+    records = []
+    for set_speed in protocol.speeds:
+        for k in range(protocol.per_speed):
+            true_speed = set_speed + protocol.speed_jitter * float(rng.uniform(-1, 1))
+            recorded = true_speed * scale
+            initial = {
+                "phid": float(rng.choice([-1, 1]) * rng.uniform(0.4, 0.9)),
+                "deltad": float(rng.uniform(-1.0, 1.0)),
+                "delta": float(rng.uniform(-0.08, 0.08)),
+                "phi": float(rng.uniform(-0.03, 0.03)),
+            }
+            duration = float(rng.uniform(*protocol.duration))
+            t, states = simulator.states(true_speed, SIL(recorded), initial, duration, protocol.rate)
+            roll_rate = states["phid"] + protocol.gyro_noise * rng.standard_normal(t.size)
+            steer = np.round(states["delta"] / protocol.encoder_step) * protocol.encoder_step
+            speed_column = recorded + protocol.speed_noise * rng.standard_normal(t.size)
+            name = f"sim_{set_speed:.1f}mps[{k}]"
+            records.append(
+                Record(
+                    name,
+                    "simulated",
+                    t - t[0],
+                    {"roll_rate": roll_rate, "steer_angle": steer},
+                    float(np.mean(speed_column)),
+                    float(np.std(speed_column)),
+                    f"{set_speed:.1f} m/s",
+                    SIL,
+                    float(np.mean(speed_column)),
+                    None,
+                    None,
+                    ("roll_rate",),
+                    True,
+                )
+            )
+    return records
+
+
+STEER_MOTOR = {
+    "I_steer": (
+        0.0,
+        0.1,
+        "a steer motor's rotor through its gearbox (a steer-by-wire conversion, as the "
+        "SBW bicycle's [plausible] table)",
+    )
+}
+"""What the record cases' bicycle states as plausible: it is steer-by-wire, like the SBW bicycle."""
+
+
+def run_record_case(model: GapModelInput, truth_name: str, seed: int, protocol: RecordProtocol = RECORDS) -> CaseResult:
+    """Simulate records from a hidden truth, diagnose them blind from the records, score on fresh records.
+
+    The diagnosis sees ``model`` with :data:`STEER_MOTOR` as its ``[plausible]`` table.
+    """
+    from dataclasses import replace
+
+    model = replace(model, plausible={**STEER_MOTOR, **model.plausible})
+    from bikerider.gap.diagnosis import Diagnosis, gap_shrink
+    from bikerider.gap.records import fit_records
+
+    start = time.perf_counter()
+    truth = RECORD_TRUTHS[truth_name]
+    rng = np.random.default_rng(seed)
+    simulator = TruthSimulator(model, truth, rng)
+    fits = fit_records(measure_records(simulator, protocol, rng))
+    diagnosis = Diagnosis(model, EigenvalueData.empty(), CanonicalData.empty(), records=fits)
+    result = diagnosis.as_dict()
+    ranking = [r["effect"] for r in result["ranking"]]
+    ties = result["ranking"][0]["tied_with"] if result["ranking"] else []
+    predicted = actual = None
+    if diagnosis.selected and result["how_far"] is not None:
+        predicted = result["how_far"]["data_shrink"]
+        fresh = fit_records(measure_records(simulator, protocol, np.random.default_rng(seed + 10_000)))
+        check = Diagnosis(model, EigenvalueData.empty(), CanonicalData.empty(), effects=(), records=fresh)
+        p = check.problem
+        if "steer_friction" in diagnosis.selected:
+            after = check._time_domain_predict(diagnosis.selected_fit, np.ones(len(p.obs), bool))
+        else:
+            after = p.predict_batch(p.layout(diagnosis.selected_fit.effects), diagnosis.selected_fit.values[None, :])[0]
+        sigma = np.sqrt(p.var_data)
+        actual = gap_shrink((p.baseline - p.y) / sigma, (after - p.y) / sigma)
+    first = (
+        {k: v["value"] for k, v in result["ranking"][0]["parameters"].items() if not k.startswith("parameters.")}
+        if result["ranking"]
+        else {}
+    )
+    if diagnosis.selected_fit is not None:
+        first = {
+            k: float(v)
+            for k, v in zip(diagnosis.selected_fit.names, diagnosis.selected_fit.values)
+            if not k.startswith("parameters.")
+        }
+    notes = [f"{r['record']}: {r['reason']}" for r in result["records"]["reasons"]] if result["records"] else []
+    how = result["how_far"] or {}
+    errors = (
+        (how["data_error_before"], how["data_error_after"])
+        if how.get("data_error_before") is not None and how.get("data_error_after") is not None
+        else None
+    )
+    return CaseResult(
+        truth_name,
+        truth.effects,
+        seed,
+        result["verdict"],
+        ranking,
+        ties,
+        list(diagnosis.selected),
+        predicted,
+        actual,
+        len(diagnosis.record_rows),
+        time.perf_counter() - start,
+        notes,
+        first,
+        errors,
+    )
+
+
+RECORD_CASES = [
+    ("sbw_friction", 300),
+    ("sbw_friction", 301),
+    ("sbw_inertia+damping", 302),
+    ("sbw_inertia+damping", 303),
+    ("sbw_speed+friction", 304),
+    ("sbw_speed+friction", 305),
+    ("sbw_null", 306),
+    ("sbw_null", 307),
+]
+"""The documented record cases: three truths of two seeds and two null cases."""

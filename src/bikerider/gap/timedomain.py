@@ -1,0 +1,507 @@
+"""Records in the time domain: each record's model response, the extraction's bias, nonlinear friction.
+
+A record's weave eigenvalue is fitted (:mod:`bikerider.gap.extraction`) with a model that is
+only approximately the bicycle's response: one damped oscillation and one real mode.  On a short
+record of a strongly damped weave, the castor and capsize modes and the control bend the fitted
+oscillation away from the weave eigenvalue.  The same fit applied to a model's own response over
+the same window, from the same initial state, shows how far (the *extraction bias*):
+
+* :func:`initial_states` fits each record's initial state (and a constant offset per signal) to the
+  record's signals by linear least squares for a linear closed-loop model (the response is linear
+  in the initial state), each signal weighted by its own scatter over the record;
+* :func:`extraction_bias` simulates the model from that state, fits the weave exactly as the
+  measured record was fitted, and returns the difference from the model's weave eigenvalue.  The
+  diagnosis compares measured and predicted eigenvalues after removing this bias, so the fit's
+  approximation does not masquerade as a model error.  Where the extraction finds something else
+  than the weave in the model's own response (the bias exceeds :data:`MAX_RELATIVE_BIAS` of the
+  eigenvalue: two oscillating modes at low speed, say), the record cannot be compared by its
+  eigenvalue and is left out with that reason.
+
+Nonlinear steer friction, ``T = -T_coulomb tanh(deltad / eps) - c_viscous deltad`` on the steer
+axis, is fitted in the time domain (:func:`fit_time_domain`): the closed-loop bicycle (nominal
+parameters, the records' control law and speed) is simulated from each record's initial state and
+its roll rate and steer angle (the signals the record holds among them) are compared with the
+record's, every signal weighted by its own scatter.  The simulation is an exponential integrator:
+the linear part exact (matrix exponential), the friction torque held over steps of at most
+:data:`MAX_STEP`.  The sign function is smoothed as ``tanh(deltad / eps)`` with ``eps =`` :data:`SMOOTHING`
+rad/s (the friction reaches 76 % of its full value at ``eps``, 96 % at twice it); a sharper corner
+would need shorter steps for no gain at the steer rates of these records.  Each record's initial
+state is refitted for every trial friction (linear least squares, then Gauss-Newton steps on the
+nonlinear response).  The friction's prediction of a record's eigenvalue is what the extraction
+finds in the simulated response (its *apparent* eigenvalue, amplitude-dependent as friction is).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from bikerider.errors import FitError
+from bikerider.gap.models import EffectModel
+from bikerider.gap.records import Record, RecordFit, combine_fits
+
+OBSERVED = {"roll_angle": 0, "steer_angle": 1, "roll_rate": 2, "steer_rate": 3}
+"""Record signals and the index of their state among ``(phi, delta, phid, deltad)``."""
+TIME_DOMAIN_SIGNALS = ("roll_rate", "steer_angle")
+"""Signals the friction fit compares (those of them a record holds)."""
+SMOOTHING = 0.05
+"""``eps`` of the smoothed sign function ``tanh(deltad / eps)`` [rad/s]."""
+MAX_STEP = 0.01
+"""Longest integration step of the nonlinear simulation [s]; shorter where the friction's slope at
+zero steer rate, ``T_coulomb / eps``, would make the explicit friction term stiff (step times that
+slope over the steer inertia kept below one)."""
+MAX_DURATION = 2.5
+"""Longest part of a record the time-domain fits use [s] (the weave has decayed by then)."""
+FIT_STEP = 0.02
+"""Sampling step of the time-domain fits [s]: records sampled faster are compared at every k-th sample."""
+MAX_RELATIVE_BIAS = 0.2
+"""Largest extraction bias, as a fraction of the model's weave eigenvalue, for which a record's
+eigenvalue is compared with the model's."""
+GN_STEPS = 1
+"""Gauss-Newton steps refining each record's initial state under friction."""
+
+
+def expm(M: np.ndarray) -> np.ndarray:
+    """Matrix exponential of a batch of small matrices ``(..., n, n)``, vectorised.
+
+    Scaling and squaring: each matrix is scaled by a power of two to a 1-norm of at most 1/2, the
+    Taylor series is summed to degree 14 (truncation below 1e-16 relative), and the result squared
+    back.  (``scipy.linalg.expm`` loops over a batch in Python, far slower for the thousands of
+    4x4 and 5x5 matrices of a time-domain fit.)
+    """
+    M = np.asarray(M, dtype=float)
+    n = M.shape[-1]
+    norm = np.max(np.sum(np.abs(M), axis=-2), axis=-1)
+    s = np.ceil(np.log2(np.maximum(norm, 1e-300) / 0.5)).clip(0, None).astype(int)
+    X = M / (2.0**s)[..., None, None]
+    eye = np.eye(n)
+    E = eye + X / 14.0
+    for k in range(13, 0, -1):
+        E = eye + (X @ E) / k
+    for k in range(int(s.max()) if s.size else 0):
+        E = np.where((k < s)[..., None, None], E @ E, E)
+    return E
+
+
+@dataclass
+class Batch:
+    """Records of one sampling step, padded to a common length.
+
+    Attributes
+    ----------
+    records : list of Record
+    dt : float
+    length : ndarray of int
+        Samples used of each record.
+    y : dict
+        Signal name to ``(R, N)`` samples (NaN beyond a record's length or where it lacks the signal).
+    weight : dict
+        Signal name to ``(R,)`` weights (1 / the signal's scatter over the record; 0 if absent).
+    """
+
+    records: list[Record]
+    dt: float
+    length: np.ndarray
+    y: dict[str, np.ndarray]
+    weight: dict[str, np.ndarray]
+
+    @property
+    def N(self) -> int:
+        return int(self.length.max())
+
+
+def make_batches(
+    records: list[Record], signals=TIME_DOMAIN_SIGNALS, max_duration: float = MAX_DURATION, min_step: float = 0.0
+) -> list[tuple[list[int], Batch]]:
+    """Group records by sampling step (uniformly sampled records only); ``[(indices, batch)]``.
+
+    Each record is used up to ``max_duration`` seconds, every ``k``-th sample where the sampling step
+    is shorter than ``min_step`` (the fits compare the weave, a few hertz, at 50 Hz).
+    """
+    groups: dict[float, list[int]] = {}
+    for k, r in enumerate(records):
+        steps = np.diff(r.time)
+        if steps.size == 0 or not np.allclose(steps, steps[0], rtol=1e-6, atol=1e-9):
+            raise FitError(f"{r.name}: the time-domain fit needs uniformly sampled records")
+        groups.setdefault(round(float(steps[0]), 9), []).append(k)
+    out = []
+    for dt, idx in groups.items():
+        every = max(1, int(round(min_step / dt))) if min_step > dt else 1
+        step = dt * every
+        recs = [records[k] for k in idx]
+        limit = int(round(max_duration / step)) + 1 if math.isfinite(max_duration) else 1 << 30
+        length = np.array([min((r.time.size - 1) // every + 1, limit) for r in recs])
+        N = int(length.max())
+        y, weight = {}, {}
+        for name in signals:
+            Y = np.full((len(recs), N), np.nan)
+            W = np.zeros(len(recs))
+            for j, r in enumerate(recs):
+                if name in r.signals:
+                    values = r.signals[name][::every][: length[j]]
+                    if np.all(np.isfinite(values)):
+                        Y[j, : length[j]] = values
+                        spread = float(np.std(values))
+                        W[j] = 1.0 / spread if spread > 0 else 0.0
+            if np.any(W > 0):
+                y[name], weight[name] = Y, W
+        out.append((idx, Batch(recs, step, length, y, weight)))
+    return out
+
+
+@dataclass(frozen=True)
+class Layout:
+    """The fitted parameters of a time-domain candidate: ``(effect, parameter)`` pairs with bounds.
+
+    ``steer_friction``'s ``T_coulomb`` and ``c_viscous`` come first; an added linear effect's
+    parameters follow (``steer_inertia``, ``steer_stiffness``, ``speed_sensor``).
+    """
+
+    names: tuple[tuple[str, str], ...]
+    lower: tuple[float, ...]
+    upper: tuple[float, ...]
+    start: tuple[float, ...]
+
+    @staticmethod
+    def of(effects: tuple[str, ...]) -> Layout:
+        from bikerider.gap.effects import EFFECTS
+
+        names, lower, upper, start = [], [], [], []
+        for effect in sorted(effects, key=lambda e: e != "steer_friction"):
+            for p in EFFECTS[effect].parameters:
+                names.append((effect, p.name))
+                lower.append(p.bounds[0])
+                upper.append(p.bounds[1])
+                start.append(p.start)
+        return Layout(tuple(names), tuple(lower), tuple(upper), tuple(start))
+
+    def value(self, theta: np.ndarray, name: str, default: float = 0.0) -> np.ndarray:
+        """Column ``name`` of parameter vectors ``theta (P, k)`` (``default`` when not fitted)."""
+        for k, (_, param) in enumerate(self.names):
+            if param == name:
+                return theta[:, k]
+        return np.full(theta.shape[0], default)
+
+
+NOMINAL = Layout((), (), (), ())
+"""The nominal linear model (nothing fitted)."""
+
+
+def systems(values: dict, geometry, records: list[Record], layout: Layout, theta: np.ndarray):
+    """Closed-loop systems of every record for parameter vectors ``theta (P, k)``.
+
+    Returns ``A (P, R, n, n)``, the steer-torque column ``b (P, R, n)``, the output state indices
+    and the Coulomb friction ``T (P,)``.  A speed scale (``speed_sensor``) multiplies the speed of
+    the records whose speed a sensor read; the control gains stay those of the recorded speed.
+    """
+    theta = np.atleast_2d(np.asarray(theta, dtype=float))
+    P, R = theta.shape[0], len(records)
+    config: dict[str, dict[str, np.ndarray]] = {}
+    c = layout.value(theta, "c_viscous")
+    if np.any(c != 0):
+        config["steer_damping"] = {"c_steer": c}
+    for effect, param in layout.names:
+        if effect not in ("steer_friction", "speed_sensor"):
+            config.setdefault(effect, {})[param] = layout.value(theta, param)
+    scale = layout.value(theta, "speed_scale", 1.0)
+    measured = np.array([r.speed_measured for r in records])
+    speeds = np.array([r.speed for r in records])
+    gains = np.array([r.gains for r in records])
+    # one model call for every (parameter vector, record) pair
+    flat_speeds = (np.where(measured[None, :], scale[:, None], 1.0) * speeds[None, :]).ravel()
+    flat_values = {k: v for k, v in values.items()}
+    flat_config = {e: {k: np.repeat(v, R) for k, v in p.items()} for e, p in config.items()}
+    from bikerider.gap.models import EffectModel
+
+    ss = EffectModel(flat_values, geometry, flat_config).state_space(flat_speeds)
+    A = ss.closed_loop(np.tile(gains, (P, 1)))
+    n = A.shape[-1]
+    return (A.reshape(P, R, n, n), ss.B[..., :, 1].reshape(P, R, n), ss.outputs, layout.value(theta, "T_coulomb"))
+
+
+def closed_loop(model: EffectModel, records: list[Record]) -> tuple[np.ndarray, np.ndarray, tuple[int, ...]]:
+    """Closed-loop ``A (R, n, n)``, steer-torque column ``b (R, n)`` and output states of any linear model."""
+    speeds = np.array([r.speed for r in records])
+    gains = np.array([r.gains for r in records])
+    ss = model.state_space(speeds)
+    return ss.closed_loop(gains), ss.B[..., :, 1], ss.outputs
+
+
+def _transitions(A: np.ndarray, dt: float, N: int) -> np.ndarray:
+    """``Phi_k = expm(A k dt)`` for ``k < N``: shape ``A.shape[:-2] + (N, n, n)``."""
+    step = expm(A * dt)
+    out = np.empty(A.shape[:-2] + (N,) + A.shape[-2:])
+    out[..., 0, :, :] = np.eye(A.shape[-1])
+    for k in range(1, N):
+        out[..., k, :, :] = step @ out[..., k - 1, :, :]
+    return out
+
+
+def _stack(batch: Batch, sensitivity: np.ndarray, outputs: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
+    """Weighted design ``(..., R, M, n + S)`` (state columns, then one offset per signal) and data ``(R, M)``.
+
+    ``sensitivity`` is ``(..., R, N, n_out, n)``: each output state's response to the initial state.
+    Samples beyond a record's length, and signals it lacks, are zero rows.
+    """
+    names = list(batch.y)
+    mask = np.arange(batch.N)[None, :] < batch.length[:, None]  # (R, N)
+    lead = sensitivity.shape[:-4]
+    R, N, n = batch.y[names[0]].shape[0], batch.N, sensitivity.shape[-1]
+    S = len(names)
+    design = np.zeros(lead + (R, S, N, n + S))
+    data = np.zeros((R, S, N))
+    for m, s in enumerate(names):
+        w = batch.weight[s][:, None] * mask  # (R, N)
+        design[..., m, :, :n] = sensitivity[..., :, outputs[OBSERVED[s]], :] * w[..., None]
+        design[..., m, :, n + m] = w
+        data[:, m, :] = np.where(mask, np.nan_to_num(batch.y[s]), 0.0) * w
+    return design.reshape(lead + (R, S * N, n + S)), data.reshape(R, S * N)
+
+
+def _solve(design: np.ndarray, data: np.ndarray) -> np.ndarray:
+    """Least squares of every ``(..., R)`` design at once (normal equations with a tiny ridge)."""
+    gram = np.swapaxes(design, -1, -2) @ design
+    rhs = np.einsum("...mk,...m->...k", design, data)
+    scale = np.maximum(np.trace(gram, axis1=-2, axis2=-1) / gram.shape[-1], 1e-300)
+    gram = gram + 1e-12 * scale[..., None, None] * np.eye(gram.shape[-1])
+    return np.linalg.solve(gram, rhs[..., None])[..., 0]
+
+
+def initial_states(batch: Batch, A: np.ndarray, outputs: tuple[int, ...]) -> np.ndarray:
+    """Initial states ``(..., R, n)`` fitted to each record for linear models ``A (..., R, n, n)``.
+
+    Each signal ``s`` is modelled as ``C_s Phi(t) x0 + offset_s`` (an offset per signal, solved
+    with the state), every signal weighted by its scatter over the record.
+    """
+    Phi = _transitions(A, batch.dt, batch.N)  # (..., R, N, n, n)
+    design, data = _stack(batch, Phi, outputs)
+    return _solve(design, data)[..., : A.shape[-1]]
+
+
+def simulate_linear(A: np.ndarray, x0: np.ndarray, dt: float, N: int) -> np.ndarray:
+    """States ``(R, N, n)`` of ``x' = A x`` from ``x0`` ``(R, n)``."""
+    step = expm(A * dt)
+    out = np.empty(x0.shape[:-1] + (N, x0.shape[-1]))
+    x = x0
+    for k in range(N):
+        out[..., k, :] = x
+        x = np.einsum("...ij,...j->...i", step, x)
+    return out
+
+
+def simulate_friction(
+    A: np.ndarray, b: np.ndarray, x0: np.ndarray, T_c, dt: float, N: int, rate_index: int
+) -> np.ndarray:
+    """States ``(..., N, n)`` of ``x' = A x + b (-T_c tanh(x[rate] / eps))`` (exponential integrator).
+
+    ``A (..., n, n)``, ``b (..., n)``, ``x0 (..., n)`` and ``T_c`` broadcast together.
+    """
+    n = A.shape[-1]
+    T_max = float(np.max(T_c)) if np.size(T_c) else 0.0
+    stiffness = T_max / SMOOTHING * float(np.max(np.abs(b[..., rate_index]))) if T_max > 0 else 0.0
+    substeps = max(1, math.ceil(dt / MAX_STEP - 1e-9), math.ceil(dt * stiffness))
+    h = dt / substeps
+    aug = np.zeros(A.shape[:-2] + (n + 1, n + 1))
+    aug[..., :n, :n] = A
+    aug[..., :n, n] = b
+    E = expm(aug * h)
+    Phi, Gamma = E[..., :n, :n], E[..., :n, n]
+    T_c = np.asarray(T_c, dtype=float)[..., None]
+    x = np.array(x0, dtype=float)
+    out = np.empty(x.shape[:-1] + (N, n))
+    for k in range(N):
+        out[..., k, :] = x
+        for _ in range(substeps):
+            u = -T_c * np.tanh(x[..., rate_index : rate_index + 1] / SMOOTHING)
+            x = np.einsum("...ij,...j->...i", Phi, x) + Gamma * u
+    return out
+
+
+def _residuals(batch: Batch, states: np.ndarray, outputs: tuple[int, ...]) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """Weighted residuals after the best constant offset per signal; ``(R, S, N)`` (0 outside)."""
+    names = list(batch.y)
+    mask = np.arange(batch.N)[None, :] < batch.length[:, None]
+    res = np.zeros(states.shape[:-2] + (len(names), batch.N))
+    offsets = {}
+    for m, s in enumerate(names):
+        sim = states[..., outputs[OBSERVED[s]]]
+        diff = np.where(mask, batch.y[s] - sim, 0.0)
+        off = diff.sum(axis=-1) / batch.length
+        offsets[s] = off
+        res[..., m, :] = np.where(mask, (sim + off[..., None] - batch.y[s]), 0.0) * batch.weight[s][..., None]
+    return res, offsets
+
+
+def friction_states(
+    batch: Batch, A: np.ndarray, b: np.ndarray, outputs: tuple[int, ...], T_c
+) -> tuple[np.ndarray, np.ndarray]:
+    """Each record's response to ``A (P, R, n, n)`` plus Coulomb friction ``T_c (P,)`` through ``b``.
+
+    The initial states are fitted to the records: linear least squares for the linear part, then
+    :data:`GN_STEPS` Gauss-Newton steps on the nonlinear response.  Returns the states
+    ``(P, R, N, n)`` and the weighted residuals ``(P, R, S, N)``.
+    """
+    T = np.asarray(T_c, dtype=float).reshape(A.shape[:-3] + (1,))
+    x0 = initial_states(batch, A, outputs)
+    rate = outputs[3]
+    nonlinear = bool(np.any(T > 0))
+    for _ in range(GN_STEPS if nonlinear else 0):
+        n = x0.shape[-1]
+        h = 1e-4 * np.maximum(np.abs(x0), 1e-3)
+        unit = np.eye(n).reshape((n,) + (1,) * (x0.ndim - 1) + (n,))
+        trial = np.concatenate([x0[None], x0[None] + unit * h[None]], axis=0)  # (n+1, P, R, n)
+        states = simulate_friction(A[None], b[None], trial, T[None], batch.dt, batch.N, rate)
+        res, _ = _residuals(batch, states, outputs)  # (n+1, P, R, S, N)
+        r0 = res[0].reshape(res.shape[1:-2] + (-1,))  # (P, R, M)
+        J = (res[1:] - res[0]).reshape((n,) + r0.shape) / np.moveaxis(h, -1, 0)[..., None]  # (n, P, R, M)
+        J = np.moveaxis(J, 0, -1)  # (P, R, M, n)
+        x0 = x0 + _solve(J, -r0)
+    states = (
+        simulate_friction(A, b, x0, T, batch.dt, batch.N, rate)
+        if nonlinear
+        else simulate_linear(A, x0, batch.dt, batch.N)
+    )
+    res, _ = _residuals(batch, states, outputs)
+    return states, res
+
+
+@dataclass
+class TimeDomainFit:
+    """A time-domain candidate (steer friction, alone or with a linear partner) fitted to records.
+
+    Attributes
+    ----------
+    values : ndarray
+        The parameters in the order of the candidate's :class:`Layout` (``T_coulomb``, ``c_viscous``,
+        then the partner's).
+    cost : float
+        Sum of squared weighted residuals.
+    n_samples : int
+    records : list of str
+    success : bool
+    """
+
+    values: np.ndarray
+    cost: float
+    n_samples: int
+    records: list[str]
+    success: bool
+
+
+def fit_time_domain(records: list[Record], values: dict, geometry, layout: Layout, start=None) -> TimeDomainFit:
+    """Fit a time-domain candidate (``layout``) to records (module docstring).
+
+    Starts from ``start`` when given (a fit to more of the records, or the friction alone with the
+    partner absent), else from the best of a small grid over the literature ranges of the friction
+    with the partner absent.
+    """
+    from scipy.optimize import least_squares
+
+    batches = make_batches(records, min_step=FIT_STEP)
+    lower, upper = np.asarray(layout.lower, float), np.asarray(layout.upper, float)
+
+    def costs(thetas: np.ndarray) -> np.ndarray:
+        """Weighted residuals ``(P, M)`` for parameter vectors ``(P, k)``, in one batched simulation."""
+        parts = []
+        for _, batch in batches:
+            A, b, outputs, T = systems(values, geometry, batch.records, layout, thetas)
+            _, res = friction_states(batch, A, b, outputs, T)
+            parts.append(res.reshape(thetas.shape[0], -1))
+        return np.concatenate(parts, axis=1)
+
+    steps = np.full(len(layout.names), 2e-3)
+
+    def fun(theta: np.ndarray) -> np.ndarray:
+        return costs(theta[None, :])[0]
+
+    def jac(theta: np.ndarray) -> np.ndarray:
+        h = steps * np.where(theta + steps <= upper, 1.0, -1.0)
+        R = costs(np.vstack([theta, theta + np.diag(h)]))
+        return ((R[1:] - R[0]) / h[:, None]).T
+
+    if start is not None:
+        x0 = np.clip(np.asarray(start, dtype=float), lower, upper)
+    else:
+        rest = [1.0 if name == "speed_scale" else 0.0 for _, name in layout.names[2:]]  # the partner absent
+        grid = np.array([[t, c] + rest for t in (0.02, 0.15) for c in (0.05, 0.3)] + [list(layout.start)])
+        x0 = np.clip(grid[int(np.argmin(np.sum(costs(grid) ** 2, axis=1)))], lower, upper)
+    scale = np.maximum(np.asarray(layout.start, float), 0.05) * 0.5
+    result = least_squares(
+        fun, x0, jac=jac, bounds=(lower, upper), method="trf", x_scale=scale, max_nfev=40, xtol=1e-3, ftol=1e-5
+    )
+    n_samples = int(sum(batch.length.sum() for _, batch in batches))
+    return TimeDomainFit(
+        result.x, float(np.sum(result.fun**2)), n_samples, [r.name for r in records], bool(result.success)
+    )
+
+
+def apparent_eigenvalues(
+    fits: list[RecordFit], values: dict, geometry, layout: Layout = NOMINAL, theta=()
+) -> tuple[np.ndarray, list[str | None]]:
+    """What the record fit finds in a model's own response over each record (NaN where nothing).
+
+    The model is the nominal bicycle with the time-domain candidate ``layout`` at ``theta`` (the
+    nominal linear model by default); its response starts from the initial state fitted to each
+    record, and the signals the record's eigenvalue was fitted to are simulated and fitted alike
+    (:func:`bikerider.gap.extraction.refit_like`, started from the record's own fit).
+    """
+    from bikerider.gap.extraction import refit_like
+
+    records = [f.record for f in fits]
+    out = np.full(len(records), np.nan + 1j * np.nan)
+    why: list[str | None] = [None] * len(records)
+    signals = tuple(
+        dict.fromkeys(TIME_DOMAIN_SIGNALS + tuple(s for r in records for s in r.fit_signals if s in OBSERVED))
+    )
+    theta = np.asarray(theta, dtype=float).reshape(1, -1)
+    for idx, batch in make_batches(records, signals, max_duration=math.inf):
+        A, b, outputs, T = systems(values, geometry, batch.records, layout, theta)
+        states, _ = friction_states(batch, A, b, outputs, T)
+        for j, k in enumerate(idx):
+            r, f = records[k], fits[k]
+            L = batch.length[j]
+            sim, t = states[0, j, :L], r.time[:L]
+            estimates = {}
+            for name, like in f.fits.items():
+                try:
+                    estimates[name] = refit_like(t, sim[:, outputs[OBSERVED[name]]], like)
+                except FitError as exc:
+                    why[k] = f"{name}: {exc}"
+            if estimates:
+                out[k] = combine_fits(estimates)[0].eigenvalue
+    return out, why
+
+
+def extraction_bias(
+    fits: list[RecordFit], values: dict, geometry, matched: np.ndarray
+) -> tuple[np.ndarray, list[str | None]]:
+    """Extraction bias of every used record under the nominal model (module docstring).
+
+    ``matched`` holds the model's weave eigenvalue of each used record.  Returns the bias (NaN
+    where the record cannot be compared) and the reason for each record that cannot.
+    """
+    used = [f for f in fits if f.used]
+    apparent, why = apparent_eigenvalues(used, values, geometry)
+    bias = apparent - matched
+    reasons: list[str | None] = []
+    for k in range(len(used)):
+        if not np.isfinite(apparent[k]):
+            reasons.append(
+                "the model's own response over this window shows no weave the fit can find "
+                f"({why[k]}); its eigenvalue cannot be compared with the model's"
+            )
+        elif abs(bias[k]) > MAX_RELATIVE_BIAS * abs(matched[k]):
+            reasons.append(
+                f"the fit applied to the model's own response over this window finds {_c(apparent[k])} "
+                f"against its weave eigenvalue {_c(matched[k])} (more than {MAX_RELATIVE_BIAS:.0%} off: "
+                "other modes share the record); its eigenvalue cannot be compared with the model's"
+            )
+        else:
+            reasons.append(None)
+    return np.where([r is None for r in reasons], bias, np.nan), reasons
+
+
+def _c(z: complex) -> str:
+    return f"{z.real:.2f}{z.imag:+.2f}i 1/s"

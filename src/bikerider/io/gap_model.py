@@ -1,0 +1,153 @@
+"""Read the model of a gap diagnosis: benchmark parameters, the rider, and what is plausible.
+
+``--model`` takes a TOML file (``[benchmark]`` with optional ``[rider]``, ``[upper_body]``,
+``[grips]`` and ``[plausible]`` tables) or a BicycleParameters ``<Name>Benchmark.txt``; ``--rider``
+adds a lumped rider.  :mod:`bikerider.gap.model_input` describes the tables and the default rider
+geometry.
+
+``[plausible]`` states what this bicycle's own knowledge says a candidate's parameter may be,
+replacing the literature range of :mod:`bikerider.gap.effects` for this bicycle::
+
+    [plausible]
+    I_steer = { range = [0.0, 0.1], why = "motor rotor through the gearbox; front-assembly inertia 0-0.1 kg m^2" }
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from bikerider.benchmark import BenchmarkParameters
+from bikerider.errors import FileFormatError, InputError
+from bikerider.gap.model_input import RIDER_KEYS, GapModelInput, default_geometry, table_numbers
+from bikerider.gap.models import GRIP_KEYS, UPPER_BODY_KEYS, RiderGeometry
+
+
+def load_model(
+    path: str | Path, rider_path: str | Path | None = None, *, rider_rel_sigma: float = 0.0
+) -> GapModelInput:
+    """Read the model file (and a lumped rider); build the default geometry where none is given.
+
+    ``rider_rel_sigma`` gives the lumped rider's values a relative standard uncertainty where its
+    file states none (BicycleParameters rider files state none).
+
+    Raises
+    ------
+    FileFormatError
+        Unreadable file.
+    InputError
+        A missing or impossible value (names the file, the key and what was expected).
+    """
+    from bikerider.io.benchmark_file import load_benchmark_parameters, parameters_from_table
+
+    path = Path(path)
+    if not path.exists():
+        raise FileFormatError(path, "no such file")
+    source = str(path)
+    tables: dict[str, object] = {}
+    if path.suffix.lower() == ".toml":
+        from bikerider.io.toml_input import read_toml
+
+        data = read_toml(path)
+        extra = {k: data[k] for k in ("rider", "upper_body", "grips", "plausible") if k in data}
+        if extra and "benchmark" not in data:
+            raise InputError(
+                "benchmark",
+                "missing",
+                "a [benchmark] table when the file also has " + ", ".join(f"[{k}]" for k in extra),
+                source,
+            )
+        tables = extra
+        parameters = parameters_from_table(data.get("benchmark", data), source)
+    else:
+        parameters = load_benchmark_parameters(path)
+    rider = table_numbers(tables["rider"], "rider", RIDER_KEYS, source) if "rider" in tables else None
+    if rider_path is not None:
+        if rider is not None:
+            raise InputError("rider", str(rider_path), "one rider: the model file already has a [rider] table", source)
+        parameters, rider = _merge_rider(parameters, Path(rider_path), rider_rel_sigma)
+    if rider is not None and not (rider["mass"] > 0 and rider["mass"] < float(parameters["mB"])):  # type: ignore[operator]
+        raise InputError(
+            "rider.mass", rider["mass"], f"a positive mass below the rear body's {parameters['mB']} kg", source
+        )
+    geometry = default_geometry(parameters, rider)
+    if "upper_body" in tables:
+        geometry = RiderGeometry(
+            table_numbers(tables["upper_body"], "upper_body", UPPER_BODY_KEYS, source),
+            geometry.grips,
+            geometry.notes + "; upper body from the model file",
+        )
+    if "grips" in tables:
+        geometry = RiderGeometry(
+            geometry.upper_body,
+            table_numbers(tables["grips"], "grips", GRIP_KEYS, source),
+            geometry.notes + "; grips from the model file",
+        )
+    plausible = _plausible(tables["plausible"], source) if "plausible" in tables else {}
+    return GapModelInput(
+        parameters, geometry, rider, source + (f" + rider {rider_path}" if rider_path else ""), plausible
+    )
+
+
+def _plausible(table: object, source: str) -> dict[str, tuple[float, float, str]]:
+    """``[plausible]``: ``name = { range = [lo, hi], why = "..." }`` for candidate parameters."""
+    import math
+
+    from bikerider.gap.effects import EFFECTS
+
+    known = {p.name for e in EFFECTS.values() for p in e.parameters}
+    if not isinstance(table, dict):
+        raise InputError("plausible", table, "a table of parameter = { range = [low, high], why = ... }", source)
+    out = {}
+    for name, entry in table.items():
+        if name not in known:
+            raise InputError(
+                f"plausible.{name}",
+                entry,
+                "a fitted parameter of a candidate (" + ", ".join(sorted(known)) + ")",
+                source,
+            )
+        if not (isinstance(entry, dict) and set(entry) <= {"range", "why"} and "range" in entry):
+            raise InputError(f"plausible.{name}", entry, '{ range = [low, high], why = "..." }', source)
+        rng = entry["range"]
+        if not (
+            isinstance(rng, list)
+            and len(rng) == 2
+            and all(isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) for x in rng)
+            and rng[0] <= rng[1]
+        ):
+            raise InputError(f"plausible.{name}.range", rng, "two finite numbers [low, high] with low <= high", source)
+        why = entry.get("why", "")
+        if not isinstance(why, str):
+            raise InputError(f"plausible.{name}.why", why, "a text", source)
+        out[name] = (float(rng[0]), float(rng[1]), why or f"{source} [plausible]")
+    return out
+
+
+def _merge_rider(
+    parameters: BenchmarkParameters, rider_path: Path, rel_sigma: float = 0.0
+) -> tuple[BenchmarkParameters, dict[str, float]]:
+    from dataclasses import replace
+
+    from bikerider.io.bicycleparameters import merge_rider, read_lumped_rider
+    from bikerider.quantity import Quantity
+
+    if not rider_path.exists():
+        raise FileFormatError(rider_path, "no such file")
+    lumped = read_lumped_rider(rider_path)
+    if rel_sigma > 0:
+        lumped = replace(
+            lumped,
+            values={
+                k: q if q.sigma > 0 else Quantity(q.value, rel_sigma * abs(q.value)) for k, q in lumped.values.items()
+            },
+        )
+    values = {k: q.value for k, q in lumped.values.items()}
+    rider = {
+        "mass": values["mBr"],
+        "x": values["xBr"],
+        "z": values["zBr"],
+        "Ixx": values["IBrxx"],
+        "Ixz": values["IBrxz"],
+        "Izz": values["IBrzz"],
+    }
+    return merge_rider(parameters, lumped), rider

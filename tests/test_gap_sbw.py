@@ -1,0 +1,108 @@
+"""The shipped steer-by-wire experiment (Pasma 2024) diagnosed from its raw logs, as a user would.
+
+One run of ``bikerider gap`` on the project's copy (its manifest and model file), shared with the
+document that reports it (``docs/gap_real_data.md``, section 3) through the command's cache.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+import bikerider
+from bikerider.cli import main
+
+SBW = Path(bikerider.__file__).parent / "data" / "gap" / "pasma2024_sbw"
+
+
+@pytest.fixture(scope="module")
+def sbw():
+    from bikerider.commands.gap import diagnose_files
+
+    diagnosis = diagnose_files(str(SBW / "sbw_bicycle.toml"), experiment=(str(SBW / "experiment.toml"),))
+    return diagnosis, diagnosis.as_dict()
+
+
+@pytest.mark.slow
+def test_every_record_is_used_or_left_out_with_a_reason(sbw):
+    _, result = sbw
+    records = result["records"]
+    assert records["total"] == 59
+    assert records["used"] >= 50
+    assert records["used"] + records["left_out"] == 59
+    for r in records["reasons"]:
+        assert r["reason"] and "5.4kph" in r["record"]  # only the slowest file, where other modes share the record
+    assert result["laws"] == {"sil": "k_phid = 2 (6.5 - v) below 6.5 m/s; k_phi = 0.7 (v - 6.5) above 6.5 m/s"}
+
+
+@pytest.mark.slow
+def test_the_records_point_to_steer_friction(sbw):
+    _, result = sbw
+    assert result["verdict"] in ("structural", "parameters")
+    assert result["selected"] == ["steer_friction"]
+    friction = next(r for r in result["ranking"] if r["effect"] == "steer_friction")
+    assert friction["plausible"]
+    T = friction["parameters"]["T_coulomb"]
+    assert 0.1 < T["value"] < 0.3 and T["ci95"][0] > 0.05  # well above the experimenter's 0.02 N m
+    assert friction["parameters"]["c_viscous"]["value"] < 0.2
+    assert result["how_far"]["data_shrink"] > 0.8  # held-out speeds, against the data's noise
+
+
+@pytest.mark.slow
+def test_the_experimenters_other_hypotheses_are_judged(sbw):
+    _, result = sbw
+    by_effect = {r["effect"]: r for r in result["ranking"]}
+    # a speed-sensor error alone would need a 10 % scale, beyond the encoder's 2-3 % calibration
+    assert not by_effect["speed_sensor"]["plausible"]
+    assert by_effect["speed_sensor"]["parameters"]["speed_scale"]["value"] < 0.95
+    # viscous damping alone fits near the experimenter's 0.2 N m s/rad but predicts held-out speeds worse
+    damping = by_effect["steer_damping"]
+    assert 0.15 < damping["parameters"]["c_steer"]["value"] < 0.4
+    assert damping["data_error_after"] > by_effect["steer_friction"]["data_error_after"]
+    # parameters within their uncertainty: never selected while implausible
+    assert not result["parameter_fit"]["plausible"] and "parameters" not in result["selected"]
+
+
+@pytest.mark.slow
+def test_the_report_shows_the_records_and_one_curve_per_law(sbw, tmp_path):
+    from bikerider.gap.report import plot_eigenvalues
+    from bikerider.io.gap_report import write_report
+
+    diagnosis, _ = sbw
+    path = write_report(diagnosis, tmp_path / "rep")
+    for name in ("records.png", "eigenvalues.png", "effects.png", "ranking.png", "gap_map.png"):
+        assert (tmp_path / "rep" / name).stat().st_size > 10_000
+    text = path.read_text()
+    assert "## Records" in text and "eigen_normal_sil6.5n2_18kph.log.gz[12961:13073]" in text
+    labels = plot_eigenvalues(diagnosis).axes[0].get_legend_handles_labels()[1]
+    assert [lab for lab in labels if "nominal model" in lab] == ["sil: nominal model"]
+
+
+@pytest.mark.slow
+def test_the_command_line_on_part_of_the_experiment(tmp_path, capsys):
+    # the command as a user types it, on a manifest of two of the logs (the whole experiment runs above)
+    text = (SBW / "experiment.toml").read_text().replace('logs = "logs"', f'logs = "{SBW / "logs"}"')
+    text = text.replace('windows = "windows.csv"', 'windows = "two.csv"')
+    rows = (SBW / "windows.csv").read_text().splitlines()
+    (tmp_path / "two.csv").write_text(
+        "\n".join([rows[0]] + [r for r in rows[1:] if "_14.4kph" in r or "_18kph" in r]) + "\n"
+    )
+    (tmp_path / "m.toml").write_text(text)
+    args = [
+        "gap",
+        "--model",
+        str(SBW / "sbw_bicycle.toml"),
+        "--experiment",
+        str(tmp_path / "m.toml"),
+        "--effects",
+        "steer_damping,steer_friction",
+    ]
+    assert main(args + ["--json", "--report", str(tmp_path / "rep")]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["records"]["total"] == 17 and out["records"]["left_out"] == 0
+    assert out["folds"] == ["group eigen_normal_sil6.5n2_14.4kph.log", "group eigen_normal_sil6.5n2_18kph.log"]
+    assert (tmp_path / "rep" / "records.png").stat().st_size > 10_000
+    assert main(args) == 0
+    assert "Records: 17 of 17 used, 0 left out" in capsys.readouterr().out
