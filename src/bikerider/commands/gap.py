@@ -74,6 +74,7 @@ def run(args: argparse.Namespace) -> int:
 
     import numpy as np
 
+    from bikerider import notes
     from bikerider.errors import InputError
     from bikerider.gap import data as gap_data
     from bikerider.gap.diagnosis import diagnose
@@ -84,7 +85,7 @@ def run(args: argparse.Namespace) -> int:
     if not (math.isfinite(args.rider_rel_sigma) and 0 <= args.rider_rel_sigma < 1):
         raise InputError("--rider-rel-sigma", args.rider_rel_sigma, "a relative uncertainty in [0, 1)")
     model = load_model(args.model, args.rider, rider_rel_sigma=args.rider_rel_sigma)
-    gains = gap_data.read_control(args.control) if args.control else None
+    gains = gap_data.read_control(args.control) if args.control is not None else None
     groups = [g.strip() for g in args.groups.split(",")] if args.groups else None
     eigen, canonical = [], []
     for path in args.data:
@@ -108,6 +109,7 @@ def run(args: argparse.Namespace) -> int:
         path = write_report(diagnosis, args.report, title=f"Sim-to-real gap: {args.model}")
         result["report"] = str(path)
     if args.json:
+        result["notes"] = notes.shown_with(result.get("notes", []))
         print(json.dumps(_plain(result, np), indent=2, allow_nan=False))
     else:
         print(summary_text(result))
