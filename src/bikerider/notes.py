@@ -78,12 +78,16 @@ def collected() -> list[str]:
 
 def shown_with(notes: Iterable[str] = ()) -> list[str]:
     """``notes`` followed by every collected note not among them, all marked as shown: what an
-    output that shows notes (a ``--json`` object, a report) should list."""
+    output that shows notes (a ``--json`` object, a report) should list.
+
+    A collected note that is one of ``notes`` with the file it came from in front
+    (``"FILE: note"``, as readers note what they also return) is the same note: listed once."""
     out = list(dict.fromkeys(notes))
     if _ACTIVE:
         collection = _ACTIVE[-1]
-        out += [m for m in collection.messages if m not in out]
-        collection.shown.update(out)
+        given = tuple(f": {n}" for n in out)
+        out += [m for m in collection.messages if m not in out and not m.endswith(given)]
+        collection.shown.update(collection.messages)
     return out
 
 

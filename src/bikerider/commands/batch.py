@@ -101,8 +101,11 @@ def process_bicycle(folder: Path) -> BatchRow:
     row = BatchRow(folder.name)
     with notes.collecting() as collection:
         _process(folder, row)
-    own = [n for n in row.notes if not any(m.endswith(f": {n}") for m in collection.messages)]
-    row.notes = own + collection.messages
+    prefixes = tuple(f"{path}: " for path in input_files(folder) if path)  # the row names the bicycle
+    for message in collection.messages:
+        short = next((message[len(p) :] for p in prefixes if message.startswith(p)), message)
+        if short not in row.notes:
+            row.notes.append(short)
     return row
 
 

@@ -81,14 +81,16 @@ def _column(path: Path, data: list[tuple[int, list[str]]], col: int, what: str) 
         values = None
     if values is not None and np.isfinite(values).all():
         return values
-    for (number, _), cell in zip(data, cells):
+    values = np.empty(len(cells))
+    for k, ((number, _), cell) in enumerate(zip(data, cells)):
         try:
             value = float(cell)
         except ValueError:
             raise FileFormatError(path, f"{what} {cell!r} is not a number", number) from None
         if not math.isfinite(value):
             raise FileFormatError(path, f"{what} {cell!r} is not a finite number", number)
-    raise FileFormatError(path, f"{what}: a cell NumPy cannot read as a number")  # pragma: no cover
+        values[k] = value
+    return values
 
 
 def read_signal_csv(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
