@@ -158,6 +158,16 @@ def test_an_empty_path_never_means_the_default(argv):
     assert code == 2 and "empty path" in err, (code, out[:200], err)
 
 
+def test_an_empty_name_value_file_is_one_error_not_every_value_missing(tmp_path):
+    path = _write(tmp_path, "EmptyBenchmark.txt", "# to be measured\n")
+    code, _, err = run_cli(["benchmark", str(path)])
+    assert (
+        code == 2
+        and err.strip()
+        == f"bikerider benchmark: error: {path}: no 'name = value' entries: the file is empty or holds only comments"
+    )
+
+
 def test_an_empty_control_file_is_not_no_control(tmp_path):
     from bikerider.gap.data import read_control
 

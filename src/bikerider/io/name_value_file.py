@@ -238,7 +238,7 @@ def read_name_value_file(path: str | Path) -> NameValueFile:
     ------
     FileFormatError
         Not a regular file, too large, not UTF-8 text (the message gives the line of the first bad
-        byte), or a line that cannot be read (see :func:`parse_name_value_text`).
+        byte), a line that cannot be read (see :func:`parse_name_value_text`), or no entry at all.
     OSError
         The file cannot be opened.
     """
@@ -249,4 +249,7 @@ def read_name_value_file(path: str | Path) -> NameValueFile:
             "contains NUL bytes: a binary file, not a name = value text file",
             text.count("\n", 0, text.index("\x00")) + 1,
         )
-    return parse_name_value_text(text, str(path))
+    data = parse_name_value_text(text, str(path))
+    if not data:  # an empty file never stands for "nothing to say"
+        raise FileFormatError(path, "no 'name = value' entries: the file is empty or holds only comments")
+    return data
