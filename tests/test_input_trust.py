@@ -386,10 +386,15 @@ def test_a_bicycle_on_the_moon_is_modelled(tmp_path):
     assert code == 0, err
     weave_earth, weave_moon = _json(earth[1])["speeds"]["weave"], _json(out)["speeds"]["weave"]
     assert weave_moon == pytest.approx(weave_earth * (1.62 / 9.81) ** 0.5, rel=1e-9)  # v ~ sqrt(g L)
-    # Without g_lab the compound pendulum would have swung on the Moon: impossible, and the message says why.
+    # Without g_lab, the pendulums are taken to have swung on Earth, and a note says so.
     alone = _bicycle(tmp_path, "g = 9.81", "g = 1.62")
-    code, _, err = run_cli(["estimate", "--bicycle", str(alone)])
-    assert code == 2 and "at g = 1.62 m/s^2" in err and "g_lab = 9.81" in err
+    code, out, err = run_cli(["estimate", "--json", "--bicycle", str(alone)])
+    assert code == 0 and _json(out)["speeds"]["weave"] == weave_moon, err
+    assert any("reduced at g_lab = 9.81 m/s^2 (on Earth)" in n for n in _json(out)["notes"])
+    # A pendulum that swung on the Moon with the periods of an Earth one cannot be: the message says why.
+    swung = _bicycle(tmp_path, "g = 9.81", "g = 1.62\ng_lab = 1.62")
+    code, _, err = run_cli(["estimate", "--bicycle", str(swung)])
+    assert code == 2 and "at g = 1.62 m/s^2" in err and "g_lab" in err
 
 
 # ------------------------------------------------------------------------------------------

@@ -143,11 +143,7 @@ def compound_inertia(
             period.value,
             f"more than {shortest:.4f} s, the period of a point mass on a {length.value} m pendulum "
             f"at g = {g.value:g} m/s^2 (a shorter period gives a negative moment of inertia"
-            + (
-                ""
-                if earth
-                else "; if the pendulum swung on Earth, give the gravity there as [environment] g_lab = 9.81"
-            )
+            + ("" if earth else "; if the pendulum swung on Earth, give the gravity there as [environment] g_lab")
             + ")",
             source,
         )

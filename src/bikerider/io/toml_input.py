@@ -273,6 +273,23 @@ def _frame(
     return out
 
 
+EARTH_G = 9.81
+"""Gravity where pendulums swing unless a file says otherwise [m/s^2] (the paper's, Table 12)."""
+
+
+def _on_earth(g: Quantity) -> bool:
+    return pendulum.EARTH_GRAVITY[0] <= g.value <= pendulum.EARTH_GRAVITY[1]
+
+
+def _has_compound_period(data: dict[str, Any]) -> bool:
+    """Whether a wheel of the file gives its I_yy as a compound pendulum period."""
+    for wheel in ("rear_wheel", "front_wheel"):
+        table = data.get(wheel)
+        if isinstance(table, dict) and isinstance(table.get("Iyy"), dict) and "compound_period" in table["Iyy"]:
+            return True
+    return False
+
+
 def _present(values: dict[str, Quantity | None]) -> dict[str, Quantity]:
     return {k: q for k, q in values.items() if q is not None}
 
@@ -323,8 +340,15 @@ def load_bicycle_toml(path: str | Path) -> BicycleBodies:
         environment = top.section("environment", {"g", "g_lab"})
         g = environment.quantity("g", required=False) or (None if "g" in reader.unreadable else g)
         g_lab = environment.quantity("g_lab", required=False)
-    # Gravity where the compound pendulums swung: g_lab, by default the bicycle's g.
+    # Gravity where the compound pendulums swung: g_lab; by default the bicycle's g when that is a
+    # gravity of the Earth's surface, else the Earth's (a bicycle modelled on the Moon was measured here).
     pendulum_g = None if "g_lab" in reader.unreadable else (g_lab or g)
+    if g_lab is None and g is not None and not _on_earth(g) and _has_compound_period(data):
+        pendulum_g = Quantity(EARTH_G)
+        note(
+            f"{source}: the compound pendulum periods are reduced at g_lab = {EARTH_G} m/s^2 (on Earth): "
+            f"[environment] g = {g} is where the bicycle rides; give g_lab if the pendulum swung elsewhere"
+        )
     values: dict[str, Quantity | None] = {"g": g}
     geometry = top.section("geometry", set(_GEOMETRY_KEYS) | {f"{a}_deg" for a in _GEOMETRY_ANGLES})
     for key in _GEOMETRY_KEYS:
@@ -345,7 +369,7 @@ def load_bicycle_toml(path: str | Path) -> BicycleBodies:
         reader.errors.raise_any()
     if g_lab is not None and not any(name_.startswith("T_") and name_.endswith("yy") for name_ in raw):
         note(f"{source}: [environment] g_lab = {g_lab} not used: no compound pendulum period is given")
-    if g_lab is not None and g is not None and g_lab.value != g.value:
+    if g is not None and pendulum_g is not None and pendulum_g.value != g.value:
         # The chain's compound-pendulum stage takes the bicycle's g: with another gravity at the
         # pendulum, its reduced I_yy enters the sensitivities as a measured value.
         for name_ in ("T_Ryy", "l_pR", "T_Fyy", "l_pF"):
