@@ -10,9 +10,10 @@ Each strategy perturbs a published starting point within physical ranges:
 Inertia tensors are perturbed by a rotation in the XZ plane and a positive scale, which keeps them
 symmetric, positive definite and within the triangle inequality by construction; a given ``I_yy``
 is drawn between the bounds the in-plane principal moments allow.  A wheel's moments are drawn
-within what a wheel of its mass and radius can have (:func:`wheel_moments`).  :func:`seated_pairs` draws a
-bicycle and a rider and rejects (``hypothesis.reject``) the pairs the project itself refuses with
-:class:`bikerider.errors.ReachError`.
+within what a wheel of its mass and radius can have (:func:`wheel_moments`).  :func:`seated_pairs`
+draws a bicycle and a rider and rejects (``hypothesis.reject``) the pairs the project itself
+refuses to seat (:class:`bikerider.errors.ReachError`, or a forward lean with the shoulders ahead
+of the hands).
 """
 
 from __future__ import annotations
@@ -31,7 +32,7 @@ from hypothesis import reject
 from hypothesis import strategies as st
 
 from bikerider.bicycle.bodies import BicycleBodies
-from bikerider.errors import ReachError
+from bikerider.errors import InputError
 from bikerider.quantity import Quantity
 from bikerider.rider.measurements import DEFAULT_MASS_FRACTIONS, FRACTION_COUNTS, RiderMeasurements
 
@@ -142,13 +143,14 @@ def riders(draw) -> RiderMeasurements:
 
 @st.composite
 def seated_pairs(draw):
-    """``(bicycle, rider, rider_model)``; pairs the project refuses with ReachError are rejected."""
+    """``(bicycle, rider, rider_model)``; pairs the project refuses to seat are rejected (a ReachError,
+    or a forward lean that puts the shoulders ahead of the hands)."""
     from bikerider.rider.model import seat_rider
 
     bicycle, rider = draw(bicycles()), draw(riders())
     try:
         model = seat_rider(bicycle, rider)
-    except ReachError:
+    except InputError:  # ReachError is one
         reject()
     return bicycle, rider, model
 
