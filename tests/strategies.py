@@ -9,9 +9,11 @@ Each strategy perturbs a published starting point within physical ranges:
 
 Inertia tensors are perturbed by a rotation in the XZ plane and a positive scale, which keeps them
 symmetric, positive definite and within the triangle inequality by construction; a given ``I_yy``
-is drawn between the bounds the in-plane principal moments allow.  :func:`seated_pairs` draws a
-bicycle and a rider and rejects (``hypothesis.reject``) the pairs the project itself refuses with
-:class:`bikerider.errors.ReachError`.
+is drawn between the bounds the in-plane principal moments allow.  A wheel's moments are drawn
+within what a wheel of its mass and radius can have (:func:`wheel_moments`).  :func:`seated_pairs`
+draws a bicycle and a rider and rejects (``hypothesis.reject``) the pairs the project itself
+refuses to seat (:class:`bikerider.errors.ReachError`, or a forward lean with the shoulders ahead
+of the hands).
 """
 
 from __future__ import annotations
@@ -30,7 +32,7 @@ from hypothesis import reject
 from hypothesis import strategies as st
 
 from bikerider.bicycle.bodies import BicycleBodies
-from bikerider.errors import ReachError
+from bikerider.errors import InputError
 from bikerider.quantity import Quantity
 from bikerider.rider.measurements import DEFAULT_MASS_FRACTIONS, FRACTION_COUNTS, RiderMeasurements
 
@@ -87,6 +89,15 @@ def tensor_perturbation(draw) -> tuple[float, float, float | None]:
 
 
 @st.composite
+def wheel_moments(draw, mass: float, radius: float, lowest_ratio: float) -> tuple[float, float]:
+    """``(I_yy, I_xx)`` a wheel of this mass and radius can have: ``I_yy`` between 0.3 and 0.95 of
+    ``m r^2`` (the paper's wheels: 0.44; Meijaard's: 0.67, 0.76), ``I_xx`` between ``I_yy / 1.98``
+    and ``I_yy / lowest_ratio`` (the triangle inequality ``I_yy <= 2 I_xx``)."""
+    yy = mass * radius**2 * draw(factor(0.3, 0.95))
+    return yy, yy / draw(factor(lowest_ratio, 1.98))
+
+
+@st.composite
 def bicycles(draw) -> BicycleBodies:
     """The paper's Browser with every length, angle, mass and inertia perturbed physically."""
     base, _ = paper_inputs()
@@ -100,8 +111,7 @@ def bicycles(draw) -> BicycleBodies:
     for key in ("mR", "mF", "mBf", "mH"):
         out[key] = v[key] * draw(factor(0.6, 1.5))
     for wheel in ("R", "F"):
-        out[f"I{wheel}xx"] = v[f"I{wheel}xx"] * draw(factor(0.6, 1.5))
-        out[f"I{wheel}yy"] = out[f"I{wheel}xx"] * draw(factor(1.1, 1.98))
+        out[f"I{wheel}yy"], out[f"I{wheel}xx"] = draw(wheel_moments(out[f"m{wheel}"], out[f"r{wheel}"], 1.1))
     for body in ("Bf", "H"):
         out[f"x{body}"] = v[f"x{body}"] + draw(factor(-0.05, 0.05))
         out[f"z{body}"] = v[f"z{body}"] + draw(factor(-0.05, 0.05))
@@ -133,13 +143,14 @@ def riders(draw) -> RiderMeasurements:
 
 @st.composite
 def seated_pairs(draw):
-    """``(bicycle, rider, rider_model)``; pairs the project refuses with ReachError are rejected."""
+    """``(bicycle, rider, rider_model)``; pairs the project refuses to seat are rejected (a ReachError,
+    or a forward lean that puts the shoulders ahead of the hands)."""
     from bikerider.rider.model import seat_rider
 
     bicycle, rider = draw(bicycles()), draw(riders())
     try:
         model = seat_rider(bicycle, rider)
-    except ReachError:
+    except InputError:  # ReachError is one
         reject()
     return bicycle, rider, model
 
@@ -158,8 +169,7 @@ def benchmark_mappings(draw) -> dict[str, float]:
     for key in ("xB", "zB", "xH", "zH"):
         out[key] = v[key] * draw(factor(0.85, 1.15))
     for wheel in ("R", "F"):
-        out[f"I{wheel}xx"] = v[f"I{wheel}xx"] * draw(factor(0.5, 1.5))
-        out[f"I{wheel}yy"] = out[f"I{wheel}xx"] * draw(factor(1.2, 1.98))
+        out[f"I{wheel}yy"], out[f"I{wheel}xx"] = draw(wheel_moments(out[f"m{wheel}"], out[f"r{wheel}"], 1.2))
     for body in ("B", "H"):
         angle, scale, yy = draw(tensor_perturbation())
         xx, zz, xz = rotate_xz(v[f"I{body}xx"], v[f"I{body}zz"], v[f"I{body}xz"], angle, scale)
@@ -219,8 +229,18 @@ BAD_NUMBERS = (
     "٣",
     "1e",
     "--1",
+    "1" * 400,
+    "5e-324",
+    "1e-320",
+    "1e300",
+    "0.3665",
+    "179",
+    "2000",
 )
-"""Replacements for one number: non-finite, huge, tiny, negative, zero, unit slips, not numbers."""
+"""Replacements for one number: non-finite, huge, tiny, negative, zero, unit slips, not numbers;
+and those of issue 12: an integer of 400 digits (beyond floating point), denormals, a sigma of 1e300
+(``"68.5 +/- 1e300"`` once it replaces a sigma), radians under a degree key, an angle of 179 deg, a
+sigma a thousand times its value."""
 
 _NUMBER = re.compile(rb"-?\d+\.?\d*(?:[eE][+-]?\d+)?")
 
@@ -235,7 +255,11 @@ MUTATIONS = (
     "swap_lines",
     "junk_line",
     "not_utf8",
+    "long_number",
 )
+LONG_NUMBER = 1 << 19
+"""Digits of the number a ``long_number`` mutation writes: half a megabyte in one cell or value (a
+megabyte CSV cell once ended the period command in a traceback), within the text readers' limit."""
 
 
 @st.composite
@@ -243,15 +267,15 @@ def mutated(draw, data: bytes) -> tuple[str, bytes]:
     """``(description, mutated bytes)`` of ``data``: one hostile change."""
     kind = draw(st.sampled_from(MUTATIONS))
     lines = data.split(b"\n")
-    if kind == "number":
+    if kind in ("number", "long_number"):
         candidates = [i for i, line in enumerate(lines) if _NUMBER.search(line.split(b"#")[0])]
         i = draw(st.sampled_from(candidates))
         code, hash_, comment = lines[i].partition(b"#")
         matches = list(_NUMBER.finditer(code))
         m = matches[draw(st.integers(0, len(matches) - 1))]
-        bad = draw(st.sampled_from(BAD_NUMBERS)).encode()
+        bad = draw(st.sampled_from(BAD_NUMBERS)).encode() if kind == "number" else b"7" * LONG_NUMBER
         lines[i] = code[: m.start()] + bad + code[m.end() :] + hash_ + comment
-        return f"line {i + 1}: {m.group().decode()} -> {bad.decode()!r}", b"\n".join(lines)
+        return f"line {i + 1}: {m.group().decode()} -> {bad[:40].decode()!r} ({len(bad)} chars)", b"\n".join(lines)
     if kind == "truncate":
         k = draw(st.integers(0, len(data) - 1))
         return f"truncated at byte {k}", data[:k]

@@ -97,7 +97,7 @@ def _edited(tmp_path, replace: str, by: str) -> Path:
         ("IRzz = 0.078+/-0.0", "IRzz = 0.09+/-0.0", "IRzz", "axisymmetric"),
         ("IFzz = 0.081+/-0.0", "mD = 1.5\nIFzz = 0.081", "mD", "no flywheel body"),
         ("IFzz = 0.081+/-0.0", "foo = 1", "foo", "a benchmark parameter"),
-        ("w = 1.010+/-0.0\n", "", "w", "all 25 parameters"),
+        ("w = 1.010+/-0.0\n", "", "w", "all 25 benchmark parameters"),
     ],
 )
 def test_benchmark_file_errors(tmp_path, replace, by, name, fragment):

@@ -30,15 +30,14 @@ PLACEHOLDER = r"(?:<[^>]+>|[\w.]+|\.\.\.|i, j)"
 
 def _raises() -> list[tuple[str, int, str, ast.expr]]:
     """``(file, line, class, argument)``: the name argument of InputError/ReachError, the message
-    of FileFormatError/FitError, for every ``raise Class(...)`` in src/."""
+    of FileFormatError/FitError, for every ``Class(...)`` in src/: raised at once, or collected to
+    be raised with the other errors of a file (``errors.add(InputError(...))``)."""
     out = []
     for path in sorted(SRC.rglob("*.py")):
         for node in ast.walk(ast.parse(path.read_text())):
-            if not (
-                isinstance(node, ast.Raise) and isinstance(node.exc, ast.Call) and isinstance(node.exc.func, ast.Name)
-            ):
+            if not (isinstance(node, ast.Call) and isinstance(node.func, ast.Name)):
                 continue
-            cls, args = node.exc.func.id, node.exc.args
+            cls, args = node.func.id, node.args
             if cls in ("InputError", "ReachError") and args:
                 out.append((str(path.relative_to(ROOT)), node.lineno, cls, args[0]))
             elif cls == "FileFormatError" and len(args) > 1:

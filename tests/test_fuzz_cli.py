@@ -7,6 +7,7 @@ argparse usage errors also exit 2.  Never a traceback, never NaN or infinity in 
 
 from __future__ import annotations
 
+import re
 import shutil
 from importlib import resources
 from pathlib import Path
@@ -32,7 +33,14 @@ def _assert_clean(code: int, out: str, err: str, path: Path | None, json_wanted:
         assert str(path) in err or path.name in err, f"message does not name {path.name}: {err}"
     if code != 0:
         assert err.strip(), "a failure without a message"
-        assert len(err.strip().splitlines()) <= 3, f"more than a short message: {err}"
+        lines = err.strip().splitlines()
+        many = re.match(r"bikerider \w+: error: (?:.*: )?(\d+) (?:input errors|lines cannot be read):$", lines[0])
+        if many:  # every error of a file at once: one indented line each (at most 20, then a count)
+            assert len(lines) == 1 + min(int(many.group(1)), 21) and all(line.startswith("  ") for line in lines[1:]), (
+                err
+            )
+        else:
+            assert len(lines) <= 3, f"more than a short message: {err}"
     elif json_wanted:
         check_json_output(out, "--json output")
 

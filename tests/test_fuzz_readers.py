@@ -210,7 +210,7 @@ def test_name_value_reader_on_arbitrary_bytes(tmp_path_factory, raw):
 @given(st.data())
 def test_signal_csv_and_fit(tmp_path_factory, data):
     from bikerider.fitting.damped_oscillation import fit_damped_oscillation
-    from bikerider.fitting.signal_csv import read_signal_csv
+    from bikerider.io.signal_csv import read_signal_csv
 
     what, text = data.draw(mutated(signal_csv()))
     path = _write(tmp_path_factory.mktemp("fuzz"), "trial.csv", text)
@@ -243,9 +243,9 @@ HUGE = b"w = 1.02\n" + b"# padding " * 200_000 + b"\n" + b"x" * 2_000_000
     ["bicycle_toml", "rider_toml", "benchmark_toml", "benchmark_text", "measured", "lumped_rider", "signal_csv"],
 )
 def test_readers_on_files_that_are_not_input(tmp_path, content, reader):
-    from bikerider.fitting.signal_csv import read_signal_csv
     from bikerider.io.benchmark_file import load_benchmark_parameters
     from bikerider.io.bicycleparameters import read_lumped_rider, read_measured_file
+    from bikerider.io.signal_csv import read_signal_csv
     from bikerider.io.toml_input import load_bicycle_toml, load_rider_toml
 
     readers = {

@@ -11,7 +11,7 @@ import pytest
 from bikerider.cli import main
 from bikerider.errors import FileFormatError, FitError
 from bikerider.fitting.damped_oscillation import fit_damped_oscillation, period_from_trials
-from bikerider.fitting.signal_csv import read_signal_csv
+from bikerider.io.signal_csv import read_signal_csv
 
 
 def signal(

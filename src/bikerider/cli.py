@@ -13,7 +13,7 @@ import logging
 import os
 import sys
 
-from bikerider import __version__
+from bikerider import __version__, notes
 from bikerider.errors import BikeriderError
 
 COMMANDS = ("estimate", "benchmark", "sweep", "period", "batch", "sensitivity", "gap")
@@ -46,7 +46,12 @@ def main(argv: list[str] | None = None) -> int:
     level = logging.WARNING - 10 * min(args.verbose, 2)
     logging.basicConfig(level=level, format="bikerider: %(levelname)s: %(message)s")
     try:
-        return int(args.run(args) or 0)
+        with notes.collecting() as collection:
+            code = int(args.run(args) or 0)
+            # What the run left out of or changed in its inputs, unless an output showed it already.
+            for message in collection.unshown():
+                print(f"bikerider {args.command}: note: {message}", file=sys.stderr)
+            return code
     except BikeriderError as exc:
         print(f"bikerider {args.command}: error: {exc}", file=sys.stderr)
         return 2

@@ -2,9 +2,16 @@
 
 The command line prints ``BikeriderError`` messages without a traceback and exits with status 2.
 ``docs/errors.md`` lists them all.
+
+The readers report every error of a file at once, not one per run: they check each value and
+relation inside :meth:`ErrorCollector.check` and raise :class:`InputErrors` (one message, one line
+per error) when more than one went wrong.
 """
 
 from __future__ import annotations
+
+from collections.abc import Iterator
+from contextlib import contextmanager
 
 MISSING = "missing"
 """The value shown for a required measurement that was not given."""
@@ -33,6 +40,84 @@ class InputError(BikeriderError, ValueError):
         self.name, self.value, self.expected, self.source = name, value, expected, source
         where = f"{source}: " if source else ""
         super().__init__(f"{where}{name} = {_show(value)}: expected {expected}")
+
+
+class InputErrors(InputError):
+    """Several input errors found together: every error of a file, reported at once.
+
+    ``name``, ``value``, ``expected`` and ``source`` are those of the first error (the one a check
+    that stops at the first problem would have raised); :attr:`errors` holds them all, in the
+    order they were found.
+    """
+
+    def __init__(self, errors: list[InputError]):
+        flat: list[InputError] = []
+        for error in errors:
+            flat.extend(error.errors if isinstance(error, InputErrors) else [error])
+        if len(flat) < 2:
+            raise ValueError("InputErrors needs at least two errors (raise a single one as it is)")
+        self.errors = flat
+        first = flat[0]
+        self.name, self.value, self.expected, self.source = first.name, first.value, first.expected, first.source
+        BikeriderError.__init__(self, f"{len(flat)} input errors:\n" + listing(flat))
+
+
+MAX_LISTED = 20
+"""The most errors a message lists one per line; the rest are counted."""
+
+
+def listing(errors: list) -> str:
+    """The lines of a message listing several errors (at most :data:`MAX_LISTED`, then a count)."""
+    lines = [f"  {e}" for e in errors[:MAX_LISTED]]
+    if len(errors) > MAX_LISTED:
+        lines.append(f"  ... and {len(errors) - MAX_LISTED} more")
+    return "\n".join(lines)
+
+
+class ErrorCollector:
+    """Collects the :class:`InputError` of independent checks, to report them all at once.
+
+    Examples
+    --------
+    >>> errors = ErrorCollector()
+    >>> for name, value in (("w", -1.0), ("c", 0.08), ("rR", -0.3)):
+    ...     with errors.check():
+    ...         if value < 0 and name != "c":
+    ...             raise InputError(name, value, "a positive value")
+    >>> len(errors.errors)
+    2
+    >>> errors.raise_any()
+    Traceback (most recent call last):
+    ...
+    bikerider.errors.InputErrors: 2 input errors:
+      w = -1: expected a positive value
+      rR = -0.3: expected a positive value
+    """
+
+    def __init__(self) -> None:
+        self.errors: list[InputError] = []
+
+    def __bool__(self) -> bool:
+        return bool(self.errors)
+
+    @contextmanager
+    def check(self) -> Iterator[None]:
+        """Run the block; an :class:`InputError` it raises is kept (and the block left), not raised."""
+        try:
+            yield
+        except InputError as exc:
+            self.add(exc)
+
+    def add(self, error: InputError) -> None:
+        """Keep ``error`` (each of them, for :class:`InputErrors`)."""
+        self.errors.extend(error.errors if isinstance(error, InputErrors) else [error])
+
+    def raise_any(self) -> None:
+        """Raise what was collected: nothing, the one error, or :class:`InputErrors`."""
+        if len(self.errors) == 1:
+            raise self.errors[0]
+        if self.errors:
+            raise InputErrors(self.errors)
 
 
 class ReachError(InputError):

@@ -175,13 +175,14 @@ def estimate_from_files(
         as benchmark parameters, which have no geometry to seat it on).
     """
     default_bicycle, default_rider = default_files()
-    bicycle = load_bicycle_file(bicycle_path or default_bicycle)
+    # None, not an empty path, means the default: an empty --bicycle "" is an error of the reader.
+    bicycle = load_bicycle_file(default_bicycle if bicycle_path is None else bicycle_path)
     bodies = bicycle if isinstance(bicycle, BicycleBodies) else None
     notes = list(bodies.notes) if bodies is not None else []
     if not with_rider:
         params = bicycle if isinstance(bicycle, BenchmarkParameters) else bicycle_benchmark_parameters(bicycle)
         return EstimateResult(bodies, None, None, None, params, WhippleModel.from_parameters(params), notes)
-    rider_file = rider_path or default_rider
+    rider_file = default_rider if rider_path is None else rider_path
     if detect_format(rider_file) == "lumped_rider":
         rider = read_lumped_rider(rider_file)
         params = merge_rider(bicycle, rider)

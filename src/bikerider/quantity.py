@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import re
+import sys
 from dataclasses import dataclass
 
 from bikerider.errors import InputError
@@ -12,6 +13,8 @@ DEG = math.pi / 180
 """One degree in radians: angles are given in degrees only at the input boundary and converted there,
 once, by this factor (``math.radians`` multiplies by the same number)."""
 
+_LARGEST_INTEGER = int(sys.float_info.max)
+"""The largest integer a float holds; TOML integers beyond it cannot be measurements."""
 _PLUS_MINUS = re.compile(r"^\s*([^\s+/]+(?:[eE][+-]?\d+)?)\s*(?:\+/-|±)\s*(\S+)\s*$")
 
 
@@ -72,6 +75,14 @@ def parse_quantity(raw: object, name: str, source: str | None = None) -> Quantit
             raise InputError(f"{name}.sigma", sigma, "a number", source)
     else:
         raise InputError(name, raw, 'a number, "value +/- sigma" or {value = ..., sigma = ...}', source)
+    for part, number in ((name, value), (f"{name} uncertainty", sigma)):
+        if isinstance(number, int) and not -_LARGEST_INTEGER <= number <= _LARGEST_INTEGER:
+            raise InputError(
+                part,
+                f"an integer of about {int(number.bit_length() * math.log10(2)) + 1} digits",
+                "a number within floating-point range",
+                source,
+            )
     value, sigma = float(value), float(sigma)
     if not math.isfinite(value):
         raise InputError(name, value, "a finite number", source)
@@ -116,5 +127,66 @@ def check_degrees(name: str, degrees: float, source: str | None = None) -> None:
             name,
             degrees,
             f"an angle in degrees ({degrees:g} looks like radians: {degrees:g} rad = {math.degrees(degrees):.4g} deg)",
+            source,
+        )
+
+
+SMALLEST: dict[str, float] = {"m": 1e-6, "kg": 1e-6, "m/s^2": 1e-6}
+"""Smallest positive length [m] and mass [kg] of a bicycle's or rider's part, and smallest gravity
+[m/s^2] (a millionth of the Earth's is already deep space).  A smaller positive value (a denormal
+such as 5e-324) is a typing slip, and the formulas that square or divide by it would overflow."""
+
+
+def smallest_expected(smallest: float, unit: str) -> str:
+    """What a positive value below its :data:`SMALLEST` was expected to be."""
+    return f"at least {smallest:g} {unit} (a smaller positive value is a typing slip, such as a denormal 5e-324)"
+
+
+def check_positive(name: str, q: Quantity, limit: float, unit: str, source: str | None = None) -> str | None:
+    """Check a measurement that must be positive (a length, a mass, a moment of inertia, a period).
+
+    Raises :class:`InputError` when the value is not positive, beyond ``limit`` in magnitude (so is
+    its uncertainty), or below :data:`SMALLEST` for its unit; returns the text of a note when the
+    value is possible but its uncertainty is not smaller than the value itself (:func:`sigma_note`).
+    """
+    if not q.value > 0:
+        raise InputError(name, q.value, "a positive value", source)
+    check_magnitude(name, q.value, limit, unit, source)
+    check_magnitude(f"{name} uncertainty", q.sigma, limit, unit, source)
+    smallest = SMALLEST.get(unit)
+    if smallest is not None and q.value < smallest:
+        raise InputError(name, q.value, smallest_expected(smallest, unit), source)
+    return sigma_note(name, q, source)
+
+
+def sigma_note(name: str, q: Quantity, source: str | None = None, shown: str | None = None) -> str | None:
+    """A note when the uncertainty of a positive value is at least the value itself.
+
+    Such an uncertainty does not even fix the sign; first-order propagation, which assumes the
+    outputs linear over a few sigmas, means little at that size.  It is accepted (a rough guess
+    may be all a user has), but never silently.  ``shown`` is the value as the user wrote it
+    (e.g. in degrees), when ``q`` is converted.
+    """
+    if not q.sigma >= abs(q.value) or q.sigma == 0:
+        return None
+    where = f"{source}: " if source else ""
+    return (
+        f"{where}{name} = {shown or q}: its uncertainty is {q.sigma / abs(q.value):.3g} times the value "
+        "(first-order sigmas mean little at that size; check the value and its uncertainty)"
+    )
+
+
+MAX_ANGLE_SIGMA = math.pi
+"""Largest uncertainty of an angle [rad] (180 degrees): a larger one says nothing about the angle."""
+
+
+def check_angle_sigma(name: str, q: Quantity, source: str | None = None) -> None:
+    """Raise :class:`InputError` when the uncertainty of the angle ``q`` (radians; ``name`` its
+    ``_deg`` key) exceeds :data:`MAX_ANGLE_SIGMA`."""
+    if not q.sigma <= MAX_ANGLE_SIGMA:
+        raise InputError(
+            f"{name} uncertainty",
+            math.degrees(q.sigma) if math.isfinite(q.sigma) else q.sigma,
+            "at most 180 degrees (a larger uncertainty says nothing about the angle)",
             source,
         )

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from bikerider.benchmark import rules
 from bikerider.benchmark.mode_labels import MODES, ModalEigenvalues, check_speeds, label_modes
 from bikerider.benchmark.parameters import BenchmarkParameters
 from bikerider.benchmark.quartic import eigenvalues_from_polynomial
@@ -99,13 +100,10 @@ class WhippleModel:
             ) from None
         mats = [np.broadcast_to(m, shape + (2, 2)) for m in mats]
         M0 = mats[0]
-        det_m = M0[..., 0, 0] * M0[..., 1, 1] - M0[..., 0, 1] * M0[..., 1, 0]
-        singular = ~((M0[..., 0, 0] > 0) & (det_m > 1e-12 * np.abs(M0).max(axis=(-2, -1)) ** 2))
+        singular = rules.singular_mass_matrix(M0)
         if np.any(singular):
             bad = tuple(int(i) for i in np.argwhere(singular)[0]) if shape else ()
-            raise InputError(
-                _at("M", bad), M0[bad].tolist(), "a positive definite mass matrix (the model is singular otherwise)"
-            )
+            raise InputError(_at("M", bad), M0[bad].tolist(), rules.SINGULAR_MASS_EXPECTED)
         self.M, self.C1, self.K0, self.K2 = mats
         self.batch_shape: tuple[int, ...] = tuple(shape)
         """Shape of the batch of bicycles; ``()`` for one."""

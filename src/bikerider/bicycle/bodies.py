@@ -10,9 +10,12 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from bikerider.errors import MISSING, InputError
+from bikerider.benchmark.parameters import check_wheel
+from bikerider.errors import MISSING, ErrorCollector, InputError
 from bikerider.inertia import check_plane_symmetric_inertia
-from bikerider.quantity import Quantity, check_degrees, check_magnitude
+from bikerider.notes import add as add_to_notes
+from bikerider.notes import note
+from bikerider.quantity import Quantity, check_angle_sigma, check_degrees, check_magnitude, check_positive, sigma_note
 
 BODY_NAMES: tuple[str, ...] = (
     "w",
@@ -129,45 +132,11 @@ class BicycleBodies:
         self.validate()
 
     def validate(self) -> None:
-        """Raise :class:`InputError` on a missing required value or an impossible one."""
-        for key in BODY_NAMES:
-            if key not in self.values:
-                raise InputError(key, MISSING, "a value: the benchmark model needs it", self.source)
-        for key, q in self.values.items():
-            if key in _POSITIVE and not q.value > 0:
-                raise InputError(key, q.value, "a positive value", self.source)
-            if key in _ANGLES:
-                low, high = _ANGLES[key]
-                if not low < q.value < high:
-                    raise InputError(
-                        f"{key}_deg", math.degrees(q.value), "an angle between 0 and 180 degrees", self.source
-                    )
-                check_degrees(f"{key}_deg", math.degrees(q.value), self.source)
-            limit = _LIMITS.get(key)
-            if limit is not None and not (abs(q.value) <= limit[0] and abs(q.sigma) <= limit[0]):
-                check_magnitude(key, q.value, *limit, self.source)  # these pass only what is within the limit
-                check_magnitude(f"{key} uncertainty", q.sigma, *limit, self.source)
-            if key in ("w", "rR", "rF") and not q.value >= 1e-3:  # the model divides by these
-                raise InputError(key, q.value, "at least 0.001 m (SI units: a length in metres)", self.source)
-        for key in ("zBf", "zH"):
-            if not self[key] < 0:
-                raise InputError(
-                    key,
-                    self[key],
-                    "a negative value: z points down in the benchmark frame, so a "
-                    "centre of mass above the ground has z < 0",
-                    self.source,
-                )
-        for body in ("Bf", "H"):
-            yy = self.values.get(f"I{body}yy")
-            check_plane_symmetric_inertia(
-                f"I{body} (I{body}xx, I{body}yy, I{body}zz, I{body}xz)",
-                self[f"I{body}xx"],
-                None if yy is None else yy.value,
-                self[f"I{body}zz"],
-                self[f"I{body}xz"],
-                self.source,
-            )
+        """Raise :class:`InputError` on missing required values and impossible ones, every one at
+        once (:class:`~bikerider.errors.InputErrors`); note the unusual ones (``notes``)."""
+        errors = ErrorCollector()
+        check_bicycle_values(self.values, self.source, errors, self.notes)
+        errors.raise_any()
 
     def __getitem__(self, key: str) -> float:
         return self.values[key].value
@@ -182,3 +151,110 @@ class BicycleBodies:
 
     def missing_seating(self) -> list[str]:
         return [k for k in SEATING_NAMES if k not in self.values]
+
+
+USUAL_ANGLES_DEG = (45.0, 90.0)
+"""Head tube and seat tube angles [deg] of the bicycles measured so far lie within these; an angle
+outside them is possible (a chopper, a steer axis tilted forward) and accepted with a note."""
+
+
+def check_bicycle_values(
+    values: dict[str, Quantity],
+    source: str,
+    errors: ErrorCollector,
+    notes: list[str] | None = None,
+    unreadable: frozenset[str] | set[str] = frozenset(),
+) -> None:
+    """Check a bicycle's values, adding every problem to ``errors`` and every note to ``notes``.
+
+    ``unreadable`` names values a reader could not read (and has reported): they are not called
+    missing, and no relation with them is checked.  The checks, each value once (its first problem):
+
+    * every name of :data:`BODY_NAMES` present;
+    * positive values (masses, lengths, wheel inertias, ``g``) via
+      :func:`bikerider.quantity.check_positive`: finite, within :data:`_LIMITS` (so are their
+      uncertainties) and at least :data:`bikerider.quantity.SMALLEST` for lengths and masses;
+      signed values (trail, centres of mass, products of inertia) within :data:`_LIMITS`;
+    * ``w``, ``rR``, ``rF`` at least 0.001 m (the model divides by them);
+    * head tube and seat tube angles between 0 and 180 degrees, not in radians, uncertainty at
+      most 180 degrees; outside :data:`USUAL_ANGLES_DEG`, a note;
+    * ``zBf``, ``zH`` negative (z points down);
+    * the rear frame's and handlebar's inertia tensors (:mod:`bikerider.inertia`);
+    * each wheel's moments (:func:`bikerider.benchmark.parameters.check_wheel`).
+
+    A positive value whose uncertainty is at least the value gets a note.
+    """
+    failed = set(unreadable)
+
+    def add_note(message: str | None) -> None:
+        if message and notes is not None:
+            add_to_notes(notes, message)
+        elif message:
+            note(message)
+
+    for key in BODY_NAMES:
+        if key not in values and key not in failed:
+            errors.add(InputError(key, MISSING, "a value: the benchmark model needs it", source))
+            failed.add(key)
+    for key, q in values.items():
+        if key in failed:
+            continue
+        try:
+            if key in _ANGLES:
+                low, high = _ANGLES[key]
+                degrees = math.degrees(q.value)
+                if not low < q.value < high:
+                    raise InputError(f"{key}_deg", degrees, "an angle between 0 and 180 degrees", source)
+                check_degrees(f"{key}_deg", degrees, source)
+                check_angle_sigma(f"{key}_deg", q, source)
+                if not USUAL_ANGLES_DEG[0] <= degrees <= USUAL_ANGLES_DEG[1]:
+                    tilt = 90.0 - degrees
+                    steer = f" (a steer axis {abs(tilt):g} deg {'back' if tilt > 0 else 'forward'} of vertical)"
+                    add_note(
+                        f"{source}: {key}_deg = {degrees:g}{steer if key == 'lam_ht' else ''}: outside the "
+                        f"{USUAL_ANGLES_DEG[0]:g} to {USUAL_ANGLES_DEG[1]:g} degrees of the bicycles measured "
+                        "so far; accepted, check the value"
+                    )
+                add_note(sigma_note(f"{key}_deg", q, source, f"{degrees:g} +/- {math.degrees(q.sigma):.2g}"))
+                continue
+            limit = _LIMITS.get(key)
+            if key in _POSITIVE:  # every one has a limit
+                add_note(check_positive(key, q, *_LIMITS[key], source))
+            elif limit is not None:
+                check_magnitude(key, q.value, *limit, source)
+                check_magnitude(f"{key} uncertainty", q.sigma, *limit, source)
+            if key in ("w", "rR", "rF") and not q.value >= 1e-3:  # the model divides by these
+                raise InputError(key, q.value, "at least 0.001 m (SI units: a length in metres)", source)
+        except InputError as exc:
+            errors.add(exc)
+            failed.add(key)
+    for key in ("zBf", "zH"):
+        if key not in failed and key in values and not values[key].value < 0:
+            errors.add(
+                InputError(
+                    key,
+                    values[key].value,
+                    "a negative value: z points down in the benchmark frame, so a "
+                    "centre of mass above the ground has z < 0",
+                    source,
+                )
+            )
+    for body in ("Bf", "H"):
+        entries = (f"I{body}xx", f"I{body}zz", f"I{body}xz")
+        if failed.intersection(entries) or f"I{body}yy" in failed or not all(k in values for k in entries):
+            continue
+        yy = values.get(f"I{body}yy")
+        with errors.check():
+            check_plane_symmetric_inertia(
+                f"I{body} (I{body}xx, I{body}yy, I{body}zz, I{body}xz)",
+                values[f"I{body}xx"].value,
+                None if yy is None else yy.value,
+                values[f"I{body}zz"].value,
+                values[f"I{body}xz"].value,
+                source,
+            )
+    for wheel in ("R", "F"):
+        names = (f"m{wheel}", f"r{wheel}", f"I{wheel}xx", f"I{wheel}yy")
+        if not failed.intersection(names) and all(k in values for k in names):
+            with errors.check():
+                check_wheel(wheel, *(values[k] for k in names), source)

@@ -26,12 +26,17 @@ import numpy as np
 from bikerider.engine import GeneratedStage, LeastSquaresStage, first_order
 from bikerider.errors import FitError, InputError
 from bikerider.generated.manifest import STAGES
-from bikerider.quantity import Quantity, check_magnitude
+from bikerider.notes import note
+from bikerider.quantity import Quantity, check_magnitude, check_positive, sigma_note
 
 #: Below this |determinant| of Eq. 6 for three orientations (``2 sin(a1-a2) sin(a1-a3) sin(a2-a3)``),
 #: or this smallest singular value of its rows for more, the orientations do not determine the
 #: tensor: two pendulum axes are within about a degree of each other.
 SINGULAR_DETERMINANT = 1e-3
+
+#: Gravity at the Earth's surface [m/s^2], poles to equator and mountains included: a compound
+#: pendulum that cannot have swung at another gravity is asked whether it swung on Earth.
+EARTH_GRAVITY = (9.76, 9.84)
 
 #: Lines whose root-mean-square distance from the fitted centre of mass exceeds this are rejected:
 #: the paper locates centres of mass to +/- 0.02 m (Moore et al. 2009, Table 3 caption), so lines
@@ -85,6 +90,11 @@ def _check_period(name: str, period: Quantity, source: str | None) -> None:
         raise InputError(name, period.value, "a positive period in seconds", source)
     check_magnitude(name, period.value, 100.0, "s", source)
     check_magnitude(f"{name} uncertainty", period.sigma, 100.0, "s", source)
+    if not period.value > 1e-3:  # 1 ms: below, squares underflow
+        raise InputError(name, period.value, "a positive period in seconds, above 0.001 s", source)
+    message = sigma_note(name, period, source)
+    if message:
+        note(message)
 
 
 def _check_stiffness(k_t: Quantity, source: str | None) -> None:
@@ -113,12 +123,12 @@ def compound_inertia(
     _check_period(name, period, source)
     if not length.value > 0:
         raise InputError("pendulum_length", length.value, "a positive pendulum length in metres", source)
-    check_magnitude("pendulum_length", length.value, 10.0, "m", source)
-    check_magnitude("pendulum_length uncertainty", length.sigma, 10.0, "m", source)
+    message = check_positive("pendulum_length", length, 10.0, "m", source)
+    if message:
+        note(message)
     if not mass.value > 0:
         raise InputError("mass", mass.value, "a positive mass in kg (of the body on the compound pendulum)", source)
-    check_magnitude("mass", mass.value, 500.0, "kg", source)
-    check_magnitude("mass uncertainty", mass.sigma, 500.0, "kg", source)
+    check_positive("mass", mass, 500.0, "kg", source)  # the wheel's checks note its uncertainty
     if not g.value > 0:
         raise InputError("g", g.value, "a positive acceleration due to gravity in m/s^2", source)
     check_magnitude("g", g.value, 100.0, "m/s^2", source)
@@ -127,11 +137,14 @@ def compound_inertia(
     value = result.quantity("Iyy")
     if not value.value > 0:
         shortest = 2 * math.pi * math.sqrt(length.value / g.value)
+        earth = EARTH_GRAVITY[0] <= g.value <= EARTH_GRAVITY[1]
         raise InputError(
             name,
             period.value,
             f"more than {shortest:.4f} s, the period of a point mass on a {length.value} m pendulum "
-            "(a shorter period gives a negative moment of inertia)",
+            f"at g = {g.value:g} m/s^2 (a shorter period gives a negative moment of inertia"
+            + ("" if earth else "; if the pendulum swung on Earth, give the gravity there as [environment] g_lab")
+            + ")",
             source,
         )
     return value

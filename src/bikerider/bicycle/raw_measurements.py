@@ -101,11 +101,12 @@ from bikerider.bicycle.pendulum import (
     check_lines_meet,
 )
 from bikerider.engine import GeneratedStage, LeastSquaresStage, Stage, arguments, conditioning_2x2, first_order
-from bikerider.errors import FitError, InputError
+from bikerider.errors import ErrorCollector, FitError, InputError
 from bikerider.fitting import PERIOD_TRIAL_TOLERANCE
 from bikerider.generated.manifest import STAGES
 from bikerider.inertia import inertia_problem, plane_symmetric_principal_moments
-from bikerider.quantity import DEG, Quantity, check_degrees, check_magnitude
+from bikerider.notes import note
+from bikerider.quantity import DEG, SMALLEST, Quantity, check_degrees, check_magnitude, smallest_expected
 
 LOG = logging.getLogger(__name__)
 
@@ -172,7 +173,7 @@ _HANDLEBAR_REFERENCE = tuple(
     a for a in arguments("measured_reduction.handlebar_reference") if a not in ("w", "rF", "lam")
 )
 _POSITIVE = ("dF", "nF", "dR", "nR", "mR", "mF", "mB", "mH", "mG", "mS", "g", "lF", "lR", "mP", "dP", "lP", "w")
-_INDEXED = re.compile(r"^(alpha|a|Tt|Tc)([BHGS])(\d+)$")
+_INDEXED = re.compile(r"^(alpha|a|Tt|Tc)([BHGS])(\d{1,3})$")
 _KNOWN_EXTRAS = {"xcl", "zcl", "ds1", "ds3"}
 """Names BicycleParameters files carry that the benchmark bodies do not use (lateral force point,
 extra frame distances); listed in the notes, not errors."""
@@ -326,38 +327,87 @@ def _raw_limit(name: str) -> tuple[float, str]:
     return 10.0, "m"  # every other value of a Measured file is a length
 
 
+def is_known_field(name: str) -> bool:
+    """Whether ``name`` is a field of a BicycleParameters Measured file that bikerider knows."""
+    return name in FIELD_PURPOSES or name in SEATING_FIELDS or name in _KNOWN_EXTRAS or bool(_INDEXED.match(name))
+
+
 def _check_values(
-    values: Mapping[str, Quantity], where: Callable[[str], str], repeats: Mapping[str, tuple[Quantity, ...]]
+    values: Mapping[str, Quantity],
+    where: Callable[[str], str],
+    repeats: Mapping[str, tuple[Quantity, ...]],
+    errors: ErrorCollector | None = None,
 ) -> None:
+    """Each value of a Measured file on its own: known, within its limit, positive where it must
+    be (lengths and masses at least :data:`bikerider.quantity.SMALLEST`), periods above 1 ms and
+    repeated trials that agree; every problem goes to ``errors`` (each value's first), or is
+    raised at the end when no collector is given."""
+    if errors is None:
+        errors = ErrorCollector()
+        _check_values(values, where, repeats, errors)
+        errors.raise_any()
+        return
+    failed: set[str] = set()
+
+    def fail(error: InputError) -> None:
+        errors.add(error)
+        failed.add(error.name.removesuffix(" uncertainty"))
+
     for name, q in values.items():
+        if not is_known_field(name):
+            fail(
+                InputError(
+                    name,
+                    q.value,
+                    "a field of a BicycleParameters Measured file (rolled distances dF, nF, masses mB, mH, ..., "
+                    "pendulum periods TtB1, TcF1, ..., angles alphaB1, ..., geometry w, gamma, f or h1..h5, d1..d4, "
+                    "seating lcs, hbb, ...): a field bikerider does not know is not dropped silently",
+                    where(name),
+                )
+            )
+            continue
         limit, unit = _raw_limit(name)
         if not (abs(q.value) <= limit and abs(q.sigma) <= limit):  # check_magnitude passes these
-            check_magnitude(name, q.value, limit, unit, where(name))
-            check_magnitude(f"{name} uncertainty", q.sigma, limit, unit, where(name))
-    if "gamma" in values:
-        check_degrees("gamma", values["gamma"].value, where("gamma"))
+            with errors.check():
+                check_magnitude(name, q.value, limit, unit, where(name))
+                check_magnitude(f"{name} uncertainty", q.sigma, limit, unit, where(name))
+            failed.add(name)
+    if "gamma" in values and "gamma" not in failed:
+        try:
+            check_degrees("gamma", values["gamma"].value, where("gamma"))
+        except InputError as exc:
+            fail(exc)
     for name in _POSITIVE:
-        if name in values and not values[name].value > 0:
-            raise InputError(name, values[name].value, f"a positive value ({_purpose(name)})", where(name))
+        if name in values and name not in failed:
+            value = values[name].value
+            smallest = SMALLEST.get(_raw_limit(name)[1], 0.0)
+            if not value > 0:
+                fail(InputError(name, value, f"a positive value ({_purpose(name)})", where(name)))
+            elif value < smallest:
+                fail(InputError(name, value, smallest_expected(smallest, _raw_limit(name)[1]), where(name)))
     for name, q in values.items():
-        if name.startswith(("Tt", "Tc")) and not q.value > 1e-3:  # 1 ms: below, squares underflow
-            raise InputError(
-                name, q.value, f"a positive period in seconds, above 0.001 s ({_purpose(name)})", where(name)
+        if name not in failed and name.startswith(("Tt", "Tc")) and not q.value > 1e-3:  # 1 ms: squares underflow
+            fail(
+                InputError(
+                    name, q.value, f"a positive period in seconds, above 0.001 s ({_purpose(name)})", where(name)
+                )
             )
     for name, trials in repeats.items():
-        if not name.startswith(("Tt", "Tc")) or len(trials) < 2:
+        if name in failed or not name.startswith(("Tt", "Tc")) or len(trials) < 2:
             continue
         median = statistics.median(t.value for t in trials)
         worst = max(trials, key=lambda t: abs(t.value - median))
         if abs(worst.value - median) > PERIOD_TRIAL_TOLERANCE * median:
             shown = ", ".join(f"{t.value:.6g}" for t in trials)
-            raise InputError(
-                name,
-                f"[{shown}] s",
-                f"repeated trials within {PERIOD_TRIAL_TOLERANCE:.0%} of their median {median:.6g} s "
-                f"(trial {worst.value:.6g} s is {abs(worst.value - median) / median:.1%} off: a trial of "
-                "another orientation or body, or a slipping clamp?)",
-                where(name),
+            fail(
+                InputError(
+                    name,
+                    f"[{shown}] s",
+                    f"repeated trials within {PERIOD_TRIAL_TOLERANCE:.0%} of their median {median:.6g} s "
+                    f"(trial {worst.value:.6g} s is {abs(worst.value - median) / median:.1%} off: a trial of "
+                    "another orientation or body, or a slipping clamp?)",
+                    where(name),
+                )
             )
 
 
@@ -725,8 +775,12 @@ def reduce_measured(
     where = getattr(source, "where", None) or (lambda _name: label)
     repeats = {k: e.repeats for k, e in getattr(source, "entries", {}).items()}
     values = values.as_dict() if hasattr(values, "as_dict") else dict(values)  # fast lookups
-    layout = detect_layout(values, label)
-    _check_values(values, where, repeats)
+    errors = ErrorCollector()
+    _check_values(values, where, repeats, errors)
+    layout = None
+    with errors.check():
+        layout = detect_layout(values, label)
+    errors.raise_any()
     reduced, lines = reduce_values(values, layout, com_method=com_method, line_tolerance=line_tolerance, source=label)
     notes = _notes(values, layout)
     body_values = {k: reduced[k] for k in _BODY_OUTPUTS if math.isfinite(reduced[k].value)}
@@ -739,6 +793,8 @@ def reduce_measured(
             notes.append(f"seating measurements not usable: {problem}")
     _drop_inconsistent_yy(body_values, notes, label)
     extras = {k: q for k, q in reduced.items() if k not in body_values and math.isfinite(q.value)}
+    for message in notes:
+        note(f"{label}: {message}")
     bodies = BicycleBodies(body_values, source=label, name=name, notes=notes)
     return MeasuredReduction(bodies, extras, lines, layout, notes)
 
@@ -788,7 +844,6 @@ def _drop_inconsistent_yy(body_values: dict[str, Quantity], notes: list[str], so
                 f"I{body}xx, I{body}xz, I{body}zz its principal moments {principal} break the triangle "
                 "inequality (the linear model does not use it)"
             )
-            LOG.info("%s: %s", source, message)
             notes.append(message)
 
 

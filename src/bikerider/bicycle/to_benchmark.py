@@ -18,10 +18,11 @@ from dataclasses import dataclass
 from bikerider.benchmark.parameters import BENCHMARK_NAMES, BenchmarkParameters
 from bikerider.bicycle.bodies import BicycleBodies
 from bikerider.engine import GeneratedStage, arguments, first_order
-from bikerider.errors import InputError
+from bikerider.errors import ErrorCollector, InputError
 from bikerider.generated.manifest import STAGES
 from bikerider.inertia import inertia_problem
-from bikerider.quantity import Quantity, check_magnitude
+from bikerider.notes import note
+from bikerider.quantity import Quantity, check_magnitude, check_positive
 
 _FRAME = tuple(a for a in arguments("combination.rear_body") if "Bf" in a)
 """The rear frame (``mBf, xBf, zBf, IBfxx, ...``): the first body of the generated ``rear_body``."""
@@ -58,38 +59,54 @@ class LumpedRider:
     name: str = "rider"
 
     def __post_init__(self) -> None:
+        errors = ErrorCollector()
+        failed: set[str] = set()
         for key in RIDER_BODY_NAMES:
             if key not in self.values and key != "IBryy":
-                raise InputError(
-                    key,
-                    "missing",
-                    "a value: the lumped rider needs its mass, centre of mass and in-plane inertia",
+                errors.add(
+                    InputError(
+                        key,
+                        "missing",
+                        "a value: the lumped rider needs its mass, centre of mass and in-plane inertia",
+                        self.source,
+                    )
+                )
+                failed.add(key)
+        for key, q in self.values.items():
+            limit = _LIMITS.get(key)
+            try:
+                if key in ("mBr", "IBrxx", "IBrzz", "IBryy"):
+                    message = check_positive(key, q, *limit, self.source)  # type: ignore[misc]
+                    if message:
+                        note(message)
+                elif limit is not None:
+                    check_magnitude(key, q.value, *limit, self.source)
+                    check_magnitude(f"{key} uncertainty", q.sigma, *limit, self.source)
+            except InputError as exc:
+                errors.add(exc)
+                failed.add(key)
+        if "zBr" not in failed and not self.values["zBr"].value < 0:
+            errors.add(
+                InputError(
+                    "zBr",
+                    self.values["zBr"].value,
+                    "a negative value: z points down in the benchmark "
+                    "frame, so a centre of mass above the ground has z < 0",
                     self.source,
                 )
-        for key in ("mBr", "IBrxx", "IBrzz", "IBryy"):
-            if key in self.values and not self.values[key].value > 0:
-                raise InputError(key, self.values[key].value, "a positive value", self.source)
-        for key, (limit, unit) in _LIMITS.items():
-            q = self.values.get(key)
-            if q is not None and not (abs(q.value) <= limit and abs(q.sigma) <= limit):  # else both pass
-                check_magnitude(key, self.values[key].value, limit, unit, self.source)
-                check_magnitude(f"{key} uncertainty", self.values[key].sigma, limit, unit, self.source)
-        if not self.values["zBr"].value < 0:
-            raise InputError(
-                "zBr",
-                self.values["zBr"].value,
-                "a negative value: z points down in the benchmark "
-                "frame, so a centre of mass above the ground has z < 0",
-                self.source,
             )
-        xx, zz, xz = (self.values[k].value for k in ("IBrxx", "IBrzz", "IBrxz"))
-        if inertia_problem(xx, None, zz, xz) is not None:  # the in-plane block, without IBryy
-            raise InputError(
-                "IBrxz",
-                xz,
-                f"|IBrxz| < sqrt(IBrxx * IBrzz) = {math.sqrt(xx * zz):.6g} (a positive definite inertia tensor)",
-                self.source,
-            )
+        if not failed.intersection(("IBrxx", "IBrzz", "IBrxz")):
+            xx, zz, xz = (self.values[k].value for k in ("IBrxx", "IBrzz", "IBrxz"))
+            if inertia_problem(xx, None, zz, xz) is not None:  # the in-plane block, without IBryy
+                errors.add(
+                    InputError(
+                        "IBrxz",
+                        xz,
+                        f"|IBrxz| < sqrt(IBrxx * IBrzz) = {math.sqrt(xx * zz):.6g} (a positive definite inertia tensor)",
+                        self.source,
+                    )
+                )
+        errors.raise_any()
 
 
 _PASS_THROUGH = tuple(name for name in BENCHMARK_NAMES if name not in _REAR_BODY and name != "lam")

@@ -19,6 +19,7 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from bikerider import notes
 from bikerider.errors import BikeriderError, InputError
 from bikerider.generated.manifest import BENCHMARK_NAMES
 from bikerider.io.atomic import atomic_write_text
@@ -87,18 +88,34 @@ def input_files(folder: Path) -> tuple[Path | None, Path | None]:
 
 
 def _raw_is_incomplete(error: Exception) -> bool:
-    return isinstance(error, InputError) and error.value == "missing"
+    """Whether a raw file's error is only that measurements are missing (every one of its errors)."""
+    return isinstance(error, InputError) and all(e.value == "missing" for e in getattr(error, "errors", [error]))
 
 
 def process_bicycle(folder: Path) -> BatchRow:
-    """Benchmark values and critical speeds of one bicycle folder (never raises for bad data)."""
+    """Benchmark values and critical speeds of one bicycle folder (never raises for bad data).
+
+    The notes of its files (what was left out or changed) go to the row, each once, not to the
+    end of the run.
+    """
+    row = BatchRow(folder.name)
+    with notes.collecting() as collection:
+        _process(folder, row)
+    prefixes = tuple(f"{path}: " for path in input_files(folder) if path)  # the row names the bicycle
+    for message in collection.messages:
+        short = next((message[len(p) :] for p in prefixes if message.startswith(p)), message)
+        if short not in row.notes:
+            row.notes.append(short)
+    return row
+
+
+def _process(folder: Path, row: BatchRow) -> None:
     # The pipeline (NumPy, the generated code) is imported when the command runs: `bikerider --help`
     # and the other commands start in 0.06 s instead of 0.4 s (python -X importtime).
     from bikerider.benchmark import WhippleModel
     from bikerider.bicycle.to_benchmark import bicycle_benchmark_parameters
     from bikerider.io.bicycleparameters import read_benchmark_file, read_measured_file
 
-    row = BatchRow(folder.name)
     measured, benchmark = input_files(folder)
     parameters = None
     try:
@@ -114,7 +131,7 @@ def process_bicycle(folder: Path) -> BatchRow:
         if parameters is None:
             if benchmark is None:
                 row.error = "no RawData/<Name>Measured.txt or Parameters/<Name>Benchmark.txt"
-                return row
+                return
             read = read_benchmark_file(benchmark)
             parameters = read.parameters
             row.source, row.path = "parameters", str(benchmark)
@@ -125,7 +142,6 @@ def process_bicycle(folder: Path) -> BatchRow:
     except (BikeriderError, OSError) as exc:
         row.error = str(exc)
         row.source = ""
-    return row
 
 
 def run_batch(directory: Path, progress=None) -> list[BatchRow]:

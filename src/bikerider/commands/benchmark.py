@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 
+from bikerider import notes
 from bikerider.commands.estimate import add_figure_options
 from bikerider.errors import InputError
 from bikerider.io.shipped_files import BICYCLES, RIDERS
@@ -93,7 +94,9 @@ def run(args: argparse.Namespace) -> int:
             dpi=args.dpi,
         )
     if args.json:
-        print(json.dumps(report.model_json(params, model, eig), indent=2, allow_nan=False))
+        out = report.model_json(params, model, eig)
+        out["notes"] = notes.shown_with()
+        print(json.dumps(out, indent=2, allow_nan=False))
     else:
         print(f"Benchmark parameters from {params.source or name}\n")
         print(report.model_text(params, model, eig))

@@ -7,6 +7,8 @@ import json
 import math
 from dataclasses import replace
 
+from bikerider import notes
+
 
 def add_parser(subparsers) -> None:
     p = subparsers.add_parser(
@@ -99,7 +101,7 @@ def run(args: argparse.Namespace) -> int:
             "method": "first-order propagation of the uncertainties stated in the input files",
         }
         out["rider"] = _rider_json(result)
-        out["notes"] = result.notes
+        out["notes"] = notes.shown_with(result.notes)
         print(json.dumps(out, indent=2, allow_nan=False))
         return 0
     np.set_printoptions(precision=4, suppress=True)
@@ -119,7 +121,7 @@ def run(args: argparse.Namespace) -> int:
     print()
     print(report.model_text(parameters, result.model, eig, uncertainty.speeds))
     print("  (first-order sigmas of these eigenvalues, with condition numbers: --json, uncertainty.eigenvalues)")
-    for note in result.notes:
+    for note in notes.shown_with(result.notes):
         print(f"Note: {note}")
     if args.plot:
         print(f"\nFigures written to {args.plot}/")

@@ -98,6 +98,7 @@ def run(args: argparse.Namespace) -> int:
 
     import numpy as np
 
+    from bikerider import notes
     from bikerider.errors import InputError
     from bikerider.gap.report import summary_text
 
@@ -129,6 +130,7 @@ def run(args: argparse.Namespace) -> int:
         path = write_report(diagnosis, args.report, title=f"Sim-to-real gap: {args.model}")
         result["report"] = str(path)
     if args.json:
+        result["notes"] = notes.shown_with(result.get("notes", []))
         print(json.dumps(_plain(result, np), indent=2, allow_nan=False))
     else:
         print(summary_text(result))
@@ -197,7 +199,7 @@ def _diagnose_files(
     from bikerider.io.gap_model import load_model
 
     loaded = load_model(model, rider, rider_rel_sigma=rider_rel_sigma)
-    laws = gap_data.read_control(control) if control else {}
+    laws = gap_data.read_control(control) if control is not None else {}
     default_law = next(iter(laws.values())) if len(laws) == 1 else None
     keep = [g.strip() for g in groups.split(",")] if groups else None
     eigen, canonical, records = [], [], []

@@ -12,6 +12,8 @@ import json
 import sys
 from pathlib import Path
 
+from bikerider import notes
+
 
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser(
@@ -30,7 +32,7 @@ def add_parser(subparsers) -> None:
 def run(args: argparse.Namespace) -> int:
     from bikerider.errors import FitError
     from bikerider.fitting.damped_oscillation import fit_damped_oscillation, period_from_trials
-    from bikerider.fitting.signal_csv import read_signal_csv
+    from bikerider.io.signal_csv import read_signal_csv
 
     records, fits = [], []
     for path in args.files:
@@ -51,6 +53,7 @@ def run(args: argparse.Namespace) -> int:
                 "sigma": combined.sigma,
                 "scatter": combined.scatter,
                 "trials": [{"file": str(p), **f.as_dict()} for (p, _, _), f in zip(records, fits)],
+                "notes": notes.shown_with(),
             },
             sys.stdout,
             indent=2,

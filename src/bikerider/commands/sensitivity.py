@@ -67,35 +67,63 @@ def _inputs(args: argparse.Namespace):
     # The readers and the chain (NumPy, the generated code) are imported when the command runs:
     # `bikerider --help` and the other commands start in 0.06 s instead of 0.4 s (python -X importtime).
     from bikerider.io import chain_inputs
-    from bikerider.io.bicycleparameters import benchmark_from_values
-    from bikerider.io.name_value_file import read_name_value_file
     from bikerider.uncertainty import inputs as inp
 
-    if args.rider and not args.bicycle:
+    if args.rider is not None and args.bicycle is None:
         raise InputError("--rider", args.rider, "a --bicycle file to go with it")
-    if args.inputs:
-        data = read_name_value_file(args.inputs)
-        quantities = {}
-        for name, q in data.as_dict().items():
-            if name.endswith("_deg"):
-                quantities[name[:-4]] = q.scaled(DEG)
-            else:
-                quantities[name] = q
-        if set(quantities) <= set(BENCHMARK_NAMES):
-            # Benchmark parameters: read and checked as `bikerider benchmark` reads them (refusing
-            # what no bicycle can have, leaving out an impossible I_yy the model does not use).
-            quantities = inp.benchmark_inputs(benchmark_from_values(data).parameters)
+    if args.inputs is not None:
+        quantities = _file_inputs(args.inputs)
         sources = {n: f"stated: {args.inputs}" if q.sigma else "exact (no sigma given)" for n, q in quantities.items()}
         return inp.InputSet(quantities, sources, str(args.inputs))
-    if args.bicycle:
-        if not args.rider:
+    if args.bicycle is not None:
+        if args.rider is None:
             raise InputError("--bicycle", args.bicycle, "a --rider file to go with it")
-        quantities = chain_inputs.raw_inputs_from_toml(args.bicycle, args.rider)
+        from bikerider.estimate import estimate
+        from bikerider.io.toml_input import load_bicycle_toml, load_rider_toml
+
+        bicycle, rider = load_bicycle_toml(args.bicycle), load_rider_toml(args.rider)
+        estimate(bicycle, rider)  # the checks `estimate` makes: the rider seated (reach, knee, elbow), the values
+        quantities = inp.chain_raw_inputs(bicycle, rider)
         sources = {n: f"stated: {args.bicycle}" if q.sigma else "exact (no sigma given)" for n, q in quantities.items()}
         if not args.no_rider_sigmas:
             quantities = inp.with_assumed_rider_sigmas(quantities, sources)
         return inp.InputSet(quantities, sources, f"{args.bicycle} + {args.rider}")
     return chain_inputs.paper_inputs(assume_rider_sigmas=not args.no_rider_sigmas)
+
+
+def _file_inputs(path: str) -> dict[str, Quantity]:
+    """The chain inputs of a ``name = value+/-sigma`` file (``NAME_deg`` in degrees).
+
+    A file of benchmark parameters (a BicycleParameters ``<Name>Benchmark.txt``, with the extras
+    those files carry) is read and checked as ``bikerider benchmark`` reads it
+    (:func:`bikerider.io.bicycleparameters.benchmark_from_values`): what no bicycle can have is
+    refused, an impossible ``I_yy`` the model does not use, ``yB = 0``, ``IRzz`` and the split
+    handlebar and fork are left out with a note.
+    """
+    from bikerider.io.bicycleparameters import BENCHMARK_EXTRAS, benchmark_from_values
+    from bikerider.io.name_value_file import NameValueEntry, NameValueFile, read_name_value_file
+    from bikerider.uncertainty import inputs as inp
+
+    data = read_name_value_file(path)
+    entries: dict[str, NameValueEntry] = {}
+    for name, entry in data.entries.items():
+        if name.endswith("_deg"):
+            base = name[:-4]
+            if base in data.entries:
+                raise InputError(
+                    name,
+                    entry.value.value,
+                    f"either {base} (radians) or {name} (degrees), not both ({base} on line {data.entries[base].line})",
+                    data.where(name),
+                )
+            scaled = entry.value.scaled(DEG)
+            entry = NameValueEntry(base, scaled, tuple(q.scaled(DEG) for q in entry.repeats), entry.line)
+        entries[entry.name] = entry
+    converted = NameValueFile(data.path, entries)
+    if set(entries) <= set(BENCHMARK_NAMES) | set(BENCHMARK_EXTRAS):
+        read = benchmark_from_values(converted)
+        return inp.benchmark_inputs(read.parameters)
+    return converted.as_dict()
 
 
 def run(args: argparse.Namespace) -> int:

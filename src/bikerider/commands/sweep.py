@@ -8,6 +8,7 @@ import io
 import json
 from pathlib import Path
 
+from bikerider import notes
 from bikerider.commands.benchmark import add_shipped_options, load_parameters
 from bikerider.commands.estimate import add_figure_options
 from bikerider.commands.sweep_design import add_design_options, is_design_run, run_design
@@ -108,6 +109,7 @@ def run(args: argparse.Namespace) -> int:
             out["stable"] = result.stable().tolist()
         if args.rows == "speeds":
             out["speed_rows"] = result.speed_rows()
+        out["notes"] = notes.shown_with()
         text = json.dumps(out, indent=2, allow_nan=False) + "\n"
     else:
         buffer = io.StringIO()

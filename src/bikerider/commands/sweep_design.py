@@ -15,6 +15,7 @@ import json
 import math
 from pathlib import Path
 
+from bikerider import notes
 from bikerider.commands.benchmark import load_parameters
 from bikerider.commands.sweep_options import cell, parse_vary
 from bikerider.errors import InputError
@@ -222,6 +223,7 @@ def run_design(args: argparse.Namespace) -> int:
             out = {"store": str(args.store), "base": name, "kind": space.kind, **summary.as_dict()}
             if args.target_weave_speed is not None:
                 out["closest_to_weave_speed"] = _closest_dict(closest)
+            out["notes"] = notes.shown_with()
             text = json.dumps(out, indent=2, allow_nan=False) + "\n"
         else:
             text = _summary_text(store, summary, closest, args.target_weave_speed)
@@ -323,6 +325,7 @@ def _rows_text(args, store, closest) -> str:
             out["stable"] = store.stable().tolist()
         if args.target_weave_speed is not None:
             out["closest_to_weave_speed"] = _closest_dict(closest)
+        out["notes"] = notes.shown_with()
         return json.dumps(out, indent=2, allow_nan=False) + "\n"
     buffer = io.StringIO()
     for row in rows:

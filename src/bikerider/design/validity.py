@@ -48,6 +48,8 @@ for _name in rules.POSITIVE:
     _register(_name, "a positive value")
 for _name, (_limit, _unit) in rules.LIMITS.items():
     _register(_name, rules.limit_expected(_limit, _unit))
+for _name, (_smallest, _unit) in rules.SMALLEST.items():
+    _register(_name, rules.smallest_expected(_smallest, _unit))
 for _name in rules.DIVISORS:
     _register(_name, rules.DIVISOR_EXPECTED)
 _register("lam", rules.TILT_EXPECTED)
@@ -58,7 +60,9 @@ for _body in rules.BODIES:
         _register(rules.tensor_name(_body), _rule)
 for _wheel in rules.WHEELS:
     _register(f"I{_wheel}yy", rules.wheel_expected(_wheel))
-SINGULAR = _register("M", "a positive definite mass matrix (the model is singular otherwise)")
+    for _axis in ("yy", "xx"):
+        _register(f"I{_wheel}{_axis}", rules.wheel_extent_expected(_wheel, _axis))
+SINGULAR = _register("M", rules.SINGULAR_MASS_EXPECTED)
 NOT_COMPUTED = _register(
     "benchmark parameters", "finite values from the estimate chain (the measured geometry does not close)"
 )
@@ -109,8 +113,8 @@ def benchmark_reasons(values: dict[str, np.ndarray], sigmas: dict[str, float] | 
         Every benchmark name to an array (or scalar) broadcasting to the batch; ``IByy``/``IHyy``
         may be NaN (not determined: only the xz block of that tensor is checked).
     sigmas : dict, optional
-        Standard uncertainties of the wheel inertias that were not varied (a wheel's ``I_yy`` may
-        exceed ``2 I_xx`` within their combined uncertainty, as ``validate`` allows).
+        Standard uncertainties of the wheels' masses, radii and inertias that were not varied (a
+        wheel may break rules 9 and 10 within their combined uncertainty, as ``validate`` allows).
 
     Returns
     -------
@@ -129,6 +133,8 @@ def benchmark_reasons(values: dict[str, np.ndarray], sigmas: dict[str, float] | 
             _assign(codes, v[name] <= 0, _code(name, "a positive value"))
         for name, (limit, unit) in rules.LIMITS.items():
             _assign(codes, np.abs(v[name]) > limit, _code(name, rules.limit_expected(limit, unit)))
+        for name, (smallest, unit) in rules.SMALLEST.items():
+            _assign(codes, v[name] < smallest, _code(name, rules.smallest_expected(smallest, unit)))
         for name in rules.DIVISORS:
             _assign(codes, v[name] < rules.MIN_DIVISOR, _code(name, rules.DIVISOR_EXPECTED))
         lam = v["lam"]
@@ -148,6 +154,17 @@ def benchmark_reasons(values: dict[str, np.ndarray], sigmas: dict[str, float] | 
                 (excess > TRIANGLE_TOLERANCE * yy) & (excess > allowed),
                 _code(f"I{wheel}yy", rules.wheel_expected(wheel)),
             )
+            m, r = v[f"m{wheel}"], v[f"r{wheel}"]
+            mr2 = m * r**2
+            mr2_sigma = np.hypot(r**2 * sigmas.get(f"m{wheel}", 0.0), 2 * m * r * sigmas.get(f"r{wheel}", 0.0))
+            for axis, moment in (("yy", yy), ("xx", xx)):
+                excess = moment - mr2
+                allowed = np.hypot(sigmas.get(f"I{wheel}{axis}", 0.0), mr2_sigma)
+                _assign(
+                    codes,
+                    (excess > TRIANGLE_TOLERANCE * moment) & (excess > allowed),
+                    _code(f"I{wheel}{axis}", rules.wheel_extent_expected(wheel, axis)),
+                )
     return codes
 
 

@@ -2,13 +2,22 @@
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 from bikerider.benchmark import BENCHMARK_NAMES, BenchmarkParameters
-from bikerider.errors import InputError
+from bikerider.benchmark.parameters import check_mass_matrix, uncertainty_notes
+from bikerider.errors import MISSING, ErrorCollector, InputError
 from bikerider.io.bicycleparameters import read_benchmark_file
 from bikerider.io.toml_input import read_toml
+from bikerider.notes import note
 from bikerider.quantity import DEG, Quantity, parse_quantity
+
+DESCRIPTIVE_KEYS = ("name", "source", "notes")
+"""Keys of a benchmark table that describe it and are not read."""
+GAP_TABLES = ("rider", "upper_body", "grips")
+"""Tables of a ``bikerider gap --model`` file beside ``[benchmark]``: read by ``gap``, left out
+(with a note) where only the benchmark parameters are read."""
 
 
 def load_benchmark_parameters(path: str | Path) -> BenchmarkParameters:
@@ -18,27 +27,96 @@ def load_benchmark_parameters(path: str | Path) -> BenchmarkParameters:
     Text: one ``name = value+/-sigma`` per line (BicycleParameters ``<Name>Benchmark.txt``), read by
     :func:`bikerider.io.bicycleparameters.read_benchmark_file`, which explains what it does with the
     extra entries BicycleParameters writes.
+
+    Raises
+    ------
+    FileFormatError, InputError
+        An unreadable file; unknown tables or names, ``lam`` beside ``lam_deg``, missing or
+        impossible values: every one of them at once.
     """
-    path = Path(path)
-    if path.suffix.lower() == ".toml":
+    if Path(path).suffix.lower() == ".toml":
         data = read_toml(path)
-        return parameters_from_table(data.get("benchmark", data), str(path))
+        if "benchmark" not in data:
+            return parameters_from_table(data, str(path))
+        errors = ErrorCollector()
+        for key, value in data.items():
+            if key in GAP_TABLES:
+                note(f"{path}: [{key}] left out: only [benchmark] is read here (bikerider gap --model reads it)")
+            elif key != "benchmark" and key not in DESCRIPTIVE_KEYS:
+                errors.add(
+                    InputError(
+                        key,
+                        value,
+                        "[benchmark] beside "
+                        + ", ".join(DESCRIPTIVE_KEYS + GAP_TABLES)
+                        + " (no other table or key in a benchmark parameter file)",
+                        str(path),
+                    )
+                )
+        parameters = None
+        with errors.check():
+            parameters = parameters_from_table(data["benchmark"], str(path))
+        errors.raise_any()
+        return parameters  # type: ignore[return-value]
     return read_benchmark_file(path).parameters
 
 
 def parameters_from_table(table: object, source: str) -> BenchmarkParameters:
     """Benchmark parameters from a TOML table of Meijaard names (``lam_deg`` may replace ``lam``;
-    ``name``, ``source`` and ``notes`` are descriptive and skipped)."""
+    ``name``, ``source`` and ``notes`` are descriptive and skipped).
+
+    Every error of the table is reported at once: unknown keys, values that cannot be read, both
+    ``lam`` and ``lam_deg``, and the values no bicycle can have.  A ``lam_deg`` that looks like
+    radians (0 < lam_deg <= pi: a steer axis tilt of at most 3.14 degrees) is accepted with a note.
+    """
     if not isinstance(table, dict):
         raise InputError("benchmark", table, "a table of benchmark parameters", source)
+    errors = ErrorCollector()
+    unreadable: set[str] = set()
     values: dict[str, Quantity] = {}
+    if "lam" in table and "lam_deg" in table:
+        errors.add(
+            InputError(
+                "lam_deg",
+                table["lam_deg"],
+                f"either lam (radians) or lam_deg (degrees), not both (lam = {table['lam']})",
+                source,
+            )
+        )
+        unreadable.add("lam")
     for key, raw in table.items():
-        if key in ("name", "source", "notes"):
+        if key in DESCRIPTIVE_KEYS:
+            continue
+        name = "lam" if key == "lam_deg" else key
+        if name not in BENCHMARK_NAMES:
+            errors.add(
+                InputError(key, raw, f"one of the benchmark names {', '.join(BENCHMARK_NAMES)} (or lam_deg)", source)
+            )
+            continue
+        if name in unreadable:
+            continue
+        try:
+            q = parse_quantity(raw, key, source)
+        except InputError as exc:
+            errors.add(exc)
+            unreadable.add(name)
             continue
         if key == "lam_deg":
-            values["lam"] = parse_quantity(raw, key, source).scaled(DEG)
-        elif key in BENCHMARK_NAMES:
-            values[key] = parse_quantity(raw, key, source)
-        else:
-            raise InputError(key, raw, f"one of the benchmark names {', '.join(BENCHMARK_NAMES)} (or lam_deg)", source)
-    return BenchmarkParameters.from_mapping(values, source)
+            if 0 < q.value <= math.pi:
+                note(
+                    f"{source}: lam_deg = {q.value:g} looks like radians ({q.value:g} rad = "
+                    f"{math.degrees(q.value):.4g} deg); taken as degrees, a steer axis tilt of {q.value:g} deg"
+                )
+            q = q.scaled(DEG)
+        values[name] = q
+    try:
+        parameters = BenchmarkParameters.from_mapping(values, source)
+        check_mass_matrix(parameters)
+    except InputError as exc:
+        for error in getattr(exc, "errors", [exc]):
+            if not (error.name in unreadable and error.value == MISSING):  # named already, as unreadable
+                errors.add(error)
+    errors.raise_any()
+    for message in uncertainty_notes(parameters):
+        note(message)
+    return parameters

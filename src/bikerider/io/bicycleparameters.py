@@ -25,24 +25,25 @@ body as the paper does (Eqs. 15-16, generated ``combination.rear_body``).
 
 from __future__ import annotations
 
-import logging
 import math
 import re
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path, PurePath
 
-from bikerider.benchmark.parameters import BENCHMARK_NAMES, BenchmarkParameters
+from bikerider.benchmark.parameters import BENCHMARK_NAMES, BenchmarkParameters, check_mass_matrix, uncertainty_notes
+from bikerider.benchmark.rules import LIMITS
 from bikerider.bicycle.bodies import BicycleBodies
 from bikerider.bicycle.raw_measurements import DEFAULT_LINE_TOLERANCE, MeasuredReduction, reduce_measured
 from bikerider.bicycle.to_benchmark import LumpedRider, bodies_from_benchmark, merge_rider
-from bikerider.errors import FileFormatError, InputError
-from bikerider.inertia import inertia_problem, plane_symmetric_principal_moments
+from bikerider.errors import ErrorCollector, FileFormatError, InputError
+from bikerider.inertia import TRIANGLE, inertia_problem, plane_symmetric_principal_moments
+from bikerider.io.input_file import read_input_text
 from bikerider.io.name_value_file import NameValueFile, parse_name_value_text, read_name_value_file
 from bikerider.io.toml_input import load_bicycle_toml
+from bikerider.notes import add as add_note
+from bikerider.notes import note
 from bikerider.quantity import Quantity
-
-LOG = logging.getLogger(__name__)
 
 #: Largest lateral centre-of-mass offset [m] accepted (and dropped) for a body of the symmetric model.
 LATERAL_TOLERANCE = 1e-3
@@ -61,6 +62,10 @@ _RIDER_BODY_NAME = {
     if name != "yB"
 }
 """A lumped rider file's name to the rider's in :data:`bikerider.bicycle.to_benchmark.RIDER_BODY_NAMES`."""
+
+BENCHMARK_EXTRAS = ("yB", "yH", "IRzz", "IFzz", *SPLIT_FORK_NAMES)
+"""The entries of a benchmark file beyond the benchmark parameters that :func:`benchmark_from_values`
+knows (and drops or keeps as extras, with a note)."""
 
 _MEASURED_MARKERS = re.compile(
     r"^(Tt|Tc|alpha|a)[A-Z]\d+$|^(dF|dR|nF|nR|mP|dP|lP|lF|lR|gamma|h\d|d\d|LhbF|LhbR|lamst|whb|lcs|hbb|lsp|lst)$"
@@ -86,11 +91,16 @@ class BenchmarkFile:
     notes: list[str] = field(default_factory=list)
 
 
-def _tensor_problem(values: dict[str, Quantity], body: str) -> str | None:
+def _triangle_problem(values: dict[str, Quantity], body: str) -> bool:
+    """Whether ``body``'s tensor breaks the triangle inequality (and nothing else)."""
     xx, yy, zz, xz = (values[f"I{body}{ax}"].value for ax in ("xx", "yy", "zz", "xz"))
-    if inertia_problem(xx, yy, zz, xz) is None:
-        return None
-    principal = ", ".join(f"{p:.4g}" for p in plane_symmetric_principal_moments(xx, yy, zz, xz))
+    problem = inertia_problem(xx, yy, zz, xz)
+    return problem is not None and problem[1] == TRIANGLE
+
+
+def _tensor_problem(values: dict[str, Quantity], yy: Quantity, body: str) -> str:
+    xx, zz, xz = (values[f"I{body}{ax}"].value for ax in ("xx", "zz", "xz"))
+    principal = ", ".join(f"{p:.4g}" for p in plane_symmetric_principal_moments(xx, yy.value, zz, xz))
     return f"with I{body}xx, I{body}xz, I{body}zz its principal moments {principal} break the triangle inequality"
 
 
@@ -101,12 +111,13 @@ def benchmark_from_values(data: NameValueFile) -> BenchmarkFile:
     ------
     InputError
         A missing benchmark parameter, an unknown or flywheel entry, a lateral centre of mass or a
-        non-axisymmetric wheel, or values no bicycle can have.
+        non-axisymmetric wheel, or values no bicycle can have: every one of them at once.
     """
     values = data.as_dict()
     mapping: dict[str, Quantity] = {}
     extras: dict[str, Quantity] = {}
     notes: list[str] = []
+    errors = ErrorCollector()
     for name, q in values.items():
         where = data.where(name)
         if name in BENCHMARK_NAMES:
@@ -115,60 +126,79 @@ def benchmark_from_values(data: NameValueFile) -> BenchmarkFile:
             extras[name] = q
         elif name in ("yB", "yH"):
             if abs(q.value) > LATERAL_TOLERANCE:
-                raise InputError(
-                    name,
-                    q.value,
-                    f"0 within {LATERAL_TOLERANCE} m: the benchmark bodies are symmetric about the bicycle's XZ plane",
-                    where,
+                errors.add(
+                    InputError(
+                        name,
+                        q.value,
+                        f"0 within {LATERAL_TOLERANCE} m: the benchmark bodies are symmetric about the bicycle's XZ plane",
+                        where,
+                    )
                 )
-            notes.append(f"{name} = {q.value:g} m dropped (the benchmark bodies lie in the XZ plane)")
+            else:
+                notes.append(f"{name} = {q.value:g} m dropped (the benchmark bodies lie in the XZ plane)")
         elif name in ("IRzz", "IFzz"):
             xx = values.get(f"I{name[1]}xx")
             if xx is not None:
                 allowed = max(math.hypot(q.sigma, xx.sigma), 1e-9 * abs(xx.value))
                 if abs(q.value - xx.value) > allowed:
-                    raise InputError(
-                        name,
-                        q.value,
-                        f"equal to I{name[1]}xx = {xx.value:g}: the benchmark's wheels are axisymmetric",
-                        where,
+                    errors.add(
+                        InputError(
+                            name,
+                            q.value,
+                            f"equal to I{name[1]}xx = {xx.value:g}: the benchmark's wheels are axisymmetric",
+                            where,
+                        )
                     )
+                    continue
             notes.append(f"{name} dropped (equal to I{name[1]}xx for the benchmark's axisymmetric wheel)")
         elif _FLYWHEEL.match(name):
-            raise InputError(
-                name,
-                q.value,
-                "no flywheel body: the Whipple benchmark model has four bodies "
-                "(R, B, H, F), and leaving the flywheel out would give a wrong model",
-                where,
+            errors.add(
+                InputError(
+                    name,
+                    q.value,
+                    "no flywheel body: the Whipple benchmark model has four bodies "
+                    "(R, B, H, F), and leaving the flywheel out would give a wrong model",
+                    where,
+                )
             )
         else:
-            raise InputError(
-                name,
-                q.value,
-                "a benchmark parameter ("
-                + ", ".join(BENCHMARK_NAMES)
-                + ") or a known BicycleParameters extra (yB, yH, IRzz, IFzz, G and S bodies)",
-                where,
+            errors.add(
+                InputError(
+                    name,
+                    q.value,
+                    "a benchmark parameter ("
+                    + ", ".join(BENCHMARK_NAMES)
+                    + ") or a known BicycleParameters extra (yB, yH, IRzz, IFzz, G and S bodies)",
+                    where,
+                )
             )
+    split = [name for name in SPLIT_FORK_NAMES if name in extras]
+    if split:
+        notes.append(
+            f"handlebar (G) and fork (S) measured apart ({', '.join(split)}): not used; the model takes the "
+            "combined handlebar and fork H of the file"
+        )
     for body in ("B", "H"):
         if all(f"I{body}{ax}" in mapping for ax in ("xx", "yy", "zz", "xz")):
-            problem = _tensor_problem(mapping, body)
-            if problem:
-                yy = mapping.pop(f"I{body}yy")
-                extras[f"I{body}yy"] = yy
-                message = f"I{body}yy = {yy} left out: {problem} (the linear model does not use it)"
-                LOG.info("%s: %s", data.path, message)
-                notes.append(message)
-    missing = [n for n in BENCHMARK_NAMES if n not in mapping and n not in ("IByy", "IHyy", "g")]
-    if missing:
-        raise InputError(
-            missing[0],
-            "missing",
-            f"a value: a benchmark file needs all 25 parameters (missing: {', '.join(missing)})",
-            data.path,
-        )
-    return BenchmarkFile(BenchmarkParameters.from_mapping(mapping, source=data.path), extras, notes)
+            yy = mapping[f"I{body}yy"]
+            if 0 < yy.value <= LIMITS[f"I{body}yy"][0] and _triangle_problem(mapping, body):
+                # Possible on its own but not with the body's in-plane moments: a compound-pendulum
+                # I_yy measured apart from the torsional ones; the linear model does not use it.
+                extras[f"I{body}yy"] = mapping.pop(f"I{body}yy")
+                notes.append(
+                    f"I{body}yy = {yy} left out: {_tensor_problem(mapping, yy, body)} (the linear model does not use it)"
+                )
+    try:
+        parameters = BenchmarkParameters.from_mapping(mapping, source=data.path)
+        check_mass_matrix(parameters)
+    except InputError as exc:
+        errors.add(exc)
+    errors.raise_any()
+    for message in notes:
+        note(f"{data.path}: {message}")
+    for message in uncertainty_notes(parameters):
+        add_note(notes, message)
+    return BenchmarkFile(parameters, extras, notes)
 
 
 def read_benchmark_file(path: str | Path) -> BenchmarkFile:
@@ -186,27 +216,37 @@ def read_lumped_rider(path: str | Path) -> LumpedRider:
     """
     data = read_name_value_file(path)
     values = data.as_dict()
-    if not _LUMPED_RIDER_SET.issuperset(values):
-        name = next(name for name in values if name not in _LUMPED_RIDER_SET)  # the first, in file order
-        raise InputError(
-            name,
-            values[name].value,
-            "one of the lumped rider entries " + ", ".join(LUMPED_RIDER_NAMES),
-            data.where(name),
+    errors = ErrorCollector()
+    for name in [name for name in values if name not in _LUMPED_RIDER_SET]:  # in file order
+        errors.add(
+            InputError(
+                name,
+                values.pop(name).value,
+                "one of the lumped rider entries " + ", ".join(LUMPED_RIDER_NAMES),
+                data.where(name),
+            )
         )
     y = values.pop("yB", None)
     if y is not None and abs(y.value) > LATERAL_TOLERANCE:
-        raise InputError(
-            "yB",
-            y.value,
-            f"0 within {LATERAL_TOLERANCE} m: a rider centred on the bicycle's XZ plane",
-            data.where("yB"),
+        errors.add(
+            InputError(
+                "yB",
+                y.value,
+                f"0 within {LATERAL_TOLERANCE} m: a rider centred on the bicycle's XZ plane",
+                data.where("yB"),
+            )
         )
     renamed = {_RIDER_BODY_NAME[name]: q for name, q in values.items()}
     stem = (path if isinstance(path, PurePath) else PurePath(path)).stem
-    return LumpedRider(
-        renamed, source=str(path), name=stem[: -len("Benchmark")] if stem.endswith("Benchmark") else stem
-    )
+    rider = None
+    with errors.check():
+        rider = LumpedRider(
+            renamed, source=str(path), name=stem[: -len("Benchmark")] if stem.endswith("Benchmark") else stem
+        )
+    errors.raise_any()
+    if y is not None:
+        note(f"{path}: yB = {y.value:g} m dropped (the rider is centred on the bicycle's XZ plane)")
+    return rider  # type: ignore[return-value]
 
 
 def read_measured_file(
@@ -256,15 +296,15 @@ def detect_format(path: str | Path) -> str:
     FileFormatError
         A file that is none of these (the message says what was found).
     """
-    path = Path(path)
-    if path.suffix.lower() == ".toml":
+    text = read_input_text(path)  # refuses an empty path, a FIFO, a folder, a huge file
+    if Path(path).suffix.lower() == ".toml":
         return "toml"
     try:
-        data = read_name_value_file(path)
+        data = parse_name_value_text(text, str(path))
     except FileFormatError as exc:
         try:
-            tomllib.loads(path.read_text(encoding="utf-8"))
-        except (tomllib.TOMLDecodeError, UnicodeDecodeError):
+            tomllib.loads(text)
+        except tomllib.TOMLDecodeError:
             raise exc from None
         return "toml"
     names = set(data)
@@ -313,6 +353,7 @@ def load_bicycle_file(path: str | Path) -> BicycleBodies | BenchmarkParameters:
 
 
 __all__ = [
+    "BENCHMARK_EXTRAS",
     "BenchmarkFile",
     "LATERAL_TOLERANCE",
     "benchmark_from_values",

@@ -16,6 +16,7 @@ from pathlib import Path
 
 from bikerider.io.toml_input import load_bicycle_toml, load_rider_toml
 from bikerider.quantity import Quantity
+from bikerider.rider.model import seat_rider
 from bikerider.uncertainty.inputs import InputSet, chain_raw_inputs, with_assumed_rider_sigmas
 
 
@@ -28,12 +29,19 @@ def paper_files() -> tuple[Path, Path]:
 def raw_inputs_from_toml(bicycle: str | Path, rider: str | Path) -> dict[str, Quantity]:
     """Every measurement of a bicycle and a rider TOML file as a chain input, unreduced.
 
+    The rider is seated on the bicycle first (:func:`bikerider.rider.model.seat_rider`), so a
+    rider who cannot reach, a knee that cannot close or a chain stay too short is refused here as
+    by ``bikerider estimate``.
+
     Raises
     ------
     FileFormatError, InputError
-        An unreadable file, a missing or malformed value (named with its table and key).
+        An unreadable file, a missing, malformed or impossible value (named with its table and
+        key), a rider who cannot be seated.
     """
-    return chain_raw_inputs(load_bicycle_toml(bicycle), load_rider_toml(rider))
+    bodies, measurements = load_bicycle_toml(bicycle), load_rider_toml(rider)
+    seat_rider(bodies, measurements)
+    return chain_raw_inputs(bodies, measurements)
 
 
 def paper_inputs(assume_rider_sigmas: bool = True) -> InputSet:

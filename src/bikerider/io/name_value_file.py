@@ -35,12 +35,15 @@ from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
-from bikerider.errors import FileFormatError
+from bikerider.errors import FileFormatError, listing
+from bikerider.io.input_file import read_input_text
 from bikerider.quantity import Quantity
 
 _NUMBER = r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?"
 _VALUE = re.compile(rf"^\s*({_NUMBER})\s*(?:(?:\+/-|±)\s*({_NUMBER}))?\s*$")
 _NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+MAX_NAME = 64
+"""Longest name, in characters (BicycleParameters' longest is 7): a longer one is a damaged line."""
 _SIMPLE_LINE = re.compile(r"\s*([A-Za-z_]\w*)\s*=\s*([-+.\deE]+)\s*(?:(?:\+/-|±)\s*([-+.\deE]+))?\s*", re.ASCII)
 """The common line, one ``name = value[+/-sigma]`` without comment or repeats, read in one match.
 Over these characters ``float`` accepts exactly the strings ``_NUMBER`` matches, so what it reads
@@ -164,9 +167,11 @@ def parse_name_value_text(text: str, path: str = "<text>") -> NameValueFile:
     ------
     FileFormatError
         A line that is not ``name = value[+/-sigma][, ...]``, a bad name, a number that cannot be
-        read, a negative uncertainty or a name given twice; the message names the line.
+        read, a negative uncertainty or a name given twice; the message names the line, and every
+        such line of the text at once (``N lines cannot be read:``, one line each).
     """
     entries: dict[str, NameValueEntry] = {}
+    problems: list[FileFormatError] = []
     simple = _SIMPLE_LINE.fullmatch
     isfinite = math.isfinite
     for number, raw in enumerate(text.splitlines(), start=1):
@@ -178,61 +183,73 @@ def parse_name_value_text(text: str, path: str = "<text>") -> NameValueFile:
                 sigma = 0.0 if sigma_text is None else float(sigma_text)
             except ValueError:
                 value = sigma = math.nan  # not a number: the general path says so
-            if name not in entries and sigma >= 0 and isfinite(value) and isfinite(sigma):
+            if name not in entries and sigma >= 0 and isfinite(value) and isfinite(sigma) and len(name) <= MAX_NAME:
                 quantity = Quantity(value, sigma)
                 entries[name] = NameValueEntry(name, quantity, (quantity,), number)
                 continue
-        content = raw.split("#", 1)[0].strip()
-        if not content:
-            continue
-        if "=" not in content:
-            raise FileFormatError(path, f"expected 'name = value+/-sigma', got {raw.strip()!r}", number)
-        name, _, rhs = content.partition("=")
-        name = name.strip()
-        if not _NAME.match(name):
-            raise FileFormatError(
-                path, f"{name!r} is not a name (letters, digits and _, not starting with a digit)", number
-            )
-        if not rhs.strip():
-            raise FileFormatError(path, f"{name}: no value after '='", number)
-        if name in entries:
-            raise FileFormatError(path, f"{name} is given twice (first on line {entries[name].line})", number)
-        repeats = tuple(_parse_value(part, path, number, name) for part in rhs.split(","))
         try:
-            mean = mean_of_repeats(repeats)
-        except OverflowError:
-            raise FileFormatError(path, f"{name}: repeated values too large to average", number) from None
-        entries[name] = NameValueEntry(name, mean, repeats, number)
+            entry = _parse_line(raw, number, path, entries)
+        except FileFormatError as exc:
+            problems.append(exc)
+            continue
+        if entry is not None:
+            entries[entry.name] = entry
+    if len(problems) == 1:
+        raise problems[0]
+    if problems:
+        raise FileFormatError(path, f"{len(problems)} lines cannot be read:\n" + listing(problems))
     return NameValueFile(path, entries)
 
 
+def _parse_line(raw: str, number: int, path: str, entries: dict[str, NameValueEntry]) -> NameValueEntry | None:
+    """The entry of one line that is not the common case (``None`` for a blank or comment line)."""
+    content = raw.split("#", 1)[0].strip()
+    if not content:
+        return None
+    if "=" not in content:
+        raise FileFormatError(path, f"expected 'name = value+/-sigma', got {raw.strip()!r}", number)
+    name, _, rhs = content.partition("=")
+    name = name.strip()
+    if len(name) > MAX_NAME:
+        raise FileFormatError(
+            path, f"a name of {len(name)} characters ({name[:20]!r}...): expected at most {MAX_NAME}", number
+        )
+    if not _NAME.match(name):
+        raise FileFormatError(
+            path, f"{name!r} is not a name (letters, digits and _, not starting with a digit)", number
+        )
+    if not rhs.strip():
+        raise FileFormatError(path, f"{name}: no value after '='", number)
+    if name in entries:
+        raise FileFormatError(path, f"{name} is given twice (first on line {entries[name].line})", number)
+    repeats = tuple(_parse_value(part, path, number, name) for part in rhs.split(","))
+    try:
+        mean = mean_of_repeats(repeats)
+    except OverflowError:
+        raise FileFormatError(path, f"{name}: repeated values too large to average", number) from None
+    return NameValueEntry(name, mean, repeats, number)
+
+
 def read_name_value_file(path: str | Path) -> NameValueFile:
-    """Read a ``name = value+/-sigma`` file (UTF-8, an optional byte-order mark allowed).
+    """Read a ``name = value+/-sigma`` file (UTF-8, an optional byte-order mark allowed), through
+    :func:`bikerider.io.input_file.read_input_text` (a regular file of bounded size).
 
     Raises
     ------
     FileFormatError
-        The file is not UTF-8 text (the message gives the line of the first bad byte) or a line
-        cannot be read (see :func:`parse_name_value_text`).
+        Not a regular file, too large, not UTF-8 text (the message gives the line of the first bad
+        byte), a line that cannot be read (see :func:`parse_name_value_text`), or no entry at all.
     OSError
         The file cannot be opened.
     """
-    path = Path(path)
-    data = path.read_bytes()
-    try:
-        text = data.decode("utf-8-sig")
-    except UnicodeDecodeError as exc:
-        line = data.count(b"\n", 0, exc.start) + 1
-        raise FileFormatError(
-            path,
-            f"not UTF-8 text (byte 0x{data[exc.start]:02x} at offset {exc.start}); "
-            "save the file as UTF-8 or plain ASCII",
-            line,
-        ) from None
+    text = read_input_text(path)
     if "\x00" in text:
         raise FileFormatError(
             path,
             "contains NUL bytes: a binary file, not a name = value text file",
             text.count("\n", 0, text.index("\x00")) + 1,
         )
-    return parse_name_value_text(text, str(path))
+    data = parse_name_value_text(text, str(path))
+    if not data:  # an empty file never stands for "nothing to say"
+        raise FileFormatError(path, "no 'name = value' entries: the file is empty or holds only comments")
+    return data

@@ -1,0 +1,125 @@
+"""The one way bikerider opens an input file: a regular file of bounded size, read once.
+
+Every reader (TOML, ``name = value`` text, CSV records) gets its bytes or text from
+:func:`read_input_bytes` or :func:`read_input_text`, which refuse, before reading anything:
+
+* an empty path (it names no file; it never stands for a default);
+* a missing file, a folder, and anything that is not a regular file: a FIFO or a device would block
+  the reader, or never end (the file is opened without blocking and checked on the open handle,
+  so it cannot be swapped between the check and the read);
+* a file larger than the reader's limit, naming its size: :data:`TEXT_LIMIT` for files a person
+  writes (measurements, parameters, control gains), :data:`DATA_LIMIT` for recorded data (CSV).
+
+Within its limit a file is read in one pass, so reading takes a time bounded by the limit.
+"""
+
+from __future__ import annotations
+
+import errno
+import os
+import stat
+from pathlib import Path
+
+from bikerider.errors import FileFormatError, InputError
+
+TEXT_LIMIT = 1 << 20
+"""Largest input file a person writes, in bytes (1 MiB; BicycleParameters' Measured files have
+about 2 kB, the project's TOML files 3 kB)."""
+
+DATA_LIMIT = 64 << 20
+"""Largest recorded data file (CSV), in bytes (64 MiB: an hour of a 1 kHz rate gyro in a
+two-column CSV is about 60 MB)."""
+
+_KINDS = (
+    (stat.S_ISDIR, "a folder"),
+    (stat.S_ISFIFO, "a FIFO (named pipe)"),
+    (stat.S_ISCHR, "a character device"),
+    (stat.S_ISBLK, "a block device"),
+    (stat.S_ISSOCK, "a socket"),
+)
+
+
+def _size_text(size: int) -> str:
+    return f"{size / (1 << 20):.1f} MiB" if size >= 1 << 20 else f"{size} bytes"
+
+
+def read_input_bytes(path: str | Path, limit: int = TEXT_LIMIT) -> bytes:
+    """The bytes of the input file ``path``: a regular file of at most ``limit`` bytes.
+
+    Parameters
+    ----------
+    path : str or Path
+    limit : int
+        Largest size accepted, in bytes (:data:`TEXT_LIMIT` or :data:`DATA_LIMIT`).
+
+    Raises
+    ------
+    InputError
+        An empty path.
+    FileFormatError
+        No such file; a folder, FIFO, device or socket; a file larger than ``limit`` (the
+        message gives its size).
+    OSError
+        The file exists but cannot be opened or read (permissions).
+    """
+    if str(path) == "":
+        raise InputError("path", "", "the path of a file (an empty path names no file, and never the default one)")
+    flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0)
+    try:
+        handle = os.open(path, flags)
+    except FileNotFoundError:
+        raise FileFormatError(path, "no such file") from None
+    except IsADirectoryError:
+        raise FileFormatError(path, "is a folder, not a regular file: expected a file to read") from None
+    except OSError as exc:
+        if exc.errno in (errno.ENXIO, errno.ENODEV):  # a socket or device that cannot be opened
+            raise FileFormatError(path, "not a regular file: expected a file to read") from None
+        raise
+    try:
+        info = os.fstat(handle)  # on the open handle: what is read is what was checked
+        for is_kind, kind in _KINDS:
+            if is_kind(info.st_mode):
+                raise FileFormatError(path, f"is {kind}, not a regular file: expected a file to read")
+        if not stat.S_ISREG(info.st_mode):
+            raise FileFormatError(path, "not a regular file: expected a file to read")
+        if info.st_size > limit:
+            raise FileFormatError(
+                path, f"{_size_text(info.st_size)}: expected an input file of at most {_size_text(limit)}"
+            )
+        with os.fdopen(handle, "rb") as stream:
+            handle = -1  # the stream closes it
+            data = stream.read(limit + 1)  # a file that grew since fstat is still read in bounded time
+    finally:
+        if handle >= 0:
+            os.close(handle)
+    if len(data) > limit:
+        raise FileFormatError(
+            path, f"more than {_size_text(limit)}: expected an input file of at most {_size_text(limit)}"
+        )
+    return data
+
+
+def decode_text(data: bytes, path: str | Path) -> str:
+    """``data`` as UTF-8 text (a byte-order mark dropped).
+
+    Raises
+    ------
+    FileFormatError
+        Bytes that are not UTF-8 (the message gives the byte, its offset and its line).
+    """
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise FileFormatError(
+            path,
+            f"not UTF-8 text (byte 0x{data[exc.start]:02x} at offset {exc.start}); save the file as UTF-8 or plain ASCII",
+            data.count(b"\n", 0, exc.start) + 1,
+        ) from None
+
+
+def read_input_text(path: str | Path, limit: int = TEXT_LIMIT) -> str:
+    """The text of the input file ``path`` (:func:`read_input_bytes`, then :func:`decode_text`)."""
+    return decode_text(read_input_bytes(path, limit), path)
+
+
+__all__ = ["DATA_LIMIT", "TEXT_LIMIT", "decode_text", "read_input_bytes", "read_input_text"]
