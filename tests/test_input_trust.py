@@ -169,7 +169,7 @@ def test_an_empty_name_value_file_is_one_error_not_every_value_missing(tmp_path)
 
 
 def test_an_empty_control_file_is_not_no_control(tmp_path):
-    from bikerider.gap.data import read_control
+    from bikerider.io.gap_data import read_control
 
     for text in ("", "# gains to follow\n"):
         path = _write(tmp_path, "control.toml", text)
@@ -202,7 +202,7 @@ def test_a_huge_integer_in_any_toml_number_is_an_error_not_a_traceback(tmp_path)
 
 
 def test_a_huge_integer_control_gain_is_an_error(tmp_path):
-    from bikerider.gap.data import read_control
+    from bikerider.io.gap_data import read_control
 
     with pytest.raises(InputError, match="k_phid = 'an integer of about 400 digits'"):
         read_control(_write(tmp_path, "control.toml", "[control]\nk_phid = " + "1" * 400 + "\n"))
