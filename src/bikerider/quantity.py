@@ -12,6 +12,10 @@ DEG = math.pi / 180
 """One degree in radians: angles are given in degrees only at the input boundary and converted there,
 once, by this factor (``math.radians`` multiplies by the same number)."""
 
+SPEED_OF_LIGHT = 299_792_458.0
+"""m/s.  No speed a command takes reaches it: the Whipple model is Newtonian (and below it ``v^2``
+and the state matrices stay far inside floating point)."""
+
 _PLUS_MINUS = re.compile(r"^\s*([^\s+/]+(?:[eE][+-]?\d+)?)\s*(?:\+/-|±)\s*(\S+)\s*$")
 
 

@@ -22,6 +22,7 @@ from pathlib import Path
 from bikerider.errors import BikeriderError, InputError
 from bikerider.generated.manifest import BENCHMARK_NAMES
 from bikerider.io.atomic import atomic_write_text
+from bikerider.io.output_guard import add_inputs, refuse_inputs
 
 PROGRESS_AFTER = 1.0
 """Seconds after which progress lines appear on stderr."""
@@ -211,10 +212,8 @@ def run(args: argparse.Namespace) -> int:
         if not prefix.parent.is_dir():
             raise InputError("--out", args.out, f"a prefix in an existing folder ({prefix.parent} does not exist)")
         targets = [prefix.with_name(prefix.name + ".csv"), prefix.with_name(prefix.name + ".txt")]
-        inputs = {p.resolve() for folder in bicycle_folders(args.directory) for p in input_files(folder) if p}
-        for target in targets:
-            if target.resolve() in inputs:
-                raise InputError("--out", args.out, f"a prefix that does not overwrite the input file {target}")
+        add_inputs(p for folder in bicycle_folders(args.directory) for p in input_files(folder) if p)
+        refuse_inputs("--out", args.out, targets)
     rows = run_batch(args.directory, progress)
     table = text_table(rows)
     if targets:

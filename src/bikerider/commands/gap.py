@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from bikerider.commands import argument_types
+
 
 def add_parser(subparsers) -> None:
     p = subparsers.add_parser(
@@ -51,7 +53,9 @@ def add_parser(subparsers) -> None:
         metavar="FILE",
         help="TOML with the known control gains k_phi, k_phid, k_delta, k_deltad for rows that give none",
     )
-    p.add_argument("--speed", metavar="V", type=float, help="speed [m/s] of perturbation runs whose file gives none")
+    p.add_argument(
+        "--speed", metavar="V", type=argument_types.speed, help="speed [m/s] of perturbation runs whose file gives none"
+    )
     p.add_argument(
         "--groups",
         metavar="G1,G2",
@@ -64,7 +68,12 @@ def add_parser(subparsers) -> None:
         "passive_arms, rider_lean, tyre_slip)",
     )
     p.add_argument("--json", action="store_true", help="print one JSON object instead of text")
-    p.add_argument("--report", metavar="DIR", help="write report.md and PNG figures into DIR")
+    p.add_argument(
+        "--report",
+        metavar="DIR",
+        help="write report.md and PNG figures into DIR (new, empty, or an earlier report's folder, which is "
+        "replaced whole)",
+    )
     p.set_defaults(run=run)
 
 
@@ -80,7 +89,11 @@ def run(args: argparse.Namespace) -> int:
     from bikerider.gap.effects import EFFECT_NAMES, effect
     from bikerider.gap.model_input import load_model
     from bikerider.gap.report import summary_text, write_report
+    from bikerider.io.output_guard import ReportFolder
 
+    report_folder = ReportFolder(args.report) if args.report else None
+    if report_folder is not None:
+        report_folder.check()  # before the work: never over an input, never over files no report wrote
     if not (math.isfinite(args.rider_rel_sigma) and 0 <= args.rider_rel_sigma < 1):
         raise InputError("--rider-rel-sigma", args.rider_rel_sigma, "a relative uncertainty in [0, 1)")
     model = load_model(args.model, args.rider, rider_rel_sigma=args.rider_rel_sigma)
@@ -104,9 +117,10 @@ def run(args: argparse.Namespace) -> int:
         model, gap_data.EigenvalueData.concatenate(eigen), gap_data.CanonicalData.concatenate(canonical), effects
     )
     result = diagnosis.as_dict()
-    if args.report:
-        path = write_report(diagnosis, args.report, title=f"Sim-to-real gap: {args.model}")
-        result["report"] = str(path)
+    if report_folder is not None:
+        with report_folder as staging:
+            path = write_report(diagnosis, staging, title=f"Sim-to-real gap: {args.model}")
+        result["report"] = str(report_folder.final(path))
     if args.json:
         print(json.dumps(_plain(result, np), indent=2, allow_nan=False))
     else:

@@ -31,7 +31,10 @@ def run(args: argparse.Namespace) -> int:
     from bikerider.errors import FitError
     from bikerider.fitting.damped_oscillation import fit_damped_oscillation, period_from_trials
     from bikerider.fitting.signal_csv import read_signal_csv
+    from bikerider.io.output_guard import refuse_inputs
 
+    if args.plot:
+        refuse_inputs("--plot", args.plot, [args.plot])
     records, fits = [], []
     for path in args.files:
         time, rate = read_signal_csv(path)

@@ -67,12 +67,28 @@ def add_parser(subparsers) -> None:
     p.set_defaults(run=run)
 
 
+def check_outputs(args: argparse.Namespace) -> None:
+    """Refuse ``--out``, ``--plot`` and ``--store`` paths that would overwrite or remove an input."""
+    from bikerider.io.output_guard import refuse_inputs, refuse_inputs_within
+
+    if args.out:
+        refuse_inputs("--out", args.out, [args.out])
+    if args.plot:
+        # The figures' names depend on the run (sweep, stable_fraction, sensitivity, map_X_Y): any file
+        # of the figure format in the folder may be written.
+        folder = Path(args.plot)
+        refuse_inputs("--plot", args.plot, folder.glob(f"*.{args.format}") if folder.is_dir() else ())
+    if args.store:
+        refuse_inputs_within("--store", args.store)
+
+
 def run(args: argparse.Namespace) -> int:
     import numpy as np  # heavy modules: imported when the command runs (cli.py)
 
     from bikerider.benchmark.sweep import sweep
     from bikerider.report import parse_speeds
 
+    check_outputs(args)
     if is_design_run(args):
         return run_design(args)
     base, name = load_parameters(args)
