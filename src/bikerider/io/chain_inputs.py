@@ -25,15 +25,16 @@ def paper_files() -> tuple[Path, Path]:
     return Path(str(base / "browser_bicycle.toml")), Path(str(base / "jason_rider.toml"))
 
 
-def raw_inputs_from_toml(bicycle: str | Path, rider: str | Path) -> dict[str, Quantity]:
-    """Every measurement of a bicycle and a rider TOML file as a chain input, unreduced.
+def raw_inputs_from_toml(bicycle: str | Path, rider: str | Path | None) -> dict[str, Quantity]:
+    """Every measurement of a bicycle and a rider TOML file as a chain input, unreduced (``rider``
+    None: the bicycle alone, a rider of no mass; :data:`bikerider.uncertainty.inputs.NO_RIDER`).
 
     Raises
     ------
     FileFormatError, InputError
         An unreadable file, a missing or malformed value (named with its table and key).
     """
-    return chain_raw_inputs(load_bicycle_toml(bicycle), load_rider_toml(rider))
+    return chain_raw_inputs(load_bicycle_toml(bicycle), None if rider is None else load_rider_toml(rider))
 
 
 def paper_inputs(assume_rider_sigmas: bool = True) -> InputSet:

@@ -277,7 +277,10 @@ def propagate(
             notes.append(f"no {key} speed at positive speed: its sigma is not defined")
     eig = None
     if speeds is not None:
-        eig = _eigen_uncertainty(nodes, grads, input_names, sig, speeds)
+        if all(math.isfinite(float(nodes[k])) for k in ENTRIES):
+            eig = _eigen_uncertainty(nodes, grads, input_names, sig, speeds)
+        else:
+            notes.append("the matrix entries are not all finite: the eigenvalues have no sigmas")
     return UncertaintyResult(
         input_names, output_names, quantities, dict(sources or {}), out_values, sigmas, J, eig, notes
     )
