@@ -16,20 +16,41 @@ BROWSER_BENCHMARK = (
 )
 
 
-def test_on_the_paper_monte_carlo_sigmas_exceed_first_order(paper_result):
-    """The audit's finding, measured: on the paper's own inputs (its stated accuracies, the rider
-    exact) the Monte Carlo sigmas of the weave and capsize speeds are larger than first order's.
-    The issue quoted 12 % and 21 %; 100,000 samples give 13 % and 24 % (seed 0; 13 % and 22 % with
-    seed 1): the capsize speed's samples are skewed by the front wheel's I_yy."""
+def test_on_the_paper_monte_carlo_and_first_order(paper_result):
+    """The audit's finding, measured.  On the paper's own inputs (its stated accuracies, the rider
+    exact) the samples' standard deviations exceed first order by 13 % (weave) and 24 % (capsize)
+    from 10,000 draws (the issue: 12 % and 21 %, measured against the Monte Carlo value); but they
+    come from long upper tails, and the central 68 % of the samples is only 3 % and 4 % wider than
+    first order's sigma, skewed upwards."""
     first_order = estimate_uncertainty(paper_result)
-    headline = estimate_headline_uncertainty(paper_result, first_order, samples=100_000, seed=0)
+    headline = estimate_headline_uncertainty(paper_result, first_order, samples=10_000, seed=0)
     weave, capsize = headline.speeds["weave"], headline.speeds["capsize"]
     assert weave.first_order == pytest.approx(0.5335, abs=1e-4)
     assert capsize.first_order == pytest.approx(1.1763, abs=1e-4)
-    assert 1.10 < weave.monte_carlo / weave.first_order < 1.16
-    assert 1.18 < capsize.monte_carlo / capsize.first_order < 1.30
-    assert weave.first_order_holds and capsize.first_order_holds  # within a factor 1.5: no warning
-    assert headline.failures.get("elbow closure", 0) < 50  # the arms reach in almost every draw
+    assert 1.10 < weave.standard_deviation / weave.first_order < 1.16
+    assert 1.18 < capsize.standard_deviation / capsize.first_order < 1.30
+    assert 1.00 < weave.monte_carlo / weave.first_order < 1.07
+    assert 1.00 < capsize.monte_carlo / capsize.first_order < 1.08
+    for speed, value in ((weave, 5.6615), (capsize, 8.3581)):  # skewed upwards: the upper side is longer
+        low, high = speed.interval
+        assert high - value > 1.3 * (value - low)
+    assert weave.first_order_holds and capsize.first_order_holds
+    assert any("long upper tails" in note for note in headline.notes)
+
+
+@pytest.mark.slow
+def test_the_reported_sigma_holds_as_samples_grow_and_the_standard_deviation_does_not(paper_result):
+    """Why the reported sigma is half the central 68 %: the capsize speed's standard deviation from a
+    million draws depends on the seed (a few samples near the edge where the root runs off to
+    infinity), the central interval does not."""
+    first_order = estimate_uncertainty(paper_result)
+    runs = [
+        estimate_headline_uncertainty(paper_result, first_order, samples=1_000_000, seed=seed).speeds["capsize"]
+        for seed in (0, 1)
+    ]
+    # seed 0: 1.47 m/s, seed 1: 1.71 m/s; the half-width: 1.220 and 1.218 m/s
+    assert max(r.standard_deviation for r in runs) > 1.1 * min(r.standard_deviation for r in runs)
+    assert max(r.monte_carlo for r in runs) < 1.01 * min(r.monte_carlo for r in runs)
 
 
 def test_estimate_leads_with_monte_carlo_and_prints_first_order_beside(capsys):
@@ -38,11 +59,13 @@ def test_estimate_leads_with_monte_carlo_and_prints_first_order_beside(capsys):
     mc = data["uncertainty"]["monte_carlo"]
     assert code == 0 and mc["samples"] == DEFAULT_SAMPLES and mc["seed"] == 0
     assert data["uncertainty"]["speeds"]["weave"] == mc["sigmas"]["v_weave"]["monte_carlo"]
+    low, high = mc["sigmas"]["v_weave"]["interval_68"]
+    assert data["uncertainty"]["speeds"]["weave"] == pytest.approx((high - low) / 2)
     assert data["uncertainty"]["first_order"]["speeds"]["weave"] == pytest.approx(0.5335, abs=1e-4)
     assert data["uncertainty"]["benchmark"]["w"] == pytest.approx(0.002)  # first order where it holds: exact
     code, text, _ = run_cli(["estimate"])
     line = next(row for row in text.splitlines() if row.startswith("Weave speed"))
-    assert "(Monte Carlo, 10000 samples; first order +/- 0.53)" in line
+    assert "(Monte Carlo, 10000 samples: 68 % within 5.21-6.30; first order +/- 0.53)" in line
     code, text, _ = run_cli(["estimate", "--monte-carlo", "0"])
     assert "Weave speed   5.6615 +/- 0.53 m/s (first order)" in text
 
@@ -81,3 +104,10 @@ def test_a_file_without_sigmas_gets_no_sigmas():
 )
 def test_when_first_order_is_said_to_hold(sigma, holds):
     assert sigma.first_order_holds is holds
+
+
+def test_the_command_line_limit_is_the_module_s():
+    from bikerider.commands.argument_types import MAX_REPORT_SAMPLES
+    from bikerider.uncertainty.headline import MAX_SAMPLES
+
+    assert MAX_REPORT_SAMPLES == MAX_SAMPLES

@@ -150,7 +150,11 @@ def _speed(v: float | None, sigma: Sigma | float | None = None, samples: int = 0
             fo = f"first order +/- {_digits(sigma.first_order)}" + (
                 "" if sigma.first_order_holds else ", which does not hold"
             )
-        return f"{v:.4f} +/- {_digits(sigma.monte_carlo)} m/s (Monte Carlo, {samples} samples; {fo})"
+        low, high = sigma.interval or (math.nan, math.nan)
+        return (
+            f"{v:.4f} +/- {_digits(sigma.monte_carlo)} m/s (Monte Carlo, {samples} samples: 68 % within "
+            f"{low:.2f}-{high:.2f}; {fo})"
+        )
     return f"{v:.4f} +/- {_digits(sigma)} m/s (first order)" if sigma else f"{v:.4f} m/s"
 
 

@@ -28,6 +28,10 @@ MAX_MONTE_CARLO = 10_000_000
 """Samples of ``sensitivity --monte-carlo``: about 35 s and 80 MB per output on one core.  The
 sampling error of a standard deviation from N samples is about 1/sqrt(2N) of it: 0.02 % here."""
 
+MAX_REPORT_SAMPLES = 1_000_000
+"""Samples behind the sigmas ``estimate`` and ``benchmark`` report (every sampled output is kept for
+its percentiles; ``bikerider.uncertainty.headline.MAX_SAMPLES``, which a test holds equal)."""
+
 
 def _fail(text: str, expected: str) -> argparse.ArgumentTypeError:
     return argparse.ArgumentTypeError(f"{text!r}: expected {expected}")
@@ -90,4 +94,13 @@ def speed(text: str) -> float:
     return value
 
 
-__all__ = ["MAX_MONTE_CARLO", "MAX_SEED", "SPEED_OF_LIGHT", "number", "seed", "speed", "whole_number"]
+__all__ = [
+    "MAX_MONTE_CARLO",
+    "MAX_REPORT_SAMPLES",
+    "MAX_SEED",
+    "SPEED_OF_LIGHT",
+    "number",
+    "seed",
+    "speed",
+    "whole_number",
+]

@@ -15,8 +15,10 @@ def add_parser(subparsers) -> None:
         description=(
             "Run the method of Moore et al. (2009) on a bicycle and a seated rider and print the 25 "
             "benchmark parameters, the rider's mass, centre of mass and inertia, the matrices M, C1, "
-            "K0, K2, the weave and capsize speeds and the eigenvalues against speed. Without files: "
-            "the paper's 2008 Batavus Browser and 72 kg rider."
+            "K0, K2, the weave and capsize speeds and the eigenvalues against speed, with sigmas (Monte "
+            "Carlo for the speeds, first order beside). Without files: the paper's 2008 Batavus Browser and "
+            "72 kg rider; --bicycle alone: that bicycle without a rider; --rider alone: that rider on the "
+            "paper's bicycle."
         ),
     )
     p.add_argument(
@@ -62,10 +64,10 @@ def add_uncertainty_options(p) -> None:
     p.add_argument(
         "--monte-carlo",
         metavar="N",
-        type=argument_types.whole_number(0, argument_types.MAX_MONTE_CARLO, "a number of samples"),
+        type=argument_types.whole_number(0, argument_types.MAX_REPORT_SAMPLES, "a number of samples"),
         default=10_000,
         help="Monte Carlo samples behind the reported sigmas of the critical speeds (default 10000, "
-        "about 0.05 s; 0: first order only; first order is always printed beside)",
+        "about 0.05 s; at most 1000000; 0: first order only; first order is always printed beside)",
     )
     p.add_argument(
         "--seed",
