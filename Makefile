@@ -49,6 +49,7 @@ docs: $(STAMP)
 	$(PY) docs/scripts/sensitivity_report.py
 	$(PY) docs/scripts/gap_real_data.py
 	$(PY) docs/scripts/gallery.py
+	$(PY) docs/scripts/measurement_figure.py
 	$(PY) docs/scripts/gap_validation.py
 
 clean:
