@@ -16,6 +16,7 @@ import numpy as np
 
 from bikerider.benchmark import BenchmarkParameters, WhippleModel
 from bikerider.estimate import EstimateResult, estimate_default
+from bikerider.generated.manifest import MATRIX_NAMES
 from bikerider.quantity import DEG
 
 #: Table 10 as printed (value column), grid points 1..31 [m].
@@ -309,7 +310,7 @@ def eqs_18_21_misfit(IFyy: float) -> float:
     from scipy.optimize import linprog
 
     names, lo, hi = _table12_box()
-    printed = np.array([x for mat in ("M", "C1", "K0", "K2") for row in EQS_18_21[mat] for x in row])
+    printed = np.array([x for mat in MATRIX_NAMES for row in EQS_18_21[mat] for x in row])
     x = 0.5 * (lo + hi)
     n = len(names)
     for _ in range(3):
