@@ -38,19 +38,20 @@ def test_on_the_paper_monte_carlo_and_first_order(paper_result):
     assert any("long upper tails" in note for note in headline.notes)
 
 
-@pytest.mark.slow
-def test_the_reported_sigma_holds_as_samples_grow_and_the_standard_deviation_does_not(paper_result):
-    """Why the reported sigma is half the central 68 %: the capsize speed's standard deviation from a
-    million draws depends on the seed (a few samples near the edge where the root runs off to
-    infinity), the central interval does not."""
+def test_the_reported_sigma_holds_from_seed_to_seed_and_the_standard_deviation_does_not(paper_result):
+    """Why the reported sigma is half the central 68 %: from 100,000 draws the capsize speed's
+    standard deviation moves 7 % with the seed (1.44 to 1.55 m/s for seeds 0-3: a few samples near
+    the edge where the root runs off to infinity; from a million draws 1.47 to 1.71 m/s), the
+    central half-width under 1 % (1.216 to 1.226 m/s)."""
     first_order = estimate_uncertainty(paper_result)
     runs = [
-        estimate_headline_uncertainty(paper_result, first_order, samples=1_000_000, seed=seed).speeds["capsize"]
-        for seed in (0, 1)
+        estimate_headline_uncertainty(paper_result, first_order, samples=100_000, seed=seed).speeds["capsize"]
+        for seed in range(4)
     ]
-    # seed 0: 1.47 m/s, seed 1: 1.71 m/s; the half-width: 1.220 and 1.218 m/s
-    assert max(r.standard_deviation for r in runs) > 1.1 * min(r.standard_deviation for r in runs)
-    assert max(r.monte_carlo for r in runs) < 1.01 * min(r.monte_carlo for r in runs)
+    deviations = [r.standard_deviation for r in runs]
+    half_widths = [r.monte_carlo for r in runs]
+    assert max(deviations) > 1.05 * min(deviations)
+    assert max(half_widths) < 1.02 * min(half_widths)
 
 
 def test_estimate_leads_with_monte_carlo_and_prints_first_order_beside(capsys):
