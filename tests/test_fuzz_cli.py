@@ -170,7 +170,12 @@ def test_random_argument_lists(tmp_path_factory, data):
     if argv and argv[0] not in ("-v", "--help", "--version") and data.draw(st.booleans()):
         argv = [data.draw(st.sampled_from(["estimate", "benchmark", "period", "batch", "sensitivity"]))] + argv
     # Keep a run short: a Monte Carlo check or a huge speed grid is not what is being tested here.
-    code, out, err = run_cli(argv)
+    cwd = os.getcwd()
+    os.chdir(tmp)  # `--plot 5` writes figures into ./5: a temporary folder, not the checkout
+    try:
+        code, out, err = run_cli(argv)
+    finally:
+        os.chdir(cwd)
     assert code in (0, 1, 2), f"{argv}: exit {code}: {err}"
     assert "Traceback" not in err and "Traceback" not in out, argv
     if code == 2:

@@ -149,3 +149,33 @@ def test_every_atomic_write_refuses_an_input_of_the_run(tmp_path):
     assert data.read_text() == "1,2\n"
     atomic_write_text(data, "allowed outside a run")  # library use without registered inputs
     assert same_file(tmp_path / "x" / ".." / "data.csv", data)
+
+
+@pytest.mark.parametrize(
+    "argv, option, expected",
+    [
+        (["estimate", "--plot", ""], "--plot", "a folder to write into (an empty path names none)"),
+        (["sweep", "--bicycle", "Benchmark", "--vary", "c=0:1:3", "--out", ""], "--out", "a file to write"),
+        (["batch", str(DATA / "bicycleparameters"), "--out", ""], "--out", "a prefix for PREFIX.csv"),
+        (["batch", str(DATA / "bicycleparameters"), "--out", "/"], "--out", "a prefix for PREFIX.csv"),  # was a traceback
+        (["gap", "--model", "m.toml", "--data", "d.csv", "--report", ""], "--report", "a folder to write into"),
+        (["sensitivity", "weave_speed", "--wrt", ""], "--wrt", "a node of the estimate chain"),
+    ],
+)
+def test_an_empty_or_wrong_kind_of_output_path_is_an_error(tmp_path, argv, option, expected):
+    """An empty output path silently meant no output (or a traceback, for batch's prefix '/')."""
+    code, out, err = run_cli(argv)
+    assert code == 2 and "Traceback" not in err
+    assert f"{option} = " in err and expected in err, err
+
+
+def test_file_and_folder_options_refuse_the_other_kind(tmp_path):
+    record = tmp_path / "t.csv"
+    record.write_bytes(signal_csv())
+    code, _, err = run_cli(["period", str(record), "--plot", str(tmp_path)])
+    assert code == 2 and "a file to write, not a folder" in err
+    code, _, err = run_cli(["estimate", "--plot", str(record)])
+    assert code == 2 and "a folder to write into (this is a file)" in err
+    code, _, err = run_cli(["sweep", "--bicycle", "Benchmark", "--vary", "c=0.05:0.1:2", "--plot", str(tmp_path / "new")])
+    assert code == 0, err  # a --plot folder is created when missing, as for estimate
+    assert (tmp_path / "new" / "sweep.png").is_file()

@@ -2,7 +2,7 @@
 
 Each function here is an argparse ``type=``: it turns the text into a value or raises
 :class:`argparse.ArgumentTypeError`, which argparse prints as one line naming the option, e.g.
-``bikerider sensitivity: error: argument --seed: '-1': expected a whole number from 0 to 2**64 - 1``,
+``bikerider sensitivity: error: argument --seed: '-1': expected a random seed: a whole number from 0 to 2**64 - 1``,
 and exits with status 2.  The limits describe what cannot work, not what is unusual:
 
 * a speed is finite, at least 0 and below the speed of light (:data:`SPEED_OF_LIGHT`): the
@@ -37,11 +37,11 @@ def _fail(text: str, expected: str) -> argparse.ArgumentTypeError:
     return argparse.ArgumentTypeError(f"{text!r}: expected {expected}")
 
 
-def whole_number(low: int, high: int, what: str = "a whole number") -> Callable[[str], int]:
-    """A type: an integer ``low <= n <= high``."""
+def whole_number(low: int, high: int, what: str = "a whole number", shown: str | None = None) -> Callable[[str], int]:
+    """A type: an integer ``low <= n <= high`` (``shown``: how the range reads in messages)."""
+    expected = f"{what} from {shown or f'{low:,} to {high:,}'}"
 
     def parse(text: str) -> int:
-        expected = f"{what} from {low:,} to {high:,}"
         try:
             value = int(text.strip())
         except ValueError:
@@ -54,33 +54,17 @@ def whole_number(low: int, high: int, what: str = "a whole number") -> Callable[
     return parse
 
 
-def seed(text: str) -> int:
-    """A random seed: a whole number from 0 to 2**64 - 1."""
-    try:
-        value = int(text.strip())
-    except ValueError:
-        raise _fail(text, "a whole number from 0 to 2**64 - 1 (a random seed)") from None
-    if not 0 <= value <= MAX_SEED:
-        raise _fail(text, "a whole number from 0 to 2**64 - 1 (a random seed)")
+seed = whole_number(0, MAX_SEED, "a random seed: a whole number", shown="0 to 2**64 - 1")
+"""A type: a random seed, a whole number from 0 to 2**64 - 1."""
+
+
+def report_samples(text: str) -> int:
+    """Monte Carlo samples behind the sigmas ``estimate`` and ``benchmark`` report: 0 (first order
+    only) or 2 to :data:`MAX_REPORT_SAMPLES` (one sample has no spread)."""
+    value = whole_number(0, MAX_REPORT_SAMPLES, "0 (first order only) or a number of samples", "2 to 1,000,000")(text)
+    if value == 1:
+        raise _fail(text, "0 (first order only) or a number of samples from 2 to 1,000,000")
     return value
-
-
-def number(low: float, high: float, what: str = "a number", unit: str = "") -> Callable[[str], float]:
-    """A type: a finite float ``low <= x <= high``."""
-
-    def parse(text: str) -> float:
-        shown = f" {unit}" if unit else ""
-        expected = f"{what} from {low:g} to {high:g}{shown}"
-        try:
-            value = float(text)
-        except ValueError:
-            raise _fail(text, expected) from None
-        if not (math.isfinite(value) and low <= value <= high):
-            raise _fail(text, expected)
-        return value
-
-    parse.__name__ = "number"
-    return parse
 
 
 def speed(text: str) -> float:
@@ -99,7 +83,7 @@ __all__ = [
     "MAX_REPORT_SAMPLES",
     "MAX_SEED",
     "SPEED_OF_LIGHT",
-    "number",
+    "report_samples",
     "seed",
     "speed",
     "whole_number",

@@ -64,7 +64,7 @@ def add_uncertainty_options(p) -> None:
     p.add_argument(
         "--monte-carlo",
         metavar="N",
-        type=argument_types.whole_number(0, argument_types.MAX_REPORT_SAMPLES, "a number of samples"),
+        type=argument_types.report_samples,
         default=10_000,
         help="Monte Carlo samples behind the reported sigmas of the critical speeds (default 10000, "
         "about 0.05 s; at most 1000000; 0: first order only; first order is always printed beside)",
@@ -79,12 +79,14 @@ def add_uncertainty_options(p) -> None:
 
 
 def check_figure_outputs(args: argparse.Namespace) -> None:
-    """Refuse a ``--plot`` folder whose figures would overwrite an input (also ``benchmark``)."""
-    if args.plot:
-        from bikerider.io.output_guard import refuse_inputs
+    """Refuse a ``--plot`` folder that is a file, or whose figures would overwrite an input (also
+    ``benchmark``)."""
+    if args.plot is not None:
+        from bikerider.io.output_guard import folder_output, refuse_inputs
         from bikerider.plotting import FIGURES, figure_paths
 
-        refuse_inputs("--plot", args.plot, figure_paths(args.plot, FIGURES, args.format))
+        folder = folder_output("--plot", args.plot)
+        refuse_inputs("--plot", args.plot, figure_paths(folder, FIGURES, args.format))
 
 
 def files_to_use(args: argparse.Namespace) -> tuple[bool, list[str]]:

@@ -89,16 +89,16 @@ def run(args: argparse.Namespace) -> int:
     from bikerider.gap.effects import EFFECT_NAMES, effect
     from bikerider.gap.model_input import load_model
     from bikerider.gap.report import summary_text, write_report
-    from bikerider.io.output_guard import ReportFolder
+    from bikerider.io.output_guard import ReportFolder, folder_output
 
-    report_folder = ReportFolder(args.report) if args.report else None
+    report_folder = ReportFolder(folder_output("--report", args.report)) if args.report is not None else None
     if report_folder is not None:
         report_folder.check()  # before the work: never over an input, never over files no report wrote
     if not (math.isfinite(args.rider_rel_sigma) and 0 <= args.rider_rel_sigma < 1):
         raise InputError("--rider-rel-sigma", args.rider_rel_sigma, "a relative uncertainty in [0, 1)")
     model = load_model(args.model, args.rider, rider_rel_sigma=args.rider_rel_sigma)
     gains = gap_data.read_control(args.control) if args.control else None
-    groups = [g.strip() for g in args.groups.split(",")] if args.groups else None
+    groups = [g.strip() for g in args.groups.split(",")] if args.groups is not None else None
     eigen, canonical = [], []
     for path in args.data:
         kind = gap_data.detect_kind(path)

@@ -162,7 +162,7 @@ def run(args: argparse.Namespace) -> int:
     output = names.check_name(args.output, known, "OUTPUT")
     print(f"Inputs: {input_set.name}")
     notes = _notes(args)
-    if args.wrt:
+    if args.wrt is not None:
         wrt, note = names.input_name(args.wrt, set(quantities), known_names())
         notes += [note] if note else []
         expr = sensitivity_expression(output, wrt, quantities)

@@ -92,6 +92,42 @@ def refuse_inputs(option: str, value: object, outputs: Iterable[PathLike]) -> No
             )
 
 
+def file_output(option: str, value: str) -> Path:
+    """The path of a file option (``--out FILE``, ``period --plot PNG``), checked: not empty, not a
+    folder, in a folder that exists.
+
+    Raises
+    ------
+    InputError
+        Naming ``option`` and its value.
+    """
+    if not value:
+        raise InputError(option, value, "a file to write (an empty path names none)")
+    path = Path(value)
+    if path.is_dir() or not path.name or path.name in (".", ".."):
+        raise InputError(option, value, "a file to write, not a folder")
+    if not path.parent.is_dir():
+        raise InputError(option, value, f"a file in an existing folder ({path.parent} does not exist)")
+    return path
+
+
+def folder_output(option: str, value: str) -> Path:
+    """The path of a folder option (``--plot DIR``, ``--report DIR``, ``--store DIR``), checked: not
+    empty, not an existing file (it is created when missing).
+
+    Raises
+    ------
+    InputError
+        Naming ``option`` and its value.
+    """
+    if not value:
+        raise InputError(option, value, "a folder to write into (an empty path names none)")
+    path = Path(value)
+    if path.exists() and not path.is_dir():
+        raise InputError(option, value, "a folder to write into (this is a file)")
+    return path
+
+
 def check_output(path: PathLike) -> None:
     """Called by :mod:`bikerider.io.atomic` before it replaces ``path``: refuse an input."""
     hit = input_at(path)
@@ -211,6 +247,8 @@ __all__ = [
     "ReportFolder",
     "add_inputs",
     "check_output",
+    "file_output",
+    "folder_output",
     "input_at",
     "inputs",
     "refuse_inputs",

@@ -133,7 +133,7 @@ def check_name(name: str, known: set[str], what: str) -> str:
     """Resolve an alias and check ``name`` is in ``known``; :class:`InputError` otherwise."""
     node = canonical_name(name)
     if node not in known:
-        close = sorted(n for n in known if n.lower().startswith(name[:2].lower()))[:10]
+        close = sorted(n for n in known if name and n.lower().startswith(name[:2].lower()))[:10]
         hint = f"; names starting alike: {', '.join(close)}" if close else ""
         raise InputError(
             what, name, f"a node of the estimate chain (e.g. weave_speed, capsize_speed, M_phidelta, xB{hint})"
