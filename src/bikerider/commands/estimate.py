@@ -139,6 +139,8 @@ def run(args: argparse.Namespace) -> int:
             if speeds.max() > speeds.min()
             else None
         )
+        if band is not None and not np.isfinite(band.sigma_real).any():
+            band = None  # no first-order sigmas (a straight limb): no band, and no band in the key
         plotting.write_figures(
             args.plot,
             result.model,
