@@ -70,7 +70,7 @@ def reported_sigmas(first_order: UncertaintyResult, headline: HeadlineUncertaint
 def uncertainty_json(first_order: UncertaintyResult, headline: HeadlineUncertainty) -> dict[str, Any]:
     """The ``uncertainty`` object of ``--json``: the sigmas reported (Monte Carlo for the speeds),
     first order beside them, the Monte Carlo draw, and the eigenvalues' first-order sigmas."""
-    speeds = headline.speeds
+    sampled = headline.speeds
     out: dict[str, Any] = {
         "method": (
             f"speeds: Monte Carlo ({headline.samples} samples, seed {headline.seed}) with first order beside; "
@@ -79,12 +79,11 @@ def uncertainty_json(first_order: UncertaintyResult, headline: HeadlineUncertain
             else "first-order propagation of the uncertainties stated in the input files"
         ),
         "benchmark": {**first_order.benchmark, **reported_sigmas(first_order, headline)},
-        "speeds": {key: s.headline for key, s in speeds.items()},
+        "speeds": {key: sampled[key].headline if key in sampled else None for key in first_order.speeds},
         "first_order": {"benchmark": first_order.benchmark, "speeds": first_order.speeds},
         "monte_carlo": headline.as_dict() if headline.samples else None,
-        "speeds_method": (f"Monte Carlo, {headline.samples} samples" if headline.samples else "first order"),
+        "eigenvalues": first_order.eigenvalues.as_list() if first_order.eigenvalues is not None else [],
     }
-    out["eigenvalues"] = first_order.eigenvalues.as_list() if first_order.eigenvalues is not None else []
     return out
 
 
