@@ -157,7 +157,11 @@ def test_every_atomic_write_refuses_an_input_of_the_run(tmp_path):
         (["estimate", "--plot", ""], "--plot", "a folder to write into (an empty path names none)"),
         (["sweep", "--bicycle", "Benchmark", "--vary", "c=0:1:3", "--out", ""], "--out", "a file to write"),
         (["batch", str(DATA / "bicycleparameters"), "--out", ""], "--out", "a prefix for PREFIX.csv"),
-        (["batch", str(DATA / "bicycleparameters"), "--out", "/"], "--out", "a prefix for PREFIX.csv"),  # was a traceback
+        (
+            ["batch", str(DATA / "bicycleparameters"), "--out", "/"],
+            "--out",
+            "a prefix for PREFIX.csv",
+        ),  # was a traceback
         (["gap", "--model", "m.toml", "--data", "d.csv", "--report", ""], "--report", "a folder to write into"),
         (["sensitivity", "weave_speed", "--wrt", ""], "--wrt", "a node of the estimate chain"),
     ],
@@ -176,6 +180,8 @@ def test_file_and_folder_options_refuse_the_other_kind(tmp_path):
     assert code == 2 and "a file to write, not a folder" in err
     code, _, err = run_cli(["estimate", "--plot", str(record)])
     assert code == 2 and "a folder to write into (this is a file)" in err
-    code, _, err = run_cli(["sweep", "--bicycle", "Benchmark", "--vary", "c=0.05:0.1:2", "--plot", str(tmp_path / "new")])
+    code, _, err = run_cli(
+        ["sweep", "--bicycle", "Benchmark", "--vary", "c=0.05:0.1:2", "--plot", str(tmp_path / "new")]
+    )
     assert code == 0, err  # a --plot folder is created when missing, as for estimate
     assert (tmp_path / "new" / "sweep.png").is_file()

@@ -10,7 +10,7 @@ Two rules, one module, used by every command's every output path:
   paths are the same file when they resolve to the same path or, both existing, to the same inode
   (a symbolic or hard link to an input is an input).
 * **A report folder holds one run's report and nothing stale.**  :class:`ReportFolder` builds the
-  report in a new folder beside the target and, once it is complete, puts it in the target's
+  report in a new folder beside the target and, once it is complete, renames it into the target's
   place: files an earlier report wrote and this one does not cannot survive, and a run that fails
   leaves the earlier report as it was.  It replaces only a folder that is new, empty, or marked
   (:data:`REPORT_MARKER`) as written by an earlier report, and never one that holds an input.
@@ -162,7 +162,8 @@ def refuse_inputs_within(option: str, folder: PathLike) -> None:
 
 
 class ReportFolder:
-    """Write a report into a new folder, then put it in place of ``path`` as one step.
+    """Write a report into a new folder, then put it in place of ``path`` (two renames: the old
+    folder aside, the new one in; readers never see a half-written report).
 
     Use as a context manager: the ``with`` block writes into the returned staging folder; on
     success the staging folder replaces ``path`` (an earlier report there is removed whole), on an
