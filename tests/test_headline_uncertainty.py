@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import json
+import re
 from importlib import resources
+from pathlib import Path
 
 import pytest
 from strategies import run_cli
@@ -112,3 +114,16 @@ def test_the_command_line_limit_is_the_module_s():
     from bikerider.uncertainty.headline import MAX_SAMPLES
 
     assert MAX_REPORT_SAMPLES == MAX_SAMPLES
+
+
+def test_a_sigma_beyond_floating_point_gives_no_sigma_and_says_why(tmp_path):
+    """The fuzzing run's `w = 1.02+/-1e308` (Meijaard et al. 2007's benchmark otherwise): first order
+    and the draws overflow; no RuntimeWarning escapes (pytest makes them errors), no sigma is
+    printed, and notes say why."""
+    text = (Path(__file__).parent / "data" / "BenchmarkBenchmark.txt").read_text()
+    path = tmp_path / "huge.txt"
+    path.write_text(re.sub(r"^w = ([0-9.]+)\+/-\S+", r"w = \1+/-1e308", text, flags=re.M))
+    code, out, err = run_cli(["benchmark", str(path)])
+    assert code == 0, err
+    assert "Weave speed   4.2924 m/s" in out
+    assert "are beyond floating point: an input's stated uncertainty is too large" in out

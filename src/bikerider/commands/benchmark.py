@@ -107,6 +107,6 @@ def run(args: argparse.Namespace) -> int:
     else:
         print(f"Benchmark parameters from {params.source or name}\n")
         print(report.model_text(params, model, eig, headline.speeds, headline.samples))
-        for note in headline.notes:
+        for note in [*uncertainty.notes, *headline.notes]:
             print(f"Note: {note}")
     return 0

@@ -201,8 +201,8 @@ def _notes(result: HeadlineUncertainty, first_order: UncertaintyResult) -> list[
         worst = max(missing.values())
         notes.append(
             f"{worst} of {result.samples} Monte Carlo samples ({worst / result.samples:.1%}) give no value "
-            f"({causes or 'the value does not exist there'}): within the inputs' uncertainty the bicycle and "
-            "rider can leave the region where the model exists; the sigmas are over the other samples"
+            f"({causes or 'the value does not exist there'}): within the inputs' uncertainty the model can "
+            "leave the region where these values exist; the sigmas are over the other samples"
         )
     long_tails = [
         n
