@@ -6,10 +6,13 @@ STAMP := $(VENV)/.installed
 
 .PHONY: setup demo test derive bench docs clean
 
+# The editable install of this layout (generated/ mapped into the package) goes through a meta path
+# finder, after which setuptools always prints an informational "Editable installation" notice about
+# folders named like the package in the working directory (the project has none): silenced by name.
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e '.[test]'
+	PYTHONWARNINGS="ignore:Editable installation:UserWarning" $(PY) -m pip install --quiet -e '.[test]'
 	touch $(STAMP)
 
 setup: $(STAMP)
@@ -17,6 +20,8 @@ setup: $(STAMP)
 ## demo: run the whole method on the paper's bicycle and rider (the embedded default)
 demo: $(STAMP)
 	$(VENV)/bin/bikerider estimate
+	@echo
+	@echo "bikerider is installed in $(VENV): run $(VENV)/bin/bikerider --help, or . $(VENV)/bin/activate to put it on the PATH"
 
 ## test: lint and format check (ruff, pyproject.toml's settings), then the full test suite
 test: $(STAMP)
@@ -44,6 +49,7 @@ docs: $(STAMP)
 	$(PY) docs/scripts/sensitivity_report.py
 	$(PY) docs/scripts/gap_real_data.py
 	$(PY) docs/scripts/gallery.py
+	$(PY) docs/scripts/measurement_figure.py
 	$(PY) docs/scripts/gap_validation.py
 	$(PY) docs/scripts/gap_sbw_checks.py
 

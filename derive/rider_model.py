@@ -14,10 +14,19 @@ the joint is ``A + p e + q n`` and SymPy's two solutions of ``p^2 + q^2 = l_a^2`
 
     p = (D^2 + l_a^2 - l_b^2) / (2 D),   q = -/+ sqrt(-(D - l_a - l_b)(D - l_a + l_b)(D + l_a - l_b)(D + l_a + l_b)) / (2 D).
 
-Branch rule (natural bending): take the root ``q >= 0`` with ``n`` the normal that points forward
-(+x) for the knee and downward (+z) for the elbow.  With the hip above the pedal axis and the
-shoulder behind the hand (checked at run time), this puts the knee ahead of the hip-to-foot line
-and the elbow below the shoulder-to-hand line.  No numerical starting guess is involved.
+Branch rule (natural bending): take the root ``q >= 0`` along the normal ``n`` obtained by turning
+the limb's direction ``e`` a quarter turn, always the same way for each limb: ``n = (-e_z, e_x)``
+for the knee, ``n = (e_z, -e_x)`` for the elbow (x forward, z down).  For the usual seating (hip
+above and behind the pedal axis, hand ahead of and below the shoulder) the knee then lies ahead of
+the foot-to-hip line and the elbow below and behind the hand-to-shoulder line.  Because ``n`` turns
+with the limb, the joint stays on the same side of the limb for every direction of it: the
+sense of flexion of a knee or elbow moving in the sagittal plane does not depend on where the hand
+or foot is.  Hands behind the shoulders (swept-back bars, an upright rider) bend the elbow
+backwards and up, as an arm drawn back does; no direction of the limb lacks its natural bend.  The
+only geometries without one are those with no closure at all: a limb too short to span the
+distance, or one segment longer than the other plus the span (including hand on shoulder, D = 0,
+where the plane of bending is not defined).  ``bikerider.rider.model`` refuses exactly those.  No
+numerical starting guess is involved.
 
 Segments (Table 9, Eqs. 9-10): cylinders for the upper and lower legs and arms, a cuboid torso of
 width ``l_y = l_ss - c_ua/pi`` and stadium-section thickness ``l_x = (c_ch - 2 l_y)/(pi - 2)``,
@@ -231,7 +240,9 @@ def build() -> GeneratedModule:
         "Derived in derive/rider_model.py.  Closure branches found by SymPy (D is the distance\n"
         "between the limb's ends, l_a and l_b the lengths from the distal and proximal ends):\n\n"
         f"{branch_text}\n\n"
-        "The natural branch is q >= 0 along the forward (knee) or downward (elbow) normal."
+        "The natural branch is q >= 0 along the limb direction turned a quarter turn, the same way\n"
+        "for every direction of the limb (forward for a knee over the pedals, down for an elbow below\n"
+        "the shoulders)."
     )
     used_geometry = [s for s in geometry if s.name not in ("w_rh", "w_fh")]
     return GeneratedModule(

@@ -134,8 +134,10 @@ BP = Path(__file__).resolve().parents[1] / "src" / "bikerider" / "data" / "bicyc
 def test_estimate_measured_file_with_the_paper_rider_model(capsys):
     # BicycleParameters' raw Browser measurements carry seating data (lcs, hbb, lsp, lst, lamst,
     # LhbF, LhbR, whb): the paper's rider model is seated on them; hub widths are not measured.
+    from bikerider.estimate import default_files
+
     path = BP / "bicycles" / "Browser" / "RawData" / "BrowserMeasured.txt"
-    assert main(["estimate", "--bicycle", str(path), "--json"]) == 0
+    assert main(["estimate", "--bicycle", str(path), "--rider", str(default_files()[1]), "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
     for point in ("3", "4", "8", "9"):
         assert out["rider"]["grid_points"][point] is None
@@ -160,9 +162,35 @@ def test_estimate_with_lumped_rider_and_without_rider(capsys):
 
 
 def test_rider_model_on_benchmark_parameters_is_refused(capsys):
+    from bikerider.estimate import default_files
+
     bicycle = BP / "bicycles" / "Fisher" / "Parameters" / "FisherBenchmark.txt"
-    assert main(["estimate", "--bicycle", str(bicycle)]) == 2
+    assert main(["estimate", "--bicycle", str(bicycle), "--rider", str(default_files()[1])]) == 2
     assert "no geometry to seat the rider model" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("name", ["Fisher/Parameters/FisherBenchmark.txt", "Browser/RawData/BrowserMeasured.txt"])
+def test_bicycle_without_rider_is_the_bicycle_alone_and_says_so(capsys, name):
+    """issue 12: `estimate --bicycle X` seated the paper's rider on X unasked, and on a Benchmark file
+    then failed naming a rider file the user never gave.  The bicycle alone, with a note."""
+    bicycle = BP / "bicycles" / name
+    assert main(["estimate", "--bicycle", str(bicycle), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["rider"] is None
+    assert any(note.startswith("no --rider given: the bicycle alone") for note in out["notes"])
+    assert main(["estimate", "--bicycle", str(bicycle)]) == 0
+    assert "Note: no --rider given: the bicycle alone" in capsys.readouterr().out
+    assert main(["estimate", "--bicycle", str(bicycle), "--no-rider", "--json"]) == 0  # asked for: no note
+    assert not any("no --rider" in note for note in json.loads(capsys.readouterr().out)["notes"])
+
+
+def test_rider_without_bicycle_sits_on_the_paper_bicycle_and_says_so(capsys):
+    from bikerider.estimate import default_files
+
+    assert main(["estimate", "--rider", str(default_files()[1]), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["rider"]["mass"] == pytest.approx(72.0)
+    assert any(note.startswith("no --bicycle given: the rider seated on the paper's bicycle") for note in out["notes"])
 
 
 def test_benchmark_text_shows_a_capsize_castor_pair_as_other(capsys):

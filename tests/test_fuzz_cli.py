@@ -7,8 +7,10 @@ argparse usage errors also exit 2.  Never a traceback, never NaN or infinity in 
 
 from __future__ import annotations
 
+import os
 import re
 import shutil
+import time
 from importlib import resources
 from pathlib import Path
 
@@ -176,7 +178,12 @@ def test_random_argument_lists(tmp_path_factory, data):
     if argv and argv[0] not in ("-v", "--help", "--version") and data.draw(st.booleans()):
         argv = [data.draw(st.sampled_from(["estimate", "benchmark", "period", "batch", "sensitivity"]))] + argv
     # Keep a run short: a Monte Carlo check or a huge speed grid is not what is being tested here.
-    code, out, err = run_cli(argv)
+    cwd = os.getcwd()
+    os.chdir(tmp)  # `--plot 5` writes figures into ./5: a temporary folder, not the checkout
+    try:
+        code, out, err = run_cli(argv)
+    finally:
+        os.chdir(cwd)
     assert code in (0, 1, 2), f"{argv}: exit {code}: {err}"
     assert "Traceback" not in err and "Traceback" not in out, argv
     if code == 2:
@@ -231,3 +238,78 @@ def test_gap_with_a_mutated_eigenvalue_file(tmp_path_factory, data):
         ]
     )
     _assert_clean(code, out, err, path, json_wanted=True)
+
+
+# ------------------------------------------------------------------------------------------
+# Hostile option values (issue 12): every numeric option of every command
+# ------------------------------------------------------------------------------------------
+HOSTILE_VALUES = [
+    "-1",
+    "0",
+    "2",
+    "1e308",
+    "-1e308",
+    "nan",
+    "inf",
+    "",
+    "1e400",
+    "9" * 400,
+    "18446744073709551616",
+    "1000000000",
+    "5e-324",
+    "0:1e308:3",
+    "0:3e8:2",
+    "5:1:3",
+    "0:10:0",
+    "0:1:1e9",
+    "a",
+    "\udcff",
+]
+COMMAND_OPTIONS = {
+    "estimate": (["estimate"], ["--speeds", "--dpi", "--monte-carlo", "--seed"]),
+    "benchmark": (
+        ["benchmark", str(TESTS / "data" / "BenchmarkBenchmark.txt")],
+        ["--speeds", "--monte-carlo", "--seed"],
+    ),
+    "sensitivity": (["sensitivity", "weave_speed"], ["--speed", "--top", "--monte-carlo", "--seed", "--wrt"]),
+    "sweep": (
+        ["sweep", "--bicycle", "Benchmark", "--vary", "c=0.05:0.1:3"],
+        ["--speeds", "--seed", "--target-weave-speed", "--weave-speeds", "--threads", "--chunk-size"],
+    ),
+    # every value drawn here is refused before the diagnosis runs (a valid one would take seconds)
+    "gap": (["gap", "--model", "m.toml", "--data", "d.csv"], ["--speed", "--rider-rel-sigma"]),
+}
+
+
+@settings(
+    max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture]
+)
+@given(st.data(), st.sampled_from(sorted(COMMAND_OPTIONS)))
+def test_hostile_option_values_give_a_clear_error_or_a_clean_run(tmp_path_factory, data, command):
+    """`--speeds 0:1e308:3` (LinAlgError), `--seed -1` (ValueError from NumPy) and
+    `--monte-carlo 1000000000` (no end) were the fuzzing run's findings; every numeric option of
+    every command now gives a result or a one-line error naming the option and its value."""
+    base, options = COMMAND_OPTIONS[command]
+    pairs = data.draw(
+        st.lists(st.tuples(st.sampled_from(options), st.sampled_from(HOSTILE_VALUES)), min_size=1, max_size=2)
+    )
+    if command == "gap":
+        pairs = [(o, v) for o, v in pairs if v not in ("0", "2")] or [("--speed", "-1")]
+    argv = list(base) + [token for pair in pairs for token in pair] + data.draw(st.sampled_from([[], ["-v"]]))
+    cwd = os.getcwd()
+    os.chdir(tmp_path_factory.mktemp("hostile"))  # a stray output lands in a temporary folder
+    try:
+        started = time.monotonic()
+        code, out, err = run_cli(argv)
+        elapsed = time.monotonic() - started
+    finally:
+        os.chdir(cwd)
+    assert code in (0, 2), f"{argv}: exit {code}: {err}"
+    assert "Traceback" not in err and "Traceback" not in out, argv
+    assert elapsed < 30, f"{argv} took {elapsed:.0f} s"
+    if code == 2:
+        last = err.strip().splitlines()[-1]
+        named = any(option in last for option, _ in pairs) or ("m.toml" in last or "d.csv" in last)
+        assert named, f"{argv}: the error does not name the option: {last}"
+    else:
+        assert "nan" not in out.lower().split("nanometre")[0] or command == "sweep", argv

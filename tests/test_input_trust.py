@@ -29,6 +29,7 @@ from strategies import meijaard_values, run_cli, signal_csv
 from bikerider.benchmark import rules
 from bikerider.errors import FileFormatError, InputError, InputErrors
 from bikerider.estimate import default_files
+from bikerider.io.chain_inputs import paper_files
 
 BICYCLE_TOML, RIDER_TOML = default_files()
 BICYCLE, RIDER = BICYCLE_TOML.read_text(), RIDER_TOML.read_text()
@@ -382,13 +383,14 @@ def test_a_bicycle_on_the_moon_is_modelled(tmp_path):
     # Measured on Earth, ridden on the Moon: the pendulum's gravity is g_lab.
     moon = _bicycle(tmp_path, "g = 9.81", "g = 1.62\ng_lab = 9.81")
     earth = run_cli(["estimate", "--json"])
-    code, out, err = run_cli(["estimate", "--json", "--bicycle", str(moon)])
+    rider = str(paper_files()[1])  # --bicycle alone seats no rider; the Earth run seats the paper's
+    code, out, err = run_cli(["estimate", "--json", "--bicycle", str(moon), "--rider", rider])
     assert code == 0, err
     weave_earth, weave_moon = _json(earth[1])["speeds"]["weave"], _json(out)["speeds"]["weave"]
     assert weave_moon == pytest.approx(weave_earth * (1.62 / 9.81) ** 0.5, rel=1e-9)  # v ~ sqrt(g L)
     # Without g_lab, the pendulums are taken to have swung on Earth, and a note says so.
     alone = _bicycle(tmp_path, "g = 9.81", "g = 1.62")
-    code, out, err = run_cli(["estimate", "--json", "--bicycle", str(alone)])
+    code, out, err = run_cli(["estimate", "--json", "--bicycle", str(alone), "--rider", rider])
     assert code == 0 and _json(out)["speeds"]["weave"] == weave_moon, err
     assert any("reduced at g_lab = 9.81 m/s^2 (on Earth)" in n for n in _json(out)["notes"])
     # A pendulum that swung on the Moon with the periods of an Earth one cannot be: the message says why.

@@ -15,9 +15,15 @@ import sys
 
 from bikerider import __version__, notes
 from bikerider.errors import BikeriderError
+from bikerider.io import output_guard
 
 COMMANDS = ("estimate", "benchmark", "sweep", "period", "batch", "sensitivity", "gap")
 """Subcommand modules under ``bikerider.commands``, in the order ``--help`` lists them."""
+
+INPUT_OPTIONS = ("file", "files", "bicycle", "rider", "inputs", "model", "data", "experiment", "control", "measured")
+"""Argument destinations that name files a command reads: the run's inputs, which no output of the
+run may overwrite (``bikerider.io.output_guard``; a command adds the files it finds in an input
+folder itself)."""
 
 LOG = logging.getLogger("bikerider")
 
@@ -36,17 +42,31 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     for name in COMMANDS:
         importlib.import_module(f"bikerider.commands.{name}").add_parser(sub)
+    for command in sub.choices.values():  # -v also after the subcommand: `bikerider estimate -v`
+        command.add_argument(
+            "-v", "--verbose", action="count", default=0, dest="verbose_after", help="log more (repeat for debug)"
+        )
     return parser
+
+
+def input_paths(args: argparse.Namespace) -> list[str]:
+    """The files named by the options of :data:`INPUT_OPTIONS` (single values or lists)."""
+    out: list[str] = []
+    for dest in INPUT_OPTIONS:
+        value = getattr(args, dest, None)
+        values = value if isinstance(value, (list, tuple)) else [value]
+        out.extend(os.fspath(v) for v in values if isinstance(v, (str, os.PathLike)) and os.fspath(v))
+    return out
 
 
 def main(argv: list[str] | None = None) -> int:
     """Run the command line; return the exit status (0 ok, 2 bad input or failed fit)."""
     parser = build_parser()
     args = parser.parse_args(argv)
-    level = logging.WARNING - 10 * min(args.verbose, 2)
+    level = logging.WARNING - 10 * min(args.verbose + getattr(args, "verbose_after", 0), 2)
     logging.basicConfig(level=level, format="bikerider: %(levelname)s: %(message)s")
     try:
-        with notes.collecting() as collection:
+        with output_guard.run_inputs(input_paths(args)), notes.collecting() as collection:
             code = int(args.run(args) or 0)
             # What the run left out of or changed in its inputs, unless an output showed it already.
             for message in collection.unshown():

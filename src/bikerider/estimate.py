@@ -10,8 +10,10 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
+
+import numpy as np
 
 from bikerider.benchmark import BENCHMARK_NAMES, BenchmarkParameters, WhippleModel
 from bikerider.bicycle.bodies import BicycleBodies
@@ -22,9 +24,17 @@ from bikerider.io.chain_inputs import paper_files
 from bikerider.io.toml_input import load_rider_toml
 from bikerider.quantity import Quantity
 from bikerider.rider.measurements import RiderMeasurements
-from bikerider.rider.model import RiderModel, model_arguments, seat_rider, straight_limb_lengths
+from bikerider.rider.model import (
+    STRAIGHT_LIMB_TOLERANCE,
+    RiderModel,
+    model_arguments,
+    seat_rider,
+    straight_limb_lengths,
+    straight_limbs,
+)
 from bikerider.uncertainty import UncertaintyResult, benchmark_inputs, propagate
 from bikerider.uncertainty.chain import ESTIMATE_INPUTS, benchmark_values
+from bikerider.uncertainty.headline import DEFAULT_SAMPLES, DEFAULT_SEED, HeadlineUncertainty, headline_uncertainty
 from bikerider.uncertainty.inputs import chain_raw_inputs
 
 LOG = logging.getLogger(__name__)
@@ -120,6 +130,11 @@ def estimate(bicycle: BicycleBodies, rider: RiderMeasurements) -> EstimateResult
         notes.append("IByy is not determined: the rear frame's I_yy was not measured.")
     if values["IHyy"] is None:
         notes.append("IHyy is not determined: the handlebar/fork I_yy was not measured.")
+    for limb in straight_limbs(model_arguments(bicycle, rider)):
+        notes.append(
+            f"the {limb}s are straight (as long as their span within {STRAIGHT_LIMB_TOLERANCE:g}): the "
+            f"{'knee' if limb == 'leg' else 'elbow'} lies on the line through the limb's ends"
+        )
     LOG.info("estimated %s with %s: mB = %.3f kg", bicycle.name, rider.name, values["mB"])
     return EstimateResult(bicycle, rider, rider_model, inputs, params, WhippleModel.from_parameters(params), notes)
 
@@ -199,12 +214,30 @@ def estimate_from_files(
     return estimate(bodies, rider_measurements)
 
 
+def uncertainty_inputs(result: EstimateResult) -> dict[str, Quantity]:
+    """The chain inputs, with their uncertainties, that :func:`estimate_uncertainty` propagates.
+
+    With the rider model or a bicycle alone, the raw measurements (pendulum periods and angles
+    kept unreduced, so their correlations survive; a straight limb at the lengths that keep its
+    closure real, as :func:`estimate` uses); with a lumped rider or benchmark parameters, the
+    benchmark parameters and their sigmas.
+    """
+    if result.rider_model is not None:
+        out = chain_raw_inputs(result.bicycle, result.rider)
+        for name, value in straight_limb_lengths(model_arguments(result.bicycle, result.rider)).items():
+            out[name] = Quantity(value, out[name].sigma)
+        return out
+    if result.bicycle is not None and result.rider is None:
+        return chain_raw_inputs(result.bicycle)
+    return benchmark_inputs(result.parameters)
+
+
 def estimate_uncertainty(result: EstimateResult, speeds=None) -> UncertaintyResult:
     """First-order uncertainty of every output of ``result`` (``bikerider.uncertainty.propagate``).
 
-    With the rider model, the inputs are the raw measurements (pendulum periods and angles kept
-    unreduced, so their correlations survive); otherwise the benchmark parameters and their sigmas.
-    Only uncertainties the input files state are propagated.
+    The inputs are those of :func:`uncertainty_inputs`.  Only uncertainties the input files state
+    are propagated.  Where a limb is straight the first-order sigmas of everything that depends on
+    its closure are not given (None, with a note): the closure's derivative is unbounded there.
 
     Parameters
     ----------
@@ -216,6 +249,51 @@ def estimate_uncertainty(result: EstimateResult, speeds=None) -> UncertaintyResu
     -------
     UncertaintyResult
     """
-    if result.rider_model is not None:
-        return propagate(chain_raw_inputs(result.bicycle, result.rider), speeds=speeds)
-    return propagate(benchmark_inputs(result.parameters), speeds=speeds)
+    uncertainty = propagate(uncertainty_inputs(result), speeds=speeds)
+    if result.rider_model is None:
+        return uncertainty
+    lengths = straight_limb_lengths(model_arguments(result.bicycle, result.rider))
+    return _without_first_order_through(uncertainty, tuple(lengths)) if lengths else uncertainty
+
+
+def _without_first_order_through(uncertainty: UncertaintyResult, limb_lengths: tuple[str, ...]) -> UncertaintyResult:
+    """``uncertainty`` with no first-order sigma for outputs that depend on ``limb_lengths``."""
+    columns = [uncertainty.input_names.index(n) for n in limb_lengths if n in uncertainty.input_names]
+    J = uncertainty.jacobian[:, columns]
+    through = {
+        name for name, row in zip(uncertainty.output_names, J) if not np.all(np.isfinite(row)) or np.any(row != 0)
+    }
+    sigmas = {name: (None if name in through else s) for name, s in uncertainty.sigmas.items()}
+    eigenvalues = uncertainty.eigenvalues
+    if eigenvalues is not None:
+        nan = np.full_like(eigenvalues.sigma_real, np.nan)
+        eigenvalues = replace(eigenvalues, sigma_real=nan, sigma_imag=nan.copy())
+    note = (
+        f"first order gives no sigma for the {len(through)} values that depend on a straight limb: the "
+        "closure's derivative is unbounded at full stretch (Monte Carlo gives theirs)"
+    )
+    return replace(uncertainty, sigmas=sigmas, eigenvalues=eigenvalues, notes=[*uncertainty.notes, note])
+
+
+def estimate_headline_uncertainty(
+    result: EstimateResult,
+    first_order: UncertaintyResult,
+    samples: int = DEFAULT_SAMPLES,
+    seed: int = DEFAULT_SEED,
+) -> HeadlineUncertainty:
+    """The Monte Carlo sigmas ``estimate`` reports first, with ``first_order`` beside them.
+
+    Parameters
+    ----------
+    result : EstimateResult
+    first_order : UncertaintyResult
+        :func:`estimate_uncertainty` of ``result``.
+    samples, seed : int
+        Monte Carlo draws of the inputs of :func:`uncertainty_inputs` (0: first order alone).
+
+    Returns
+    -------
+    HeadlineUncertainty
+        See :mod:`bikerider.uncertainty.headline`.
+    """
+    return headline_uncertainty(uncertainty_inputs(result), first_order, samples=samples, seed=seed)

@@ -15,6 +15,11 @@ once, by this factor (``math.radians`` multiplies by the same number)."""
 
 _LARGEST_INTEGER = int(sys.float_info.max)
 """The largest integer a float holds; TOML integers beyond it cannot be measurements."""
+
+SPEED_OF_LIGHT = 299_792_458.0
+"""m/s.  No speed a command takes reaches it: the Whipple model is Newtonian (and below it ``v^2``
+and the state matrices stay far inside floating point)."""
+
 _PLUS_MINUS = re.compile(r"^\s*([^\s+/]+(?:[eE][+-]?\d+)?)\s*(?:\+/-|±)\s*(\S+)\s*$")
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
@@ -11,19 +12,24 @@ from bikerider.benchmark import BENCHMARK_NAMES, BenchmarkParameters, ModalEigen
 from bikerider.benchmark.mode_labels import MODES
 from bikerider.errors import InputError
 from bikerider.generated.manifest import MATRIX_NAMES
+from bikerider.quantity import SPEED_OF_LIGHT
+from bikerider.uncertainty import UncertaintyResult
+from bikerider.uncertainty.headline import HeadlineUncertainty, Sigma
 
 
-def parse_speeds(text: str) -> np.ndarray:
-    """``START:STOP:N`` (inclusive, N points) to an array of speeds in m/s."""
+def parse_speeds(text: str, option: str = "--speeds") -> np.ndarray:
+    """``START:STOP:N`` (inclusive, N points) to an array of speeds in m/s (``option`` names it in errors)."""
     parts = text.split(":")
     try:
         if len(parts) != 3:
             raise ValueError
         start, stop, n = float(parts[0]), float(parts[1]), int(parts[2])
     except ValueError:
-        raise InputError("--speeds", text, "START:STOP:N, e.g. 0:10:101 (m/s, N points)") from None
-    if not (math.isfinite(start) and math.isfinite(stop)) or n < 1 or n > 1_000_000 or start < 0 or stop < start:
-        raise InputError("--speeds", text, "0 <= START <= STOP (finite, m/s) and 1 <= N <= 1000000")
+        raise InputError(option, text, "START:STOP:N, e.g. 0:10:101 (m/s, N points)") from None
+    if not (0 <= start <= stop < SPEED_OF_LIGHT) or not 1 <= n <= 1_000_000:
+        raise InputError(
+            option, text, "0 <= START <= STOP < 2.998e8 (m/s, below the speed of light) and 1 <= N <= 1000000"
+        )
     return np.linspace(start, stop, n)
 
 
@@ -51,13 +57,48 @@ def _matrix_text(name: str, m: np.ndarray) -> list[str]:
     return [f"  {name:3s} = [[{m[0, 0]:12.6f} {m[0, 1]:12.6f}]", f"         [{m[1, 0]:12.6f} {m[1, 1]:12.6f}]]"]
 
 
+def reported_sigmas(first_order: UncertaintyResult, headline: HeadlineUncertainty) -> dict[str, float | None]:
+    """The sigma of each benchmark parameter a report shows: first order where it holds (exact for
+    the parameters that are inputs, free of sampling noise), Monte Carlo where it does not."""
+    out = {}
+    for name, sigma in first_order.benchmark.items():
+        sampled = headline.sigmas.get(name)
+        out[name] = sampled.monte_carlo if sampled is not None and not sampled.first_order_holds else sigma
+    return {k: v for k, v in out.items() if v is not None}
+
+
+def uncertainty_json(first_order: UncertaintyResult, headline: HeadlineUncertainty) -> dict[str, Any]:
+    """The ``uncertainty`` object of ``--json``: the sigmas reported (Monte Carlo for the speeds),
+    first order beside them, the Monte Carlo draw, and the eigenvalues' first-order sigmas."""
+    sampled = headline.speeds
+    out: dict[str, Any] = {
+        "method": (
+            f"speeds: Monte Carlo ({headline.samples} samples, seed {headline.seed}) with first order beside; "
+            "benchmark values: first order where it holds, else Monte Carlo; eigenvalues: first order"
+            if headline.samples
+            else "first-order propagation of the uncertainties stated in the input files"
+        ),
+        "benchmark": {**first_order.benchmark, **reported_sigmas(first_order, headline)},
+        "speeds": {key: sampled[key].headline if key in sampled else None for key in first_order.speeds},
+        "first_order": {"benchmark": first_order.benchmark, "speeds": first_order.speeds},
+        "monte_carlo": headline.as_dict() if headline.samples else None,
+        "eigenvalues": first_order.eigenvalues.as_list() if first_order.eigenvalues is not None else [],
+    }
+    return out
+
+
 def model_text(
     parameters: BenchmarkParameters,
     model: WhippleModel,
     eig: ModalEigenvalues,
-    speed_sigmas: dict[str, float | None] | None = None,
+    speed_sigmas: Mapping[str, Sigma | float | None] | None = None,
+    samples: int = 0,
 ) -> str:
-    """Readable text: parameters (with sigmas), matrices, critical speeds, eigenvalue table."""
+    """Readable text: parameters (with sigmas), matrices, critical speeds, eigenvalue table.
+
+    ``speed_sigmas`` holds, for ``weave`` and ``capsize``, a first-order sigma or a
+    :class:`~bikerider.uncertainty.headline.Sigma` (Monte Carlo from ``samples`` draws, with first
+    order beside it)."""
     lines = ["Benchmark parameters (Meijaard et al. 2007, Table 1 names; SI units)"]
     for name in BENCHMARK_NAMES:
         value, sigma = parameters.values[name], parameters.sigmas.get(name, 0.0)
@@ -70,8 +111,8 @@ def model_text(
     speeds = model.critical_speeds()
     lines.append("")
     sig = speed_sigmas or {}
-    lines.append(f"Weave speed   {_speed(speeds.weave, sig.get('weave'))}")
-    lines.append(f"Capsize speed {_speed(speeds.capsize, sig.get('capsize'))}")
+    lines.append(f"Weave speed   {_speed(speeds.weave, sig.get('weave'), samples)}")
+    lines.append(f"Capsize speed {_speed(speeds.capsize, sig.get('capsize'), samples)}")
     if speeds.stable_intervals:
         shown = [
             f"from {lo:.4f} to {hi:.4f} m/s" if math.isfinite(hi) else f"above {lo:.4f} m/s"
@@ -94,7 +135,28 @@ def model_text(
     return "\n".join(lines)
 
 
-def _speed(v: float | None, sigma: float | None = None) -> str:
+def _speed(v: float | None, sigma: Sigma | float | None = None, samples: int = 0) -> str:
     if v is None:
         return "none at positive speed"
-    return f"{v:.4f} +/- {sigma:.2g} m/s (first order)" if sigma else f"{v:.4f} m/s"
+    if isinstance(sigma, Sigma):
+        if sigma.monte_carlo is None:
+            return _speed(v, sigma.first_order)
+        if sigma.monte_carlo == 0 and not sigma.first_order:
+            return f"{v:.4f} m/s"
+        if sigma.first_order is None:
+            fo = "first order: not defined here"
+        else:
+            fo = f"first order +/- {_digits(sigma.first_order)}" + (
+                "" if sigma.first_order_holds else ", which does not hold"
+            )
+        low, high = sigma.interval or (math.nan, math.nan)
+        return (
+            f"{v:.4f} +/- {_digits(sigma.monte_carlo)} m/s (Monte Carlo, {samples} samples: 68 % within "
+            f"{low:.2f}-{high:.2f}; {fo})"
+        )
+    return f"{v:.4f} +/- {_digits(sigma)} m/s (first order)" if sigma else f"{v:.4f} m/s"
+
+
+def _digits(x: float) -> str:
+    """Two significant digits, trailing zeros kept: 0.60, 1.5, 23, 2.6e+02."""
+    return format(x, "#.2g").rstrip(".")

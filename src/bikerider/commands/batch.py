@@ -14,6 +14,7 @@ import argparse
 import csv
 import io
 import math
+import os
 import sys
 import time
 from dataclasses import dataclass, field
@@ -23,6 +24,7 @@ from bikerider import notes
 from bikerider.errors import BikeriderError, InputError
 from bikerider.generated.manifest import BENCHMARK_NAMES
 from bikerider.io.atomic import atomic_write_text
+from bikerider.io.output_guard import add_inputs, file_output, refuse_inputs
 
 PROGRESS_AFTER = 1.0
 """Seconds after which progress lines appear on stderr."""
@@ -222,15 +224,17 @@ def run(args: argparse.Namespace) -> int:
             print(f"batch: [{i}/{n}] {name}", file=sys.stderr, flush=True)
 
     targets: list[Path] = []
-    if args.out:
+    if args.out is not None:
+        if not args.out or args.out.endswith(("/", os.sep)) or Path(args.out).name in ("", ".", ".."):
+            raise InputError("--out", args.out, "a prefix for PREFIX.csv and PREFIX.txt (a path that ends in a name)")
         prefix = Path(args.out)
         if not prefix.parent.is_dir():
             raise InputError("--out", args.out, f"a prefix in an existing folder ({prefix.parent} does not exist)")
         targets = [prefix.with_name(prefix.name + ".csv"), prefix.with_name(prefix.name + ".txt")]
-        inputs = {p.resolve() for folder in bicycle_folders(args.directory) for p in input_files(folder) if p}
         for target in targets:
-            if target.resolve() in inputs:
-                raise InputError("--out", args.out, f"a prefix that does not overwrite the input file {target}")
+            file_output("--out", str(target))
+        add_inputs(p for folder in bicycle_folders(args.directory) for p in input_files(folder) if p)
+        refuse_inputs("--out", args.out, targets)
     rows = run_batch(args.directory, progress)
     table = text_table(rows)
     if targets:

@@ -6,7 +6,7 @@ import argparse
 import json
 
 from bikerider import notes
-from bikerider.commands.estimate import add_figure_options
+from bikerider.commands.estimate import add_figure_options, add_uncertainty_options, check_figure_outputs
 from bikerider.errors import InputError
 from bikerider.io.shipped_files import BICYCLES, RIDERS
 
@@ -40,6 +40,7 @@ def add_parser(subparsers) -> None:
         "--plot", metavar="DIR", help="write the figures eigenvalues, side_view, mode_shapes and bode into DIR"
     )
     add_figure_options(p)
+    add_uncertainty_options(p)
     p.set_defaults(run=run)
 
 
@@ -74,11 +75,18 @@ def run(args: argparse.Namespace) -> int:
     # and the other commands start in 0.06 s instead of 0.4 s (python -X importtime).
     from bikerider import report
     from bikerider.benchmark import WhippleModel
+    from bikerider.uncertainty import benchmark_inputs, propagate
+    from bikerider.uncertainty.headline import headline_uncertainty
 
     speeds = report.parse_speeds(args.speeds)
+    check_figure_outputs(args)
     params, name = load_parameters(args)
     model = WhippleModel.from_parameters(params)
     eig = model.eigenvalues(speeds)
+    # The sigmas the file states, propagated as `estimate` propagates them (Monte Carlo first).
+    inputs = benchmark_inputs(params)
+    uncertainty = propagate(inputs, speeds=speeds)
+    headline = headline_uncertainty(inputs, uncertainty, samples=args.monte_carlo, seed=args.seed)
     if args.plot:
         from bikerider import plotting  # matplotlib: only when figures are asked for
 
@@ -95,9 +103,12 @@ def run(args: argparse.Namespace) -> int:
         )
     if args.json:
         out = report.model_json(params, model, eig)
+        out["uncertainty"] = report.uncertainty_json(uncertainty, headline)
         out["notes"] = notes.shown_with()
         print(json.dumps(out, indent=2, allow_nan=False))
     else:
         print(f"Benchmark parameters from {params.source or name}\n")
-        print(report.model_text(params, model, eig))
+        print(report.model_text(params, model, eig, headline.speeds, headline.samples))
+        for note in [*uncertainty.notes, *headline.notes]:
+            print(f"Note: {note}")
     return 0

@@ -17,8 +17,10 @@ def add_parser(subparsers) -> None:
         description=(
             "Run the method of Moore et al. (2009) on a bicycle and a seated rider and print the 25 "
             "benchmark parameters, the rider's mass, centre of mass and inertia, the matrices M, C1, "
-            "K0, K2, the weave and capsize speeds and the eigenvalues against speed. Without files: "
-            "the paper's 2008 Batavus Browser and 72 kg rider."
+            "K0, K2, the weave and capsize speeds and the eigenvalues against speed, with sigmas (Monte "
+            "Carlo for the speeds, first order beside). Without files: the paper's 2008 Batavus Browser and "
+            "72 kg rider; --bicycle alone: that bicycle without a rider; --rider alone: that rider on the "
+            "paper's bicycle."
         ),
     )
     p.add_argument(
@@ -32,7 +34,8 @@ def add_parser(subparsers) -> None:
         "--rider",
         metavar="FILE",
         help="rider: project TOML (the paper's rider model, seated on the bicycle) or a "
-        "BicycleParameters lumped rider <Rider><Bike>Benchmark.txt. Default: the paper's rider",
+        "BicycleParameters lumped rider <Rider><Bike>Benchmark.txt. Default: the paper's rider when no "
+        "--bicycle is given; with --bicycle alone, no rider (a note says so)",
     )
     rider.add_argument("--no-rider", action="store_true", help="the bicycle alone")
     p.add_argument(
@@ -46,6 +49,7 @@ def add_parser(subparsers) -> None:
         "--plot", metavar="DIR", help="write the figures eigenvalues, side_view, mode_shapes and bode into DIR"
     )
     add_figure_options(p)
+    add_uncertainty_options(p)
     p.set_defaults(run=run)
 
 
@@ -55,19 +59,76 @@ def add_figure_options(p) -> None:
     p.add_argument("--dpi", type=float, default=None, help="resolution of PNG figures (default 200)")
 
 
+def add_uncertainty_options(p) -> None:
+    """``--monte-carlo N`` and ``--seed S`` of the reported sigmas (shared with ``benchmark``)."""
+    from bikerider.commands import argument_types
+
+    p.add_argument(
+        "--monte-carlo",
+        metavar="N",
+        type=argument_types.report_samples,
+        default=10_000,
+        help="Monte Carlo samples behind the reported sigmas of the critical speeds (default 10000, "
+        "about 0.05 s; at most 1000000; 0: first order only; first order is always printed beside)",
+    )
+    p.add_argument(
+        "--seed",
+        metavar="S",
+        type=argument_types.seed,
+        default=0,
+        help="random seed of the Monte Carlo draw (default 0)",
+    )
+
+
+def check_figure_outputs(args: argparse.Namespace) -> None:
+    """Refuse a ``--plot`` folder that is a file, or whose figures would overwrite an input (also
+    ``benchmark``)."""
+    if args.plot is not None:
+        from bikerider.io.output_guard import folder_output, refuse_inputs
+        from bikerider.plotting import FIGURES, figure_paths
+
+        folder = folder_output("--plot", args.plot)
+        refuse_inputs("--plot", args.plot, figure_paths(folder, FIGURES, args.format))
+
+
+def files_to_use(args: argparse.Namespace) -> tuple[bool, list[str]]:
+    """Whether to seat a rider, and notes on what was taken for files not given.
+
+    Without files: the paper's bicycle and rider.  ``--bicycle`` alone: that bicycle alone (its
+    rider is the user's to give; the paper's rider is not seated on it silently).  ``--rider``
+    alone: that rider on the paper's bicycle.  Each choice made for the user is said in a note.
+    """
+    from bikerider.estimate import default_files
+
+    default_bicycle, default_rider = default_files()
+    if args.no_rider:
+        return False, []
+    if args.bicycle and not args.rider:
+        return False, [
+            f"no --rider given: the bicycle alone (--rider FILE seats a rider; the paper's is {default_rider})"
+        ]
+    if args.rider and not args.bicycle:
+        return True, [f"no --bicycle given: the rider seated on the paper's bicycle ({default_bicycle})"]
+    return True, []
+
+
 def run(args: argparse.Namespace) -> int:
     # The pipeline (NumPy, the generated code) is imported when the command runs: `bikerider --help`
     # and the other commands start in 0.06 s instead of 0.4 s (python -X importtime).
     import numpy as np
 
     from bikerider import report
-    from bikerider.estimate import estimate_from_files, estimate_uncertainty
+    from bikerider.estimate import estimate_from_files, estimate_headline_uncertainty, estimate_uncertainty
 
     speeds = report.parse_speeds(args.speeds)
-    result = estimate_from_files(args.bicycle, args.rider, with_rider=not args.no_rider)
+    check_figure_outputs(args)
+    with_rider, run_notes = files_to_use(args)
+    result = estimate_from_files(args.bicycle, args.rider, with_rider=with_rider)
     uncertainty = estimate_uncertainty(result, speeds)
-    sigmas = {k: v for k, v in uncertainty.benchmark.items() if v is not None}
+    headline = estimate_headline_uncertainty(result, uncertainty, samples=args.monte_carlo, seed=args.seed)
+    sigmas = report.reported_sigmas(uncertainty, headline)
     parameters = replace(result.parameters, sigmas={**result.parameters.sigmas, **sigmas})
+    run_notes += [*result.notes, *uncertainty.notes, *headline.notes]
     eig = result.model.eigenvalues(speeds)
     rm = result.rider_model
     bicycle_name = result.bicycle.name if result.bicycle is not None else str(args.bicycle)
@@ -80,6 +141,8 @@ def run(args: argparse.Namespace) -> int:
             if speeds.max() > speeds.min()
             else None
         )
+        if band is not None and not np.isfinite(band.sigma_real).any():
+            band = None  # no first-order sigmas (a straight limb): no band, and no band in the key
         plotting.write_figures(
             args.plot,
             result.model,
@@ -94,14 +157,9 @@ def run(args: argparse.Namespace) -> int:
         )
     if args.json:
         out = report.model_json(parameters, result.model, eig)
-        out["uncertainty"] = {
-            "benchmark": uncertainty.benchmark,
-            "speeds": uncertainty.speeds,
-            "eigenvalues": uncertainty.eigenvalues.as_list(),
-            "method": "first-order propagation of the uncertainties stated in the input files",
-        }
+        out["uncertainty"] = report.uncertainty_json(uncertainty, headline)
         out["rider"] = _rider_json(result)
-        out["notes"] = notes.shown_with(result.notes)
+        out["notes"] = notes.shown_with(run_notes)
         print(json.dumps(out, indent=2, allow_nan=False))
         return 0
     np.set_printoptions(precision=4, suppress=True)
@@ -119,9 +177,9 @@ def run(args: argparse.Namespace) -> int:
             shown = " ".join("      n/a" if x is None else f"{x:9.4f}" for x in row)
             print(f"{label} [{shown}] kg m^2")
     print()
-    print(report.model_text(parameters, result.model, eig, uncertainty.speeds))
+    print(report.model_text(parameters, result.model, eig, headline.speeds, headline.samples))
     print("  (first-order sigmas of these eigenvalues, with condition numbers: --json, uncertainty.eigenvalues)")
-    for note in notes.shown_with(result.notes):
+    for note in notes.shown_with(run_notes):
         print(f"Note: {note}")
     if args.plot:
         print(f"\nFigures written to {args.plot}/")

@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 import functools
 
+from bikerider.commands import argument_types
+
 
 def add_parser(subparsers) -> None:
     p = subparsers.add_parser(
@@ -75,7 +77,9 @@ def add_parser(subparsers) -> None:
         help="TOML with the known control: [control] constant gains k_phi, k_phid, k_delta, k_deltad, or "
         "named laws [control.<name>] whose gains may change with speed; acts where the data name none",
     )
-    p.add_argument("--speed", metavar="V", type=float, help="speed [m/s] of perturbation runs whose file gives none")
+    p.add_argument(
+        "--speed", metavar="V", type=argument_types.speed, help="speed [m/s] of perturbation runs whose file gives none"
+    )
     p.add_argument(
         "--groups",
         metavar="G1,G2",
@@ -88,7 +92,12 @@ def add_parser(subparsers) -> None:
         "passive_arms, rider_lean, tyre_slip, speed_sensor, steer_friction)",
     )
     p.add_argument("--json", action="store_true", help="print one JSON object instead of text")
-    p.add_argument("--report", metavar="DIR", help="write report.md and PNG figures into DIR")
+    p.add_argument(
+        "--report",
+        metavar="DIR",
+        help="write report.md and PNG figures into DIR (new, empty, or an earlier report's folder, which is "
+        "replaced whole)",
+    )
     p.set_defaults(run=run)
 
 
@@ -101,7 +110,11 @@ def run(args: argparse.Namespace) -> int:
     from bikerider import notes
     from bikerider.errors import InputError
     from bikerider.gap.report import summary_text
+    from bikerider.io.output_guard import ReportFolder, folder_output
 
+    report_folder = ReportFolder(folder_output("--report", args.report)) if args.report is not None else None
+    if report_folder is not None:
+        report_folder.check()  # before the work: never over an input, never over files no report wrote
     if not (math.isfinite(args.rider_rel_sigma) and 0 <= args.rider_rel_sigma < 1):
         raise InputError("--rider-rel-sigma", args.rider_rel_sigma, "a relative uncertainty in [0, 1)")
     if not args.data and not args.experiment:
@@ -124,11 +137,12 @@ def run(args: argparse.Namespace) -> int:
         args.sample_rate,
     )
     result = diagnosis.as_dict()
-    if args.report:
+    if report_folder is not None:
         from bikerider.io.gap_report import write_report
 
-        path = write_report(diagnosis, args.report, title=f"Sim-to-real gap: {args.model}")
-        result["report"] = str(path)
+        with report_folder as staging:
+            path = write_report(diagnosis, staging, title=f"Sim-to-real gap: {args.model}")
+        result["report"] = str(report_folder.final(path))
     if args.json:
         result["notes"] = notes.shown_with(result.get("notes", []))
         print(json.dumps(_plain(result, np), indent=2, allow_nan=False))

@@ -23,7 +23,7 @@ def add_parser(subparsers) -> None:
         "(columns time and rate; see docs/period.md) and combine the trials' periods.",
     )
     parser.add_argument("files", nargs="+", type=Path, metavar="FILE.csv", help="one trial per file")
-    parser.add_argument("--plot", type=Path, metavar="PNG", help="write a plot of data and fits")
+    parser.add_argument("--plot", metavar="PNG", help="write a plot of data and fits")
     parser.add_argument("--json", action="store_true", help="print the results as JSON")
     parser.add_argument("--drift", action="store_true", help="also fit a linear drift of the rate")
     parser.set_defaults(run=run)
@@ -32,8 +32,11 @@ def add_parser(subparsers) -> None:
 def run(args: argparse.Namespace) -> int:
     from bikerider.errors import FitError
     from bikerider.fitting.damped_oscillation import fit_damped_oscillation, period_from_trials
+    from bikerider.io.output_guard import file_output, refuse_inputs
     from bikerider.io.signal_csv import read_signal_csv
 
+    if args.plot is not None:
+        refuse_inputs("--plot", args.plot, [file_output("--plot", str(args.plot))])
     records, fits = [], []
     for path in args.files:
         time, rate = read_signal_csv(path)
@@ -44,8 +47,8 @@ def run(args: argparse.Namespace) -> int:
         records.append((path, time, rate))
         fits.append(fit)
     combined = period_from_trials(fits, names=[str(p) for p in args.files])
-    if args.plot:
-        _plot(args.plot, records, fits)
+    if args.plot is not None:
+        _plot(Path(args.plot), records, fits)
     if args.json:
         json.dump(
             {

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 
+from bikerider.commands import argument_types
 from bikerider.errors import InputError
 from bikerider.generated.manifest import BENCHMARK_NAMES
 from bikerider.quantity import DEG, Quantity
@@ -15,11 +16,14 @@ IFyy, ...) or a characteristic coefficient a0..a4 (with --speed).
 
 INPUT is any input name: Table 1 geometry (h_bb, lam_ht, ...), masses (mR, mBf, ...), centres of mass
 (xBf, zH, ...), pendulum measurements (k_t, T_Bf1..3, alpha_Bf1..3, T_Rxx, T_Fxx, T_Fyy, l_pF), rider
-measurements (l_ll, c_ch, mBr, lam_fl, f_to, ...), or an intermediate quantity (IFyy, xB, M_phiphi).
+measurements (l_ll, c_ch, mBr, lam_fl, f_to, ...), or an intermediate quantity (IFyy, xB, M_phiphi);
+or a key as the TOML files spell it (lam_ht_deg, compound_period, front_wheel.mass,
+rear_frame.inertia.periods.2; a key several inputs share is refused with the list).
 
 Default inputs: the paper's Batavus Browser and rider (bikerider/data/paper/*.toml) with the paper's
 stated accuracies (Tables 1-6) and, for the rider, whose accuracy the paper does not state, assumed
-sigmas (0.01 m, 1 deg, 0.1 kg; --no-rider-sigmas makes them exact).
+sigmas (0.01 m, 1 deg, 0.1 kg; --no-rider-sigmas makes them exact).  --bicycle alone, or --no-rider:
+the bicycle without a rider; --rider alone: that rider on the paper's bicycle (a note says so).
 """
 
 
@@ -45,21 +49,35 @@ def add_parser(subparsers) -> None:
         metavar="FILE",
         help="name = value+/-sigma file of chain inputs (e.g. a BicycleParameters Benchmark.txt)",
     )
-    src.add_argument("--bicycle", metavar="TOML", help="bicycle TOML file (with --rider)")
-    p.add_argument("--rider", metavar="TOML", help="rider TOML file (with --bicycle)")
+    src.add_argument("--bicycle", metavar="TOML", help="bicycle TOML file (default: the paper's)")
+    rider = p.add_mutually_exclusive_group()
+    rider.add_argument(
+        "--rider", metavar="TOML", help="rider TOML file (default: the paper's, unless --bicycle is given)"
+    )
+    rider.add_argument("--no-rider", action="store_true", help="the bicycle alone")
     p.add_argument(
         "--no-rider-sigmas", action="store_true", help="do not assume sigmas for rider measurements given without one"
     )
-    p.add_argument("--speed", metavar="V", type=float, help="speed [m/s] for the characteristic coefficients a0..a4")
-    p.add_argument("--top", metavar="N", type=int, default=None, help="show only the N largest contributions")
+    p.add_argument(
+        "--speed", metavar="V", type=argument_types.speed, help="speed [m/s] for the characteristic coefficients a0..a4"
+    )
+    p.add_argument(
+        "--top",
+        metavar="N",
+        type=argument_types.whole_number(1, 10**6),
+        default=None,
+        help="show only the N largest contributions",
+    )
     p.add_argument(
         "--monte-carlo",
         metavar="N",
-        type=int,
+        type=argument_types.whole_number(2, argument_types.MAX_MONTE_CARLO, "a number of samples"),
         default=None,
-        help="also draw N input sets and compare the first-order sigma with the Monte Carlo one",
+        help="also draw N input sets (2 to 10,000,000) and compare the first-order sigma with the Monte Carlo one",
     )
-    p.add_argument("--seed", metavar="S", type=int, default=0, help="random seed for --monte-carlo (default 0)")
+    p.add_argument(
+        "--seed", metavar="S", type=argument_types.seed, default=0, help="random seed for --monte-carlo (default 0)"
+    )
     p.set_defaults(run=run)
 
 
@@ -69,26 +87,43 @@ def _inputs(args: argparse.Namespace):
     from bikerider.io import chain_inputs
     from bikerider.uncertainty import inputs as inp
 
-    if args.rider is not None and args.bicycle is None:
-        raise InputError("--rider", args.rider, "a --bicycle file to go with it")
+    if args.inputs is not None and (args.rider is not None or args.no_rider):
+        raise InputError(
+            "--rider" if args.rider is not None else "--no-rider",
+            args.rider if args.rider is not None else True,
+            "no --inputs with it (--inputs gives every chain input, the rider's included)",
+        )
     if args.inputs is not None:
         quantities = _file_inputs(args.inputs)
         sources = {n: f"stated: {args.inputs}" if q.sigma else "exact (no sigma given)" for n, q in quantities.items()}
         return inp.InputSet(quantities, sources, str(args.inputs))
-    if args.bicycle is not None:
-        if args.rider is None:
-            raise InputError("--bicycle", args.bicycle, "a --rider file to go with it")
-        from bikerider.estimate import estimate
-        from bikerider.io.toml_input import load_bicycle_toml, load_rider_toml
+    if args.bicycle is None and args.rider is None and not args.no_rider:
+        return chain_inputs.paper_inputs(assume_rider_sigmas=not args.no_rider_sigmas)
+    # The same checks as `estimate` (chain_inputs.raw_inputs_from_toml seats the rider: reach, knee, elbow).
+    bicycle, rider = chain_inputs.paper_files()
+    bicycle = args.bicycle if args.bicycle is not None else bicycle
+    if args.no_rider or (args.bicycle is not None and args.rider is None):
+        quantities = chain_inputs.raw_inputs_from_toml(bicycle, None)
+        sources = {n: f"stated: {bicycle}" if q.sigma else "exact (no sigma given)" for n, q in quantities.items()}
+        return inp.InputSet(quantities, sources, f"{bicycle} (no rider)")
+    rider = args.rider if args.rider is not None else rider
+    quantities = chain_inputs.raw_inputs_from_toml(bicycle, rider)
+    sources = {n: f"stated: {bicycle}" if q.sigma else "exact (no sigma given)" for n, q in quantities.items()}
+    if not args.no_rider_sigmas:
+        quantities = inp.with_assumed_rider_sigmas(quantities, sources)
+    return inp.InputSet(quantities, sources, f"{bicycle} + {rider}")
 
-        bicycle, rider = load_bicycle_toml(args.bicycle), load_rider_toml(args.rider)
-        estimate(bicycle, rider)  # the checks `estimate` makes: the rider seated (reach, knee, elbow), the values
-        quantities = inp.chain_raw_inputs(bicycle, rider)
-        sources = {n: f"stated: {args.bicycle}" if q.sigma else "exact (no sigma given)" for n, q in quantities.items()}
-        if not args.no_rider_sigmas:
-            quantities = inp.with_assumed_rider_sigmas(quantities, sources)
-        return inp.InputSet(quantities, sources, f"{args.bicycle} + {args.rider}")
-    return chain_inputs.paper_inputs(assume_rider_sigmas=not args.no_rider_sigmas)
+
+def _notes(args: argparse.Namespace) -> list[str]:
+    """What was taken for the files not given (as ``estimate`` says it)."""
+    from bikerider.io.chain_inputs import paper_files
+
+    bicycle, rider = paper_files()
+    if args.bicycle is not None and args.rider is None and not args.no_rider:
+        return [f"no --rider given: the bicycle alone (--rider FILE seats a rider; the paper's is {rider})"]
+    if args.rider is not None and args.bicycle is None:
+        return [f"no --bicycle given: the rider seated on the paper's bicycle ({bicycle})"]
+    return []
 
 
 def _file_inputs(path: str) -> dict[str, Quantity]:
@@ -129,7 +164,7 @@ def _file_inputs(path: str) -> dict[str, Quantity]:
 def run(args: argparse.Namespace) -> int:
     # The chain (NumPy, the generated code) is imported when the command runs (see _inputs).
     from bikerider.uncertainty import names, text
-    from bikerider.uncertainty.chain import Chain, prepare_values
+    from bikerider.uncertainty.chain import Chain, known_names, prepare_values
     from bikerider.uncertainty.montecarlo import compare, monte_carlo
     from bikerider.uncertainty.propagation import propagate
     from bikerider.uncertainty.stages import COEFFICIENTS
@@ -150,8 +185,11 @@ def run(args: argparse.Namespace) -> int:
     known = set(result.output_names) | set(result.input_names)
     output = names.check_name(args.output, known, "OUTPUT")
     print(f"Inputs: {input_set.name}")
-    if args.wrt:
-        expr = sensitivity_expression(output, args.wrt, quantities)
+    notes = _notes(args)
+    if args.wrt is not None:
+        wrt, note = names.input_name(args.wrt, set(quantities), known_names())
+        notes += [note] if note else []
+        expr = sensitivity_expression(output, wrt, quantities)
         values = prepare_values(quantities)
         point = {k: float(v) for k, v in Chain(values).evaluate(values).items()}
         value = expr.evaluate(point)
@@ -161,6 +199,8 @@ def run(args: argparse.Namespace) -> int:
         x = point.get(expr.wrt)
         if y and x is not None and y == y:
             print(f"elasticity (x/y) dy/dx: {x / y * value:.4g}")
+        if args.wrt.endswith("_deg") and "_deg" not in expr.wrt:
+            print(f"per degree of {args.wrt}: {value * DEG:.6g} {names.unit(output)}/deg")
     else:
         if output in result.input_names:
             raise InputError("OUTPUT", args.output, "a computed quantity, not one of the inputs")
@@ -169,4 +209,6 @@ def run(args: argparse.Namespace) -> int:
         mc = monte_carlo(quantities, args.monte_carlo, outputs=[output], seed=args.seed)
         print(f"\nMonte Carlo, {args.monte_carlo} input sets (seed {args.seed}):")
         print(text.table(text.COMPARISON_HEADER, text.comparison_rows(compare(result, mc, quantities))))
+    for note in notes:
+        print(f"Note: {note}")
     return 0

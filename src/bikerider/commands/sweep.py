@@ -68,12 +68,29 @@ def add_parser(subparsers) -> None:
     p.set_defaults(run=run)
 
 
+def check_outputs(args: argparse.Namespace) -> None:
+    """Refuse ``--out``, ``--plot`` and ``--store`` paths that would overwrite or remove an input."""
+    from bikerider.io.output_guard import file_output, folder_output, refuse_inputs, refuse_inputs_within
+
+    if args.out is not None:
+        refuse_inputs("--out", args.out, [file_output("--out", args.out)])
+    if args.plot is not None:
+        # The figures' names depend on the run (sweep, stable_fraction, sensitivity, map_X_Y): any file
+        # of the figure format in the folder may be written.
+        folder = folder_output("--plot", args.plot)
+        refuse_inputs("--plot", args.plot, folder.glob(f"*.{args.format}") if folder.is_dir() else ())
+    if args.store is not None:
+        folder_output("--store", args.store)
+        refuse_inputs_within("--store", args.store)
+
+
 def run(args: argparse.Namespace) -> int:
     import numpy as np  # heavy modules: imported when the command runs (cli.py)
 
     from bikerider.benchmark.sweep import sweep
     from bikerider.report import parse_speeds
 
+    check_outputs(args)
     if is_design_run(args):
         return run_design(args)
     base, name = load_parameters(args)
@@ -92,6 +109,7 @@ def run(args: argparse.Namespace) -> int:
         from bikerider import plotting  # matplotlib: only when figures are asked for
 
         what = " and ".join(result.names)
+        Path(args.plot).mkdir(parents=True, exist_ok=True)  # as estimate's --plot: created when missing
         plotting.save_figure(
             plotting.sweep_figure(result, f"{name}: {what}"),
             Path(args.plot) / f"sweep.{args.format}",

@@ -16,6 +16,7 @@ import math
 from pathlib import Path
 
 from bikerider import notes
+from bikerider.commands import argument_types
 from bikerider.commands.benchmark import load_parameters
 from bikerider.commands.sweep_options import cell, parse_vary
 from bikerider.errors import InputError
@@ -47,7 +48,7 @@ def add_design_options(p) -> None:
         metavar="N",
         help="N random designs, every base value with an uncertainty drawn normally (no --vary)",
     )
-    g.add_argument("--seed", type=int, default=0, help="seed of the random designs (default 0)")
+    g.add_argument("--seed", type=argument_types.seed, default=0, help="seed of the random designs (default 0)")
     g.add_argument(
         "--store",
         metavar="DIR",
@@ -68,7 +69,12 @@ def add_design_options(p) -> None:
         help="fused C kernels (compiled at first use) or the NumPy reference (default: compiled where a "
         "C compiler is found)",
     )
-    g.add_argument("--threads", type=int, metavar="N", help="threads of the compiled engine (default: every core)")
+    g.add_argument(
+        "--threads",
+        type=argument_types.whole_number(1, 4096),
+        metavar="N",
+        help="threads of the compiled engine (default: every core)",
+    )
     g.add_argument(
         "--dask",
         nargs="?",
@@ -77,11 +83,14 @@ def add_design_options(p) -> None:
         help="run on Dask: a LocalCluster on this machine, or the scheduler at ADDRESS (needs bikerider[distributed])",
     )
     g.add_argument(
-        "--workers", type=int, metavar="N", help="with --dask: workers of the local cluster (default: cores)"
+        "--workers",
+        type=argument_types.whole_number(1, 4096),
+        metavar="N",
+        help="with --dask: workers of the local cluster (default: cores)",
     )
     g.add_argument(
         "--target-weave-speed",
-        type=float,
+        type=argument_types.speed,
         metavar="V",
         help="also report the self-stable design whose weave speed is closest to V m/s",
     )
@@ -182,7 +191,7 @@ def run_design(args: argparse.Namespace) -> int:
     base, name = _base(args)
     space = _space(args, base, name)
     speeds = parse_speeds(args.speeds) if args.speeds else np.empty(0)
-    weave_speeds = parse_speeds(args.weave_speeds) if args.weave_speeds else np.empty(0)
+    weave_speeds = parse_speeds(args.weave_speeds, "--weave-speeds") if args.weave_speeds else np.empty(0)
     if args.rows == "speeds":
         raise InputError(
             "--rows",

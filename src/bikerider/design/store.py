@@ -140,6 +140,14 @@ class DesignStore:
                     )
             return cls(group, spec, path)
         if path.exists() and restart:
+            # --restart removes the folder: only a design store (or nothing at all) may go.
+            if not path.is_dir() or (any(path.iterdir()) and not (path / "zarr.json").exists()):
+                raise InputError(
+                    "--store",
+                    str(path),
+                    "with --restart, a design store or an empty folder (--restart removes the folder, "
+                    "and this one is not a bikerider design store)",
+                )
             shutil.rmtree(path)
         group = zarr.open_group(str(path), mode="w")
         store = cls(group, spec, path)

@@ -5,6 +5,9 @@ Every output bikerider writes (figures, tables) goes through :func:`atomic_write
 (so the final rename stays on one file system), flushed to disk, and renamed over the target with
 :func:`os.replace`.  If anything fails before the rename, the temporary file is removed and the
 target is left as it was.
+
+Before anything is written, :func:`bikerider.io.output_guard.check_output` refuses a target that is
+one of the current run's inputs: no command writes over what it reads.
 """
 
 from __future__ import annotations
@@ -14,6 +17,8 @@ import os
 import tempfile
 from pathlib import Path
 
+from bikerider.io.output_guard import check_output
+
 
 def atomic_write_bytes(path: str | Path, data: bytes) -> Path:
     """Write ``data`` to ``path`` atomically; return the path.
@@ -22,9 +27,15 @@ def atomic_write_bytes(path: str | Path, data: bytes) -> Path:
     ------
     OSError
         The folder does not exist or cannot be written (the target is then unchanged).
+    InputError
+        ``path`` is one of the current run's inputs (:mod:`bikerider.io.output_guard`).
     """
     path = Path(path)
-    handle, temporary = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    check_output(path)
+    try:
+        handle, temporary = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    except OSError as exc:  # name the file asked for, not the temporary one
+        raise OSError(exc.errno, exc.strerror, str(path)) from None
     try:
         with os.fdopen(handle, "wb") as stream:
             stream.write(data)

@@ -26,8 +26,9 @@ def paper_files() -> tuple[Path, Path]:
     return Path(str(base / "browser_bicycle.toml")), Path(str(base / "jason_rider.toml"))
 
 
-def raw_inputs_from_toml(bicycle: str | Path, rider: str | Path) -> dict[str, Quantity]:
-    """Every measurement of a bicycle and a rider TOML file as a chain input, unreduced.
+def raw_inputs_from_toml(bicycle: str | Path, rider: str | Path | None) -> dict[str, Quantity]:
+    """Every measurement of a bicycle and a rider TOML file as a chain input, unreduced (``rider``
+    None: the bicycle alone, a rider of no mass; :data:`bikerider.uncertainty.inputs.NO_RIDER`).
 
     The rider is seated on the bicycle first (:func:`bikerider.rider.model.seat_rider`), so a
     rider who cannot reach, a knee that cannot close or a chain stay too short is refused here as
@@ -39,7 +40,10 @@ def raw_inputs_from_toml(bicycle: str | Path, rider: str | Path) -> dict[str, Qu
         An unreadable file, a missing, malformed or impossible value (named with its table and
         key), a rider who cannot be seated.
     """
-    bodies, measurements = load_bicycle_toml(bicycle), load_rider_toml(rider)
+    bodies = load_bicycle_toml(bicycle)
+    if rider is None:
+        return chain_raw_inputs(bodies, None)
+    measurements = load_rider_toml(rider)
     seat_rider(bodies, measurements)
     return chain_raw_inputs(bodies, measurements)
 

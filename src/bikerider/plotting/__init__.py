@@ -39,6 +39,11 @@ FIGURES = ("eigenvalues", "side_view", "mode_shapes", "bode")
 """The figures :func:`write_figures` can write, by file stem."""
 
 
+def figure_paths(directory: str | Path, figures=FIGURES, fmt: str = "png") -> list[Path]:
+    """The files :func:`write_figures` writes for ``figures`` into ``directory`` (for output checks)."""
+    return [Path(directory) / f"{name}.{fmt}" for name in figures]
+
+
 def write_figures(
     directory: str | Path,
     model,
@@ -99,7 +104,8 @@ def write_figures(
         else:
             force = None if parameters is None else LateralForce(parameters.values["xB"], parameters.values["zB"])
             fig = bode_figure(model, _bode_speeds(model, speeds), lateral_force=force, title=title)
-        written.append(save_figure(fig, out / f"{name}.{fmt}", fmt, dpi))
+        (path,) = figure_paths(out, (name,), fmt)
+        written.append(save_figure(fig, path, fmt, dpi))
     return written
 
 
@@ -127,6 +133,7 @@ __all__ = [
     "bode_figure",
     "eigenvalue_comparison_figure",
     "eigenvalue_figure",
+    "figure_paths",
     "mode_shape_figure",
     "plot_bode",
     "plot_eigenvalues",

@@ -2,7 +2,10 @@
 
 Wraps ``bikerider.generated.rider_model`` (derived in ``derive/rider_model.py``).  Before any
 generated function runs, the closures' preconditions are checked so that an impossible rider gets
-a message naming the measurement and the distance needed, never a NaN.
+a message naming the measurement and the distance needed, never a NaN.  Those are the only
+refusals: the knee and elbow bend naturally for every direction of the limb (hands behind the
+shoulders included; derive/rider_model.py explains the branch), so a rider is refused only when a
+limb cannot close at all.
 """
 
 from __future__ import annotations
@@ -150,24 +153,12 @@ def check_closures(args: dict[str, float], bicycle_source: str, rider_source: st
             f"at most {arm_span:.3f} m, the shoulder to grip distance (the elbow cannot close)",
             rider_source,
         )
-    points = gen.grid_points(**{**{k: args[k] for k in _GRID}, **straight_limb_lengths(args)})
-    # Preconditions of the branch rule (derive/rider_model.py): hip above the pedal axis,
-    # shoulder behind the hand.
-    hip, foot, shoulder, hand = points[12], points[4], points[20], points[18]
-    if not hip[2] < foot[2]:
-        raise InputError(
-            "l_sp",
-            args["l_sp"],
-            "a seat above the pedal axis (the hip must be higher than the bottom bracket)",
-            bicycle_source,
-        )
-    if not shoulder[0] < hand[0]:
-        raise InputError(
-            "lam_fl_deg",
-            math.degrees(args["lam_fl"]),
-            "a forward lean that keeps the shoulders behind the hands",
-            rider_source,
-        )
+
+
+def straight_limbs(args: dict[str, float]) -> list[str]:
+    """``"leg"`` and/or ``"arm"``: the limbs straight within :data:`STRAIGHT_LIMB_TOLERANCE`."""
+    lengths = straight_limb_lengths(args)
+    return [limb for limb, (distal, _) in zip(("leg", "arm"), _LIMB_LENGTHS) if distal in lengths]
 
 
 def straight_limb_lengths(args: dict[str, float]) -> dict[str, float]:

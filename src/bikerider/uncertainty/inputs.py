@@ -49,12 +49,21 @@ class InputSet:
     name: str = "inputs"
 
 
-def chain_raw_inputs(bicycle, rider) -> dict[str, Quantity]:
+NO_RIDER: dict[str, Quantity] = {
+    name: Quantity(0.0) for name in ("mBr_sum", "xBr", "zBr", "IBrxx", "IBryy", "IBrzz", "IBrxz")
+}
+"""The rear body's rider nodes for a bicycle alone: a rider of no mass (the rear body is the frame)."""
+
+
+def chain_raw_inputs(bicycle, rider=None) -> dict[str, Quantity]:
     """Chain inputs of a bicycle (:class:`~bikerider.bicycle.BicycleBodies`) and a rider
-    (:class:`~bikerider.rider.RiderMeasurements`), with every reduced value replaced by the raw
-    measurements it came from (``BicycleBodies.raw_inputs``)."""
+    (:class:`~bikerider.rider.RiderMeasurements`, or None for the bicycle alone), with every
+    reduced value replaced by the raw measurements it came from (``BicycleBodies.raw_inputs``)."""
     out = {name: q for name, q in bicycle.values.items() if name not in bicycle.reduced}
     out.update(bicycle.raw_inputs)
+    if rider is None:
+        out.update(NO_RIDER)
+        return out
     out.update(rider.values)
     out.update({name: Quantity(value) for name, value in rider.fractions.items()})
     return out

@@ -103,9 +103,10 @@ def sample_outputs(
     for start in range(0, n, chunk):
         size = min(chunk, n - start)
         batch = dict(values)
-        for name in varied:
-            batch[name] = values[name] + quantities[name].sigma * rng.standard_normal(size)
-        nodes = chain.evaluate(batch)
+        with np.errstate(over="ignore", invalid="ignore"):  # draws beyond floating point: no value
+            for name in varied:
+                batch[name] = values[name] + quantities[name].sigma * rng.standard_normal(size)
+            nodes = chain.evaluate(batch)
         for name in outputs:
             out[name][start : start + size] = np.broadcast_to(nodes[name], (size,))
         for label, node in _FAILURES:

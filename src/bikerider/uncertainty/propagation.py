@@ -266,18 +266,30 @@ def propagate(
     sig = result.sigmas
     out_values: dict[str, float | None] = {}
     sigmas: dict[str, float | None] = {}
+    overflowed = []
     for name in output_names:
         y = float(nodes[name])
-        sigma = result.sigma(name, skip_nonfinite=False)
+        with np.errstate(over="ignore", invalid="ignore"):  # a sigma near 1e308: inf, said below
+            sigma = result.sigma(name, skip_nonfinite=False)
         out_values[name] = y if math.isfinite(y) else None
         sigmas[name] = sigma if math.isfinite(y) and math.isfinite(sigma) else None
+        if math.isfinite(y) and math.isinf(sigma):
+            overflowed.append(name)
     notes = []
+    if overflowed:
+        notes.append(
+            f"the first-order sigmas of {', '.join(overflowed[:6])}{', ...' if len(overflowed) > 6 else ''} "
+            "are beyond floating point: an input's stated uncertainty is too large"
+        )
     for key, node in SPEED_NODES.items():
         if out_values.get(node) is None:
             notes.append(f"no {key} speed at positive speed: its sigma is not defined")
     eig = None
     if speeds is not None:
-        eig = _eigen_uncertainty(nodes, grads, input_names, sig, speeds)
+        if all(math.isfinite(float(nodes[k])) for k in ENTRIES):
+            eig = _eigen_uncertainty(nodes, grads, input_names, sig, speeds)
+        else:
+            notes.append("the matrix entries are not all finite: the eigenvalues have no sigmas")
     return UncertaintyResult(
         input_names, output_names, quantities, dict(sources or {}), out_values, sigmas, J, eig, notes
     )
@@ -294,7 +306,8 @@ def _eigen_uncertainty(nodes, grads, input_names, sig, speeds) -> EigenvalueUnce
     sens = eigen_sensitivity(entries, float(nodes["g"]), speeds)
     # d lambda / d inputs = d lambda / d[entries, g] . d[entries, g] / d inputs
     de = np.array([np.broadcast_to(grads[k], (len(input_names),)) for k in ENTRIES + ("g",)])
-    dlam = sens.derivatives @ de  # (n, 4, n_in)
-    sigma_real = np.sqrt(np.sum((dlam.real * sig) ** 2, axis=-1))
-    sigma_imag = np.sqrt(np.sum((dlam.imag * sig) ** 2, axis=-1))
+    with np.errstate(over="ignore", invalid="ignore"):  # inf where an input's sigma is too large
+        dlam = sens.derivatives @ de  # (n, 4, n_in)
+        sigma_real = np.sqrt(np.sum((dlam.real * sig) ** 2, axis=-1))
+        sigma_imag = np.sqrt(np.sum((dlam.imag * sig) ** 2, axis=-1))
     return EigenvalueUncertainty(sens, sigma_real, sigma_imag)
