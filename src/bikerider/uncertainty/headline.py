@@ -46,7 +46,7 @@ CENTRAL = 0.6827
 DEFAULT_SEED = 0
 DISAGREEMENT = 0.5
 """First order is said not to hold for an output whose first-order sigma differs from the Monte
-Carlo one by more than this fraction of it (a factor of 1.5 either way)."""
+Carlo one by more than this fraction of it (it holds from half to one and a half times it)."""
 
 
 @dataclass(frozen=True)
