@@ -771,15 +771,15 @@ class Diagnosis:
             if best is not None and (chosen is None or best.effects != chosen.effects):
                 ok, checks = self.plausibility(self.fit_of(best.effects))
                 if not ok:
-                    setattr(
-                        self,
-                        key,
-                        {
-                            "effects": list(best.effects),
-                            "heldout_error": best.error_after,
-                            "why": _implausible_reasons(checks),
-                        },
-                    )
+                    entry = {
+                        "effects": list(best.effects),
+                        "heldout_error": best.error_after,
+                        "why": _implausible_reasons(checks),
+                    }
+                    ranked = next((r for r in self.ranking if (r["effect"],) == best.effects), None)
+                    if ranked is not None:  # where the ranking (ties to the simpler) puts it
+                        entry["rank"], entry["tied_with"] = ranked["rank"], list(ranked["tied_with"])
+                    setattr(self, key, entry)
         if self.best_single_implausible == self.best_implausible:
             self.best_single_implausible = None
         # ... and select nothing that an implausible fit of no more fitted parameters beats significantly

@@ -153,14 +153,16 @@ def summary_text(result: dict) -> str:
     single = result.get("best_single_implausible")
     if single:
         lines.append(
-            f"The best single candidate, {'+'.join(single['effects'])}, needs implausible values: "
+            f"The lowest held-out error of a single candidate ({single['heldout_error']:.3g}) is that of "
+            f"{'+'.join(single['effects'])}{_rank_phrase(single)}, which needs implausible values: "
             + "; ".join(single["why"])
             + "."
         )
     bad = result.get("best_implausible")
     if bad:
         lines.append(
-            f"The best held-out fit, {'+'.join(bad['effects'])}, needs implausible values: "
+            f"The lowest held-out error of any fit, single or pair ({bad['heldout_error']:.3g}), is that of "
+            f"{'+'.join(bad['effects'])}{_rank_phrase(bad)}, which needs implausible values: "
             + "; ".join(bad["why"])
             + ". It is not selected"
             + (
@@ -759,3 +761,16 @@ def figures(diagnosis, result: dict) -> list[tuple[str, str, object]]:
         ("time_response.png", "Time response", plot_time_response(diagnosis)),
     ]
     return [(name, caption, fig) for name, caption, fig in out if fig is not None]
+
+
+def _rank_phrase(entry: dict) -> str:
+    """`` (ranked 2nd: tied with steer_friction, which has fewer fitted values)`` for a ranked single."""
+    if "rank" not in entry:
+        return ""
+    ties = entry.get("tied_with") or []
+    if entry["rank"] == 1 or not ties:
+        return f" (ranked {entry['rank']})"
+    return (
+        f" (ranked {entry['rank']}: tied with {', '.join(ties)}; within a tie the candidate with fewer fitted "
+        "values ranks first)"
+    )
