@@ -241,6 +241,22 @@ def test_3_and_6_nothing_implausible_is_selected(example):
         assert by_effect[effect]["plausible"]
 
 
+def test_3_the_text_says_what_the_ranking_is(example):
+    # before: "The best single candidate, parameters, needs implausible values" while steer_friction ranked
+    # first (tied, and first as the simpler): the text now names the measure and the candidate's rank
+    from bikerider.gap.report import summary_text
+
+    text = summary_text(example)
+    single = example["best_single_implausible"]
+    first = example["ranking"][0]["effect"]
+    assert single["effects"] != [first] and single["rank"] > 1 and first in single["tied_with"]
+    assert (
+        f"The lowest held-out error of a single candidate ({single['heldout_error']:.3g}) is that of "
+        f"{single['effects'][0]} (ranked {single['rank']}: tied with {first}" in text
+    )
+    assert "The best single candidate" not in text
+
+
 def test_6_fits_at_a_search_bound_are_implausible(example):
     # before: c_alpha = 200 [2, 200] and sigma_t = 0.005 at the search bounds were flagged plausible
     tyre = next(r for r in example["ranking"] if r["effect"] == "tyre_slip")

@@ -461,7 +461,8 @@ def _sbw_section() -> list[str]:
         f"window and the model's weave eigenvalue, is {np.median(bias[:, 0]):+.2f} 1/s on the real part and "
         f"{np.median(bias[:, 1]):+.2f} rad/s on the imaginary part (median),",
         f"{bias[:, 0].min():+.2f} to {bias[:, 0].max():+.2f} and {bias[:, 1].min():+.2f} to {bias[:, 1].max():+.2f}; "
-        "it is removed from the measured values. The noise of each value is the larger of its fit's standard",
+        "every candidate is compared with the records by its own bias (the fit applied to its own response over",
+        "each window: indirect inference, `docs/gap.md`). The noise of each value is the larger of its fit's standard",
         "error and the scatter of the records at its speed (the scatter raised most of them: the records of one",
         f"speed scatter by {min(scatter):.1f}-{max(scatter):.1f} rad/s in frequency, more than their fits' errors).",
         "",

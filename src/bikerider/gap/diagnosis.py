@@ -23,7 +23,7 @@ one, or not significantly better at :data:`TIE_P`, is
 tied with it, and within a tie the candidate with fewer fitted parameters ranks first (Occam).
 "Better" is a paired bootstrap of the held-out points' RMS error (:func:`significantly_better`).
 Pairs are cross-validated as well (fitted jointly on the same folds): every pair of candidates that
-each, alone, predict the held-out folds better than the nominal model (an effect that makes the
+each, alone, predict the held-out folds better than the nominal model (by more than 1 %; an effect that makes the
 held-out predictions worse on its own is not searched further).
 
 Plausible.  A candidate fitted to all the data is plausible when every fitted value's 95 % interval
@@ -84,6 +84,10 @@ TIME_DOMAIN_PARTNERS = ("steer_inertia", "steer_stiffness", "speed_sensor")
 """Linear candidates searched together with steer friction in the time domain: a steer motor's rotor
 inertia, a spring, and an error of the speed sensor (the other pairs are searched between linear
 candidates only, to keep the time-domain fits few)."""
+HELPFUL = 0.01
+"""A candidate predicts the held-out folds better than the nominal model (and enters the pair search)
+when its held-out error is lower by more than this fraction (a fit that stays at its neutral value
+changes nothing and pairs nothing)."""
 UNDETERMINED = 1.0
 """A fitted value whose standard error exceeds this many times the width of its plausible range is
 not determined by the data (the data narrow it down less than the literature already does)."""
@@ -176,8 +180,8 @@ class Diagnosis:
         Candidates (default: all of :data:`EFFECT_NAMES`).
     records : list of RecordFit, optional
         Fitted records (:func:`bikerider.gap.records.fit_records`); those fitted become eigenvalue
-        rows, corrected for the extraction's bias (:mod:`bikerider.gap.timedomain`), and the others
-        are left out with their reason.
+        rows, which every model predicts by indirect inference (:mod:`bikerider.gap.indirect`), and
+        the others are left out with their reason.
 
     Raises
     ------
@@ -198,7 +202,8 @@ class Diagnosis:
         self.records = [replace(f) for f in records or []]  # copies: records left out here get their reason
         self.record_rows: dict[int, int] = {}  # index in self.records -> eigenvalue row
         self._time_domain_full: dict[tuple[str, ...], EffectFit] = {}
-        self.bias = np.zeros(0, complex)
+        self.bias = np.zeros(0, complex)  # each record row's extraction bias under the nominal model
+        self._record_set = None
         eigen = self._with_records(model, eigen)
         if len(eigen) + len(canonical) == 0:
             if not self.records:
@@ -210,7 +215,7 @@ class Diagnosis:
                 f"{len(left)} of {len(self.records)} records left out",
                 f"enough records for a diagnosis: none could be used ({reasons})",
             )
-        self.problem = GapProblem(model, eigen, canonical)
+        self.problem = GapProblem(model, eigen, canonical, records=self._record_set)
         self.effects = [e for e in effects]
         self.not_applicable = {}
         for e in self.effects:
@@ -252,20 +257,27 @@ class Diagnosis:
 
     # -- records -----------------------------------------------------------------------------------
     def _with_records(self, model: GapModelInput, eigen: EigenvalueData) -> EigenvalueData:
-        """Table rows plus one bias-corrected row per comparable record (others get their reason)."""
+        """Table rows plus one row per comparable record (others get their reason).
+
+        A record's row holds the eigenvalue its fit found; every model predicts it by indirect
+        inference (:mod:`bikerider.gap.indirect`).  The nominal model's extraction bias decides which
+        records can be compared by their eigenvalue at all (:func:`bikerider.gap.indirect.comparable`).
+        """
+        from bikerider.gap.indirect import RecordRows, RecordSimulator, comparable
         from bikerider.gap.models import BENCH_ARGS, EffectModel
         from bikerider.gap.predict import Predictor
-        from bikerider.gap.timedomain import extraction_bias
 
         used = [k for k, f in enumerate(self.records) if f.used]
         if not used:
             return eigen
         rows = eigenvalues_of(self.records)
         nominal = {k: float(model.parameters.values[k]) for k in BENCH_ARGS + ("g",)}  # type: ignore[arg-type]
+        simulator = RecordSimulator([self.records[k] for k in used], nominal, model.geometry)
+        apparent = simulator.settle()
         matched = Predictor(rows, CanonicalData.empty(), nominal, model.geometry).eigenvalues(
             EffectModel(nominal, model.geometry)
         )
-        bias, reasons = extraction_bias(self.records, nominal, model.geometry, matched)
+        bias, reasons = comparable(apparent, matched)
         keep = []
         for j, k in enumerate(used):
             if reasons[j] is not None:
@@ -274,10 +286,10 @@ class Diagnosis:
             else:
                 keep.append(j)
         rows = rows.subset(np.array(keep, dtype=int))
-        rows.value = rows.value - bias[keep]
         self.bias = bias[keep]
         still = [k for k in used if self.records[k].used]
         self.record_rows = {k: len(eigen) + j for j, k in enumerate(still)}
+        self._record_set = RecordRows(simulator.subset(keep), np.array(list(self.record_rows.values()), int))
         return EigenvalueData.concatenate([eigen, rows])
 
     def _time_domain_ready(self) -> bool:
@@ -381,39 +393,55 @@ class Diagnosis:
         return out
 
     def _time_domain_predict(self, fit: EffectFit, mask: np.ndarray) -> np.ndarray:
-        """Predicted (bias-corrected) observations of the records in ``mask`` under a time-domain fit."""
-        from bikerider.gap.timedomain import Layout, apparent_eigenvalues
+        """Predicted observations of the records in ``mask`` under a time-domain fit: what the record fit
+        finds in the candidate's simulated response over each record (indirect inference, as for every
+        candidate)."""
+        from bikerider.gap.timedomain import Layout
 
         idx = self._record_indices(mask)
         pred = np.full(len(self.problem.obs), np.nan)
-        layout = Layout.of(fit.effects)
-        apparent, _ = apparent_eigenvalues(
-            [self.records[k] for k in idx], self.problem.nominal, self.problem.geometry, layout, fit.values
-        )
+        order = list(self.record_rows)
+        simulator = self.problem.records.simulator.subset([order.index(k) for k in idx])
+        apparent = simulator.apparent_time_domain(Layout.of(fit.effects), fit.values)[0]
         obs_row = self._obs_rows()
-        rows = list(self.record_rows)
         for j, k in enumerate(idx):
-            row = self.record_rows[k]
-            value = apparent[j] - self.bias[rows.index(k)]
-            parts = obs_row[row]
-            pred[parts[0]] = value.real
+            parts = obs_row[self.record_rows[k]]
+            pred[parts[0]] = apparent[j].real
             if len(parts) > 1:
-                pred[parts[1]] = value.imag
+                pred[parts[1]] = apparent[j].imag
         return pred
 
-    def selected_predictions(self) -> np.ndarray | None:
-        """Predicted eigenvalue of each row under the selected time-domain effect (apparent, per record).
+    def nominal_bias_per_row(self) -> np.ndarray:
+        """Each eigenvalue row's extraction bias under the nominal model (0 for rows from tables)."""
+        out = np.zeros(len(self.problem.eigen), complex)
+        for j, row in enumerate(self.record_rows.values()):
+            out[row] = self.bias[j]
+        return out
 
-        ``None`` when the selection is not a time-domain effect (its predictions are curves in speed).
+    def shown_values(self) -> np.ndarray:
+        """Measured eigenvalue of each row as figures show it beside weave-eigenvalue curves: a record's
+        value with the nominal model's extraction bias removed (the display's only use of that bias)."""
+        return self.problem.eigen.value - self.nominal_bias_per_row()
+
+    def selected_predictions(self) -> np.ndarray | None:
+        """The selection's prediction of each record row, on the scale of :meth:`shown_values`.
+
+        Its apparent eigenvalue (indirect inference; amplitude-dependent for a time-domain effect) minus
+        the nominal model's extraction bias.  ``None`` without a selection or without records.
         """
-        if not _time_domain(tuple(self.selected)) or self.selected_fit is None:
+        if self.selected_fit is None or not self.record_rows:
             return None
         if not hasattr(self, "_selected_predictions"):
-            pred = self._time_domain_predict(self.selected_fit, np.ones(len(self.problem.obs), bool))
+            every = np.ones(len(self.problem.obs), bool)
+            if _time_domain(tuple(self.selected)):
+                pred = self._time_domain_predict(self.selected_fit, every)
+            else:
+                pred = self.problem.predict_fit(self.selected_fit)
             out = np.full(len(self.problem.eigen), np.nan + 1j * np.nan)
             for row, parts in self._obs_rows().items():
-                out[row] = complex(pred[parts[0]], pred[parts[1]] if len(parts) > 1 else 0.0)
-            self._selected_predictions = out
+                if row in self.record_rows.values():
+                    out[row] = complex(pred[parts[0]], pred[parts[1]] if len(parts) > 1 else 0.0)
+            self._selected_predictions = out - self.nominal_bias_per_row()
         return self._selected_predictions
 
     # -- folds --------------------------------------------------------------------------------------
@@ -552,7 +580,7 @@ class Diagnosis:
                 fit = self._time_domain_fit(effects, ~held, start=full.values)
                 pred = self._time_domain_predict(fit, held)
             else:
-                fit = p.fit(effects, ~held, start=full.values)
+                fit = p.fit(effects, ~held, start=full.values, bias=full.bias)
                 pred = p.predict_fit(fit)
             fits.append(fit)
             z_fold = p.z(pred)[held]
@@ -633,12 +661,14 @@ class Diagnosis:
 
     def pair_candidates(self) -> list[tuple[str, str]]:
         """Pairs searched on the held-out folds (module docstring): any two linear candidates that each,
-        alone, predict the held-out folds better than the nominal model, fitted jointly; and steer
+        alone, predict the held-out folds better than the nominal model (by :data:`HELPFUL`), fitted jointly; and steer
         friction (in the time domain) with each such one of :data:`TIME_DOMAIN_PARTNERS`."""
         import itertools
 
         helpful = [
-            e for e in self.candidates if (e,) in self.cv and self.cv[(e,)].error_after < self.cv[(e,)].error_before
+            e
+            for e in self.candidates
+            if (e,) in self.cv and self.cv[(e,)].error_after < (1 - HELPFUL) * self.cv[(e,)].error_before
         ]
         linear = [e for e in helpful if e not in TIME_DOMAIN_EFFECTS]
         pairs = [tuple(sorted(pair, key=EFFECT_NAMES.index)) for pair in itertools.combinations(linear, 2)]
@@ -741,15 +771,15 @@ class Diagnosis:
             if best is not None and (chosen is None or best.effects != chosen.effects):
                 ok, checks = self.plausibility(self.fit_of(best.effects))
                 if not ok:
-                    setattr(
-                        self,
-                        key,
-                        {
-                            "effects": list(best.effects),
-                            "heldout_error": best.error_after,
-                            "why": _implausible_reasons(checks),
-                        },
-                    )
+                    entry = {
+                        "effects": list(best.effects),
+                        "heldout_error": best.error_after,
+                        "why": _implausible_reasons(checks),
+                    }
+                    ranked = next((r for r in self.ranking if (r["effect"],) == best.effects), None)
+                    if ranked is not None:  # where the ranking (ties to the simpler) puts it
+                        entry["rank"], entry["tied_with"] = ranked["rank"], list(ranked["tied_with"])
+                    setattr(self, key, entry)
         if self.best_single_implausible == self.best_implausible:
             self.best_single_implausible = None
         # ... and select nothing that an implausible fit of no more fitted parameters beats significantly

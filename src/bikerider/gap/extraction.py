@@ -27,7 +27,8 @@ the two-mode fit alone finds the weave.  Records should start after the perturba
 
 Every refusal is a :class:`~bikerider.errors.FitError` whose message says why; the records of an
 experiment turn it into the record's reason for being left out (:mod:`bikerider.gap.records`).
-:func:`refit_like` fits a model's own response over a record the way the record was fitted.
+A model's own response over a record is fitted the same way, batched, by
+:mod:`bikerider.gap.indirect` (indirect inference).
 """
 
 from __future__ import annotations
@@ -297,79 +298,6 @@ def _weave_eigenvalue(time, signal, min_cycles: float) -> WeaveEstimate:
     if rss >= rss_base or f_dist.sf((rss_base - rss) / (rss / dof), 1, dof) >= 0.01:
         return _checked(plain)
     return _checked(estimate)
-
-
-def refit_like(time, signal, like: WeaveEstimate, min_cycles: float = MIN_CYCLES) -> WeaveEstimate:
-    """The fit of :func:`weave_eigenvalue`, of the same kind (two-mode or plain) as ``like``, started from it.
-
-    For a model's own response over a record whose measured signal gave ``like``: one optimisation
-    from a start that is already close, instead of the search of a fresh fit.  Falls back to
-    :func:`weave_eigenvalue` when the refit is not a weave.
-
-    Raises
-    ------
-    bikerider.errors.FitError
-        As :func:`weave_eigenvalue`.
-    """
-    from scipy.optimize import least_squares
-
-    from bikerider.errors import FitError
-    from bikerider.fitting.damped_oscillation import fit_damped_oscillation
-
-    t = np.asarray(time, dtype=float)
-    y = np.asarray(signal, dtype=float)
-    tau = t - t[0]
-    total = float(np.sum((y - np.mean(y)) ** 2))
-    with np.errstate(all="ignore"):
-        if like.kind == "two-mode" and t.size > 7 and np.all(np.isfinite(y)):
-            try:
-                res = least_squares(
-                    lambda p: _two_mode(p, tau) - y,
-                    np.asarray(like.params, dtype=float),
-                    jac=lambda p: _two_mode_jacobian(p, tau),
-                    method="lm",
-                    max_nfev=200,
-                )
-                two, _ = _accept_two_mode(res, t.size, tau, total, min_cycles)
-                if two is not None:
-                    e = two[0]
-                    return _checked(
-                        WeaveEstimate(
-                            e.eigenvalue,
-                            e.real_sigma,
-                            e.imag_sigma,
-                            e.extra_mode,
-                            e.residual_rms,
-                            e.r2,
-                            e.cycles,
-                            "two-mode",
-                            e.params,
-                            float(t[0]),
-                        )
-                    )
-            except (ValueError, np.linalg.LinAlgError):
-                pass
-        elif like.kind == "plain":
-            try:
-                base = fit_damped_oscillation(t, y, drift=True, guess_frequency=float(like.params[0]))
-                k = _correlation_inflation(base.evaluate(t) - y)
-                return _checked(
-                    WeaveEstimate(
-                        base.eigenvalue,
-                        k * base.sigma_se,
-                        k * base.omega_d_se,
-                        None,
-                        base.residual_rms,
-                        1 - t.size * base.residual_rms**2 / total,
-                        base.omega_d * tau[-1] / (2 * math.pi),
-                        "plain",
-                        (base.omega_d, base.sigma, base.offset, base.A, base.B, base.drift or 0.0),
-                        float(t[0]),
-                    )
-                )
-            except FitError:
-                pass
-    return weave_eigenvalue(t, y, min_cycles=min_cycles)
 
 
 def _checked(estimate: WeaveEstimate) -> WeaveEstimate:

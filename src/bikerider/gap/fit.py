@@ -12,6 +12,20 @@ Uncertainties.  Each measured scalar ``y_i`` has
   first order (central differences of one standard deviation), with the full covariance
   ``J J^T`` across observations.
 
+Rows fitted from records.  A record's value is what the record fit finds in a short decay, and
+every model predicts it by indirect inference: what the same fit finds in the model's own response
+over the record's window from the record's initial state fitted under that model
+(:mod:`bikerider.gap.indirect`).  The data, the nominal model (``baseline``, the gap map and test),
+the parameters' and the speed's uncertainties and every held-out prediction use it.  Fits use
+*iterated bias correction*: a model's weave eigenvalues plus a fixed extraction bias are fitted
+(fast; the first bias is the nominal model's, the correction issue 11 applied to every candidate
+alike), the fitted model's own bias is computed by indirect inference, and the fitted values follow
+the change of the bias by Gauss-Newton steps (the fit's Jacobian held) until no record's bias
+changes by more than :data:`BIAS_TOLERANCE` of its data uncertainty.  The converged fit's residuals
+are its indirect-inference residuals; only the bias's own change with the parameters is left out
+of the search direction (``tests/test_gap_indirect.py`` compares the values with a full
+indirect-inference least squares).
+
 Fits.  A set of effects is fitted by bounded nonlinear least squares
 (:func:`scipy.optimize.least_squares`) on the residuals ``(prediction - y) / w``: ``w`` is the
 square root of data plus model variance for structural effects (the parameter uncertainty is a
@@ -33,6 +47,7 @@ import itertools
 import logging
 import math
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -43,6 +58,9 @@ from bikerider.gap.effects import EFFECTS, OBSERVATION_EFFECTS
 from bikerider.gap.model_input import GapModelInput
 from bikerider.gap.models import BENCH_ARGS, STRUCTURAL_KEYS, EffectModel
 from bikerider.gap.predict import Predictor
+
+if TYPE_CHECKING:
+    from bikerider.gap.indirect import RecordRows
 
 LOG = logging.getLogger(__name__)
 MAX_STARTS = 32
@@ -57,6 +75,15 @@ MIN_REPLICATES = 3
 """Fewest records of one group and speed whose scatter counts as a replicate estimate."""
 REPLICATE_SPEED = (0.05, 0.03)
 """Rows are replicates when their speeds differ by less than this many m/s or this fraction."""
+MAX_BIAS_ITERATIONS = 4
+"""Most evaluations of a fitted model's own extraction bias in the iterated bias correction."""
+BIAS_TOLERANCE = 0.1
+"""The iterated bias correction stops when the records' biases change by no more than this fraction of
+their data standard uncertainties (root mean square over the records fitted): the fit's chi-square
+then moves by a small fraction of one."""
+MAX_BIAS_STEP = 0.2
+"""Largest move of a fitted value in one step of the iterated bias correction, as a fraction of its
+search range (a longer Gauss-Newton step is shortened to it)."""
 
 
 @dataclass
@@ -99,6 +126,9 @@ class EffectFit:
     message: str = ""
     lower: np.ndarray = field(default_factory=lambda: np.zeros(0))
     upper: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    bias: np.ndarray | None = None
+    """The fitted model's own extraction bias at every observation (records; see :meth:`GapProblem.fit`)."""
+    bias_iterations: int = 0
 
     def at_bound(self) -> list[str]:
         """Names of the fitted values pinned at a bound of the search."""
@@ -133,7 +163,9 @@ class GapProblem:
     canonical : CanonicalData
     """
 
-    def __init__(self, model: GapModelInput, eigen: EigenvalueData, canonical: CanonicalData):
+    def __init__(
+        self, model: GapModelInput, eigen: EigenvalueData, canonical: CanonicalData, records: RecordRows | None = None
+    ):
         if len(eigen) + len(canonical) == 0:
             raise InputError("data", "empty", "at least one measured eigenvalue or identified entry")
         self.model_input = model
@@ -155,7 +187,12 @@ class GapProblem:
         self.predictor = Predictor(eigen, canonical, self.nominal, self.geometry)
         self.obs = self.predictor.observations
         self.y = self.obs.value
-        self.baseline = self.predictor.predict(EffectModel(self.nominal, self.geometry))
+        self.records = records
+        self.record_obs = self._record_observations()
+        self.baseline = self.predict_models(self.nominal, {})[0]
+        # each record row's extraction bias under the nominal model (apparent minus weave eigenvalue):
+        # the starting offset of the fits' iterated bias correction, and the replicate scatter's reference
+        self.nominal_bias = self.baseline - self.predictor.predict(EffectModel(self.nominal, self.geometry))
         self.notes: list[str] = []
         self.noise: list[dict] = []
         self.jacobian = self._parameter_jacobian()  # (n_obs, n_free), per sigma
@@ -185,7 +222,7 @@ class GapProblem:
             return np.zeros((len(self.obs), 0))
         stage = DifferencedStage(
             "gap predictions",
-            lambda v: self.predictor.predict(EffectModel({**self.nominal, **v}, self.geometry)),
+            lambda v: self.predict_models({**self.nominal, **v}, {}),
             inputs=self.free,
             outputs=range(len(self.obs)),
             steps=dict(zip(self.free, self.free_sigma)),
@@ -207,8 +244,10 @@ class GapProblem:
             return out
         # the step: the speed uncertainty, at least 1 mm/s, at most half the speed (never a negative speed)
         h = np.minimum(np.maximum(eigen.speed_sigma, 1e-3), 0.5 * eigen.speed)
-        base = EffectModel(self.nominal, self.geometry)
-        slopes = [self.predictor.predict(base, speed_scale=1 + sign * h / eigen.speed)[: len(out)] for sign in (1, -1)]
+        slopes = [
+            self.predict_models(self.nominal, {}, row_scale=1 + sign * h / eigen.speed)[0, : len(out)]
+            for sign in (1, -1)
+        ]
         slope = (slopes[0] - slopes[1]) / 2  # per h, eigenvalue parts first
         k = 0
         for row in range(len(eigen)):
@@ -237,7 +276,8 @@ class GapProblem:
             for cell in cells:
                 members = [i for i in cell if kind[i] == "record"]
                 if len(members) >= MIN_REPLICATES:
-                    s = float(np.std(self.y[members], ddof=1))
+                    # about each record's own expectation: the nominal model's extraction bias removed
+                    s = float(np.std(self.y[members] - self.nominal_bias[members], ddof=1))
                     scatter_used += len(members)
                     for i in members:
                         if s > sigma[i]:
@@ -377,20 +417,39 @@ class GapProblem:
             values = dict(self.nominal)
         return values, config, scale
 
-    def predict_batch(self, lay: _Layout, x: np.ndarray) -> np.ndarray:
-        """Predictions ``(P, n_obs)`` for parameter vectors ``x`` ``(P, p)``; NaN rows when singular."""
-        x = np.atleast_2d(x)
-        values, config, scale = self.configure(lay, x)
+    def _record_observations(self) -> np.ndarray:
+        """Observation indices ``(R, 2)`` (real, imaginary part) of the rows fitted from records."""
+        if self.records is None:
+            return np.zeros((0, 2), int)
+        first = np.cumsum([0] + [2 if m == "weave" else 1 for m in self.eigen.mode])
+        return np.array([[first[row], first[row] + 1] for row in self.records.rows], int).reshape(-1, 2)
+
+    def predict_models(
+        self, values: dict, config: dict, scale=None, row_scale=None, indirect: bool = True
+    ) -> np.ndarray:
+        """Predictions ``(P, n_obs)`` of batched models; NaN rows when singular.
+
+        ``values`` and ``config`` as :class:`EffectModel` takes them (arrays of a leading size ``P``);
+        ``scale`` a speed scale per model for the rows a sensor read (``speed_sensor``); ``row_scale`` a
+        speed scale per eigenvalue row (the speed's uncertainty).  With ``indirect`` (the default), the
+        rows fitted from records are predicted by indirect inference (:mod:`bikerider.gap.indirect`):
+        what the record fit finds in each model's own response over the record; otherwise by the
+        models' weave eigenvalues.
+        """
         try:
             with np.errstate(all="ignore"):
-                if scale is None:
+                if row_scale is not None:
+                    out = self.predictor.predict(EffectModel(values, self.geometry, config), speed_scale=row_scale)
+                elif scale is None:
                     out = self.predictor.predict(EffectModel(values, self.geometry, config))
                 else:  # a speed scale per parameter vector: the (vector, row) pairs flattened into one call
                     n_rows = len(self.eigen)
-                    P = x.shape[0]
+                    P = np.asarray(scale).size
 
                     def flat(v):
-                        return np.repeat(np.broadcast_to(np.asarray(v, dtype=float), (P, 1))[:, 0], n_rows)
+                        return np.repeat(
+                            np.broadcast_to(np.asarray(v, dtype=float).reshape(-1, 1)[:, :1], (P, 1))[:, 0], n_rows
+                        )
 
                     flat_values = {n: flat(v) for n, v in values.items()}
                     flat_config = {e: {n: flat(v) for n, v in p.items()} for e, p in config.items()}
@@ -404,11 +463,23 @@ class GapProblem:
                         out = np.concatenate([eigen_part, np.broadcast_to(rest, (P, rest.shape[-1]))], axis=-1)
                     else:
                         out = eigen_part
+                out = np.atleast_2d(out)
+                if indirect and self.records is not None and len(self.record_obs):
+                    rscale = None if row_scale is None else np.asarray(row_scale, float)[self.records.rows][None, :]
+                    apparent = self.records.simulator.apparent(values, config, scale if rscale is None else rscale)
+                    out = np.array(np.broadcast_to(out, (max(out.shape[0], apparent.shape[0]), out.shape[1])))
+                    out[:, self.record_obs[:, 0]] = apparent.real
+                    out[:, self.record_obs[:, 1]] = apparent.imag
         except np.linalg.LinAlgError:
-            return np.full((x.shape[0], len(self.obs)), np.nan)
-        if out.ndim == 1:
-            out = np.broadcast_to(out, (x.shape[0], out.size))
+            return np.full((1, len(self.obs)), np.nan)
         return out
+
+    def predict_batch(self, lay: _Layout, x: np.ndarray, indirect: bool = True) -> np.ndarray:
+        """Predictions ``(P, n_obs)`` for parameter vectors ``x`` ``(P, p)`` (see :meth:`predict_models`)."""
+        x = np.atleast_2d(x)
+        values, config, scale = self.configure(lay, x)
+        out = self.predict_models(values, config, scale, indirect=indirect)
+        return np.broadcast_to(out, (x.shape[0], out.shape[-1]))
 
     def z(self, prediction: np.ndarray) -> np.ndarray:
         """Residuals ``(prediction - y) / sqrt(data + model variance)``."""
@@ -422,34 +493,109 @@ class GapProblem:
         return lower, upper
 
     def fit(
-        self, effects: tuple[str, ...], mask: np.ndarray | None = None, start: np.ndarray | None = None
+        self,
+        effects: tuple[str, ...],
+        mask: np.ndarray | None = None,
+        start: np.ndarray | None = None,
+        bias: np.ndarray | None = None,
     ) -> EffectFit:
         """Fit ``effects`` to the observations selected by ``mask`` (all by default).
 
         ``start`` (a parameter vector, e.g. the fit to all the data when fitting a fold) replaces
-        the grid of starting values.
+        the grid of starting values.  Rows fitted from records are fitted by iterated bias correction
+        (module docstring): ``bias`` (one value per observation) is the first correction, by default
+        the nominal model's extraction bias.
+        """
+        if self.records is None or not len(self.record_obs):
+            return self._fit(tuple(effects), mask, start, None)
+        lay = self.layout(tuple(effects))
+        mask = np.ones(len(self.obs), bool) if mask is None else np.asarray(mask, bool)
+        rec = self.record_obs.ravel()
+        rec = rec[mask[rec]]
+        sigma = np.sqrt(self.var_data[rec])
+        offset = np.array(self.nominal_bias if bias is None else bias, dtype=float)
+        fit = self._fit(tuple(effects), mask, start, offset)
+        x = fit.values.copy()
+        J, weight = fit._jacobian, fit._weight
+        lower, upper = self.bounds(lay)
+        for iteration in range(1, MAX_BIAS_ITERATIONS + 1):
+            own = self.own_bias(lay, x)
+            change = np.abs(own[rec] - offset[rec]) / sigma
+            finite = change[np.isfinite(change)]
+            settled = not finite.size or float(np.sqrt(np.mean(finite**2))) <= BIAS_TOLERANCE
+            # a model whose response over a record shows no weave the record fit finds (NaN) cannot
+            # predict that record; where that holds for most of the records fitted, the fit has left
+            # the models that predict records at all and no bias correction brings it back
+            lost = np.count_nonzero(~np.isfinite(own[rec])) > rec.size / 2
+            if settled or lost or x.size == 0 or iteration == MAX_BIAS_ITERATIONS:
+                offset = own
+                break
+            # the fit's residuals move by the change of the bias (records without a weave keep their
+            # last one): a Gauss-Newton step follows them, shortened where it would move a value by more
+            # than a fifth of its search range (a direction the data hardly determine)
+            own = np.where(np.isfinite(own), own, offset)
+            delta = np.zeros(J.shape[0])
+            delta[: int(mask.sum())] = (own - offset)[mask] / weight
+            step = -np.linalg.lstsq(J, delta, rcond=1e-6)[0]
+            step *= min(1.0, float(np.min(MAX_BIAS_STEP * (upper - lower) / np.maximum(np.abs(step), 1e-300))))
+            x = np.clip(x + step, lower, upper)
+            offset = own
+        # the residuals, chi-square and values reported: those of the fitted model's own bias
+        r = self._residuals(lay, mask, x, offset)
+        fit = self._result(lay, x, fit.stderr, r, int(mask.sum()), fit.success, fit.message)
+        fit.bias, fit.bias_iterations = offset, iteration
+        return fit
+
+    def own_bias(self, lay: _Layout, x: np.ndarray) -> np.ndarray:
+        """A fitted model's own extraction bias at every observation: its apparent eigenvalue (indirect
+        inference) minus its weave eigenvalue on the rows fitted from records, 0 elsewhere."""
+        X = np.atleast_2d(np.asarray(x, dtype=float)) if np.size(x) else np.zeros((1, 0))
+        return self.predict_batch(lay, X, indirect=True)[0] - self.predict_batch(lay, X, indirect=False)[0]
+
+    def _weights(self, lay: _Layout, mask: np.ndarray) -> np.ndarray:
+        """The residuals' scale: data uncertainty with ``parameters`` (it moves them), else combined."""
+        weight = np.sqrt(self.var_data if lay.n_shift else self.var_total)
+        return np.where(weight > 0, weight, np.sqrt(self.var_total))[mask]
+
+    def _residuals_batch(self, lay: _Layout, mask: np.ndarray, X: np.ndarray, offset: np.ndarray | None) -> np.ndarray:
+        """Weighted residuals ``(P, m)`` of parameter vectors ``X``: weave eigenvalues plus ``offset``
+        against the observations in ``mask``, then the prior residuals of any parameter shifts."""
+        pred = self.predict_batch(lay, X, indirect=False)[:, mask]
+        if offset is not None:
+            pred = pred + np.asarray(offset, dtype=float)[mask]
+        r = (pred - self.y[mask]) / self._weights(lay, mask)
+        r = np.where(np.isfinite(r), r, _BAD)
+        if lay.n_shift:
+            r = np.concatenate([r, X[:, len(lay.structural) :]], axis=1)
+        return r
+
+    def _residuals(self, lay: _Layout, mask: np.ndarray, x: np.ndarray, offset: np.ndarray | None) -> np.ndarray:
+        X = np.atleast_2d(np.asarray(x, dtype=float)) if np.size(x) else np.zeros((1, 0))
+        return self._residuals_batch(lay, mask, X, offset)[0]
+
+    def _fit(
+        self, effects: tuple[str, ...], mask: np.ndarray | None, start: np.ndarray | None, offset: np.ndarray | None
+    ) -> EffectFit:
+        """One least-squares fit; each model's predictions are its weave eigenvalues plus ``offset``.
+
+        The result keeps the weighted Jacobian at the solution (``_jacobian``) and the weights
+        (``_weight``), for the iterated bias correction.
         """
         from scipy.optimize import least_squares
 
         mask = np.ones(len(self.obs), bool) if mask is None else np.asarray(mask, bool)
         lay = self.layout(tuple(effects))
         n_struct = len(lay.structural)
-        weight = np.sqrt(self.var_data if lay.n_shift else self.var_total)
-        weight = np.where(weight > 0, weight, np.sqrt(self.var_total))[mask]
-        y = self.y[mask]
         p = n_struct + lay.n_shift
 
         def residuals_batch(X: np.ndarray) -> np.ndarray:
-            pred = self.predict_batch(lay, X)[:, mask]
-            r = (pred - y) / weight
-            r = np.where(np.isfinite(r), r, _BAD)
-            if lay.n_shift:
-                r = np.concatenate([r, X[:, n_struct:]], axis=1)
-            return r
+            return self._residuals_batch(lay, mask, X, offset)
 
         if p == 0:
             r = residuals_batch(np.zeros((1, 0)))[0]
-            return self._result(lay, np.zeros(0), np.zeros(0), r, int(mask.sum()), True, "nothing to fit")
+            out = self._result(lay, np.zeros(0), np.zeros(0), r, int(mask.sum()), True, "nothing to fit")
+            out._jacobian, out._weight = np.zeros((r.size, 0)), self._weights(lay, mask)
+            return out
         lower, upper = self.bounds(lay)
         if start is not None and np.size(start) == p:
             starts = np.array([np.asarray(start, dtype=float)])
@@ -492,7 +638,9 @@ class GapProblem:
             stderr = np.where(insensitive, np.inf, stderr)
         except np.linalg.LinAlgError:
             stderr = np.full(p, np.inf)
-        return self._result(lay, result.x, stderr, result.fun, int(mask.sum()), bool(result.success), result.message)
+        out = self._result(lay, result.x, stderr, result.fun, int(mask.sum()), bool(result.success), result.message)
+        out._jacobian, out._weight = J, self._weights(lay, mask)
+        return out
 
     def _result(
         self, lay: _Layout, x: np.ndarray, stderr: np.ndarray, r: np.ndarray, n: int, ok: bool, message: str
@@ -535,9 +683,16 @@ class GapProblem:
         )
 
     def predict_fit(self, fit: EffectFit) -> np.ndarray:
-        """Predictions of every observation with a fitted set of effects."""
+        """Predictions of every observation with a fitted set of effects.
+
+        The rows fitted from records by indirect inference: the fitted model's weave eigenvalues plus
+        its own extraction bias, which :meth:`fit` computed at the fitted values for every record
+        (held out or not), so no record is simulated again.
+        """
         lay = self.layout(fit.effects)
-        return self.predict_batch(lay, fit.values[None, :])[0]
+        if fit.bias is None:
+            return self.predict_batch(lay, fit.values[None, :])[0]
+        return self.predict_batch(lay, fit.values[None, :], indirect=False)[0] + fit.bias
 
     def fitted_model(self, fit: EffectFit) -> EffectModel:
         """The :class:`EffectModel` of a fit (nominal parameters plus any fitted shift; no speed scale)."""

@@ -153,14 +153,16 @@ def summary_text(result: dict) -> str:
     single = result.get("best_single_implausible")
     if single:
         lines.append(
-            f"The best single candidate, {'+'.join(single['effects'])}, needs implausible values: "
+            f"The lowest held-out error of a single candidate ({single['heldout_error']:.3g}) is that of "
+            f"{'+'.join(single['effects'])}{_rank_phrase(single)}, which needs implausible values: "
             + "; ".join(single["why"])
             + "."
         )
     bad = result.get("best_implausible")
     if bad:
         lines.append(
-            f"The best held-out fit, {'+'.join(bad['effects'])}, needs implausible values: "
+            f"The lowest held-out error of any fit, single or pair ({bad['heldout_error']:.3g}), is that of "
+            f"{'+'.join(bad['effects'])}{_rank_phrase(bad)}, which needs implausible values: "
             + "; ".join(bad["why"])
             + ". It is not selected"
             + (
@@ -323,6 +325,8 @@ def plot_eigenvalues(diagnosis):
         "imag": np.sqrt(p.var_data[[k for k, q in enumerate(p.obs.quantity) if q == "imag"]]),
     }
     laws = list(dict.fromkeys(e.law[i] for i in weave_rows))
+    shown = diagnosis.shown_values()
+    apparent = diagnosis.selected_predictions()
     for k, name in enumerate(laws):
         law = e.laws[name]
         colour = colours[k % len(colours)]
@@ -348,10 +352,10 @@ def plot_eigenvalues(diagnosis):
             axes[1].plot(grid, after.imag, "-", color=colour, lw=1.8)
         rows = [j for j, i in enumerate(weave_rows) if e.law[i] == name]
         idx = [weave_rows[j] for j in rows]
-        what = "measured, extraction bias removed" if diagnosis.record_rows else "measured"
+        what = "measured, nominal extraction bias removed" if diagnosis.record_rows else "measured"
         axes[0].errorbar(
             e.speed[idx],
-            e.value.real[idx],
+            shown.real[idx],
             yerr=sig["real"][rows],
             fmt="o",
             ms=3.5,
@@ -360,8 +364,7 @@ def plot_eigenvalues(diagnosis):
             alpha=0.8,
             label=f"{name}: {what} ({len(idx)})",
         )
-        apparent = diagnosis.selected_predictions()
-        if apparent is not None:
+        if apparent is not None and np.any(np.isfinite(apparent[idx])):
             axes[0].plot(
                 e.speed[idx],
                 apparent[idx].real,
@@ -373,7 +376,7 @@ def plot_eigenvalues(diagnosis):
             )
             axes[1].plot(e.speed[idx], apparent[idx].imag, "x", color="k", ms=5, mew=1)
         axes[1].errorbar(
-            e.speed[idx], e.value.imag[idx], yerr=sig["imag"][rows], fmt="o", ms=3.5, color=colour, capsize=2, alpha=0.8
+            e.speed[idx], shown.imag[idx], yerr=sig["imag"][rows], fmt="o", ms=3.5, color=colour, capsize=2, alpha=0.8
         )
     axes[0].axhline(0, color="0.6", lw=0.8)
     axes[0].set_ylabel("weave real part [1/s]")
@@ -629,8 +632,10 @@ def plot_effects(diagnosis):
         axes[0].plot(grid, curve.real, style, label=label)
         axes[1].plot(grid, curve.imag, style)
     rows = [i for i in range(len(e)) if e.law[i] == main and e.mode[i] == "weave"]
-    axes[0].plot(e.speed[rows], e.value.real[rows], "k.", ms=3, label=f"measured ({main})")
-    axes[1].plot(e.speed[rows], e.value.imag[rows], "k.", ms=3)
+    shown = diagnosis.shown_values()
+    what = "measured, nominal extraction bias removed" if diagnosis.record_rows else "measured"
+    axes[0].plot(e.speed[rows], shown.real[rows], "k.", ms=3, label=f"{what} ({main})")
+    axes[1].plot(e.speed[rows], shown.imag[rows], "k.", ms=3)
     axes[0].set_ylabel("weave real part [1/s]")
     axes[1].set_ylabel("weave imaginary part [rad/s]")
     for ax in axes:
@@ -756,3 +761,16 @@ def figures(diagnosis, result: dict) -> list[tuple[str, str, object]]:
         ("time_response.png", "Time response", plot_time_response(diagnosis)),
     ]
     return [(name, caption, fig) for name, caption, fig in out if fig is not None]
+
+
+def _rank_phrase(entry: dict) -> str:
+    """`` (ranked 2nd: tied with steer_friction, which has fewer fitted values)`` for a ranked single."""
+    if "rank" not in entry:
+        return ""
+    ties = entry.get("tied_with") or []
+    if entry["rank"] == 1 or not ties:
+        return f" (ranked {entry['rank']})"
+    return (
+        f" (ranked {entry['rank']}: tied with {', '.join(ties)}; within a tie the candidate with fewer fitted "
+        "values ranks first)"
+    )

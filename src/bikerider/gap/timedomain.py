@@ -1,21 +1,10 @@
-"""Records in the time domain: each record's model response, the extraction's bias, nonlinear friction.
-
-A record's weave eigenvalue is fitted (:mod:`bikerider.gap.extraction`) with a model that is
-only approximately the bicycle's response: one damped oscillation and one real mode.  On a short
-record of a strongly damped weave, the castor and capsize modes and the control bend the fitted
-oscillation away from the weave eigenvalue.  The same fit applied to a model's own response over
-the same window, from the same initial state, shows how far (the *extraction bias*):
+"""Records in the time domain: linear responses, initial states, nonlinear steer friction.
 
 * :func:`initial_states` fits each record's initial state (and a constant offset per signal) to the
   record's signals by linear least squares for a linear closed-loop model (the response is linear
-  in the initial state), each signal weighted by its own scatter over the record;
-* :func:`extraction_bias` simulates the model from that state, fits the weave exactly as the
-  measured record was fitted, and returns the difference from the model's weave eigenvalue.  The
-  diagnosis compares measured and predicted eigenvalues after removing this bias, so the fit's
-  approximation does not masquerade as a model error.  Where the extraction finds something else
-  than the weave in the model's own response (the bias exceeds :data:`MAX_RELATIVE_BIAS` of the
-  eigenvalue: two oscillating modes at low speed, say), the record cannot be compared by its
-  eigenvalue and is left out with that reason.
+  in the initial state), each signal weighted by its own scatter over the record.  What the record
+  fit finds in a model's response from that state (the record's *apparent* eigenvalue under the
+  model, and the fit's bias) is :mod:`bikerider.gap.indirect`'s.
 
 Nonlinear steer friction, ``T = -T_coulomb tanh(deltad / eps) - c_viscous deltad`` on the steer
 axis, is fitted in the time domain (:func:`fit_time_domain`): the closed-loop bicycle (nominal
@@ -27,8 +16,9 @@ the linear part exact (matrix exponential), the friction torque held over steps 
 rad/s (the friction reaches 76 % of its full value at ``eps``, 96 % at twice it); a sharper corner
 would need shorter steps for no gain at the steer rates of these records.  Each record's initial
 state is refitted for every trial friction (linear least squares, then Gauss-Newton steps on the
-nonlinear response).  The friction's prediction of a record's eigenvalue is what the extraction
-finds in the simulated response (its *apparent* eigenvalue, amplitude-dependent as friction is).
+nonlinear response).  The friction's prediction of a record's eigenvalue is what the record fit
+finds in the simulated response (indirect inference, as for every candidate; amplitude-dependent as
+friction is: :meth:`bikerider.gap.indirect.RecordSimulator.apparent_time_domain`).
 """
 
 from __future__ import annotations
@@ -40,7 +30,7 @@ import numpy as np
 
 from bikerider.errors import FitError
 from bikerider.gap.models import EffectModel
-from bikerider.gap.records import Record, RecordFit, combine_fits
+from bikerider.gap.records import Record
 
 OBSERVED = {"roll_angle": 0, "steer_angle": 1, "roll_rate": 2, "steer_rate": 3}
 """Record signals and the index of their state among ``(phi, delta, phid, deltad)``."""
@@ -56,9 +46,6 @@ MAX_DURATION = 2.5
 """Longest part of a record the time-domain fits use [s] (the weave has decayed by then)."""
 FIT_STEP = 0.02
 """Sampling step of the time-domain fits [s]: records sampled faster are compared at every k-th sample."""
-MAX_RELATIVE_BIAS = 0.2
-"""Largest extraction bias, as a fraction of the model's weave eigenvalue, for which a record's
-eigenvalue is compared with the model's."""
 GN_STEPS = 1
 """Gauss-Newton steps refining each record's initial state under friction."""
 
@@ -435,73 +422,3 @@ def fit_time_domain(records: list[Record], values: dict, geometry, layout: Layou
     return TimeDomainFit(
         result.x, float(np.sum(result.fun**2)), n_samples, [r.name for r in records], bool(result.success)
     )
-
-
-def apparent_eigenvalues(
-    fits: list[RecordFit], values: dict, geometry, layout: Layout = NOMINAL, theta=()
-) -> tuple[np.ndarray, list[str | None]]:
-    """What the record fit finds in a model's own response over each record (NaN where nothing).
-
-    The model is the nominal bicycle with the time-domain candidate ``layout`` at ``theta`` (the
-    nominal linear model by default); its response starts from the initial state fitted to each
-    record, and the signals the record's eigenvalue was fitted to are simulated and fitted alike
-    (:func:`bikerider.gap.extraction.refit_like`, started from the record's own fit).
-    """
-    from bikerider.gap.extraction import refit_like
-
-    records = [f.record for f in fits]
-    out = np.full(len(records), np.nan + 1j * np.nan)
-    why: list[str | None] = [None] * len(records)
-    signals = tuple(
-        dict.fromkeys(TIME_DOMAIN_SIGNALS + tuple(s for r in records for s in r.fit_signals if s in OBSERVED))
-    )
-    theta = np.asarray(theta, dtype=float).reshape(1, -1)
-    for idx, batch in make_batches(records, signals, max_duration=math.inf):
-        A, b, outputs, T = systems(values, geometry, batch.records, layout, theta)
-        states, _ = friction_states(batch, A, b, outputs, T)
-        for j, k in enumerate(idx):
-            r, f = records[k], fits[k]
-            L = batch.length[j]
-            sim, t = states[0, j, :L], r.time[:L]
-            estimates = {}
-            for name, like in f.fits.items():
-                try:
-                    estimates[name] = refit_like(t, sim[:, outputs[OBSERVED[name]]], like)
-                except FitError as exc:
-                    why[k] = f"{name}: {exc}"
-            if estimates:
-                out[k] = combine_fits(estimates)[0].eigenvalue
-    return out, why
-
-
-def extraction_bias(
-    fits: list[RecordFit], values: dict, geometry, matched: np.ndarray
-) -> tuple[np.ndarray, list[str | None]]:
-    """Extraction bias of every used record under the nominal model (module docstring).
-
-    ``matched`` holds the model's weave eigenvalue of each used record.  Returns the bias (NaN
-    where the record cannot be compared) and the reason for each record that cannot.
-    """
-    used = [f for f in fits if f.used]
-    apparent, why = apparent_eigenvalues(used, values, geometry)
-    bias = apparent - matched
-    reasons: list[str | None] = []
-    for k in range(len(used)):
-        if not np.isfinite(apparent[k]):
-            reasons.append(
-                "the model's own response over this window shows no weave the fit can find "
-                f"({why[k]}); its eigenvalue cannot be compared with the model's"
-            )
-        elif abs(bias[k]) > MAX_RELATIVE_BIAS * abs(matched[k]):
-            reasons.append(
-                f"the fit applied to the model's own response over this window finds {_c(apparent[k])} "
-                f"against its weave eigenvalue {_c(matched[k])} (more than {MAX_RELATIVE_BIAS:.0%} off: "
-                "other modes share the record); its eigenvalue cannot be compared with the model's"
-            )
-        else:
-            reasons.append(None)
-    return np.where([r is None for r in reasons], bias, np.nan), reasons
-
-
-def _c(z: complex) -> str:
-    return f"{z.real:.2f}{z.imag:+.2f}i 1/s"

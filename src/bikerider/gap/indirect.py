@@ -1,0 +1,598 @@
+"""Indirect inference on records: what the record fit finds in a model's own response over each record.
+
+A record's weave eigenvalue is what :func:`bikerider.gap.extraction.weave_eigenvalue` finds in a
+short decay that also holds the castor and slow modes and the control's action.  A model's
+prediction of that observation is therefore not its weave eigenvalue but what the *same* fit finds
+in the model's own response over the record's window, from the initial state fitted to the record
+under that model (indirect inference: the extraction is applied alike to the data and to every
+candidate).  The difference between the two, the extraction's bias, depends on the model: a
+candidate that damps the weave more or mixes the modes otherwise has a bias of its own, and
+correcting every candidate by the nominal model's bias would favour or penalise candidates.
+
+:class:`RecordSimulator` does it for many models at once, for ``P`` parameter vectors and ``R``
+records in one batched computation:
+
+* the closed-loop state matrix of every (model, record) pair at the record's speed and control law
+  (one matrix exponential of the sampling step per pair; the response is linear in the initial
+  state, so the output rows ``C Phi(t_k)`` follow by repeated multiplication);
+* each record's initial state, and a constant offset per signal, by linear least squares on the
+  record's signals (roll rate and steer angle where logged), each weighted by its scatter over the
+  record, as in :func:`bikerider.gap.timedomain.initial_states`;
+* the simulated signals from that state, fitted by batched least squares of the same model (two-mode
+  or plain, as the record's own fit) started from the record's own fit (variable projection with
+  Levenberg-Marquardt steps; ``tests/test_gap_indirect.py`` holds it to SciPy's least squares one
+  record at a time); signals combined with the weights of the record's own fit.
+
+:func:`extract` is the last step alone, for responses simulated otherwise (the nonlinear friction
+of :mod:`bikerider.gap.timedomain`), so every candidate's apparent eigenvalue comes from one
+extraction.  Where the extraction finds no weave in a model's response (a fit that leaves the
+range the record fit accepts), the prediction is NaN.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from bikerider.errors import FitError
+from bikerider.gap.extraction import EXTRA_MODE_RANGE, MIN_CYCLES
+from bikerider.gap.records import RecordFit
+
+OBSERVED = {"roll_angle": 0, "steer_angle": 1, "roll_rate": 2, "steer_rate": 3}
+"""Record signals and the index of their state among ``(phi, delta, phid, deltad)``."""
+STATE_SIGNALS = ("roll_rate", "steer_angle")
+"""Signals the initial state is fitted to (those of them a record holds)."""
+MAX_ELEMENTS = 3_000_000
+"""Largest intermediate array (elements) of one batched chunk; larger batches are split over ``P``."""
+MAX_RELATIVE_BIAS = 0.2
+"""Largest extraction bias under the nominal model, as a fraction of its weave eigenvalue, for which a
+record's eigenvalue is compared with models at all (:func:`comparable`)."""
+LM_ITERATIONS = 60
+"""Most Levenberg-Marquardt iterations of the batched extraction."""
+LM_TOLERANCE = 1e-10
+"""The batched extraction stops when an accepted step lowers the residual sum of squares by less than
+this fraction of it."""
+LM_STEP = 1e-8
+"""... or when a step changes no parameter by more than this fraction of its size (the eigenvalue
+is then settled far below any record's standard error)."""
+
+
+# ---------------------------------------------------------------------------------------------
+# The extraction models (as bikerider.gap.extraction), batched, by variable projection
+# ---------------------------------------------------------------------------------------------
+# Both models are linear in four of their parameters (amplitudes, offset, the extra mode's amplitude
+# or the drift) given the others (frequency, decay, the extra mode's eigenvalue).  The batched fit
+# solves the linear ones exactly for every trial of the nonlinear ones (variable projection, with
+# Kaufman's Jacobian), which converges in a few steps where a search over all of them crawls along
+# the near-degenerate directions of offset and slow mode.
+LAMBDA_BOUNDS = (EXTRA_MODE_RANGE[0] + 1e-6, EXTRA_MODE_RANGE[1] - 1e-6)
+"""The two-mode fit's extra real mode is kept inside the range the record fit accepts
+(:data:`bikerider.gap.extraction.EXTRA_MODE_RANGE`): the same estimator on data and on models (the
+model's response could otherwise lend the extra exponential to its faster castor mode)."""
+NONLINEAR = {"two-mode": (0, 1, 6), "plain": (0, 1)}
+"""Positions of the nonlinear parameters in each model's parameter vector."""
+LINEAR = {"two-mode": (2, 3, 4, 5), "plain": (3, 4, 2, 5)}
+"""Positions of the coefficients of :func:`_basis`'s four functions in each model's parameter vector."""
+
+
+def _project(kind: str, theta: np.ndarray, y: np.ndarray, w: np.ndarray, tau: np.ndarray):
+    """Linear coefficients, weighted residuals, cost and Kaufman's Jacobian at ``theta``.
+
+    Two-mode: ``theta = (omega, sigma, lambda)``, basis ``e sin, e cos, 1, exp(lambda t)`` with
+    ``e = exp(-sigma t)``; plain: ``theta = (omega, sigma)``, basis ``e sin, e cos, 1, t``.
+    """
+    omega, sigma = theta[:, 0, None], theta[:, 1, None]
+    decay = np.exp(-sigma * tau)
+    es, ec = decay * np.sin(omega * tau), decay * np.cos(omega * tau)
+    B, N = es.shape
+    phi = np.empty((B, N, 4))
+    phi[..., 0], phi[..., 1], phi[..., 2] = es, ec, 1.0
+    grow = np.exp(theta[:, 2, None] * tau) if kind == "two-mode" else None
+    phi[..., 3] = grow if grow is not None else tau
+    phi_w = phi * w[..., None]
+    phi_wT = np.swapaxes(phi_w, 1, 2)
+    gram = phi_wT @ phi_w
+    gram = gram + 1e-12 * np.maximum(np.trace(gram, axis1=1, axis2=2), 1e-300)[:, None, None] * np.eye(4)
+    coef = np.linalg.solve(gram, phi_wT @ (y * w)[..., None])[..., 0]  # (B, 4)
+    r = ((phi @ coef[..., None])[..., 0] - y) * w
+    a, b = coef[:, 0, None], coef[:, 1, None]
+    columns = [tau * (a * ec - b * es), -tau * (a * es + b * ec)]  # d/d omega, sigma
+    if grow is not None:
+        columns.append(coef[:, 3, None] * tau * grow)  # d/d lambda
+    J = np.stack(columns, axis=-1) * w[..., None]
+    # Kaufman: the part of J the linear coefficients cannot follow
+    J = J - phi_w @ np.linalg.solve(gram, phi_wT @ J)
+    return coef, r, np.sum(r * r, axis=1), J
+
+
+def levenberg_marquardt(
+    kind: str, beta: np.ndarray, y: np.ndarray, mask: np.ndarray, tau: np.ndarray, iterations: int = LM_ITERATIONS
+) -> tuple[np.ndarray, np.ndarray]:
+    """Least squares of the ``kind`` model to every row of ``y (B, N)`` (where ``mask``), from ``beta (B, k)``.
+
+    Variable projection (the linear coefficients solved at every step) with Levenberg-Marquardt
+    steps in the nonlinear parameters, Marquardt's scaling and one damping factor per row.  A row
+    stops when the reduction a step achieves, or the linearised model predicts for it, is below
+    :data:`LM_TOLERANCE` of the signal's sum of squares, or the step below :data:`LM_STEP` relative.
+    A row whose frequency falls below half a cycle over its samples (:data:`bikerider.gap.extraction.
+    MIN_CYCLES`: the response holds no weave the record fit would accept) stops there and is NaN.
+    Returns the full parameter vectors (in the model's order) and the residual sums of squares
+    (``inf`` where the fit broke down).
+    """
+    nl, lin = list(NONLINEAR[kind]), list(LINEAR[kind])
+    beta = np.array(beta, dtype=float)
+    theta = beta[:, nl].copy()
+    w = mask.astype(float)
+    scale = np.maximum(np.sum((y * w) ** 2, axis=1), 1e-300)
+    span = tau[np.maximum(np.sum(mask, axis=1) - 1, 0)]
+    with np.errstate(all="ignore"):
+        coef, r, cost, J = _project(kind, theta, y, w, tau)
+        cost = np.where(np.isfinite(cost), cost, np.inf)
+        mu = np.full(theta.shape[0], 1e-3)
+        active = np.isfinite(cost)
+        eye = np.eye(theta.shape[1])
+        for _ in range(iterations):
+            if not np.any(active):
+                break
+            idx = np.flatnonzero(active)
+            JT = np.swapaxes(J[idx], 1, 2)
+            H = JT @ J[idx]
+            g = (JT @ r[idx][..., None])[..., 0]
+            if kind == "two-mode":  # the extra mode held at a bound it presses against (active set)
+                lam = theta[idx, 2]
+                held = ((lam <= LAMBDA_BOUNDS[0]) & (g[:, 2] > 0)) | ((lam >= LAMBDA_BOUNDS[1]) & (g[:, 2] < 0))
+                if np.any(held):
+                    H[held, 2, :], H[held, :, 2], g[held, 2] = 0.0, 0.0, 0.0
+                    H[held, 2, 2] = 1.0
+            d = np.maximum(np.einsum("bkk->bk", H), 1e-30)
+            try:
+                step = np.linalg.solve(H + mu[idx, None, None] * d[:, :, None] * eye, -g[..., None])[..., 0]
+            except np.linalg.LinAlgError:
+                step = np.stack(
+                    [np.linalg.lstsq(h + m * np.diag(dd), -gg, rcond=None)[0] for h, m, dd, gg in zip(H, mu[idx], d, g)]
+                )
+            trial = theta[idx] + step
+            if kind == "two-mode":  # the extra mode stays where the record fit accepts it
+                trial[:, 2] = np.clip(trial[:, 2], *LAMBDA_BOUNDS)
+            coef2, r2, cost2, J2 = _project(kind, trial, y[idx], w[idx], tau)
+            better = np.isfinite(cost2) & (cost2 <= cost[idx])
+            predicted = -(2 * np.sum(g * step, axis=1) + np.einsum("bk,bkl,bl->b", step, H, step))
+            gain = np.where(better, cost[idx] - cost2, predicted)
+            small_step = np.max(np.abs(step) / (np.abs(theta[idx]) + 1e-6), axis=1) < LM_STEP
+            good = idx[better]
+            theta[good], coef[good], r[good], J[good] = trial[better], coef2[better], r2[better], J2[better]
+            cost[good] = cost2[better]
+            mu[idx] = np.where(better, mu[idx] / 3.0, mu[idx] * 4.0)
+            # no weave left: less than half a cycle over the record (the fit then wanders off)
+            lost = theta[idx, 0] * span[idx] < 2 * math.pi * MIN_CYCLES
+            done = (gain <= LM_TOLERANCE * scale[idx]) | small_step | (mu[idx] > 1e12) | lost
+            active[idx[done]] = False
+    beta[:, nl] = theta
+    beta[:, lin] = coef
+    beta[theta[:, 0] * span < 2 * math.pi * MIN_CYCLES] = np.nan
+    return beta, cost
+
+
+def eigenvalue_of(beta: np.ndarray) -> np.ndarray:
+    """The weave eigenvalue ``-sigma + i omega`` of fitted parameters ``beta (..., k)``; NaN unless a weave.
+
+    A weave: finite parameters and a positive frequency (the fit keeps the extra mode in range and
+    gives up below half a cycle).  The record fit's other checks (amplitude above the noise, the
+    F-test against the plain fit) judge a noisy record; a model's response has no noise.
+    """
+    omega, sigma = beta[..., 0], beta[..., 1]
+    ok = np.all(np.isfinite(beta), axis=-1) & (omega > 0)
+    return np.where(ok, -sigma + 1j * omega, np.nan + 1j * np.nan)
+
+
+# ---------------------------------------------------------------------------------------------
+# Records prepared for batched simulation
+# ---------------------------------------------------------------------------------------------
+@dataclass
+class FitItem:
+    """One signal's fit of one record: what the extraction refits in a model's response."""
+
+    record: int  # index among the batch's records
+    signal: int  # index among the batch's signals
+    kind: str  # "two-mode" or "plain"
+    start: np.ndarray  # the record's own fitted parameters
+    weight: complex  # weight of this signal's eigenvalue in the record's (real + i imag)
+
+
+@dataclass
+class RecordBatch:
+    """Records of one sampling step, padded to a common length.
+
+    Attributes
+    ----------
+    index : ndarray of int
+        Position of each record in the simulator's list.
+    dt : float
+    length : ndarray of int
+    signals : tuple of str
+        Signals simulated (the state signals and every fitted signal).
+    y, weight : ndarray
+        ``(R, N, S)`` samples (0 where absent) and ``(R, S)`` weights for the initial-state fit
+        (1 / the signal's scatter over the record; 0 where it is not used for the state).
+    items : list of FitItem
+    """
+
+    index: np.ndarray
+    dt: float
+    length: np.ndarray
+    signals: tuple[str, ...]
+    y: np.ndarray
+    weight: np.ndarray
+    items: list[FitItem]
+
+    @property
+    def N(self) -> int:
+        return int(self.length.max())
+
+    @property
+    def mask(self) -> np.ndarray:
+        return np.arange(self.N)[None, :] < self.length[:, None]
+
+
+def fit_weights(fit: RecordFit) -> list[tuple[str, complex]]:
+    """The signals a record's eigenvalue came from and their weights (real part + i imaginary part).
+
+    Inverse-variance weights of the record's own fits where :func:`bikerider.gap.records.combine_fits`
+    combined them, else the first signal alone: a model's apparent eigenvalue combines its refits
+    with the same weights, so it is a smooth function of the model.
+    """
+    names = list(fit.fits)
+    if len(names) == 1 or fit.estimate is None or fit.estimate == fit.fits[names[0]]:
+        return [(names[0], 1 + 1j)]
+    wr = np.array([1 / max(fit.fits[n].real_sigma, 1e-12) ** 2 for n in names])
+    wi = np.array([1 / max(fit.fits[n].imag_sigma, 1e-12) ** 2 for n in names])
+    return [(n, complex(a, b)) for n, a, b in zip(names, wr / wr.sum(), wi / wi.sum())]
+
+
+class RecordSimulator:
+    """Apparent eigenvalues of records under batches of models (module docstring).
+
+    Parameters
+    ----------
+    fits : list of RecordFit
+        Fitted records (each used); their order is the order of the results.
+    values : dict
+        Nominal benchmark values (the models' default).
+    geometry : RiderGeometry
+    starts : list of dict, optional
+        Per record, the starting parameters of each signal's refit (default: the record's own fit,
+        then :meth:`settle` replaces them by the nominal model's fit).
+
+    Raises
+    ------
+    bikerider.errors.FitError
+        For a record that is not uniformly sampled.
+    """
+
+    def __init__(self, fits: list[RecordFit], values: dict, geometry, starts: list[dict] | None = None):
+        self.fits = list(fits)
+        self.values = dict(values)
+        self.geometry = geometry
+        records = [f.record for f in self.fits]
+        self.speeds = np.array([r.speed for r in records], float)
+        self.measured = np.array([r.speed_measured for r in records], bool)
+        self.gains = np.array([r.gains for r in records], float).reshape(len(records), 4)
+        self.starts = (
+            starts
+            if starts is not None
+            else [{s: np.asarray(e.params, float) for s, e in f.fits.items()} for f in self.fits]
+        )
+        self.batches = self._batches()
+
+    def __len__(self) -> int:
+        return len(self.fits)
+
+    def subset(self, positions) -> RecordSimulator:
+        """The simulator of some of the records (their starts kept)."""
+        positions = [int(k) for k in positions]
+        return RecordSimulator(
+            [self.fits[k] for k in positions], self.values, self.geometry, [self.starts[k] for k in positions]
+        )
+
+    def settle(self) -> np.ndarray:
+        """Apparent eigenvalues of the nominal model, refitted from each record's own fit; their fits
+        become the starts of every later refit (so a model near the nominal one is refitted in a few
+        steps, and the nominal model's own apparent eigenvalue is reproduced exactly).  Returns them ``(R,)``."""
+        out = np.full(len(self.fits), np.nan + 1j * np.nan)
+        for batch in self.batches:
+            A, outputs = self.closed_loop(self.values, {}, None, batch.index)
+            sim = _linear_response(batch, A, outputs)
+            eig, betas = extract(batch, sim, keep=True)
+            out[batch.index] = eig[0]
+            for it, beta in zip(batch.items, betas):
+                if np.all(np.isfinite(beta[0])):
+                    self.starts[batch.index[it.record]][batch.signals[it.signal]] = beta[0]
+        self.batches = self._batches()
+        return out
+
+    def _batches(self) -> list[RecordBatch]:
+        groups: dict[float, list[int]] = {}
+        for k, f in enumerate(self.fits):
+            steps = np.diff(f.record.time)
+            if steps.size == 0 or not np.allclose(steps, steps[0], rtol=1e-6, atol=1e-9):
+                raise FitError(f"{f.record.name}: comparing a record with models needs it uniformly sampled")
+            groups.setdefault(round(float(steps[0]), 9), []).append(k)
+        out = []
+        for dt, idx in groups.items():
+            fits = [self.fits[k] for k in idx]
+            weights = [fit_weights(f) for f in fits]
+            signals = tuple(
+                dict.fromkeys(
+                    [s for f in fits for s in STATE_SIGNALS if s in f.record.signals]
+                    + [s for w in weights for s, _ in w]
+                )
+            )
+            length = np.array([f.record.time.size for f in fits])
+            N = int(length.max())
+            y = np.zeros((len(fits), N, len(signals)))
+            weight = np.zeros((len(fits), len(signals)))
+            items = []
+            for j, (k, f, w) in enumerate(zip(idx, fits, weights)):
+                for m, s in enumerate(signals):
+                    values = f.record.signals.get(s)
+                    if values is None or not np.all(np.isfinite(values)):
+                        continue
+                    y[j, : length[j], m] = values
+                    spread = float(np.std(values))
+                    weight[j, m] = 1.0 / spread if spread > 0 and s in STATE_SIGNALS else 0.0
+                for s, wt in w:
+                    items.append(FitItem(j, signals.index(s), f.fits[s].kind, self.starts[k][s], wt))
+            out.append(RecordBatch(np.array(idx), float(dt), length, signals, y, weight, items))
+        return out
+
+    # -- models ---------------------------------------------------------------------------------
+    def closed_loop(self, values: dict, config: dict, scale, index: np.ndarray) -> tuple[np.ndarray, tuple]:
+        """Closed-loop ``A (P, R, n, n)`` of records ``index`` for batched linear models.
+
+        ``values`` and ``config`` as :class:`bikerider.gap.models.EffectModel` takes them, each value
+        a number or an array of ``P`` (shape ``(P,)`` or ``(P, 1)``); ``scale`` ``None``, ``(P,)`` (the
+        speed of the records a sensor read) or ``(P, R_all)`` (every record's own, e.g. for the
+        speed's uncertainty).  The control gains stay those of the recorded speed.
+        """
+        from bikerider.gap.models import EffectModel
+
+        P = _batch_size(values, config, scale)
+        R = index.size
+        speeds = np.broadcast_to(self.speeds[index], (P, R))
+        if scale is not None:
+            s = np.asarray(scale, dtype=float)
+            if s.ndim == 2:
+                speeds = speeds * s[:, index]
+            else:
+                speeds = speeds * np.where(self.measured[index][None, :], s.reshape(P, 1), 1.0)
+
+        def flat(v):
+            a = np.asarray(v, dtype=float)
+            if a.ndim == 0:
+                return float(a)
+            return np.repeat(np.broadcast_to(a.reshape(a.shape[0], -1)[:, 0], (P,)), R)
+
+        model = EffectModel(
+            {k: flat(v) for k, v in values.items()},
+            self.geometry,
+            {e: {k: flat(v) for k, v in p.items()} for e, p in config.items()},
+        )
+        ss = model.state_space(speeds.ravel())
+        A = ss.closed_loop(np.tile(self.gains[index], (P, 1)))
+        n = A.shape[-1]
+        return A.reshape(P, R, n, n), ss.outputs
+
+    def apparent(self, values: dict | None = None, config: dict | None = None, scale=None) -> np.ndarray:
+        """Apparent eigenvalue of every record, ``(P, R)`` complex, for batched linear models.
+
+        Arguments as :meth:`closed_loop` (the nominal model when all are left out).
+        """
+        values = self.values if values is None else values
+        config = config or {}
+        P = _batch_size(values, config, scale)
+        out = np.full((P, len(self.fits)), np.nan + 1j * np.nan)
+        for batch in self.batches:
+            A, outputs = self.closed_loop(values, config, scale, batch.index)
+            R, N, S, n = batch.index.size, batch.N, len(batch.signals), A.shape[-1]
+            chunk = max(1, MAX_ELEMENTS // max(R * N * S * (n + S), 1))
+            for lo in range(0, P, chunk):
+                hi = min(P, lo + chunk)
+                out[lo:hi, batch.index] = extract(batch, _linear_response(batch, A[lo:hi], outputs))[0]
+        return out
+
+    def apparent_time_domain(self, layout, theta) -> np.ndarray:
+        """Apparent eigenvalue of every record ``(P, R)`` under a time-domain candidate (steer friction).
+
+        The response comes from :func:`bikerider.gap.timedomain.friction_states` (each record's
+        initial state refitted under the nonlinear model), the extraction is :func:`extract`, as for
+        every linear model.
+        """
+        from bikerider.gap.timedomain import Batch, friction_states, systems
+
+        theta = np.atleast_2d(np.asarray(theta, dtype=float))
+        out = np.full((theta.shape[0], len(self.fits)), np.nan + 1j * np.nan)
+        for batch in self.batches:
+            records = [self.fits[k].record for k in batch.index]
+            state = [m for m, s in enumerate(batch.signals) if np.any(batch.weight[:, m] > 0)]
+            y = {batch.signals[m]: np.where(batch.mask, batch.y[..., m], np.nan) for m in state}
+            weight = {batch.signals[m]: batch.weight[:, m] for m in state}
+            A, b, outputs, T = systems(self.values, self.geometry, records, layout, theta)
+            states, _ = friction_states(Batch(records, batch.dt, batch.length, y, weight), A, b, outputs, T)
+            sim = states[..., [outputs[OBSERVED[s]] for s in batch.signals]]
+            out[:, batch.index] = extract(batch, sim)[0]
+        return out
+
+
+def _batch_size(values: dict, config: dict, scale) -> int:
+    sizes = {np.asarray(v).shape[0] for v in values.values() if np.ndim(v) > 0}
+    sizes |= {np.asarray(v).shape[0] for p in config.values() for v in p.values() if np.ndim(v) > 0}
+    if scale is not None and np.ndim(scale) > 0:
+        sizes.add(np.asarray(scale).shape[0])
+    sizes.discard(1)
+    if len(sizes) > 1:
+        raise ValueError(f"batched values of different sizes {sorted(sizes)}")
+    return sizes.pop() if sizes else 1
+
+
+def _linear_response(batch: RecordBatch, A: np.ndarray, outputs: tuple) -> np.ndarray:
+    """Each record's response ``(P, R, N, S)`` under ``A (P, R, n, n)`` from its fitted initial state.
+
+    One matrix exponential of the sampling step per (model, record); the output rows ``C Phi(t_k)``
+    by repeated multiplication, doubling the samples known at each step (``C Phi(t_{k + m}) =
+    C Phi(t_k) Phi(t_m)`` for the ``m`` samples known, ``Phi(t_{2m})`` by squaring), so a record of
+    ``N`` samples takes ``log2 N`` batched products; the initial state (and an offset per signal) by
+    linear least squares on the record's state signals, each weighted by its scatter
+    (:func:`_initial_states`).
+    """
+    from bikerider.gap.timedomain import expm
+
+    P, R, n = A.shape[0], A.shape[1], A.shape[-1]
+    rows = [outputs[OBSERVED[s]] for s in batch.signals]
+    power = expm(A * batch.dt)  # (P, R, n, n): Phi over m samples, m = 1, 2, 4, ...
+    O = np.empty((P, R, batch.N, len(rows), n))
+    O[:, :, 0] = np.eye(n)[rows]
+    known = 1
+    while known < batch.N:
+        more = min(known, batch.N - known)
+        O[:, :, known : known + more] = O[:, :, :more] @ power[:, :, None]
+        known += more
+        if known < batch.N:
+            power = power @ power
+    basis = resolved_basis(A, batch.dt)  # (P, R, n, n)
+    O = O @ basis[:, :, None]
+    z = _initial_states(batch, O)
+    return (O.reshape(P, R, -1, n) @ z[..., None]).reshape(P, R, batch.N, len(rows))
+
+
+def resolved_basis(A: np.ndarray, dt: float) -> np.ndarray:
+    """A real basis ``(..., n, n)`` of the modes of ``A`` a record sampled every ``dt`` resolves.
+
+    A mode decaying faster than ``1 / dt`` (by more than a factor e from one sample to the next:
+    stiff tyres, a stiff lean spring) only shapes the first sample or two; left free, its initial value
+    would fit those samples' noise and bend the response the extraction sees.  The initial state is
+    fitted within the span of the other modes: the basis holds their (real and imaginary parts of)
+    eigenvectors, and zero columns in place of the fast ones.  Where every mode is resolved (the
+    Whipple bicycle's four at any ordinary speed) it is the identity, and nothing changes.
+    """
+    n = A.shape[-1]
+    eye = np.broadcast_to(np.eye(n), A.shape).copy()
+    with np.errstate(all="ignore"):
+        lam, V = np.linalg.eig(A)
+    fast = lam.real * dt < -1.0
+    todo = np.any(fast, axis=-1) & np.all(np.isfinite(lam), axis=-1)
+    if not np.any(todo):
+        return eye
+    lam, V, fast = lam[todo], V[todo], fast[todo]
+    basis = np.zeros(V.shape)
+    upper = lam.imag > 0
+    lower = lam.imag < 0
+    real = ~upper & ~lower
+    # LAPACK returns a complex pair as neighbours, the positive imaginary part first
+    basis = np.where(real[..., None, :], V.real, basis)
+    basis = np.where(upper[..., None, :], V.real, basis)
+    partner = np.roll(V.imag, 1, axis=-1)  # the column before each lower member: its upper partner
+    basis = np.where(lower[..., None, :], partner, basis)
+    basis = np.where(fast[..., None, :], 0.0, basis)
+    eye[todo] = basis
+    return eye
+
+
+def _initial_states(batch: RecordBatch, O: np.ndarray) -> np.ndarray:
+    """Each record's initial state ``(P, R, n)`` fitted to its signals (an offset per signal solved with it)."""
+    P, R, N, S, n = O.shape
+    w = batch.weight[:, None, :] * batch.mask[:, :, None]  # (R, N, S)
+    design = np.zeros((P, R, N, S, n + S))
+    design[..., :n] = O * w[None, :, :, :, None]
+    design[..., n:] = np.eye(S)[None, None, None] * w[None, :, :, :, None]
+    data = batch.y * w  # (R, N, S)
+    design = design.reshape(P, R, N * S, n + S)
+    designT = np.swapaxes(design, -1, -2)
+    gram = designT @ design
+    rhs = (designT @ data.reshape(R, N * S, 1))[..., 0]
+    scale = np.maximum(np.trace(gram, axis1=-2, axis2=-1) / gram.shape[-1], 1e-300)
+    gram = gram + 1e-12 * scale[..., None, None] * np.eye(n + S)
+    return np.linalg.solve(gram, rhs[..., None])[..., :n, 0]
+
+
+def extract(batch: RecordBatch, sim: np.ndarray, keep: bool = False):
+    """The record fit applied to simulated signals ``sim (P, R, N, S)`` of a batch: ``(P, R)`` complex.
+
+    Every fitted signal of every record is refitted with the model of the record's own fit (two-mode
+    or plain) from the batch's starting parameters, by :func:`levenberg_marquardt`; the signals'
+    eigenvalues are combined with the record's weights (:func:`fit_weights`).  Returns the
+    eigenvalues and, with ``keep``, the fitted parameters ``(P, k)`` of every item (else ``None``).
+    """
+    P, R = sim.shape[:2]
+    tau = np.arange(batch.N) * batch.dt
+    out = np.zeros((P, R), complex)
+    betas: list = [None] * len(batch.items)
+    for kind in ("two-mode", "plain"):
+        chosen = [j for j, it in enumerate(batch.items) if it.kind == kind]
+        if not chosen:
+            continue
+        items = [batch.items[j] for j in chosen]
+        rec = np.array([it.record for it in items])
+        sig = np.array([it.signal for it in items])
+        y = np.moveaxis(sim[:, rec, :, sig], 0, 1).reshape(P * len(items), batch.N)  # (P * I, N)
+        mask = np.tile(batch.mask[rec], (P, 1))
+        start = np.tile(np.array([it.start for it in items]), (P, 1))
+        beta, _ = levenberg_marquardt(kind, start, y, mask, tau)
+        eig = eigenvalue_of(beta).reshape(P, len(items))
+        weight = np.array([it.weight for it in items])
+        contrib = eig.real * weight.real + 1j * eig.imag * weight.imag
+        np.add.at(out, (slice(None), rec), contrib)
+        if keep:
+            beta = beta.reshape(P, len(items), -1)
+            for m, j in enumerate(chosen):
+                betas[j] = beta[:, m]
+    return out, (betas if keep else None)
+
+
+@dataclass
+class RecordRows:
+    """The eigenvalue rows of a problem that were fitted from records, and their simulator.
+
+    Attributes
+    ----------
+    simulator : RecordSimulator
+        One record per row, in the order of ``rows``.
+    rows : ndarray of int
+        The eigenvalue row of each record.
+    """
+
+    simulator: RecordSimulator
+    rows: np.ndarray
+
+
+def comparable(apparent: np.ndarray, matched: np.ndarray) -> tuple[np.ndarray, list[str | None]]:
+    """Which records can be compared by their eigenvalue: the nominal model's extraction bias.
+
+    ``apparent`` is what the record fit finds in the nominal model's response over each record,
+    ``matched`` the nominal model's weave eigenvalue there.  Where the fit finds no weave, or one
+    more than :data:`MAX_RELATIVE_BIAS` off the weave eigenvalue (another oscillating mode shares the
+    record, as at the lowest speeds), the record is left out, for every candidate alike.  Returns
+    the bias (NaN where left out) and the reason for each record left out (``None`` for the others).
+    """
+    bias = apparent - matched
+    reasons: list[str | None] = []
+    for a, m, b in zip(apparent, matched, bias):
+        if not np.isfinite(a):
+            reasons.append(
+                "the model's own response over this window shows no weave the record fit can find "
+                "(less than half a cycle); its eigenvalue cannot be compared with the model's"
+            )
+        elif abs(b) > MAX_RELATIVE_BIAS * abs(m):
+            reasons.append(
+                f"the fit applied to the model's own response over this window finds {_c(a)} against its "
+                f"weave eigenvalue {_c(m)} (more than {MAX_RELATIVE_BIAS:.0%} off: other modes share the "
+                "record); its eigenvalue cannot be compared with the model's"
+            )
+        else:
+            reasons.append(None)
+    return np.where([r is None for r in reasons], bias, np.nan), reasons
+
+
+def _c(z: complex) -> str:
+    return f"{z.real:.2f}{z.imag:+.2f}i 1/s"
