@@ -474,14 +474,19 @@ def _sbw_section() -> list[str]:
         f"{unc['data']:.2f} for the data; most from "
         + ", ".join(f"{u['parameter']}" for u in unc["largest"][:4])
         + "),",
-        f"yet the parameter fit (prior chi2 {r['parameter_fit']['test']['prior_chi2']:.1f} on "
+        ("and" if r["parameter_fit"]["plausible"] and not pinned else "yet")
+        + f" the parameter fit (prior chi2 {r['parameter_fit']['test']['prior_chi2']:.1f} on "
         f"{r['parameter_fit']['test']['prior_dof']} parameters) "
         + (
             f"needs {', '.join(pinned)} at its bound"
             + (" (a fork of zero roll inertia)" if pinned == ["IHxx"] else "")
             + ": implausible."
             if pinned
-            else ("is plausible." if r["parameter_fit"]["plausible"] else "is implausible.")
+            else (
+                "passes its prior test, but the parameters alone do not close the gap (the verdict's test)."
+                if r["parameter_fit"]["plausible"]
+                else "is implausible."
+            )
         ),
         f"The measured weave is slower than the nominal model's by {min(-c['mean_residual'] for c in imag_cells):.1f}-"
         f"{max(-c['mean_residual'] for c in imag_cells):.1f} rad/s from 2.5 m/s up (speed bands of the gap map) and "
@@ -559,9 +564,22 @@ def _sbw_section() -> list[str]:
         )
         + " |",
         f"| parameter error | within their uncertainty the parameters can bend the weave this far (held-out "
-        f"{ranking['parameters']['data_error_after']:.2f}), but only with "
-        + ", ".join(r["parameter_fit"]["at_bound"])
-        + " at zero: implausible |",
+        f"{ranking['parameters']['data_error_after']:.2f})"
+        + (
+            f", but only with {', '.join(r['parameter_fit']['at_bound'])} at its bound: implausible |"
+            if r["parameter_fit"]["at_bound"]
+            else (
+                ", with shifts that pass their prior test: plausible, but it predicts held-out speeds "
+                + (
+                    "worse than"
+                    if ranking["parameters"]["data_error_after"] > ranking["steer_friction"]["data_error_after"]
+                    else "no better than"
+                )
+                + f" steer friction ({ranking['steer_friction']['data_error_after']:.2f}) |"
+                if ranking["parameters"].get("plausible")
+                else ", but only with shifts that fail their prior test: implausible |"
+            )
+        ),
         f"| (the motor's rotor inertia) | added steer inertia fits at {_shown(inertia['value'], inertia['ci95'])} "
         f"[{_shown(inertia['ci95'][0], inertia['ci95'])}, {_shown(inertia['ci95'][1], inertia['ci95'])}] kg m^2: "
         "none is needed |",
