@@ -69,7 +69,13 @@ class FirstOrder:
 
     def quantities(self, names: Sequence[str]) -> dict[str, Quantity]:
         """:meth:`quantity` of each of ``names``, at once."""
-        sigmas = _root_sum_squares(self.jacobian(names), self.sigmas) if len(self.wrt) else [0.0] * len(names)
+        entries = self.gradients.entries(names) if isinstance(self.gradients, Rows) else None
+        if not len(self.wrt):
+            sigmas = [0.0] * len(names)
+        elif entries is not None:  # one point: only the entries that can count
+            sigmas = _root_sum_squares_of_entries(*entries, self.sigmas)
+        else:
+            sigmas = _root_sum_squares(self.jacobian(names), self.sigmas)
         nodes = self.nodes
         out = {}
         for name, sigma in zip(names, sigmas):
@@ -95,6 +101,30 @@ def _root_sum_squares(jacobian: np.ndarray, sigmas: np.ndarray, skip_nonfinite: 
     ends = np.cumsum(nonzero.sum(axis=1)).tolist()
     fsum, sqrt = math.fsum, math.sqrt
     return [sqrt(fsum(terms_by_row[start:end])) for start, end in zip([0, *ends], ends)]
+
+
+def _root_sum_squares_of_entries(
+    values: np.ndarray, columns: np.ndarray, ends: list[int], sigmas: np.ndarray
+) -> list[float]:
+    """:func:`_root_sum_squares` (skipping terms that are not finite) of rows given by the entries
+    that can be finite and not zero (:meth:`Rows.entries`): the same terms, so the same sums."""
+    with np.errstate(invalid="ignore", over="ignore"):
+        terms = values * sigmas[columns]
+        squares = (terms * terms).tolist()
+    fsum, sqrt, isfinite = math.fsum, math.sqrt, math.isfinite
+    out = []
+    start = 0
+    for end in ends:
+        row = squares[start:end]
+        start = end
+        try:
+            total = fsum(row)
+        except OverflowError:
+            total = math.inf
+        if not isfinite(total):  # a term that is not finite contributes nothing
+            total = fsum([t for t in row if isfinite(t)])
+        out.append(sqrt(total))
+    return out
 
 
 @functools.lru_cache(maxsize=256)
