@@ -144,19 +144,24 @@ def first_order(
     for one bicycle); arrays give a batch.  ``chain``: the stages already selected for these
     inputs (:class:`Chain`), when the caller has them."""
     chain = chain or _chain(tuple(stages), frozenset(quantities))
-    values, uncertain = {}, []
+    values, uncertain, spread = {}, [], []
     for name, q in quantities.items():
         if type(q) is Quantity:
             values[name] = q.value
-            if q.sigma > 0:
-                uncertain.append(name)
+            sigma = q.sigma
         else:  # a plain number or an array: no uncertainty
             values[name] = getattr(q, "value", q)
-            if getattr(q, "sigma", 0.0) > 0:
-                uncertain.append(name)
-    wrt = tuple(wrt) if wrt is not None else tuple(uncertain)
+            sigma = getattr(q, "sigma", 0.0)
+        if sigma > 0:
+            uncertain.append(name)
+            spread.append(sigma)
+    if wrt is None:
+        wrt = tuple(uncertain)
+    else:
+        wrt = tuple(wrt)
+        spread = [getattr(quantities[name], "sigma", 0.0) for name in wrt]
     nodes, gradients = chain.gradients(values, wrt)
-    sigmas = np.array([getattr(quantities[name], "sigma", 0.0) for name in wrt], dtype=float)
+    sigmas = np.array(spread, dtype=float)
     return FirstOrder(nodes, gradients, wrt, sigmas)
 
 
