@@ -695,19 +695,22 @@ def _check_compound(name: str, inertia, period, length, g, source: str) -> None:
         )
 
 
-def _outputs(layout: MeasuredLayout) -> list[str]:
-    """The reduction's outputs, in the order :class:`MeasuredReduction` reports them."""
+@functools.lru_cache(maxsize=64)
+def _outputs(key: tuple) -> tuple[str, ...]:
+    """The reduction's outputs of a layout (:func:`_layout_key`), in the order
+    :class:`MeasuredReduction` reports them (worked out once per layout)."""
+    _, split_fork, orientations, _, seating, _ = key
     out = ["w", "c", "lam_ht", "g", "rR", "rF", "lam", "f", "k_t"]
     for wheel in ("R", "F"):
         out += [f"m{wheel}", f"I{wheel}xx", f"I{wheel}yy"]
-    for body in layout.orientations:
+    for body, _ in orientations:
         name = _node_name(body)
         out += [f"m{name}", f"x{name}", f"z{name}", f"I{name}xx", f"I{name}xz", f"I{name}zz", f"I{name}yy"]
-    if layout.split_fork:
+    if split_fork:
         out += _HANDLEBAR
-    if layout.seating:
+    if seating:
         out += ["h_bb", "l_cs", "l_sp", "l_st", "lam_st", "l_s", "l_hb", "l_f", "x_hand", "z_hand"]
-    return out
+    return tuple(out)
 
 
 _BODY_OUTPUTS = BODY_NAMES + OPTIONAL_BODY_NAMES
@@ -729,9 +732,9 @@ def reduce_values(
     result = first_order(_stages(key), inputs)
     lines: dict[str, LineIntersection] = {}
     _check(result.nodes, layout, com_method, line_tolerance, source, lines)
-    outputs = _outputs(layout)
-    computed = result.quantities([key for key in outputs if key not in inputs])
-    reduced = {key: inputs[key] if key in inputs else computed[key] for key in outputs}
+    outputs = _outputs(key)
+    computed = result.quantities([name for name in outputs if name not in inputs])
+    reduced = {name: inputs[name] if name in inputs else computed[name] for name in outputs}
     return reduced, lines
 
 

@@ -18,10 +18,22 @@ from bikerider.errors import InputError
 
 class Rows(Mapping):
     """Gradients at one point: the rows of one matrix by node name; :attr:`matrix` and
-    :attr:`index` give them whole (for products over many rows at once)."""
+    :attr:`index` give them whole (for products over many rows at once).
 
-    def __init__(self, index: dict[str, int], matrix: np.ndarray):
-        self.index, self.matrix = index, matrix
+    ``plan``, when given, is the :class:`_PointPlan` the matrix was computed by: it knows which
+    entries of a row can be finite and not zero (:meth:`entries`)."""
+
+    def __init__(self, index: dict[str, int], matrix: np.ndarray, plan: _PointPlan | None = None):
+        self.index, self.matrix, self.plan = index, matrix, plan
+
+    def entries(self, names: Sequence[str]) -> tuple[np.ndarray, np.ndarray, list[int]] | None:
+        """``(values, columns, ends)``: the entries of the rows of ``names`` that can be finite and
+        not zero, row after row (``ends``: where each row ends), and their columns; every other
+        entry of these rows is zero or not finite.  ``None`` without a plan."""
+        if self.plan is None:
+            return None
+        positions, columns, ends = self.plan.entries(tuple(names))
+        return self.matrix.reshape(-1)[positions], columns, ends
 
     def __getitem__(self, name: str) -> np.ndarray:
         return self.matrix[self.index[name]]
@@ -78,7 +90,7 @@ class Chain:
             available.update(stage.outputs)
         self.available = available
         """The nodes given and computed (the stages' checks are computed too, but not listed)."""
-        self._plans: dict[tuple, tuple] = {}
+        self._plans: dict[tuple, _PointPlan] = {}
 
     def require(self, names: Sequence[str]) -> None:
         """Raise :class:`InputError` naming the first of ``names`` the inputs cannot give."""
@@ -130,31 +142,133 @@ class Chain:
         return nodes, grads
 
     def _point_gradients(self, values: Mapping[str, object], wrt: Sequence[str]) -> tuple[dict, dict[str, np.ndarray]]:
-        """:meth:`gradients` at one point: the gradients are the rows of one matrix, each stage one
-        product of its Jacobian with the rows of its inputs (no per-node arrays; the rows each stage
-        reads and writes are worked out once for a set of names)."""
-        rows, plan, seeds = self._plan(tuple(values), tuple(wrt))
-        G = np.zeros((len(rows), len(wrt)))
-        G[seeds, np.arange(len(wrt))] = 1.0
+        """:meth:`gradients` at one point: the gradients are the rows of one matrix ``G``, each stage
+        one product of its Jacobian with the rows of its inputs (no per-node arrays; the rows each
+        stage reads and writes are worked out once for a set of names, see :class:`_PointPlan`).
+
+        A stage that reads only given nodes, and gives its Jacobian as the entries that are not
+        identically zero (a generated stage's float twin), has its entries written straight into
+        ``G``: its inputs' rows hold one 1 each (or nothing), so the product is those entries, put
+        in place.  Where an entry is not finite the product is taken, so that it spreads as it
+        does through a product (``inf * 0`` is NaN).
+        """
+        plan = self._point_plan(tuple(values), tuple(wrt))
+        G = np.zeros(plan.shape)
+        flat = G.reshape(-1)  # a view: writes by flat index land in G
+        flat[plan.seeds] = 1.0
         nodes = dict(values)
         with np.errstate(invalid="ignore", divide="ignore"):
-            for stage, inputs, outputs in plan:
-                values_out, checks, J = stage.evaluate_with_jacobian(stage.kwargs(nodes))
+            for stage, inputs, outputs, selected, targets in plan.steps:
+                values_out, checks, J, sparse = stage.evaluate_point(stage.kwargs(nodes))
                 nodes.update(zip(stage.outputs, values_out))
-                nodes.update(zip(stage.checks, checks))
+                if checks:
+                    nodes.update(zip(stage.checks, checks))
+                if sparse:
+                    entries = np.array(J, dtype=float)
+                    if targets is not None and np.isfinite(entries).all():
+                        flat[targets] = entries[selected]
+                        continue
+                    J = np.zeros((len(stage.outputs), len(stage.inputs)))
+                    J.flat[stage.sparsity] = entries
                 G[outputs] = J @ G[inputs]
-        return nodes, Rows(rows, G)
+        return nodes, Rows(plan.rows, G, plan)
 
-    def _plan(self, names: tuple[str, ...], wrt: tuple[str, ...]):
+    def _point_plan(self, names: tuple[str, ...], wrt: tuple[str, ...]) -> _PointPlan:
         key = (names, wrt)
-        if key not in self._plans:
-            row = {name: i for i, name in enumerate(names)}
-            for stage in self.stages:
-                for name in stage.outputs:
-                    row[name] = len(row)
-            plan = [
-                (stage, np.array([row[n] for n in stage.inputs]), np.array([row[n] for n in stage.outputs]))
-                for stage in self.stages
-            ]
-            self._plans[key] = (row, plan, np.array([row[n] for n in wrt], dtype=int))
-        return self._plans[key]
+        plan = self._plans.get(key)
+        if plan is None:
+            plan = self._plans[key] = _PointPlan(self.stages, names, wrt)
+        return plan
+
+
+class _PointPlan:
+    """The rows of the gradient matrix for one set of given names and ``wrt``, worked out once.
+
+    Attributes
+    ----------
+    rows : dict of str to int
+        The row of each given and computed node.
+    shape : tuple of int
+        ``(len(rows), len(wrt))``.
+    seeds : ndarray
+        Flat indices of the 1s of the ``wrt`` nodes' rows.
+    steps : list of tuple
+        Per stage ``(stage, input rows, output rows, selected, targets)``: for a stage that reads
+        only given nodes (each once) and can give its Jacobian's entries that are not identically
+        zero (:attr:`Stage.sparsity`), ``selected`` are those of the entries whose input is in
+        ``wrt`` and ``targets`` their flat indices in the gradient matrix; else both are ``None``.
+    pattern : list of set of int
+        Per row the columns whose entry can be finite and not zero: a ``wrt`` node's own column; a
+        stage output's, those of the inputs its Jacobian entry is not identically zero for (every
+        input where the stage gives no :attr:`Stage.sparsity`).  Any other entry is zero or not
+        finite: a product with a zero Jacobian entry is zero (or NaN from ``0 * inf``), and so is
+        a product with a zero gradient entry.
+    """
+
+    def __init__(self, stages: Sequence[Stage], names: tuple[str, ...], wrt: tuple[str, ...]):
+        self.rows = {name: i for i, name in enumerate(names)}
+        for stage in stages:
+            for name in stage.outputs:
+                self.rows[name] = len(self.rows)
+        n = len(wrt)
+        self.shape = (len(self.rows), n)
+        self.seeds = np.array([self.rows[name] * n + k for k, name in enumerate(wrt)], dtype=int)
+        column = {name: k for k, name in enumerate(wrt)}
+        given = set(names)
+        written = set(wrt)  # rows that are not zero before their stage runs
+        self.steps = []
+        self.pattern: list[set[int]] = [set() for _ in self.rows]
+        for k, name in enumerate(wrt):
+            self.pattern[self.rows[name]] = {k}
+        self._entries: dict[tuple[str, ...], tuple[np.ndarray, np.ndarray, list[int]]] = {}
+        for stage in stages:
+            self._add_pattern(stage)
+            inputs = np.array([self.rows[name] for name in stage.inputs], dtype=int)
+            outputs = np.array([self.rows[name] for name in stage.outputs], dtype=int)
+            selected = targets = None
+            sparsity = stage.sparsity
+            if (
+                sparsity is not None
+                and given.issuperset(stage.inputs)
+                and len(set(stage.inputs)) == len(stage.inputs)
+                and written.isdisjoint(stage.outputs)
+            ):
+                row, col = np.divmod(sparsity, len(stage.inputs))
+                wrt_column = np.array([column.get(stage.inputs[j], -1) for j in col.tolist()], dtype=int)
+                keep = wrt_column >= 0
+                selected = np.flatnonzero(keep)
+                targets = outputs[row[keep]] * n + wrt_column[keep]
+            written.update(stage.outputs)
+            self.steps.append((stage, inputs, outputs, selected, targets))
+
+    def _add_pattern(self, stage: Stage) -> None:
+        """The pattern of the rows ``stage`` writes (from its inputs' and its Jacobian's)."""
+        n_in = len(stage.inputs)
+        if stage.sparsity is None:
+            structure: list = [range(n_in)] * len(stage.outputs)
+        else:
+            structure = [[] for _ in stage.outputs]
+            for flat in stage.sparsity.tolist():
+                structure[flat // n_in].append(flat % n_in)
+        for name, inputs in zip(stage.outputs, structure):
+            columns: set[int] = set()
+            for j in inputs:
+                columns |= self.pattern[self.rows[stage.inputs[j]]]
+            self.pattern[self.rows[name]] = columns
+
+    def entries(self, names: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray, list[int]]:
+        """``(positions, columns, ends)`` of :meth:`Rows.entries` (flat indices into the matrix)."""
+        found = self._entries.get(names)
+        if found is None:
+            n = self.shape[1]
+            positions: list[int] = []
+            columns: list[int] = []
+            ends = []
+            for name in names:
+                row = self.rows[name]
+                pattern = sorted(self.pattern[row])
+                positions += [row * n + k for k in pattern]
+                columns += pattern
+                ends.append(len(positions))
+            found = self._entries[names] = (np.array(positions, dtype=int), np.array(columns, dtype=int), ends)
+        return found

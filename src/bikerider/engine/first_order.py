@@ -69,7 +69,13 @@ class FirstOrder:
 
     def quantities(self, names: Sequence[str]) -> dict[str, Quantity]:
         """:meth:`quantity` of each of ``names``, at once."""
-        sigmas = _root_sum_squares(self.jacobian(names), self.sigmas) if len(self.wrt) else [0.0] * len(names)
+        entries = self.gradients.entries(names) if isinstance(self.gradients, Rows) else None
+        if not len(self.wrt):
+            sigmas = [0.0] * len(names)
+        elif entries is not None:  # one point: only the entries that can count
+            sigmas = _root_sum_squares_of_entries(*entries, self.sigmas)
+        else:
+            sigmas = _root_sum_squares(self.jacobian(names), self.sigmas)
         nodes = self.nodes
         out = {}
         for name, sigma in zip(names, sigmas):
@@ -97,6 +103,30 @@ def _root_sum_squares(jacobian: np.ndarray, sigmas: np.ndarray, skip_nonfinite: 
     return [sqrt(fsum(terms_by_row[start:end])) for start, end in zip([0, *ends], ends)]
 
 
+def _root_sum_squares_of_entries(
+    values: np.ndarray, columns: np.ndarray, ends: list[int], sigmas: np.ndarray
+) -> list[float]:
+    """:func:`_root_sum_squares` (skipping terms that are not finite) of rows given by the entries
+    that can be finite and not zero (:meth:`Rows.entries`): the same terms, so the same sums."""
+    with np.errstate(invalid="ignore", over="ignore"):
+        terms = values * sigmas[columns]
+        squares = (terms * terms).tolist()
+    fsum, sqrt, isfinite = math.fsum, math.sqrt, math.isfinite
+    out = []
+    start = 0
+    for end in ends:
+        row = squares[start:end]
+        start = end
+        try:
+            total = fsum(row)
+        except OverflowError:
+            total = math.inf
+        if not isfinite(total):  # a term that is not finite contributes nothing
+            total = fsum([t for t in row if isfinite(t)])
+        out.append(sqrt(total))
+    return out
+
+
 @functools.lru_cache(maxsize=256)
 def _chain(stages: tuple[Stage, ...], names: frozenset[str]) -> Chain:
     """The chain of the same stages for the same input names, built once (one bicycle after another)."""
@@ -114,19 +144,24 @@ def first_order(
     for one bicycle); arrays give a batch.  ``chain``: the stages already selected for these
     inputs (:class:`Chain`), when the caller has them."""
     chain = chain or _chain(tuple(stages), frozenset(quantities))
-    values, uncertain = {}, []
+    values, uncertain, spread = {}, [], []
     for name, q in quantities.items():
         if type(q) is Quantity:
             values[name] = q.value
-            if q.sigma > 0:
-                uncertain.append(name)
+            sigma = q.sigma
         else:  # a plain number or an array: no uncertainty
             values[name] = getattr(q, "value", q)
-            if getattr(q, "sigma", 0.0) > 0:
-                uncertain.append(name)
-    wrt = tuple(wrt) if wrt is not None else tuple(uncertain)
+            sigma = getattr(q, "sigma", 0.0)
+        if sigma > 0:
+            uncertain.append(name)
+            spread.append(sigma)
+    if wrt is None:
+        wrt = tuple(uncertain)
+    else:
+        wrt = tuple(wrt)
+        spread = [getattr(quantities[name], "sigma", 0.0) for name in wrt]
     nodes, gradients = chain.gradients(values, wrt)
-    sigmas = np.array([getattr(quantities[name], "sigma", 0.0) for name in wrt], dtype=float)
+    sigmas = np.array(spread, dtype=float)
     return FirstOrder(nodes, gradients, wrt, sigmas)
 
 

@@ -95,6 +95,20 @@ class Stage:
         outputs, checks = self.evaluate(kw)
         return outputs, checks, self.jacobian(kw)
 
+    sparsity: np.ndarray | None = None
+    """Flat indices into ``(len(outputs), len(inputs))`` of the Jacobian entries that are not
+    identically zero, when :meth:`evaluate_point` can give the Jacobian as those entries alone."""
+
+    def evaluate_point(self, kw: Mapping[str, object]) -> tuple[list, list, object, bool]:
+        """:meth:`evaluate_with_jacobian` at one point: ``(outputs, checks, jacobian, sparse)``.
+
+        With ``sparse`` the Jacobian is the flat sequence of its entries at :attr:`sparsity` (every
+        other entry is zero), else the whole ``(len(outputs), len(inputs))`` array.  One bicycle's
+        chain then writes a stage's Jacobian where it is needed without building the matrix.
+        """
+        outputs, checks, jacobian = self.evaluate_with_jacobian(kw)
+        return outputs, checks, jacobian, False
+
 
 def _floats(kw: Mapping[str, object]) -> bool:
     """Whether every argument is a plain number (not an array)."""
@@ -168,6 +182,8 @@ class GeneratedStage(Stage):
         self._shape = jacobian["outputs"][-1][1]
         self._combined = [o[0] for o in jacobian["outputs"][:-1]] == names  # the values come with it
         self._nonzero = np.array(jacobian.get("nonzero", {}).get("jacobian", ()), dtype=int)
+        if self._scalar:  # the float twin returns the entries at these indices
+            self.sparsity = self._nonzero
         vector = [("values", (i,)) for i in range(len(self.outputs))]
         self._vector = list(entry["picks"]) == vector and all(
             o == "checks" and index == (i,) for i, (_, o, index) in enumerate(entry["checks"])
@@ -207,17 +223,31 @@ class GeneratedStage(Stage):
         return matrix
 
     def evaluate_with_jacobian(self, kw: Mapping[str, object]) -> tuple[list, list, np.ndarray]:
+        outputs, checks, jacobian, sparse = self.evaluate_point(kw)
+        return outputs, checks, self._matrix(jacobian, False) if sparse else jacobian
+
+    def evaluate_point(self, kw: Mapping[str, object]) -> tuple[list, list, object, bool]:
         scalar = self._scalar and _floats(kw)
-        if scalar and self._vector and self._combined:  # one bicycle: one call of a float twin, no picking
+        if scalar:  # one bicycle: the float twins, the Jacobian's entries as they come
+            functions = self._functions
             try:
-                *values, jacobian = self._functions[self._jacobian, True](**kw)
+                if self._vector and self._combined:  # values, checks and Jacobian from one function, no picking
+                    *values, jacobian = functions[self._jacobian, True](**kw)
+                    return list(values[0]), list(values[1]) if len(values) > 1 else [], jacobian, True
+                result = functions[self._value, True](**kw)
+                jacobian = functions[self._jacobian, True](**kw)
             except (ValueError, ZeroDivisionError, OverflowError):
                 pass  # outside a function's domain: the NumPy functions below give NaN or inf
             else:
-                return list(values[0]), list(values[1]) if len(values) > 1 else [], self._matrix(jacobian, False)
+                if self._single:
+                    result = (result,)
+                outputs = [_pick(result[i], index, False) for i, index in self._picks]
+                checks = [_pick(result[i], index, False) for i, index in self._check_picks]
+                return outputs, checks, jacobian[-1] if self._combined else jacobian, True
         outputs, checks = self._values(kw, scalar)
         result, batched = self._call(self._jacobian, kw, scalar)
-        return outputs, checks, self._matrix(result[-1] if self._combined else result, batched)
+        jacobian = result[-1] if self._combined else result  # type: ignore[index]
+        return outputs, checks, np.asarray(jacobian, dtype=float) if batched else jacobian, not batched
 
 
 class DifferencedStage(Stage):
