@@ -4,6 +4,10 @@ from __future__ import annotations
 
 import argparse
 import functools
+import logging
+
+LONG_WORK_ROWS = 1000
+"""Eigenvalue rows and records from which the command says, before it starts, that the work takes minutes."""
 
 
 def add_parser(subparsers) -> None:
@@ -75,7 +79,9 @@ def add_parser(subparsers) -> None:
         help="TOML with the known control: [control] constant gains k_phi, k_phid, k_delta, k_deltad, or "
         "named laws [control.<name>] whose gains may change with speed; acts where the data name none",
     )
-    p.add_argument("--speed", metavar="V", type=float, help="speed [m/s] of perturbation runs whose file gives none")
+    p.add_argument(
+        "--speed", metavar="V", type=float, help="speed [m/s] of perturbation runs whose file gives none (0 < V <= 1e6)"
+    )
     p.add_argument(
         "--groups",
         metavar="G1,G2",
@@ -88,7 +94,12 @@ def add_parser(subparsers) -> None:
         "passive_arms, rider_lean, tyre_slip, speed_sensor, steer_friction)",
     )
     p.add_argument("--json", action="store_true", help="print one JSON object instead of text")
-    p.add_argument("--report", metavar="DIR", help="write report.md and PNG figures into DIR")
+    p.add_argument(
+        "--report",
+        metavar="DIR",
+        help="write report.md and PNG figures into DIR (figures of a previous report there that this one "
+        "does not link are removed; a DIR where the report would replace an input is refused)",
+    )
     p.set_defaults(run=run)
 
 
@@ -99,6 +110,7 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
 
     from bikerider.errors import InputError
+    from bikerider.gap.control import MAX_MAGNITUDE
     from bikerider.gap.report import summary_text
 
     if not (math.isfinite(args.rider_rel_sigma) and 0 <= args.rider_rel_sigma < 1):
@@ -109,6 +121,13 @@ def run(args: argparse.Namespace) -> int:
         )
     if args.sample_rate is not None and not (math.isfinite(args.sample_rate) and args.sample_rate > 0):
         raise InputError("--sample-rate", args.sample_rate, "a positive sampling rate [Hz]")
+    if args.speed is not None and not (0 < args.speed <= MAX_MAGNITUDE):  # also NaN
+        raise InputError("--speed", args.speed, f"a positive speed of at most {MAX_MAGNITUDE:g} m/s (check the units)")
+    inputs = [p for p in (args.model, args.rider, args.control, *args.data, *args.experiment) if p]
+    if args.report:
+        from bikerider.io.gap_report import check_report_folder
+
+        check_report_folder(args.report, inputs)  # before the work: the report must not replace an input
     diagnosis = _diagnose_files(
         args.model,
         tuple(args.data),
@@ -126,7 +145,7 @@ def run(args: argparse.Namespace) -> int:
     if args.report:
         from bikerider.io.gap_report import write_report
 
-        path = write_report(diagnosis, args.report, title=f"Sim-to-real gap: {args.model}")
+        path = write_report(diagnosis, args.report, title=f"Sim-to-real gap: {args.model}", inputs=inputs)
         result["report"] = str(path)
     if args.json:
         print(json.dumps(_plain(result, np), indent=2, allow_nan=False))
@@ -197,7 +216,7 @@ def _diagnose_files(
     from bikerider.io.gap_model import load_model
 
     loaded = load_model(model, rider, rider_rel_sigma=rider_rel_sigma)
-    laws = gap_data.read_control(control) if control else {}
+    laws = gap_data.read_control(control) if control is not None else {}  # "" is a missing file, not "none"
     default_law = next(iter(laws.values())) if len(laws) == 1 else None
     keep = [g.strip() for g in groups.split(",")] if groups else None
     eigen, canonical, records = [], [], []
@@ -217,13 +236,16 @@ def _diagnose_files(
         candidates = tuple(e.strip() for e in effects.split(","))
         for name in candidates:
             effect(name)
-    return diagnose(
-        loaded,
-        EigenvalueData.concatenate(eigen),
-        CanonicalData.concatenate(canonical),
-        candidates,
-        fit_records(records),
-    )
+    table = EigenvalueData.concatenate(eigen)
+    if len(table) + len(records) >= LONG_WORK_ROWS:  # a progress line: the user sees why it takes long
+        logging.getLogger("bikerider.gap").warning(
+            "%d eigenvalue rows and %d records, candidates %s: each is fitted on every fold, which may take "
+            "minutes (fewer --effects are faster)",
+            len(table),
+            len(records),
+            ", ".join(candidates),
+        )
+    return diagnose(loaded, table, CanonicalData.concatenate(canonical), candidates, fit_records(records))
 
 
 def _plain(value, np):
