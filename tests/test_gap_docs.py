@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import re
+import shlex
 from pathlib import Path
 
 import pytest
@@ -15,13 +16,6 @@ from bikerider.cli import main
 ROOT = Path(__file__).resolve().parents[1]
 DOC = ROOT / "docs" / "gap.md"
 DATA = Path(bikerider.__file__).parent / "data"
-BP = DATA / "bicycleparameters"
-MODEL = [
-    "--model",
-    str(BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt"),
-    "--rider",
-    str(BP / "riders/Jason/Parameters/JasonRigidBenchmark.txt"),
-]
 
 
 def _section(title: str) -> str:
@@ -46,17 +40,20 @@ def test_the_python_section_runs_as_written(tmp_path, monkeypatch):
     assert (tmp_path / "tyres.png").stat().st_size > 10_000
 
 
-def test_the_documented_example_command_gives_the_documented_result(capsys):
+def test_the_documented_example_command_gives_the_documented_result(capsys, monkeypatch):
     # docs/gap.md, "Examples": the synthetic example hides a steer friction; with the perturbation run
     # the tool selects steer_damping at about 1.2 N m s/rad (the friction's linear equivalent), not
-    # the steer_friction candidate, which needs records in two groups or more.  Only the two effects
-    # that decide it are searched here (tests/test_gap_failures.py runs every candidate).
-    examples = DATA / "gap_examples"
+    # the steer_friction candidate, which needs records in two groups or more.  The command as the
+    # page writes it, from the project's root; only the two effects that decide it are searched here
+    # (tests/test_gap_failures.py runs every candidate).
     section = _section("Examples")
     assert "steer_damping` ranked first and **selected**, c_steer about 1.2 N m s/rad" in section
     assert "steer_friction` is not applicable" in section
-    data = [str(examples / "eigenvalues.csv"), str(examples / "perturbation_run.csv")]
-    assert main(["gap", *MODEL, "--data", *data, "--effects", "steer_damping,steer_friction", "--json"]) == 0
+    block = next(b for b in re.findall(r"```\n(.*?)```", section, re.S) if "perturbation_run.csv" in b)
+    argv = shlex.split(block.replace("\\\n", " "))
+    assert argv[:2] == ["bikerider", "gap"]
+    monkeypatch.chdir(ROOT)
+    assert main([*argv[1:], "--effects", "steer_damping,steer_friction", "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
     assert out["verdict"] == "structural" and out["selected"] == ["steer_damping"]
     assert round(out["ranking"][0]["parameters"]["c_steer"]["value"], 1) == 1.2

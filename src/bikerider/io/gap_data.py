@@ -348,7 +348,7 @@ def read_perturbation(
     if "speed" in data:
         v, v_sigma = float(np.mean(data["speed"])), float(np.std(data["speed"]))
     elif speed is not None:
-        if not (isinstance(speed, (int, float)) and not isinstance(speed, bool) and 0 < float(speed) <= MAX_MAGNITUDE):
+        if not (isinstance(speed, (int, float)) and not isinstance(speed, bool) and 0 < speed <= MAX_MAGNITUDE):
             raise InputError(
                 "speed", speed, f"a positive speed of at most {MAX_MAGNITUDE:g} m/s (check the units)", str(table.path)
             )
