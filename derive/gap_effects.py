@@ -41,8 +41,13 @@ equations.  The lateral slip velocities of the two wheel contacts are linear in 
 * With tyre slip the lateral tyre forces are generalized forces through the partial velocities of
   the contact points, and the heading ``psi`` enters only through ``u = Y' - v psi`` (the lateral
   velocity of the rear contact relative to the heading), so the state is
-  ``[phi, delta, theta, u, r, phi', delta', theta', F_R, F_F]`` with ``r = psi'``.  As the tyre
-  stiffnesses grow without bound the slip vanishes and the Whipple eigenvalues return.
+  ``[phi, delta, theta, u, r, phi', delta', theta', F_R, F_F]`` with ``r = psi'``.  As the
+  cornering stiffness grows without bound the slip vanishes and the slip forces become the
+  reactions of rolling without slip, still applied ``t_p`` behind the contacts (through the
+  partial velocities ``Papp``, not ``P``): the limit is the no-slip kinematics with those reactions
+  as multipliers, an aligning moment ``t_p F`` on each wheel (``F`` the reaction less the camber
+  thrust), independent of ``sigma_t``.  It is the Whipple model only for ``t_p = 0``
+  (``tests/test_gap_tyre_limit.py``).
 
 Rows and columns of every matrix follow the coordinates; the rigid-rider models are the leading
 blocks with ``theta`` removed (``theta = 0`` is a holonomic constraint whose reaction acts only in

@@ -4,8 +4,12 @@ from __future__ import annotations
 
 import argparse
 import functools
+import logging
 
 from bikerider.commands import argument_types
+
+LONG_WORK_ROWS = 1000
+"""Eigenvalue rows and records from which the command says, before it starts, that the work takes minutes."""
 
 
 def add_parser(subparsers) -> None:
@@ -109,6 +113,7 @@ def run(args: argparse.Namespace) -> int:
 
     from bikerider import notes
     from bikerider.errors import InputError
+    from bikerider.gap.control import MAX_MAGNITUDE
     from bikerider.gap.report import summary_text
     from bikerider.io.output_guard import ReportFolder, folder_output
 
@@ -123,6 +128,8 @@ def run(args: argparse.Namespace) -> int:
         )
     if args.sample_rate is not None and not (math.isfinite(args.sample_rate) and args.sample_rate > 0):
         raise InputError("--sample-rate", args.sample_rate, "a positive sampling rate [Hz]")
+    if args.speed is not None and not (0 < args.speed <= MAX_MAGNITUDE):  # also NaN
+        raise InputError("--speed", args.speed, f"a positive speed of at most {MAX_MAGNITUDE:g} m/s (check the units)")
     diagnosis = _diagnose_files(
         args.model,
         tuple(args.data),
@@ -233,13 +240,16 @@ def _diagnose_files(
         candidates = tuple(e.strip() for e in effects.split(","))
         for name in candidates:
             effect(name)
-    return diagnose(
-        loaded,
-        EigenvalueData.concatenate(eigen),
-        CanonicalData.concatenate(canonical),
-        candidates,
-        fit_records(records),
-    )
+    table = EigenvalueData.concatenate(eigen)
+    if len(table) + len(records) >= LONG_WORK_ROWS:  # a progress line: the user sees why it takes long
+        logging.getLogger("bikerider.gap").warning(
+            "%d eigenvalue rows and %d records, candidates %s: each is fitted on every fold, which may take "
+            "minutes (fewer --effects are faster)",
+            len(table),
+            len(records),
+            ", ".join(candidates),
+        )
+    return diagnose(loaded, table, CanonicalData.concatenate(canonical), candidates, fit_records(records))
 
 
 def _plain(value, np):

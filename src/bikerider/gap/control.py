@@ -34,6 +34,11 @@ from bikerider.errors import InputError
 GAIN_NAMES = ("k_phi", "k_phid", "k_delta", "k_deltad")
 """The gains of a law, in the order of their arrays: roll angle, roll rate, steer angle, steer rate."""
 GAIN_UNITS = {"k_phi": "N m/rad", "k_phid": "N m s/rad", "k_delta": "N m/rad", "k_deltad": "N m s/rad"}
+MAX_MAGNITUDE = 1e6
+"""Largest magnitude of a gain (SI units) or a speed [m/s] in a control law, and of any number in a
+data table (:mod:`bikerider.io.gap_data`).  No controller of a bicycle applies a thousand N m at a
+milliradian, and no bicycle test runs at a thousand km/s: a larger value is a unit or column mistake,
+and would overflow the closed-loop model."""
 
 
 @dataclass(frozen=True)
@@ -58,7 +63,7 @@ class GainSchedule:
 
     @staticmethod
     def constant(value: float, name: str = "gain", source: str | None = None) -> GainSchedule:
-        value = _finite(value, name, source)
+        value = _finite(value, name, source, "gain")
         return GainSchedule((0.0,), (value,), f"{value:g}")
 
     @staticmethod
@@ -70,8 +75,8 @@ class GainSchedule:
             raise InputError(
                 name, {"speed": speeds, "gain": values}, "as many gains as speeds, at least two of each", source
             )
-        s = [_finite(x, f"{name}.speed", source) for x in speeds]
-        g = [_finite(x, f"{name}.gain", source) for x in values]
+        s = [_finite(x, f"{name}.speed", source, "speed") for x in speeds]
+        g = [_finite(x, f"{name}.gain", source, "gain") for x in values]
         if any(b <= a for a, b in zip(s, s[1:])):
             raise InputError(f"{name}.speed", speeds, "increasing speeds", source)
         if s[0] < 0:
@@ -82,8 +87,8 @@ class GainSchedule:
     @staticmethod
     def make_ramp(K, v0, side: str, name: str = "gain", source: str | None = None) -> GainSchedule:
         """``K (v0 - v)`` for ``v < v0`` (``side = "below"``) or ``K (v - v0)`` for ``v > v0`` (``"above"``)."""
-        K = _finite(K, f"{name}.K", source)
-        v0 = _finite(v0, f"{name}.v0", source)
+        K = _finite(K, f"{name}.K", source, "gain")
+        v0 = _finite(v0, f"{name}.v0", source, "speed")
         if v0 <= 0:
             raise InputError(f"{name}.v0", v0, "a positive speed [m/s]", source)
         if side not in ("below", "above"):
@@ -142,8 +147,8 @@ class ControlLaw:
     def constant(gains, name: str | None = None) -> ControlLaw:
         """A law of constant gains ``[k_phi, k_phid, k_delta, k_deltad]``, named by its gains unless named."""
         values = np.asarray(gains, dtype=float).reshape(-1)
-        if values.size != 4 or not np.all(np.isfinite(values)):
-            raise InputError("control gains", values.tolist(), "four finite gains k_phi, k_phid, k_delta, k_deltad")
+        if values.size != 4:
+            raise InputError("control gains", values.tolist(), "four gains k_phi, k_phid, k_delta, k_deltad")
         schedules = {k: GainSchedule.constant(float(x), k) for k, x in zip(GAIN_NAMES, values) if x != 0}
         return ControlLaw(name or constant_law_name(values), schedules)
 
@@ -179,7 +184,21 @@ def constant_law_name(gains) -> str:
     return ", ".join(parts) if parts else "no control"
 
 
-def _finite(value, name: str, source: str | None) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+def _finite(value, name: str, source: str | None, kind: str) -> float:
+    """``value`` as a float: a finite number (a ``kind``, gain or speed) of magnitude at most :data:`MAX_MAGNITUDE`."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise InputError(name, value, "a finite number", source)
+    if isinstance(value, int) and abs(value) > MAX_MAGNITUDE:  # also ints too large for a float
+        digits = len(str(abs(value)))
+        shown = f"{str(value)[:8]}... ({digits} digits)" if digits > 20 else value
+        raise InputError(name, shown, _limit_text(kind), source)
+    if not math.isfinite(value):
+        raise InputError(name, value, "a finite number", source)
+    if abs(value) > MAX_MAGNITUDE:
+        raise InputError(name, float(value), _limit_text(kind), source)
     return float(value)
+
+
+def _limit_text(kind: str) -> str:
+    unit = "m/s" if kind == "speed" else "SI units (N m/rad, N m s/rad)"
+    return f"a {kind} of magnitude at most {MAX_MAGNITUDE:g} {unit} (check the units)"

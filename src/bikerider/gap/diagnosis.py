@@ -15,8 +15,9 @@ freedom) plausible parameter errors explain the gap (``parameters``), else it is
 With verdict ``parameters`` the parameter fit is selected when it is plausible; when it needs
 implausible shifts the candidates are compared as for a structural gap.
 
-Which.  Folds are the data's groups (runs, riders, environments), or, for a single group, contiguous
-speed bands; never random points.  Every candidate is fitted on the training folds and scored on
+Which.  Folds are the data's groups (runs, riders, environments; more than :data:`MAX_FOLDS` groups
+are held out in blocks of whole groups), or, for a single group, contiguous speed bands; never
+random points.  Every candidate is fitted on the training folds and scored on
 the held-out fold; the held-out error is the root mean square of the normalised residuals over all
 held-out points.  Candidates are ranked by it; a candidate within :data:`TIE_RELATIVE` of a better
 one, or not significantly better at :data:`TIE_P`, is
@@ -92,6 +93,9 @@ UNDETERMINED = 1.0
 """A fitted value whose standard error exceeds this many times the width of its plausible range is
 not determined by the data (the data narrow it down less than the literature already does)."""
 N_SPEED_BANDS = 3
+MAX_FOLDS = 12
+"""Most folds: data in more groups are held out a block of whole groups at a time (a fold costs a fit of
+every candidate, so the folds must not grow with the data)."""
 UNPREDICTED_Z = 1e3
 """Normalised residual given to a held-out point the fitted model cannot predict (singular model)."""
 
@@ -147,6 +151,8 @@ def gap_shrink(z_before: np.ndarray, z_after: np.ndarray) -> float | None:
 
 N_BOOTSTRAP = 2000
 """Resamples of the paired bootstrap in :func:`significantly_better`."""
+BOOTSTRAP_BLOCK = 1_000_000
+"""Resampled points drawn at a time by :func:`significantly_better` (bounds its memory)."""
 
 
 def significantly_better(z_better: np.ndarray, z_worse: np.ndarray) -> tuple[bool, float]:
@@ -162,8 +168,13 @@ def significantly_better(z_better: np.ndarray, z_worse: np.ndarray) -> tuple[boo
     n = a.size
     if n < 3:
         return False, 1.0
-    index = np.random.default_rng(0).integers(0, n, size=(N_BOOTSTRAP, n))
-    p = float(np.mean(a[index].sum(axis=1) >= b[index].sum(axis=1)))
+    rng = np.random.default_rng(0)
+    rows = max(1, BOOTSTRAP_BLOCK // n)  # resamples drawn at a time: memory bounded for any n
+    not_better = 0
+    for done in range(0, N_BOOTSTRAP, rows):
+        index = rng.integers(0, n, size=(min(rows, N_BOOTSTRAP - done), n))
+        not_better += int(np.sum(a[index].sum(axis=1) >= b[index].sum(axis=1)))
+    p = not_better / N_BOOTSTRAP
     return p < TIE_P and rms(z_better) < (1 - TIE_RELATIVE) * rms(z_worse), p
 
 
@@ -447,9 +458,15 @@ class Diagnosis:
     # -- folds --------------------------------------------------------------------------------------
     def _folds(self) -> list[tuple[str, np.ndarray]]:
         obs = self.problem.obs
-        groups = sorted(set(obs.group))
-        if len(groups) >= 2:
-            return [(f"group {g}", np.array([gg == g for gg in obs.group])) for g in groups]
+        groups, member = np.unique(np.asarray(obs.group, dtype=str), return_inverse=True)
+        if groups.size > MAX_FOLDS:  # whole groups, consecutive in name order, share a fold
+            blocks = np.array_split(np.arange(groups.size), MAX_FOLDS)
+            return [
+                (f"groups {groups[b[0]]} to {groups[b[-1]]} ({b.size})", (member >= b[0]) & (member <= b[-1]))
+                for b in blocks
+            ]
+        if groups.size >= 2:
+            return [(f"group {g}", member == k) for k, g in enumerate(groups)]
         speeds = np.unique(obs.speed)
         if speeds.size < 2:
             return []
@@ -509,11 +526,11 @@ class Diagnosis:
     def _gap_test(self) -> dict:
         from scipy.stats import chi2
 
+        from bikerider.gap.low_rank import low_rank_chi2
+
         p = self.problem
         r = p.y - p.baseline
-        cov = np.diag(p.var_data) + p.jacobian @ p.jacobian.T
-        stat = float(r @ np.linalg.solve(cov, r))
-        n = r.size
+        stat, n = low_rank_chi2(r, p.var_data, p.jacobian)  # r^T (D + J J^T)^-1 r in linear time
         if np.all(p.var_data > 0):
             data_stat = float(np.sum(r**2 / p.var_data))
         else:  # rows taken as exact: any residual is a gap against the data alone

@@ -106,31 +106,63 @@ MIN_AMPLITUDE_SIGNIFICANCE = 10.0
 above zero (the rule of :mod:`bikerider.fitting.damped_oscillation`)."""
 
 
+SCAN_CHUNK = 2048
+"""Samples per block when :func:`_scan_start` accumulates its normal equations (bounds its memory)."""
+
+
 def _scan_start(t: np.ndarray, y: np.ndarray) -> np.ndarray:
     """Start ``[omega, sigma, A, B, offset, C, lambda_c]`` of the two-mode fit from a grid scan.
 
     For each (frequency, decay, extra-mode) grid point the model is linear in its amplitudes; the
     point with the smallest residual is the start.  Unlike the FFT peak this is not taken in by
-    the slow capsize mode's leakage.  The normal equations are assembled from products of the
-    three one-dimensional families of basis functions.
+    the slow capsize mode's leakage.  The normal equations of every grid point are sums over the
+    samples of products of the three one-dimensional families of basis functions (oscillation,
+    decay, extra mode); they are accumulated over blocks of :data:`SCAN_CHUNK` samples, so the
+    memory stays bounded however long the record (the grid's basis functions are never stored
+    for every sample at once).
     """
-    tau = t - t[0]
-    decay = np.exp(-SCAN_DECAYS[:, None] * tau)  # (D, n)
-    sin, cos = np.sin(SCAN_OMEGAS[:, None] * tau), np.cos(SCAN_OMEGAS[:, None] * tau)  # (W, n)
-    extra = np.exp(np.asarray(SCAN_MODES)[:, None] * tau)  # (L, n)
-    osc_s = decay[None, :, :] * sin[:, None, :]  # (W, D, n)
-    osc_c = decay[None, :, :] * cos[:, None, :]
-    W, D, L, n = SCAN_OMEGAS.size, SCAN_DECAYS.size, len(SCAN_MODES), tau.size
-    basis = np.empty((W, D, L, 4, n))
-    basis[..., 0, :] = osc_s[:, :, None, :]
-    basis[..., 1, :] = osc_c[:, :, None, :]
-    basis[..., 2, :] = 1.0
-    basis[..., 3, :] = extra[None, None, :, :]
-    basis = basis.reshape(-1, 4, n)
-    gram = basis @ np.swapaxes(basis, 1, 2) + 1e-9 * np.eye(4)
-    rhs = basis @ y
+    W, D, L = SCAN_OMEGAS.size, SCAN_DECAYS.size, len(SCAN_MODES)
+    modes = np.asarray(SCAN_MODES)
+    gram = np.zeros((W, D, L, 4, 4))
+    rhs = np.zeros((W, D, L, 4))
+    yy = 0.0
+    tau_all = t - t[0]
+    for lo in range(0, tau_all.size, SCAN_CHUNK):
+        tau, yc = tau_all[lo : lo + SCAN_CHUNK], y[lo : lo + SCAN_CHUNK]
+        decay = np.exp(-SCAN_DECAYS[:, None] * tau)  # (D, c)
+        sin, cos = np.sin(SCAN_OMEGAS[:, None] * tau), np.cos(SCAN_OMEGAS[:, None] * tau)  # (W, c)
+        extra = np.exp(modes[:, None] * tau)  # (L, c)
+        decay2 = decay**2
+        osc_s = sin[:, None, :] * decay[None, :, :]  # (W, D, c)
+        osc_c = cos[:, None, :] * decay[None, :, :]
+        ss, sc, cc = (sin * sin) @ decay2.T, (sin * cos) @ decay2.T, (cos * cos) @ decay2.T  # (W, D)
+        s1, c1 = sin @ decay.T, cos @ decay.T
+        se, ce = osc_s @ extra.T, osc_c @ extra.T  # (W, D, L)
+        e1, ee = extra.sum(axis=1), np.einsum("lc,lc->l", extra, extra)  # (L,)
+        for (i, j), value in {
+            (0, 0): ss[:, :, None],
+            (0, 1): sc[:, :, None],
+            (1, 1): cc[:, :, None],
+            (0, 2): s1[:, :, None],
+            (1, 2): c1[:, :, None],
+            (2, 2): float(tau.size),
+            (0, 3): se,
+            (1, 3): ce,
+            (2, 3): e1,
+            (3, 3): ee,
+        }.items():
+            gram[..., i, j] += value
+        rhs[..., 0] += (osc_s @ yc)[:, :, None]
+        rhs[..., 1] += (osc_c @ yc)[:, :, None]
+        rhs[..., 2] += float(yc.sum())
+        rhs[..., 3] += extra @ yc
+        yy += float(yc @ yc)
+    upper = np.triu_indices(4, 1)
+    gram[..., upper[1], upper[0]] = gram[..., upper[0], upper[1]]  # symmetric
+    gram = gram.reshape(-1, 4, 4) + 1e-9 * np.eye(4)
+    rhs = rhs.reshape(-1, 4)
     coef = np.linalg.solve(gram, rhs[..., None])[..., 0]
-    rss = y @ y - np.einsum("gk,gk->g", coef, rhs)  # residual of the least-squares solution
+    rss = yy - np.einsum("gk,gk->g", coef, rhs)  # residual of the least-squares solution
     k = int(np.argmin(rss))
     w, d, l_ = np.unravel_index(k, (W, D, L))
     a, b, offset, c = coef[k]

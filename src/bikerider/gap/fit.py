@@ -302,8 +302,9 @@ class GapProblem:
         for key in sorted({(obs.mode[i], obs.quantity[i]) for i in none}):
             idx = [i for i in none if (obs.mode[i], obs.quantity[i]) == key]
             dev, dof = 0.0, 0
+            in_key = set(idx)
             for cell in cells:
-                members = [i for i in cell if i in idx]
+                members = [i for i in cell if i in in_key]
                 if len(members) >= 2:
                     dev += float(np.sum((self.y[members] - np.mean(self.y[members])) ** 2))
                     dof += len(members) - 1
@@ -353,11 +354,11 @@ class GapProblem:
         """Observations of one group, mode and quantity at one speed (:data:`REPLICATE_SPEED`)."""
         obs = self.obs
         cells: list[list[int]] = []
-        keys = sorted({(obs.group[i], obs.mode[i], obs.quantity[i]) for i in rows})
-        for key in keys:
-            members = sorted(
-                (i for i in rows if (obs.group[i], obs.mode[i], obs.quantity[i]) == key), key=lambda i: obs.speed[i]
-            )
+        by_key: dict[tuple, list[int]] = {}
+        for i in rows:  # one pass: the data may hold as many groups as rows
+            by_key.setdefault((obs.group[i], obs.mode[i], obs.quantity[i]), []).append(i)
+        for key in sorted(by_key):
+            members = sorted(by_key[key], key=lambda i: obs.speed[i])
             current: list[int] = []
             for i in members:
                 if current:

@@ -34,6 +34,10 @@ LOG = logging.getLogger(__name__)
 SIGNALS = ("roll_rate", "roll_angle", "steer_angle", "steer_rate")
 """State signals a record may hold (rad, rad/s; benchmark sign convention)."""
 SIGNAL_UNITS = {"roll_rate": "rad/s", "roll_angle": "rad", "steer_angle": "rad", "steer_rate": "rad/s"}
+MAX_RECORD_SAMPLES = 100_000
+"""Most samples of one record: a free decay lasts seconds (a weave's time constant is about one),
+and 100,000 samples are 100 s even at 1 kHz.  A longer record holds more than one decay (and its fit
+would take minutes): cut the decay out, or give the log with a manifest of windows."""
 AGREEMENT = 3.0
 """Fits of one record to two signals are combined when they agree within this many combined
 standard errors; otherwise the first (the roll rate) stands alone."""

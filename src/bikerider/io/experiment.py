@@ -63,9 +63,20 @@ from pathlib import Path
 import numpy as np
 
 from bikerider.errors import FileFormatError, InputError
-from bikerider.gap.control import GAIN_NAMES, NO_CONTROL, ControlLaw, GainSchedule
-from bikerider.gap.records import SIGNALS, DetectorSettings, Record, detect_windows
+from bikerider.gap.control import GAIN_NAMES, MAX_MAGNITUDE, NO_CONTROL, ControlLaw, GainSchedule
+from bikerider.gap.records import (
+    MAX_RECORD_SAMPLES,
+    SIGNAL_UNITS,
+    SIGNALS,
+    DetectorSettings,
+    Record,
+    detect_windows,
+)
+from bikerider.io.input_guard import checked_input_file
 
+MAX_LOG_BYTES = 200_000_000
+"""Largest log, manifest or windows file read [bytes, unpacked]: hours of a 100 Hz log with a dozen
+columns (the project's eight SBW logs are about 0.7 MB each); a larger file is refused with its size."""
 COLUMN_KEYS = SIGNALS + ("speed", "time")
 """Keys of a column map: the state signals, the speed and the time."""
 SPEED_SOURCES = ("column", "file_name", "value")
@@ -106,19 +117,19 @@ class Log:
 
 
 def read_text(path: str | Path) -> str:
-    """The text of a file, gunzipped when it ends in ``.gz``."""
-    path = Path(path)
-    try:
-        raw = path.read_bytes()
-    except FileNotFoundError:
-        raise FileFormatError(path, "no such file") from None
-    except IsADirectoryError:
-        raise FileFormatError(path, "is a folder, not a data file") from None
+    """The text of a file, gunzipped when it ends in ``.gz`` (at most :data:`MAX_LOG_BYTES` either way)."""
+    path = checked_input_file(path, MAX_LOG_BYTES, "log or manifest")
+    raw = path.read_bytes()
     if path.suffix == ".gz":
         try:
-            raw = gzip.decompress(raw)
+            with gzip.GzipFile(fileobj=io.BytesIO(raw)) as stream:
+                raw = stream.read(MAX_LOG_BYTES + 1)
         except (OSError, EOFError) as exc:
             raise FileFormatError(path, f"not a readable gzip file ({exc})") from None
+        if len(raw) > MAX_LOG_BYTES:
+            raise FileFormatError(
+                path, f"unpacks to more than {MAX_LOG_BYTES / 1e6:g} MB: expected a log of at most that size"
+            )
     try:
         return raw.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
@@ -285,8 +296,8 @@ def read_manifest(path: str | Path) -> tuple[ExperimentSettings, list[Window]]:
     from bikerider.io.toml_input import read_toml
 
     path = Path(path)
+    text = read_text(path)  # checks the path first: a regular file of a readable size
     data = read_toml(path)
-    text = read_text(path)
 
     def where(key: str, after: int = 0) -> str:
         line = _line_of(text, rf"^\s*\[*\s*{re.escape(key)}\b", after)
@@ -335,8 +346,8 @@ def read_manifest(path: str | Path) -> tuple[ExperimentSettings, list[Window]]:
     for key, value in scale.items():
         if key not in SIGNALS:
             raise InputError(f"columns.scale.{key}", value, "a factor for one of " + ", ".join(SIGNALS), where(key))
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value == 0:
-            raise InputError(f"columns.scale.{key}", value, "a finite, non-zero factor", where(key))
+        if not _real(value):  # None (not a finite number) or zero
+            raise InputError(f"columns.scale.{key}", _shown(value), "a finite, non-zero factor", where(key))
     settings = ExperimentSettings(dict(columns), {k: float(v) for k, v in scale.items()}, source=str(path))
     if "time_column" in exp:
         settings.columns["time"] = _text(exp["time_column"], "experiment.time_column", where("time_column"))
@@ -398,7 +409,7 @@ def _file_windows(entry: object, folder: Path, here: str, text: str, line: int, 
     file = folder / _text(entry["path"], "file.path", here)
     group = _text(entry["group"], "file.group", here) if "group" in entry else None
     law = _text(entry["control"], "file.control", here) if "control" in entry else None
-    speed = _number(entry["speed"], "file.speed", here) if "speed" in entry else None
+    speed = _speed_value(entry["speed"], "file.speed", here) if "speed" in entry else None
     detect = entry.get("detect", False)
     if not isinstance(detect, bool):
         raise InputError("file.detect", detect, "true or false", here)
@@ -543,8 +554,12 @@ def read_windows(path: str | Path, folder: Path | None = None) -> list[Window]:
                 raise FileFormatError(
                     path, f"speed = {cells[cols['speed']]!r}: expected a number [m/s]", number
                 ) from None
-            if not (math.isfinite(speed) and speed > 0):
-                raise FileFormatError(path, f"speed = {cells[cols['speed']]}: expected a positive speed [m/s]", number)
+            if not (0 < speed <= MAX_MAGNITUDE):  # also NaN
+                raise FileFormatError(
+                    path,
+                    f"speed = {cells[cols['speed']]}: expected a positive speed of at most {MAX_MAGNITUDE:g} m/s",
+                    number,
+                )
         group = cells[cols["group"]] if "group" in cols and cells[cols["group"]] else None
         law = cells[cols["control"]] if "control" in cols and cells[cols["control"]] else None
         if not cells[cols["file"]]:
@@ -653,10 +668,15 @@ def _read_speed(settings: ExperimentSettings, table: object, where) -> None:
                 where("calibration"),
             )
         gain = _number(cal["gain"], "speed.calibration.gain", where("calibration"))
-        offset = cal["offset"]
-        if isinstance(offset, bool) or not isinstance(offset, (int, float)) or not math.isfinite(offset):
-            raise InputError("speed.calibration.offset", offset, "a finite number [m/s]", where("calibration"))
-        settings.calibration = (gain, float(offset))
+        offset = _real(cal["offset"])
+        if offset is None or abs(offset) > MAX_MAGNITUDE:
+            raise InputError(
+                "speed.calibration.offset",
+                _shown(cal["offset"]),
+                f"a finite number of at most {MAX_MAGNITUDE:g} m/s",
+                where("calibration"),
+            )
+        settings.calibration = (gain, offset)
 
 
 def _detector(table: object, where: str) -> DetectorSettings:
@@ -677,9 +697,36 @@ def _text(value: object, name: str, where: str) -> str:
 
 
 def _number(value: object, name: str, where: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
-        raise InputError(name, value, "a positive number", where)
-    return float(value)
+    x = _real(value)
+    if x is None or x <= 0:
+        raise InputError(name, _shown(value), "a positive number", where)
+    return x
+
+
+def _speed_value(value: object, name: str, where: str) -> float:
+    x = _real(value)
+    if x is None or not 0 < x <= MAX_MAGNITUDE:
+        raise InputError(name, _shown(value), f"a positive speed of at most {MAX_MAGNITUDE:g} m/s", where)
+    return x
+
+
+def _real(value: object) -> float | None:
+    """A TOML number as a float; ``None`` for anything else (a bool, a text, NaN, infinity, or an
+    integer too large for a float)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return None
+    try:
+        x = float(value)
+    except OverflowError:
+        return None
+    return x if math.isfinite(x) else None
+
+
+def _shown(value: object) -> object:
+    """A value for a message: an integer of many digits shortened."""
+    if isinstance(value, int) and not isinstance(value, bool) and len(str(abs(value))) > 20:
+        return f"{str(value)[:8]}... ({len(str(abs(value)))} digits)"
+    return value
 
 
 # ---------------------------------------------------------------------------------------------
@@ -700,7 +747,12 @@ def load_records(settings: ExperimentSettings, windows: list[Window]) -> list[Re
     records = []
     for window in windows:
         if window.file not in logs:
-            logs[window.file] = read_log(_find(window.file), wanted, settings.delimiter)
+            try:
+                logs[window.file] = read_log(_find(window.file), wanted, settings.delimiter)
+            except FileFormatError as exc:  # say where the log was named, too
+                where = exc.path if exc.line is None else f"{exc.path}:{exc.line}"
+                detail = str(exc).removeprefix(f"{where}: ")
+                raise FileFormatError(exc.path, f"{detail} (the log of {window.source})", exc.line) from None
         log = logs[window.file]
         spans = [(window.start, window.end)]
         if window.detect:
@@ -746,6 +798,13 @@ def _cut(log: Log, start: int, end: int, window: Window, settings: ExperimentSet
             f"window [{start}, {end}] ends after the last sample of {log.path.name} ({log.n} samples)",
             _line(where),
         )
+    if end - start > MAX_RECORD_SAMPLES:
+        raise FileFormatError(
+            where.rsplit(":", 1)[0],
+            f"window [{start}, {end}] of {log.path.name} holds {end - start} samples: expected one free decay "
+            f"of at most {MAX_RECORD_SAMPLES}",
+            _line(where),
+        )
     name = f"{log.path.name}[{start}:{end}]"
     if "time" in settings.columns:
         t = log.columns[settings.columns["time"]][start:end]
@@ -764,6 +823,12 @@ def _cut(log: Log, start: int, end: int, window: Window, settings: ExperimentSet
                     f"{signal} ({settings.columns[signal]}) has {missing.size} missing values in the window "
                     f"(first at sample {start + int(missing[0])})"
                 )
+            huge = np.flatnonzero(np.abs(values) > MAX_MAGNITUDE)
+            if huge.size and problem is None:
+                problem = (
+                    f"{signal} ({settings.columns[signal]}) = {values[huge[0]]:g} at sample {start + int(huge[0])}: "
+                    f"above {MAX_MAGNITUDE:g} {SIGNAL_UNITS[signal]} (check the column and its units)"
+                )
     if problem is None and not np.all(np.isfinite(time)):
         problem = "the time column has missing values in the window"
     elif problem is None and np.any(np.diff(time) <= 0):
@@ -771,6 +836,8 @@ def _cut(log: Log, start: int, end: int, window: Window, settings: ExperimentSet
     speed, speed_sigma, controller = _speed(log, start, end, window, settings)
     if problem is None and not (math.isfinite(speed) and speed > 0):
         problem = f"no positive speed in the window (speed {speed:g} m/s)"
+    elif problem is None and not (speed <= MAX_MAGNITUDE and abs(controller) <= MAX_MAGNITUDE):
+        problem = f"speed {speed:g} m/s in the window: above {MAX_MAGNITUDE:g} m/s (check the speed column's units)"
     law_name = window.law or settings.default_law
     law = settings.laws[law_name] if law_name else NO_CONTROL
     group = window.group or (log.path.name.removesuffix(".gz") if settings.group == "file" else settings.group)
@@ -806,6 +873,9 @@ def _speed(log: Log, start: int, end: int, window: Window, settings: ExperimentS
         values = values[np.isfinite(values)]
         if values.size == 0:
             return math.nan, 0.0, math.nan
+        huge = values[np.abs(values) > MAX_MAGNITUDE]
+        if huge.size:  # the record is left out naming it (its mean and scatter would overflow)
+            return float(huge[0]), 0.0, float(huge[0])
         recorded = float(np.mean(values))
         scatter = float(np.std(values))
         if settings.calibration is not None:

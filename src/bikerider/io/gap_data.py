@@ -45,9 +45,10 @@ from pathlib import Path
 import numpy as np
 
 from bikerider.errors import FileFormatError, InputError
-from bikerider.gap.control import GAIN_NAMES, ControlLaw
+from bikerider.gap.control import GAIN_NAMES, MAX_MAGNITUDE, ControlLaw, GainSchedule
 from bikerider.gap.data import MODES, CanonicalData, EigenvalueData, entry_name
-from bikerider.gap.records import Record
+from bikerider.gap.records import MAX_RECORD_SAMPLES, Record
+from bikerider.io.input_guard import checked_input_file
 
 LOG = logging.getLogger(__name__)
 
@@ -65,6 +66,19 @@ EIGENVALUE_COLUMNS = (
 TIME_SERIES_COLUMNS = ("time", "roll_rate", "roll_angle", "steer_angle", "steer_rate", "speed")
 
 
+MAX_CONTROL_BYTES = 1_000_000
+"""Largest control file read [bytes] (a few laws of four gains: a few kB)."""
+MAX_EIGENVALUE_ROWS = 10_000
+"""Most rows of one eigenvalue table: one row per test run is a few hundred at most; the diagnosis
+fits every candidate to every row on every fold (about a tenth of a second per row with all the
+candidates), so a larger table is refused rather than left running for hours."""
+MAX_TABLE_BYTES = 16_000_000
+"""Largest data table read [bytes]: far above any table of measured eigenvalues or identified entries
+(:data:`MAX_EIGENVALUE_ROWS` rows take about 1 MB) or a perturbation run of
+:data:`~bikerider.gap.records.MAX_RECORD_SAMPLES` samples (a few MB); a larger file is refused with its
+size before it is read."""
+
+
 # ---------------------------------------------------------------------------------------------
 # CSV plumbing
 # ---------------------------------------------------------------------------------------------
@@ -77,13 +91,9 @@ class _Table:
 
 
 def _read_table(path: str | Path) -> _Table:
-    path = Path(path)
+    path = checked_input_file(path, MAX_TABLE_BYTES, "data table")
     try:
         text = path.read_bytes().decode("utf-8-sig")
-    except FileNotFoundError:
-        raise FileFormatError(path, "no such file") from None
-    except IsADirectoryError:
-        raise FileFormatError(path, "is a folder, not a data file") from None
     except UnicodeDecodeError as exc:
         raise FileFormatError(path, f"not UTF-8 text (byte {exc.start})") from None
     meta: dict[str, tuple[int, str]] = {}
@@ -118,10 +128,6 @@ def _read_table(path: str | Path) -> _Table:
     if columns is None:
         raise FileFormatError(path, "no header line (column names) found")
     return _Table(path, columns, rows, meta)
-
-
-MAX_MAGNITUDE = 1e6
-"""Largest magnitude of a number in a data file (speeds in m/s, eigenvalues in 1/s, times in s, gains)."""
 
 
 def _number(
@@ -250,6 +256,12 @@ def read_eigenvalues(
     used_laws: dict[str, ControlLaw] = {}
     if not table.rows:
         raise FileFormatError(table.path, "no data rows")
+    if len(table.rows) > MAX_EIGENVALUE_ROWS:
+        raise FileFormatError(
+            table.path,
+            f"{len(table.rows)} rows: expected at most {MAX_EIGENVALUE_ROWS} measured eigenvalues in one table "
+            "(a row per test run; is this a time series? give it as a perturbation run or a log)",
+        )
     for line, cells in table.rows:
 
         def get(name, **kw):
@@ -316,6 +328,12 @@ def read_perturbation(
     """
     table = _read_table(path)
     _check_columns(table, TIME_SERIES_COLUMNS, ("time", "roll_rate"))
+    if len(table.rows) > MAX_RECORD_SAMPLES:
+        raise FileFormatError(
+            table.path,
+            f"{len(table.rows)} samples: expected one free decay of at most {MAX_RECORD_SAMPLES} samples "
+            "(cut the decay after the perturbation out, or give the log with a manifest of windows)",
+        )
     cols = {name: i for i, name in enumerate(table.columns)}
     data = {name: np.empty(len(table.rows)) for name in table.columns}
     for k, (line, cells) in enumerate(table.rows):
@@ -330,8 +348,10 @@ def read_perturbation(
     if "speed" in data:
         v, v_sigma = float(np.mean(data["speed"])), float(np.std(data["speed"]))
     elif speed is not None:
-        if not (isinstance(speed, (int, float)) and math.isfinite(speed) and speed > 0):
-            raise InputError("speed", speed, "a finite, positive speed [m/s]", str(table.path))
+        if not (isinstance(speed, (int, float)) and not isinstance(speed, bool) and 0 < speed <= MAX_MAGNITUDE):
+            raise InputError(
+                "speed", speed, f"a positive speed of at most {MAX_MAGNITUDE:g} m/s (check the units)", str(table.path)
+            )
         v, v_sigma = float(speed), 0.0
     else:
         v_meta = _meta_number(table, "speed", positive=True)
@@ -444,7 +464,7 @@ def read_control(path: str | Path) -> dict[str, ControlLaw]:
     from bikerider.io.toml_input import read_toml
     from bikerider.quantity import parse_quantity
 
-    data = read_toml(path)
+    data = read_toml(checked_input_file(path, MAX_CONTROL_BYTES, "control file"))
     table = data.get("control", data)
     if not isinstance(table, dict) or not table:
         raise InputError(
@@ -455,7 +475,12 @@ def read_control(path: str | Path) -> dict[str, ControlLaw]:
     unknown = sorted(set(table) - set(GAIN_NAMES))
     if unknown:
         raise InputError(unknown[0], table[unknown[0]], "one of the gains " + ", ".join(GAIN_NAMES), str(path))
-    gains = np.array([parse_quantity(table.get(k, 0.0), k, str(path)).value for k in GAIN_NAMES])
+    gains = []
+    for k in GAIN_NAMES:
+        raw = table.get(k, 0.0)
+        if isinstance(raw, str):  # "5.0 +/- 0.1": the value (a known controller's gains are exact)
+            raw = parse_quantity(raw, k, str(path)).value
+        gains.append(GainSchedule.constant(raw, f"control.{k}", str(path)).values[0])  # finite, within bounds
     law = ControlLaw.constant(gains)
     return {law.name: law}
 

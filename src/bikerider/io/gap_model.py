@@ -17,9 +17,13 @@ from __future__ import annotations
 from pathlib import Path
 
 from bikerider.benchmark import BenchmarkParameters
-from bikerider.errors import FileFormatError, InputError
+from bikerider.errors import InputError
 from bikerider.gap.model_input import RIDER_KEYS, GapModelInput, default_geometry, table_numbers
 from bikerider.gap.models import GRIP_KEYS, UPPER_BODY_KEYS, RiderGeometry
+from bikerider.io.input_guard import checked_input_file
+
+MAX_MODEL_BYTES = 1_000_000
+"""Largest model or rider file read [bytes] (they hold a few dozen values: a few kB)."""
 
 
 def load_model(
@@ -39,9 +43,7 @@ def load_model(
     """
     from bikerider.io.benchmark_file import load_benchmark_parameters, parameters_from_table
 
-    path = Path(path)
-    if not path.exists():
-        raise FileFormatError(path, "no such file")
+    path = checked_input_file(path, MAX_MODEL_BYTES, "model file")
     source = str(path)
     tables: dict[str, object] = {}
     if path.suffix.lower() == ".toml":
@@ -64,7 +66,8 @@ def load_model(
     if rider_path is not None:
         if rider is not None:
             raise InputError("rider", str(rider_path), "one rider: the model file already has a [rider] table", source)
-        parameters, rider = _merge_rider(parameters, Path(rider_path), rider_rel_sigma)
+        rider_path = checked_input_file(rider_path, MAX_MODEL_BYTES, "rider file")
+        parameters, rider = _merge_rider(parameters, rider_path, rider_rel_sigma)
     if rider is not None and not (rider["mass"] > 0 and rider["mass"] < float(parameters["mB"])):  # type: ignore[operator]
         raise InputError(
             "rider.mass", rider["mass"], f"a positive mass below the rear body's {parameters['mB']} kg", source
@@ -131,8 +134,6 @@ def _merge_rider(
     from bikerider.io.bicycleparameters import merge_rider, read_lumped_rider
     from bikerider.quantity import Quantity
 
-    if not rider_path.exists():
-        raise FileFormatError(rider_path, "no such file")
     lumped = read_lumped_rider(rider_path)
     if rel_sigma > 0:
         lumped = replace(
