@@ -205,7 +205,7 @@ def test_a_huge_integer_in_any_toml_number_is_an_error_not_a_traceback(tmp_path)
 def test_a_huge_integer_control_gain_is_an_error(tmp_path):
     from bikerider.io.gap_data import read_control
 
-    with pytest.raises(InputError, match="k_phid = 'an integer of about 400 digits'"):
+    with pytest.raises(InputError, match=r"k_phid = .*(about 400 digits|\(400 digits\)).*expected"):
         read_control(_write(tmp_path, "control.toml", "[control]\nk_phid = " + "1" * 400 + "\n"))
 
 

@@ -72,7 +72,7 @@ from bikerider.gap.records import (
     Record,
     detect_windows,
 )
-from bikerider.io.input_guard import checked_input_file
+from bikerider.io.input_file import checked_input_file
 
 MAX_LOG_BYTES = 200_000_000
 """Largest log, manifest or windows file read [bytes, unpacked]: hours of a 100 Hz log with a dozen
@@ -525,7 +525,7 @@ def read_windows(path: str | Path, folder: Path | None = None) -> list[Window]:
     if not rows:
         raise FileFormatError(path, "no header line (column names) found")
     header_line, header = rows[0]
-    names = [c.strip() for c in next(csv.reader(io.StringIO(header)))]
+    names = _csv_cells(header, path, header_line)
     cols = {}
     for key, aliases in WINDOW_ALIASES.items():
         found = [a for a in aliases if a in names]
@@ -540,7 +540,7 @@ def read_windows(path: str | Path, folder: Path | None = None) -> list[Window]:
             )
     out = []
     for number, line in rows[1:]:
-        cells = [c.strip() for c in next(csv.reader(io.StringIO(line)))]
+        cells = _csv_cells(line, path, number)
         if len(cells) != len(names):
             raise FileFormatError(
                 path, f"expected {len(names)} comma-separated values ({', '.join(names)}), got {len(cells)}", number
@@ -902,3 +902,12 @@ def _speed(log: Log, start: int, end: int, window: Window, settings: ExperimentS
     raise InputError(
         "speed", "missing", 'a speed for the file (speed.source = "value" needs file.speed)', window.source
     )
+
+
+def _csv_cells(line: str, path, number: int) -> list[str]:
+    """The stripped cells of one line of a windows file; a line the csv module cannot split (a cell
+    beyond its field limit, an unclosed quote) is an error naming the line."""
+    try:
+        return [c.strip() for c in next(csv.reader(io.StringIO(line)))]
+    except csv.Error as exc:
+        raise FileFormatError(path, f"not a comma-separated line ({exc})", number) from None

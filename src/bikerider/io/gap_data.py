@@ -48,7 +48,7 @@ from bikerider.errors import FileFormatError, InputError
 from bikerider.gap.control import GAIN_NAMES, MAX_MAGNITUDE, ControlLaw, GainSchedule
 from bikerider.gap.data import MODES, CanonicalData, EigenvalueData, entry_name
 from bikerider.gap.records import MAX_RECORD_SAMPLES, Record
-from bikerider.io.input_guard import checked_input_file
+from bikerider.io.input_file import checked_input_file
 
 LOG = logging.getLogger(__name__)
 

@@ -20,7 +20,7 @@ from bikerider.benchmark import BenchmarkParameters
 from bikerider.errors import InputError
 from bikerider.gap.model_input import RIDER_KEYS, GapModelInput, default_geometry, table_numbers
 from bikerider.gap.models import GRIP_KEYS, UPPER_BODY_KEYS, RiderGeometry
-from bikerider.io.input_guard import checked_input_file
+from bikerider.io.input_file import checked_input_file
 
 MAX_MODEL_BYTES = 1_000_000
 """Largest model or rider file read [bytes] (they hold a few dozen values: a few kB)."""

@@ -122,4 +122,47 @@ def read_input_text(path: str | Path, limit: int = TEXT_LIMIT) -> str:
     return decode_text(read_input_bytes(path, limit), path)
 
 
-__all__ = ["DATA_LIMIT", "TEXT_LIMIT", "decode_text", "read_input_bytes", "read_input_text"]
+__all__ = ["DATA_LIMIT", "TEXT_LIMIT", "checked_input_file", "decode_text", "read_input_bytes", "read_input_text"]
+
+
+def checked_input_file(path: str | os.PathLike, max_bytes: int | None = None, kind: str = "input file") -> Path:
+    """``path`` when it names a regular file of at most ``max_bytes`` bytes (symbolic links followed),
+    for readers that stream a file themselves (gzip logs, large CSV tables) rather than take its bytes
+    from :func:`read_input_bytes`; the same refusals, checked on the path.
+
+    Parameters
+    ----------
+    path : path-like
+    max_bytes : int, optional
+        Largest size accepted; no limit when ``None``.
+    kind : str
+        What the file is, for the message (e.g. ``"eigenvalue table"``).
+
+    Raises
+    ------
+    FileFormatError
+        An empty path, no such file, a folder, not a regular file (FIFO, socket, device), or larger
+        than ``max_bytes``.
+    """
+    if os.fspath(path) == "":  # Path("") would be the current folder
+        raise FileFormatError("''", f"empty path: expected the path of the {kind}")
+    path = Path(path)
+    try:
+        info = os.stat(path)
+    except FileNotFoundError:
+        raise FileFormatError(path, "no such file") from None
+    except OSError as exc:
+        raise FileFormatError(path, f"cannot be read ({exc.strerror or exc})") from None
+    except ValueError:  # a NUL byte in the path
+        raise FileFormatError(repr(str(path)), "not a valid path (it holds a NUL byte)") from None
+    for is_kind, what in _KINDS:
+        if is_kind(info.st_mode):
+            raise FileFormatError(path, f"is {what}, not a regular file: expected the {kind} as a file")
+    if not stat.S_ISREG(info.st_mode):
+        raise FileFormatError(path, f"not a regular file: expected the {kind} as a file")
+    if max_bytes is not None and info.st_size > max_bytes:
+        raise FileFormatError(
+            path,
+            f"{_size_text(info.st_size)} ({info.st_size} bytes): expected a {kind} of at most {_size_text(max_bytes)}",
+        )
+    return path
