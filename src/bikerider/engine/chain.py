@@ -8,6 +8,7 @@ lets generated stages use their plain-float twins for one bicycle.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable, Mapping, Sequence
 
 import numpy as np
@@ -21,10 +22,27 @@ class Rows(Mapping):
     :attr:`index` give them whole (for products over many rows at once).
 
     ``plan``, when given, is the :class:`_PointPlan` the matrix was computed by: it knows which
-    entries of a row can be finite and not zero (:meth:`entries`)."""
+    entries of a row can be finite and not zero (:meth:`entries`).  ``entries``, when given
+    instead of ``matrix``, are the stages' Jacobian entries one after another (a plan whose
+    stages read only given nodes, :attr:`_PointPlan.direct`): the matrix is then built from them
+    only when asked for, and :meth:`entries` gathers from them directly."""
 
-    def __init__(self, index: dict[str, int], matrix: np.ndarray, plan: _PointPlan | None = None):
-        self.index, self.matrix, self.plan = index, matrix, plan
+    def __init__(
+        self,
+        index: dict[str, int],
+        matrix: np.ndarray | None,
+        plan: _PointPlan | None = None,
+        entries: tuple[float, ...] | None = None,
+    ):
+        self.index, self.plan = index, plan
+        self._matrix, self._entries = matrix, entries
+
+    @property
+    def matrix(self) -> np.ndarray:
+        """``(len(index), len(wrt))``: every row."""
+        if self._matrix is None:
+            self._matrix = self.plan.matrix_of(self._entries)  # type: ignore[union-attr]
+        return self._matrix
 
     def entries(self, names: Sequence[str]) -> tuple[np.ndarray, np.ndarray, list[int]] | None:
         """``(values, columns, ends)``: the entries of the rows of ``names`` that can be finite and
@@ -32,8 +50,10 @@ class Rows(Mapping):
         entry of these rows is zero or not finite.  ``None`` without a plan."""
         if self.plan is None:
             return None
-        positions, columns, ends = self.plan.entries(tuple(names))
-        return self.matrix.reshape(-1)[positions], columns, ends
+        positions, columns, ends, sources = self.plan.entries(tuple(names))
+        if self._matrix is None:
+            return np.array(self._entries, dtype=float)[sources], columns, ends
+        return self._matrix.reshape(-1)[positions], columns, ends
 
     def __getitem__(self, name: str) -> np.ndarray:
         return self.matrix[self.index[name]]
@@ -153,6 +173,21 @@ class Chain:
         does through a product (``inf * 0`` is NaN).
         """
         plan = self._point_plan(tuple(values), tuple(wrt))
+        if plan.direct:  # every stage reads given nodes only: its entries are the gradients
+            nodes = dict(values)
+            entries: tuple = ()
+            with np.errstate(invalid="ignore", divide="ignore"):
+                for stage, *_ in plan.steps:
+                    values_out, checks, J, sparse = stage.evaluate_point(stage.kwargs(nodes))
+                    nodes.update(zip(stage.outputs, values_out))
+                    if checks:
+                        nodes.update(zip(stage.checks, checks))
+                    # a sum that is finite has no entry that is not (one that overflows goes the long way)
+                    if not (sparse and math.isfinite(sum(J))):
+                        break
+                    entries += tuple(J)
+                else:
+                    return nodes, Rows(plan.rows, None, plan, (*entries, 1.0))
         G = np.zeros(plan.shape)
         flat = G.reshape(-1)  # a view: writes by flat index land in G
         flat[plan.seeds] = 1.0
@@ -203,6 +238,10 @@ class _PointPlan:
         input where the stage gives no :attr:`Stage.sparsity`).  Any other entry is zero or not
         finite: a product with a zero Jacobian entry is zero (or NaN from ``0 * inf``), and so is
         a product with a zero gradient entry.
+    direct : bool
+        Whether every stage has its ``targets`` (reads only given nodes): the gradient matrix is
+        then the seeds and the stages' entries, nothing else, and :meth:`Chain.gradients` keeps
+        the entries as they come (:class:`Rows` builds the matrix only when asked for it).
     """
 
     def __init__(self, stages: Sequence[Stage], names: tuple[str, ...], wrt: tuple[str, ...]):
@@ -220,7 +259,7 @@ class _PointPlan:
         self.pattern: list[set[int]] = [set() for _ in self.rows]
         for k, name in enumerate(wrt):
             self.pattern[self.rows[name]] = {k}
-        self._entries: dict[tuple[str, ...], tuple[np.ndarray, np.ndarray, list[int]]] = {}
+        self._entries: dict[tuple[str, ...], tuple] = {}
         for stage in stages:
             self._add_pattern(stage)
             inputs = np.array([self.rows[name] for name in stage.inputs], dtype=int)
@@ -240,6 +279,27 @@ class _PointPlan:
                 targets = outputs[row[keep]] * n + wrt_column[keep]
             written.update(stage.outputs)
             self.steps.append((stage, inputs, outputs, selected, targets))
+        self.direct = bool(self.steps) and all(step[4] is not None for step in self.steps)
+        # Where each written entry of the matrix is in the stages' entries one after another and
+        # a final 1 (the seeds): what a direct plan's Rows gathers from.
+        self._source: dict[int, int] = {}
+        offset = 0
+        self._targets, self._selected = [], []
+        for stage, _, _, selected, targets in self.steps:
+            if targets is not None:
+                self._source.update(zip(targets.tolist(), (offset + selected).tolist()))
+                self._targets += targets.tolist()
+                self._selected += (offset + selected).tolist()
+            offset += len(stage.sparsity) if stage.sparsity is not None else 0
+        self._source.update(dict.fromkeys(self.seeds.tolist(), offset))
+
+    def matrix_of(self, entries: tuple[float, ...]) -> np.ndarray:
+        """The gradient matrix of a direct plan from its stages' entries one after another."""
+        G = np.zeros(self.shape)
+        flat = G.reshape(-1)
+        flat[self.seeds] = 1.0
+        flat[self._targets] = np.array(entries, dtype=float)[self._selected]
+        return G
 
     def _add_pattern(self, stage: Stage) -> None:
         """The pattern of the rows ``stage`` writes (from its inputs' and its Jacobian's)."""
@@ -256,8 +316,9 @@ class _PointPlan:
                 columns |= self.pattern[self.rows[stage.inputs[j]]]
             self.pattern[self.rows[name]] = columns
 
-    def entries(self, names: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray, list[int]]:
-        """``(positions, columns, ends)`` of :meth:`Rows.entries` (flat indices into the matrix)."""
+    def entries(self, names: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray, list[int], np.ndarray | None]:
+        """``(positions, columns, ends, sources)``: :meth:`Rows.entries` as flat indices into the
+        matrix, and for a direct plan where each is in the stages' entries (else ``None``)."""
         found = self._entries.get(names)
         if found is None:
             n = self.shape[1]
@@ -270,5 +331,7 @@ class _PointPlan:
                 positions += [row * n + k for k in pattern]
                 columns += pattern
                 ends.append(len(positions))
-            found = self._entries[names] = (np.array(positions, dtype=int), np.array(columns, dtype=int), ends)
+            sources = np.array([self._source[p] for p in positions], dtype=int) if self.direct else None
+            found = (np.array(positions, dtype=int), np.array(columns, dtype=int), ends, sources)
+            self._entries[names] = found
         return found

@@ -112,6 +112,13 @@ def _root_sum_squares_of_entries(
         terms = values * sigmas[columns]
         squares = (terms * terms).tolist()
     fsum, sqrt, isfinite = math.fsum, math.sqrt, math.isfinite
+    try:  # the common case, every row's sum finite, in C loops
+        totals = list(map(fsum, map(squares.__getitem__, map(slice, [0, *ends[:-1]], ends))))
+    except OverflowError:
+        pass
+    else:
+        if isfinite(sum(totals)):  # (sums of squares: a finite total has no sum that is not)
+            return list(map(sqrt, totals))
     out = []
     start = 0
     for end in ends:
