@@ -86,17 +86,34 @@ def read_input_bytes(path: str | Path, limit: int = TEXT_LIMIT) -> bytes:
             raise FileFormatError(
                 path, f"{_size_text(info.st_size)}: expected an input file of at most {_size_text(limit)}"
             )
-        with os.fdopen(handle, "rb") as stream:
-            handle = -1  # the stream closes it
-            data = stream.read(limit + 1)  # a file that grew since fstat is still read in bounded time
+        data = _read_to_end(handle, info.st_size, limit + 1)  # a file that grew since fstat: bounded too
     finally:
-        if handle >= 0:
-            os.close(handle)
+        os.close(handle)
     if len(data) > limit:
         raise FileFormatError(
             path, f"more than {_size_text(limit)}: expected an input file of at most {_size_text(limit)}"
         )
     return data
+
+
+def _read_to_end(handle: int, size: int, most: int) -> bytes:
+    """The bytes of ``handle`` to its end, at most ``most`` of them.
+
+    The first read asks for one byte more than the file's size (so a file that has not grown
+    is read at once), later ones for at most 64 KiB: no read allocates a buffer of ``most`` bytes
+    for a file of a few kilobytes (a 1 MiB buffer per file cost more than reading it).
+    """
+    parts = []
+    total = 0
+    want = min(size + 1, most)
+    while total < most:
+        chunk = os.read(handle, min(want, most - total))
+        if not chunk:  # the end of the file
+            break
+        parts.append(chunk)
+        total += len(chunk)
+        want = 1 << 16
+    return parts[0] if len(parts) == 1 else b"".join(parts)
 
 
 def decode_text(data: bytes, path: str | Path) -> str:
