@@ -63,3 +63,13 @@ def test_plain_lines_keep_their_values_sigmas_and_line_numbers():
     assert (data["mR"].value, data["mR"].sigma, data.entries["mR"].line) == (3.11, 0.02, 2)
     assert (data["nF"].value, data["nF"].sigma, data.entries["nF"].line) == (13.0, 0.0, 3)
     assert data.entries["mR"].repeats == (data["mR"],)
+
+
+@pytest.mark.parametrize("line", LINES)
+@pytest.mark.parametrize("ending", ["\n", "\r\n"])
+def test_a_text_of_plain_lines_reads_as_line_by_line(line, ending):
+    """A text whose every line is plain is read by one match over the whole text (no comment or
+    blank line sends it line by line): the same entries, line numbers and errors."""
+    plain = _outcome(f"b = 2 +/- 0.1{ending}{line}{ending}c = 3{ending}")
+    commented = _outcome(f"b = 2 +/- 0.1{ending}{line}   # forces the general path{ending}c = 3{ending}")
+    assert plain == commented

@@ -49,6 +49,11 @@ _SIMPLE_LINE = re.compile(r"\s*([A-Za-z_]\w*)\s*=\s*([-+.\deE]+)\s*(?:(?:\+/-|±
 Over these characters ``float`` accepts exactly the strings ``_NUMBER`` matches, so what it reads
 the general path reads the same way; anything else (a number ``float`` rejects, any value that
 would raise) goes through the general path."""
+_SIMPLE_LINES = re.compile(
+    r"^[ \t]*([A-Za-z_]\w*)[ \t]*=[ \t]*([-+.\deE]+)[ \t]*(?:(?:\+/-|±)[ \t]*([-+.\deE]+))?[ \t]*$", re.ASCII | re.M
+)
+r""":data:`_SIMPLE_LINE` over a whole text, one line after another (within a line of
+``str.splitlines`` the only characters ``\s`` matches are spaces and tabs)."""
 
 
 @dataclass(frozen=True, init=False)
@@ -170,11 +175,15 @@ def parse_name_value_text(text: str, path: str = "<text>") -> NameValueFile:
         read, a negative uncertainty or a name given twice; the message names the line, and every
         such line of the text at once (``N lines cannot be read:``, one line each).
     """
+    lines = text.splitlines()
+    every_line = _simple_text(lines)
+    if every_line is not None:
+        return NameValueFile(path, every_line)
     entries: dict[str, NameValueEntry] = {}
     problems: list[FileFormatError] = []
     simple = _SIMPLE_LINE.fullmatch
     isfinite = math.isfinite
-    for number, raw in enumerate(text.splitlines(), start=1):
+    for number, raw in enumerate(lines, start=1):
         match = simple(raw)
         if match is not None:
             name, value_text, sigma_text = match.groups()
@@ -199,6 +208,28 @@ def parse_name_value_text(text: str, path: str = "<text>") -> NameValueFile:
     if problems:
         raise FileFormatError(path, f"{len(problems)} lines cannot be read:\n" + listing(problems))
     return NameValueFile(path, entries)
+
+
+def _simple_text(lines: list[str]) -> dict[str, NameValueEntry] | None:
+    """The entries of a text whose every line is the common ``name = value[+/-sigma]`` line,
+    read by one regular expression over the whole text; ``None`` for any other text (then
+    :func:`parse_name_value_text` reads it line by line, and says what is wrong)."""
+    found = _SIMPLE_LINES.findall("\n".join(lines))
+    if len(found) != len(lines):  # a blank line, a comment, repeats, or a line to complain about
+        return None
+    entries: dict[str, NameValueEntry] = {}
+    isfinite = math.isfinite
+    for number, (name, value_text, sigma_text) in enumerate(found, start=1):
+        try:
+            value = float(value_text)
+            sigma = float(sigma_text) if sigma_text else 0.0
+        except ValueError:
+            return None
+        if name in entries or not (sigma >= 0 and isfinite(value) and isfinite(sigma) and len(name) <= MAX_NAME):
+            return None
+        quantity = Quantity(value, sigma)
+        entries[name] = NameValueEntry(name, quantity, (quantity,), number)
+    return entries
 
 
 def _parse_line(raw: str, number: int, path: str, entries: dict[str, NameValueEntry]) -> NameValueEntry | None:
