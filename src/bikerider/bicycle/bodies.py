@@ -15,7 +15,15 @@ from bikerider.errors import MISSING, ErrorCollector, InputError
 from bikerider.inertia import check_plane_symmetric_inertia
 from bikerider.notes import add as add_to_notes
 from bikerider.notes import note
-from bikerider.quantity import Quantity, check_angle_sigma, check_degrees, check_magnitude, check_positive, sigma_note
+from bikerider.quantity import (
+    SMALLEST,
+    Quantity,
+    check_angle_sigma,
+    check_degrees,
+    check_magnitude,
+    check_positive,
+    sigma_note,
+)
 
 BODY_NAMES: tuple[str, ...] = (
     "w",
@@ -99,6 +107,19 @@ _LIMITS: dict[str, tuple[float, str]] = {
     **{f"I{b}{a}": (1e4, "kg m^2") for b in ("Bf", "H") for a in ("xx", "yy", "zz", "xz")},
 }
 """Largest plausible magnitudes: far beyond any bicycle, so a larger value is a unit slip."""
+
+_QUICK: dict[str, tuple[float, float, bool]] = {
+    key: (
+        max(SMALLEST.get(unit, 0.0), 1e-3 if key in ("w", "rR", "rF") else 0.0) if key in _POSITIVE else -limit,
+        limit,
+        key in _POSITIVE,
+    )
+    for key, (limit, unit) in _LIMITS.items()
+    if key not in _ANGLES
+}
+"""Per value with a limit: ``(low, limit, positive)`` such that a value in ``[low, limit]`` with an
+uncertainty of at most ``limit`` (and, if ``positive``, below the value or zero) passes every check
+of :func:`check_bicycle_values` on its own without a note; any other value takes the checks."""
 
 
 @dataclass(frozen=True)
@@ -196,9 +217,17 @@ def check_bicycle_values(
         if key not in values and key not in failed:
             errors.add(InputError(key, MISSING, "a value: the benchmark model needs it", source))
             failed.add(key)
+    quick_checks = _QUICK.get
     for key, q in values.items():
         if key in failed:
             continue
+        quick = quick_checks(key)
+        if quick is not None:  # the common case first: a value well inside its limits, no note
+            low, limit, positive = quick
+            value, sigma = q.value, q.sigma
+            if low <= value <= limit and abs(sigma) <= limit:
+                if not positive or (value > 0 and (sigma < value or sigma == 0)):
+                    continue
         try:
             if key in _ANGLES:
                 low, high = _ANGLES[key]

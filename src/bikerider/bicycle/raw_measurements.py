@@ -327,6 +327,7 @@ def _raw_limit(name: str) -> tuple[float, str]:
     return 10.0, "m"  # every other value of a Measured file is a length
 
 
+@functools.lru_cache(maxsize=1024)
 def is_known_field(name: str) -> bool:
     """Whether ``name`` is a field of a BicycleParameters Measured file that bikerider knows."""
     return name in FIELD_PURPOSES or name in SEATING_FIELDS or name in _KNOWN_EXTRAS or bool(_INDEXED.match(name))
