@@ -333,6 +333,12 @@ def is_known_field(name: str) -> bool:
     return name in FIELD_PURPOSES or name in SEATING_FIELDS or name in _KNOWN_EXTRAS or bool(_INDEXED.match(name))
 
 
+@functools.lru_cache(maxsize=1024)
+def _field_limit(name: str) -> tuple[float, str] | None:
+    """:func:`_raw_limit` of a field :func:`is_known_field` knows, ``None`` for any other."""
+    return _raw_limit(name) if is_known_field(name) else None
+
+
 def _check_values(
     values: Mapping[str, Quantity],
     where: Callable[[str], str],
@@ -355,7 +361,8 @@ def _check_values(
         failed.add(error.name.removesuffix(" uncertainty"))
 
     for name, q in values.items():
-        if not is_known_field(name):
+        rule = _field_limit(name)
+        if rule is None:
             fail(
                 InputError(
                     name,
@@ -367,7 +374,7 @@ def _check_values(
                 )
             )
             continue
-        limit, unit = _raw_limit(name)
+        limit, unit = rule
         if not (abs(q.value) <= limit and abs(q.sigma) <= limit):  # check_magnitude passes these
             with errors.check():
                 check_magnitude(name, q.value, limit, unit, where(name))
@@ -387,14 +394,14 @@ def _check_values(
             elif value < smallest:
                 fail(InputError(name, value, smallest_expected(smallest, _raw_limit(name)[1]), where(name)))
     for name, q in values.items():
-        if name not in failed and name.startswith(("Tt", "Tc")) and not q.value > 1e-3:  # 1 ms: squares underflow
+        if name.startswith(("Tt", "Tc")) and not q.value > 1e-3 and name not in failed:  # 1 ms: squares underflow
             fail(
                 InputError(
                     name, q.value, f"a positive period in seconds, above 0.001 s ({_purpose(name)})", where(name)
                 )
             )
     for name, trials in repeats.items():
-        if name in failed or not name.startswith(("Tt", "Tc")) or len(trials) < 2:
+        if len(trials) < 2 or name in failed or not name.startswith(("Tt", "Tc")):
             continue
         median = statistics.median(t.value for t in trials)
         worst = max(trials, key=lambda t: abs(t.value - median))

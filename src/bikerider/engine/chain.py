@@ -52,7 +52,7 @@ class Rows(Mapping):
             return None
         positions, columns, ends, sources = self.plan.entries(tuple(names))
         if self._matrix is None:
-            return np.array(self._entries, dtype=float)[sources], columns, ends
+            return np.fromiter(self._entries, float, len(self._entries))[sources], columns, ends
         return self._matrix.reshape(-1)[positions], columns, ends
 
     def __getitem__(self, name: str) -> np.ndarray:
@@ -298,7 +298,7 @@ class _PointPlan:
         G = np.zeros(self.shape)
         flat = G.reshape(-1)
         flat[self.seeds] = 1.0
-        flat[self._targets] = np.array(entries, dtype=float)[self._selected]
+        flat[self._targets] = np.fromiter(entries, float, len(entries))[self._selected]
         return G
 
     def _add_pattern(self, stage: Stage) -> None:
