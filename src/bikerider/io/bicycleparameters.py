@@ -272,7 +272,7 @@ def read_measured_file(
         An unreadable file, a missing or impossible measurement, hanging lines that do not meet.
     """
     data = read_name_value_file(path)
-    stem = Path(path).stem
+    stem = (path if isinstance(path, PurePath) else PurePath(path)).stem
     name = stem[: -len("Measured")] if stem.endswith("Measured") and len(stem) > len("Measured") else stem
     return reduce_measured(data, source=data, name=name, line_tolerance=line_tolerance, com_method=com_method)
 
