@@ -212,24 +212,31 @@ def parse_name_value_text(text: str, path: str = "<text>") -> NameValueFile:
 
 def _simple_text(lines: list[str]) -> dict[str, NameValueEntry] | None:
     """The entries of a text whose every line is the common ``name = value[+/-sigma]`` line,
-    read by one regular expression over the whole text; ``None`` for any other text (then
-    :func:`parse_name_value_text` reads it line by line, and says what is wrong)."""
+    read by one regular expression over the whole text; ``None`` for any other text, and for
+    any value the line path would question (then :func:`parse_name_value_text` reads it line by
+    line, and says what is wrong)."""
     found = _SIMPLE_LINES.findall("\n".join(lines))
-    if len(found) != len(lines):  # a blank line, a comment, repeats, or a line to complain about
+    if not found or len(found) != len(lines):  # a blank line, a comment, repeats, a line to complain about
+        return None
+    names, value_texts, sigma_texts = zip(*found)
+    try:
+        values = list(map(float, value_texts))
+        sigmas = [float(text) if text else 0.0 for text in sigma_texts]
+    except ValueError:
+        return None
+    # A finite sum has no term that is not finite (one that overflows goes line by line).
+    if not (
+        math.isfinite(sum(values))
+        and math.isfinite(sum(sigmas))
+        and min(sigmas) >= 0
+        and max(map(len, names)) <= MAX_NAME
+    ):
         return None
     entries: dict[str, NameValueEntry] = {}
-    isfinite = math.isfinite
-    for number, (name, value_text, sigma_text) in enumerate(found, start=1):
-        try:
-            value = float(value_text)
-            sigma = float(sigma_text) if sigma_text else 0.0
-        except ValueError:
-            return None
-        if name in entries or not (sigma >= 0 and isfinite(value) and isfinite(sigma) and len(name) <= MAX_NAME):
-            return None
+    for number, (name, value, sigma) in enumerate(zip(names, values, sigmas), start=1):
         quantity = Quantity(value, sigma)
         entries[name] = NameValueEntry(name, quantity, (quantity,), number)
-    return entries
+    return entries if len(entries) == len(found) else None  # a name given twice: line by line
 
 
 def _parse_line(raw: str, number: int, path: str, entries: dict[str, NameValueEntry]) -> NameValueEntry | None:
