@@ -10,9 +10,6 @@ per error) when more than one went wrong.
 
 from __future__ import annotations
 
-from collections.abc import Iterator
-from contextlib import contextmanager
-
 MISSING = "missing"
 """The value shown for a required measurement that was not given."""
 
@@ -100,13 +97,9 @@ class ErrorCollector:
     def __bool__(self) -> bool:
         return bool(self.errors)
 
-    @contextmanager
-    def check(self) -> Iterator[None]:
+    def check(self) -> _Keeper:
         """Run the block; an :class:`InputError` it raises is kept (and the block left), not raised."""
-        try:
-            yield
-        except InputError as exc:
-            self.add(exc)
+        return _Keeper(self)
 
     def add(self, error: InputError) -> None:
         """Keep ``error`` (each of them, for :class:`InputErrors`)."""
@@ -118,6 +111,25 @@ class ErrorCollector:
             raise self.errors[0]
         if self.errors:
             raise InputErrors(self.errors)
+
+
+class _Keeper:
+    """The context of :meth:`ErrorCollector.check` (a class, not a generator: readers enter one
+    per value they check)."""
+
+    __slots__ = ("collector",)
+
+    def __init__(self, collector: ErrorCollector):
+        self.collector = collector
+
+    def __enter__(self) -> None:
+        return None
+
+    def __exit__(self, kind: object, error: BaseException | None, traceback: object) -> bool:
+        if isinstance(error, InputError):
+            self.collector.add(error)
+            return True  # kept, not raised
+        return False
 
 
 class ReachError(InputError):
