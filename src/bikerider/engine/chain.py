@@ -170,7 +170,9 @@ class Chain:
         identically zero (a generated stage's float twin), has its entries written straight into
         ``G``: its inputs' rows hold one 1 each (or nothing), so the product is those entries, put
         in place.  Where an entry is not finite the product is taken, so that it spreads as it
-        does through a product (``inf * 0`` is NaN).
+        does through a product (``inf * 0`` is NaN).  When every stage is such a stage
+        (:attr:`_PointPlan.direct`) and every entry is finite, the entries are kept as they come
+        and :class:`Rows` gathers from them (the same numbers, no matrix until one is asked for).
         """
         plan = self._point_plan(tuple(values), tuple(wrt))
         if plan.direct:  # every stage reads given nodes only: its entries are the gradients
@@ -182,9 +184,9 @@ class Chain:
                     nodes.update(zip(stage.outputs, values_out))
                     if checks:
                         nodes.update(zip(stage.checks, checks))
-                    # a sum that is finite has no entry that is not (one that overflows goes the long way)
+                    # a finite sum has no entry that is not (one that overflows goes the long way too)
                     if not (sparse and math.isfinite(sum(J))):
-                        break
+                        break  # to the matrix below, which spreads what is not finite
                     entries += tuple(J)
                 else:
                     return nodes, Rows(plan.rows, None, plan, (*entries, 1.0))
