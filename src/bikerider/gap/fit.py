@@ -129,6 +129,8 @@ class EffectFit:
     bias: np.ndarray | None = None
     """The fitted model's own extraction bias at every observation (records; see :meth:`GapProblem.fit`)."""
     bias_iterations: int = 0
+    covariance: np.ndarray | None = None
+    """Covariance of the fitted values (their standard errors are its diagonal's roots), where known."""
 
     def at_bound(self) -> list[str]:
         """Names of the fitted values pinned at a bound of the search."""
@@ -516,6 +518,7 @@ class GapProblem:
         sigma = np.sqrt(self.var_data[rec])
         offset = np.array(self.nominal_bias if bias is None else bias, dtype=float)
         fit = self._fit(tuple(effects), mask, start, offset)
+        covariance = fit.covariance
         x = fit.values.copy()
         J, weight = fit._jacobian, fit._weight
         lower, upper = self.bounds(lay)
@@ -544,7 +547,7 @@ class GapProblem:
         # the residuals, chi-square and values reported: those of the fitted model's own bias
         r = self._residuals(lay, mask, x, offset)
         fit = self._result(lay, x, fit.stderr, r, int(mask.sum()), fit.success, fit.message)
-        fit.bias, fit.bias_iterations = offset, iteration
+        fit.bias, fit.bias_iterations, fit.covariance = offset, iteration, covariance
         return fit
 
     def own_bias(self, lay: _Layout, x: np.ndarray) -> np.ndarray:
@@ -632,6 +635,7 @@ class GapProblem:
         J = jac(result.x)
         dof = max(result.fun.size - p, 1)
         reduced = float(np.sum(result.fun**2)) / dof
+        cov = None
         try:
             cov = np.linalg.pinv(J.T @ J) * max(1.0, reduced)
             stderr = np.sqrt(np.clip(np.diag(cov), 0, None))
@@ -640,7 +644,7 @@ class GapProblem:
         except np.linalg.LinAlgError:
             stderr = np.full(p, np.inf)
         out = self._result(lay, result.x, stderr, result.fun, int(mask.sum()), bool(result.success), result.message)
-        out._jacobian, out._weight = J, self._weights(lay, mask)
+        out._jacobian, out._weight, out.covariance = J, self._weights(lay, mask), cov
         return out
 
     def _result(
