@@ -202,6 +202,10 @@ def markdown(result: dict, title: str, figures: list[tuple[str, str]]) -> str:
         "",
     ]
     md += ["```", summary_text(result), "```", ""]
+    if result.get("next"):
+        from bikerider.gap.next_report import next_text
+
+        md += ["## Next experiment", "", "```", next_text(result["next"], rows=12), "```", ""]
     md += ["## Candidates", "", "| effect | what it is |", "|---|---|"]
     md += [f"| {e.name} | {e.description} |" for e in EFFECTS.values()]
     md += [""]
