@@ -5,33 +5,26 @@ from __future__ import annotations
 
 import json
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
+from gap_support import BP, DATA, decay_record, nominal, riderless_model
 
-import bikerider
 from bikerider.cli import main
-from bikerider.gap.control import ControlLaw, GainSchedule
 from bikerider.gap.data import CanonicalData, EigenvalueData
 from bikerider.gap.diagnosis import Diagnosis
-from bikerider.gap.models import BENCH_ARGS, EffectModel
+from bikerider.gap.models import EffectModel
 from bikerider.gap.next_experiment import ODDS, NextExperiment, resolution_probability
-from bikerider.gap.records import Record, fit_records
+from bikerider.gap.records import fit_records
 from bikerider.io.gap_model import load_model
-
-DATA = Path(bikerider.__file__).parent / "data"
-BP = DATA / "bicycleparameters"
-SIL = ControlLaw("sil", {"k_phid": GainSchedule.make_ramp(2.0, 6.5, "below")})
 
 
 @pytest.fixture(scope="module")
 def riderless():
-    return load_model(BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt")
+    return riderless_model()
 
 
-def _nominal(model):
-    return {k: float(model.parameters.values[k]) for k in BENCH_ARGS + ("g",)}
+_nominal = nominal
 
 
 def _weave(model, effects, speed, gains=(0.0, 0.0, 0.0, 0.0)):
@@ -154,16 +147,8 @@ def test_bad_rivals_are_a_clear_error(table_plan):
 
 
 def _record(model, speed, group, effects, seed, duration=1.8):
-    rng = np.random.default_rng(seed)
-    t = np.arange(0.0, duration, 0.01)
-    out = EffectModel(_nominal(model), model.geometry, effects).simulate(
-        speed, t, initial={"phid": 0.6, "deltad": 0.4, "delta": 0.03}, gains=SIL(speed)
-    )
-    signals = {
-        "roll_rate": out["phid"] + 0.01 * rng.standard_normal(t.size),
-        "steer_angle": out["delta"] + 2e-4 * rng.standard_normal(t.size),
-    }
-    return Record(f"{group}[{seed}]", "test", t, signals, speed, 0.01, group, SIL, speed, None, None, ("roll_rate",))
+    initial = {"phid": 0.6, "deltad": 0.4, "delta": 0.03}
+    return decay_record(model, speed, group, effects, seed=seed, duration=duration, steer_noise=2e-4, initial=initial)
 
 
 @pytest.mark.slow
