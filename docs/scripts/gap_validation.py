@@ -357,6 +357,7 @@ def _next_cases(model) -> list[str]:
     elapsed = time.perf_counter() - start
     r = N.rates(cases)
     tied = [c for c in cases if c.tie]
+    hopeful = [c for c in tied if c.planned_probability > 0.05]
     sessions = "; ".join(f"{s.group} {', '.join(f'{v:g}' for v in s.speeds)} m/s" for s in N.NARROW.sessions)
     lines = [
         "## 3. What to measure next: following the plan against runs spread evenly",
@@ -384,6 +385,10 @@ def _next_cases(model) -> list[str]:
         f"* Ties resolved **following the plan: {r['resolved_planned']} of {r['ties']}** "
         f"({r['resolved_planned'] / max(r['ties'], 1):.0%}); **spread evenly: {r['resolved_even']} of {r['ties']}** "
         f"({r['resolved_even'] / max(r['ties'], 1):.0%}).",
+        f"* Where the plan gives a chance (resolution probability above 0.05): following it "
+        f"{sum(bool(c.resolved_planned) for c in hopeful)} of {len(hopeful)}, spread evenly "
+        f"{sum(bool(c.resolved_even) for c in hopeful)} of {len(hopeful)}; the plan's probabilities add up to "
+        f"{sum(c.planned_probability for c in tied):.1f} over the {len(tied)} ties, {r['resolved_planned']} were resolved.",
         f"* {len(cases)} cases in {elapsed:.0f} s.",
         "",
         "| truth | seed | tied | plan | its resolution probability | runs (planned, even) | planned: first | "

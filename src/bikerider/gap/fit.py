@@ -20,10 +20,12 @@ the parameters' and the speed's uncertainties and every held-out prediction use 
 *iterated bias correction*: a model's weave eigenvalues plus a fixed extraction bias are fitted
 (fast; the first bias is the nominal model's, the correction issue 11 applied to every candidate
 alike), the fitted model's own bias is computed by indirect inference, and the fitted values follow
-the change of the bias by Gauss-Newton steps (the fit's Jacobian held) until no record's bias
-changes by more than :data:`BIAS_TOLERANCE` of its data uncertainty.  The converged fit's residuals
-are its indirect-inference residuals; only the bias's own change with the parameters is left out
-of the search direction (``tests/test_gap_indirect.py`` compares the values with a full
+the change of the bias by Gauss-Newton steps (the fit's Jacobian held; a step is shortened to
+:data:`MAX_BIAS_STEP` of a value's search range) until the biases change by no more than
+:data:`BIAS_TOLERANCE` of the data uncertainty (RMS over the records fitted), at most
+:data:`MAX_BIAS_ITERATIONS` evaluations.  The fit's residuals, chi-square and held-out predictions are
+those of the fitted model's own bias; only the bias's own change with the parameters is left out of
+the search direction (``tests/test_gap_indirect.py`` compares the values with a full
 indirect-inference least squares).
 
 Fits.  A set of effects is fitted by bounded nonlinear least squares

@@ -60,7 +60,7 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -179,7 +179,6 @@ class NextExperiment:
     repeats: int = DEFAULT_REPEATS
     noise: dict | None = None
     signals: object = None
-    notes: list[str] = field(default_factory=list)
 
     def __post_init__(self):
         d = self.diagnosis
@@ -389,7 +388,6 @@ class NextExperiment:
         from bikerider.gap.indirect import LAMBDA_BOUNDS, levenberg_marquardt
 
         nominal = EffectModel(self.problem.nominal, self.problem.geometry)
-        out: list[RecordFit] = []
         groups: dict[int, list[int]] = {}
         for k, r in enumerate(records):
             groups.setdefault(r.time.size, []).append(k)
@@ -430,8 +428,7 @@ class NextExperiment:
                 else:
                     estimate = two[0]
                     fitted[k] = RecordFit(r, estimate, {name: estimate})
-        out = [fitted[k] for k in range(len(records))]
-        return out
+        return [fitted[k] for k in range(len(records))]
 
     # -- predictions --------------------------------------------------------------------------------
     def _predict(self) -> None:
@@ -715,9 +712,9 @@ class NextExperiment:
             "best_per_signal": best_of("signal") if self.records else None,
             "best_per_law": best_of("law"),
             "best_per_speed": {f"{k:g}": v for k, v in best_of("speed").items()},
+            "best_per_push": {f"{k:g}": v for k, v in best_of("push").items()} if self.records else None,
             "left_out": self.left_out,
             "laws": {name: law.describe() for name, law in self.laws.items()},
-            "notes": list(self.notes),
             "points": [
                 {
                     "speed": e.speed,

@@ -118,7 +118,8 @@ def plot_next(plan, result: dict | None = None):
     law_rows = [i for i in range(len(e)) if e.law[i] == best.law and e.mode[i] == "weave"]
     if law_rows:
         shown = plan.diagnosis.shown_values()
-        axes[0].plot(e.speed[law_rows], shown.real[law_rows], "k.", ms=4, label=f"measured ({best.law})")
+        taken = ", as the data were taken" if plan.records else ""
+        axes[0].plot(e.speed[law_rows], shown.real[law_rows], "k.", ms=4, label=f"measured ({best.law}{taken})")
         axes[1].plot(e.speed[law_rows], shown.imag[law_rows], "k.", ms=4)
     for ax in axes[:2]:
         ax.axvline(best.speed, color="0.3", ls=":", lw=1)
