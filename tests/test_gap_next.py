@@ -14,7 +14,7 @@ from bikerider.cli import main
 from bikerider.gap.data import CanonicalData, EigenvalueData
 from bikerider.gap.diagnosis import Diagnosis
 from bikerider.gap.models import EffectModel
-from bikerider.gap.next_experiment import ODDS, NextExperiment, resolution_probability
+from bikerider.gap.next_experiment import ODDS, NextExperiment, fit_residual, resolution_probability, signal_noise
 from bikerider.gap.records import fit_records
 from bikerider.io.gap_model import load_model
 
@@ -75,6 +75,23 @@ def test_the_probability_of_a_resolution():
     assert resolution_probability(math.sqrt(2 * math.log(ODDS))) == pytest.approx(0.5)
     d = np.linspace(0.1, 8, 50)
     assert np.all(np.diff(resolution_probability(d)) > 0) and resolution_probability(8.0) > 0.99
+
+
+def test_a_smoothed_signal_takes_its_noise_from_the_fit_residual():
+    # A weave decay measured with white noise: the second differences' scatter finds the noise and the
+    # record fit leaves about as much.  The same decay logged smoothed, with the slow drift of a fused
+    # angle: its samples scatter far less than its error, and only the fit's residual shows that error.
+    rng = np.random.default_rng(7)
+    t = np.arange(0.0, 2.5, 0.01)
+    clean = 0.5 * np.exp(-1.5 * t) * np.sin(6.0 * t)
+    noisy = clean + 0.01 * rng.standard_normal(t.size)
+    assert signal_noise(noisy) == pytest.approx(0.01, rel=0.25)
+    assert fit_residual(t, noisy) == pytest.approx(0.01, rel=0.25)
+    drift = np.cumsum(0.004 * rng.standard_normal(t.size))
+    smoothed = np.convolve(clean + drift, np.ones(5) / 5, mode="same")
+    error = np.std((smoothed - clean)[5:-5])
+    assert signal_noise(smoothed[5:-5]) < 0.2 * error
+    assert fit_residual(t[5:-5], smoothed[5:-5]) > 5 * signal_noise(smoothed[5:-5])
 
 
 def test_each_rival_predicts_its_own_weave(riderless, table_plan):

@@ -15,7 +15,8 @@ decay depend on it).  What each decay gives is what the diagnosis compares: its 
 Predictions.  Each rival predicts a decay as the diagnosis predicts a record.  For tables of
 eigenvalues: the rival's weave eigenvalue at that speed and law.  With records: a *template* decay
 is simulated with the nominal model from the push of the nearest-speed record of the data (its first
-samples, scaled), with each signal's noise (:func:`signal_noise`), and fitted as a record is fitted
+samples, scaled), with each signal's noise (the larger of its records' sample-to-sample scatter,
+:func:`signal_noise`, and what their own fits leave, :func:`fit_residual`), and fitted as a record is fitted
 (the record fit's two-mode function, started from the nominal model's eigenvalues, judged by the record
 fit's acceptance rules); every rival predicts it by indirect inference (the same
 fit applied to the rival's own response over the template, :mod:`bikerider.gap.indirect`; the
@@ -64,9 +65,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bikerider.errors import InputError
+from bikerider.errors import FitError, InputError
 from bikerider.gap.control import NO_CONTROL, ControlLaw
 from bikerider.gap.effects import TIME_DOMAIN_EFFECTS
+from bikerider.gap.extraction import weave_eigenvalue
 from bikerider.gap.fit import EffectFit
 from bikerider.gap.models import EffectModel
 from bikerider.gap.records import SIGNALS, Record, RecordFit
@@ -275,17 +277,19 @@ class NextExperiment:
         if self.records:
             d = self.diagnosis
             for name in SIGNALS:
-                levels = [
-                    signal_noise(d.records[k].record.signals[name])
-                    for k in d.record_rows
-                    if name in d.records[k].record.signals
-                ]
-                levels = [x for x in levels if x > 0]
-                if levels:
-                    values[name], source[name] = (
-                        float(np.median(levels)),
-                        "the data's records (sample-to-sample scatter)",
-                    )
+                held = [d.records[k].record for k in d.record_rows if name in d.records[k].record.signals]
+                scatter = [x for x in (signal_noise(r.signals[name]) for r in held) if x > 0]
+                if not scatter:
+                    continue
+                left = [fit_residual(r.time, r.signals[name]) for r in held]
+                left = [x for x in left if x is not None]
+                values[name] = max(float(np.median(scatter)), float(np.median(left)) if left else 0.0)
+                source[name] = (
+                    f"the data's records: the larger of their sample-to-sample scatter ({np.median(scatter):.2g}) "
+                    "and what their own fits leave ("
+                    + (f"{np.median(left):.2g}, RMS residual over {len(left)} records" if left else "no fit")
+                    + ")"
+                )
             for name in SIGNALS:
                 if name not in values:
                     values[name], source[name] = ASSUMED_NOISE[name], "assumed (the data hold no such signal)"
@@ -783,6 +787,19 @@ def resolution_probability(d: np.ndarray) -> np.ndarray:
     with np.errstate(divide="ignore", invalid="ignore"):
         z = np.where(d > 0, d / 2 - math.log(ODDS) / np.where(d > 0, d, 1.0), -np.inf)
     return ndtr(z)
+
+
+def fit_residual(time, samples) -> float | None:
+    """The RMS residual the record fit leaves on a signal's record (``None`` when it cannot fit it).
+
+    A signal smoothed before it was logged (an IMU's fused roll angle) shows less sample-to-sample
+    scatter than its error, and a decay departs from the fit's two-mode function by more than the
+    sensor's noise; both show in what the fit leaves, which a new decay's fit will meet too.
+    """
+    try:
+        return float(weave_eigenvalue(time, samples).residual_rms)
+    except FitError:
+        return None
 
 
 def signal_noise(samples) -> float:
