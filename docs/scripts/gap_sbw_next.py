@@ -60,13 +60,25 @@ def _sbw_next(diagnosis):
     noise = out["noise"]["signals"]
     lines += [
         "",
-        f"The plan asks for **small pushes** (half the data's) at about {best['speed']:.1f} m/s under the experiment's",
-        "own controller: Coulomb friction makes the decay depend on its size, so small pushes show it where",
-        "viscous damping and parameter errors, which scale with the push, cannot follow. The roll angle ranks",
-        f"first because its sample-to-sample scatter in the logs is small ({noise['roll_angle']['value']:.1g} rad): it is",
-        "the IMU's fused estimate, smoother than its error, so the roll-rate and steer-angle rows are the ones to",
-        f"trust (roll rate noise {noise['roll_rate']['value']:.2g} rad/s, steer angle {noise['steer_angle']['value']:.2g} "
-        "rad, from the logs; the steer rate is not logged and its noise is assumed).",
+        f"The plan asks for **small pushes** (x{best['push']:g} the data's) at about {best['speed']:.1f} m/s under "
+        + (
+            "the experiment's own controller"
+            if best["law"] == "sil"
+            else f"`{best['law']}` (the experiment's controller, `sil`, at another gain)"
+            if best["law"].startswith("sil")
+            else f"`{best['law']}`"
+        )
+        + ": Coulomb friction makes the decay depend on its size, so small pushes show it where",
+        "viscous damping and parameter errors, which scale with the push, cannot follow.",
+        "",
+        "Each signal's noise comes from the logs: the larger of its sample-to-sample scatter and the residual its",
+        f"records' own fits leave (roll rate {noise['roll_rate']['value']:.2g} rad/s, roll angle "
+        f"{noise['roll_angle']['value']:.2g} rad, steer angle {noise['steer_angle']['value']:.2g} rad; the steer rate",
+        "is not logged and its noise is assumed), and each signal's run-to-run scatter from its own fits of the",
+        "records at the nearest speed. The roll angle is the IMU's fused estimate: it scatters from sample to",
+        "sample about thirty times less than its fits' residual, and its errors are not independent from sample",
+        "to sample as a fit's standard errors assume, so where it ranks first the roll-rate and steer-angle",
+        "rows are the safer choice.",
         "",
         "![The rivals' predictions diverging over speed](gap_sbw_next.png)",
         "",

@@ -28,7 +28,8 @@ Uncertainties (2x2, real and imaginary part): the data's noise per decay ``D`` (
 standard uncertainty at the nearest speed, scaled by ``(decay rate / decay rate there)^(3/2)``, as a
 fitted decay rate's and frequency's standard errors grow on a faster decay; records: the template
 fit's standard errors plus the data's run-to-run scatter beyond their own standard errors at the
-nearest speed); the nominal parameters' uncertainty ``V`` carried through (central differences of one
+nearest speed, of the experiment's own signal where the diagnosis did not fit that signal: the
+scatter of its records' own fits of it, :data:`MIN_REPLICATES` or more at that speed); the nominal parameters' uncertainty ``V`` carried through (central differences of one
 standard deviation by :class:`bikerider.engine.DifferencedStage`; with records from the roll-rate,
 standard-push template of each speed and law), counted per decay as the diagnosis counts it (it
 weights each row by data plus parameter variance and takes rows as independent); and each rival's
@@ -101,6 +102,8 @@ angle, a 13-bit steer encoder's quantisation, its rate."""
 MIN_DECAY = 0.3
 """Smallest decay rate [1/s] the noise of a table's decays is scaled with (slower decays, and growing
 ones, are cut by the record's length rather than by their decay)."""
+MIN_REPLICATES = 3
+"""Fewest records at one speed whose fits of a signal give that signal's run-to-run scatter."""
 NOISE_SEED = 2024
 """Seed of the noise added to templates (their fits' standard errors scale with it; the value does not)."""
 
@@ -274,6 +277,7 @@ class NextExperiment:
         """Sample noise of each signal: given, from the data's records, or assumed."""
         values: dict[str, float] = {}
         source: dict[str, str] = {}
+        self.signal_fits: dict[str, list] = {}
         if self.records:
             d = self.diagnosis
             for name in SIGNALS:
@@ -281,8 +285,9 @@ class NextExperiment:
                 scatter = [x for x in (signal_noise(r.signals[name]) for r in held) if x > 0]
                 if not scatter:
                     continue
-                left = [fit_residual(r.time, r.signals[name]) for r in held]
-                left = [x for x in left if x is not None]
+                fits = [(r.speed, record_fit(r.time, r.signals[name])) for r in held]
+                self.signal_fits[name] = [(v, f) for v, f in fits if f is not None]
+                left = [f.residual_rms for _, f in self.signal_fits[name]]
                 values[name] = max(float(np.median(scatter)), float(np.median(left)) if left else 0.0)
                 source[name] = (
                     f"the data's records: the larger of their sample-to-sample scatter ({np.median(scatter):.2g}) "
@@ -590,14 +595,37 @@ class NextExperiment:
                 scale = (max(-float(np.mean(self.mean[:, m].real)), MIN_DECAY) / np.median(decay[near])) ** 3
                 out[m, 0, 0], out[m, 1, 1] = scale * np.median(real[near]), scale * np.median(imag[near])
                 continue
-            # records: the template's own standard errors plus the data's scatter beyond their records' own
-            rows = np.array(weave)[near]
-            own_r = np.median(eig.real_sigma[rows] ** 2)
-            own_i = np.median(eig.imag_sigma[rows] ** 2)
+            # records: the template's own standard errors plus the data's scatter beyond their records' own;
+            # for a signal the diagnosis did not fit, the scatter of that signal's own fits when they replicate
             est = self.templates[e].estimate
-            out[m, 0, 0] = est.real_sigma**2 + max(float(np.median(real[near])) - own_r, 0.0)
-            out[m, 1, 1] = est.imag_sigma**2 + max(float(np.median(imag[near])) - own_i, 0.0)
+            own = self._signal_scatter(e)
+            if own is None:
+                rows = np.array(weave)[near]
+                own_r = np.median(eig.real_sigma[rows] ** 2)
+                own_i = np.median(eig.imag_sigma[rows] ** 2)
+                own = (max(float(np.median(real[near])) - own_r, 0.0), max(float(np.median(imag[near])) - own_i, 0.0))
+            out[m, 0, 0] = est.real_sigma**2 + own[0]
+            out[m, 1, 1] = est.imag_sigma**2 + own[1]
         return out
+
+    def _signal_scatter(self, e: Experiment) -> tuple[float, float] | None:
+        """Run-to-run variance (real, imaginary) of the records' own fits of ``e``'s signal at the data's
+        nearest speed, beyond their fits' standard errors; ``None`` for a signal the diagnosis fits (its
+        data uncertainty holds it) or with fewer than :data:`MIN_REPLICATES` fits there."""
+        d = self.diagnosis
+        fitted = {name for k in d.record_rows for name in d.records[k].record.fit_signals}
+        fits = self.signal_fits.get(e.signal, [])
+        if e.signal in fitted or not fits:
+            return None
+        speeds = np.array([v for v, _ in fits])
+        nearest = speeds[np.argmin(np.abs(speeds - e.speed))]
+        here = [f for v, f in fits if abs(v - nearest) < 1e-9 + 0.03 * e.speed]
+        if len(here) < MIN_REPLICATES:
+            return None
+        z = np.array([f.eigenvalue for f in here])
+        own_r = float(np.median([f.real_sigma**2 for f in here]))
+        own_i = float(np.median([f.imag_sigma**2 for f in here]))
+        return max(float(np.var(z.real, ddof=1)) - own_r, 0.0), max(float(np.var(z.imag, ddof=1)) - own_i, 0.0)
 
     # -- discrimination -----------------------------------------------------------------------------
     def separation(self, repeats: float) -> np.ndarray:
@@ -789,17 +817,25 @@ def resolution_probability(d: np.ndarray) -> np.ndarray:
     return ndtr(z)
 
 
-def fit_residual(time, samples) -> float | None:
-    """The RMS residual the record fit leaves on a signal's record (``None`` when it cannot fit it).
+def record_fit(time, samples):
+    """The record fit of one signal of a record (``None`` when it cannot fit it).
 
-    A signal smoothed before it was logged (an IMU's fused roll angle) shows less sample-to-sample
-    scatter than its error, and a decay departs from the fit's two-mode function by more than the
-    sensor's noise; both show in what the fit leaves, which a new decay's fit will meet too.
+    Its RMS residual bounds the signal's noise from below where the samples' scatter does not: a
+    signal smoothed before it was logged (an IMU's fused roll angle) scatters less from sample to
+    sample than its error, and a decay departs from the fit's two-mode function by more than the
+    sensor's noise; both show in what the fit leaves, which a new decay's fit will meet too.  Its
+    eigenvalues, over the records of one speed, give the signal's own run-to-run scatter.
     """
     try:
-        return float(weave_eigenvalue(time, samples).residual_rms)
+        return weave_eigenvalue(time, samples)
     except FitError:
         return None
+
+
+def fit_residual(time, samples) -> float | None:
+    """The RMS residual of :func:`record_fit` (``None`` when it cannot fit the signal)."""
+    fit = record_fit(time, samples)
+    return None if fit is None else float(fit.residual_rms)
 
 
 def signal_noise(samples) -> float:
