@@ -15,7 +15,7 @@ from bikerider.gap.data import CanonicalData
 from bikerider.gap.diagnosis import Diagnosis
 from bikerider.gap.models import EffectModel
 from bikerider.gap.next_experiment import NextExperiment
-from bikerider.gap.next_sweep import line_amplitude, lines_for, linearised_friction, response
+from bikerider.gap.next_sweep import line_amplitude, linearised_friction, lines_for, response
 
 
 @pytest.fixture(scope="module")
