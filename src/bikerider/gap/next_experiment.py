@@ -678,7 +678,7 @@ class NextExperiment:
             A, b, outputs, friction = systems(p.nominal, p.geometry, runs, Layout.of(tuple(effects)), np.atleast_2d(X))
             omegas = np.array([s.omegas for s in sweeps])
             amplitude = np.array([line_amplitude(s.lines, s.torque, s.run_time) for s in sweeps])
-            A = linearised_friction(A, b, friction[:, None], outputs[3], omegas[None], amplitude[None, :, None])
+            A = linearised_friction(A, b, friction[:, None], outputs[3], omegas[None], amplitude[None, :])
             return A, b, outputs
         lay = p.layout(tuple(effects))
         if values is None:
