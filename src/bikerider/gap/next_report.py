@@ -187,12 +187,15 @@ def _sweep_row(axes, plan, sweeps, colours):
     unit = "rad/s" if best.output == "roll_rate" else "rad"
     axes[0].set_ylabel(f"|{best.output.replace('_', ' ')} / steer torque| [{unit} / N m]")
     axes[1].set_ylabel("phase [deg]")
+    from matplotlib.ticker import NullFormatter
+
     for ax in axes[:2]:
         ax.set_xscale("log")
+        ax.xaxis.set_minor_formatter(NullFormatter())
         ax.set_xlabel("frequency [Hz]")
         ax.grid(alpha=0.3, which="both")
     axes[0].set_yscale("log")
     axes[0].set_title(f"best multisine: {best.torque:g} N m at {best.speed:.2f} m/s under {best.law}", fontsize=9)
-    axes[1].set_title(f"bands: 1 sd of the mean of {plan.repeats} runs (rival's own, noise, parameters)", fontsize=9)
+    axes[1].set_title(f"bands: 1 sd of the mean of {plan.repeats} runs", fontsize=9)
     axes[0].legend(fontsize=8)
     _probability_panel(axes[2], sweeps, plan, colours, "multisine runs")
