@@ -181,12 +181,22 @@ def test_records_are_planned_by_indirect_inference(riderless):
     assert out["noise"]["signals"]["roll_rate"]["value"] == pytest.approx(0.01, rel=0.2)
     assert "the data's records" in out["noise"]["signals"]["steer_angle"]["source"]
     assert "assumed" in out["noise"]["signals"]["steer_rate"]["source"]
-    assert set(out["best_per_signal"]) <= {"roll_rate", "roll_angle", "steer_angle", "steer_rate"}
+    assert set(out["best_per_signal"]) <= {
+        "roll_rate",
+        "roll_angle",
+        "steer_angle",
+        "steer_rate",
+        "frf_roll_rate",
+        "frf_steer_angle",
+    }
     assert {e.law for e in plan.points} <= {"sil", "sil x0.5", "sil x1.5", "no control"}
     # the riderless bicycle without control falls at these speeds: no decay the record fit accepts there
     assert not [e for e in plan.points if e.law == "no control" and e.speed <= 4.0]
-    slow = [x for x in out["left_out"] if "2.00 m/s under no control" in x["experiment"]]
+    slow = [x for x in out["left_out"] if "decays at 2.00 m/s under no control" in x["experiment"]]
     assert len(slow) == 4 and all("no weave" in x["reason"] for x in slow)
+    # nor a steady response to a steer-torque multisine
+    (sweep,) = [x for x in out["left_out"] if x["experiment"] == "multisines at 2.00 m/s under no control"]
+    assert "unstable" in sweep["reason"]
     # each template is predicted like a record: the nominal model that made it predicts its fit within the
     # fit's standard errors (the template carries the signals' noise, the model's response none)
     e = plan.points[0]

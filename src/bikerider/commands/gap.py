@@ -98,7 +98,8 @@ def add_parser(subparsers) -> None:
     p.add_argument(
         "--next",
         action="store_true",
-        help="plan the next experiment: the speed, control law, signal and push of new free decays that best "
+        help="plan the next experiment: the speed, control law, signal and push of new free decays, or the "
+        "steer-torque multisine whose frequency response, that best "
         "tell apart the candidates the diagnosis left tied (or the first and the runners-up), ranked by the "
         "probability that the new decays favour the true one 19 to 1 (docs/gap.md)",
     )
@@ -125,6 +126,25 @@ def add_parser(subparsers) -> None:
         metavar="SIGNAL=SD",
         help="with --next: sample noise of signals, e.g. steer_rate=0.02,steer_angle=0.0005 (rad, rad/s; "
         "default: from the records, or assumed for a signal they do not hold)",
+    )
+    p.add_argument(
+        "--next-torque",
+        metavar="NM",
+        type=float,
+        default=None,
+        help="with --next: peak steer torque of a planned multisine run [N m] (default 0.5)",
+    )
+    p.add_argument(
+        "--next-run-time",
+        metavar="S",
+        type=float,
+        default=None,
+        help="with --next: recorded length of one multisine run [s] (default 10)",
+    )
+    p.add_argument(
+        "--next-no-sweeps",
+        action="store_true",
+        help="with --next: plan free decays only (no steer-torque multisines)",
     )
     p.add_argument("--json", action="store_true", help="print one JSON object instead of text")
     p.add_argument(
@@ -208,11 +228,21 @@ def _plan(args: argparse.Namespace, diagnosis):
     from bikerider.errors import InputError
 
     if not args.next:
-        for option in ("next_between", "next_speeds", "next_noise"):
-            if getattr(args, option):
+        for option in ("next_between", "next_speeds", "next_noise", "next_torque", "next_run_time", "next_no_sweeps"):
+            if getattr(args, option) not in (None, False):
                 raise InputError("--" + option.replace("_", "-"), getattr(args, option), "--next as well")
         return None
     from bikerider.gap.next_experiment import plan_next
+    from bikerider.gap.next_sweep import DEFAULT_RUN_TIME, DEFAULT_TORQUE, MAX_TORQUE, RUN_TIME_RANGE
+
+    torque = DEFAULT_TORQUE if args.next_torque is None else args.next_torque
+    if not 0 < torque <= MAX_TORQUE:  # also NaN
+        raise InputError("--next-torque", torque, f"a positive peak steer torque of at most {MAX_TORQUE:g} N m")
+    run_time = DEFAULT_RUN_TIME if args.next_run_time is None else args.next_run_time
+    if not RUN_TIME_RANGE[0] <= run_time <= RUN_TIME_RANGE[1]:
+        raise InputError(
+            "--next-run-time", run_time, f"a recorded run length from {RUN_TIME_RANGE[0]:g} to {RUN_TIME_RANGE[1]:g} s"
+        )
 
     speeds = None
     if args.next_speeds:
@@ -237,7 +267,16 @@ def _plan(args: argparse.Namespace, diagnosis):
         except ValueError:
             raise InputError("--next-noise", item, "SIGNAL=SD, e.g. steer_rate=0.02") from None
     rivals = [r.strip() for r in args.next_between.split(",")] if args.next_between else None
-    return plan_next(diagnosis, rivals=rivals, speeds=speeds, repeats=args.next_repeats, noise=noise or None)
+    return plan_next(
+        diagnosis,
+        rivals=rivals,
+        speeds=speeds,
+        repeats=args.next_repeats,
+        noise=noise or None,
+        sweeps=not args.next_no_sweeps,
+        torque=torque,
+        run_time=run_time,
+    )
 
 
 def diagnose_files(

@@ -72,6 +72,21 @@ from bikerider.gap.effects import TIME_DOMAIN_EFFECTS
 from bikerider.gap.extraction import weave_eigenvalue
 from bikerider.gap.fit import EffectFit
 from bikerider.gap.models import EffectModel
+from bikerider.gap.next_sweep import (
+    DEFAULT_RUN_TIME,
+    DEFAULT_SAMPLE_RATE,
+    DEFAULT_TORQUE,
+    FRF_SIGNALS,
+    MAX_TORQUE,
+    RUN_TIME_RANGE,
+    Sweep,
+    line_amplitude,
+    linearised_friction,
+    lines_for,
+    noise_covariance,
+    response,
+    run_stand_in,
+)
 from bikerider.gap.records import SIGNALS, Record, RecordFit
 
 LOG = logging.getLogger(__name__)
@@ -129,6 +144,8 @@ class Experiment:
     signal: str = "eigenvalue"
     push: float = 1.0
 
+    kind = "decay"
+
     def describe(self, repeats: int | None = None) -> str:
         what = "decays" if repeats is None else (f"{repeats} decay" + ("s" if repeats != 1 else ""))
         out = f"{what} at {self.speed:.2f} m/s under {self.law}"
@@ -176,6 +193,12 @@ class NextExperiment:
         Sample noise of signals (overrides what the data give and :data:`ASSUMED_NOISE`).
     signals : sequence of str, optional
         Signals to consider with records (default: every one of :data:`bikerider.gap.records.SIGNALS`).
+    sweeps : bool
+        Also plan steer-torque frequency responses (:mod:`bikerider.gap.next_sweep`).
+    torque : float
+        Peak steer torque of a planned multisine [N m].
+    run_time : float
+        Recorded length of one multisine run [s].
     """
 
     diagnosis: object
@@ -184,12 +207,21 @@ class NextExperiment:
     repeats: int = DEFAULT_REPEATS
     noise: dict | None = None
     signals: object = None
+    sweeps: object = True
+    torque: float = DEFAULT_TORQUE
+    run_time: float = DEFAULT_RUN_TIME
 
     def __post_init__(self):
         d = self.diagnosis
         self.problem = d.problem
         if not isinstance(self.repeats, int | np.integer) or not 1 <= self.repeats <= MAX_REPEATS:
             raise InputError("repeats", self.repeats, f"a whole number of decays from 1 to {MAX_REPEATS}")
+        if not (isinstance(self.torque, int | float) and 0 < self.torque <= MAX_TORQUE):  # also NaN
+            raise InputError("torque", self.torque, f"a positive peak steer torque of at most {MAX_TORQUE:g} N m")
+        lo, hi = RUN_TIME_RANGE
+        if not (isinstance(self.run_time, int | float) and lo <= self.run_time <= hi):
+            raise InputError("run_time", self.run_time, f"a recorded run length from {lo:g} to {hi:g} s")
+        self.run_sweeps = bool(self.sweeps)
         self.rivals = self._rivals(self.rivals)
         if len(self.rivals) < 2:
             raise InputError(
@@ -207,6 +239,9 @@ class NextExperiment:
             raise InputError("experiments", "none measurable", "speeds and laws at which a decay shows a weave")
         self._predict()
         self._drop_unpredicted()
+        self.sweeps = self._plan_sweeps() if self.run_sweeps else []
+        self._predict_sweeps()
+        self.experiments = list(self.points) + list(self.sweeps)
         if self.all_pairs:  # a tie (or rivals named): which of them
             self.pairs = [(i, j) for i in range(len(self.rivals)) for j in range(i + 1, len(self.rivals))]
         else:  # runners-up: whether the first stands against each
@@ -452,22 +487,8 @@ class NextExperiment:
             self.mean[k] = self._predict_rival(rival, fit.values[None, :])[0]
             if not fit.names:
                 continue
-            # the fit's covariance, each value's spread at most that of a value anywhere in its range;
-            # slopes by secants over +-1 standard deviation kept inside the search bounds (a tyre's relaxation
-            # length or an inertia stepped below zero would be no model at all), so not by the engine's
-            # central differences
-            span = (fit.upper - fit.lower) / math.sqrt(12)
-            cov = _bounded_covariance(fit, span)
-            sigma = np.sqrt(np.diag(cov))
-            h = np.where(sigma > 0, sigma, 1e-6 * np.maximum(span, 1.0))
-            up = np.minimum(fit.values + h, fit.upper)
-            down = np.maximum(fit.values - h, fit.lower)
-            X = np.repeat(fit.values[None, :], 2 * fit.values.size, axis=0)
-            for j in range(fit.values.size):
-                X[2 * j, j], X[2 * j + 1, j] = up[j], down[j]
-            pred = _split(self._predict_rival(rival, X))  # (2 p, 2 n)
-            width = np.where(up > down, up - down, np.inf)
-            J = ((pred[0::2] - pred[1::2]) / width[:, None]).T.reshape(2, n, -1)  # per unit of each value
+            J, cov = _secants(fit, lambda X, rival=rival: _split(self._predict_rival(rival, X)))
+            J = J.reshape(2, n, -1)  # per unit of each value
             self.own_cov[k] = np.einsum("anj,jk,bnk->nab", J, cov, J)
         # the nominal parameters' uncertainty, as the diagnosis carries it
         self.model_cov = np.zeros((n, 2, 2))
@@ -627,27 +648,224 @@ class NextExperiment:
         own_i = float(np.median([f.imag_sigma**2 for f in here]))
         return max(float(np.var(z.real, ddof=1)) - own_r, 0.0), max(float(np.var(z.imag, ddof=1)) - own_i, 0.0)
 
+    # -- sweeps ----------------------------------------------------------------------------------------
+    def _plan_sweeps(self) -> list[Sweep]:
+        """Multisine runs per speed, law and output, around the nominal weave (:mod:`bikerider.gap.next_sweep`);
+        where the nominal closed loop is unstable or shows no weave, left out with the reason."""
+        nominal = EffectModel(self.problem.nominal, self.problem.geometry)
+        out = []
+        for name, law in self.laws.items():
+            for v in self.speeds:
+                v = float(v)
+                ev = nominal.eigenvalues([v], law(v)[None, :])[0]
+                fs = self._sample_rate(v)
+                where = f"multisines at {v:.2f} m/s under {name}"
+                oscillating = ev[ev.imag > 1e-6]
+                if ev.real.max() >= 1.0 / self.run_time:
+                    why = (
+                        "the nominal closed loop is unstable there (a mode grows e-fold within the run): no steady "
+                        "response to measure"
+                    )
+                elif not oscillating.size:
+                    why = "the nominal model shows no weave there to place the lines around"
+                else:
+                    lines = lines_for(float(oscillating.imag.max()) / (2 * math.pi), float(self.run_time))
+                    if lines[-1] >= fs / 2:
+                        why = f"its highest line {lines[-1]:.3g} Hz is above the Nyquist frequency of {fs:g} Hz"
+                    else:
+                        out += [Sweep(v, name, o, float(self.torque), float(self.run_time), lines) for o in FRF_SIGNALS]
+                        continue
+                self.left_out.append({"experiment": where, "reason": why})
+        return out
+
+    def _sample_rate(self, speed: float) -> float:
+        """The sampling rate [Hz] of the nearest-speed record (without records, :data:`DEFAULT_SAMPLE_RATE`)."""
+        if not self.records:
+            return DEFAULT_SAMPLE_RATE
+        d = self.diagnosis
+        used = [d.records[k].record for k in d.record_rows]
+        near = used[int(np.argmin([abs(r.speed - speed) for r in used]))]
+        return 1.0 / float(near.time[1] - near.time[0])
+
+    def _sweep_systems(self, effects, X, values=None, nonlinear=False, speeds=None):
+        """Closed loops ``A (P, s, n, n)``, steer-torque columns ``b (P, s, n)`` and output states of every
+        sweep for a rival's fitted-value vectors ``X (P, p)`` (or the nominal model with benchmark values
+        ``values``, a batch); friction linearised at each sweep's torque."""
+        from bikerider.gap.timedomain import Layout, systems
+
+        p = self.problem
+        sweeps = self.sweeps
+        speeds = np.array([s.speed for s in sweeps]) if speeds is None else np.asarray(speeds, float)
+        gains = np.array([self.laws[s.law](s.speed) for s in sweeps]).reshape(len(sweeps), 4)
+        measured = self._speed_measured()
+        if nonlinear:
+            runs = [
+                run_stand_in(Sweep(v, s.law, s.output, s.torque, s.run_time, s.lines), g, measured)
+                for v, s, g in zip(speeds, sweeps, gains)
+            ]
+            A, b, outputs, friction = systems(p.nominal, p.geometry, runs, Layout.of(tuple(effects)), np.atleast_2d(X))
+            omegas = np.array([s.omegas for s in sweeps])
+            amplitude = np.array([line_amplitude(s.lines, s.torque, s.run_time) for s in sweeps])
+            A = linearised_friction(A, b, friction[:, None], outputs[3], omegas[None], amplitude[None, :])
+            return A, b, outputs
+        lay = p.layout(tuple(effects))
+        if values is None:
+            values, config, scale = p.configure(lay, np.atleast_2d(X))
+        else:
+            values = {**p.nominal, **{k: np.asarray(v, float).reshape(-1, 1) for k, v in values.items()}}
+            config, scale = {}, None
+        P = max([np.shape(v)[0] for v in values.values() if np.ndim(v) > 0] + [np.atleast_2d(X).shape[0]])
+        if scale is None or not measured:
+            ss = EffectModel(values, p.geometry, config).state_space(speeds)
+            A, b, outputs = ss.closed_loop(gains), ss.B[..., :, 1], ss.outputs
+        else:  # a speed sensor's scale per vector: one model per vector
+
+            def row(x, i):
+                return np.asarray(x)[i] if np.ndim(x) > 0 and np.shape(x)[0] == P else x
+
+            parts = []
+            for i in range(P):
+                model = EffectModel(
+                    {k: row(v, i) for k, v in values.items()},
+                    p.geometry,
+                    {e: {k: row(v, i) for k, v in c.items()} for e, c in config.items()},
+                )
+                ss = model.state_space(float(np.ravel(scale)[i]) * speeds)
+                parts.append((ss.closed_loop(gains).reshape((len(sweeps),) + ss.A.shape[-2:]), ss.B[..., :, 1]))
+            A = np.array([a for a, _ in parts])
+            b = np.array([np.reshape(x, A.shape[1:-1]) for _, x in parts])
+            outputs = ss.outputs
+        n = A.shape[-1]
+        return np.broadcast_to(A, (P, len(sweeps), n, n)), np.broadcast_to(b, (P, len(sweeps), n)), outputs
+
+    def _speed_measured(self) -> bool:
+        """Whether the planned runs' speed is read by the sensor a ``speed_sensor`` rival rescales (as the data's)."""
+        if self.records:
+            d = self.diagnosis
+            return any(d.records[k].record.speed_measured for k in d.record_rows)
+        return bool(np.any(self.problem.eigen.speed_sensor))
+
+    def _sweep_response(self, A, b, outputs) -> np.ndarray:
+        """Each sweep's frequency response ``(P, s, K)`` from its systems."""
+        omegas = np.array([s.omegas for s in self.sweeps])
+        roll = response(A, b, outputs[2], omegas[None])
+        steer = response(A, b, outputs[1], omegas[None])
+        is_roll = np.array([s.output == "roll_rate" for s in self.sweeps])
+        return np.where(is_roll[None, :, None], roll, steer)
+
+    def _sweep_rival(self, rival: Rival, X) -> np.ndarray:
+        return self._sweep_response(*self._sweep_systems(rival.effects, X, nonlinear=rival.nonlinear))
+
+    def _predict_sweeps(self) -> None:
+        """Every rival's frequency responses and their uncertainties (module docstring of
+        :mod:`bikerider.gap.next_sweep`); sweeps where a rival's loop is unstable are left out."""
+        from bikerider.engine import DifferencedStage
+        from bikerider.gap.next_sweep import split
+
+        R, p = len(self.rivals), self.problem
+        if not self.sweeps:
+            self.sweep_mean = np.zeros((R, 0, 0), complex)
+            self.sweep_own = np.zeros((R, 0, 0, 0))
+            self.sweep_data = self.sweep_model = np.zeros((0, 0, 0))
+            return
+        K = len(self.sweeps[0].lines)
+        s = len(self.sweeps)
+        self.sweep_mean = np.zeros((R, s, K), complex)
+        self.sweep_own = np.zeros((R, s, 2 * K, 2 * K))
+        unstable = np.zeros(s, bool)
+        for k, rival in enumerate(self.rivals):
+            fit = rival.fit
+            systems = self._sweep_systems(rival.effects, fit.values[None, :], nonlinear=rival.nonlinear)
+            with np.errstate(all="ignore"):
+                # a mode that grows e-fold within the run (a slow capsize a rider or a catch holds is allowed)
+                unstable |= np.linalg.eigvals(systems[0][0]).real.max(axis=-1) >= 1.0 / self.run_time
+            self.sweep_mean[k] = self._sweep_response(*systems)[0]
+            if fit.names:
+                J, cov = _secants(fit, lambda X, rival=rival: split(self._sweep_rival(rival, X)).reshape(len(X), -1))
+                J = J.reshape(s, 2 * K, -1)
+                self.sweep_own[k] = np.einsum("naj,jk,nbk->nab", J, cov, J)
+        # per run: the sensor noise at the lines, and the speed scattering as the data's
+        nominal = ((), np.zeros((1, 0)))
+        self.sweep_data = np.array(
+            [
+                noise_covariance(
+                    x, self.sample_noise.get(x.output, ASSUMED_NOISE[x.output]), self._sample_rate(x.speed)
+                )
+                for x in self.sweeps
+            ]
+        )
+        speeds = np.array([x.speed for x in self.sweeps])
+        h = 0.01 * speeds
+        up = self._sweep_response(*self._sweep_systems(*nominal, speeds=speeds + h))[0]
+        down = self._sweep_response(*self._sweep_systems(*nominal, speeds=speeds - h))[0]
+        Jv = split((up - down) / (2 * h[:, None]))
+        self.sweep_data += np.einsum("na,nb->nab", Jv, Jv) * self._speed_sigma() ** 2
+        self.sweep_model = np.zeros((s, 2 * K, 2 * K))
+        if p.free:
+            stage = DifferencedStage(
+                "nominal parameters",
+                lambda v: split(
+                    self._sweep_response(*self._sweep_systems((), np.zeros((np.size(next(iter(v.values()))), 0)), v))
+                ).reshape(np.size(next(iter(v.values()))), -1),
+                p.free,
+                range(s * 2 * K),
+                dict(zip(p.free, p.free_sigma)),
+                batched=True,
+            )
+            J = (stage.jacobian({k: p.nominal[k] for k in p.free}) * p.free_sigma).reshape(s, 2 * K, -1)
+            self.sweep_model = np.einsum("naj,nbj->nab", J, J)
+        bad = unstable | ~np.all(np.isfinite(self.sweep_mean), axis=(0, 2))
+        bad |= ~np.all(np.isfinite(self.sweep_own), axis=(0, 2, 3)) | ~np.all(
+            np.isfinite(self.sweep_model), axis=(1, 2)
+        )
+        for m in np.flatnonzero(bad):
+            why = (
+                "a rival's closed loop is unstable there (a mode grows e-fold within the run): no steady response to "
+                "measure"
+                if unstable[m]
+                else "an uncertainty cannot be evaluated there"
+            )
+            self.left_out.append({"experiment": self.sweeps[m].describe(), "reason": why})
+        keep = np.flatnonzero(~bad)
+        self.sweeps = [self.sweeps[m] for m in keep]
+        self.sweep_mean, self.sweep_own = self.sweep_mean[:, keep], self.sweep_own[:, keep]
+        self.sweep_data, self.sweep_model = self.sweep_data[keep], self.sweep_model[keep]
+
+    def _speed_sigma(self) -> float:
+        """A run's speed scatter [m/s]: the median of the data's speed uncertainties."""
+        if self.records:
+            d = self.diagnosis
+            return float(np.median([d.records[k].record.speed_sigma for k in d.record_rows]))
+        eig = self.problem.eigen
+        return float(np.median(eig.speed_sigma)) if len(eig) else 0.0
+
     # -- discrimination -----------------------------------------------------------------------------
     def separation(self, repeats: float) -> np.ndarray:
         """``d`` of every pair at every experiment for ``repeats`` decays each, ``(n_pairs, 2, n_points)``:
         with the pair's first rival true, and with its second (``math.inf`` repeats: the limit the true
         rival's own uncertainty sets)."""
+        from bikerider.gap.next_sweep import split
+
         out = []
         for i, j in self.pairs:
-            delta = _split_last(self.mean[i] - self.mean[j])  # (n_points, 2)
             both = []
             for true in (i, j):
-                # the true rival's own uncertainty, and its misfit on held-out data (systematic: more decays
-                # do not average it away), then the decays' noise and the parameters', per decay
-                noise = self.data_cov + self.model_cov
-                S = self.own_cov[true] + self.rivals[true].misfit * noise
-                if math.isfinite(repeats):
-                    S = S + noise / repeats
-                # a difference no uncertainty covers (a rival of one fitted value, endless decays): resolved
-                size = np.trace(S, axis1=-2, axis2=-1)[..., None, None]
-                S = S + (1e-9 * size + 1e-30) * np.eye(2)
-                x = np.linalg.solve(S, delta[..., None])[..., 0]
-                both.append(np.sqrt(np.maximum(np.sum(delta * x, axis=-1), 0.0)))
+                misfit = self.rivals[true].misfit
+                decays = _distance(
+                    _split_last(self.mean[i] - self.mean[j]),
+                    self.own_cov[true],
+                    self.data_cov + self.model_cov,
+                    misfit,
+                    repeats,
+                )
+                sweeps = _distance(
+                    split(self.sweep_mean[i] - self.sweep_mean[j]),
+                    self.sweep_own[true],
+                    self.sweep_data + self.sweep_model,
+                    misfit,
+                    repeats,
+                )
+                both.append(np.concatenate([decays, sweeps]))
             out.append(both)
         return np.array(out)
 
@@ -666,12 +884,13 @@ class NextExperiment:
         order = np.lexsort((-d_all[at].min(axis=(0, 1)), -worst[at]))
         plan = []
         for m in order:
-            e = self.points[m]
+            e = self.experiments[m]
             enough = np.flatnonzero(worst[:, m] >= 0.95)
             plan.append(
                 {
                     "experiment": e,
                     "text": e.describe(self.repeats),
+                    "text_for_95": e.describe(int(counts[enough[0]])) if enough.size else None,
                     "resolution_probability": float(worst[at, m]),
                     "decays_for_95": int(counts[enough[0]]) if enough.size else None,
                     "limit": float(limit[m]),
@@ -699,7 +918,7 @@ class NextExperiment:
             seen = {}
             for item in self.plan:
                 k = getattr(item["experiment"], key)
-                if k not in seen:
+                if k is not None and k not in seen:
                     seen[k] = _item(item)
             return seen
 
@@ -715,8 +934,9 @@ class NextExperiment:
             ],
             "measure": (
                 "expected log-likelihood ratio between the rivals' Gaussian predictive distributions of the mean "
-                f"weave eigenvalue of the new decays (d^2 / 2); resolution probability Phi(d / 2 - ln {ODDS:g} / d): "
-                f"the new decays favour the true rival by odds of {ODDS:g} to 1 or more"
+                "weave eigenvalue of the new decays, or of the mean frequency response of the new steer-torque "
+                f"multisines (d^2 / 2); resolution probability Phi(d / 2 - ln {ODDS:g} / d): "
+                f"the new runs favour the true rival by odds of {ODDS:g} to 1 or more"
             ),
             "rivals_rule": (
                 "named"
@@ -741,7 +961,7 @@ class NextExperiment:
                 ),
             },
             "plan": [_item(item) for item in self.plan[:top]],
-            "best_per_signal": best_of("signal") if self.records else None,
+            "best_per_signal": best_of("signal") if self.records or self.sweeps else None,
             "best_per_law": best_of("law"),
             "best_per_speed": {f"{k:g}": v for k, v in best_of("speed").items()},
             "best_per_push": {f"{k:g}": v for k, v in best_of("push").items()} if self.records else None,
@@ -749,6 +969,7 @@ class NextExperiment:
             "laws": {name: law.describe() for name, law in self.laws.items()},
             "points": [
                 {
+                    "kind": "decay",
                     "speed": e.speed,
                     "law": e.law,
                     "signal": e.signal,
@@ -771,23 +992,104 @@ class NextExperiment:
                     ],
                 }
                 for m, e in enumerate(self.points)
-            ],
+            ]
+            + [self._sweep_point(m) for m in range(len(self.sweeps))],
+            "sweeps": {
+                "torque": float(self.torque),
+                "run_time": float(self.run_time),
+                "note": (
+                    "per run: the DFT estimate's variance 2 sigma_y^2 / (N a^2) at each line (sigma_y the signal's "
+                    "sample noise, N samples, a the line's torque amplitude) and the data's speed scatter; friction "
+                    "by its random-input describing function at the planned torque"
+                ),
+            }
+            if self.run_sweeps
+            else None,
+        }
+
+    def _sweep_point(self, m: int) -> dict:
+        e = self.sweeps[m]
+        K = len(e.lines)
+
+        def sd(cov):
+            return np.sqrt(np.diag(cov)).reshape(2, K).tolist()
+
+        return {
+            "kind": "sweep",
+            "speed": e.speed,
+            "law": e.law,
+            "signal": e.signal,
+            "torque": e.torque,
+            "run_time": e.run_time,
+            "lines": list(e.lines),
+            "predicted": {
+                r.name: {
+                    "real": self.sweep_mean[k, m].real.tolist(),
+                    "imag": self.sweep_mean[k, m].imag.tolist(),
+                    "sigma": sd(self.sweep_own[k, m]),
+                }
+                for k, r in enumerate(self.rivals)
+            },
+            "data_sigma": sd(self.sweep_data[m]),
+            "model_sigma": sd(self.sweep_model[m]),
         }
 
 
 def _item(item: dict) -> dict:
     e = item["experiment"]
     return {
+        "kind": e.kind,
         "text": item["text"],
+        "text_for_95": item["text_for_95"],
         "speed": e.speed,
         "law": e.law,
         "signal": e.signal,
         "push": e.push,
+        **({"torque": e.torque, "run_time": e.run_time, "lines": list(e.lines)} if e.kind == "sweep" else {}),
         "resolution_probability": item["resolution_probability"],
         "decays_for_95": item["decays_for_95"],
         "limit": item["limit"],
         "pairs": item["pairs"],
     }
+
+
+def _distance(delta, own, noise, misfit: float, repeats: float) -> np.ndarray:
+    """``d`` per experiment: ``delta (n, m)`` the rivals' difference, ``own (n, m, m)`` the true rival's own
+    covariance, ``noise (n, m, m)`` one run's (data plus parameters), ``misfit`` the true rival's."""
+    if not len(delta):
+        return np.zeros(0)
+    # the true rival's own uncertainty, and its misfit on held-out data (systematic: more runs do not
+    # average it away), then the runs' noise and the parameters', per run
+    S = own + misfit * noise
+    if math.isfinite(repeats):
+        S = S + noise / repeats
+    # a difference no uncertainty covers (a rival of one fitted value, endless runs): resolved
+    size = np.trace(S, axis1=-2, axis2=-1)[..., None, None]
+    S = S + (1e-9 * size + 1e-30) * np.eye(S.shape[-1])
+    x = np.linalg.solve(S, delta[..., None])[..., 0]
+    return np.sqrt(np.maximum(np.sum(delta * x, axis=-1), 0.0))
+
+
+def _secants(fit: EffectFit, predict) -> tuple[np.ndarray, np.ndarray]:
+    """Slopes ``(m, p)`` of ``predict(X (P, p)) -> (P, m)`` in a rival's fitted values, and the values'
+    covariance they carry.
+
+    The fit's covariance, each value's spread at most that of a value anywhere in its range; slopes by
+    secants over +-1 standard deviation kept inside the search bounds (a tyre's relaxation length or an
+    inertia stepped below zero would be no model at all), so not by the engine's central differences.
+    """
+    span = (fit.upper - fit.lower) / math.sqrt(12)
+    cov = _bounded_covariance(fit, span)
+    sigma = np.sqrt(np.diag(cov))
+    h = np.where(sigma > 0, sigma, 1e-6 * np.maximum(span, 1.0))
+    up = np.minimum(fit.values + h, fit.upper)
+    down = np.maximum(fit.values - h, fit.lower)
+    X = np.repeat(fit.values[None, :], 2 * fit.values.size, axis=0)
+    for j in range(fit.values.size):
+        X[2 * j, j], X[2 * j + 1, j] = up[j], down[j]
+    pred = predict(X)  # (2 p, m)
+    width = np.where(up > down, up - down, np.inf)
+    return ((pred[0::2] - pred[1::2]) / width[:, None]).T, cov
 
 
 def _bounded_covariance(fit: EffectFit, span: np.ndarray) -> np.ndarray:

@@ -8,6 +8,7 @@ import numpy as np
 def next_text(result: dict, rows: int = 8) -> str:
     """The plan in words: rivals, measure, noise, the ranked experiments, the best per signal and law."""
     rivals = [" + ".join(r["effects"]) for r in result["rivals"]]
+    width = max([78] + [len(item["text"]) + 2 for item in result["plan"][:rows]])
     lines = [
         "Next experiment: to tell " + ", ".join(rivals[:-1]) + " and " + rivals[-1] + " apart "
         f"({result['rivals_rule']})",
@@ -34,7 +35,7 @@ def next_text(result: dict, rows: int = 8) -> str:
             else ""
         )
         + ".",
-        f"  {'rank':<5}{'experiment':<78}{'P':>6}{'n 95%':>7}{'limit':>7}  d per pair (first true/second true)",
+        f"  {'rank':<5}{'experiment':<{width}}{'P':>6}{'n 95%':>7}{'limit':>7}  d per pair (first true/second true)",
     ]
     for k, item in enumerate(result["plan"][:rows], start=1):
         need = "-" if item["decays_for_95"] is None else str(item["decays_for_95"])
@@ -42,7 +43,7 @@ def next_text(result: dict, rows: int = 8) -> str:
             f"{'/'.join(p['rivals'])} {p['separation'][0]:.1f}/{p['separation'][1]:.1f}" for p in item["pairs"]
         )
         lines.append(
-            f"  {k:<5}{item['text']:<78}{item['resolution_probability']:>6.2f}{need:>7}{item['limit']:>7.2f}  {pairs}"
+            f"  {k:<5}{item['text']:<{width}}{item['resolution_probability']:>6.2f}{need:>7}{item['limit']:>7.2f}  {pairs}"
         )
     if result.get("best_per_signal"):
         lines.append(
@@ -62,21 +63,12 @@ def next_text(result: dict, rows: int = 8) -> str:
     best = result["plan"][0] if result["plan"] else None
     if best is not None:
         if best["decays_for_95"] is not None:
-            lines.append(
-                f"Recommendation: {best['decays_for_95']} decays at {best['speed']:.2f} m/s under {best['law']}"
-                + (
-                    f", eigenvalue from the {best['signal'].replace('_', ' ')}"
-                    if best["signal"] != "eigenvalue"
-                    else ""
-                )
-                + (f", pushes x{best['push']:g}" if best["push"] != 1 else "")
-                + " tell the rivals apart with 95 % probability."
-            )
+            lines.append(f"Recommendation: {best['text_for_95']} tell the rivals apart with 95 % probability.")
         else:
             lines.append(
-                f"Recommendation: no experiment considered reaches 95 % within {result['max_repeats']} decays; the best, "
+                f"Recommendation: no experiment considered reaches 95 % within {result['max_repeats']} runs; the best, "
                 f"{best['text']}, reaches {best['resolution_probability']:.2f} (at most {best['limit']:.2f} with any "
-                "number of decays: the rivals' own uncertainty and their misfit on held-out data keep it there)."
+                "number of runs: the rivals' own uncertainty and their misfit on held-out data keep it there)."
             )
     if result["left_out"]:
         lines.append(
@@ -98,8 +90,11 @@ def plot_next(plan, result: dict | None = None):
 
     plt = pyplot()
     result = result or plan.as_dict()
-    best = plan.plan[0]["experiment"]
-    fig, axes = plt.subplots(1, 3, figsize=(15, 4.6))
+    decays = [item for item in plan.plan if item["experiment"].kind == "decay"]
+    sweeps = [item for item in plan.plan if item["experiment"].kind == "sweep"]
+    best = decays[0]["experiment"]
+    fig, grid = plt.subplots(2 if sweeps else 1, 3, figsize=(15, 9.2 if sweeps else 4.6), squeeze=False)
+    axes = grid[0]
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     chosen = [m for m, e in enumerate(plan.points) if (e.law, e.signal, e.push) == (best.law, best.signal, best.push)]
     chosen.sort(key=lambda m: plan.points[m].speed)
@@ -132,8 +127,22 @@ def plot_next(plan, result: dict | None = None):
     axes[1].set_title(f"bands: 1 sd of the mean of {n} decays", fontsize=9)
     axes[0].legend(fontsize=8)
     # resolution probability against speed, per law (the best signal and push at each speed)
+    _probability_panel(axes[2], decays, plan, colours, "decays")
+    if sweeps:
+        _sweep_row(grid[1], plan, sweeps, colours)
+    fig.suptitle(
+        "Where the rivals disagree: " + ", ".join(r.name for r in plan.rivals) + f" (best: {plan.plan[0]['text']})",
+        fontsize=10,
+    )
+    fig.tight_layout()
+    return fig
+
+
+def _probability_panel(ax, items, plan, colours, what):
+    """Resolution probability against speed, per law (the best experiment of the kind at each speed)."""
+    n = plan.repeats
     prob = {}
-    for item in plan.plan:
+    for item in items:
         x = item["experiment"]
         key = (x.law, x.speed)
         prob[key] = max(prob.get(key, 0.0), item["resolution_probability"])
@@ -141,17 +150,52 @@ def plot_next(plan, result: dict | None = None):
         pts = sorted((s, p) for (name, s), p in prob.items() if name == law)
         if pts:
             s, p = zip(*pts)
-            axes[2].plot(s, p, "-o", ms=3, color=colours[k % len(colours)], label=law)
-    axes[2].axhline(0.95, color="0.4", ls="--", lw=1)
-    axes[2].set_ylim(0, 1.02)
-    axes[2].set_xlabel("speed [m/s]")
-    axes[2].set_ylabel(f"resolution probability, {n} decays")
-    axes[2].set_title("smallest over the pairs of rivals", fontsize=9)
-    axes[2].grid(alpha=0.3)
-    axes[2].legend(fontsize=7)
-    fig.suptitle(
-        "Where the rivals disagree: " + ", ".join(r.name for r in plan.rivals) + f" (best: {plan.plan[0]['text']})",
-        fontsize=10,
-    )
-    fig.tight_layout()
-    return fig
+            ax.plot(s, p, "-o", ms=3, color=colours[k % len(colours)], label=law)
+    ax.axhline(0.95, color="0.4", ls="--", lw=1)
+    ax.set_ylim(0, 1.02)
+    ax.set_xlabel("speed [m/s]")
+    ax.set_ylabel(f"resolution probability, {n} {what}")
+    ax.set_title(f"{what}: smallest over the pairs of rivals", fontsize=9)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+
+
+def _sweep_row(axes, plan, sweeps, colours):
+    """The best multisine's frequency response per rival (magnitude and phase, bands one standard deviation
+    of the mean of the planned runs), and the multisines' resolution probability against speed."""
+    best = sweeps[0]["experiment"]
+    m = plan.sweeps.index(best)
+    f = np.array(best.lines)
+    K = f.size
+    cov = plan.sweep_data[m] + plan.sweep_model[m]
+    for k, rival in enumerate(plan.rivals):
+        H = plan.sweep_mean[k, m]
+        S = plan.sweep_own[k, m] + cov / plan.repeats
+        # first-order spread of |H| and of the phase from the real and imaginary parts' covariance
+        re, im = H.real, H.imag
+        mag = np.abs(H)
+        var_re, var_im, cross = np.diag(S)[:K], np.diag(S)[K:], np.diag(S[:K, K:])
+        sd_mag = np.sqrt(np.maximum(re**2 * var_re + im**2 * var_im + 2 * re * im * cross, 0)) / mag
+        sd_phase = np.sqrt(np.maximum(im**2 * var_re + re**2 * var_im - 2 * re * im * cross, 0)) / mag**2
+        phase = np.degrees(np.unwrap(np.angle(H)))
+        colour = colours[k % len(colours)]
+        axes[0].plot(f, mag, "-o", ms=3, color=colour, label=rival.name)
+        axes[0].fill_between(f, mag - sd_mag, mag + sd_mag, color=colour, alpha=0.18, lw=0)
+        axes[1].plot(f, phase, "-o", ms=3, color=colour)
+        band = np.degrees(sd_phase)
+        axes[1].fill_between(f, phase - band, phase + band, color=colour, alpha=0.18, lw=0)
+    unit = "rad/s" if best.output == "roll_rate" else "rad"
+    axes[0].set_ylabel(f"|{best.output.replace('_', ' ')} / steer torque| [{unit} / N m]")
+    axes[1].set_ylabel("phase [deg]")
+    from matplotlib.ticker import NullFormatter
+
+    for ax in axes[:2]:
+        ax.set_xscale("log")
+        ax.xaxis.set_minor_formatter(NullFormatter())
+        ax.set_xlabel("frequency [Hz]")
+        ax.grid(alpha=0.3, which="both")
+    axes[0].set_yscale("log")
+    axes[0].set_title(f"best multisine: {best.torque:g} N m at {best.speed:.2f} m/s under {best.law}", fontsize=9)
+    axes[1].set_title(f"bands: 1 sd of the mean of {plan.repeats} runs", fontsize=9)
+    axes[0].legend(fontsize=8)
+    _probability_panel(axes[2], sweeps, plan, colours, "multisine runs")
