@@ -15,7 +15,7 @@ from bikerider.gap.data import CanonicalData
 from bikerider.gap.diagnosis import Diagnosis
 from bikerider.gap.models import EffectModel
 from bikerider.gap.next_experiment import NextExperiment
-from bikerider.gap.next_sweep import line_amplitude, linearised_friction, lines_for, response
+from bikerider.gap.next_sweep import line_amplitude, linearised_friction, lines_for, response, weave_shift
 
 
 @pytest.fixture(scope="module")
@@ -94,22 +94,36 @@ def test_each_rival_predicts_its_own_frequency_response(damping_or_inertia):
 
 def test_a_multisine_sees_what_the_decays_do_not(damping_or_inertia):
     # steer damping and steer inertia move the weave alike but shape the steer's response to torque
-    # differently: the multisines separate them far better than decays at the same speed, and rank first
+    # differently: on an ideal, linear rig the multisines separate them far better than decays at the same
+    # speed.  A real run's response departs from any linear model line by line (default without records:
+    # 10 % of it), which bounds what a multisine can tell: the best of them still beats the best decay.
     _, plan = damping_or_inertia
-    d = plan.separation(plan.repeats)[0].min(axis=0)  # (experiments,)
-    n = len(plan.points)
-    for m, sweep in enumerate(plan.sweeps):
-        decay = [j for j, e in enumerate(plan.points) if e.speed == sweep.speed and e.law == sweep.law]
+    ideal = NextExperiment(plan.diagnosis, rivals=["steer_damping", "steer_inertia"], speeds=[5.5, 6.0], distortion=0)
+    d = ideal.separation(ideal.repeats)[0].min(axis=0)  # (experiments,)
+    n = len(ideal.points)
+    for m, sweep in enumerate(ideal.sweeps):
+        decay = [j for j, e in enumerate(ideal.points) if e.speed == sweep.speed and e.law == sweep.law]
         assert d[n + m] > 3 * max(d[j] for j in decay)
-    assert plan.plan[0]["experiment"].kind == "sweep"
+    d = plan.separation(plan.repeats)[0].min(axis=0)
+    n = len(plan.points)
+    assert max(d[n:]) > max(d[:n]) and plan.plan[0]["experiment"].kind == "sweep"
+    assert ideal.plan[0]["experiment"].kind == "sweep"
+    assert plan.as_dict()["sweeps"]["distortion"] == {"value": 0.1, "source": "assumed (the data hold no records)"}
     out = plan.as_dict()
     assert out["plan"][0]["kind"] == "sweep" and "N m" in out["plan"][0]["text"]
     assert {"frf_roll_rate", "frf_steer_angle"} <= set(out["best_per_signal"])
     sweep_points = [p for p in out["points"] if p["kind"] == "sweep"]
     assert len(sweep_points) == len(plan.sweeps) and len(sweep_points[0]["lines"]) == 9
-    # the runs' noise falls with the torque squared: a larger torque separates more
-    louder = NextExperiment(plan.diagnosis, rivals=["steer_damping", "steer_inertia"], speeds=[5.5, 6.0], torque=2.0)
-    assert np.all(louder.sweep_data <= plan.sweep_data / 15)
+    # the sensor noise falls with the torque squared; the bicycle's own run-to-run variation does not
+    # (the line-by-line distortion, a share of the response, does not either: left out here)
+    rivals = ["steer_damping", "steer_inertia"]
+    quiet = NextExperiment(plan.diagnosis, rivals=rivals, speeds=[5.5, 6.0], distortion=0)
+    louder = NextExperiment(plan.diagnosis, rivals=rivals, speeds=[5.5, 6.0], torque=2.0, distortion=0)
+    sensor, louder_sensor = quiet.sweep_data - quiet.sweep_run, louder.sweep_data - louder.sweep_run
+    assert np.all(louder_sensor <= sensor / 15)
+    assert louder.sweep_run == pytest.approx(quiet.sweep_run, rel=1e-9, abs=1e-30)
+    assert np.all(np.trace(quiet.sweep_run, axis1=1, axis2=2) > 0)
+    assert np.all(plan.sweep_data >= quiet.sweep_data)
     # without multisines the plan is the decays' alone
     decays_only = NextExperiment(plan.diagnosis, rivals=["steer_damping", "steer_inertia"], speeds=[5.5], sweeps=False)
     assert not decays_only.sweeps and all(item["experiment"].kind == "decay" for item in decays_only.plan)
@@ -140,3 +154,29 @@ def test_bad_sweep_options_exit_2(capsys, extra, message):
     args += [str(DATA / "gap_examples" / "eigenvalues.csv"), "--effects", "steer_damping,steer_inertia"]
     assert main(args + extra) == 2
     assert message in capsys.readouterr().err
+
+
+def test_the_weave_moving_from_run_to_run_moves_the_response_by_its_slopes():
+    # A = V diag(lambda) V^-1 with a weave pair and two real modes: moving the weave pair by delta (its
+    # modal vectors held) moves the response by the slopes weave_shift gives, to first order
+    rng = np.random.default_rng(3)
+    lam = np.array([-1.0 + 5.0j, -1.0 - 5.0j, -8.0, -0.5])
+    V = np.empty((4, 4), complex)
+    V[:, 0] = rng.standard_normal(4) + 1j * rng.standard_normal(4)
+    V[:, 1] = np.conj(V[:, 0])
+    V[:, 2:] = rng.standard_normal((4, 2))
+    b = rng.standard_normal(4)
+    omegas = np.linspace(1.0, 10.0, 7)
+
+    def real_system(weave):
+        values = lam.copy()
+        values[0], values[1] = weave, np.conj(weave)
+        return (V @ np.diag(values) @ np.linalg.inv(V)).real
+
+    J = weave_shift(real_system(lam[0]), b, 2, omegas)
+    h = 1e-6
+    for k, step in enumerate((h, 1j * h)):
+        moved = response(real_system(lam[0] + step), b, 2, omegas) - response(real_system(lam[0] - step), b, 2, omegas)
+        expected = np.concatenate([moved.real, moved.imag]) / (2 * h)
+        assert J[:, k] == pytest.approx(expected, rel=1e-6, abs=1e-9)
+    assert weave_shift(np.diag([-1.0, -2.0]), np.ones(2), 0, omegas) is None

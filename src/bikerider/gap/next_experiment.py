@@ -86,6 +86,7 @@ from bikerider.gap.next_sweep import (
     noise_covariance,
     response,
     run_stand_in,
+    weave_shift,
 )
 from bikerider.gap.records import SIGNALS, Record, RecordFit
 
@@ -117,6 +118,9 @@ angle, a 13-bit steer encoder's quantisation, its rate."""
 MIN_DECAY = 0.3
 """Smallest decay rate [1/s] the noise of a table's decays is scaled with (slower decays, and growing
 ones, are cut by the record's length rather than by their decay)."""
+ASSUMED_DISTORTION = 0.1
+"""Share of a run's frequency response a linear model misses at each line (friction's harmonics, the
+treadmill's or rider's disturbances), assumed when the data hold no records to measure it."""
 MIN_REPLICATES = 3
 """Fewest records at one speed whose fits of a signal give that signal's run-to-run scatter."""
 NOISE_SEED = 2024
@@ -199,6 +203,9 @@ class NextExperiment:
         Peak steer torque of a planned multisine [N m].
     run_time : float
         Recorded length of one multisine run [s].
+    distortion : float, optional
+        Share of a multisine run's response a linear model misses at each line (default: from the records'
+        fits, ``sqrt(1 - r^2)``, or :data:`ASSUMED_DISTORTION`); 0 is an ideal, linear test rig.
     """
 
     diagnosis: object
@@ -210,6 +217,7 @@ class NextExperiment:
     sweeps: object = True
     torque: float = DEFAULT_TORQUE
     run_time: float = DEFAULT_RUN_TIME
+    distortion: float | None = None
 
     def __post_init__(self):
         d = self.diagnosis
@@ -221,6 +229,8 @@ class NextExperiment:
         lo, hi = RUN_TIME_RANGE
         if not (isinstance(self.run_time, int | float) and lo <= self.run_time <= hi):
             raise InputError("run_time", self.run_time, f"a recorded run length from {lo:g} to {hi:g} s")
+        if self.distortion is not None and not (isinstance(self.distortion, int | float) and 0 <= self.distortion < 1):
+            raise InputError("distortion", self.distortion, "a share of the response from 0 to below 1")
         self.run_sweeps = bool(self.sweeps)
         self.rivals = self._rivals(self.rivals)
         if len(self.rivals) < 2:
@@ -621,13 +631,28 @@ class NextExperiment:
             est = self.templates[e].estimate
             own = self._signal_scatter(e)
             if own is None:
-                rows = np.array(weave)[near]
-                own_r = np.median(eig.real_sigma[rows] ** 2)
-                own_i = np.median(eig.imag_sigma[rows] ** 2)
-                own = (max(float(np.median(real[near])) - own_r, 0.0), max(float(np.median(imag[near])) - own_i, 0.0))
+                own = self._run_scatter(e.speed)
             out[m, 0, 0] = est.real_sigma**2 + own[0]
             out[m, 1, 1] = est.imag_sigma**2 + own[1]
         return out
+
+    def _run_scatter(self, speed: float) -> tuple[float, float]:
+        """The data's run-to-run variance (real, imaginary) of the weave eigenvalue at the data's speed
+        nearest ``speed``: with records, their scatter beyond their fits' own standard errors; from
+        tables, the rows' whole uncertainty (which of it is scatter from run to run the table does not say)."""
+        p = self.problem
+        eig = p.eigen
+        first = np.cumsum([0] + [2 if m == "weave" else 1 for m in eig.mode])
+        weave = np.array([r for r in range(len(eig)) if eig.mode[r] == "weave"])
+        speeds = eig.speed[weave]
+        near = np.abs(speeds - speeds[np.argmin(np.abs(speeds - speed))]) < 1e-9 + 0.03 * speed
+        real = float(np.median([p.var_data[first[r]] for r in weave[near]]))
+        imag = float(np.median([p.var_data[first[r] + 1] for r in weave[near]]))
+        if not self.records:
+            return real, imag
+        own_r = float(np.median(eig.real_sigma[weave[near]] ** 2))
+        own_i = float(np.median(eig.imag_sigma[weave[near]] ** 2))
+        return max(real - own_r, 0.0), max(imag - own_i, 0.0)
 
     def _signal_scatter(self, e: Experiment) -> tuple[float, float] | None:
         """Run-to-run variance (real, imaginary) of the records' own fits of ``e``'s signal at the data's
@@ -766,7 +791,8 @@ class NextExperiment:
         if not self.sweeps:
             self.sweep_mean = np.zeros((R, 0, 0), complex)
             self.sweep_own = np.zeros((R, 0, 0, 0))
-            self.sweep_data = self.sweep_model = np.zeros((0, 0, 0))
+            self.sweep_data = self.sweep_model = self.sweep_run = np.zeros((0, 0, 0))
+            self.sweep_distortion, self.distortion_source = self._linear_misfit()
             return
         K = len(self.sweeps[0].lines)
         s = len(self.sweeps)
@@ -800,6 +826,21 @@ class NextExperiment:
         down = self._sweep_response(*self._sweep_systems(*nominal, speeds=speeds - h))[0]
         Jv = split((up - down) / (2 * h[:, None]))
         self.sweep_data += np.einsum("na,nb->nab", Jv, Jv) * self._speed_sigma() ** 2
+        # and the bicycle itself varying from run to run as the data's weave did (next_sweep.weave_shift):
+        # more torque does not average it away
+        A, b, outputs = self._sweep_systems(*nominal)
+        self.sweep_run = np.zeros_like(self.sweep_data)
+        for m, x in enumerate(self.sweeps):
+            index = outputs[2] if x.output == "roll_rate" else outputs[1]
+            J = weave_shift(A[0, m], b[0, m], index, x.omegas)
+            if J is not None:
+                self.sweep_run[m] = J @ np.diag(self._run_scatter(x.speed)) @ J.T
+        self.sweep_data += self.sweep_run
+        # and what a linear response misses of a real run, line by line (next_sweep.linear_misfit)
+        self.sweep_distortion, self.distortion_source = self._linear_misfit()
+        H = self._sweep_response(A, b, outputs)[0]  # (s, K), the nominal model's
+        part = (self.sweep_distortion * np.abs(H)) ** 2 / 2
+        self.sweep_data += np.einsum("na,ab->nab", np.concatenate([part, part], axis=-1), np.eye(2 * H.shape[-1]))
         self.sweep_model = np.zeros((s, 2 * K, 2 * K))
         if p.free:
             stage = DifferencedStage(
@@ -830,6 +871,21 @@ class NextExperiment:
         self.sweeps = [self.sweeps[m] for m in keep]
         self.sweep_mean, self.sweep_own = self.sweep_mean[:, keep], self.sweep_own[:, keep]
         self.sweep_data, self.sweep_model = self.sweep_data[keep], self.sweep_model[keep]
+        self.sweep_run = self.sweep_run[keep]
+
+    def _linear_misfit(self) -> tuple[float, str]:
+        """The share of a run's response a linear model misses (:data:`ASSUMED_DISTORTION` without records)."""
+        if self.distortion is not None:
+            return float(self.distortion), "given"
+        if not self.records:
+            return ASSUMED_DISTORTION, "assumed (the data hold no records)"
+        d = self.diagnosis
+        r2 = [d.records[k].estimate.r2 for k in d.record_rows]
+        r2 = [x for x in r2 if math.isfinite(x)]
+        if not r2:
+            return ASSUMED_DISTORTION, "assumed (the records' fits give no r^2)"
+        share = float(np.median(np.sqrt(np.clip(1.0 - np.array(r2), 0.0, 1.0))))
+        return share, f"the records: sqrt(1 - r^2) of their fits, median over {len(r2)}"
 
     def _speed_sigma(self) -> float:
         """A run's speed scatter [m/s]: the median of the data's speed uncertainties."""
@@ -997,10 +1053,13 @@ class NextExperiment:
             "sweeps": {
                 "torque": float(self.torque),
                 "run_time": float(self.run_time),
+                "distortion": {"value": self.sweep_distortion, "source": self.distortion_source},
                 "note": (
                     "per run: the DFT estimate's variance 2 sigma_y^2 / (N a^2) at each line (sigma_y the signal's "
-                    "sample noise, N samples, a the line's torque amplitude) and the data's speed scatter; friction "
-                    "by its random-input describing function at the planned torque"
+                    "sample noise, N samples, a the line's torque amplitude), the data's speed scatter, and the "
+                    "response moving as the weave eigenvalue moved from run to run in the data, and at each line "
+                    "the share of the response a linear model misses (distortion); friction by its random-input "
+                    "describing function at the planned torque"
                 ),
             }
             if self.run_sweeps
@@ -1031,6 +1090,7 @@ class NextExperiment:
                 for k, r in enumerate(self.rivals)
             },
             "data_sigma": sd(self.sweep_data[m]),
+            "run_to_run_sigma": sd(self.sweep_run[m]),
             "model_sigma": sd(self.sweep_model[m]),
         }
 

@@ -165,6 +165,31 @@ def linearised_friction(A, b, friction, rate_index, omegas, amplitude) -> np.nda
     return closed(c)
 
 
+def weave_shift(A: np.ndarray, b: np.ndarray, index: int, omegas: np.ndarray) -> np.ndarray | None:
+    """Slopes ``(2K, 2)`` of the response ``e_index^T (i w I - A)^-1 b`` at ``omegas (K,)`` (real parts,
+    then imaginary parts) in the real and imaginary part of the weave eigenvalue, its modal residue held:
+    how a run's response moves when the bicycle's weave moves from run to run (``None`` without a weave).
+
+    With ``A = V diag(lambda) V^-1``, ``H(w) = sum_j r_j / (i w - lambda_j)``, ``r_j = (e^T V)_j (V^-1 b)_j``;
+    moving the weave pair ``lambda, conj(lambda)`` by ``delta, conj(delta)`` moves ``H`` by
+    ``g delta + g' conj(delta)``, ``g = r / (i w - lambda)^2``, ``g'`` the same for the conjugate.
+    """
+    lam, V = np.linalg.eig(A)
+    upper = np.flatnonzero(lam.imag > 1e-9)
+    if not upper.size:
+        return None
+    w = upper[np.argmax(lam.imag[upper])]
+    c = np.conj(lam[w])
+    pair = np.argmin(np.abs(lam - c))
+    r = V[index, :] * np.linalg.solve(V, b.astype(complex))
+    s = 1j * np.asarray(omegas)
+    g = r[w] / (s - lam[w]) ** 2
+    g_conj = r[pair] / (s - lam[pair]) ** 2
+    d_real = g + g_conj  # delta = 1
+    d_imag = 1j * g - 1j * g_conj  # delta = i
+    return np.stack([split(d_real), split(d_imag)], axis=-1)
+
+
 def noise_covariance(sweep: Sweep, sigma_y: float, sample_rate: float) -> np.ndarray:
     """Per run ``(2K, 2K)``: the DFT estimate's variance ``2 sigma_y^2 / (N a^2)`` on each real and
     imaginary part (module docstring)."""
