@@ -137,6 +137,8 @@ def test_bad_sweep_values_are_a_clear_error(damping_or_inertia):
         NextExperiment(plan.diagnosis, rivals=["steer_damping", "steer_inertia"], torque=-1.0)
     with pytest.raises(InputError, match="run_time = 1"):
         NextExperiment(plan.diagnosis, rivals=["steer_damping", "steer_inertia"], run_time=1.0)
+    with pytest.raises(InputError, match="distortion = 1.5"):
+        NextExperiment(plan.diagnosis, rivals=["steer_damping", "steer_inertia"], distortion=1.5)
 
 
 @pytest.mark.parametrize(

@@ -35,6 +35,14 @@ def next_text(result: dict, rows: int = 8) -> str:
             else ""
         )
         + ".",
+    ]
+    if result.get("sweeps"):
+        sw = result["sweeps"]
+        lines.append(
+            f"Multisines: {sw['torque']:g} N m peak, {sw['run_time']:g} s per run; {sw['note']}; the share a linear "
+            f"model misses {sw['distortion']['value']:.2f} per line ({_short_source(sw['distortion']['source'])})."
+        )
+    lines += [
         f"  {'rank':<5}{'experiment':<{width}}{'P':>6}{'n 95%':>7}{'limit':>7}  d per pair (first true/second true)",
     ]
     for k, item in enumerate(result["plan"][:rows], start=1):
@@ -79,7 +87,7 @@ def next_text(result: dict, rows: int = 8) -> str:
 
 
 def _short_source(source: str) -> str:
-    return "data" if source.startswith("the data") else source.split(" ")[0]
+    return "data" if source.startswith(("the data", "the records")) else source.split(" ")[0]
 
 
 def plot_next(plan, result: dict | None = None):

@@ -31,7 +31,11 @@ the torque known: the DFT estimate ``H_k = (2 / N) sum_n y_n e^(-i w_k t_n) / (a
 independent real and imaginary errors of variance ``2 sigma_y^2 / (N a^2)`` at each line, independent
 between lines (orthogonal bins of white noise).  A run's speed scatters as the data's did (the
 records' speed uncertainty): ``J_v J_v^T sigma_v^2`` with ``J_v`` the nominal response's slope in
-speed, also per run.
+speed, also per run.  The bicycle itself varies from run to run as the data's weave eigenvalue did
+(:func:`weave_shift`: the response's slopes in the weave eigenvalue times the data's run-to-run
+variance), and a real run departs from any linear response at each line by a share ``rho`` of it
+(variance ``(rho |H_k|)^2 / 2`` on each part; ``rho`` from the records' fits, ``sqrt(1 - r^2)``):
+neither shrinks with a larger torque (:meth:`bikerider.gap.next_experiment.NextExperiment._predict_sweeps`).
 """
 
 from __future__ import annotations

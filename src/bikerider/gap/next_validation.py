@@ -6,7 +6,8 @@ candidates tie.  For every case whose first-ranked candidate is tied with anothe
 effect is among them:
 
 * the plan (:class:`bikerider.gap.next_experiment.NextExperiment`, the tied candidates as rivals,
-  :data:`FOLLOW_UP` decays) recommends one experiment, a speed and a control law;
+  :data:`FOLLOW_UP` decays; multisines are left out, since the diagnosis that judges the follow-up reads
+  no frequency responses) recommends one experiment, a speed and a control law;
 * *planned*: :data:`FOLLOW_UP` new runs of that experiment, simulated by the independent truth
   (:class:`bikerider.gap.validation.TruthSimulator`: Meijaard's Appendix A typed in by hand, the
   nonlinear effects, LSODA, noise, the weave fitted from the noisy roll rate), as a new session;
@@ -100,7 +101,8 @@ def run_next_case(model: GapModelInput, truth_name: str, seed: int, follow_up: i
         case.notes.append("no tie holding the hidden effect" if first else "no ranking")
         case.seconds = time.perf_counter() - start
         return case
-    plan = NextExperiment(diagnosis, rivals=rivals, repeats=follow_up)
+    # decays only: the follow-up is diagnosed again, and the diagnosis reads no frequency responses
+    plan = NextExperiment(diagnosis, rivals=rivals, repeats=follow_up, sweeps=False)
     best = plan.plan[0]
     e = best["experiment"]
     case.planned, case.planned_probability = best["text"], best["resolution_probability"]
