@@ -170,7 +170,8 @@ def _probability_panel(ax, items, plan, colours, what):
 
 def _sweep_row(axes, plan, sweeps, colours):
     """The best multisine's frequency response per rival (magnitude and phase, bands one standard deviation
-    of the mean of the planned runs), and the multisines' resolution probability against speed."""
+    of the mean of the planned runs, the magnitude's as a factor ``exp(sd / |H|)``), and the multisines'
+    resolution probability against speed."""
     best = sweeps[0]["experiment"]
     m = plan.sweeps.index(best)
     f = np.array(best.lines)
@@ -186,9 +187,14 @@ def _sweep_row(axes, plan, sweeps, colours):
         sd_mag = np.sqrt(np.maximum(re**2 * var_re + im**2 * var_im + 2 * re * im * cross, 0)) / mag
         sd_phase = np.sqrt(np.maximum(im**2 * var_re + re**2 * var_im - 2 * re * im * cross, 0)) / mag**2
         phase = np.degrees(np.unwrap(np.angle(H)))
+        if k == 0:
+            reference = phase[0]
+        phase = phase + 360.0 * np.round((reference - phase[0]) / 360.0)  # every rival on the first one's branch
         colour = colours[k % len(colours)]
         axes[0].plot(f, mag, "-o", ms=3, color=colour, label=rival.name)
-        axes[0].fill_between(f, mag - sd_mag, mag + sd_mag, color=colour, alpha=0.18, lw=0)
+        # on the log axis, the band as a factor (a band below zero has no place there)
+        spread = np.exp(np.minimum(sd_mag / mag, 3.0))
+        axes[0].fill_between(f, mag / spread, mag * spread, color=colour, alpha=0.18, lw=0)
         axes[1].plot(f, phase, "-o", ms=3, color=colour)
         band = np.degrees(sd_phase)
         axes[1].fill_between(f, phase - band, phase + band, color=colour, alpha=0.18, lw=0)
