@@ -564,17 +564,23 @@ class NextExperiment:
             return self.simulator.apparent_time_domain(Layout.of(rival.effects), X)
         return self._predict_linear(rival.effects, X, None, self.points)
 
+    def _configured(self, effects, X, values=None):
+        """The model's values, effect configuration and speed scale for fitted-value vectors ``X (P, p)`` of
+        ``effects`` (or the nominal model with benchmark values ``values``, a batch), and the batch size ``P``."""
+        p = self.problem
+        if values is None:
+            values, config, scale = p.configure(p.layout(tuple(effects)), np.atleast_2d(X))
+        else:
+            values = {**p.nominal, **{k: np.asarray(v, float).reshape(-1, 1) for k, v in values.items()}}
+            config, scale = {}, None
+        P = max([np.shape(v)[0] for v in values.values() if np.ndim(v) > 0] + [np.atleast_2d(X).shape[0]])
+        return values, config, scale, P
+
     def _predict_linear(self, effects, X, values=None, points=None) -> np.ndarray:
         """Predicted eigenvalue ``(P, len(points))`` of linear effects at fitted values ``X``, or of the
         nominal model with benchmark values ``values`` (a batch)."""
         p = self.problem
-        lay = p.layout(tuple(effects))
-        if values is None:
-            values, config, scale = p.configure(lay, np.atleast_2d(X))
-        else:
-            values = {**p.nominal, **{k: np.asarray(v, float).reshape(-1, 1) for k, v in values.items()}}
-            config, scale = {}, None
-        P = max([np.asarray(v).shape[0] for v in values.values() if np.ndim(v) > 0] + [np.atleast_2d(X).shape[0]])
+        values, config, scale, P = self._configured(effects, X, values)
         index = [self.points.index(e) for e in points]
         if self.records:
             sub = self.simulator.subset(index) if len(index) != len(self.points) else self.simulator
@@ -733,13 +739,7 @@ class NextExperiment:
             amplitude = np.array([line_amplitude(s.lines, s.torque, s.run_time) for s in sweeps])
             A = linearised_friction(A, b, friction[:, None], outputs[3], omegas[None], amplitude[None, :])
             return A, b, outputs
-        lay = p.layout(tuple(effects))
-        if values is None:
-            values, config, scale = p.configure(lay, np.atleast_2d(X))
-        else:
-            values = {**p.nominal, **{k: np.asarray(v, float).reshape(-1, 1) for k, v in values.items()}}
-            config, scale = {}, None
-        P = max([np.shape(v)[0] for v in values.values() if np.ndim(v) > 0] + [np.atleast_2d(X).shape[0]])
+        values, config, scale, P = self._configured(effects, X, values)
         if scale is None or not measured:
             ss = EffectModel(values, p.geometry, config).state_space(speeds)
             A, b, outputs = ss.closed_loop(gains), ss.B[..., :, 1], ss.outputs
