@@ -52,6 +52,7 @@ docs: $(STAMP)
 	$(PY) docs/scripts/measurement_figure.py
 	$(PY) docs/scripts/gap_validation.py
 	$(PY) docs/scripts/gap_sbw_checks.py
+	$(PY) docs/scripts/gap_sbw_next.py
 
 clean:
 	rm -rf $(VENV) build *.egg-info src/*.egg-info .pytest_cache

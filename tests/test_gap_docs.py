@@ -38,6 +38,9 @@ def test_the_python_section_runs_as_written(tmp_path, monkeypatch):
     assert namespace["eigenvalues"].shape == (3, 8)
     assert namespace["response"]["phid"].shape == namespace["time"].shape
     assert (tmp_path / "tyres.png").stat().st_size > 10_000
+    plan = namespace["plan"].as_dict()
+    assert [r["effects"] for r in plan["rivals"]] == [["steer_damping"], ["steer_inertia"]]
+    assert plan["plan"] and (tmp_path / "next.png").stat().st_size > 10_000
 
 
 def test_the_documented_example_command_gives_the_documented_result(capsys, monkeypatch):

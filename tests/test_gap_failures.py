@@ -16,17 +16,16 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from gap_support import SIL, decay_record, nominal, riderless_model
 
 import bikerider
 from bikerider.cli import main
-from bikerider.gap.control import ControlLaw, GainSchedule
 from bikerider.gap.data import CanonicalData, EigenvalueData
 from bikerider.gap.diagnosis import Diagnosis
 from bikerider.gap.fit import GapProblem
-from bikerider.gap.models import BENCH_ARGS, EffectModel
+from bikerider.gap.models import EffectModel
 from bikerider.gap.predict import Predictor
 from bikerider.gap.records import Record, fit_records
-from bikerider.io.gap_model import load_model
 
 DATA = Path(bikerider.__file__).parent / "data"
 BP = DATA / "bicycleparameters"
@@ -37,40 +36,19 @@ MODEL = [
     str(BP / "riders/Jason/Parameters/JasonRigidBenchmark.txt"),
 ]
 EXAMPLES = DATA / "gap_examples"
-SIL = ControlLaw("sil", {"k_phid": GainSchedule.make_ramp(2.0, 6.5, "below")})
 
 
 @pytest.fixture(scope="module")
 def riderless():
-    return load_model(BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt")
+    return riderless_model()
 
 
-def _nominal(model):
-    return {k: float(model.parameters.values[k]) for k in BENCH_ARGS + ("g",)}
+_nominal = nominal
 
 
 def _record(model, speed: float, group: str, effects=None, noise=0.01, seed=0, duration=2.0) -> Record:
     """The roll rate of a linear model under the SIL law after a roll-rate kick (a synthetic record)."""
-    rng = np.random.default_rng(seed)
-    t = np.arange(0.0, duration, 0.01)
-    out = EffectModel(_nominal(model), model.geometry, effects or {}).simulate(
-        speed, t, initial={"phid": 0.6, "deltad": 0.3}, gains=SIL(speed)
-    )
-    return Record(
-        f"{group}[{seed}]",
-        "test",
-        t,
-        {"roll_rate": out["phid"] + noise * rng.standard_normal(t.size), "steer_angle": out["delta"]},
-        speed,
-        0.01,
-        group,
-        SIL,
-        speed,
-        None,
-        None,
-        ("roll_rate",),
-        True,
-    )
+    return decay_record(model, speed, group, effects, seed=seed, duration=duration, noise=noise, speed_measured=True)
 
 
 # 1 ----------------------------------------------------------------------------------------------

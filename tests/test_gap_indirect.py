@@ -3,43 +3,30 @@ own simulated response (``bikerider.gap.indirect``), the comparison like with li
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pytest
+from gap_support import SIL, decay_record, nominal, riderless_model
 
-import bikerider
-from bikerider.gap.control import ControlLaw, GainSchedule
 from bikerider.gap.data import CanonicalData, EigenvalueData
 from bikerider.gap.diagnosis import Diagnosis
 from bikerider.gap.extraction import _two_mode
 from bikerider.gap.indirect import LAMBDA_BOUNDS, RecordSimulator, eigenvalue_of, levenberg_marquardt
-from bikerider.gap.models import BENCH_ARGS, EffectModel
+from bikerider.gap.models import EffectModel
 from bikerider.gap.records import Record, fit_records
-from bikerider.io.gap_model import load_model
-
-BP = Path(bikerider.__file__).parent / "data" / "bicycleparameters"
-SIL = ControlLaw("sil", {"k_phid": GainSchedule.make_ramp(2.0, 6.5, "below")})
 
 
 @pytest.fixture(scope="module")
 def riderless():
-    return load_model(BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt")
+    return riderless_model()
 
 
-def _nominal(model):
-    return {k: float(model.parameters.values[k]) for k in BENCH_ARGS + ("g",)}
+_nominal = nominal
 
 
 def _record(model, speed, group, effects=None, noise=0.005, seed=0, duration=1.6) -> Record:
     """A short decay of a linear model under the SIL law (roll rate and steer angle), a little noise."""
-    rng = np.random.default_rng(seed)
-    t = np.arange(0.0, duration, 0.01)
-    out = EffectModel(_nominal(model), model.geometry, effects or {}).simulate(
-        speed, t, initial={"phid": 0.6, "deltad": 0.4, "delta": 0.03}, gains=SIL(speed)
-    )
-    signals = {"roll_rate": out["phid"] + noise * rng.standard_normal(t.size), "steer_angle": out["delta"]}
-    return Record(f"{group}[{seed}]", "test", t, signals, speed, 0.01, group, SIL, speed, None, None, ("roll_rate",))
+    initial = {"phid": 0.6, "deltad": 0.4, "delta": 0.03}
+    return decay_record(model, speed, group, effects, seed=seed, duration=duration, noise=noise, initial=initial)
 
 
 DAMPED = {"steer_damping": {"c_steer": 0.4}}

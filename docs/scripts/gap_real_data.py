@@ -584,6 +584,11 @@ def _sbw_section() -> list[str]:
         f"[{_shown(inertia['ci95'][0], inertia['ci95'])}, {_shown(inertia['ci95'][1], inertia['ci95'])}] kg m^2: "
         "none is needed |",
         "",
+    ]
+    lines += [
+        "What to measure next to tell the friction from the runners-up (`bikerider gap ... --next`): small pushes",
+        "under the experiment's own controller, in `docs/gap_sbw_next.md` (written by `make docs`).",
+        "",
         "### What stays unexplained",
         "",
     ]

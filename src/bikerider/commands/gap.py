@@ -95,6 +95,57 @@ def add_parser(subparsers) -> None:
         help="candidate effects (default: all of parameters, steer_damping, steer_inertia, steer_stiffness, "
         "passive_arms, rider_lean, tyre_slip, speed_sensor, steer_friction)",
     )
+    p.add_argument(
+        "--next",
+        action="store_true",
+        help="plan the next experiment: the speed, control law, signal and push of new free decays, or the "
+        "steer-torque multisine whose frequency response, that best "
+        "tell apart the candidates the diagnosis left tied (or the first and the runners-up), ranked by the "
+        "probability that the new decays favour the true one 19 to 1 (docs/gap.md)",
+    )
+    p.add_argument(
+        "--next-between",
+        metavar="E1,E2",
+        help="with --next: the candidates to tell apart (pairs as a+b), instead of the tied ones",
+    )
+    p.add_argument(
+        "--next-repeats",
+        metavar="N",
+        type=int,
+        default=10,
+        help="with --next: decays per experiment the plan is ranked for (default 10)",
+    )
+    p.add_argument(
+        "--next-speeds",
+        metavar="LO:HI[:N]",
+        help="with --next: the speeds to consider [m/s] (default 12 from 0.6 times the slowest to 1.25 times "
+        "the fastest speed of the data)",
+    )
+    p.add_argument(
+        "--next-noise",
+        metavar="SIGNAL=SD",
+        help="with --next: sample noise of signals, e.g. steer_rate=0.02,steer_angle=0.0005 (rad, rad/s; "
+        "default: from the records, or assumed for a signal they do not hold)",
+    )
+    p.add_argument(
+        "--next-torque",
+        metavar="NM",
+        type=float,
+        default=None,
+        help="with --next: peak steer torque of a planned multisine run [N m] (default 0.5)",
+    )
+    p.add_argument(
+        "--next-run-time",
+        metavar="S",
+        type=float,
+        default=None,
+        help="with --next: recorded length of one multisine run [s] (default 10)",
+    )
+    p.add_argument(
+        "--next-no-sweeps",
+        action="store_true",
+        help="with --next: plan free decays only (no steer-torque multisines)",
+    )
     p.add_argument("--json", action="store_true", help="print one JSON object instead of text")
     p.add_argument(
         "--report",
@@ -144,20 +195,88 @@ def run(args: argparse.Namespace) -> int:
         args.sample_rate,
     )
     result = diagnosis.as_dict()
+    plan = _plan(args, diagnosis)
+    if plan is not None:
+        result["next"] = plan.as_dict()
     if report_folder is not None:
         from bikerider.io.gap_report import write_report
 
         with report_folder as staging:
-            path = write_report(diagnosis, staging, title=f"Sim-to-real gap: {args.model}")
+            path = write_report(diagnosis, staging, title=f"Sim-to-real gap: {args.model}", plan=plan)
         result["report"] = str(report_folder.final(path))
     if args.json:
         result["notes"] = notes.shown_with(result.get("notes", []))
         print(json.dumps(_plain(result, np), indent=2, allow_nan=False))
     else:
         print(summary_text(result))
+        if plan is not None:
+            from bikerider.gap.next_report import next_text
+
+            print()
+            print(next_text(result["next"]))
         if args.report:
             print(f"\nReport: {result['report']}")
     return 0
+
+
+def _plan(args: argparse.Namespace, diagnosis):
+    """The next-experiment plan the options ask for (``None`` without ``--next``)."""
+    import math
+
+    import numpy as np
+
+    from bikerider.errors import InputError
+
+    if not args.next:
+        for option in ("next_between", "next_speeds", "next_noise", "next_torque", "next_run_time", "next_no_sweeps"):
+            if getattr(args, option) not in (None, False):
+                raise InputError("--" + option.replace("_", "-"), getattr(args, option), "--next as well")
+        return None
+    from bikerider.gap.next_experiment import plan_next
+    from bikerider.gap.next_sweep import DEFAULT_RUN_TIME, DEFAULT_TORQUE, MAX_TORQUE, RUN_TIME_RANGE
+
+    torque = DEFAULT_TORQUE if args.next_torque is None else args.next_torque
+    if not 0 < torque <= MAX_TORQUE:  # also NaN
+        raise InputError("--next-torque", torque, f"a positive peak steer torque of at most {MAX_TORQUE:g} N m")
+    run_time = DEFAULT_RUN_TIME if args.next_run_time is None else args.next_run_time
+    if not RUN_TIME_RANGE[0] <= run_time <= RUN_TIME_RANGE[1]:
+        raise InputError(
+            "--next-run-time", run_time, f"a recorded run length from {RUN_TIME_RANGE[0]:g} to {RUN_TIME_RANGE[1]:g} s"
+        )
+
+    speeds = None
+    if args.next_speeds:
+        parts = args.next_speeds.split(":")
+        try:
+            numbers = [float(x) for x in parts]
+        except ValueError:
+            numbers = []
+        if len(numbers) not in (2, 3) or not all(map(math.isfinite, numbers)) or not 0 < numbers[0] < numbers[1]:
+            raise InputError("--next-speeds", args.next_speeds, "LO:HI or LO:HI:N with 0 < LO < HI [m/s]")
+        count = int(numbers[2]) if len(numbers) == 3 else 12
+        if len(numbers) == 3 and (count != numbers[2] or not 2 <= count <= 100):
+            raise InputError("--next-speeds", args.next_speeds, "a whole number of speeds N from 2 to 100")
+        speeds = np.linspace(numbers[0], numbers[1], count)
+    noise = {}
+    for item in (args.next_noise or "").split(","):
+        if not item.strip():
+            continue
+        name, _, value = item.partition("=")
+        try:
+            noise[name.strip()] = float(value)
+        except ValueError:
+            raise InputError("--next-noise", item, "SIGNAL=SD, e.g. steer_rate=0.02") from None
+    rivals = [r.strip() for r in args.next_between.split(",")] if args.next_between else None
+    return plan_next(
+        diagnosis,
+        rivals=rivals,
+        speeds=speeds,
+        repeats=args.next_repeats,
+        noise=noise or None,
+        sweeps=not args.next_no_sweeps,
+        torque=torque,
+        run_time=run_time,
+    )
 
 
 def diagnose_files(

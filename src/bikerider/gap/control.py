@@ -100,6 +100,15 @@ class GainSchedule:
     def is_constant(self) -> bool:
         return self.ramp is None and len(set(self.values)) == 1
 
+    def scaled(self, factor: float) -> GainSchedule:
+        """The same schedule with every gain multiplied by ``factor`` (a controller's gain turned up or down)."""
+        if self.ramp is not None:
+            K, v0, side = self.ramp
+            return GainSchedule.make_ramp(K * factor, v0, side)
+        if len(self.speeds) == 1:
+            return GainSchedule.constant(self.values[0] * factor)
+        return GainSchedule.piecewise(list(self.speeds), [g * factor for g in self.values])
+
     def __call__(self, speed) -> np.ndarray:
         """The gain at ``speed`` [m/s] (any shape)."""
         v = np.asarray(speed, dtype=float)
@@ -151,6 +160,15 @@ class ControlLaw:
             raise InputError("control gains", values.tolist(), "four gains k_phi, k_phid, k_delta, k_deltad")
         schedules = {k: GainSchedule.constant(float(x), k) for k, x in zip(GAIN_NAMES, values) if x != 0}
         return ControlLaw(name or constant_law_name(values), schedules)
+
+    def scaled(self, factor: float, name: str | None = None) -> ControlLaw:
+        """The same controller with every gain multiplied by ``factor``, named ``<name> x<factor>``."""
+        return ControlLaw(
+            name or f"{self.name} x{factor:g}",
+            {k: s.scaled(factor) for k, s in self.gains.items()},
+            f"{self.name} with its gains times {factor:g}",
+            self.source,
+        )
 
     @property
     def is_zero(self) -> bool:

@@ -371,10 +371,13 @@ class Diagnosis:
             )
             values, cost, n, success = fit.values, fit.cost, fit.n_samples, fit.success
         stderr = np.full(values.size, np.inf)
+        covariance = None
         if mask is None and jackknife and len(self.folds) >= 3:  # jackknife over the held-out folds' fits
             folds = np.array([f.values for f in self.cross_validate(effects).fits])
             g = len(folds)
-            stderr = np.sqrt((g - 1) / g * np.sum((folds - folds.mean(axis=0)) ** 2, axis=0))
+            centred = folds - folds.mean(axis=0)
+            covariance = (g - 1) / g * centred.T @ centred
+            stderr = np.sqrt(np.diag(covariance))
         ci_low = np.clip(values - 1.96 * stderr, lower, upper)
         ci_high = np.clip(values + 1.96 * stderr, lower, upper)
         config: dict[str, dict[str, float]] = {}
@@ -398,6 +401,7 @@ class Diagnosis:
             "time-domain fit",
             lower,
             upper,
+            covariance=covariance,
         )
         if mask is None:
             self._time_domain_full[effects] = out

@@ -20,10 +20,12 @@ the parameters' and the speed's uncertainties and every held-out prediction use 
 *iterated bias correction*: a model's weave eigenvalues plus a fixed extraction bias are fitted
 (fast; the first bias is the nominal model's, the correction issue 11 applied to every candidate
 alike), the fitted model's own bias is computed by indirect inference, and the fitted values follow
-the change of the bias by Gauss-Newton steps (the fit's Jacobian held) until no record's bias
-changes by more than :data:`BIAS_TOLERANCE` of its data uncertainty.  The converged fit's residuals
-are its indirect-inference residuals; only the bias's own change with the parameters is left out
-of the search direction (``tests/test_gap_indirect.py`` compares the values with a full
+the change of the bias by Gauss-Newton steps (the fit's Jacobian held; a step is shortened to
+:data:`MAX_BIAS_STEP` of a value's search range) until the biases change by no more than
+:data:`BIAS_TOLERANCE` of the data uncertainty (RMS over the records fitted), at most
+:data:`MAX_BIAS_ITERATIONS` evaluations.  The fit's residuals, chi-square and held-out predictions are
+those of the fitted model's own bias; only the bias's own change with the parameters is left out of
+the search direction (``tests/test_gap_indirect.py`` compares the values with a full
 indirect-inference least squares).
 
 Fits.  A set of effects is fitted by bounded nonlinear least squares
@@ -129,6 +131,8 @@ class EffectFit:
     bias: np.ndarray | None = None
     """The fitted model's own extraction bias at every observation (records; see :meth:`GapProblem.fit`)."""
     bias_iterations: int = 0
+    covariance: np.ndarray | None = None
+    """Covariance of the fitted values (their standard errors are its diagonal's roots), where known."""
 
     def at_bound(self) -> list[str]:
         """Names of the fitted values pinned at a bound of the search."""
@@ -516,6 +520,7 @@ class GapProblem:
         sigma = np.sqrt(self.var_data[rec])
         offset = np.array(self.nominal_bias if bias is None else bias, dtype=float)
         fit = self._fit(tuple(effects), mask, start, offset)
+        covariance = fit.covariance
         x = fit.values.copy()
         J, weight = fit._jacobian, fit._weight
         lower, upper = self.bounds(lay)
@@ -544,7 +549,7 @@ class GapProblem:
         # the residuals, chi-square and values reported: those of the fitted model's own bias
         r = self._residuals(lay, mask, x, offset)
         fit = self._result(lay, x, fit.stderr, r, int(mask.sum()), fit.success, fit.message)
-        fit.bias, fit.bias_iterations = offset, iteration
+        fit.bias, fit.bias_iterations, fit.covariance = offset, iteration, covariance
         return fit
 
     def own_bias(self, lay: _Layout, x: np.ndarray) -> np.ndarray:
@@ -632,6 +637,7 @@ class GapProblem:
         J = jac(result.x)
         dof = max(result.fun.size - p, 1)
         reduced = float(np.sum(result.fun**2)) / dof
+        cov = None
         try:
             cov = np.linalg.pinv(J.T @ J) * max(1.0, reduced)
             stderr = np.sqrt(np.clip(np.diag(cov), 0, None))
@@ -640,7 +646,7 @@ class GapProblem:
         except np.linalg.LinAlgError:
             stderr = np.full(p, np.inf)
         out = self._result(lay, result.x, stderr, result.fun, int(mask.sum()), bool(result.success), result.message)
-        out._jacobian, out._weight = J, self._weights(lay, mask)
+        out._jacobian, out._weight, out.covariance = J, self._weights(lay, mask), cov
         return out
 
     def _result(

@@ -202,6 +202,10 @@ def markdown(result: dict, title: str, figures: list[tuple[str, str]]) -> str:
         "",
     ]
     md += ["```", summary_text(result), "```", ""]
+    if result.get("next"):
+        from bikerider.gap.next_report import next_text
+
+        md += ["## Next experiment", "", "```", next_text(result["next"], rows=12), "```", ""]
     md += ["## Candidates", "", "| effect | what it is |", "|---|---|"]
     md += [f"| {e.name} | {e.description} |" for e in EFFECTS.values()]
     md += [""]
@@ -580,7 +584,12 @@ def plot_ranking(result: dict):
     )
     colour = {True: "tab:green", False: "tab:orange", None: "0.7"}
     for ax, (what, col, before) in zip(axes[0], panels):
-        ax.barh(range(len(entries)), [e[col] for e in entries], color=[colour[e[3]] for e in entries])
+        # from the nominal model's error to the candidate's (a log axis has no zero for bars to start at)
+        rows = np.arange(len(entries))
+        values = np.array([e[col] for e in entries], dtype=float)
+        colours = [colour[e[3]] for e in entries]
+        ax.hlines(rows, before, values, colors=colours, lw=2.5)
+        ax.scatter(values, rows, c=colours, s=28, zorder=3)
         ax.axvline(before, color="k", ls="--", label=f"nominal model ({before:.2f})")
         ax.axvline(1.0, color="0.5", ls=":", label="noise floor (1)")
         ax.set_yticks(
@@ -591,8 +600,8 @@ def plot_ranking(result: dict):
         ax.set_xlabel(f"held-out error: RMS residual over {what}", fontsize=8)
         ax.legend(fontsize=7)
     fig.suptitle(
-        "Candidates and pairs fitted on training folds, scored on held-out folds "
-        "(green: plausible values; orange: implausible; grey: pair not judged)",
+        "Candidates and pairs fitted on training folds, scored on held-out folds: each line from the nominal "
+        "model's error to the candidate's\n(green: plausible values; orange: implausible; grey: pair not judged)",
         fontsize=8,
     )
     fig.tight_layout()

@@ -30,10 +30,13 @@ def write_report(
     folder: str | Path,
     title: str = "Sim-to-real gap diagnosis",
     inputs: Iterable[str | os.PathLike] = (),
+    plan=None,
 ) -> Path:
     """Write ``report.md`` and the figures into ``folder`` (created if needed); return the report path.
 
-    Figures of a previous report in the folder that this one does not link are removed.
+    Figures of a previous report in the folder that this one does not link are removed.  With
+    ``plan`` (:class:`bikerider.gap.next_experiment.NextExperiment`), also the next experiment's
+    plan and its figure of the rivals' predictions diverging over speed.
 
     Raises
     ------
@@ -47,7 +50,13 @@ def write_report(
     previous = linked_figures(folder / REPORT_NAME)
     written = []
     plt = pyplot()
-    for name, caption, fig in figures(diagnosis, result):
+    pictures = list(figures(diagnosis, result))
+    if plan is not None:
+        from bikerider.gap.next_report import plot_next
+
+        result["next"] = plan.as_dict()
+        pictures.append(("next.png", "Next experiment: where the rivals disagree", plot_next(plan, result["next"])))
+    for name, caption, fig in pictures:
         _refuse_inputs([folder / name], inputs)
         try:
             atomic_write_bytes(folder / name, figure_bytes(fig, dpi=110, format="png"))

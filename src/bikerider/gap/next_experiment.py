@@ -1,0 +1,1254 @@
+"""What to measure next: the experiment that best tells apart the candidates a diagnosis left standing.
+
+Rivals.  By default the first-ranked candidate of a diagnosis and every (single) candidate tied with
+it; when none is tied, the runners-up that also beat the nominal model on the held-out folds (at most
+:data:`MAX_RIVALS` in all).  Any candidates (or pairs) fitted to all the data may be named instead.
+The measure below is then for every pair of a tie (or of named rivals), or for the first against each
+runner-up.
+
+Experiments.  A new measurement is a number of free decays at one speed under one control law: a
+law of the data, the same controller with its gains scaled (:data:`GAIN_FACTORS`), or no control;
+with records, the signal the decay's eigenvalue is fitted to (roll rate, steer angle, steer rate,
+roll angle) and the size of the push (:data:`PUSHES`, relative to the data's: friction makes the
+decay depend on it).  What each decay gives is what the diagnosis compares: its weave eigenvalue.
+
+Predictions.  Each rival predicts a decay as the diagnosis predicts a record.  For tables of
+eigenvalues: the rival's weave eigenvalue at that speed and law.  With records: a *template* decay
+is simulated with the nominal model from the push of the nearest-speed record of the data (its first
+samples, scaled), with each signal's noise (the larger of its records' sample-to-sample scatter,
+:func:`signal_noise`, and what their own fits leave, :func:`fit_residual`), and fitted as a record is fitted
+(the record fit's two-mode function, started from the nominal model's eigenvalues, judged by the record
+fit's acceptance rules); every rival predicts it by indirect inference (the same
+fit applied to the rival's own response over the template, :mod:`bikerider.gap.indirect`; the
+nonlinear friction by its simulated response).  A template the record fit cannot fit, or whose fit
+the nominal model's own response bends by more than 20 %, is not a measurement the diagnosis could
+use, and is left out of the plan with its reason.
+
+Uncertainties (2x2, real and imaginary part): the data's noise per decay ``D`` (tables: the data's
+standard uncertainty at the nearest speed, scaled by ``(decay rate / decay rate there)^(3/2)``, as a
+fitted decay rate's and frequency's standard errors grow on a faster decay; records: the template
+fit's standard errors plus the data's run-to-run scatter beyond their own standard errors at the
+nearest speed, of the experiment's own signal where the diagnosis did not fit that signal: the
+scatter of its records' own fits of it, :data:`MIN_REPLICATES` or more at that speed); the nominal parameters' uncertainty ``V`` carried through (central differences of one
+standard deviation by :class:`bikerider.engine.DifferencedStage`; with records from the roll-rate,
+standard-push template of each speed and law), counted per decay as the diagnosis counts it (it
+weights each row by data plus parameter variance and takes rows as independent); and each rival's
+own uncertainty ``C``: its fitted values' covariance (each value's spread capped at that of a value
+anywhere in its search range) through secants over one standard deviation inside the search bounds.
+A rival that misses held-out data by more than the uncertainties (held-out RMS error ``e`` above one)
+would miss new data alike: its misfit ``(e^2 - 1) (D + V)`` is added, systematic.  ``n`` decays' mean
+then has, with rival ``T`` true, the covariance ``S_T = C_T + (e_T^2 - 1)^+ (D + V) + (D + V) / n``.
+The plan assumes one of the rivals is the truth; the misfit term keeps it from promising a resolution
+between two rivals that both miss the data by more than they differ.
+
+Discrimination.  The expected log-likelihood ratio of the new decays between two rivals ``A`` and
+``B``: with ``T`` true and the statistic weighted by ``S_T``, the log-likelihood ratio is Gaussian with
+mean ``d_T^2 / 2`` and variance ``d_T^2``, ``d_T^2 = (mu_A - mu_B)^T S_T^-1 (mu_A - mu_B)`` (the
+Kullback-Leibler divergence; Box and Hill 1967, Hunter and Reiner 1965).  It measures what the
+question is, whether new data favour one structure over the other, where the Fisher information of
+the effects' parameters measures how precisely one candidate's own values would be pinned down: tied
+candidates may each be well determined and still predict the same thing at the measured speeds.  The
+probability that the new decays favour the true rival by odds of :data:`ODDS` to 1 or more (95 %
+posterior probability from even odds) is ``Phi(d_T / 2 - ln(ODDS) / d_T)``; averaged over which of the
+two is true (even prior odds) it is the pair's *resolution probability*.  Experiments are ranked by
+their smallest resolution probability over the pairs of rivals (all pairs of a tie; the first against
+each runner-up otherwise) at the given number of decays, then by the smallest ``d``; each states the
+decays it needs for 95 % (at most :data:`MAX_REPEATS`), and the limit the rivals' own uncertainty
+sets with endless decays.  Experiments where a rival's weave grows (no free decay to record) are left
+out.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from bikerider.errors import FitError, InputError
+from bikerider.gap.control import NO_CONTROL, ControlLaw
+from bikerider.gap.effects import TIME_DOMAIN_EFFECTS
+from bikerider.gap.extraction import weave_eigenvalue
+from bikerider.gap.fit import EffectFit
+from bikerider.gap.models import EffectModel
+from bikerider.gap.next_sweep import (
+    DEFAULT_RUN_TIME,
+    DEFAULT_SAMPLE_RATE,
+    DEFAULT_TORQUE,
+    FRF_SIGNALS,
+    MAX_TORQUE,
+    RUN_TIME_RANGE,
+    Sweep,
+    line_amplitude,
+    linearised_friction,
+    lines_for,
+    noise_covariance,
+    response,
+    run_stand_in,
+    weave_shift,
+)
+from bikerider.gap.records import SIGNALS, Record, RecordFit
+
+LOG = logging.getLogger(__name__)
+
+MAX_RIVALS = 3
+"""Most rivals chosen by default."""
+GAIN_FACTORS = (0.5, 1.5)
+"""Gains of each control law of the data tried scaled by these factors (a different gain of the
+same controller)."""
+PUSHES = (0.5, 1.0, 2.0)
+"""Push sizes tried with records when a rival is nonlinear (its decay depends on the push)."""
+N_SPEEDS = 12
+"""Speeds of the default grid."""
+SPEED_SPAN = (0.6, 1.25)
+"""The default grid spans these factors times the slowest and the fastest speed of the data."""
+DEFAULT_REPEATS = 10
+MAX_REPEATS = 100
+ODDS = 19.0
+"""Odds a resolution needs: 95 % posterior probability from even prior odds."""
+ASSUMED_NOISE = {
+    "roll_rate": 0.01,
+    "roll_angle": 0.002,
+    "steer_angle": 2 * math.pi / 8192 / math.sqrt(12),
+    "steer_rate": 0.02,
+}
+"""Sample noise assumed for a signal the data's records do not hold (rad, rad/s): a MEMS gyro, an IMU's
+angle, a 13-bit steer encoder's quantisation, its rate."""
+MIN_DECAY = 0.3
+"""Smallest decay rate [1/s] the noise of a table's decays is scaled with (slower decays, and growing
+ones, are cut by the record's length rather than by their decay)."""
+ASSUMED_DISTORTION = 0.1
+"""Share of a run's frequency response a linear model misses at each line (friction's harmonics, the
+treadmill's or rider's disturbances), assumed when the data hold no records to measure it."""
+MIN_REPLICATES = 3
+"""Fewest records at one speed whose fits of a signal give that signal's run-to-run scatter."""
+NOISE_SEED = 2024
+"""Seed of the noise added to templates (their fits' standard errors scale with it; the value does not)."""
+
+
+@dataclass(frozen=True)
+class Experiment:
+    """One kind of new decay.
+
+    Attributes
+    ----------
+    speed : float
+        [m/s]
+    law : str
+        Name of the control law acting (a key of :attr:`NextExperiment.laws`).
+    signal : str
+        The signal the eigenvalue is fitted to (``eigenvalue`` for tables: the data say none).
+    push : float
+        The push relative to the data's (records only).
+    """
+
+    speed: float
+    law: str
+    signal: str = "eigenvalue"
+    push: float = 1.0
+
+    kind = "decay"
+
+    def describe(self, repeats: int | None = None) -> str:
+        what = "decays" if repeats is None else (f"{repeats} decay" + ("s" if repeats != 1 else ""))
+        out = f"{what} at {self.speed:.2f} m/s under {self.law}"
+        if self.signal != "eigenvalue":
+            out += f", eigenvalue from the {self.signal.replace('_', ' ')}"
+        if self.push != 1.0:
+            out += f", pushes x{self.push:g} the data's"
+        return out
+
+
+@dataclass
+class Rival:
+    """A candidate (or pair) to tell apart from the others, as fitted to all the data."""
+
+    effects: tuple[str, ...]
+    fit: EffectFit
+    misfit: float = 0.0
+    """Its held-out mean squared normalised residual above the noise floor, ``max(0, error^2 - 1)``: how far
+    beyond the uncertainties it misses data it was not fitted to."""
+
+    @property
+    def name(self) -> str:
+        return "+".join(self.effects)
+
+    @property
+    def nonlinear(self) -> bool:
+        return any(e in TIME_DOMAIN_EFFECTS for e in self.effects)
+
+
+@dataclass
+class NextExperiment:
+    """The ranked plan of new measurements for a diagnosis (see the module docstring).
+
+    Parameters
+    ----------
+    diagnosis : bikerider.gap.diagnosis.Diagnosis
+    rivals : sequence of str, optional
+        Candidates to tell apart (``"steer_damping"``, ``"parameters+steer_damping"``); default as the
+        module docstring says.
+    speeds : array_like, optional
+        Speeds to consider [m/s] (default :data:`N_SPEEDS` over :data:`SPEED_SPAN` of the data's).
+    repeats : int
+        Decays per experiment the plan is ranked for.
+    noise : dict, optional
+        Sample noise of signals (overrides what the data give and :data:`ASSUMED_NOISE`).
+    signals : sequence of str, optional
+        Signals to consider with records (default: every one of :data:`bikerider.gap.records.SIGNALS`).
+    sweeps : bool
+        Also plan steer-torque frequency responses (:mod:`bikerider.gap.next_sweep`).
+    torque : float
+        Peak steer torque of a planned multisine [N m].
+    run_time : float
+        Recorded length of one multisine run [s].
+    distortion : float, optional
+        Share of a multisine run's response a linear model misses at each line (default: from the records'
+        fits, ``sqrt(1 - r^2)``, or :data:`ASSUMED_DISTORTION`); 0 is an ideal, linear test rig.
+    """
+
+    diagnosis: object
+    rivals: object = None
+    speeds: object = None
+    repeats: int = DEFAULT_REPEATS
+    noise: dict | None = None
+    signals: object = None
+    sweeps: object = True
+    torque: float = DEFAULT_TORQUE
+    run_time: float = DEFAULT_RUN_TIME
+    distortion: float | None = None
+
+    def __post_init__(self):
+        d = self.diagnosis
+        self.problem = d.problem
+        if not isinstance(self.repeats, int | np.integer) or not 1 <= self.repeats <= MAX_REPEATS:
+            raise InputError("repeats", self.repeats, f"a whole number of decays from 1 to {MAX_REPEATS}")
+        if not (isinstance(self.torque, int | float) and 0 < self.torque <= MAX_TORQUE):  # also NaN
+            raise InputError("torque", self.torque, f"a positive peak steer torque of at most {MAX_TORQUE:g} N m")
+        lo, hi = RUN_TIME_RANGE
+        if not (isinstance(self.run_time, int | float) and lo <= self.run_time <= hi):
+            raise InputError("run_time", self.run_time, f"a recorded run length from {lo:g} to {hi:g} s")
+        if self.distortion is not None and not (isinstance(self.distortion, int | float) and 0 <= self.distortion < 1):
+            raise InputError("distortion", self.distortion, "a share of the response from 0 to below 1")
+        self.run_sweeps = bool(self.sweeps)
+        self.rivals = self._rivals(self.rivals)
+        if len(self.rivals) < 2:
+            raise InputError(
+                "rivals",
+                [r.name for r in self.rivals],
+                "at least two candidates to tell apart (name them, or a diagnosis with two candidates that beat "
+                "the nominal model)",
+            )
+        self.records = bool(d.record_rows)
+        self.speeds = self._speeds(self.speeds)
+        self.laws = self._laws()
+        self.sample_noise, self.noise_source = self._signal_noise()
+        self.points, self.left_out = self._experiments()
+        if not self.points:
+            raise InputError("experiments", "none measurable", "speeds and laws at which a decay shows a weave")
+        self._predict()
+        self._drop_unpredicted()
+        self.sweeps = self._plan_sweeps() if self.run_sweeps else []
+        self._predict_sweeps()
+        self.experiments = list(self.points) + list(self.sweeps)
+        if self.all_pairs:  # a tie (or rivals named): which of them
+            self.pairs = [(i, j) for i in range(len(self.rivals)) for j in range(i + 1, len(self.rivals))]
+        else:  # runners-up: whether the first stands against each
+            self.pairs = [(0, j) for j in range(1, len(self.rivals))]
+        self.plan = self._rank()
+
+    # -- rivals --------------------------------------------------------------------------------------
+    def _rivals(self, named) -> list[Rival]:
+        d = self.diagnosis
+        self.all_pairs = True
+        self.named = bool(named)
+        if named:
+            chosen = []
+            for name in named:
+                effects = tuple(e.strip() for e in str(name).split("+"))
+                bad = [e for e in effects if e not in d.candidates]
+                if bad:
+                    raise InputError(
+                        "rival", name, "candidates of the diagnosis (" + ", ".join(d.candidates) + "), joined by +"
+                    )
+                chosen.append(effects)
+        else:
+            if not d.ranking:
+                raise InputError("diagnosis", "no ranking", "a diagnosis with held-out folds (two groups or more)")
+            first = d.ranking[0]
+            chosen = [(first["effect"],)] + [tuple(t.split("+")) for t in first["tied_with"]]
+            chosen = [c for c in chosen if len(c) == 1 or c in d.cv]
+            if len(chosen) < 2:
+                self.all_pairs = False
+                for r in d.ranking[1:]:
+                    if len(chosen) >= MAX_RIVALS:
+                        break
+                    cv = d.cv[(r["effect"],)]
+                    if cv.error_after < cv.error_before and (r["effect"],) not in chosen:
+                        chosen.append((r["effect"],))
+            chosen = chosen[:MAX_RIVALS]
+        out = []
+        for c in dict.fromkeys(chosen):
+            error = d.cross_validate(c).error_after if len(d.folds) >= 2 else 1.0
+            out.append(Rival(c, d.fit_of(c), max(0.0, error**2 - 1.0) if math.isfinite(error) else 0.0))
+        return out
+
+    # -- the space of experiments -----------------------------------------------------------------
+    def _speeds(self, speeds) -> np.ndarray:
+        if speeds is not None:
+            out = np.asarray(speeds, dtype=float).ravel()
+            if out.size == 0 or not np.all(np.isfinite(out)) or np.any(out <= 0):
+                raise InputError("speeds", out.tolist(), "finite, positive speeds [m/s]")
+            return np.unique(out)
+        eig = self.problem.eigen
+        if not len(eig):
+            raise InputError("data", "no eigenvalue rows", "measured eigenvalues or records to plan from")
+        lo, hi = SPEED_SPAN[0] * float(eig.speed.min()), SPEED_SPAN[1] * float(eig.speed.max())
+        return np.round(np.linspace(max(lo, 0.5), hi, N_SPEEDS), 2)
+
+    def _laws(self) -> dict[str, ControlLaw]:
+        laws: dict[str, ControlLaw] = {}
+        for law in self.problem.eigen.laws.values():
+            laws[law.name] = law
+            if not law.is_zero:
+                for factor in GAIN_FACTORS:
+                    scaled = law.scaled(factor)
+                    laws[scaled.name] = scaled
+        laws.setdefault(NO_CONTROL.name, NO_CONTROL)
+        return laws
+
+    def _signal_noise(self) -> tuple[dict[str, float], dict[str, str]]:
+        """Sample noise of each signal: given, from the data's records, or assumed."""
+        values: dict[str, float] = {}
+        source: dict[str, str] = {}
+        self.signal_fits: dict[str, list] = {}
+        if self.records:
+            d = self.diagnosis
+            for name in SIGNALS:
+                held = [d.records[k].record for k in d.record_rows if name in d.records[k].record.signals]
+                scatter = [x for x in (signal_noise(r.signals[name]) for r in held) if x > 0]
+                if not scatter:
+                    continue
+                fits = [(r.speed, record_fit(r.time, r.signals[name])) for r in held]
+                self.signal_fits[name] = [(v, f) for v, f in fits if f is not None]
+                left = [f.residual_rms for _, f in self.signal_fits[name]]
+                values[name] = max(float(np.median(scatter)), float(np.median(left)) if left else 0.0)
+                source[name] = (
+                    f"the data's records: the larger of their sample-to-sample scatter ({np.median(scatter):.2g}) "
+                    "and what their own fits leave ("
+                    + (f"{np.median(left):.2g}, RMS residual over {len(left)} records" if left else "no fit")
+                    + ")"
+                )
+            for name in SIGNALS:
+                if name not in values:
+                    values[name], source[name] = ASSUMED_NOISE[name], "assumed (the data hold no such signal)"
+        for name, value in (self.noise or {}).items():
+            if name not in SIGNALS:
+                raise InputError("noise signal", name, "one of " + ", ".join(SIGNALS))
+            if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
+                raise InputError(f"noise of {name}", value, "a positive standard deviation (rad or rad/s)")
+            values[name], source[name] = float(value), "given"
+        return values, source
+
+    def _experiments(self) -> tuple[list[Experiment], list[dict]]:
+        if not self.records:
+            return [Experiment(float(v), name) for name in self.laws for v in self.speeds], []
+        signals = tuple(self.signals) if self.signals else SIGNALS
+        for s in signals:
+            if s not in SIGNALS:
+                raise InputError("signal", s, "one of " + ", ".join(SIGNALS))
+        pushes = PUSHES if any(r.nonlinear for r in self.rivals) else (1.0,)
+        candidates = [
+            Experiment(float(v), name, s, p) for name in self.laws for v in self.speeds for p in pushes for s in signals
+        ]
+        self.templates, left = self._templates(candidates)
+        points = [e for e in candidates if e in self.templates]
+        return points, left
+
+    # -- templates (records) ------------------------------------------------------------------------
+    def _templates(self, experiments: list[Experiment]) -> tuple[dict[Experiment, RecordFit], list[dict]]:
+        """A fitted template decay per experiment (module docstring); those that fail, with the reason."""
+        from bikerider.gap.indirect import RecordSimulator, comparable
+        from bikerider.gap.predict import Predictor
+        from bikerider.gap.records import eigenvalues_of
+
+        d = self.diagnosis
+        used = [d.records[k] for k in d.record_rows]
+        speeds = np.array([f.record.speed for f in used])
+        nominal = EffectModel(self.problem.nominal, self.problem.geometry)
+        rng = np.random.default_rng(NOISE_SEED)
+        records: list[Record] = []
+        for e in experiments:
+            near = used[int(np.argmin(np.abs(speeds - e.speed)))].record
+            dt = float(near.time[1] - near.time[0])
+            t = np.arange(near.time.size) * dt
+            law = self.laws[e.law]
+            out = nominal.simulate(e.speed, t, initial=_push(near, e.push), gains=law(e.speed))
+            signals = {
+                name: out[state] + self.sample_noise[name] * rng.standard_normal(t.size)
+                for name, state in (
+                    ("roll_rate", "phid"),
+                    ("roll_angle", "phi"),
+                    ("steer_angle", "delta"),
+                    ("steer_rate", "deltad"),
+                )
+            }
+            records.append(
+                Record(
+                    f"next {e.describe()}",
+                    "plan",
+                    t,
+                    signals,
+                    e.speed,
+                    near.speed_sigma,
+                    "next",
+                    law,
+                    e.speed,
+                    None,
+                    None,
+                    (e.signal,),
+                    near.speed_measured,
+                )
+            )
+        fits = self._fit_templates(records)
+        left = [{"experiment": e.describe(), "reason": f.reason} for e, f in zip(experiments, fits) if not f.used]
+        kept = [(e, f) for e, f in zip(experiments, fits) if f.used]
+        if not kept:
+            return {}, left
+        rows = eigenvalues_of([f for _, f in kept])
+        matched = Predictor(rows, _no_canonical(), self.problem.nominal, self.problem.geometry).eigenvalues(nominal)
+        simulator = RecordSimulator([f for _, f in kept], self.problem.nominal, self.problem.geometry)
+        _, reasons = comparable(simulator.settle(), matched)
+        out = {}
+        keep = []
+        for j, ((e, f), why) in enumerate(zip(kept, reasons)):
+            if why is None:
+                out[e] = f
+                keep.append(j)
+            else:
+                left.append({"experiment": e.describe(), "reason": why})
+        self.simulator = simulator.subset(keep)
+        return out, left
+
+    def _fit_templates(self, records: list[Record]) -> list[RecordFit]:
+        """Fit every template as a record is fitted, batched: the record fit's two-mode function, started
+        from the nominal model's weave and slow eigenvalues, judged by the record fit's acceptance rules
+        (:func:`bikerider.gap.extraction._accept_two_mode`: a significant oscillation, half a cycle and
+        more with a clear decay, the slow mode in range)."""
+        from types import SimpleNamespace
+
+        from bikerider.gap.extraction import MIN_CYCLES, MIN_R2, _accept_two_mode, _two_mode, _two_mode_jacobian
+        from bikerider.gap.indirect import LAMBDA_BOUNDS, levenberg_marquardt
+
+        nominal = EffectModel(self.problem.nominal, self.problem.geometry)
+        groups: dict[int, list[int]] = {}
+        for k, r in enumerate(records):
+            groups.setdefault(r.time.size, []).append(k)
+        fitted: dict[int, RecordFit] = {}
+        for size, index in groups.items():
+            tau = records[index[0]].time - records[index[0]].time[0]
+            starts, ys = [], []
+            for k in index:
+                r = records[k]
+                ev = nominal.eigenvalues([r.speed], r.gains[None, :])[0]
+                weave = ev[np.argmax(ev.imag)]
+                real = ev[np.abs(ev.imag) < 1e-9 * np.maximum(1.0, np.abs(ev))].real
+                slow = float(real.max()) if real.size else -1.0
+                lam = float(np.clip(slow, LAMBDA_BOUNDS[0], LAMBDA_BOUNDS[1]))
+                starts.append([abs(weave.imag), -weave.real, 0.0, 0.0, 0.0, 0.0, lam])
+                ys.append(r.signals[r.fit_signals[0]])
+            Y = np.array(ys)
+            with np.errstate(all="ignore"):
+                beta, cost = levenberg_marquardt("two-mode", np.array(starts), Y, np.ones(Y.shape, bool), tau)
+            for j, k in enumerate(index):
+                r, name = records[k], records[k].fit_signals[0]
+                if not np.all(np.isfinite(beta[j])):
+                    fitted[k] = RecordFit(
+                        r, None, reason=f"{name}: no weave the record fit finds (less than half a cycle)"
+                    )
+                    continue
+                fun = _two_mode(beta[j], tau) - Y[j]
+                res = SimpleNamespace(
+                    x=beta[j], cost=0.5 * float(cost[j]), jac=_two_mode_jacobian(beta[j], tau), fun=fun
+                )
+                total = float(np.sum((Y[j] - Y[j].mean()) ** 2))
+                with np.errstate(all="ignore"):
+                    two, why = _accept_two_mode(res, size, tau, total, MIN_CYCLES)
+                if two is None:
+                    fitted[k] = RecordFit(r, None, reason=f"{name}: {why}")
+                elif not two[0].r2 >= MIN_R2:
+                    fitted[k] = RecordFit(r, None, reason=f"{name}: poor fit (r^2 = {two[0].r2:.2f})")
+                else:
+                    estimate = two[0]
+                    fitted[k] = RecordFit(r, estimate, {name: estimate})
+        return [fitted[k] for k in range(len(records))]
+
+    # -- predictions --------------------------------------------------------------------------------
+    def _predict(self) -> None:
+        from bikerider.engine import DifferencedStage
+
+        n = len(self.points)
+        p = self.problem
+        self.mean = np.zeros((len(self.rivals), n), complex)
+        self.own_cov = np.zeros((len(self.rivals), n, 2, 2))
+        for k, rival in enumerate(self.rivals):
+            fit = rival.fit
+            self.mean[k] = self._predict_rival(rival, fit.values[None, :])[0]
+            if not fit.names:
+                continue
+            J, cov = _secants(fit, lambda X, rival=rival: _split(self._predict_rival(rival, X)))
+            J = J.reshape(2, n, -1)  # per unit of each value
+            self.own_cov[k] = np.einsum("anj,jk,bnk->nab", J, cov, J)
+        # the nominal parameters' uncertainty, as the diagnosis carries it
+        self.model_cov = np.zeros((n, 2, 2))
+        if p.free:
+            base = self._reference_points()
+            stage = DifferencedStage(
+                "nominal parameters",
+                lambda v: _split(self._predict_linear((), np.zeros((np.size(next(iter(v.values()))), 0)), v, base)),
+                p.free,
+                range(2 * len(base)),
+                dict(zip(p.free, p.free_sigma)),
+                batched=True,
+            )
+            J = (stage.jacobian({k: p.nominal[k] for k in p.free}) * p.free_sigma).reshape(2, len(base), -1)
+            cov = np.einsum("anj,bnj->nab", J, J)
+            index = {(e.speed, e.law): m for m, e in enumerate(base)}
+            for m, e in enumerate(self.points):
+                self.model_cov[m] = cov[index[(e.speed, e.law)]]
+        self.data_cov = self._data_noise()
+
+    def _drop_unpredicted(self) -> None:
+        """Leave out experiments where a rival's response shows no weave the record fit finds."""
+        bad = ~np.all(np.isfinite(self.mean), axis=0) | ~np.all(np.isfinite(self.own_cov), axis=(0, 2, 3))
+        bad |= ~np.all(np.isfinite(self.model_cov), axis=(1, 2)) | ~np.all(np.isfinite(self.data_cov), axis=(1, 2))
+        growing = np.any(self.mean.real >= 0, axis=0)
+        for m in np.flatnonzero(bad | growing):
+            missing = [r.name for k, r in enumerate(self.rivals) if not np.isfinite(self.mean[k, m])]
+            grows = [r.name for k, r in enumerate(self.rivals) if self.mean[k, m].real >= 0]
+            if missing:
+                why = f"the response of {', '.join(missing)} shows no weave the record fit finds"
+            elif grows:
+                why = (
+                    f"the weave of {', '.join(grows)} grows there: no free decay to record (the bicycle falls "
+                    "unless a controller or a catch stops it)"
+                )
+            else:
+                why = "an uncertainty cannot be evaluated there"
+            self.left_out.append({"experiment": self.points[m].describe(), "reason": why})
+        keep = np.flatnonzero(~(bad | growing))
+        if not keep.size:
+            raise InputError("experiments", "none predicted", "speeds and laws where every rival shows a weave")
+        self.points = [self.points[m] for m in keep]
+        self.mean, self.own_cov = self.mean[:, keep], self.own_cov[:, keep]
+        self.model_cov, self.data_cov = self.model_cov[keep], self.data_cov[keep]
+        if self.records:
+            self.simulator = self.simulator.subset(keep)
+
+    def _reference_points(self) -> list[Experiment]:
+        """One experiment per speed and law (the roll-rate, standard-push one where there is one)."""
+        out: dict[tuple[float, str], Experiment] = {}
+        for e in self.points:
+            key = (e.speed, e.law)
+            best = out.get(key)
+            if best is None or (e.push == 1.0 and e.signal == "roll_rate"):
+                out[key] = e
+        return list(out.values())
+
+    def _predict_rival(self, rival: Rival, X: np.ndarray) -> np.ndarray:
+        """Predicted eigenvalue ``(P, n_points)`` of a rival for fitted-value vectors ``X (P, p)``."""
+        if rival.nonlinear:
+            from bikerider.gap.timedomain import Layout
+
+            return self.simulator.apparent_time_domain(Layout.of(rival.effects), X)
+        return self._predict_linear(rival.effects, X, None, self.points)
+
+    def _configured(self, effects, X, values=None):
+        """The model's values, effect configuration and speed scale for fitted-value vectors ``X (P, p)`` of
+        ``effects`` (or the nominal model with benchmark values ``values``, a batch), and the batch size ``P``."""
+        p = self.problem
+        if values is None:
+            values, config, scale = p.configure(p.layout(tuple(effects)), np.atleast_2d(X))
+        else:
+            values = {**p.nominal, **{k: np.asarray(v, float).reshape(-1, 1) for k, v in values.items()}}
+            config, scale = {}, None
+        P = max([np.shape(v)[0] for v in values.values() if np.ndim(v) > 0] + [np.atleast_2d(X).shape[0]])
+        return values, config, scale, P
+
+    def _predict_linear(self, effects, X, values=None, points=None) -> np.ndarray:
+        """Predicted eigenvalue ``(P, len(points))`` of linear effects at fitted values ``X``, or of the
+        nominal model with benchmark values ``values`` (a batch)."""
+        p = self.problem
+        values, config, scale, P = self._configured(effects, X, values)
+        index = [self.points.index(e) for e in points]
+        if self.records:
+            sub = self.simulator.subset(index) if len(index) != len(self.points) else self.simulator
+            res = sub.apparent(values, config, scale)
+            return np.broadcast_to(res, (P, len(index))).copy()
+        rows = self._rows(points)
+        from bikerider.gap.predict import Predictor
+
+        predictor = Predictor(rows, _no_canonical(), p.nominal, p.geometry)
+        with np.errstate(all="ignore"):
+            out = predictor.eigenvalues(EffectModel(values, p.geometry, config))
+        return np.broadcast_to(out, (P, len(points))).copy()
+
+    def _rows(self, points: list[Experiment]):
+        from bikerider.gap.data import EigenvalueData
+
+        n = len(points)
+        speeds = np.array([e.speed for e in points])
+        gains = np.array([self.laws[e.law](e.speed) for e in points]).reshape(n, 4)
+        return EigenvalueData(
+            speeds,
+            np.zeros(n, complex),
+            np.ones(n),
+            np.ones(n),
+            np.zeros(n),
+            ["weave"] * n,
+            ["next"] * n,
+            gains,
+            [e.describe() for e in points],
+            [e.law for e in points],
+            {e.law: self.laws[e.law] for e in points},
+        )
+
+    def _data_noise(self) -> np.ndarray:
+        """Per decay ``(n_points, 2, 2)``: the data's noise (module docstring)."""
+        p = self.problem
+        eig = p.eigen
+        first = np.cumsum([0] + [2 if m == "weave" else 1 for m in eig.mode])
+        weave = [r for r in range(len(eig)) if eig.mode[r] == "weave"]
+        real = np.array([p.var_data[first[r]] for r in weave])
+        imag = np.array([p.var_data[first[r] + 1] for r in weave])
+        speeds = eig.speed[weave]
+        decay = np.maximum(-np.array([p.baseline[first[r]] for r in weave]), MIN_DECAY)
+        out = np.zeros((len(self.points), 2, 2))
+        for m, e in enumerate(self.points):
+            near = np.abs(speeds - speeds[np.argmin(np.abs(speeds - e.speed))]) < 1e-9 + 0.03 * e.speed
+            if not self.records:
+                # a fitted decay rate's and frequency's standard error grows as (decay rate)^(3/2)
+                scale = (max(-float(np.mean(self.mean[:, m].real)), MIN_DECAY) / np.median(decay[near])) ** 3
+                out[m, 0, 0], out[m, 1, 1] = scale * np.median(real[near]), scale * np.median(imag[near])
+                continue
+            # records: the template's own standard errors plus the data's scatter beyond their records' own;
+            # for a signal the diagnosis did not fit, the scatter of that signal's own fits when they replicate
+            est = self.templates[e].estimate
+            own = self._signal_scatter(e)
+            if own is None:
+                own = self._run_scatter(e.speed)
+            out[m, 0, 0] = est.real_sigma**2 + own[0]
+            out[m, 1, 1] = est.imag_sigma**2 + own[1]
+        return out
+
+    def _run_scatter(self, speed: float) -> tuple[float, float]:
+        """The data's run-to-run variance (real, imaginary) of the weave eigenvalue at the data's speed
+        nearest ``speed``: with records, their scatter beyond their fits' own standard errors; from
+        tables, the rows' whole uncertainty (which of it is scatter from run to run the table does not say)."""
+        p = self.problem
+        eig = p.eigen
+        first = np.cumsum([0] + [2 if m == "weave" else 1 for m in eig.mode])
+        weave = np.array([r for r in range(len(eig)) if eig.mode[r] == "weave"])
+        speeds = eig.speed[weave]
+        near = np.abs(speeds - speeds[np.argmin(np.abs(speeds - speed))]) < 1e-9 + 0.03 * speed
+        real = float(np.median([p.var_data[first[r]] for r in weave[near]]))
+        imag = float(np.median([p.var_data[first[r] + 1] for r in weave[near]]))
+        if not self.records:
+            return real, imag
+        own_r = float(np.median(eig.real_sigma[weave[near]] ** 2))
+        own_i = float(np.median(eig.imag_sigma[weave[near]] ** 2))
+        return max(real - own_r, 0.0), max(imag - own_i, 0.0)
+
+    def _signal_scatter(self, e: Experiment) -> tuple[float, float] | None:
+        """Run-to-run variance (real, imaginary) of the records' own fits of ``e``'s signal at the data's
+        nearest speed, beyond their fits' standard errors; ``None`` for a signal the diagnosis fits (its
+        data uncertainty holds it) or with fewer than :data:`MIN_REPLICATES` fits there."""
+        d = self.diagnosis
+        fitted = {name for k in d.record_rows for name in d.records[k].record.fit_signals}
+        fits = self.signal_fits.get(e.signal, [])
+        if e.signal in fitted or not fits:
+            return None
+        speeds = np.array([v for v, _ in fits])
+        nearest = speeds[np.argmin(np.abs(speeds - e.speed))]
+        here = [f for v, f in fits if abs(v - nearest) < 1e-9 + 0.03 * e.speed]
+        if len(here) < MIN_REPLICATES:
+            return None
+        z = np.array([f.eigenvalue for f in here])
+        own_r = float(np.median([f.real_sigma**2 for f in here]))
+        own_i = float(np.median([f.imag_sigma**2 for f in here]))
+        return max(float(np.var(z.real, ddof=1)) - own_r, 0.0), max(float(np.var(z.imag, ddof=1)) - own_i, 0.0)
+
+    # -- sweeps ----------------------------------------------------------------------------------------
+    def _plan_sweeps(self) -> list[Sweep]:
+        """Multisine runs per speed, law and output, around the nominal weave (:mod:`bikerider.gap.next_sweep`);
+        where the nominal closed loop is unstable or shows no weave, left out with the reason."""
+        nominal = EffectModel(self.problem.nominal, self.problem.geometry)
+        out = []
+        for name, law in self.laws.items():
+            for v in self.speeds:
+                v = float(v)
+                ev = nominal.eigenvalues([v], law(v)[None, :])[0]
+                fs = self._sample_rate(v)
+                where = f"multisines at {v:.2f} m/s under {name}"
+                oscillating = ev[ev.imag > 1e-6]
+                if ev.real.max() >= 1.0 / self.run_time:
+                    why = (
+                        "the nominal closed loop is unstable there (a mode grows e-fold within the run): no steady "
+                        "response to measure"
+                    )
+                elif not oscillating.size:
+                    why = "the nominal model shows no weave there to place the lines around"
+                else:
+                    lines = lines_for(float(oscillating.imag.max()) / (2 * math.pi), float(self.run_time))
+                    if lines[-1] >= fs / 2:
+                        why = f"its highest line {lines[-1]:.3g} Hz is above the Nyquist frequency of {fs:g} Hz"
+                    else:
+                        out += [Sweep(v, name, o, float(self.torque), float(self.run_time), lines) for o in FRF_SIGNALS]
+                        continue
+                self.left_out.append({"experiment": where, "reason": why})
+        return out
+
+    def _sample_rate(self, speed: float) -> float:
+        """The sampling rate [Hz] of the nearest-speed record (without records, :data:`DEFAULT_SAMPLE_RATE`)."""
+        if not self.records:
+            return DEFAULT_SAMPLE_RATE
+        d = self.diagnosis
+        used = [d.records[k].record for k in d.record_rows]
+        near = used[int(np.argmin([abs(r.speed - speed) for r in used]))]
+        return 1.0 / float(near.time[1] - near.time[0])
+
+    def _sweep_systems(self, effects, X, values=None, nonlinear=False, speeds=None):
+        """Closed loops ``A (P, s, n, n)``, steer-torque columns ``b (P, s, n)`` and output states of every
+        sweep for a rival's fitted-value vectors ``X (P, p)`` (or the nominal model with benchmark values
+        ``values``, a batch); friction linearised at each sweep's torque."""
+        from bikerider.gap.timedomain import Layout, systems
+
+        p = self.problem
+        sweeps = self.sweeps
+        speeds = np.array([s.speed for s in sweeps]) if speeds is None else np.asarray(speeds, float)
+        gains = np.array([self.laws[s.law](s.speed) for s in sweeps]).reshape(len(sweeps), 4)
+        measured = self._speed_measured()
+        if nonlinear:
+            runs = [
+                run_stand_in(Sweep(v, s.law, s.output, s.torque, s.run_time, s.lines), g, measured)
+                for v, s, g in zip(speeds, sweeps, gains)
+            ]
+            A, b, outputs, friction = systems(p.nominal, p.geometry, runs, Layout.of(tuple(effects)), np.atleast_2d(X))
+            omegas = np.array([s.omegas for s in sweeps])
+            amplitude = np.array([line_amplitude(s.lines, s.torque, s.run_time) for s in sweeps])
+            A = linearised_friction(A, b, friction[:, None], outputs[3], omegas[None], amplitude[None, :])
+            return A, b, outputs
+        values, config, scale, P = self._configured(effects, X, values)
+        if scale is None or not measured:
+            ss = EffectModel(values, p.geometry, config).state_space(speeds)
+            A, b, outputs = ss.closed_loop(gains), ss.B[..., :, 1], ss.outputs
+        else:  # a speed sensor's scale per vector: one model per vector
+
+            def row(x, i):
+                return np.asarray(x)[i] if np.ndim(x) > 0 and np.shape(x)[0] == P else x
+
+            parts = []
+            for i in range(P):
+                model = EffectModel(
+                    {k: row(v, i) for k, v in values.items()},
+                    p.geometry,
+                    {e: {k: row(v, i) for k, v in c.items()} for e, c in config.items()},
+                )
+                ss = model.state_space(float(np.ravel(scale)[i]) * speeds)
+                parts.append((ss.closed_loop(gains).reshape((len(sweeps),) + ss.A.shape[-2:]), ss.B[..., :, 1]))
+            A = np.array([a for a, _ in parts])
+            b = np.array([np.reshape(x, A.shape[1:-1]) for _, x in parts])
+            outputs = ss.outputs
+        n = A.shape[-1]
+        return np.broadcast_to(A, (P, len(sweeps), n, n)), np.broadcast_to(b, (P, len(sweeps), n)), outputs
+
+    def _speed_measured(self) -> bool:
+        """Whether the planned runs' speed is read by the sensor a ``speed_sensor`` rival rescales (as the data's)."""
+        if self.records:
+            d = self.diagnosis
+            return any(d.records[k].record.speed_measured for k in d.record_rows)
+        return bool(np.any(self.problem.eigen.speed_sensor))
+
+    def _sweep_response(self, A, b, outputs) -> np.ndarray:
+        """Each sweep's frequency response ``(P, s, K)`` from its systems."""
+        omegas = np.array([s.omegas for s in self.sweeps])
+        roll = response(A, b, outputs[2], omegas[None])
+        steer = response(A, b, outputs[1], omegas[None])
+        is_roll = np.array([s.output == "roll_rate" for s in self.sweeps])
+        return np.where(is_roll[None, :, None], roll, steer)
+
+    def _sweep_rival(self, rival: Rival, X) -> np.ndarray:
+        return self._sweep_response(*self._sweep_systems(rival.effects, X, nonlinear=rival.nonlinear))
+
+    def _predict_sweeps(self) -> None:
+        """Every rival's frequency responses and their uncertainties (module docstring of
+        :mod:`bikerider.gap.next_sweep`); sweeps where a rival's loop is unstable are left out."""
+        from bikerider.engine import DifferencedStage
+        from bikerider.gap.next_sweep import split
+
+        R, p = len(self.rivals), self.problem
+        if not self.sweeps:
+            self.sweep_mean = np.zeros((R, 0, 0), complex)
+            self.sweep_own = np.zeros((R, 0, 0, 0))
+            self.sweep_data = self.sweep_model = self.sweep_run = np.zeros((0, 0, 0))
+            self.sweep_distortion, self.distortion_source = self._linear_misfit()
+            return
+        K = len(self.sweeps[0].lines)
+        s = len(self.sweeps)
+        self.sweep_mean = np.zeros((R, s, K), complex)
+        self.sweep_own = np.zeros((R, s, 2 * K, 2 * K))
+        unstable = np.zeros(s, bool)
+        for k, rival in enumerate(self.rivals):
+            fit = rival.fit
+            systems = self._sweep_systems(rival.effects, fit.values[None, :], nonlinear=rival.nonlinear)
+            with np.errstate(all="ignore"):
+                # a mode that grows e-fold within the run (a slow capsize a rider or a catch holds is allowed)
+                unstable |= np.linalg.eigvals(systems[0][0]).real.max(axis=-1) >= 1.0 / self.run_time
+            self.sweep_mean[k] = self._sweep_response(*systems)[0]
+            if fit.names:
+                J, cov = _secants(fit, lambda X, rival=rival: split(self._sweep_rival(rival, X)).reshape(len(X), -1))
+                J = J.reshape(s, 2 * K, -1)
+                self.sweep_own[k] = np.einsum("naj,jk,nbk->nab", J, cov, J)
+        # per run: the sensor noise at the lines, and the speed scattering as the data's
+        nominal = ((), np.zeros((1, 0)))
+        self.sweep_data = np.array(
+            [
+                noise_covariance(
+                    x, self.sample_noise.get(x.output, ASSUMED_NOISE[x.output]), self._sample_rate(x.speed)
+                )
+                for x in self.sweeps
+            ]
+        )
+        speeds = np.array([x.speed for x in self.sweeps])
+        h = 0.01 * speeds
+        up = self._sweep_response(*self._sweep_systems(*nominal, speeds=speeds + h))[0]
+        down = self._sweep_response(*self._sweep_systems(*nominal, speeds=speeds - h))[0]
+        Jv = split((up - down) / (2 * h[:, None]))
+        self.sweep_data += np.einsum("na,nb->nab", Jv, Jv) * self._speed_sigma() ** 2
+        # and the bicycle itself varying from run to run as the data's weave did (next_sweep.weave_shift):
+        # more torque does not average it away
+        A, b, outputs = self._sweep_systems(*nominal)
+        self.sweep_run = np.zeros_like(self.sweep_data)
+        for m, x in enumerate(self.sweeps):
+            index = outputs[2] if x.output == "roll_rate" else outputs[1]
+            J = weave_shift(A[0, m], b[0, m], index, x.omegas)
+            if J is not None:
+                self.sweep_run[m] = J @ np.diag(self._run_scatter(x.speed)) @ J.T
+        self.sweep_data += self.sweep_run
+        # and what a linear response misses of a real run, line by line (next_sweep.linear_misfit)
+        self.sweep_distortion, self.distortion_source = self._linear_misfit()
+        H = self._sweep_response(A, b, outputs)[0]  # (s, K), the nominal model's
+        part = (self.sweep_distortion * np.abs(H)) ** 2 / 2
+        self.sweep_data += np.einsum("na,ab->nab", np.concatenate([part, part], axis=-1), np.eye(2 * H.shape[-1]))
+        self.sweep_model = np.zeros((s, 2 * K, 2 * K))
+        if p.free:
+            stage = DifferencedStage(
+                "nominal parameters",
+                lambda v: split(
+                    self._sweep_response(*self._sweep_systems((), np.zeros((np.size(next(iter(v.values()))), 0)), v))
+                ).reshape(np.size(next(iter(v.values()))), -1),
+                p.free,
+                range(s * 2 * K),
+                dict(zip(p.free, p.free_sigma)),
+                batched=True,
+            )
+            J = (stage.jacobian({k: p.nominal[k] for k in p.free}) * p.free_sigma).reshape(s, 2 * K, -1)
+            self.sweep_model = np.einsum("naj,nbj->nab", J, J)
+        bad = unstable | ~np.all(np.isfinite(self.sweep_mean), axis=(0, 2))
+        bad |= ~np.all(np.isfinite(self.sweep_own), axis=(0, 2, 3)) | ~np.all(
+            np.isfinite(self.sweep_model), axis=(1, 2)
+        )
+        for m in np.flatnonzero(bad):
+            why = (
+                "a rival's closed loop is unstable there (a mode grows e-fold within the run): no steady response to "
+                "measure"
+                if unstable[m]
+                else "an uncertainty cannot be evaluated there"
+            )
+            self.left_out.append({"experiment": self.sweeps[m].describe(), "reason": why})
+        keep = np.flatnonzero(~bad)
+        self.sweeps = [self.sweeps[m] for m in keep]
+        self.sweep_mean, self.sweep_own = self.sweep_mean[:, keep], self.sweep_own[:, keep]
+        self.sweep_data, self.sweep_model = self.sweep_data[keep], self.sweep_model[keep]
+        self.sweep_run = self.sweep_run[keep]
+
+    def _linear_misfit(self) -> tuple[float, str]:
+        """The share of a run's response a linear model misses (:data:`ASSUMED_DISTORTION` without records)."""
+        if self.distortion is not None:
+            return float(self.distortion), "given"
+        if not self.records:
+            return ASSUMED_DISTORTION, "assumed (the data hold no records)"
+        d = self.diagnosis
+        r2 = [d.records[k].estimate.r2 for k in d.record_rows]
+        r2 = [x for x in r2 if math.isfinite(x)]
+        if not r2:
+            return ASSUMED_DISTORTION, "assumed (the records' fits give no r^2)"
+        share = float(np.median(np.sqrt(np.clip(1.0 - np.array(r2), 0.0, 1.0))))
+        return share, f"the records: sqrt(1 - r^2) of their fits, median over {len(r2)}"
+
+    def _speed_sigma(self) -> float:
+        """A run's speed scatter [m/s]: the median of the data's speed uncertainties."""
+        if self.records:
+            d = self.diagnosis
+            return float(np.median([d.records[k].record.speed_sigma for k in d.record_rows]))
+        eig = self.problem.eigen
+        return float(np.median(eig.speed_sigma)) if len(eig) else 0.0
+
+    # -- discrimination -----------------------------------------------------------------------------
+    def separation(self, repeats: float) -> np.ndarray:
+        """``d`` of every pair at every experiment for ``repeats`` decays each, ``(n_pairs, 2, n_points)``:
+        with the pair's first rival true, and with its second (``math.inf`` repeats: the limit the true
+        rival's own uncertainty sets)."""
+        from bikerider.gap.next_sweep import split
+
+        out = []
+        for i, j in self.pairs:
+            both = []
+            for true in (i, j):
+                misfit = self.rivals[true].misfit
+                decays = _distance(
+                    _split_last(self.mean[i] - self.mean[j]),
+                    self.own_cov[true],
+                    self.data_cov + self.model_cov,
+                    misfit,
+                    repeats,
+                )
+                sweeps = _distance(
+                    split(self.sweep_mean[i] - self.sweep_mean[j]),
+                    self.sweep_own[true],
+                    self.sweep_data + self.sweep_model,
+                    misfit,
+                    repeats,
+                )
+                both.append(np.concatenate([decays, sweeps]))
+            out.append(both)
+        return np.array(out)
+
+    def probability(self, repeats: float) -> np.ndarray:
+        """Resolution probability of every pair at every experiment, ``(n_pairs, n_points)``: the mean over
+        which of the two is true (even prior odds)."""
+        return resolution_probability(self.separation(repeats)).mean(axis=1)
+
+    def _rank(self) -> list[dict]:
+        counts = np.arange(1, MAX_REPEATS + 1)
+        d_all = np.stack([self.separation(float(k)) for k in counts])  # (repeats, pairs, 2, points)
+        prob_all = resolution_probability(d_all).mean(axis=2)  # (repeats, pairs, points)
+        worst = prob_all.min(axis=1)  # (repeats, points)
+        at = self.repeats - 1
+        limit = self.probability(math.inf).min(axis=0)
+        order = np.lexsort((-d_all[at].min(axis=(0, 1)), -worst[at]))
+        plan = []
+        for m in order:
+            e = self.experiments[m]
+            enough = np.flatnonzero(worst[:, m] >= 0.95)
+            plan.append(
+                {
+                    "experiment": e,
+                    "text": e.describe(self.repeats),
+                    "text_for_95": e.describe(int(counts[enough[0]])) if enough.size else None,
+                    "resolution_probability": float(worst[at, m]),
+                    "decays_for_95": int(counts[enough[0]]) if enough.size else None,
+                    "limit": float(limit[m]),
+                    "pairs": [
+                        {
+                            "rivals": [self.rivals[i].name, self.rivals[j].name],
+                            "separation": [float(d_all[at, k, 0, m]), float(d_all[at, k, 1, m])],
+                            "expected_log_likelihood_ratio": [
+                                float(d_all[at, k, 0, m] ** 2 / 2),
+                                float(d_all[at, k, 1, m] ** 2 / 2),
+                            ],
+                            "resolution_probability": float(prob_all[at, k, m]),
+                        }
+                        for k, (i, j) in enumerate(self.pairs)
+                    ],
+                }
+            )
+        return plan
+
+    # -- output -------------------------------------------------------------------------------------
+    def as_dict(self, top: int = 10) -> dict:
+        """The plan and every experiment's numbers, JSON-ready."""
+
+        def best_of(key):
+            seen = {}
+            for item in self.plan:
+                k = getattr(item["experiment"], key)
+                if k is not None and k not in seen:
+                    seen[k] = _item(item)
+            return seen
+
+        return {
+            "rivals": [
+                {
+                    "effects": list(r.effects),
+                    "fitted": {n: float(v) for n, v in zip(r.fit.names, r.fit.values)},
+                    "heldout_error": math.sqrt(1.0 + r.misfit) if r.misfit > 0 else None,
+                    "heldout_misfit": r.misfit,
+                }
+                for r in self.rivals
+            ],
+            "measure": (
+                "expected log-likelihood ratio between the rivals' Gaussian predictive distributions of the mean "
+                "weave eigenvalue of the new decays, or of the mean frequency response of the new steer-torque "
+                f"multisines (d^2 / 2); resolution probability Phi(d / 2 - ln {ODDS:g} / d): "
+                f"the new runs favour the true rival by odds of {ODDS:g} to 1 or more"
+            ),
+            "rivals_rule": (
+                "named"
+                if self.named
+                else (
+                    "the first-ranked candidate and those tied with it"
+                    if self.all_pairs
+                    else "no candidate is tied with the first: the first against the runners-up that beat the nominal "
+                    "model"
+                )
+            ),
+            "pairs": [[self.rivals[i].name, self.rivals[j].name] for i, j in self.pairs],
+            "repeats": self.repeats,
+            "max_repeats": MAX_REPEATS,
+            "noise": {
+                "signals": {s: {"value": v, "source": self.noise_source[s]} for s, v in self.sample_noise.items()},
+                "note": (
+                    "per decay: the template fit's standard errors plus the data's run-to-run scatter at the nearest "
+                    "speed"
+                    if self.records
+                    else "per decay: the data's standard uncertainty at the nearest measured speed"
+                ),
+            },
+            "plan": [_item(item) for item in self.plan[:top]],
+            "best_per_signal": best_of("signal") if self.records or self.sweeps else None,
+            "best_per_law": best_of("law"),
+            "best_per_speed": {f"{k:g}": v for k, v in best_of("speed").items()},
+            "best_per_push": {f"{k:g}": v for k, v in best_of("push").items()} if self.records else None,
+            "left_out": self.left_out,
+            "laws": {name: law.describe() for name, law in self.laws.items()},
+            "points": [
+                {
+                    "kind": "decay",
+                    "speed": e.speed,
+                    "law": e.law,
+                    "signal": e.signal,
+                    "push": e.push,
+                    "predicted": {
+                        r.name: {
+                            "real": float(self.mean[k, m].real),
+                            "imag": float(self.mean[k, m].imag),
+                            "sigma": [
+                                float(math.sqrt(self.own_cov[k, m, 0, 0])),
+                                float(math.sqrt(self.own_cov[k, m, 1, 1])),
+                            ],
+                        }
+                        for k, r in enumerate(self.rivals)
+                    },
+                    "data_sigma": [float(math.sqrt(self.data_cov[m, 0, 0])), float(math.sqrt(self.data_cov[m, 1, 1]))],
+                    "model_sigma": [
+                        float(math.sqrt(self.model_cov[m, 0, 0])),
+                        float(math.sqrt(self.model_cov[m, 1, 1])),
+                    ],
+                }
+                for m, e in enumerate(self.points)
+            ]
+            + [self._sweep_point(m) for m in range(len(self.sweeps))],
+            "sweeps": {
+                "torque": float(self.torque),
+                "run_time": float(self.run_time),
+                "distortion": {"value": self.sweep_distortion, "source": self.distortion_source},
+                "note": (
+                    "per run: the DFT estimate's variance 2 sigma_y^2 / (N a^2) at each line (sigma_y the signal's "
+                    "sample noise, N samples, a the line's torque amplitude), the data's speed scatter, and the "
+                    "response moving as the weave eigenvalue moved from run to run in the data, and at each line "
+                    "the share of the response a linear model misses (distortion); friction by its random-input "
+                    "describing function at the planned torque"
+                ),
+            }
+            if self.run_sweeps
+            else None,
+        }
+
+    def _sweep_point(self, m: int) -> dict:
+        e = self.sweeps[m]
+        K = len(e.lines)
+
+        def sd(cov):
+            return np.sqrt(np.diag(cov)).reshape(2, K).tolist()
+
+        return {
+            "kind": "sweep",
+            "speed": e.speed,
+            "law": e.law,
+            "signal": e.signal,
+            "torque": e.torque,
+            "run_time": e.run_time,
+            "lines": list(e.lines),
+            "predicted": {
+                r.name: {
+                    "real": self.sweep_mean[k, m].real.tolist(),
+                    "imag": self.sweep_mean[k, m].imag.tolist(),
+                    "sigma": sd(self.sweep_own[k, m]),
+                }
+                for k, r in enumerate(self.rivals)
+            },
+            "data_sigma": sd(self.sweep_data[m]),
+            "run_to_run_sigma": sd(self.sweep_run[m]),
+            "model_sigma": sd(self.sweep_model[m]),
+        }
+
+
+def _item(item: dict) -> dict:
+    e = item["experiment"]
+    return {
+        "kind": e.kind,
+        "text": item["text"],
+        "text_for_95": item["text_for_95"],
+        "speed": e.speed,
+        "law": e.law,
+        "signal": e.signal,
+        "push": e.push,
+        **({"torque": e.torque, "run_time": e.run_time, "lines": list(e.lines)} if e.kind == "sweep" else {}),
+        "resolution_probability": item["resolution_probability"],
+        "decays_for_95": item["decays_for_95"],
+        "limit": item["limit"],
+        "pairs": item["pairs"],
+    }
+
+
+def _distance(delta, own, noise, misfit: float, repeats: float) -> np.ndarray:
+    """``d`` per experiment: ``delta (n, m)`` the rivals' difference, ``own (n, m, m)`` the true rival's own
+    covariance, ``noise (n, m, m)`` one run's (data plus parameters), ``misfit`` the true rival's."""
+    if not len(delta):
+        return np.zeros(0)
+    # the true rival's own uncertainty, and its misfit on held-out data (systematic: more runs do not
+    # average it away), then the runs' noise and the parameters', per run
+    S = own + misfit * noise
+    if math.isfinite(repeats):
+        S = S + noise / repeats
+    # a difference no uncertainty covers (a rival of one fitted value, endless runs): resolved
+    size = np.trace(S, axis1=-2, axis2=-1)[..., None, None]
+    S = S + (1e-9 * size + 1e-30) * np.eye(S.shape[-1])
+    x = np.linalg.solve(S, delta[..., None])[..., 0]
+    return np.sqrt(np.maximum(np.sum(delta * x, axis=-1), 0.0))
+
+
+def _secants(fit: EffectFit, predict) -> tuple[np.ndarray, np.ndarray]:
+    """Slopes ``(m, p)`` of ``predict(X (P, p)) -> (P, m)`` in a rival's fitted values, and the values'
+    covariance they carry.
+
+    The fit's covariance, each value's spread at most that of a value anywhere in its range; slopes by
+    secants over +-1 standard deviation kept inside the search bounds (a tyre's relaxation length or an
+    inertia stepped below zero would be no model at all), so not by the engine's central differences.
+    """
+    span = (fit.upper - fit.lower) / math.sqrt(12)
+    cov = _bounded_covariance(fit, span)
+    sigma = np.sqrt(np.diag(cov))
+    h = np.where(sigma > 0, sigma, 1e-6 * np.maximum(span, 1.0))
+    up = np.minimum(fit.values + h, fit.upper)
+    down = np.maximum(fit.values - h, fit.lower)
+    X = np.repeat(fit.values[None, :], 2 * fit.values.size, axis=0)
+    for j in range(fit.values.size):
+        X[2 * j, j], X[2 * j + 1, j] = up[j], down[j]
+    pred = predict(X)  # (2 p, m)
+    width = np.where(up > down, up - down, np.inf)
+    return ((pred[0::2] - pred[1::2]) / width[:, None]).T, cov
+
+
+def _bounded_covariance(fit: EffectFit, span: np.ndarray) -> np.ndarray:
+    """The fitted values' covariance (or their standard errors' squares), each value's standard deviation
+    capped at ``span`` (the spread of a value anywhere in its search range), correlations kept."""
+    stderr = np.where(np.isfinite(fit.stderr), fit.stderr, np.inf)
+    cov = fit.covariance
+    if cov is None or cov.shape != (stderr.size, stderr.size) or not np.all(np.isfinite(cov)):
+        cov = np.diag(np.where(np.isfinite(stderr), stderr, 0.0) ** 2)
+    sd = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    target = np.minimum(np.where(np.isfinite(stderr), sd, np.inf), span)
+    scale = np.where(sd > 0, target / np.where(sd > 0, sd, 1.0), 0.0)
+    out = cov * scale[:, None] * scale[None, :]
+    fill = ~np.isfinite(stderr) | (sd == 0) & (stderr > 0)
+    out[fill, :], out[:, fill] = 0.0, 0.0
+    out[fill, fill] = span[fill] ** 2
+    return out
+
+
+def resolution_probability(d: np.ndarray) -> np.ndarray:
+    """``Phi(d / 2 - ln(ODDS) / d)``: the new data favour the true rival by :data:`ODDS` to 1 or more."""
+    from scipy.special import ndtr
+
+    d = np.asarray(d, dtype=float)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        z = np.where(d > 0, d / 2 - math.log(ODDS) / np.where(d > 0, d, 1.0), -np.inf)
+    return ndtr(z)
+
+
+def record_fit(time, samples):
+    """The record fit of one signal of a record (``None`` when it cannot fit it).
+
+    Its RMS residual bounds the signal's noise from below where the samples' scatter does not: a
+    signal smoothed before it was logged (an IMU's fused roll angle) scatters less from sample to
+    sample than its error, and a decay departs from the fit's two-mode function by more than the
+    sensor's noise; both show in what the fit leaves, which a new decay's fit will meet too.  Its
+    eigenvalues, over the records of one speed, give the signal's own run-to-run scatter.
+    """
+    try:
+        return weave_eigenvalue(time, samples)
+    except FitError:
+        return None
+
+
+def fit_residual(time, samples) -> float | None:
+    """The RMS residual of :func:`record_fit` (``None`` when it cannot fit the signal)."""
+    fit = record_fit(time, samples)
+    return None if fit is None else float(fit.residual_rms)
+
+
+def signal_noise(samples) -> float:
+    """A signal's sample noise: the robust (median absolute deviation) scatter of its second differences
+    over sqrt(6), which a decay's own curvature hardly touches at a lab's sampling rates; for a quantised
+    signal at least its step over sqrt(12)."""
+    y = np.asarray(samples, dtype=float)
+    y = y[np.isfinite(y)]
+    if y.size < 4:
+        return 0.0
+    second = np.diff(y, 2)
+    mad = 1.4826 * float(np.median(np.abs(second - np.median(second)))) / math.sqrt(6)
+    steps = np.abs(np.diff(y))
+    steps = steps[steps > 0]
+    quantum = float(steps.min()) / math.sqrt(12) if steps.size else 0.0
+    return max(mad, quantum)
+
+
+def _push(record: Record, factor: float) -> dict[str, float]:
+    """The initial state of a record (its first samples; steer rate from the steer angle where not
+    logged), times ``factor``."""
+    s = record.signals
+    dt = float(record.time[1] - record.time[0])
+    out = {"phid": float(np.mean(s["roll_rate"][:2])) if "roll_rate" in s else 0.5}
+    if "roll_angle" in s:
+        out["phi"] = float(s["roll_angle"][0])
+    if "steer_angle" in s:
+        out["delta"] = float(s["steer_angle"][0])
+    if "steer_rate" in s:
+        out["deltad"] = float(s["steer_rate"][0])
+    elif "steer_angle" in s and s["steer_angle"].size > 3:
+        out["deltad"] = float((s["steer_angle"][3] - s["steer_angle"][0]) / (3 * dt))
+    return {k: factor * v for k, v in out.items() if math.isfinite(v)}
+
+
+def _split(z: np.ndarray) -> np.ndarray:
+    """Complex ``(P, n)`` to real ``(P, 2 n)``: real parts, then imaginary parts."""
+    z = np.asarray(z)
+    return np.concatenate([z.real, z.imag], axis=-1)
+
+
+def _split_last(z: np.ndarray) -> np.ndarray:
+    return np.stack([z.real, z.imag], axis=-1)
+
+
+def _no_canonical():
+    from bikerider.gap.data import CanonicalData
+
+    return CanonicalData.empty()
+
+
+def plan_next(diagnosis, **options) -> NextExperiment:
+    """The ranked plan of new measurements for ``diagnosis`` (see :class:`NextExperiment`)."""
+    return NextExperiment(diagnosis, **options)

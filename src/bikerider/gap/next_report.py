@@ -1,0 +1,215 @@
+"""Text and figure of a plan for the next experiment (:mod:`bikerider.gap.next_experiment`)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def next_text(result: dict, rows: int = 8) -> str:
+    """The plan in words: rivals, measure, noise, the ranked experiments, the best per signal and law."""
+    rivals = [" + ".join(r["effects"]) for r in result["rivals"]]
+    width = max([78] + [len(item["text"]) + 2 for item in result["plan"][:rows]])
+    lines = [
+        "Next experiment: to tell " + ", ".join(rivals[:-1]) + " and " + rivals[-1] + " apart "
+        f"({result['rivals_rule']})",
+        f"Measure: {result['measure']}.",
+    ]
+    missing = [r for r in result["rivals"] if r.get("heldout_error")]
+    if missing:
+        lines.append(
+            "Misfit: "
+            + ", ".join(f"{' + '.join(r['effects'])} misses held-out data by {r['heldout_error']:.2f}" for r in missing)
+            + " (RMS over the uncertainties, 1 the noise floor); the plan counts the misfit as a systematic error of "
+            "each rival's prediction, so two rivals that both miss the data by more than they differ are not told apart."
+        )
+    lines += [
+        "Noise: "
+        + result["noise"]["note"]
+        + (
+            "; sample noise "
+            + ", ".join(
+                f"{s.replace('_', ' ')} {v['value']:.2g} ({_short_source(v['source'])})"
+                for s, v in result["noise"]["signals"].items()
+            )
+            if result["noise"]["signals"]
+            else ""
+        )
+        + ".",
+    ]
+    if result.get("sweeps"):
+        sw = result["sweeps"]
+        lines.append(
+            f"Multisines: {sw['torque']:g} N m peak, {sw['run_time']:g} s per run; {sw['note']}; the share a linear "
+            f"model misses {sw['distortion']['value']:.2f} per line ({_short_source(sw['distortion']['source'])})."
+        )
+    lines += [
+        f"  {'rank':<5}{'experiment':<{width}}{'P':>6}{'n 95%':>7}{'limit':>7}  d per pair (first true/second true)",
+    ]
+    for k, item in enumerate(result["plan"][:rows], start=1):
+        need = "-" if item["decays_for_95"] is None else str(item["decays_for_95"])
+        pairs = ", ".join(
+            f"{'/'.join(p['rivals'])} {p['separation'][0]:.1f}/{p['separation'][1]:.1f}" for p in item["pairs"]
+        )
+        lines.append(
+            f"  {k:<5}{item['text']:<{width}}{item['resolution_probability']:>6.2f}{need:>7}{item['limit']:>7.2f}  {pairs}"
+        )
+    if result.get("best_per_signal"):
+        lines.append(
+            "  best per signal: "
+            + "; ".join(
+                f"{s.replace('_', ' ')} {v['resolution_probability']:.2f} at {v['speed']:.2f} m/s"
+                for s, v in result["best_per_signal"].items()
+            )
+        )
+    lines.append(
+        "  best per law: "
+        + "; ".join(
+            f"{law} {v['resolution_probability']:.2f} at {v['speed']:.2f} m/s"
+            for law, v in result["best_per_law"].items()
+        )
+    )
+    best = result["plan"][0] if result["plan"] else None
+    if best is not None:
+        if best["decays_for_95"] is not None:
+            lines.append(f"Recommendation: {best['text_for_95']} tell the rivals apart with 95 % probability.")
+        else:
+            lines.append(
+                f"Recommendation: no experiment considered reaches 95 % within {result['max_repeats']} runs; the best, "
+                f"{best['text']}, reaches {best['resolution_probability']:.2f} (at most {best['limit']:.2f} with any "
+                "number of runs: the rivals' own uncertainty and their misfit on held-out data keep it there)."
+            )
+    if result["left_out"]:
+        lines.append(
+            f"  {len(result['left_out'])} experiments left out (e.g. {result['left_out'][0]['experiment']}: "
+            f"{result['left_out'][0]['reason']})"
+        )
+    return "\n".join(lines)
+
+
+def _short_source(source: str) -> str:
+    return "data" if source.startswith(("the data", "the records")) else source.split(" ")[0]
+
+
+def plot_next(plan, result: dict | None = None):
+    """Predictions of the rivals diverging over speed (the best plan item's law, signal and push), with
+    one standard deviation of each for the planned decays, the data, and the resolution probability
+    against speed for every law."""
+    from bikerider.gap.report import pyplot
+
+    plt = pyplot()
+    result = result or plan.as_dict()
+    decays = [item for item in plan.plan if item["experiment"].kind == "decay"]
+    sweeps = [item for item in plan.plan if item["experiment"].kind == "sweep"]
+    best = decays[0]["experiment"]
+    fig, grid = plt.subplots(2 if sweeps else 1, 3, figsize=(15, 9.2 if sweeps else 4.6), squeeze=False)
+    axes = grid[0]
+    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    chosen = [m for m, e in enumerate(plan.points) if (e.law, e.signal, e.push) == (best.law, best.signal, best.push)]
+    chosen.sort(key=lambda m: plan.points[m].speed)
+    v = np.array([plan.points[m].speed for m in chosen])
+    n = plan.repeats
+    noise = (plan.data_cov[chosen] + plan.model_cov[chosen]) / n
+    for k, rival in enumerate(plan.rivals):
+        mean = plan.mean[k, chosen]
+        colour = colours[k % len(colours)]
+        for part, ax in enumerate(axes[:2]):
+            sd = np.sqrt(plan.own_cov[k, chosen, part, part] + noise[:, part, part])
+            y = mean.real if part == 0 else mean.imag
+            ax.plot(v, y, "-o", ms=3, color=colour, label=rival.name if part == 0 else None)
+            ax.fill_between(v, y - sd, y + sd, color=colour, alpha=0.18, lw=0)
+    e = plan.problem.eigen
+    law_rows = [i for i in range(len(e)) if e.law[i] == best.law and e.mode[i] == "weave"]
+    if law_rows:
+        shown = plan.diagnosis.shown_values()
+        taken = ", as the data were taken" if plan.records else ""
+        axes[0].plot(e.speed[law_rows], shown.real[law_rows], "k.", ms=4, label=f"measured ({best.law}{taken})")
+        axes[1].plot(e.speed[law_rows], shown.imag[law_rows], "k.", ms=4)
+    for ax in axes[:2]:
+        ax.axvline(best.speed, color="0.3", ls=":", lw=1)
+        ax.set_xlabel("speed [m/s]")
+        ax.grid(alpha=0.3)
+    what = best.describe().replace("decays at", "").split(",", 1)
+    axes[0].set_ylabel("weave real part [1/s]")
+    axes[1].set_ylabel("weave imaginary part [rad/s]")
+    axes[0].set_title(f"predicted under {best.law}" + (f",{what[1]}" if len(what) > 1 else ""), fontsize=9)
+    axes[1].set_title(f"bands: 1 sd of the mean of {n} decays", fontsize=9)
+    axes[0].legend(fontsize=8)
+    # resolution probability against speed, per law (the best signal and push at each speed)
+    _probability_panel(axes[2], decays, plan, colours, "decays")
+    if sweeps:
+        _sweep_row(grid[1], plan, sweeps, colours)
+    fig.suptitle(
+        "Where the rivals disagree: " + ", ".join(r.name for r in plan.rivals) + f" (best: {plan.plan[0]['text']})",
+        fontsize=10,
+    )
+    fig.tight_layout()
+    return fig
+
+
+def _probability_panel(ax, items, plan, colours, what):
+    """Resolution probability against speed, per law (the best experiment of the kind at each speed)."""
+    n = plan.repeats
+    prob = {}
+    for item in items:
+        x = item["experiment"]
+        key = (x.law, x.speed)
+        prob[key] = max(prob.get(key, 0.0), item["resolution_probability"])
+    for k, law in enumerate(plan.laws):
+        pts = sorted((s, p) for (name, s), p in prob.items() if name == law)
+        if pts:
+            s, p = zip(*pts)
+            ax.plot(s, p, "-o", ms=3, color=colours[k % len(colours)], label=law)
+    ax.axhline(0.95, color="0.4", ls="--", lw=1)
+    ax.set_ylim(0, 1.02)
+    ax.set_xlabel("speed [m/s]")
+    ax.set_ylabel(f"resolution probability, {n} {what}")
+    ax.set_title(f"{what}: smallest over the pairs of rivals", fontsize=9)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+
+
+def _sweep_row(axes, plan, sweeps, colours):
+    """The best multisine's frequency response per rival (magnitude and phase, bands one standard deviation
+    of the mean of the planned runs, the magnitude's as a factor ``exp(sd / |H|)``), and the multisines'
+    resolution probability against speed."""
+    best = sweeps[0]["experiment"]
+    m = plan.sweeps.index(best)
+    f = np.array(best.lines)
+    K = f.size
+    cov = plan.sweep_data[m] + plan.sweep_model[m]
+    for k, rival in enumerate(plan.rivals):
+        H = plan.sweep_mean[k, m]
+        S = plan.sweep_own[k, m] + cov / plan.repeats
+        # first-order spread of |H| and of the phase from the real and imaginary parts' covariance
+        re, im = H.real, H.imag
+        mag = np.abs(H)
+        var_re, var_im, cross = np.diag(S)[:K], np.diag(S)[K:], np.diag(S[:K, K:])
+        sd_mag = np.sqrt(np.maximum(re**2 * var_re + im**2 * var_im + 2 * re * im * cross, 0)) / mag
+        sd_phase = np.sqrt(np.maximum(im**2 * var_re + re**2 * var_im - 2 * re * im * cross, 0)) / mag**2
+        phase = np.degrees(np.unwrap(np.angle(H)))
+        if k == 0:
+            reference = phase[0]
+        phase = phase + 360.0 * np.round((reference - phase[0]) / 360.0)  # every rival on the first one's branch
+        colour = colours[k % len(colours)]
+        axes[0].plot(f, mag, "-o", ms=3, color=colour, label=rival.name)
+        # on the log axis, the band as a factor (a band below zero has no place there)
+        spread = np.exp(np.minimum(sd_mag / mag, 3.0))
+        axes[0].fill_between(f, mag / spread, mag * spread, color=colour, alpha=0.18, lw=0)
+        axes[1].plot(f, phase, "-o", ms=3, color=colour)
+        band = np.degrees(sd_phase)
+        axes[1].fill_between(f, phase - band, phase + band, color=colour, alpha=0.18, lw=0)
+    unit = "rad/s" if best.output == "roll_rate" else "rad"
+    axes[0].set_ylabel(f"|{best.output.replace('_', ' ')} / steer torque| [{unit} / N m]")
+    axes[1].set_ylabel("phase [deg]")
+    from matplotlib.ticker import NullFormatter
+
+    for ax in axes[:2]:
+        ax.set_xscale("log")
+        ax.xaxis.set_minor_formatter(NullFormatter())
+        ax.set_xlabel("frequency [Hz]")
+        ax.grid(alpha=0.3, which="both")
+    axes[0].set_yscale("log")
+    axes[0].set_title(f"best multisine: {best.torque:g} N m at {best.speed:.2f} m/s under {best.law}", fontsize=9)
+    axes[1].set_title(f"bands: 1 sd of the mean of {plan.repeats} runs", fontsize=9)
+    axes[0].legend(fontsize=8)
+    _probability_panel(axes[2], sweeps, plan, colours, "multisine runs")

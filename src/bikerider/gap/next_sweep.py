@@ -1,0 +1,213 @@
+"""Steer-torque frequency responses as experiments of the next-experiment plan.
+
+Experiment.  At one speed under one control law (as for decays), the steer is driven by a multisine
+torque ``T(t) = a sum_k cos(w_k t + phi_k)`` of :data:`N_LINES` lines with Schroeder phases, scaled so
+that its peak is the planned torque; after the transient has settled, ``run_time`` seconds (a whole
+number of the multisine's periods) of the response are recorded at the sampling rate ``fs`` and the
+frequency response ``H(w_k)`` from steer torque to the roll rate (or the steer angle) is read at each
+line by the discrete Fourier transform.  The roll rate is what every lab logs with a gyro and what the
+whole bicycle, weave and all, shapes; the steer angle is the steer's own response, which steer
+inertia, damping and friction act on first.  Both are offered; the plan ranks them.
+
+Lines.  Log-spaced from a quarter to four times the nominal model's weave frequency at that speed and
+law (two octaves either side), rounded to multiples of ``1 / run_time`` (distinct, at least one): the
+rivals part at the weave resonance (damping sets its height and width) and on its flanks (stiffness
+below it, inertia above it).
+
+Prediction.  A linear rival's closed loop ``x' = A x + b T`` (``A`` from
+:meth:`~bikerider.gap.models.EffectModel.state_space` and ``closed_loop`` with the law's gains, ``b``
+its steer-torque column) predicts ``H(w) = c (i w I - A)^-1 b``.  Steer Coulomb friction ``T_c
+sign(delta')`` is replaced by its random-input describing function (statistical linearisation,
+Booton 1954): for a steer rate of standard deviation ``s`` (a multisine of several lines is nearly
+Gaussian), the equivalent viscous damping is ``c_eq = sqrt(2 / pi) T_c / s``, with ``s^2 = sum_k a^2
+|H_delta'(w_k)|^2 / 2`` of the linearised loop itself; the fixed point (``c_eq s`` grows with
+``c_eq``) is found by bisection, and where friction exceeds what the torque can move, the steer
+sticks (``c_eq`` at its cap).  This is what a fit of a linear FRF to the friction bicycle's response
+would find to first order; it ignores the harmonics friction makes.
+
+Noise per run.  Output samples ``y_n = sum_k Re(H_k a e^(i (w_k t_n + phi_k))) + e_n``, ``e_n`` white
+of standard deviation ``sigma_y`` (the signal's sample noise of the plan), ``N = fs run_time`` samples,
+the torque known: the DFT estimate ``H_k = (2 / N) sum_n y_n e^(-i w_k t_n) / (a e^(i phi_k))`` has
+independent real and imaginary errors of variance ``2 sigma_y^2 / (N a^2)`` at each line, independent
+between lines (orthogonal bins of white noise).  A run's speed scatters as the data's did (the
+records' speed uncertainty): ``J_v J_v^T sigma_v^2`` with ``J_v`` the nominal response's slope in
+speed, also per run.  The bicycle itself varies from run to run as the data's weave eigenvalue did
+(:func:`weave_shift`: the response's slopes in the weave eigenvalue times the data's run-to-run
+variance), and a real run departs from any linear response at each line by a share ``rho`` of it
+(variance ``(rho |H_k|)^2 / 2`` on each part; ``rho`` from the records' fits, ``sqrt(1 - r^2)``):
+neither shrinks with a larger torque (:meth:`bikerider.gap.next_experiment.NextExperiment._predict_sweeps`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from types import SimpleNamespace
+
+import numpy as np
+
+N_LINES = 9
+"""Lines of the multisine."""
+LINE_SPAN = (0.25, 4.0)
+"""The lines span these factors times the nominal weave frequency."""
+DEFAULT_TORQUE = 0.5
+"""Peak steer torque of a planned multisine [N m]."""
+MAX_TORQUE = 50.0
+DEFAULT_RUN_TIME = 10.0
+"""Recorded steady-state length of one run [s]."""
+RUN_TIME_RANGE = (2.0, 600.0)
+DEFAULT_SAMPLE_RATE = 100.0
+"""Sampling rate [Hz] assumed without records."""
+FRF_SIGNALS = {"roll_rate": "frf_roll_rate", "steer_angle": "frf_steer_angle"}
+"""Output signal measured to the name the plan's rows carry."""
+STICK_DAMPING = 1e4
+"""Cap of friction's equivalent damping [N m s/rad]: the steer sticks."""
+
+
+@dataclass(frozen=True)
+class Sweep:
+    """One kind of steer-torque run: its frequency response from steer torque to ``output``.
+
+    Attributes
+    ----------
+    speed : float
+        [m/s]
+    law : str
+    output : str
+        ``roll_rate`` or ``steer_angle``.
+    torque : float
+        Peak torque of the multisine [N m].
+    run_time : float
+        Recorded length of one run [s].
+    lines : tuple of float
+        The multisine's frequencies [Hz].
+    """
+
+    speed: float
+    law: str
+    output: str
+    torque: float
+    run_time: float
+    lines: tuple[float, ...]
+
+    kind = "sweep"
+    push = None
+
+    @property
+    def signal(self) -> str:
+        return FRF_SIGNALS[self.output]
+
+    @property
+    def omegas(self) -> np.ndarray:
+        return 2 * math.pi * np.asarray(self.lines)
+
+    def describe(self, repeats: int | None = None) -> str:
+        what = (
+            "steer-torque multisines" if repeats is None else f"{repeats} steer-torque multisine" + "s" * (repeats != 1)
+        )
+        return (
+            f"{what} of {self.torque:g} N m, {self.run_time:g} s, at {self.speed:.2f} m/s under {self.law}, "
+            f"{self.output.replace('_', ' ')} response {self.lines[0]:.2g}-{self.lines[-1]:.2g} Hz"
+        )
+
+
+def lines_for(weave_hz: float, run_time: float) -> tuple[float, ...]:
+    """:data:`N_LINES` frequencies [Hz] around ``weave_hz`` on the multisine's grid ``1 / run_time``."""
+    f0 = 1.0 / run_time
+    wanted = weave_hz * np.geomspace(LINE_SPAN[0], LINE_SPAN[1], N_LINES)
+    k = np.maximum(np.round(wanted / f0).astype(int), 1)
+    for j in range(1, k.size):
+        k[j] = max(k[j], k[j - 1] + 1)
+    return tuple(float(x) for x in k * f0)
+
+
+def line_amplitude(lines, peak: float, run_time: float) -> float:
+    """Amplitude ``a`` of each line of a Schroeder-phased multisine over ``lines`` [Hz] (multiples of
+    ``1 / run_time``) whose peak over its period ``run_time`` is ``peak``."""
+    lines = np.asarray(lines, float)
+    K = lines.size
+    phases = -math.pi * np.arange(1, K + 1) * np.arange(K) / K
+    t = np.linspace(0.0, run_time, 20000, endpoint=False)
+    shape = np.cos(2 * math.pi * lines[None, :] * t[:, None] + phases[None, :]).sum(axis=1)
+    return peak / float(np.max(np.abs(shape)))
+
+
+def response(A: np.ndarray, b: np.ndarray, index: int, omegas: np.ndarray) -> np.ndarray:
+    """``H(w) = e_index^T (i w I - A)^-1 b`` for ``A (..., n, n)``, ``b (..., n)``, ``omegas (..., K)``: ``(..., K)``."""
+    n = A.shape[-1]
+    s = 1j * np.asarray(omegas)[..., None, None]
+    M = s * np.eye(n) - A[..., None, :, :]
+    x = np.linalg.solve(M, np.broadcast_to(b[..., None, :, None], M.shape[:-1] + (1,)).astype(complex))
+    return x[..., index, 0]
+
+
+def linearised_friction(A, b, friction, rate_index, omegas, amplitude) -> np.ndarray:
+    """``A - c_eq b e_rate^T``: Coulomb friction ``friction (...)`` replaced by its random-input describing
+    function for a multisine of lines ``omegas (..., K)`` of amplitude ``amplitude`` (module docstring)."""
+    friction = np.asarray(friction, float)
+    target = math.sqrt(2 / math.pi) * friction
+    n = A.shape[-1]
+    e = np.zeros(n)
+    e[rate_index] = 1.0
+
+    def closed(c):
+        return A - c[..., None, None] * b[..., :, None] * e[None, :]
+
+    def c_times_sd(c):
+        H = response(closed(c), b, rate_index, omegas)
+        return c * amplitude * np.sqrt(np.sum(np.abs(H) ** 2, axis=-1) / 2)
+
+    shape = np.broadcast_shapes(friction.shape, A.shape[:-2])
+    lo = np.full(shape, -8.0)
+    hi = np.full(shape, math.log10(STICK_DAMPING))
+    stuck = c_times_sd(10.0**hi) <= target
+    for _ in range(45):  # c sd(c) grows with c: bisection on log10 c
+        mid = (lo + hi) / 2
+        above = c_times_sd(10.0**mid) > target
+        hi, lo = np.where(above, mid, hi), np.where(above, lo, mid)
+    c = np.where(friction > 0, np.where(stuck, STICK_DAMPING, 10.0 ** ((lo + hi) / 2)), 0.0)
+    return closed(c)
+
+
+def weave_shift(A: np.ndarray, b: np.ndarray, index: int, omegas: np.ndarray) -> np.ndarray | None:
+    """Slopes ``(2K, 2)`` of the response ``e_index^T (i w I - A)^-1 b`` at ``omegas (K,)`` (real parts,
+    then imaginary parts) in the real and imaginary part of the weave eigenvalue, its modal residue held:
+    how a run's response moves when the bicycle's weave moves from run to run (``None`` without a weave).
+
+    With ``A = V diag(lambda) V^-1``, ``H(w) = sum_j r_j / (i w - lambda_j)``, ``r_j = (e^T V)_j (V^-1 b)_j``;
+    moving the weave pair ``lambda, conj(lambda)`` by ``delta, conj(delta)`` moves ``H`` by
+    ``g delta + g' conj(delta)``, ``g = r / (i w - lambda)^2``, ``g'`` the same for the conjugate.
+    """
+    lam, V = np.linalg.eig(A)
+    upper = np.flatnonzero(lam.imag > 1e-9)
+    if not upper.size:
+        return None
+    w = upper[np.argmax(lam.imag[upper])]
+    c = np.conj(lam[w])
+    pair = np.argmin(np.abs(lam - c))
+    r = V[index, :] * np.linalg.solve(V, b.astype(complex))
+    s = 1j * np.asarray(omegas)
+    g = r[w] / (s - lam[w]) ** 2
+    g_conj = r[pair] / (s - lam[pair]) ** 2
+    d_real = g + g_conj  # delta = 1
+    d_imag = 1j * g - 1j * g_conj  # delta = i
+    return np.stack([split(d_real), split(d_imag)], axis=-1)
+
+
+def noise_covariance(sweep: Sweep, sigma_y: float, sample_rate: float) -> np.ndarray:
+    """Per run ``(2K, 2K)``: the DFT estimate's variance ``2 sigma_y^2 / (N a^2)`` on each real and
+    imaginary part (module docstring)."""
+    a = line_amplitude(sweep.lines, sweep.torque, sweep.run_time)
+    N = sample_rate * sweep.run_time
+    return np.eye(2 * len(sweep.lines)) * 2 * sigma_y**2 / (N * a**2)
+
+
+def run_stand_in(sweep: Sweep, gains: np.ndarray, speed_measured: bool):
+    """What :func:`bikerider.gap.timedomain.systems` reads of a record, for a sweep."""
+    return SimpleNamespace(speed=sweep.speed, speed_measured=speed_measured, gains=np.asarray(gains, float))
+
+
+def split(z: np.ndarray) -> np.ndarray:
+    """Complex ``(..., K)`` to real ``(..., 2 K)``: real parts, then imaginary parts."""
+    z = np.asarray(z)
+    return np.concatenate([z.real, z.imag], axis=-1)

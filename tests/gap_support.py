@@ -1,0 +1,69 @@
+"""Pieces the gap tests share: the riderless Davis bicycle, the SBW experiment's kind of control law, and
+synthetic free decays of a linear model."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+import bikerider
+from bikerider.gap.control import ControlLaw, GainSchedule
+from bikerider.gap.models import BENCH_ARGS, EffectModel
+from bikerider.gap.records import Record
+from bikerider.io.gap_model import load_model
+
+DATA = Path(bikerider.__file__).parent / "data"
+BP = DATA / "bicycleparameters"
+SIL = ControlLaw("sil", {"k_phid": GainSchedule.make_ramp(2.0, 6.5, "below")})
+"""Steer into lean below 6.5 m/s, as the steer-by-wire experiment's law."""
+
+
+def riderless_model():
+    """The Davis instrumented bicycle without its rider (BicycleParameters' RigidBenchmark.txt)."""
+    return load_model(BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt")
+
+
+def nominal(model) -> dict[str, float]:
+    """A model file's benchmark values and ``g``."""
+    return {k: float(model.parameters.values[k]) for k in BENCH_ARGS + ("g",)}
+
+
+def decay_record(
+    model,
+    speed: float,
+    group: str,
+    effects=None,
+    *,
+    seed: int = 0,
+    duration: float = 2.0,
+    noise: float = 0.01,
+    steer_noise: float = 0.0,
+    initial=None,
+    speed_measured: bool = False,
+) -> Record:
+    """A linear model's decay under :data:`SIL` after a push (roll rate and steer angle, 100 Hz), with noise."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(0.0, duration, 0.01)
+    out = EffectModel(nominal(model), model.geometry, effects or {}).simulate(
+        speed, t, initial=initial or {"phid": 0.6, "deltad": 0.3}, gains=SIL(speed)
+    )
+    signals = {
+        "roll_rate": out["phid"] + noise * rng.standard_normal(t.size),
+        "steer_angle": out["delta"] + (steer_noise * rng.standard_normal(t.size) if steer_noise else 0.0),
+    }
+    return Record(
+        f"{group}[{seed}]",
+        "test",
+        t,
+        signals,
+        speed,
+        0.01,
+        group,
+        SIL,
+        speed,
+        None,
+        None,
+        ("roll_rate",),
+        speed_measured,
+    )
