@@ -289,7 +289,12 @@ def _gap_read(kind: str, path: Path):
 
     if kind == "eigenvalues":
         d = gap_data.read_eigenvalues(path)
-        return [d.speed, d.value, d.real_sigma, d.imag_sigma, d.speed_sigma, d.gains]
+        # an empty or missing real_sigma / imag_sigma is NaN, "not given" (the diagnosis takes the scatter
+        # of replicates then); any given one is a positive number
+        for sigma in (d.real_sigma, d.imag_sigma):
+            given = sigma[~np.isnan(sigma)]
+            assert np.all(np.isfinite(given) & (given > 0)), sigma
+        return [d.speed, d.value, d.speed_sigma, d.gains]
     if kind == "canonical":
         d = gap_data.read_canonical(path)
         return [d.value, d.sigma, list(d.speed_range.values())]

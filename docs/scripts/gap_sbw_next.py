@@ -82,7 +82,7 @@ def _sbw_next(diagnosis):
         coulomb = friction["parameters"]["T_coulomb"]["value"]
         lines += [
             f"Steer-torque multisines do it more surely ({top['text']}: {top['resolution_probability']:.2f}, "
-            f"{top['decays_for_95']} run(s) for 95 %). At a peak of {out['sweeps']['torque']:g} N m, the fitted Coulomb "
+            f"{top['decays_for_95']} run{'' if top['decays_for_95'] == 1 else 's'} for 95 %). At a peak of {out['sweeps']['torque']:g} N m, the fitted Coulomb "
             f"friction ({coulomb:.2f} N m) takes a large share of the drive: its describing function gives the steer a",
             "damping that falls as the steer moves faster, which no viscous rival has, and the responses part by more",
             "than a run's noise: the sensor's, the speed's scatter, the data's run-to-run variation of the weave carried",

@@ -71,7 +71,8 @@ def next_text(result: dict, rows: int = 8) -> str:
     best = result["plan"][0] if result["plan"] else None
     if best is not None:
         if best["decays_for_95"] is not None:
-            lines.append(f"Recommendation: {best['text_for_95']} tell the rivals apart with 95 % probability.")
+            verb = "tells" if best["decays_for_95"] == 1 else "tell"
+            lines.append(f"Recommendation: {best['text_for_95']} {verb} the rivals apart with 95 % probability.")
         else:
             lines.append(
                 f"Recommendation: no experiment considered reaches 95 % within {result['max_repeats']} runs; the best, "
