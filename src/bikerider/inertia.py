@@ -51,7 +51,7 @@ def inertia_problem(xx: float, yy: float | None, zz: float, xz: float) -> tuple[
     what was expected)`` for an :class:`InputError`.
     """
     yy_known = yy is not None and math.isfinite(yy)
-    if not all(math.isfinite(x) for x in (xx, xz, zz)):
+    if not (math.isfinite(xx) and math.isfinite(xz) and math.isfinite(zz)):
         return [[xx, 0.0, xz], [0.0, yy if yy_known else math.nan, 0.0], [xz, 0.0, zz]], FINITE
     # The checks below are scale invariant; on the tensor over its largest entry they cannot overflow.
     scale = max(abs(xx), abs(zz), abs(xz), abs(yy) if yy_known else 0.0) or 1.0

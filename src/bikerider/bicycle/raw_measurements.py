@@ -333,6 +333,10 @@ def is_known_field(name: str) -> bool:
     return name in FIELD_PURPOSES or name in SEATING_FIELDS or name in _KNOWN_EXTRAS or bool(_INDEXED.match(name))
 
 
+_POSITIVE_SMALLEST = tuple((name, SMALLEST.get(_raw_limit(name)[1], 0.0), _raw_limit(name)[1]) for name in _POSITIVE)
+"""Each of :data:`_POSITIVE` with its smallest value (:data:`bikerider.quantity.SMALLEST`) and unit."""
+
+
 @functools.lru_cache(maxsize=1024)
 def _field_limit(name: str) -> tuple[float, str] | None:
     """:func:`_raw_limit` of a field :func:`is_known_field` knows, ``None`` for any other."""
@@ -360,6 +364,7 @@ def _check_values(
         errors.add(error)
         failed.add(error.name.removesuffix(" uncertainty"))
 
+    periods = []  # the known periods, in file order
     for name, q in values.items():
         rule = _field_limit(name)
         if rule is None:
@@ -375,6 +380,8 @@ def _check_values(
             )
             continue
         limit, unit = rule
+        if unit == "s":  # (exactly the known names that start with Tt or Tc)
+            periods.append(name)
         if not (abs(q.value) <= limit and abs(q.sigma) <= limit):  # check_magnitude passes these
             with errors.check():
                 check_magnitude(name, q.value, limit, unit, where(name))
@@ -385,20 +392,18 @@ def _check_values(
             check_degrees("gamma", values["gamma"].value, where("gamma"))
         except InputError as exc:
             fail(exc)
-    for name in _POSITIVE:
+    for name, smallest, unit in _POSITIVE_SMALLEST:
         if name in values and name not in failed:
             value = values[name].value
-            smallest = SMALLEST.get(_raw_limit(name)[1], 0.0)
             if not value > 0:
                 fail(InputError(name, value, f"a positive value ({_purpose(name)})", where(name)))
             elif value < smallest:
-                fail(InputError(name, value, smallest_expected(smallest, _raw_limit(name)[1]), where(name)))
-    for name, q in values.items():
-        if name.startswith(("Tt", "Tc")) and not q.value > 1e-3 and name not in failed:  # 1 ms: squares underflow
+                fail(InputError(name, value, smallest_expected(smallest, unit), where(name)))
+    for name in periods:
+        value = values[name].value
+        if not value > 1e-3 and name not in failed:  # 1 ms: squares underflow
             fail(
-                InputError(
-                    name, q.value, f"a positive period in seconds, above 0.001 s ({_purpose(name)})", where(name)
-                )
+                InputError(name, value, f"a positive period in seconds, above 0.001 s ({_purpose(name)})", where(name))
             )
     for name, trials in repeats.items():
         if len(trials) < 2 or name in failed or not name.startswith(("Tt", "Tc")):

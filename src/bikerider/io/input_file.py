@@ -77,10 +77,10 @@ def read_input_bytes(path: str | Path, limit: int = TEXT_LIMIT) -> bytes:
         raise
     try:
         info = os.fstat(handle)  # on the open handle: what is read is what was checked
-        for is_kind, kind in _KINDS:
-            if is_kind(info.st_mode):
-                raise FileFormatError(path, f"is {kind}, not a regular file: expected a file to read")
-        if not stat.S_ISREG(info.st_mode):
+        if not stat.S_ISREG(info.st_mode):  # name the kind of file when it is one of _KINDS
+            for is_kind, kind in _KINDS:
+                if is_kind(info.st_mode):
+                    raise FileFormatError(path, f"is {kind}, not a regular file: expected a file to read")
             raise FileFormatError(path, "not a regular file: expected a file to read")
         if info.st_size > limit:
             raise FileFormatError(

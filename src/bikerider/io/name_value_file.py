@@ -29,6 +29,7 @@ period-trial check of :mod:`bikerider.bicycle.raw_measurements`.
 
 from __future__ import annotations
 
+import itertools
 import math
 import re
 from collections.abc import Iterator, Mapping
@@ -232,10 +233,10 @@ def _simple_text(lines: list[str]) -> dict[str, NameValueEntry] | None:
         and max(map(len, names)) <= MAX_NAME
     ):
         return None
-    entries: dict[str, NameValueEntry] = {}
-    for number, (name, value, sigma) in enumerate(zip(names, values, sigmas), start=1):
-        quantity = Quantity(value, sigma)
-        entries[name] = NameValueEntry(name, quantity, (quantity,), number)
+    # One Quantity and one entry a line, built by map (no Python loop); zip(quantities) gives each
+    # line's repeats, the 1-tuple (quantity,).
+    quantities = list(map(Quantity, values, sigmas))
+    entries = dict(zip(names, map(NameValueEntry, names, quantities, zip(quantities), itertools.count(1))))
     return entries if len(entries) == len(found) else None  # a name given twice: line by line
 
 
