@@ -66,11 +66,21 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from bikerider.engine import DifferencedStage
 from bikerider.errors import FitError, InputError
 from bikerider.gap.control import NO_CONTROL, ControlLaw
+from bikerider.gap.data import CanonicalData, EigenvalueData
 from bikerider.gap.effects import TIME_DOMAIN_EFFECTS
-from bikerider.gap.extraction import weave_eigenvalue
+from bikerider.gap.extraction import (
+    MIN_CYCLES,
+    MIN_R2,
+    _accept_two_mode,
+    _two_mode,
+    _two_mode_jacobian,
+    weave_eigenvalue,
+)
 from bikerider.gap.fit import EffectFit
+from bikerider.gap.indirect import LAMBDA_BOUNDS, RecordSimulator, comparable, levenberg_marquardt
 from bikerider.gap.models import EffectModel
 from bikerider.gap.next_sweep import (
     DEFAULT_RUN_TIME,
@@ -86,9 +96,12 @@ from bikerider.gap.next_sweep import (
     noise_covariance,
     response,
     run_stand_in,
+    split,
     weave_shift,
 )
-from bikerider.gap.records import SIGNALS, Record, RecordFit
+from bikerider.gap.predict import Predictor
+from bikerider.gap.records import SIGNALS, Record, RecordFit, eigenvalues_of
+from bikerider.gap.timedomain import Layout, systems
 
 LOG = logging.getLogger(__name__)
 
@@ -369,9 +382,6 @@ class NextExperiment:
     # -- templates (records) ------------------------------------------------------------------------
     def _templates(self, experiments: list[Experiment]) -> tuple[dict[Experiment, RecordFit], list[dict]]:
         """A fitted template decay per experiment (module docstring); those that fail, with the reason."""
-        from bikerider.gap.indirect import RecordSimulator, comparable
-        from bikerider.gap.predict import Predictor
-        from bikerider.gap.records import eigenvalues_of
 
         d = self.diagnosis
         used = [d.records[k] for k in d.record_rows]
@@ -438,9 +448,6 @@ class NextExperiment:
         more with a clear decay, the slow mode in range)."""
         from types import SimpleNamespace
 
-        from bikerider.gap.extraction import MIN_CYCLES, MIN_R2, _accept_two_mode, _two_mode, _two_mode_jacobian
-        from bikerider.gap.indirect import LAMBDA_BOUNDS, levenberg_marquardt
-
         nominal = EffectModel(self.problem.nominal, self.problem.geometry)
         groups: dict[int, list[int]] = {}
         for k, r in enumerate(records):
@@ -486,7 +493,6 @@ class NextExperiment:
 
     # -- predictions --------------------------------------------------------------------------------
     def _predict(self) -> None:
-        from bikerider.engine import DifferencedStage
 
         n = len(self.points)
         p = self.problem
@@ -559,8 +565,6 @@ class NextExperiment:
     def _predict_rival(self, rival: Rival, X: np.ndarray) -> np.ndarray:
         """Predicted eigenvalue ``(P, n_points)`` of a rival for fitted-value vectors ``X (P, p)``."""
         if rival.nonlinear:
-            from bikerider.gap.timedomain import Layout
-
             return self.simulator.apparent_time_domain(Layout.of(rival.effects), X)
         return self._predict_linear(rival.effects, X, None, self.points)
 
@@ -587,7 +591,6 @@ class NextExperiment:
             res = sub.apparent(values, config, scale)
             return np.broadcast_to(res, (P, len(index))).copy()
         rows = self._rows(points)
-        from bikerider.gap.predict import Predictor
 
         predictor = Predictor(rows, _no_canonical(), p.nominal, p.geometry)
         with np.errstate(all="ignore"):
@@ -595,7 +598,6 @@ class NextExperiment:
         return np.broadcast_to(out, (P, len(points))).copy()
 
     def _rows(self, points: list[Experiment]):
-        from bikerider.gap.data import EigenvalueData
 
         n = len(points)
         speeds = np.array([e.speed for e in points])
@@ -722,7 +724,6 @@ class NextExperiment:
         """Closed loops ``A (P, s, n, n)``, steer-torque columns ``b (P, s, n)`` and output states of every
         sweep for a rival's fitted-value vectors ``X (P, p)`` (or the nominal model with benchmark values
         ``values``, a batch); friction linearised at each sweep's torque."""
-        from bikerider.gap.timedomain import Layout, systems
 
         p = self.problem
         sweeps = self.sweeps
@@ -784,8 +785,6 @@ class NextExperiment:
     def _predict_sweeps(self) -> None:
         """Every rival's frequency responses and their uncertainties (module docstring of
         :mod:`bikerider.gap.next_sweep`); sweeps where a rival's loop is unstable are left out."""
-        from bikerider.engine import DifferencedStage
-        from bikerider.gap.next_sweep import split
 
         R, p = len(self.rivals), self.problem
         if not self.sweeps:
@@ -801,11 +800,11 @@ class NextExperiment:
         unstable = np.zeros(s, bool)
         for k, rival in enumerate(self.rivals):
             fit = rival.fit
-            systems = self._sweep_systems(rival.effects, fit.values[None, :], nonlinear=rival.nonlinear)
+            loop = self._sweep_systems(rival.effects, fit.values[None, :], nonlinear=rival.nonlinear)
             with np.errstate(all="ignore"):
                 # a mode that grows e-fold within the run (a slow capsize a rider or a catch holds is allowed)
-                unstable |= np.linalg.eigvals(systems[0][0]).real.max(axis=-1) >= 1.0 / self.run_time
-            self.sweep_mean[k] = self._sweep_response(*systems)[0]
+                unstable |= np.linalg.eigvals(loop[0][0]).real.max(axis=-1) >= 1.0 / self.run_time
+            self.sweep_mean[k] = self._sweep_response(*loop)[0]
             if fit.names:
                 J, cov = _secants(fit, lambda X, rival=rival: split(self._sweep_rival(rival, X)).reshape(len(X), -1))
                 J = J.reshape(s, 2 * K, -1)
@@ -900,7 +899,6 @@ class NextExperiment:
         """``d`` of every pair at every experiment for ``repeats`` decays each, ``(n_pairs, 2, n_points)``:
         with the pair's first rival true, and with its second (``math.inf`` repeats: the limit the true
         rival's own uncertainty sets)."""
-        from bikerider.gap.next_sweep import split
 
         out = []
         for i, j in self.pairs:
@@ -1244,7 +1242,6 @@ def _split_last(z: np.ndarray) -> np.ndarray:
 
 
 def _no_canonical():
-    from bikerider.gap.data import CanonicalData
 
     return CanonicalData.empty()
 

@@ -30,7 +30,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from bikerider.gap.data import CanonicalData, EigenvalueData
+from bikerider.gap.diagnosis import Diagnosis
 from bikerider.gap.model_input import GapModelInput
+from bikerider.gap.next_experiment import NextExperiment
 from bikerider.gap.validation import TRUTHS, Protocol, Session, TruthSimulator, measure
 
 LOG = logging.getLogger(__name__)
@@ -70,7 +72,6 @@ class NextCase:
 
 def _resolved(model: GapModelInput, data: EigenvalueData, rivals: list[str], hidden: tuple[str, ...]):
     """Diagnose ``data`` with the rivals alone: (resolved, first-ranked with its ties)."""
-    from bikerider.gap.diagnosis import Diagnosis
 
     d = Diagnosis(model, data, CanonicalData.empty(), effects=tuple(rivals))
     if not d.ranking:
@@ -84,8 +85,6 @@ def _resolved(model: GapModelInput, data: EigenvalueData, rivals: list[str], hid
 def run_next_case(model: GapModelInput, truth_name: str, seed: int, follow_up: int = FOLLOW_UP) -> NextCase:
     """Measure a truth narrowly, diagnose it, and when it ends in a tie holding the hidden effect, follow
     the plan and the even spread with runs from the independent simulation and diagnose again."""
-    from bikerider.gap.diagnosis import Diagnosis
-    from bikerider.gap.next_experiment import NextExperiment
 
     start = time.perf_counter()
     truth = TRUTHS[truth_name]
