@@ -98,10 +98,10 @@ def add_parser(subparsers) -> None:
     p.add_argument(
         "--next",
         action="store_true",
-        help="plan the next experiment: the speed, control law, signal and push of new free decays, or the "
-        "steer-torque multisine whose frequency response, that best "
-        "tell apart the candidates the diagnosis left tied (or the first and the runners-up), ranked by the "
-        "probability that the new decays favour the true one 19 to 1 (docs/gap.md)",
+        help="plan the next experiment: new free decays (speed, control law, signal, push) or steer-torque "
+        "multisines (speed, control law, the response read), ranked by the probability that the new runs tell "
+        "apart the candidates the diagnosis left tied (or the first and the runners-up), favouring the true one "
+        "19 to 1 (docs/gap.md)",
     )
     p.add_argument(
         "--next-between",
@@ -113,7 +113,7 @@ def add_parser(subparsers) -> None:
         metavar="N",
         type=int,
         default=10,
-        help="with --next: decays per experiment the plan is ranked for (default 10)",
+        help="with --next: runs (decays or multisines) per experiment the plan is ranked for (default 10)",
     )
     p.add_argument(
         "--next-speeds",
@@ -125,7 +125,8 @@ def add_parser(subparsers) -> None:
         "--next-noise",
         metavar="SIGNAL=SD",
         help="with --next: sample noise of signals, e.g. steer_rate=0.02,steer_angle=0.0005 (rad, rad/s; "
-        "default: from the records, or assumed for a signal they do not hold)",
+        "default: from the records, the larger of their sample scatter and their fits' residual, or assumed "
+        "for a signal they do not hold)",
     )
     p.add_argument(
         "--next-torque",
