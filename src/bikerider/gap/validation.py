@@ -535,8 +535,6 @@ def run_case(model: GapModelInput, truth_name: str, seed: int, protocol: Protoco
     empty = CanonicalData([], np.empty(0), np.empty(0), [], {}, [])
     diagnosis = Diagnosis(model, data, empty)
     result = diagnosis.as_dict()
-    ranking = [r["effect"] for r in result["ranking"]]
-    ties = result["ranking"][0]["tied_with"] if result["ranking"] else []
     predicted = actual = None
     if diagnosis.selected and result["how_far"] is not None:
         predicted = result["how_far"]["shrink"]
@@ -546,25 +544,49 @@ def run_case(model: GapModelInput, truth_name: str, seed: int, protocol: Protoco
         z_before = test.z(test.baseline)
         z_after = test.z(test.predictor.predict(fitted))
         actual = gap_shrink(z_before, z_after)
-    first = (
-        {k: v["value"] for k, v in result["ranking"][0]["parameters"].items() if not k.startswith("parameters.")}
-        if result["ranking"]
-        else {}
+    return _case_result(
+        truth_name, truth.effects, seed, diagnosis, result, predicted, actual, len(data), start, notes + result["notes"]
     )
+
+
+def _case_result(
+    truth_name: str,
+    hidden: tuple[str, ...],
+    seed: int,
+    diagnosis,
+    result: dict,
+    predicted: float | None,
+    actual: float | None,
+    n_measured: int,
+    start: float,
+    notes: list[str],
+    first: dict[str, float] | None = None,
+    errors: tuple[float, float] | None = None,
+) -> CaseResult:
+    """A case's score from its diagnosis (``result`` its ``as_dict()``); ``first`` defaults to the structural
+    values of the first-ranked effect."""
+    ranking = result["ranking"]
+    if first is None:
+        first = (
+            {k: v["value"] for k, v in ranking[0]["parameters"].items() if not k.startswith("parameters.")}
+            if ranking
+            else {}
+        )
     return CaseResult(
         truth_name,
-        truth.effects,
+        hidden,
         seed,
         result["verdict"],
-        ranking,
-        ties,
+        [r["effect"] for r in ranking],
+        ranking[0]["tied_with"] if ranking else [],
         list(diagnosis.selected),
         predicted,
         actual,
-        len(data),
+        n_measured,
         time.perf_counter() - start,
-        notes + result["notes"],
+        notes,
         first,
+        errors,
     )
 
 
@@ -796,8 +818,6 @@ def run_record_case(model: GapModelInput, truth_name: str, seed: int, protocol: 
     fits = fit_records(measure_records(simulator, protocol, rng))
     diagnosis = Diagnosis(model, EigenvalueData.empty(), CanonicalData.empty(), records=fits)
     result = diagnosis.as_dict()
-    ranking = [r["effect"] for r in result["ranking"]]
-    ties = result["ranking"][0]["tied_with"] if result["ranking"] else []
     predicted = actual = None
     if diagnosis.selected and result["how_far"] is not None:
         predicted = result["how_far"]["data_shrink"]
@@ -810,11 +830,7 @@ def run_record_case(model: GapModelInput, truth_name: str, seed: int, protocol: 
             after = p.predict_batch(p.layout(diagnosis.selected_fit.effects), diagnosis.selected_fit.values[None, :])[0]
         sigma = np.sqrt(p.var_data)
         actual = gap_shrink((p.baseline - p.y) / sigma, (after - p.y) / sigma)
-    first = (
-        {k: v["value"] for k, v in result["ranking"][0]["parameters"].items() if not k.startswith("parameters.")}
-        if result["ranking"]
-        else {}
-    )
+    first = None  # the first-ranked effect's values, unless an effect is selected
     if diagnosis.selected_fit is not None:
         first = {
             k: float(v)
@@ -828,18 +844,16 @@ def run_record_case(model: GapModelInput, truth_name: str, seed: int, protocol: 
         if how.get("data_error_before") is not None and how.get("data_error_after") is not None
         else None
     )
-    return CaseResult(
+    return _case_result(
         truth_name,
         truth.effects,
         seed,
-        result["verdict"],
-        ranking,
-        ties,
-        list(diagnosis.selected),
+        diagnosis,
+        result,
         predicted,
         actual,
         len(diagnosis.record_rows),
-        time.perf_counter() - start,
+        start,
         notes,
         first,
         errors,
