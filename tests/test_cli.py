@@ -179,7 +179,9 @@ def test_bicycle_without_rider_is_the_bicycle_alone_and_says_so(capsys, name):
     assert out["rider"] is None
     assert any(note.startswith("no --rider given: the bicycle alone") for note in out["notes"])
     assert main(["estimate", "--bicycle", str(bicycle)]) == 0
-    assert "Note: no --rider given: the bicycle alone" in capsys.readouterr().out
+    captured = capsys.readouterr()  # notes on stderr, as README says; the results alone on stdout
+    assert "bikerider estimate: note: no --rider given: the bicycle alone" in captured.err
+    assert "no --rider" not in captured.out
     assert main(["estimate", "--bicycle", str(bicycle), "--no-rider", "--json"]) == 0  # asked for: no note
     assert not any("no --rider" in note for note in json.loads(capsys.readouterr().out)["notes"])
 
@@ -201,3 +203,18 @@ def test_benchmark_text_shows_a_capsize_castor_pair_as_other(capsys):
     assert len(rows) == 2
     assert "other pair" in rows[0] and "+/-" not in rows[0].split("other pair")[0]  # two real weave roots
     assert "other pair" not in rows[1]
+
+
+def test_estimate_notes_go_to_stderr_and_verbose_logs_each_once(capsys, caplog):
+    """issue 24: `estimate` printed its notes on stdout (README: stderr), and `-v` logged the paper's
+    rear-wheel note twice."""
+    import logging
+
+    caplog.set_level(logging.INFO, logger="bikerider")
+    assert main(["estimate", "-v"]) == 0
+    captured = capsys.readouterr()
+    assert "note" not in captured.out.lower()
+    wheel = [line for line in captured.err.splitlines() if "IRyy = 0.16 is not at most 2*IRxx" in line]
+    assert wheel == [line for line in wheel if line.startswith("bikerider estimate: note: ")] and len(wheel) == 1
+    logged = [r.getMessage() for r in caplog.records if r.getMessage().startswith("note: ")]
+    assert logged and len(logged) == len(set(logged))

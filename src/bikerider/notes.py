@@ -31,9 +31,12 @@ class NoteCollection:
         self.messages: list[str] = []
         self.shown: set[str] = set()
 
-    def add(self, message: str) -> None:
-        if message not in self.messages:
-            self.messages.append(message)
+    def add(self, message: str) -> bool:
+        """Keep ``message``; whether it is new to this run."""
+        if message in self.messages:
+            return False
+        self.messages.append(message)
+        return True
 
     def unshown(self) -> list[str]:
         """The notes no output has shown yet."""
@@ -46,8 +49,8 @@ _ACTIVE: list[NoteCollection] = []
 def note(message: str) -> str:
     """Record ``message`` as a note of the current run (see the module docstring); return it."""
     if _ACTIVE:
-        _ACTIVE[-1].add(message)
-        LOG.info("note: %s", message)
+        if _ACTIVE[-1].add(message):  # logged once, however often it is made (``-v``)
+            LOG.info("note: %s", message)
     else:
         LOG.warning("%s", message)
     return message

@@ -241,7 +241,8 @@ def run(args: argparse.Namespace) -> int:
         write_atomically(targets[0], csv_text(rows))
         write_atomically(targets[1], table)
         print(f"wrote {targets[0]} and {targets[1]}", file=sys.stderr)
-    sys.stdout.write(table)
+    else:
+        sys.stdout.write(table)
     if time.monotonic() - started > PROGRESS_AFTER:
         print(f"batch: done, {len(rows)} bicycles in {time.monotonic() - started:.1f} s", file=sys.stderr)
     failed = [r.name for r in rows if r.error]

@@ -6,7 +6,12 @@ import argparse
 import json
 
 from bikerider import notes
-from bikerider.commands.estimate import add_figure_options, add_uncertainty_options, check_figure_outputs
+from bikerider.commands.estimate import (
+    add_figure_options,
+    add_uncertainty_options,
+    check_figure_outputs,
+    print_notes,
+)
 from bikerider.errors import InputError
 from bikerider.io.shipped_files import BICYCLES, RIDERS
 
@@ -109,6 +114,5 @@ def run(args: argparse.Namespace) -> int:
     else:
         print(f"Benchmark parameters from {params.source or name}\n")
         print(report.model_text(params, model, eig, headline.speeds, headline.samples))
-        for note in [*uncertainty.notes, *headline.notes]:
-            print(f"Note: {note}")
+        print_notes("benchmark", [*uncertainty.notes, *headline.notes])
     return 0

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import sys
 from dataclasses import replace
 
 from bikerider import notes
@@ -179,11 +180,17 @@ def run(args: argparse.Namespace) -> int:
     print()
     print(report.model_text(parameters, result.model, eig, headline.speeds, headline.samples))
     print("  (first-order sigmas of these eigenvalues, with condition numbers: --json, uncertainty.eigenvalues)")
-    for note in notes.shown_with(run_notes):
-        print(f"Note: {note}")
     if args.plot:
         print(f"\nFigures written to {args.plot}/")
+    print_notes("estimate", run_notes)
     return 0
+
+
+def print_notes(command: str, run_notes: list[str]) -> None:
+    """The notes of a text run on stderr, each once, as ``bikerider COMMAND: note: ...`` (the results
+    stay alone on stdout; ``--json`` lists them under ``notes`` instead); also ``benchmark``."""
+    for note in notes.shown_with(run_notes):
+        print(f"bikerider {command}: note: {note}", file=sys.stderr)
 
 
 def _rider_json(result) -> dict | None:
