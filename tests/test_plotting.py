@@ -251,3 +251,22 @@ def test_sweep_command_csv_json_and_map(tmp_path, capsys):
     assert rows[0].startswith("c,speed,stable,weave_real,weave_imag") and rows[1].split(",")[2] == "true"
     assert main(["sweep", "--bicycle", "Benchmark", "--vary", "trail=0:1:3"]) == 2
     assert "one of the benchmark names" in capsys.readouterr().err
+
+
+def test_benchmark_plot_draws_the_files_sigmas_and_says_where(tmp_path, capsys, monkeypatch):
+    """issue 24: `benchmark --plot` drew no uncertainty band though the file had sigmas, and did not
+    say where the figures went."""
+    drawn = {}
+    write = plotting.write_figures
+
+    def spy(*args, **kwargs):
+        drawn["band"] = kwargs.get("uncertainty")
+        return write(*args, **kwargs)
+
+    monkeypatch.setattr(plotting, "write_figures", spy)
+    assert main(["benchmark", "--bicycle", "Browser", "--rider", "Jason", "--plot", str(tmp_path / "b")]) == 0
+    assert f"Figures written to {tmp_path / 'b'}/" in capsys.readouterr().out
+    band = drawn["band"]
+    assert band is not None and band.sigma_real.shape[0] == 101 and np.nanmax(band.sigma_real) > 0
+    assert main(["benchmark", "--bicycle", "Benchmark", "--plot", str(tmp_path / "a")]) == 0  # no sigmas
+    assert drawn["band"] is None

@@ -93,8 +93,19 @@ def run(args: argparse.Namespace) -> int:
     uncertainty = propagate(inputs, speeds=speeds)
     headline = headline_uncertainty(inputs, uncertainty, samples=args.monte_carlo, seed=args.seed)
     if args.plot:
+        import numpy as np
+
         from bikerider import plotting  # matplotlib: only when figures are asked for
 
+        # The band of the eigenvalue figure: the file's sigmas, first order, on a fine speed grid
+        # (as `estimate` draws it); none without sigmas, and none in the key.
+        band = (
+            propagate(inputs, speeds=np.linspace(speeds.min(), speeds.max(), 101)).eigenvalues
+            if speeds.max() > speeds.min()
+            else None
+        )
+        if band is not None and not (np.isfinite(band.sigma_real).any() and np.nanmax(band.sigma_real) > 0):
+            band = None
         plotting.write_figures(
             args.plot,
             model,
@@ -105,6 +116,7 @@ def run(args: argparse.Namespace) -> int:
             figures=plotting.FIGURES,
             fmt=args.format,
             dpi=args.dpi,
+            uncertainty=band,
         )
     if args.json:
         out = report.model_json(params, model, eig)
@@ -114,5 +126,7 @@ def run(args: argparse.Namespace) -> int:
     else:
         print(f"Benchmark parameters from {params.source or name}\n")
         print(report.model_text(params, model, eig, headline.speeds, headline.samples))
+        if args.plot:
+            print(f"\nFigures written to {args.plot}/")
         print_notes("benchmark", [*uncertainty.notes, *headline.notes])
     return 0
