@@ -270,3 +270,34 @@ def test_benchmark_plot_draws_the_files_sigmas_and_says_where(tmp_path, capsys, 
     assert band is not None and band.sigma_real.shape[0] == 101 and np.nanmax(band.sigma_real) > 0
     assert main(["benchmark", "--bicycle", "Benchmark", "--plot", str(tmp_path / "a")]) == 0  # no sigmas
     assert drawn["band"] is None
+
+
+def test_side_view_holds_the_whole_inertia_ellipses(bench, paper_result):
+    """issue 24: the side view from benchmark parameters cut the rear body's ellipse at the top."""
+    from matplotlib.patches import Ellipse
+
+    for parameters, points in ((bench, None), (paper_result.parameters, paper_result.rider_model.grid_points)):
+        fig, ax = _axes()
+        plotting.plot_side_view(ax, parameters, points)
+        x0, x1 = ax.get_xlim()
+        y0, y1 = ax.get_ylim()
+        ellipses = [p for p in ax.patches if type(p) is Ellipse]
+        assert len(ellipses) == 2
+        for e in ellipses:
+            corners = e.get_patch_transform().transform(e.get_path().vertices)  # in data coordinates
+            assert corners[:, 0].min() >= x0 and corners[:, 0].max() <= x1
+            assert corners[:, 1].min() >= y0 and corners[:, 1].max() <= y1
+        plotting.pyplot().close(fig)
+
+
+def test_benchmark_figures_are_titled_by_the_bicycle_not_the_path(tmp_path):
+    from bikerider.commands.benchmark import figure_title
+
+    bp = tmp_path / "BrowserBenchmark.txt"
+    bp.write_text("w = 1.0\n")
+    assert figure_title(str(bp)) == "Browser"
+    named_file = tmp_path / "mine.toml"
+    named_file.write_text('name = "My bicycle"\n[benchmark]\nw = 1.0\n')
+    assert figure_title(str(named_file)) == "My bicycle"
+    (tmp_path / "plain.toml").write_text("[benchmark]\nw = 1.0\n")
+    assert figure_title(str(tmp_path / "plain.toml")) == "plain"

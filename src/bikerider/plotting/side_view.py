@@ -93,6 +93,7 @@ def plot_side_view(
         sum(m * x for m, x, _ in bodies.values()) / mass,
         sum(m * y for m, _, y in bodies.values()) / mass,
     )
+    extents: list[tuple[float, float, float, float]] = []  # (x0, x1, y0, y1) the limits must hold
     wheel_style = {"fill": False, "edgecolor": "0.25", "lw": 1.4}
     ax.add_patch(Circle((0.0, rR), rR, **wheel_style))
     ax.add_patch(Circle((w, rF), rF, **wheel_style))
@@ -177,6 +178,10 @@ def plot_side_view(
                 float(p[f"I{name}xz"]),
                 None if iyy is None else float(iyy),
             )  # type: ignore[arg-type]
+            # the ellipse's bounding box: half-widths of an ellipse turned by `angle`
+            dx = math.hypot(a * math.cos(angle), b * math.sin(angle))
+            dy = math.hypot(a * math.sin(angle), b * math.cos(angle))
+            extents.append((x - dx, x + dx, y - dy, y + dy))
             ax.add_patch(
                 Ellipse(
                     (x, y),
@@ -198,8 +203,10 @@ def plot_side_view(
         finite = np.isfinite(g[:, 0])
         xs += [g[finite, 0].min(), g[finite, 0].max()]
         heights += [(-g[finite, 2]).max() + 0.15]
+    xs += [e[0] for e in extents] + [e[1] for e in extents]
+    heights += [e[3] for e in extents]
     ax.set_xlim(min(xs) - 0.08, max(xs) + 0.08)
-    ax.set_ylim(-0.05, max(heights) + 0.05)
+    ax.set_ylim(min([-0.05] + [e[2] - 0.02 for e in extents]), max(heights) + 0.05)
     ax.set_xlabel("x [m]")
     ax.set_ylabel("height [m]")
     if key:
