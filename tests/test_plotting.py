@@ -301,3 +301,16 @@ def test_benchmark_figures_are_titled_by_the_bicycle_not_the_path(tmp_path):
     assert figure_title(str(named_file)) == "My bicycle"
     (tmp_path / "plain.toml").write_text("[benchmark]\nw = 1.0\n")
     assert figure_title(str(tmp_path / "plain.toml")) == "plain"
+
+
+def test_bode_default_speeds_include_a_self_stable_one_and_mark_it(paper_result, model):
+    """issue 24: the Bode figure's speeds (25/55/85 % of the range: 2.5, 5.5, 8.5 m/s) all missed the
+    paper bicycle's self-stable range (5.66-8.36 m/s); the figure showed only unstable systems."""
+    for m in (paper_result.model, model):
+        speeds = plotting._bode_speeds(m, np.linspace(0, 10, 11))
+        stable = m.stability().is_stable(speeds)
+        assert len(speeds) == 3 and stable.sum() >= 1 and not stable.all()  # stable ones, and the others
+        fig = plotting.bode_figure(m, speeds)
+        labels = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+        assert sum(label.endswith("(self-stable)") for label in labels) == stable.sum()
+        plotting.pyplot().close(fig)

@@ -120,10 +120,36 @@ def _mode_speed(model, speeds) -> float:
 
 
 def _bode_speeds(model, speeds) -> tuple[float, ...]:
-    """Three round speeds across the range."""
+    """Three round speeds across the range, one of them self-stable when the range holds a
+    self-stable speed: the middle of the first stable interval inside the range, with a speed below
+    it and one above it where the range reaches there (an unstable weave, a slowly diverging capsize);
+    else 25, 55 and 85 % of the range."""
     v = np.asarray(speeds, dtype=float)
     lo, hi = (float(v.min()), float(v.max())) if v.size > 1 and v.max() > v.min() else (0.0, 10.0)
-    return tuple(float(np.round(x, 1)) for x in np.linspace(lo + 0.25 * (hi - lo), hi - 0.15 * (hi - lo), 3))
+    stability = model.stability()
+    fallback = tuple(float(np.round(x, 1)) for x in np.linspace(lo + 0.25 * (hi - lo), hi - 0.15 * (hi - lo), 3))
+    for interval in stability.intervals:
+        a, b = max(interval.lower, lo), min(interval.upper, hi)
+        if not b > a:
+            continue
+        middle = _round_inside(0.5 * (a + b), a, b)
+        below = _round_inside(0.5 * (lo + a), lo, a) if a > lo else None
+        above = _round_inside(0.5 * (b + hi), b, hi) if b < hi else None
+        chosen = [x for x in (below, middle, above) if x is not None]
+        if len(chosen) < 3:  # the stable interval reaches an end of the range: two speeds inside it
+            extra = _round_inside(a + 0.8 * (b - a) if above is None else a + 0.2 * (b - a), a, b)
+            chosen.append(extra)
+        return tuple(sorted(set(chosen)))
+    return fallback
+
+
+def _round_inside(x: float, a: float, b: float) -> float:
+    """``x`` rounded to 0.1 m/s if that stays strictly inside (a, b), else to 0.01, else as it is."""
+    for digits in (1, 2):
+        r = float(np.round(x, digits))
+        if a < r < b:
+            return r
+    return float(x)
 
 
 __all__ = [
