@@ -314,3 +314,44 @@ def test_bode_default_speeds_include_a_self_stable_one_and_mark_it(paper_result,
         labels = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
         assert sum(label.endswith("(self-stable)") for label in labels) == stable.sum()
         plotting.pyplot().close(fig)
+
+
+def _design_slice(valid, fixed, base):
+    from bikerider.design.summary import DesignSlice
+
+    nx, ny = valid.shape
+    lower = np.where(valid, 4.0 + np.arange(nx)[:, None] * 0.1 + np.zeros((1, ny)), np.nan)[..., None]
+    upper = np.where(valid, 6.0 + np.arange(ny)[None, :] * 0.1 + np.zeros((nx, 1)), np.nan)[..., None]
+    nan = np.full((nx, ny), np.nan)
+    x, y = ("c", np.linspace(0.0, 0.15, nx)), ("lam", np.radians(np.linspace(0, 36, ny)))
+    return DesignSlice(x, y, fixed, valid, lower, upper, nan, nan, nan, base)
+
+
+def test_design_map_key_and_base_star_say_what_the_slice_shows():
+    """issue 24: the map's "base design" star sat on a slice that did not hold the base, and its key
+    listed "impossible design" where there were none."""
+    from bikerider.plotting import design as figures
+
+    base = {"c": 0.08, "lam": 0.3, "w": 1.02, "xB": 0.3}
+    valid = np.ones((5, 4), bool)
+    on = _design_slice(valid, {"w": 1.02, "xB": 0.3}, base)
+    fig = figures.design_slice_figure(on, (), "t")
+    labels = [t.get_text() for t in fig.legends[0].get_texts()]
+    assert "impossible design" not in labels and "never self-stable" not in labels
+    assert "base design" in labels
+    stars = [line for line in fig.axes[0].get_lines() if line.get_marker() == "*" and len(line.get_xdata())]
+    assert len(stars) == 1 and stars[0].get_markerfacecolor() == "w"
+    plotting.pyplot().close(fig)
+
+    holes = valid.copy()
+    holes[0, 0] = False
+    off = _design_slice(holes, {"w": 0.9868, "xB": 0.3}, base)  # the grid's w nearest the base's 1.02
+    assert figures.base_on_slice(off) is False
+    fig = figures.design_slice_figure(off, (), "t")
+    labels = [t.get_text() for t in fig.legends[0].get_texts()]
+    assert "impossible design" in labels and "base design" not in labels
+    assert any("the base is off this slice: w = 1.02 m" in label for label in labels)
+    stars = [line for line in fig.axes[0].get_lines() if line.get_marker() == "*" and len(line.get_xdata())]
+    assert len(stars) == 1 and stars[0].get_markerfacecolor() == "none"
+    plotting.pyplot().close(fig)
+    assert figures.base_on_slice(_design_slice(valid, {"w": 1.02}, {**base, "c": 0.5})) is None  # outside

@@ -199,26 +199,80 @@ def plot_design_slice(ax, design_slice, colorbar: bool = True, legend: bool = Tr
         contours = ax.contour(x, y, finite_upper, colors="k", linewidths=0.6)
         ax.clabel(contours, fontsize=6, fmt="%.1f")
     base = design_slice.base
-    if np.isfinite(base.get(xn, np.nan)) and np.isfinite(base.get(yn, np.nan)):
-        ax.plot(_scaled(xn, base[xn]), _scaled(yn, base[yn]), "w*", ms=9, mec="k", mew=0.6)
+    where = base_on_slice(design_slice)
+    if where is not None:
+        # on the slice: the base design itself; off it: where its two values are, hollow
+        face = "w" if where else "none"
+        ax.plot(_scaled(xn, base[xn]), _scaled(yn, base[yn]), "*", mfc=face, ms=9, mec="k", mew=0.6)
     ax.set_xlabel(axis_label(xn))
     ax.set_ylabel(axis_label(yn))
     if colorbar:
         bar = ax.figure.colorbar(mesh, ax=ax, pad=0.02)
         bar.set_label("self-stable from [m/s] (weave speed)")
     if legend:
-        ax.legend(handles=slice_legend_handles(ax), loc="upper left", bbox_to_anchor=(0.0, -0.16), ncols=2, fontsize=7)
+        ax.legend(
+            handles=slice_legend_handles(ax, design_slice),
+            loc="upper left",
+            bbox_to_anchor=(0.0, -0.16),
+            ncols=2,
+            fontsize=7,
+        )
     return ax
 
 
-def slice_legend_handles(ax) -> list:
-    """The key of :func:`plot_design_slice`."""
-    return [
-        mpatches.Patch(facecolor="white", edgecolor="0.45", hatch=_NEVER, label="never self-stable"),
-        mpatches.Patch(color="0.8", label="impossible design"),
-        ax.plot([], [], color="k", lw=0.6, label="self-stable up to [m/s] (capsize speed)")[0],
-        ax.plot([], [], "w*", mec="k", ms=8, label="base design")[0],
-    ]
+def base_on_slice(design_slice) -> bool | None:
+    """Whether the slice holds the base design (every other parameter at its base value); False when
+    it does not but the base's two values lie within the slice's axes (the star then marks only
+    where they are); None when they lie outside or the base lacks one of them."""
+    (xn, xv), (yn, yv) = design_slice.x, design_slice.y
+    base = design_slice.base
+    bx, by = base.get(xn, np.nan), base.get(yn, np.nan)
+    if not (np.isfinite(bx) and np.isfinite(by)):
+        return None
+    if not (xv.min() <= bx <= xv.max() and yv.min() <= by <= yv.max()):
+        return None
+    return all(
+        name in base and math.isclose(value, base[name], rel_tol=1e-9, abs_tol=1e-12)
+        for name, value in design_slice.fixed.items()
+    )
+
+
+def _off_base(design_slice) -> str:
+    """The base's values of the fixed parameters where the slice leaves them (``w = 1.02 m``)."""
+    base = design_slice.base
+    return ", ".join(
+        f"{k} = {_scaled(k, base[k]):.4g} {_unit(k)[0]}"
+        for k, v in design_slice.fixed.items()
+        if k in base and not math.isclose(v, base[k], rel_tol=1e-9, abs_tol=1e-12)
+    )
+
+
+def slice_legend_handles(ax, design_slice=None) -> list:
+    """The key of :func:`plot_design_slice`: an entry for what the slice shows (all four entries
+    without ``design_slice``)."""
+    handles = []
+    if design_slice is None:
+        never = impossible = contours = True
+        where: bool | None = True
+    else:
+        valid = np.asarray(design_slice.valid, bool)
+        lower, upper = design_slice.lower[..., 0], design_slice.upper[..., 0]
+        never = bool((valid & ~np.isfinite(lower)).any())
+        impossible = bool((~valid).any())
+        contours = bool(np.isfinite(upper).sum() > 3 and lower.shape[0] > 1 and lower.shape[1] > 1)
+        where = base_on_slice(design_slice)
+    if never:
+        handles.append(mpatches.Patch(facecolor="white", edgecolor="0.45", hatch=_NEVER, label="never self-stable"))
+    if impossible:
+        handles.append(mpatches.Patch(color="0.8", label="impossible design"))
+    if contours:
+        handles.append(ax.plot([], [], color="k", lw=0.6, label="self-stable up to [m/s] (capsize speed)")[0])
+    if where:
+        handles.append(ax.plot([], [], "w*", mec="k", ms=8, label="base design")[0])
+    elif where is False:
+        label = f"base design's values (the base is off this slice: {_off_base(design_slice)})"
+        handles.append(ax.plot([], [], "*", mfc="none", mec="k", ms=8, label=label)[0])
+    return handles
 
 
 def plot_stable_speed_share(ax, design_slice, speeds, colorbar: bool = True):
@@ -253,7 +307,9 @@ def design_slice_figure(design_slice, speeds=(), title: str = ""):
     plot_design_slice(axes[0, 0], design_slice, legend=False)
     if two:
         plot_stable_speed_share(axes[0, 1], design_slice, speeds)
-    fig.legend(handles=slice_legend_handles(axes[0, 0]), loc="outside lower center", ncols=4, fontsize=7)
+    handles = slice_legend_handles(axes[0, 0], design_slice)
+    if handles:
+        fig.legend(handles=handles, loc="outside lower center", ncols=min(len(handles), 4), fontsize=7)
     fixed = ", ".join(f"{k} = {_scaled(k, v):.4g} {_unit(k)[0]}" for k, v in design_slice.fixed.items())
     heading = title + (f"\n{fixed}" if fixed else "")
     if heading:
@@ -263,6 +319,7 @@ def design_slice_figure(design_slice, speeds=(), title: str = ""):
 
 __all__ = [
     "axis_label",
+    "base_on_slice",
     "design_slice_figure",
     "interval_sensitivity_figure",
     "plot_design_slice",
