@@ -52,12 +52,45 @@ def _num(x) -> str:
     return "-" if x is None or (isinstance(x, float) and not math.isfinite(x)) else f"{x:.2f}"
 
 
+ZERO = 1e-6
+"""A fitted value below this share of its 95 % interval's larger end is shown as 0 (an optimiser's
+1e-20 for a value at the bound 0)."""
+
+
+def _interval_text(value: float, low: float, high: float) -> str:
+    """``value [low, high]`` with three significant digits, or more where three would show ends that
+    differ as equal (a well determined value: ``11.4711 [11.47106, 11.47114]``, not ``11.5 [11.5,
+    11.5]``); a value or end within :data:`ZERO` of 0, relative to the interval, as 0."""
+    numbers = [value, low, high]
+    finite = [abs(x) for x in numbers if math.isfinite(x)]
+    scale = max(finite, default=0.0)
+    numbers = [0.0 if math.isfinite(x) and abs(x) < ZERO * scale else x for x in numbers]
+    digits = 3
+    while digits < 9:
+        texts = [f"{x:.{digits}g}" for x in numbers]
+        if all(texts[i] != texts[j] for i in range(3) for j in range(i) if numbers[i] != numbers[j]):
+            break
+        digits += 1
+    texts = [f"{x:.{digits}g}" for x in numbers]
+    return f"{texts[0]} [{texts[1]}, {texts[2]}]"
+
+
 def _values(params: dict) -> str:
     return ", ".join(
-        f"{k} = {v['value']:.3g} [{v['ci95'][0]:.3g}, {v['ci95'][1]:.3g}] {v['unit']}"
+        f"{k} = {_interval_text(v['value'], v['ci95'][0], v['ci95'][1])} {v['unit']}"
         for k, v in params.items()
         if not k.startswith("parameters.")
     )
+
+
+def _law_text(name: str, text: str) -> str:
+    """``Control law NAME: GAINS``, or ``Control law: GAINS`` when the name is the gains themselves
+    (an unnamed ``[control]`` table)."""
+
+    def squeeze(x: str) -> str:
+        return "".join(c for c in x if c not in " ,;")
+
+    return f"Control law: {text}" if squeeze(name) == squeeze(text) else f"Control law {name}: {text}"
 
 
 # ---------------------------------------------------------------------------------------------
@@ -68,10 +101,18 @@ def summary_text(result: dict) -> str:
     lines = []
     test = result["gap"]["test"]
     lines.append(f"Verdict: {result['verdict']}")
+    # Two scales, each named on screen: against the combined uncertainty (data and parameters) and
+    # against the data's noise alone; the parameter fit's chi2 belongs to the second.
+    n = max(test["dof"], 1)
     lines.append(
-        f"Gap: chi2 = {test['chi2']:.1f} on {test['dof']} observations (p = {test['p_value']:.2g}), "
-        f"RMS normalised residual {test['rms_z']:.2f}; against the data's noise alone chi2 = "
-        f"{test['data_only']['chi2']:.1f} (p = {test['data_only']['p_value']:.2g})"
+        f"Gap against the combined uncertainty of data and parameters: chi2 = {test['chi2']:.1f} on "
+        f"{test['dof']} observations (chi2/n = {test['chi2'] / n:.2f}, p = {test['p_value']:.2g}; with the "
+        f"correlation the shared parameters give the residuals). Each residual over its own combined "
+        f"sigma, correlation left out: RMS {test['rms_z']:.2f} (the scale of the held-out errors below)"
+    )
+    data_line = (
+        f"Gap against the data's noise alone: the nominal parameters chi2 = {test['data_only']['chi2']:.1f} "
+        f"(chi2/n = {test['data_only']['chi2'] / n:.2f}, p = {test['data_only']['p_value']:.2g})"
     )
     unc = result.get("uncertainty") or {}
     if unc.get("largest"):
@@ -81,10 +122,12 @@ def summary_text(result: dict) -> str:
         )
     if result.get("parameter_fit") and result["parameter_fit"].get("test"):
         pt = result["parameter_fit"]["test"]
-        lines.append(
-            f"Parameters alone (fitted within their uncertainty): chi2 = {pt['chi2']:.1f} "
-            f"(p = {pt['p_value']:.2g}; prior {pt['prior_chi2']:.1f} on {pt['prior_dof']} parameters)"
+        data_line += (
+            f"; the parameters fitted within their uncertainty chi2 = {pt['chi2']:.1f} "
+            f"(chi2/n = {pt['chi2'] / max(pt['dof'], 1):.2f}, p = {pt['p_value']:.2g}; "
+            f"data {pt['chi2'] - pt['prior_chi2']:.1f} + prior {pt['prior_chi2']:.1f} on {pt['prior_dof']} parameters)"
         )
+    lines.append(data_line)
     records = result.get("records")
     if records:
         lines.append(f"Records: {records['used']} of {records['total']} used, {records['left_out']} left out")
@@ -92,7 +135,7 @@ def summary_text(result: dict) -> str:
             lines.append(f"  left out {r['record']}: {r['reason']}")
     for name, text in result.get("laws", {}).items():
         if text != "no control":
-            lines.append(f"Control law {name}: {text}")
+            lines.append(_law_text(name, text))
     lines.append("")
     lines.append("Where (gap map; cells significant against the combined uncertainty, or * against the data's alone):")
     lines.append(
