@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import bikerider
@@ -110,3 +111,23 @@ def test_the_command_line_on_part_of_the_experiment(tmp_path, capsys):
     assert (tmp_path / "rep" / "records.png").stat().st_size > 10_000
     assert main(args) == 0
     assert "Records: 17 of 17 used, 0 left out" in capsys.readouterr().out
+
+
+@pytest.mark.slow
+def test_the_effects_figure_shows_the_nominal_and_the_selection(sbw):
+    """issue 24: effects.png drew the nominal curve under the candidates fitted at it, and left out the
+    selected steer_friction (a time-domain effect, without a linear curve)."""
+    from bikerider.gap.report import plot_effects, pyplot
+
+    diagnosis, _ = sbw
+    fig = plot_effects(diagnosis)
+    lines = fig.axes[0].get_lines()
+    nominal = next(line for line in lines if line.get_label() == "nominal")
+    assert nominal.get_zorder() > max(line.get_zorder() for line in lines if line is not nominal)
+    labels = [t.get_text() for t in fig.legends[0].get_texts()]
+    assert labels[0] == "nominal"
+    assert any(label.startswith("steer_friction (selected, time domain)") for label in labels)
+    marks = next(line for line in lines if line.get_label().startswith("steer_friction (selected"))
+    assert np.isfinite(marks.get_ydata()).sum() >= 50  # one per record used
+    assert any(label.endswith("fitted at the nominal, under its line") for label in labels)
+    pyplot().close(fig)

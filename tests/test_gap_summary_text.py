@@ -65,3 +65,28 @@ def test_fitted_values_zero_and_narrow_intervals():
     assert _interval_text(200.0, 2.0, 200.0) == "200 [2, 200]"  # at a bound: equal ends stay equal
     values = {"c_lean": {"value": 4.78012, "ci95": [4.78001, 4.78023], "unit": "N m s/rad"}}
     assert _values(values) == "c_lean = 4.7801 [4.78, 4.7802] N m s/rad"
+
+
+def test_the_ranking_axis_spans_a_decade_with_plain_labels():
+    """issue 24: ranking.png's log axis spanned less than a decade, labelled "6x10^-1"."""
+    from bikerider.gap.report import plot_ranking, pyplot
+
+    def row(effect, after, data_after, plausible):
+        return {
+            "effect": effect,
+            "heldout_error_before": 0.89,
+            "heldout_error_after": after,
+            "data_error_before": 3.36,
+            "data_error_after": data_after,
+            "plausible": plausible,
+        }
+
+    result = {"ranking": [row("steer_friction", 0.43, 1.2, True), row("steer_damping", 0.68, 2.0, True)], "pairs": []}
+    fig = plot_ranking(result)
+    fig.canvas.draw()
+    for ax in fig.axes:
+        lo, hi = ax.get_xlim()
+        assert hi / lo >= 10 * (1 - 1e-9)
+        labels = [t.get_text() for t in ax.get_xticklabels() if lo <= t.get_position()[0] <= hi]
+        assert len(labels) >= 3 and all(label.replace(".", "").isdigit() for label in labels), labels
+    pyplot().close(fig)

@@ -639,7 +639,7 @@ def plot_ranking(result: dict):
             range(len(entries)), [e[0] for e in entries] if ax is axes[0][0] else [""] * len(entries), fontsize=7
         )
         ax.invert_yaxis()
-        ax.set_xscale("log")
+        _decade_axis(ax, [*values[np.isfinite(values)], before, 1.0])
         ax.set_xlabel(f"held-out error: RMS residual over {what}", fontsize=8)
         ax.legend(fontsize=7)
     fig.suptitle(
@@ -651,8 +651,32 @@ def plot_ranking(result: dict):
     return fig
 
 
+def _decade_axis(ax, values) -> None:
+    """A log x axis over ``values`` (positive) spanning at least a decade, about their geometric
+    middle, with plain numbers at 1, 2 and 5 times the powers of ten (``0.5``, not ``5x10^-1``)."""
+    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
+
+    v = np.asarray([x for x in values if np.isfinite(x) and x > 0], dtype=float)
+    lo, hi = (float(v.min()), float(v.max())) if v.size else (0.1, 10.0)
+    lo, hi = lo / 1.15, hi * 1.15
+    if hi / lo < 10.0:
+        middle = math.sqrt(lo * hi)
+        lo, hi = middle / math.sqrt(10.0), middle * math.sqrt(10.0)
+    ax.set_xscale("log")
+    ax.set_xlim(lo, hi)
+    ax.xaxis.set_major_locator(LogLocator(base=10.0, subs=(1.0, 2.0, 5.0)))
+    ax.xaxis.set_major_formatter(FuncFormatter(lambda x, _: f"{x:g}"))
+    ax.xaxis.set_minor_locator(LogLocator(base=10.0, subs=np.arange(2, 10) * 1.0))
+    ax.xaxis.set_minor_formatter(NullFormatter())
+
+
 def plot_effects(diagnosis):
-    """Every candidate as fitted to all the data, on its own (and the best pairs), under the main law."""
+    """Every candidate as fitted to all the data, on its own (and the best pairs), under the main law.
+
+    The nominal model is drawn last, on top (a candidate fitted at its nominal values lies under it
+    and says so); the selection is drawn thick and, when it is a time-domain effect (steer friction,
+    whose apparent eigenvalue depends on each record's amplitude), as its prediction of each record.
+    """
     plt = pyplot()
     from bikerider.gap.models import EffectModel
 
@@ -664,43 +688,68 @@ def plot_effects(diagnosis):
     nominal = EffectModel(p.nominal, p.geometry)
     main = max(set(e.law), key=e.law.count)
     law = e.laws[main]
-    fig, axes = plt.subplots(1, 2, figsize=(11.5, 4.4), sharex=True)
+    fig, axes = plt.subplots(1, 2, figsize=(14.0, 4.6), sharex=True, layout="constrained")
     base = weave_curve(nominal, grid, law, nominal)
-    axes[0].plot(grid, base.real, "k--", label="nominal")
-    axes[1].plot(grid, base.imag, "k--")
     linear = [
         pr
         for pr in sorted(getattr(diagnosis, "pairs", []), key=lambda r: r.error_after)
         if pr.effects in diagnosis.full_fits and "steer_friction" not in pr.effects
     ]
     sets = [(name,) for name in diagnosis.candidates if name != "steer_friction"] + [pr.effects for pr in linear[:2]]
+    selected = tuple(diagnosis.selected)
+    scale_of_base = max(float(np.nanmax(np.abs(base))), 1.0) if np.isfinite(base).any() else 1.0
     for effects in sets:
         fit = diagnosis.fit_of(effects)
         scale = fit.config.get("speed_sensor", {}).get("speed_scale", 1.0)
         plausible, _ = diagnosis.plausibility(fit)
-        label = "+".join(effects) + ("" if plausible else " (implausible)")
         curve = weave_curve(p.fitted_model(fit), grid, law, nominal, scale)
+        at_nominal = bool(np.nanmax(np.abs(curve - base)) < 1e-3 * scale_of_base) if np.isfinite(curve).any() else False
+        label = "+".join(effects) + ("" if plausible else " (implausible)")
+        if effects == selected:
+            label += " (selected)"
+        if at_nominal:
+            label += ": fitted at the nominal, under its line"
         style = "-" if len(effects) == 1 else ":"
-        axes[0].plot(grid, curve.real, style, label=label)
-        axes[1].plot(grid, curve.imag, style)
+        lw = 2.4 if effects == selected else 1.4
+        axes[0].plot(grid, curve.real, style, lw=lw, label=label)
+        axes[1].plot(grid, curve.imag, style, lw=lw)
     rows = [i for i in range(len(e)) if e.law[i] == main and e.mode[i] == "weave"]
     shown = diagnosis.shown_values()
     what = "measured, nominal extraction bias removed" if diagnosis.record_rows else "measured"
     axes[0].plot(e.speed[rows], shown.real[rows], "k.", ms=3, label=f"{what} ({main})")
     axes[1].plot(e.speed[rows], shown.imag[rows], "k.", ms=3)
+    apparent = diagnosis.selected_predictions() if selected and _time_domain_selection(selected) else None
+    if apparent is not None and np.any(np.isfinite(apparent[rows])):
+        label = f"{'+'.join(selected)} (selected, time domain): as fitted, per record"
+        axes[0].plot(e.speed[rows], apparent[rows].real, "x", color="k", ms=5, mew=1, label=label)
+        axes[1].plot(e.speed[rows], apparent[rows].imag, "x", color="k", ms=5, mew=1)
+    # the nominal model last: on top of the candidates fitted at it
+    axes[0].plot(grid, base.real, "k--", lw=1.6, zorder=5, label="nominal")
+    axes[1].plot(grid, base.imag, "k--", lw=1.6, zorder=5)
     axes[0].set_ylabel("weave real part [1/s]")
     axes[1].set_ylabel("weave imaginary part [rad/s]")
     for ax in axes:
         ax.set_xlabel("speed [m/s]")
         ax.grid(alpha=0.3)
-    axes[0].legend(fontsize=7)
+    handles, labels = axes[0].get_legend_handles_labels()
+    order = [labels.index("nominal")] + [k for k, lab in enumerate(labels) if lab != "nominal"]
+    fig.legend(
+        [handles[k] for k in order],
+        [labels[k] for k in order],
+        fontsize=7,
+        loc="outside right center",
+    )
     fig.suptitle(
         f"Every linear candidate fitted to all the data, on its own, and the best two linear pairs (dotted); "
         f"control law {main}",
         fontsize=9,
     )
-    fig.tight_layout()
     return fig
+
+
+def _time_domain_selection(effects: tuple[str, ...]) -> bool:
+    """Whether a selection is fitted in the time domain (steer friction: no eigenvalue curve)."""
+    return "steer_friction" in effects
 
 
 def plot_time_response(diagnosis):
