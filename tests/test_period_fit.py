@@ -200,3 +200,37 @@ def test_period_command_reports_a_failed_fit(tmp_path, capsys):
     assert main(["period", str(noise)]) == 2
     err = capsys.readouterr().err
     assert "noise.csv" in err and "no oscillation" in err and "Traceback" not in err
+
+
+def test_period_json_and_figure_say_what_they_show(tmp_path, capsys):
+    """issue 24: `period --json` used "sigma" for the period's uncertainty and for each trial's decay
+    rate; the figure was in matplotlib's default style, its key over the peaks, its y axis without a
+    unit and no residuals."""
+    from bikerider.fitting.damped_oscillation import fit_damped_oscillation
+    from bikerider.plotting import pyplot
+    from bikerider.plotting.period import period_figure
+
+    t, y = signal(1.894, 0.004, 0.02, seed=1)[:2]
+    path = tmp_path / "trial.csv"
+    path.write_text("time [s],rate (deg/s)\n" + "\n".join(f"{float(a)!r},{float(b)!r}" for a, b in zip(t, y)) + "\n")
+    assert main(["period", str(path), "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    trial = report["trials"][0]
+    assert "sigma" not in trial and trial["decay_rate"] > 0 and trial["decay_rate_se"] > 0
+    assert report["sigma"] > 0  # the period's standard uncertainty
+    from bikerider.io.signal_csv import signal_unit
+
+    assert signal_unit(path) == "deg/s"
+    fit = fit_damped_oscillation(t, y)
+    fig = period_figure([(path, t, y), (path, t, y)], [fit, fit], signal_unit(path))
+    data, residual = fig.axes[0], fig.axes[1]
+    assert len(fig.axes) == 4
+    assert data.get_ylabel() == "angular rate [deg/s]" and residual.get_ylabel() == "residual [deg/s]"
+    assert residual.get_xlim() == data.get_xlim()
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    key = data.get_legend().get_window_extent(renderer)
+    assert key.x0 >= data.get_window_extent(renderer).x1  # beside the axes, never over a peak
+    assert not data.spines["top"].get_visible()  # the house style (plotting.common.RC)
+    pyplot().close(fig)
+    assert period_figure([(path, t, y)], [fit]).axes[0].get_ylabel() == "angular rate [as recorded]"

@@ -77,27 +77,10 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _plot(target: Path, records, fits) -> None:
-    import matplotlib
+    from bikerider.io.signal_csv import signal_unit
+    from bikerider.plotting.common import save_figure
+    from bikerider.plotting.period import period_figure
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    import numpy as np
-
-    fig, axes = plt.subplots(len(records), 1, figsize=(8, 2.6 * len(records)), squeeze=False)
-    for ax, (path, time, rate), fit in zip(axes[:, 0], records, fits):
-        ax.plot(time, rate, ".", ms=2, color="0.5", label="data")
-        fine = np.linspace(time[0], time[-1], max(2000, 10 * time.size))
-        ax.plot(
-            fine, fit.evaluate(fine), "-", lw=1, color="C0", label=f"fit: T = {fit.period:.5f} s, zeta = {fit.zeta:.3g}"
-        )
-        ax.set_title(path.name, fontsize=9)
-        ax.set_xlabel("time [s]")
-        ax.set_ylabel("rate")
-        ax.legend(fontsize=8, loc="upper right")
-    fig.tight_layout()
-    from bikerider.io.atomic import atomic_write_bytes, figure_bytes
-
-    try:
-        atomic_write_bytes(Path(target), figure_bytes(fig, format="png", dpi=120))
-    finally:
-        plt.close(fig)
+    units = {signal_unit(path) for path, _, _ in records}
+    unit = units.pop() if len(units) == 1 else None  # one unit for every trial, or none claimed
+    save_figure(period_figure(records, fits, unit), target, "png", 150)

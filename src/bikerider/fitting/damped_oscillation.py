@@ -167,8 +167,8 @@ class DampedOscillationFit:
             "period_se": self.period_se,
             "omega_d": self.omega_d,
             "omega_d_se": self.omega_d_se,
-            "sigma": self.sigma,
-            "sigma_se": self.sigma_se,
+            "decay_rate": self.sigma,  # the model's sigma; "sigma" in bikerider's JSON is an uncertainty
+            "decay_rate_se": self.sigma_se,
             "zeta": self.zeta,
             "zeta_se": self.zeta_se,
             "amplitude": self.amplitude,

@@ -143,6 +143,20 @@ def read_signal_csv(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
     return _column(path, data, time_col, "time"), _column(path, data, signal_col, "rate")
 
 
+def signal_unit(path: str | Path) -> str | None:
+    """The unit in brackets of the rate column's header (``rate (deg/s)``: ``deg/s``), or None (no
+    header, or none given there).  For labels: the fit does not depend on it."""
+    text = decode_text(read_input_bytes(path, DATA_LIMIT), path)
+    first = next((line for line in text.splitlines() if line.strip() and not line.lstrip().startswith("#")), "")
+    delimiter = max((",", ";", "\t"), key=first.count) if any(d in first for d in ",;\t") else None
+    cells = [c.strip() for c in (first.split(delimiter) if delimiter else first.split())]
+    for cell in cells:
+        if _normalise(cell) in SIGNAL_NAMES:
+            unit = _UNIT.search(cell)
+            return unit.group(0)[1:-1].strip() or None if unit else None
+    return None
+
+
 def _fast_columns(
     lines: list[str], delimiter: str | None, time_col: int, signal_col: int
 ) -> tuple[np.ndarray, np.ndarray] | None:
