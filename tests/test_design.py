@@ -242,9 +242,9 @@ def test_a_store_opens_again_and_refuses_another_run(space, tmp_path, bench):
     _equal_runs(first, again)
     assert again.spec.space.to_json() == space.to_json()
     other = design.grid(bench, {"c": np.linspace(0, 0.1, 3)})
-    with pytest.raises(InputError, match="--store = .*its space differ"):
+    with pytest.raises(InputError, match="--store = .*its space differs;"):
         design.explore(other, tmp_path / "s", SPEEDS, chunk_size=100)
-    with pytest.raises(InputError, match="its chunk_size differ"):
+    with pytest.raises(InputError, match="its chunk_size differs;"):
         design.explore(space, tmp_path / "s", SPEEDS, chunk_size=50)
     (tmp_path / "plain").mkdir()
     (tmp_path / "plain" / "notes.txt").write_text("mine")

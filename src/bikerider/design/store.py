@@ -135,8 +135,8 @@ class DesignStore:
                     raise InputError(
                         "--store",
                         str(path),
-                        f"a new folder, or the same run to resume (its {key} "
-                        "differ; remove the folder or give --restart to start again)",
+                        f"a new folder, or the same run to resume (its {key} {'differ' if key.endswith('s') else 'differs'}"
+                        "; remove the folder or give --restart to start again)",
                     )
             return cls(group, spec, path)
         if path.exists() and restart:
