@@ -118,3 +118,41 @@ def test_raw_measurements_through_the_estimate(capsys):
 def test_bad_design_options_are_named(argv, message, capsys):
     assert main(["sweep", "--bicycle", "Benchmark", "--quiet", *argv]) == 2
     assert message in capsys.readouterr().err
+
+
+def test_a_store_run_says_each_stage_and_ctrl_c_says_how_to_resume(tmp_path, capsys, monkeypatch):
+    """issue 24: after the bar reached 100 % the summary, figures and target search ran in silence;
+    Ctrl-C ended without "N of M chunks stored: rerun the same command to resume", and a resumed run
+    did not say it resumed."""
+    from bikerider.design import engine
+
+    argv = [*[a for a in GRID if a != "--quiet"], "--store", str(tmp_path / "s"), "--chunk-size", "16"]
+    original, calls = engine.evaluate, []
+
+    def stopped(*args, **kwargs):
+        calls.append(1)
+        if len(calls) == 4:
+            raise KeyboardInterrupt  # the user's Ctrl-C while the fourth chunk is computed
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(engine, "evaluate", stopped)
+    assert main(["sweep", *argv]) == 130
+    err = capsys.readouterr().err
+    assert "interrupted; 3 of 9 chunks stored in" in err and "rerun the same command to resume" in err
+    monkeypatch.setattr(engine, "evaluate", original)
+    figures = tmp_path / "fig"
+    assert main(["sweep", *argv, "--plot", str(figures), "--target-weave-speed", "5"]) == 0
+    err = capsys.readouterr().err.splitlines()
+    assert err[0] == f"resuming {tmp_path / 's'}: 3 of 9 chunks already stored, 6 to compute"
+    stages = [
+        "finding the design whose weave speed is closest to 5 m/s ...",
+        "summarising the store (self-stable fractions, sensitivity indices) ...",
+        f"writing {figures / 'stable_fraction.png'}",
+        f"writing {figures / 'sensitivity.png'}",
+        f"writing {figures / 'map_c_lam.png'}",
+    ]
+    positions = [err.index(line) for line in stages]
+    assert positions == sorted(positions)
+    assert err[-1].startswith("sweep: done in ") and err[-1].endswith("(the whole command)")
+    assert main(["sweep", *argv, "--quiet"]) == 0
+    assert capsys.readouterr().err == ""  # --quiet: nothing on stderr

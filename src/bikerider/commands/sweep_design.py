@@ -13,6 +13,9 @@ import csv
 import io
 import json
 import math
+import sys
+import time
+from contextlib import contextmanager
 from pathlib import Path
 
 from bikerider import notes
@@ -204,30 +207,39 @@ def run_design(args: argparse.Namespace) -> int:
         )
     if args.workers is not None and args.dask != "local":
         raise InputError("--workers", args.workers, "--dask without an address (a local cluster)")
-    store = design.explore(
-        space,
-        args.store,
-        speeds,
-        weave_speeds,
-        chunk_size=args.chunk_size,
-        engine=args.engine,
-        threads=args.threads,
-        restart=args.restart,
-        quiet=args.quiet,
-        scheduler=args.dask,
-        workers=args.workers,
-    )
-    closest = (
-        summaries.closest_to_weave_speed(store, args.target_weave_speed)
-        if args.target_weave_speed is not None
-        else None
-    )
-    if args.plot:
-        _plots(args, store, name)
+    stages = Stages(args.quiet)
+    try:
+        store = design.explore(
+            space,
+            args.store,
+            speeds,
+            weave_speeds,
+            chunk_size=args.chunk_size,
+            engine=args.engine,
+            threads=args.threads,
+            restart=args.restart,
+            quiet=args.quiet,
+            scheduler=args.dask,
+            workers=args.workers,
+        )
+        closest = None
+        if args.target_weave_speed is not None:
+            with stages.bar(
+                f"finding the design whose weave speed is closest to {args.target_weave_speed:g} m/s", store
+            ):
+                closest = summaries.closest_to_weave_speed(store, args.target_weave_speed, progress=stages.update)
+        summary = None
+        if args.store is not None or args.plot:
+            with stages.bar("summarising the store (self-stable fractions, sensitivity indices)", store):
+                summary = summaries.summarize(store, progress=stages.update)
+        if args.plot:
+            _plots(args, store, name, summary, stages)
+    except KeyboardInterrupt:
+        stages.interrupted(args.store, space)
+        raise
     if args.store is None:
         text = _rows_text(args, store, closest)
     else:
-        summary = summaries.summarize(store)
         if args.json:
             out = {"store": str(args.store), "base": name, "kind": space.kind, **summary.as_dict()}
             if args.target_weave_speed is not None:
@@ -238,9 +250,70 @@ def run_design(args: argparse.Namespace) -> int:
             text = _summary_text(store, summary, closest, args.target_weave_speed)
     if args.out:
         atomic_write_text(args.out, text)
+        stages.note(f"wrote {args.out}")
     else:
         print(text, end="")
+    stages.note(f"sweep: done in {_duration(time.monotonic() - stages.started)} (the whole command)")
     return 0
+
+
+class Stages:
+    """What a design run does after its progress bar, on stderr (nothing with ``--quiet``): a line
+    per stage and a bar over each pass through the store, so no stage runs in silence; after Ctrl-C,
+    how much of the run is stored and how to resume it."""
+
+    def __init__(self, quiet: bool) -> None:
+        self.quiet = quiet
+        self.started = time.monotonic()
+        self.progress = None
+
+    def note(self, text: str) -> None:
+        if not self.quiet:
+            print(text, file=sys.stderr, flush=True)
+
+    @contextmanager
+    def bar(self, what: str, store):
+        from bikerider.design.progress import Progress
+
+        total = sum(stop - start for start, stop, _ in store.chunks())
+        self.note(f"{what} ...")
+        self.progress = Progress(total, quiet=self.quiet, label="designs read")
+        try:
+            yield self.progress
+        finally:
+            self.progress.close()
+            self.progress = None
+
+    def update(self, n: int) -> None:
+        if self.progress is not None:
+            self.progress.update(n)
+
+    def interrupted(self, folder, space) -> None:
+        """Say, on Ctrl-C, how many chunks the store holds and that the same command resumes."""
+        if folder is None:
+            print("\nbikerider sweep: interrupted; nothing kept (no --store)", file=sys.stderr, flush=True)
+            return
+        from bikerider.design import open_store
+
+        try:
+            store = open_store(folder)
+        except (InputError, OSError, KeyError, ValueError):  # not made yet, or its attributes not written
+            print(f"\nbikerider sweep: interrupted before {folder} held a chunk", file=sys.stderr, flush=True)
+            return
+        total = store.spec.n_chunks
+        done = total - len(store.pending())
+        if done < total:
+            text = f"{done} of {total} chunks stored in {folder}: rerun the same command to resume"
+        else:
+            text = (
+                f"all {total} chunks stored in {folder}: rerun the same command for the summary (nothing is recomputed)"
+            )
+        print(f"\nbikerider sweep: interrupted; {text}", file=sys.stderr, flush=True)
+
+
+def _duration(seconds: float) -> str:
+    minutes, secs = divmod(int(round(seconds)), 60)
+    return f"{minutes}:{secs:02d}" if minutes else f"{seconds:.1f} s"
 
 
 def _closest_dict(closest) -> dict | None:
@@ -347,7 +420,7 @@ def _rows_text(args, store, closest) -> str:
     return buffer.getvalue()
 
 
-def _plots(args, store, name: str) -> None:
+def _plots(args, store, name: str, summary, stages: Stages) -> None:
     from bikerider.design import summary as summaries
     from bikerider.plotting import design as figures
     from bikerider.plotting.common import save_figure
@@ -355,20 +428,7 @@ def _plots(args, store, name: str) -> None:
     out = Path(args.plot)
     out.mkdir(parents=True, exist_ok=True)
     space = store.spec.space
-    summary = summaries.summarize(store)
     title = f"{name}: {space.size:,} designs"
-    save_figure(
-        figures.stable_fraction_figure(summary, space.base, title),
-        out / f"stable_fraction.{args.format}",
-        args.format,
-        args.dpi,
-    )
-    save_figure(
-        figures.interval_sensitivity_figure(summary, space.base, title),
-        out / f"sensitivity.{args.format}",
-        args.format,
-        args.dpi,
-    )
     if space.is_grid and len(space.names) >= 2:
         if args.slice:
             x, _, y = args.slice.partition(",")
@@ -376,12 +436,24 @@ def _plots(args, store, name: str) -> None:
                 raise InputError("--slice", args.slice, "two varied parameters X,Y")
         else:
             x, y = space.names[:2]
+    elif args.slice:
+        raise InputError("--slice", args.slice, "a grid over at least two parameters")
+    else:
+        x = y = ""
+    path = out / f"stable_fraction.{args.format}"
+    stages.note(f"writing {path}")
+    save_figure(figures.stable_fraction_figure(summary, space.base, title), path, args.format, args.dpi)
+    path = out / f"sensitivity.{args.format}"
+    stages.note(f"writing {path}")
+    save_figure(figures.interval_sensitivity_figure(summary, space.base, title), path, args.format, args.dpi)
+    if x:
+        stages.note(f"reading the slice over {x.strip()} and {y.strip()}")
         cut = summaries.design_slice(store, x.strip(), y.strip())
+        path = out / f"map_{cut.x[0]}_{cut.y[0]}.{args.format}"
+        stages.note(f"writing {path}")
         save_figure(
             figures.design_slice_figure(cut, store.spec.speeds, f"{name}: {cut.x[0]} and {cut.y[0]}"),
-            out / f"map_{cut.x[0]}_{cut.y[0]}.{args.format}",
+            path,
             args.format,
             args.dpi,
         )
-    elif args.slice:
-        raise InputError("--slice", args.slice, "a grid over at least two parameters")

@@ -72,8 +72,14 @@ class Progress:
             self.stream.flush()
             self.last = now
 
+    def note(self, text: str) -> None:
+        """A line of its own on the stream (what the run is doing), unless quiet."""
+        if not self.quiet:
+            self.stream.write(text + "\n")
+            self.stream.flush()
+
     def close(self) -> None:
-        if self.quiet:
+        if self.quiet or (self.total == 0 and self.done_before):  # a resumed run with nothing left: said already
             return
         self.stream.write(("\r" if self.tty else "") + self.text() + "\n")
         self.stream.flush()

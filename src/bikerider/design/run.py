@@ -107,9 +107,13 @@ def explore(
     result = DesignStore.create_or_resume(store, spec, restart)
     pending = result.pending()
     done_before = space.size - sum(spec.chunk_range(k)[1] - spec.chunk_range(k)[0] for k in pending)
-    if done_before:
-        LOG.info("resuming %s: %d of %d chunks done", store, spec.n_chunks - len(pending), spec.n_chunks)
     progress = Progress(space.size - done_before, done_before, quiet)
+    if done_before:
+        text = f"resuming {store}: {spec.n_chunks - len(pending)} of {spec.n_chunks} chunks already stored, " + (
+            f"{len(pending)} to compute" if pending else "nothing to compute"
+        )
+        LOG.info("%s", text)
+        progress.note(text)
     if scheduler is not None:
         run_on_dask(result, pending, engine, scheduler, workers, progress)
     else:

@@ -22,6 +22,7 @@ its width counts only intervals with an upper end.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -154,10 +155,11 @@ def _bin_index(store: DesignStore) -> list[tuple[str, np.ndarray, np.ndarray | N
     return out
 
 
-def summarize(store: DesignStore, speed_range=None) -> Summary:
+def summarize(store: DesignStore, speed_range=None, progress: Callable[[int], None] | None = None) -> Summary:
     """Self-stable fractions, conditional means and sensitivity indices (the module docstring).
 
-    One pass over the finished chunks of ``store``.
+    One pass over the finished chunks of ``store``; ``progress(n)`` is called after each chunk of
+    ``n`` designs (a progress bar's ``update``).
     """
     lo, hi = speed_range_of(store, speed_range)
     axes = _bin_index(store)
@@ -236,6 +238,8 @@ def summarize(store: DesignStore, speed_range=None) -> Summary:
                 if o in bins:
                     flat = i[good] * n_hist + bins[o][good]
                     acc[name][f"{o}_hist"] += np.bincount(flat, minlength=k * n_hist).reshape(k, n_hist)
+        if progress is not None:
+            progress(stop - start)
     overall = {}
     for o, (n, s, sq) in total.items():
         mean = s / n if n else np.nan
@@ -382,13 +386,18 @@ class ClosestDesign:
     stable_intervals: list[tuple[float, float]]
 
 
-def closest_to_weave_speed(store: DesignStore, target: float, self_stable: bool = True) -> ClosestDesign | None:
+def closest_to_weave_speed(
+    store: DesignStore, target: float, self_stable: bool = True, progress: Callable[[int], None] | None = None
+) -> ClosestDesign | None:
     """The design whose weave speed is nearest ``target`` [m/s] (with ``self_stable``, among designs
-    whose weave speed begins a stable interval); None when no design has a weave speed."""
+    whose weave speed begins a stable interval); None when no design has a weave speed.
+    ``progress(n)`` after each chunk of ``n`` designs."""
     if not (np.isfinite(target) and target > 0):
         raise InputError("--target-weave-speed", target, "a positive speed [m/s]")
     best, best_gap = -1, np.inf
-    for start, _, chunk in store.chunks(("weave_speed", "lower")):
+    for start, stop, chunk in store.chunks(("weave_speed", "lower")):
+        if progress is not None:
+            progress(stop - start)
         w = chunk["weave_speed"]
         ok = np.isfinite(w)
         if self_stable:
