@@ -27,7 +27,11 @@ class FrequencyResponse:
     speeds : numpy.ndarray, shape (n,)
         Speeds [m/s].
     response : numpy.ndarray, shape S + (n, nf, p, m)
-        ``G(i w)`` from each input (last axis) to each output.
+        ``G(i w)`` from each input (last axis) to each output, frequency first.  python-control's
+        ``FrequencyResponseData`` puts frequency last, ``(p, m, nf)``, with ``magnitude`` the
+        absolute value ``|G|`` (not dB) and ``phase`` in radians: :attr:`magnitude`,
+        :attr:`phase` and :attr:`omega` here are the same; :meth:`magnitude_db` and
+        :meth:`phase_deg` are for Bode diagrams.
     system : StateSpace
         The state space evaluated (names of inputs and outputs).
     """
@@ -40,6 +44,23 @@ class FrequencyResponse:
     def select(self, output: str, input: str) -> np.ndarray:
         """``G`` from ``input`` to ``output``, ``S + (n, nf)``."""
         return self.response[..., self.system.outputs.index(output), self.system.inputs.index(input)]
+
+    @property
+    def omega(self) -> np.ndarray:
+        """Angular frequencies [rad/s] (python-control's name)."""
+        return self.frequencies
+
+    @property
+    def magnitude(self) -> np.ndarray:
+        """``|G|``, absolute (not dB; the response's unit: rad per N m, ...), in python-control's
+        layout, frequency last: ``S + (n, p, m, nf)``."""
+        return np.moveaxis(np.abs(self.response), -3, -1)
+
+    @property
+    def phase(self) -> np.ndarray:
+        """``arg G`` [rad], unwrapped along frequency, python-control's layout ``S + (n, p, m, nf)``
+        (``phase_deg`` also brings the lowest frequency into (-180, 180] degrees)."""
+        return np.unwrap(np.moveaxis(np.angle(self.response), -3, -1), axis=-1)
 
     def magnitude_db(self, output: str, input: str) -> np.ndarray:
         """``20 log10 |G|`` [dB] (of the response's unit: rad per N m, rad per N, ...)."""

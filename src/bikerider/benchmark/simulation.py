@@ -36,9 +36,11 @@ class Simulation:
     speeds : numpy.ndarray, shape (n,)
         Speeds [m/s].
     states : numpy.ndarray, shape S + (n, nt, 4)
-        ``[phi, delta, phi_dot, delta_dot]`` at each time (``S``: the model's batch shape).
+        ``[phi, delta, phi_dot, delta_dot]`` at each time (``S``: the model's batch shape): time
+        before state, so ``states[k, :, 0]`` is the roll angle at speed ``k`` over time.
+        python-control's ``TimeResponseData.states`` is ``(4, nt)``, state first: that is :attr:`x`.
     outputs : numpy.ndarray, shape S + (n, nt, p)
-        The chosen outputs.
+        The chosen outputs (python-control's ``(p, nt)`` layout: :attr:`y`).
     inputs : numpy.ndarray, shape (nt, m)
         The input samples used.
     system : StateSpace
@@ -55,6 +57,22 @@ class Simulation:
     def output(self, name: str) -> np.ndarray:
         """One output by name, ``S + (n, nt)``."""
         return self.outputs[..., self.system.outputs.index(name)]
+
+    @property
+    def t(self) -> np.ndarray:
+        """The sample times [s] (python-control's name)."""
+        return self.times
+
+    @property
+    def x(self) -> np.ndarray:
+        """The states as python-control lays them out, state before time: ``S + (n, 4, nt)``
+        (``x[k]`` at speed ``k`` is python-control's ``(4, nt)``); a view of :attr:`states`."""
+        return np.swapaxes(self.states, -1, -2)
+
+    @property
+    def y(self) -> np.ndarray:
+        """The outputs as python-control lays them out, output before time: ``S + (n, p, nt)``."""
+        return np.swapaxes(self.outputs, -1, -2)
 
 
 def _times(times) -> np.ndarray:
