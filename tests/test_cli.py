@@ -216,5 +216,9 @@ def test_estimate_notes_go_to_stderr_and_verbose_logs_each_once(capsys, caplog):
     assert "note" not in captured.out.lower()
     wheel = [line for line in captured.err.splitlines() if "IRyy = 0.16 is not at most 2*IRxx" in line]
     assert wheel == [line for line in wheel if line.startswith("bikerider estimate: note: ")] and len(wheel) == 1
+    assert not [r for r in caplog.records if r.getMessage().startswith("note: ")]  # -v: printed once, not logged
+    caplog.clear()
+    caplog.set_level(logging.DEBUG, logger="bikerider")
+    assert main(["estimate", "-vv"]) == 0
     logged = [r.getMessage() for r in caplog.records if r.getMessage().startswith("note: ")]
-    assert logged and len(logged) == len(set(logged))
+    assert logged and len(logged) == len(set(logged))  # -vv: when each was made, once

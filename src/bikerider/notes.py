@@ -49,8 +49,10 @@ _ACTIVE: list[NoteCollection] = []
 def note(message: str) -> str:
     """Record ``message`` as a note of the current run (see the module docstring); return it."""
     if _ACTIVE:
-        if _ACTIVE[-1].add(message):  # logged once, however often it is made (``-v``)
-            LOG.info("note: %s", message)
+        # Printed at the end of the run (or shown in its output): logged here only at DEBUG (``-vv``,
+        # when it was made), and once, however often it is made.
+        if _ACTIVE[-1].add(message):
+            LOG.debug("note: %s", message)
     else:
         LOG.warning("%s", message)
     return message
