@@ -36,16 +36,18 @@ def test_each_chi2_is_shown_on_its_own_scale():
     first is against the data's noise alone (where the nominal model has 1216.1), the second against
     the combined uncertainty; and "RMS normalised residual 0.89" sat beside chi2/n = 1.82."""
     lines = summary_text(_result()).splitlines()
-    combined = next(line for line in lines if line.startswith("Gap against the combined uncertainty"))
-    assert "chi2 = 196.7" in combined and "chi2/n = 1.82" in combined
-    assert "correlation left out: RMS 0.89" in combined
-    data = next(line for line in lines if line.startswith("Gap against the data's noise alone"))
-    nominal, fitted = data.index("chi2 = 1216.1"), data.index("chi2 = 211.8")
-    assert nominal < fitted and "data 195.7 + prior 16.1 on 23 parameters" in data
+    combined = lines.index(next(line for line in lines if line.startswith("Gap against the combined uncertainty")))
+    assert "chi2 = 196.7 on 108 observations, chi2/n = 1.82" in lines[combined + 1]
+    assert "correlation left out" in lines[combined + 2] and lines[combined + 2].endswith("RMS 0.89")
+    data = lines.index("Gap against the data's noise alone (the parameters taken as exact):")
+    assert lines[data + 1].startswith("  nominal parameters: chi2 = 1216.1")
+    fitted = lines[data + 2]
+    assert fitted.startswith("  parameters fitted within their uncertainty: chi2 = 211.8")
+    assert "data 195.7 + prior 16.1 on 23 parameters" in fitted
     assert not any(line.startswith(("Gap: chi2", "Parameters alone")) for line in lines)
-    assert any(
-        line.startswith("Gap against the data's noise alone") for line in summary_text(_result(False)).split("\n")
-    )
+    without_fit = summary_text(_result(False)).splitlines()
+    assert any(line.startswith("  nominal parameters: chi2 = 1216.1") for line in without_fit)
+    assert not any("fitted within their uncertainty" in line for line in without_fit)
 
 
 def test_a_control_law_named_by_its_gains_is_printed_once():

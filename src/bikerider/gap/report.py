@@ -105,29 +105,34 @@ def summary_text(result: dict) -> str:
     # against the data's noise alone; the parameter fit's chi2 belongs to the second.
     n = max(test["dof"], 1)
     lines.append(
-        f"Gap against the combined uncertainty of data and parameters: chi2 = {test['chi2']:.1f} on "
-        f"{test['dof']} observations (chi2/n = {test['chi2'] / n:.2f}, p = {test['p_value']:.2g}; with the "
-        f"correlation the shared parameters give the residuals). Each residual over its own combined "
-        f"sigma, correlation left out: RMS {test['rms_z']:.2f} (the scale of the held-out errors below)"
+        "Gap against the combined uncertainty of data and parameters (full covariance: the shared "
+        "parameters correlate the residuals):"
     )
-    data_line = (
-        f"Gap against the data's noise alone: the nominal parameters chi2 = {test['data_only']['chi2']:.1f} "
-        f"(chi2/n = {test['data_only']['chi2'] / n:.2f}, p = {test['data_only']['p_value']:.2g})"
+    lines.append(
+        f"  chi2 = {test['chi2']:.1f} on {test['dof']} observations, chi2/n = {test['chi2'] / n:.2f}, p = {test['p_value']:.2g}"
     )
+    lines.append(
+        f"  each residual over its own combined sigma, correlation left out (the scale of the held-out "
+        f"errors below): RMS {test['rms_z']:.2f}"
+    )
+    lines.append("Gap against the data's noise alone (the parameters taken as exact):")
+    data = test["data_only"]
+    lines.append(
+        f"  nominal parameters: chi2 = {data['chi2']:.1f}, chi2/n = {data['chi2'] / n:.2f}, p = {data['p_value']:.2g}"
+    )
+    if result.get("parameter_fit") and result["parameter_fit"].get("test"):
+        pt = result["parameter_fit"]["test"]
+        lines.append(
+            f"  parameters fitted within their uncertainty: chi2 = {pt['chi2']:.1f} (data "
+            f"{pt['chi2'] - pt['prior_chi2']:.1f} + prior {pt['prior_chi2']:.1f} on {pt['prior_dof']} parameters), "
+            f"chi2/n = {pt['chi2'] / max(pt['dof'], 1):.2f}, p = {pt['p_value']:.2g}"
+        )
     unc = result.get("uncertainty") or {}
     if unc.get("largest"):
         lines.append(
             f"Typical standard uncertainty: data {_fmt(unc['data'])}, model parameters {_fmt(unc['parameters'])} "
             "(largest: " + ", ".join(f"{u['parameter']} {_fmt(u['rms_effect'], 2)}" for u in unc["largest"][:4]) + ")"
         )
-    if result.get("parameter_fit") and result["parameter_fit"].get("test"):
-        pt = result["parameter_fit"]["test"]
-        data_line += (
-            f"; the parameters fitted within their uncertainty chi2 = {pt['chi2']:.1f} "
-            f"(chi2/n = {pt['chi2'] / max(pt['dof'], 1):.2f}, p = {pt['p_value']:.2g}; "
-            f"data {pt['chi2'] - pt['prior_chi2']:.1f} + prior {pt['prior_chi2']:.1f} on {pt['prior_dof']} parameters)"
-        )
-    lines.append(data_line)
     records = result.get("records")
     if records:
         lines.append(f"Records: {records['used']} of {records['total']} used, {records['left_out']} left out")
