@@ -355,3 +355,21 @@ def test_design_map_key_and_base_star_say_what_the_slice_shows():
     assert len(stars) == 1 and stars[0].get_markerfacecolor() == "none"
     plotting.pyplot().close(fig)
     assert figures.base_on_slice(_design_slice(valid, {"w": 1.02}, {**base, "c": 0.5})) is None  # outside
+
+
+def test_stability_map_key_lists_only_what_the_map_shows(bench):
+    """issue 24: "impossible design" in the key of a map without one; the star where the base is not."""
+    fig, ax = _axes()
+    result = stability_map(bench, ("c", np.linspace(0.02, 0.15, 6)), ("lam", np.radians(np.linspace(10, 30, 5))))
+    assert result.valid.all()
+    plotting.plot_stability_map(ax, result, colorbar=False)
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert "impossible design" not in labels and "base design" in labels
+    plotting.pyplot().close(fig)
+    fig, ax = _axes()
+    away = stability_map(bench, ("c", np.linspace(0.1, 0.15, 4)), ("mB", np.linspace(-10.0, 120.0, 3)))
+    plotting.plot_stability_map(ax, away, colorbar=False)
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert "impossible design" in labels and "base design" not in labels  # the base's c = 0.08 is off the map
+    assert not [line for line in ax.get_lines() if line.get_marker() == "*" and len(line.get_xdata())]
+    plotting.pyplot().close(fig)

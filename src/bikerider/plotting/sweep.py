@@ -115,19 +115,26 @@ def plot_stability_map(ax, result: Sweep, colorbar: bool = True):
     if np.isfinite(finite_upper).sum() > 3:
         contours = ax.contour(x, y, finite_upper, colors="k", linewidths=0.6)
         ax.clabel(contours, fontsize=6, fmt="%.1f")
-    ax.plot(result.base.values[result.names[0]], result.base.values[result.names[1]], "w*", ms=9, mec="k", mew=0.6)
+    bx, by = result.base.values[result.names[0]], result.base.values[result.names[1]]
+    base_shown = bool(np.min(x) <= bx <= np.max(x) and np.min(y) <= by <= np.max(y))
+    if base_shown:
+        ax.plot(bx, by, "w*", ms=9, mec="k", mew=0.6)
     ax.set_xlabel(_axis_label(result.names[0]))
     ax.set_ylabel(_axis_label(result.names[1]))
     if colorbar:
         bar = ax.figure.colorbar(mesh, ax=ax, pad=0.02)
         bar.set_label("self-stable from [m/s] (weave speed)")
-    handles = [
-        mpatches.Patch(facecolor="white", edgecolor="0.3", hatch="////", label="never self-stable"),
-        mpatches.Patch(color="0.8", label="impossible design"),
-        ax.plot([], [], color="k", lw=0.6, label="self-stable up to [m/s] (capsize speed)")[0],
-        ax.plot([], [], "w*", mec="k", ms=8, label="base design")[0],
-    ]
-    ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(0.0, -0.16), ncols=2, fontsize=7)
+    handles = []  # an entry for what the map shows, and only that
+    if never.any():
+        handles.append(mpatches.Patch(facecolor="white", edgecolor="0.3", hatch="////", label="never self-stable"))
+    if (~valid).any():
+        handles.append(mpatches.Patch(color="0.8", label="impossible design"))
+    if np.isfinite(finite_upper).sum() > 3:
+        handles.append(ax.plot([], [], color="k", lw=0.6, label="self-stable up to [m/s] (capsize speed)")[0])
+    if base_shown:
+        handles.append(ax.plot([], [], "w*", mec="k", ms=8, label="base design")[0])
+    if handles:
+        ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(0.0, -0.16), ncols=2, fontsize=7)
     return ax
 
 
