@@ -373,3 +373,19 @@ def test_stability_map_key_lists_only_what_the_map_shows(bench):
     assert "impossible design" in labels and "base design" not in labels  # the base's c = 0.08 is off the map
     assert not [line for line in ax.get_lines() if line.get_marker() == "*" and len(line.get_xdata())]
     plotting.pyplot().close(fig)
+
+
+def test_estimate_figures_of_a_benchmark_file_are_titled_by_its_name(tmp_path, monkeypatch):
+    from pathlib import Path
+
+    bp = Path(plotting.__file__).parents[1] / "data" / "bicycleparameters" / "bicycles" / "Fisher" / "Parameters"
+    titles = []
+    write = plotting.write_figures
+
+    def spy(*args, **kwargs):
+        titles.append(kwargs.get("title", args[4] if len(args) > 4 else ""))
+        return write(*args, **kwargs)
+
+    monkeypatch.setattr(plotting, "write_figures", spy)
+    assert main(["estimate", "--bicycle", str(bp / "FisherBenchmark.txt"), "--plot", str(tmp_path)]) == 0
+    assert titles == ["Fisher"]  # not the path, and no "+ no rider"

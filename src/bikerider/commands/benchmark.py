@@ -4,14 +4,13 @@ from __future__ import annotations
 
 import argparse
 import json
-import tomllib
-from pathlib import Path
 
 from bikerider import notes
 from bikerider.commands.estimate import (
     add_figure_options,
     add_uncertainty_options,
     check_figure_outputs,
+    figure_title,
     print_notes,
 )
 from bikerider.errors import InputError
@@ -75,23 +74,6 @@ def load_parameters(args: argparse.Namespace):
     from bikerider.io.benchmark_file import load_benchmark_parameters
 
     return load_benchmark_parameters(args.file), str(args.file)
-
-
-def figure_title(path: str) -> str:
-    """A figure title for a parameter file: the ``name`` a TOML file gives (top level, ``[benchmark]``
-    or ``[bicycle]``), else the file's name without the folders, suffix and BicycleParameters'
-    ``Benchmark`` ending (``BrowserBenchmark.txt``: ``Browser``)."""
-    file = Path(path)
-    if file.suffix.lower() == ".toml":
-        try:
-            table = tomllib.loads(file.read_text(encoding="utf-8"))
-        except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
-            table = {}  # the reader has accepted the file; a title is not worth an error
-        for where in (table, table.get("benchmark"), table.get("bicycle")):
-            if isinstance(where, dict) and isinstance(where.get("name"), str) and where["name"].strip():
-                return where["name"].strip()
-    stem = file.stem
-    return stem[: -len("Benchmark")] if stem.endswith("Benchmark") and stem != "Benchmark" else stem
 
 
 def run(args: argparse.Namespace) -> int:

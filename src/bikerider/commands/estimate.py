@@ -6,7 +6,9 @@ import argparse
 import json
 import math
 import sys
+import tomllib
 from dataclasses import replace
+from pathlib import Path
 
 from bikerider import notes
 
@@ -92,6 +94,23 @@ def check_figure_outputs(args: argparse.Namespace) -> None:
         refuse_inputs("--plot", args.plot, figure_paths(folder, FIGURES, args.format))
 
 
+def figure_title(path: str) -> str:
+    """A figure title for a parameter file: the ``name`` a TOML file gives (top level, ``[benchmark]``
+    or ``[bicycle]``), else the file's name without the folders, suffix and BicycleParameters'
+    ``Benchmark`` ending (``BrowserBenchmark.txt``: ``Browser``)."""
+    file = Path(path)
+    if file.suffix.lower() == ".toml":
+        try:
+            table = tomllib.loads(file.read_text(encoding="utf-8"))
+        except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+            table = {}  # the reader has accepted the file; a title is not worth an error
+        for where in (table, table.get("benchmark"), table.get("bicycle")):
+            if isinstance(where, dict) and isinstance(where.get("name"), str) and where["name"].strip():
+                return where["name"].strip()
+    stem = file.stem
+    return stem[: -len("Benchmark")] if stem.endswith("Benchmark") and stem != "Benchmark" else stem
+
+
 def files_to_use(args: argparse.Namespace) -> tuple[bool, list[str]]:
     """Whether to seat a rider, and notes on what was taken for files not given.
 
@@ -149,7 +168,7 @@ def run(args: argparse.Namespace) -> int:
             result.model,
             eig,
             rm.grid_points if rm else None,
-            title=f"{bicycle_name} + {rider_name}",
+            title=_figure_title(result, args),
             parameters=result.parameters,
             figures=plotting.FIGURES,
             fmt=args.format,
@@ -191,6 +210,13 @@ def print_notes(command: str, run_notes: list[str]) -> None:
     stay alone on stdout; ``--json`` lists them under ``notes`` instead); also ``benchmark``."""
     for note in notes.shown_with(run_notes):
         print(f"bikerider {command}: note: {note}", file=sys.stderr)
+
+
+def _figure_title(result, args: argparse.Namespace) -> str:
+    """The figures' title: the bicycle's name (a file's name when it names none, not its path) and
+    the rider's, if any."""
+    bicycle = result.bicycle.name if result.bicycle is not None else figure_title(str(args.bicycle))
+    return f"{bicycle} + {result.rider.name}" if result.rider is not None else bicycle
 
 
 def _rider_json(result) -> dict | None:
