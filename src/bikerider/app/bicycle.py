@@ -44,12 +44,17 @@ UNITS = {
     "g": "m/s^2",
 }
 """SI unit of each benchmark value."""
+SECTIONS = {"R": "rear wheel R", "B": "rear body B", "H": "front assembly H", "F": "front wheel F"}
+
+
+def _section(name: str) -> str:
+    """The table section of a benchmark value: its body (the letter after ``m``, ``r``, ``x``, ``z``
+    or ``I``), else the geometry."""
+    return SECTIONS.get(name[1:2], "geometry") if name[0] in "mrxzI" and len(name) > 1 else "geometry"
+
+
 GROUPS = {
-    "geometry": ("w", "c", "lam", "g"),
-    "rear wheel R": ("rR", "mR", "IRxx", "IRyy"),
-    "rear body B": ("xB", "zB", "mB", "IBxx", "IByy", "IBzz", "IBxz"),
-    "front assembly H": ("xH", "zH", "mH", "IHxx", "IHyy", "IHzz", "IHxz"),
-    "front wheel F": ("rF", "mF", "IFxx", "IFyy"),
+    section: tuple(n for n in BENCHMARK_NAMES if _section(n) == section) for section in ("geometry", *SECTIONS.values())
 }
 """The table's sections, each value once."""
 TABLE_SOURCE = "the parameter table"
@@ -259,7 +264,7 @@ def edited_parameters(cells: dict, steer_frame: dict | None = None, source: str 
         except InputError as exc:
             _add(errors, exc.name, str(exc))
         else:
-            converted = from_steer_frame({k: found[k].value for k in ("w", "c", "lam")}, steer)
+            converted = from_steer_frame({k: q.value for k, q in found.items()}, steer)
             for name, value in converted.items():
                 found[name] = Quantity(value, found[name].sigma)
     found_notes: dict[str, list[str]] = {}
