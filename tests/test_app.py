@@ -116,7 +116,7 @@ def test_each_input_change_runs_each_computation_once(app, browser_jason):
     request = {"cells": bicycle.cells_of(browser_jason.parameters), "speed": 5.0, "map": {"x": "c"}}
     first = app.update(request).data()
     assert first["ok"]
-    everything = {name: 1 for name in dynamics.COMPUTATIONS}
+    everything = {name: 1 for name in dynamics.COMPUTATIONS if name != "closed_loop"}  # no gains given
     assert dict(app.dynamics.calls) == everything
     app.update(request)  # the same page again: nothing runs
     assert dict(app.dynamics.calls) == everything
@@ -126,6 +126,32 @@ def test_each_input_change_runs_each_computation_once(app, browser_jason):
     assert dict(app.dynamics.calls) == {"eigenvalues": 2, "uncertainty": 2, "side_view": 2, "bode": 3, "map": 2}
     app.update({**request, "speed": 6.0, "map": {"x": "c", "y": "lam"}})  # a new map: the map alone
     assert app.dynamics.calls["map"] == 3 and app.dynamics.calls["eigenvalues"] == 2
+    gains = {"k_phi": "20", "k_phid": 0, "k_delta": 0, "k_deltad": 0}
+    app.update({**request, "speed": 6.0, "map": {"x": "c", "y": "lam"}, "gains": gains})  # the closed loop alone
+    assert dict(app.dynamics.calls) == {
+        "eigenvalues": 2,
+        "uncertainty": 2,
+        "side_view": 2,
+        "bode": 3,
+        "map": 3,
+        "closed_loop": 1,
+    }
+
+
+def test_the_closed_loop_under_constant_gains(app, browser_jason):
+    from bikerider.benchmark import WhippleModel
+
+    request = {"cells": bicycle.cells_of(browser_jason.parameters), "speed": 5.0}
+    off = app.update({**request, "gains": {"k_phi": 0, "k_phid": 0, "k_delta": 0, "k_deltad": 0}}).data()
+    critical = WhippleModel.from_parameters(browser_jason.parameters).critical_speeds()
+    assert off["closed_loop"]["weave"] == pytest.approx(critical.weave)  # no gains: the open loop
+    assert off["closed_loop"]["capsize"] == pytest.approx(critical.capsize)
+    on = app.update({**request, "gains": {"k_phi": 50}}).data()["closed_loop"]
+    assert on["stable_intervals"][0][0] != pytest.approx(critical.weave)
+    bad = app.update({**request, "gains": {"k_phi": "x"}}).data()
+    assert bad["closed_loop"] is None and bad["gains_error"].startswith(
+        "the closed loop: k_phi = 'x': expected a finite"
+    )
 
 
 def test_a_table_with_errors_runs_nothing_and_says_why(app, browser_jason):
@@ -159,10 +185,11 @@ def test_map_errors_name_the_map(browser_jason):
 
 
 # -- downloads -----------------------------------------------------------------------------------------
-@pytest.mark.parametrize("fmt, suffix", [("toml", ".toml"), ("txt", ".txt")])
-def test_downloaded_parameters_read_back_as_benchmark_reads_them(tmp_path, browser_jason, fmt, suffix):
+@pytest.mark.parametrize("fmt", ["toml", "txt", "json"])
+def test_downloaded_parameters_read_back_as_benchmark_reads_them(tmp_path, browser_jason, fmt):
     name, text = downloads.parameter_file(browser_jason.parameters, fmt, "Browser + Jason")
-    path = tmp_path / f"bicycle{suffix}"
+    assert name == {"toml": "BrowserJason.toml", "txt": "BrowserJasonBenchmark.txt", "json": "BrowserJason.json"}[fmt]
+    path = tmp_path / name
     path.write_text(text)
     back = load_benchmark_parameters(path)
     for key, value in browser_jason.parameters.values.items():
@@ -179,7 +206,10 @@ def test_downloaded_tables_and_figures(browser_jason):
     assert lines[0].startswith("speed,mode,real,imag,sigma_real") and len(lines) == 1 + 101 * 4
     axes = dynamics.check_map({"x": "c"}, browser_jason.parameters)
     _, text = downloads.table_file(browser_jason.parameters, "map", axes)
-    assert text.splitlines()[0].startswith("c,valid,reason,weave_speed") and len(text.splitlines()) == 82
+    assert (
+        text.splitlines()[0].startswith("c,valid,reason,weave_speed")
+        and len(text.splitlines()) == 1 + dynamics.MAP_POINTS[1]
+    )
     _, png = downloads.figure_file(browser_jason.parameters, "eigenvalues", "png", 5.0)
     assert png.startswith(b"\x89PNG")
     _, svg = downloads.figure_file(browser_jason.parameters, "bode", "svg", 5.0)

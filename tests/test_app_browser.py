@@ -113,6 +113,7 @@ def _edit(driver, name: str, value: str, column: int = 0) -> None:
 
 def test_the_page_in_a_browser(server, browser, shots):
     from selenium.webdriver.common.by import By
+    from selenium.webdriver.common.keys import Keys
 
     app, url = server
     browser.get(url)
@@ -127,7 +128,7 @@ def test_the_page_in_a_browser(server, browser, shots):
     trail = float(browser.find_element(By.CSS_SELECTOR, 'input[data-name="c"][data-k="0"]').get_attribute("value"))
     before = dict(app.dynamics.calls)
     n = len(_latencies(browser))
-    edits = 24
+    edits = 40
     for k in range(edits):
         _edit(browser, "c", f"{trail * (1 + 0.01 * (k + 1)):.6f}")
         _wait(lambda: len(_latencies(browser)) >= n + k + 1, 10, f"edit {k + 1}")
@@ -138,7 +139,8 @@ def test_the_page_in_a_browser(server, browser, shots):
     breakdown = browser.execute_script("return window.bikerider.breakdown.slice()")[n:]
     p95 = statistics.quantiles(latencies, n=20)[-1]
     (shots / "latency.txt").write_text(
-        f"{len(latencies)} edits of c; latency (change -> every figure redrawn) ms: median "
+        f"{len(latencies)} edits of c, load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores; "
+        "latency (change -> every figure redrawn) ms: median "
         f"{statistics.median(latencies):.1f}, p95 {p95:.1f}, max {max(latencies):.1f}\n"
         + "".join(f"{t:.1f} {b}\n" for t, b in zip(latencies, breakdown))
     )
@@ -158,14 +160,31 @@ def test_the_page_in_a_browser(server, browser, shots):
 
     # A download: the parameters as TOML, which `bikerider benchmark` reads back.
     browser.find_element(By.CSS_SELECTOR, 'button[data-kind="parameters"][data-format="toml"]').click()
-    saved = _wait(lambda: list(browser.downloads.glob("bicycle.toml")), 20, "the downloaded TOML file")
+    saved = _wait(lambda: list(browser.downloads.glob("BrowserJason.toml")), 20, "the downloaded TOML file")
     from bikerider.io.benchmark_file import load_benchmark_parameters
 
     assert load_benchmark_parameters(saved[0]).values["mB"] == pytest.approx(9.86)
     browser.find_element(By.ID, "dl-figure-go").click()
     _wait(lambda: list(browser.downloads.glob("eigenvalues.png")), 60, "the downloaded figure")
 
-    # A bad upload shows its error, and the page goes on.
+    # The closed loop under a roll-angle gain: its own figure, the open loop's unchanged.
+    calls = dict(app.dynamics.calls)
+    browser.find_element(By.ID, "k_phi").send_keys(Keys.CONTROL, "a")
+    browser.find_element(By.ID, "k_phi").send_keys("20")
+    browser.find_element(By.ID, "loop-apply").click()
+    _wait(lambda: "closed loop stable" in browser.find_element(By.ID, "loop-speeds").text, 10, "the closed loop")
+    assert app.dynamics.calls["closed_loop"] == calls.get("closed_loop", 0) + 1
+    assert app.dynamics.calls["eigenvalues"] == calls["eigenvalues"]
+    browser.execute_script("document.getElementById('fig-loop').scrollIntoView()")
+    browser.save_screenshot(str(shots / "03_closed_loop.png"))
+
+    # An uploaded bicycle (a BicycleParameters Measured file, as estimate reads it), then a bad
+    # upload, which shows its error; the page goes on.
+    measured = next(Path(str(resources.files("bikerider") / "data" / "bicycleparameters")).rglob("BrowserMeasured.txt"))
+    browser.find_element(By.ID, "bicycle-file").send_keys(str(measured))
+    browser.find_element(By.ID, "load-files").click()
+    _wait(lambda: "BrowserMeasured.txt" in browser.find_element(By.ID, "bicycle-name").text, 30, "the uploaded bicycle")
+    browser.find_element(By.ID, "bicycle-file").clear()
     bad = Path(browser.downloads) / "not_a_bicycle.txt"
     bad.write_text("this is no bicycle\n")
     browser.find_element(By.ID, "bicycle-file").send_keys(str(bad))
@@ -184,7 +203,7 @@ def test_the_page_in_a_browser(server, browser, shots):
     _wait(lambda: "experiment.toml" in browser.find_element(By.ID, "gap-upload-status").text, 60, "the upload")
     browser.find_element(By.ID, "gap-run").click()
     _wait(lambda: "s)" in browser.find_element(By.ID, "gap-progress").text, 20, "the progress")
-    browser.save_screenshot(str(shots / "03_gap_running.png"))
+    browser.save_screenshot(str(shots / "04_gap_running.png"))
     _wait(
         lambda: browser.find_element(By.ID, "gap-summary").text or browser.find_element(By.ID, "gap-error").text,
         600,
@@ -199,4 +218,4 @@ def test_the_page_in_a_browser(server, browser, shots):
     browser.find_element(By.ID, "gap-zip-link").click()
     _wait(lambda: list(browser.downloads.glob("gap_report.zip")), 30, "the report folder")
     browser.execute_script("document.getElementById('gap').scrollIntoView()")
-    browser.save_screenshot(str(shots / "04_gap_report.png"))
+    browser.save_screenshot(str(shots / "05_gap_report.png"))

@@ -1,10 +1,9 @@
 """What the page offers for download: parameter files, CSV tables and figures.
 
 * Parameters as a TOML file (``[benchmark]``, ``"value +/- sigma"``), a BicycleParameters
-  ``Benchmark.txt`` (``name = value+/-sigma``) and JSON; the first two read back through
-  ``bikerider benchmark FILE`` to the same values (a test checks it).  The writers here are the
-  page's own until the package has one set of exporters (``bikerider.io.export``, being written
-  beside this page): then :func:`parameter_file` is the one place to switch to them.
+  ``<Name>Benchmark.txt`` (``name = value+/-sigma``) and JSON, by the package's exporters
+  (:mod:`bikerider.io.export`): each reads back through ``bikerider benchmark FILE`` to the same
+  values.
 * The eigenvalues at 0-10 m/s with their first-order sigmas and condition numbers (CSV, as
   ``estimate --json`` lists them), the tracked modes (CSV), and the stability map's designs (CSV, as
   ``bikerider sweep`` writes them).
@@ -13,14 +12,13 @@
 
 from __future__ import annotations
 
-import csv
-import io
-import json
 import math
+import re
 
 from bikerider.app import dynamics
-from bikerider.benchmark import BENCHMARK_NAMES, BenchmarkParameters, WhippleModel
+from bikerider.benchmark import BenchmarkParameters, WhippleModel
 from bikerider.errors import InputError
+from bikerider.io import export
 
 PARAMETER_FORMATS = {"toml": "application/toml", "txt": "text/plain", "json": "application/json"}
 FIGURE_FORMATS = {"png": "image/png", "svg": "image/svg+xml", "pdf": "application/pdf"}
@@ -28,43 +26,28 @@ FIGURES = ("eigenvalues", "side_view", "mode_shapes", "bode", "map")
 TABLES = ("eigenvalues", "modes", "map")
 
 
-def _number(x: float) -> str:
-    return repr(float(x))
+def bicycle_name(name: str) -> str:
+    """A BicycleParameters bicycle name from the page's name (letters, digits and ``_``, a letter
+    first): ``"Browser + Jason"`` gives ``"BrowserJason"``."""
+    cleaned = re.sub(r"[^A-Za-z0-9_]", "", str(name))
+    return cleaned if cleaned[:1].isalpha() else f"Bicycle{cleaned}"
 
 
 def parameter_file(parameters: BenchmarkParameters, fmt: str, name: str = "bicycle") -> tuple[str, str]:
-    """``(file name, text)`` of ``parameters`` in format ``fmt`` (``toml``, ``txt``, ``json``)."""
-    v, s = parameters.values, parameters.sigmas
-    present = [n for n in BENCHMARK_NAMES if v[n] is not None]
+    """``(file name, text)`` of ``parameters`` in format ``fmt`` (``toml``, ``txt``, ``json``), written
+    by the package's exporters (:mod:`bikerider.io.export`), which every reader reads back bit for bit."""
     if fmt == "toml":
-        lines = [f"# {name}: benchmark parameters (Meijaard et al. 2007 names, SI units), written by bikerider serve"]
-        lines += ["[benchmark]"]
-        for n in present:
-            sigma = float(s.get(n, 0.0) or 0.0)
-            lines.append(f'{n} = "{_number(v[n])} +/- {_number(sigma)}"' if sigma else f"{n} = {_number(v[n])}")  # type: ignore[arg-type]
-        return "bicycle.toml", "\n".join(lines) + "\n"
+        return f"{bicycle_name(name)}.toml", export.parameters_to_toml(parameters, name)
     if fmt == "txt":
-        lines = []
-        for n in present:
-            sigma = float(s.get(n, 0.0) or 0.0)
-            lines.append(f"{n} = {_number(v[n])}+/-{_number(sigma)}" if sigma else f"{n} = {_number(v[n])}")  # type: ignore[arg-type]
-        return "BicycleBenchmark.txt", "\n".join(lines) + "\n"
+        short = bicycle_name(name)
+        return export.benchmark_txt_filename(short), export.parameters_to_benchmark_txt(parameters, short)
     if fmt == "json":
-        out = {
-            "name": name,
-            "benchmark": {n: v[n] for n in BENCHMARK_NAMES},
-            "sigmas": {n: float(s.get(n, 0.0) or 0.0) for n in BENCHMARK_NAMES},
-        }
-        return "bicycle.json", json.dumps(out, indent=2, allow_nan=False) + "\n"
+        return f"{bicycle_name(name)}.json", export.parameters_to_json(parameters)
     raise InputError("format", fmt, f"one of {', '.join(PARAMETER_FORMATS)}")
 
 
 def _csv(rows: list[dict]) -> str:
-    buffer = io.StringIO()
-    writer = csv.DictWriter(buffer, fieldnames=list(rows[0]), lineterminator="\n")
-    writer.writeheader()
-    writer.writerows({k: ("" if v is None else v) for k, v in row.items()} for row in rows)
-    return buffer.getvalue()
+    return export.rows_to_csv(rows)
 
 
 def table_file(parameters: BenchmarkParameters, table: str, axes=None) -> tuple[str, str]:

@@ -23,6 +23,8 @@ from collections.abc import Callable
 import numpy as np
 
 from bikerider.benchmark import BENCHMARK_NAMES, BenchmarkParameters, WhippleModel
+from bikerider.benchmark.closed_loop import closed_loop
+from bikerider.benchmark.control import GAIN_NAMES, GAIN_UNITS, MAX_MAGNITUDE
 from bikerider.benchmark.frequency_response import frequency_response
 from bikerider.benchmark.mode_shapes import ModeShapes, mode_shapes
 from bikerider.benchmark.state_space import LateralForce
@@ -39,7 +41,7 @@ MONTE_CARLO_SAMPLES = 2000
 downloads say how many)."""
 FREQUENCIES = np.logspace(-1, 2, 160)
 """Angular frequencies of the Bode diagram [rad/s]."""
-MAP_POINTS = {1: 81, 2: 31}
+MAP_POINTS = {1: 41, 2: 25}
 """Grid points per axis of a one- and a two-parameter stability map."""
 MAP_PARAMETERS = tuple(n for n in BENCHMARK_NAMES if n not in ("IByy", "IHyy", "g"))
 """Parameters a map may vary."""
@@ -234,12 +236,58 @@ def stability_map(parameters: BenchmarkParameters, axes: tuple[tuple[str, float,
     return out
 
 
+def check_gains(raw: dict) -> tuple[float, ...]:
+    """The closed loop's constant gains ``(k_phi, k_phid, k_delta, k_deltad)`` from the page.
+
+    Raises
+    ------
+    InputError
+        A gain that is not a finite number of magnitude at most 10^6 (as control files).
+    """
+    out = []
+    for name in GAIN_NAMES:
+        value = raw.get(name, 0.0)
+        try:
+            number = float(value if value not in (None, "") else 0.0)
+        except (TypeError, ValueError):
+            number = math.nan
+        if not (math.isfinite(number) and abs(number) <= MAX_MAGNITUDE):
+            raise InputError(
+                name,
+                value,
+                f"a finite gain [{GAIN_UNITS[name]}] of magnitude at most {MAX_MAGNITUDE:g}",
+                "the closed loop",
+            )
+        out.append(number)
+    return tuple(out)
+
+
+def closed_loop_modes(parameters: BenchmarkParameters, gains: tuple[float, ...]) -> dict:
+    """Eigenvalues against :data:`SPEEDS` under the steer torque ``T = k_phi phi + k_phid phi' +
+    k_delta delta + k_deltad delta'`` (:func:`bikerider.benchmark.closed_loop.closed_loop`), labelled
+    as the open loop's where the closed loop keeps that structure, and its stable intervals."""
+    loop = closed_loop(WhippleModel.from_parameters(parameters), dict(zip(GAIN_NAMES, gains)))
+    modal = loop.eigenvalues(SPEEDS)
+    critical = loop.critical_speeds()
+    return {
+        "gains": dict(zip(GAIN_NAMES, gains)),
+        "speeds": SPEEDS.tolist(),
+        "labels": modal.labels.tolist(),
+        "real": _list(modal.values.real),
+        "imag": _list(modal.values.imag),
+        "weave": critical.weave,
+        "capsize": critical.capsize,
+        "stable_intervals": [[lo, hi if math.isfinite(hi) else None] for lo, hi in critical.stable_intervals],
+    }
+
+
 COMPUTATIONS: dict[str, Callable] = {
     "eigenvalues": tracked_modes,
     "uncertainty": uncertainty,
     "side_view": side_view,
     "bode": bode,
     "map": stability_map,
+    "closed_loop": closed_loop_modes,
 }
 """The computations, by the name of the figure they feed."""
 
@@ -268,8 +316,9 @@ class Dynamics:
                 cache.popitem(last=False)
             return value, time.perf_counter() - start
 
-    def all(self, parameters: BenchmarkParameters, speed: float, axes) -> tuple[dict, dict]:
-        """Every figure's data for one state of the page, and the milliseconds each took."""
+    def all(self, parameters: BenchmarkParameters, speed: float, axes, gains=None) -> tuple[dict, dict]:
+        """Every figure's data for one state of the page (no map without ``axes``, no closed loop
+        without ``gains``), and the milliseconds each took."""
         out, timing = {}, {}
         for name, extra in (
             ("eigenvalues", ()),
@@ -277,8 +326,9 @@ class Dynamics:
             ("side_view", ()),
             ("bode", (speed,)),
             ("map", (axes,)),
+            ("closed_loop", (gains,)),
         ):
-            if name == "map" and axes is None:
+            if extra == (None,):
                 out[name] = None
                 continue
             out[name], seconds = self.result(name, parameters, *extra)
@@ -298,7 +348,9 @@ __all__ = [
     "MONTE_CARLO_SAMPLES",
     "SPEEDS",
     "bode",
+    "check_gains",
     "check_map",
+    "closed_loop_modes",
     "map_sweep",
     "side_view",
     "stability_map",

@@ -137,7 +137,13 @@ class App:
                 axes = dynamics.check_map(spec, edit.parameters)
             except InputError as exc:
                 out["map_error"] = str(exc)
-        figures, timing = self.dynamics.all(edit.parameters, speed, axes)
+        gains = None
+        if isinstance(request.get("gains"), dict):
+            try:
+                gains = dynamics.check_gains(request["gains"])
+            except InputError as exc:
+                out["gains_error"] = str(exc)
+        figures, timing = self.dynamics.all(edit.parameters, speed, axes, gains)
         out.update(figures)
         out["speed"] = speed
         out["timing"] = timing

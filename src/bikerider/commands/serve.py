@@ -15,7 +15,7 @@ def add_parser(subparsers) -> None:
             "edit the benchmark parameters and their sigmas (the front assembly also in the steer-axis "
             "frame), see the eigenvalues against speed with the self-stable band and the uncertainty band, "
             "weave and capsize speeds with sigmas, the side view, mode shapes and Bode at a chosen speed "
-            "and a stability map; upload a model and records to run the gap diagnosis; download parameters, "
+            "a stability map and the closed loop under constant steer-torque gains; upload a model and records to run the gap diagnosis; download parameters, "
             "tables, figures and the report. See docs/app.md."
         ),
     )

@@ -1,7 +1,7 @@
 // bikerider serve: the page.  Plain JavaScript, no library: the server computes, this file draws (SVG).
 "use strict";
 
-const state = { cells: null, steerEdit: null, name: "bicycle", speed: 5.0, map: { x: "c", y: "" }, last: null,
+const state = { cells: null, steerEdit: null, name: "bicycle", speed: 5.0, map: { x: "c", y: "" }, gains: null, last: null,
   pending: null, busy: false, latencies: [], breakdown: [], gapFolder: null, gapJob: null };
 window.bikerider = state;  // the browser test reads state.latencies
 
@@ -264,6 +264,32 @@ function drawMap(m) {
   el("text", { x: 515, y: 196 }, svg, "this bicycle");
 }
 
+function drawLoop(c) {
+  const svg = $("fig-loop"); clear(svg);
+  if (!c) { $("loop-speeds").textContent = ""; el("text", { x: 20, y: 30 }, svg, "give gains and Apply: the closed loop's eigenvalues against speed"); return; }
+  const v = c.speeds;
+  let lo = Infinity, hi = -Infinity;
+  c.real.forEach((row) => row.forEach((x) => { if (x !== null) { lo = Math.min(lo, x); hi = Math.max(hi, x); } }));
+  c.imag.forEach((row) => row.forEach((x) => { if (x !== null) hi = Math.max(hi, Math.abs(x)); }));
+  lo = Math.max(lo, -10); hi = Math.min(Math.max(hi, 1), 10);
+  const ax = axes(svg, [55, 12, 420, 300], [0, 10], [lo, hi], { xlabel: "speed v [m/s]", ylabel: "eigenvalue [1/s]" });
+  for (const [a, b] of c.stable_intervals) {
+    const right = b === null ? 10 : Math.min(b, 10);
+    if (a < 10) el("rect", { x: ax.fx(a), y: 12, width: Math.max(0, ax.fx(right) - ax.fx(a)), height: 300, fill: "#9e9e9e", opacity: 0.18 }, ax.g);
+  }
+  v.forEach((speed, i) => c.labels[i].forEach((label, k) => {
+    const colour = COLOURS[label] || COLOURS.other;
+    if (c.real[i][k] !== null) el("circle", { cx: ax.fx(speed), cy: ax.fy(c.real[i][k]), r: 1.6, fill: colour }, ax.g);
+    if (c.imag[i][k] !== null && c.imag[i][k] > 0) el("circle", { cx: ax.fx(speed), cy: ax.fy(c.imag[i][k]), r: 1.6, fill: "none", stroke: colour }, ax.g);
+  }));
+  legend(svg, 490, 24, [["weave", COLOURS.weave], ["capsize", COLOURS.capsize], ["castor", COLOURS.castor], ["other", COLOURS.other]]);
+  el("text", { x: 490, y: 90 }, svg, "filled: real part; open: imaginary");
+  el("rect", { x: 490, y: 100, width: 18, height: 10, fill: "#9e9e9e", opacity: 0.35 }, svg);
+  el("text", { x: 512, y: 109 }, svg, "stable");
+  const intervals = c.stable_intervals.map(([a, b]) => `${fmt(a, 3)}-${b === null ? "inf" : fmt(b, 3)}`).join(", ") || "none";
+  $("loop-speeds").textContent = `closed loop stable ${intervals} m/s`;
+}
+
 // ---------------------------------------------------------------- the table
 function buildTable(table) {
   const body = $("params").tBodies[0];
@@ -349,7 +375,7 @@ function onSteerEdit() {
 
 // ---------------------------------------------------------------- updates: one request per change, latest wins
 function requestUpdate() {
-  state.pending = { t0: performance.now(), body: { cells: state.cells, steer_frame: state.steerEdit, speed: state.speed, map: mapSpec() } };
+  state.pending = { t0: performance.now(), body: { cells: state.cells, steer_frame: state.steerEdit, speed: state.speed, map: mapSpec(), gains: state.gains } };
   if (!state.busy) sendUpdate();
 }
 
@@ -394,6 +420,8 @@ function render(data) {
   drawBode(data.bode);
   $("map-error").textContent = data.map_error || "";
   drawMap(data.map);
+  $("loop-error").textContent = data.gains_error || "";
+  drawLoop(data.closed_loop);
   if (data.map_axes) {
     const [x, y] = data.map_axes;
     $("map-x-lo").value = fmt(x[1], 4); $("map-x-hi").value = fmt(x[2], 4);
@@ -557,6 +585,12 @@ async function start() {
     button.addEventListener("click", () => download({ kind: button.dataset.kind, format: button.dataset.format }));
   }
   $("dl-figure-go").addEventListener("click", () => download({ kind: $("dl-figure").value, format: $("dl-format").value }));
+  $("loop-apply").addEventListener("click", () => {
+    state.gains = {};
+    for (const k of ["k_phi", "k_phid", "k_delta", "k_deltad"]) state.gains[k] = $(k).value;
+    requestUpdate();
+  });
+  $("loop-off").addEventListener("click", () => { state.gains = null; requestUpdate(); });
   $("gap-folder").addEventListener("change", (e) => gapUpload(e.target.files));
   $("gap-files").addEventListener("change", (e) => gapUpload(e.target.files));
   $("gap-run").addEventListener("click", gapRun);
