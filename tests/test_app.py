@@ -374,3 +374,16 @@ def test_serve_binds_this_computer_alone_by_default():
 
     args = build_parser().parse_args(["serve"])
     assert args.host == "127.0.0.1" and args.port == 8050 and not args.open
+
+
+def test_a_readers_note_is_placed_at_the_value_it_is_about(app):
+    reply = app.load_shipped({"id": "Browser+Jason"}).data()
+    assert any("IByy = 1.3164" in n for n in reply["note_fields"]["IByy"])
+    assert any("yB = 0 m dropped" in n for n in reply["note_fields"]["*"])  # yB is no table value
+
+
+def test_serve_refuses_a_port_out_of_range(capsys):
+    from bikerider.cli import main
+
+    assert main(["serve", "--port", "70000"]) == 2
+    assert "--port = 70000: expected a port number from 0 to 65535" in capsys.readouterr().err

@@ -165,7 +165,9 @@ def test_the_page_in_a_browser(server, browser, shots):
 
     assert load_benchmark_parameters(saved[0]).values["mB"] == pytest.approx(9.86)
     browser.find_element(By.ID, "dl-figure-go").click()
-    _wait(lambda: list(browser.downloads.glob("eigenvalues.png")), 60, "the downloaded figure")
+    figure = _wait(lambda: list(browser.downloads.glob("eigenvalues.png")), 60, "the downloaded figure")
+    assert figure[0].read_bytes().startswith(b"\x89PNG")
+    shutil.copy(figure[0], shots / "downloaded_eigenvalues.png")
 
     # The closed loop under a roll-angle gain: its own figure, the open loop's unchanged.
     calls = dict(app.dynamics.calls)

@@ -194,10 +194,19 @@ def _field_of(error: InputError) -> list[str]:
     return mentioned
 
 
-def _note_field(message: str) -> str | None:
-    """The first benchmark value a note names as ``NAME =`` (where to show it), if any."""
-    match = re.search(r"\b(" + "|".join(BENCHMARK_NAMES) + r") =", message)
+def note_field(message: str) -> str | None:
+    """The benchmark value a note is about (where the page shows it): the first one it names as
+    ``NAME =`` or ``NAME is``, if any."""
+    match = re.search(r"\b(" + "|".join(BENCHMARK_NAMES) + r") (=|is)", message)
     return match.group(1) if match else None
+
+
+def notes_by_field(messages: list[str]) -> dict[str, list[str]]:
+    """``messages`` by the value each is about (``"*"`` for the others)."""
+    out: dict[str, list[str]] = {}
+    for message in messages:
+        _add(out, note_field(message) or "*", message)
+    return out
 
 
 @dataclass
@@ -282,9 +291,7 @@ def edited_parameters(cells: dict, steer_frame: dict | None = None, source: str 
         if errors:
             return EditResult(None, errors, found_notes)
         messages = [*collection.messages, *uncertainty_notes(parameters)]
-    for message in messages:
-        _add(found_notes, _note_field(message) or "*", message)
-    return EditResult(parameters, {}, found_notes)
+    return EditResult(parameters, {}, notes_by_field(messages))
 
 
 def _number(raw: object) -> object:

@@ -98,6 +98,7 @@ class App:
             {
                 "name": loaded.name,
                 "notes": loaded.notes,
+                "note_fields": bicycle.notes_by_field(loaded.notes),
                 "cells": bicycle.cells_of(loaded.parameters),
                 "table": bicycle.parameter_table(loaded.parameters),
             }

@@ -14,9 +14,10 @@ def add_parser(subparsers) -> None:
             "is downloaded): choose a shipped bicycle or upload files as estimate and benchmark read them, "
             "edit the benchmark parameters and their sigmas (the front assembly also in the steer-axis "
             "frame), see the eigenvalues against speed with the self-stable band and the uncertainty band, "
-            "weave and capsize speeds with sigmas, the side view, mode shapes and Bode at a chosen speed "
-            "a stability map and the closed loop under constant steer-torque gains; upload a model and records to run the gap diagnosis; download parameters, "
-            "tables, figures and the report. See docs/app.md."
+            "weave and capsize speeds with sigmas, the side view, mode shapes and Bode at a chosen speed, "
+            "a stability map and the closed loop under constant steer-torque gains; upload a model and "
+            "records to run the gap diagnosis; download parameters, tables, figures and the report. See "
+            "docs/app.md."
         ),
     )
     p.add_argument("--port", type=int, default=8050, help="port to listen on (default 8050; 0: any free port)")
@@ -32,6 +33,7 @@ def add_parser(subparsers) -> None:
 
 def run(args: argparse.Namespace) -> int:
     # The page's modules import NumPy and the model: imported when the command runs.
+    import signal
     import webbrowser
 
     from bikerider.app.server import App, make_server
@@ -50,6 +52,11 @@ def run(args: argparse.Namespace) -> int:
         print(f"bikerider serve: note: bound to {args.host}: other computers can reach the page", flush=True)
     if args.open:
         webbrowser.open(url)
+
+    def stop(signum, frame):  # SIGTERM stops the page as Ctrl+C does: the uploads are removed
+        raise KeyboardInterrupt
+
+    signal.signal(signal.SIGTERM, stop)
     try:
         server.serve_forever()
     except KeyboardInterrupt:

@@ -314,7 +314,9 @@ function buildTable(table) {
 }
 
 // The table's values (unless being typed in) and its messages, without rebuilding it: focus stays.
-function refreshTable(errors, notes) {
+function refreshTable(errors, editNotes) {
+  const notes = { ...(state.loadNotes || {}) };  // the readers' notes stay next to their values
+  for (const [k, list] of Object.entries(editNotes || {})) notes[k] = (notes[k] || []).concat(list);
   const body = $("params").tBodies[0];
   for (const input of body.querySelectorAll("input[data-name]")) {
     const cell = state.cells[input.dataset.name];
@@ -444,6 +446,8 @@ function loaded(data) {
   const notes = $("load-notes"); notes.innerHTML = "";
   for (const n of data.notes) html("li", {}, notes, n);
   state.cells = data.cells;
+  state.loadNotes = data.note_fields;
+  delete state.loadNotes["*"];  // listed under the bicycle's name
   state.steerEdit = null;
   state.map.xRange = state.map.yRange = null;
   buildTable(data.table);
