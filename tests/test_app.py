@@ -387,3 +387,18 @@ def test_serve_refuses_a_port_out_of_range(capsys):
 
     assert main(["serve", "--port", "70000"]) == 2
     assert "--port = 70000: expected a port number from 0 to 65535" in capsys.readouterr().err
+
+
+def test_uploaded_project_files_give_what_estimate_gives(app):
+    """The paper's bicycle and rider TOML files uploaded: the parameters `estimate` gives, with the
+    sigmas it reports."""
+    from bikerider.estimate import estimate_from_files
+
+    folder = app.new_upload({"kind": "bicycle"}).data()["folder"]
+    for name in ("browser_bicycle.toml", "jason_rider.toml"):
+        data = (DATA / "paper" / name).read_bytes()
+        app.upload(folder, name, io.BytesIO(data), len(data))
+    uploaded = app.load_files({"folder": folder, "bicycle": "browser_bicycle.toml", "rider": "jason_rider.toml"}).data()
+    expected = estimate_from_files(DATA / "paper" / "browser_bicycle.toml", DATA / "paper" / "jason_rider.toml")
+    assert {k: v[0] for k, v in uploaded["cells"].items()} == expected.parameters.values
+    assert uploaded["cells"]["mB"][1] > 0  # the sigmas estimate reports (the files give none for mB)

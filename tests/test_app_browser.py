@@ -194,6 +194,12 @@ def test_the_page_in_a_browser(server, browser, shots):
     browser.find_element(By.ID, "load-files").click()
     error = _wait(lambda: browser.find_element(By.ID, "load-error").text, 20, "the upload's error")
     assert "not_a_bicycle.txt" in error
+    big = Path(browser.downloads) / "too_big.toml"
+    big.write_bytes(b"# " + b"x" * (1 << 20) + b"\n")
+    browser.find_element(By.ID, "bicycle-file").clear()
+    browser.find_element(By.ID, "bicycle-file").send_keys(str(big))
+    browser.find_element(By.ID, "load-files").click()
+    _wait(lambda: "at most 1048576 bytes" in browser.find_element(By.ID, "load-error").text, 20, "the size error")
     n = len(_latencies(browser))
     _edit(browser, "c", f"{trail:.6f}")
     _wait(lambda: len(_latencies(browser)) > n, 10, "an edit after the bad upload")

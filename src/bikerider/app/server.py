@@ -21,7 +21,7 @@ from urllib.parse import parse_qs, unquote, urlsplit
 
 from bikerider.app import bicycle, downloads, dynamics
 from bikerider.app.gap_jobs import GapJobs
-from bikerider.app.uploads import UploadFolders
+from bikerider.app.uploads import LIMITS, UploadFolders
 from bikerider.errors import BikeriderError, InputError
 
 LOG = logging.getLogger(__name__)
@@ -91,7 +91,7 @@ class App:
 
     # -- the bicycle ------------------------------------------------------------------------------
     def bicycles(self) -> Reply:
-        return Reply.json({"shipped": bicycle.shipped_choices(), "speeds": [0.0, 10.0, 0.1]})
+        return Reply.json({"shipped": bicycle.shipped_choices(), "speeds": [0.0, 10.0, 0.1], "limits": LIMITS})
 
     def _loaded(self, loaded: bicycle.LoadedBicycle) -> Reply:
         return Reply.json(

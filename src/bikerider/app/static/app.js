@@ -456,6 +456,10 @@ function loaded(data) {
 }
 
 async function uploadFiles(kind, files) {
+  for (const { file, name } of files) {  // the server's limits, said before anything is sent
+    const limit = (state.limits || {})[kind];
+    if (limit && file.size > limit) throw new Error(`${name} = '${file.size} bytes': expected an uploaded ${kind} file of at most ${limit} bytes`);
+  }
   const { folder } = await api("/api/upload/new", { kind });
   let listing = [];
   for (const { file, name } of files) {
@@ -560,6 +564,7 @@ async function pollGap() {
 // ---------------------------------------------------------------- start
 async function start() {
   const info = await api("/api/bicycles");
+  state.limits = info.limits;
   for (const choice of info.shipped) html("option", { value: choice.id }, $("shipped"), choice.label);
   const names = ["w", "c", "lam", "rR", "mR", "IRxx", "IRyy", "xB", "zB", "mB", "IBxx", "IBzz", "IBxz", "xH", "zH", "mH", "IHxx", "IHzz", "IHxz", "rF", "mF", "IFxx", "IFyy"];
   html("option", { value: "" }, $("map-y"), "(none: one parameter)");
