@@ -323,8 +323,8 @@ function refreshTable(errors, editNotes) {
     const value = cell ? cell[Number(input.dataset.k)] : null;
     if (document.activeElement !== input) input.value = value === null || value === undefined ? "" : String(value);
   }
-  for (const old of body.querySelectorAll("tr.message")) old.remove();
-  for (const tr of body.querySelectorAll("tr[data-name]")) {
+  for (const old of document.querySelectorAll("#params tr.message, #steer tr.message")) old.remove();
+  for (const tr of document.querySelectorAll("#params tr[data-name], #steer tr[data-name]")) {
     const name = tr.dataset.name;
     tr.classList.toggle("bad", !!(errors || {})[name]);
     let after = tr;
@@ -343,7 +343,7 @@ function buildSteer(table) {
   const body = $("steer").tBodies[0];
   if (!body.rows.length) {
     for (const row of table.steer_frame) {
-      const tr = html("tr", {}, body);
+      const tr = html("tr", { "data-name": row.name }, body);
       html("td", {}, tr, row.name);
       const input = html("input", { "data-steer": row.name, "aria-label": `${row.name} value` }, html("td", {}, tr));
       input.addEventListener("change", onSteerEdit);
