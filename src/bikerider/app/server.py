@@ -254,6 +254,8 @@ class Handler(BaseHTTPRequestHandler):
             self.send_header(key, value)
         if reply.filename:
             self.send_header("Content-Disposition", f'attachment; filename="{reply.filename}"')
+        if self.close_connection:
+            self.send_header("Connection", "close")
         self.end_headers()
         self.wfile.write(reply.body)
 
@@ -299,6 +301,8 @@ class Handler(BaseHTTPRequestHandler):
         except Exception as exc:  # a bug: the page shows it and keeps working
             LOG.exception("request %s failed", self.path)
             reply = Reply.error(f"internal error ({type(exc).__name__}: {exc}); please report it", 500)
+        if reply.status >= 400 and self.command in ("POST", "PUT"):
+            self.close_connection = True  # the body may not have been read: this connection ends here
         self._send(reply)
 
     def do_GET(self) -> None:  # noqa: N802 - the base class's name
@@ -340,11 +344,7 @@ class Handler(BaseHTTPRequestHandler):
                 return Reply.error(f"no such endpoint: {split.path}", 404)
             name = (parse_qs(split.query).get("name") or [""])[0]
             size = self._size()
-            try:
-                self.app.uploads.check_size(parts[2], name, size)
-            except InputError:
-                self.close_connection = True  # the body is not read
-                raise
+            self.app.uploads.check_size(parts[2], name, size)  # before the body is read
             return self.app.upload(parts[2], name, self.rfile, size)
 
         self._answer(work)
