@@ -547,7 +547,8 @@ async function gapRun() {
 async function pollGap() {
   let job;
   try { job = await api(`/api/gap/${state.gapJob}`); } catch (err) { $("gap-error").textContent = `error: ${err.message}`; return; }
-  const bar = job.step_index === null ? "" : job.steps.map((s, k) => (k < job.step_index ? "[x] " : k === job.step_index ? "[>] " : "[ ] ") + s).join("\n");
+  const at = job.step === "done" ? job.steps.length : job.step_index;
+  const bar = at === null ? "" : job.steps.map((s, k) => (k < at ? "[x] " : k === at ? "[>] " : "[ ] ") + s).join("\n");
   $("gap-progress").textContent = `${job.step} (${job.elapsed === null ? 0 : job.elapsed} s)\n${bar}\n${job.messages.slice(-5).join("\n")}`;
   if (job.step === "failed") { $("gap-error").textContent = job.error; return; }
   if (job.step !== "done") { setTimeout(pollGap, 1000); return; }
