@@ -402,3 +402,14 @@ def test_uploaded_project_files_give_what_estimate_gives(app):
     expected = estimate_from_files(DATA / "paper" / "browser_bicycle.toml", DATA / "paper" / "jason_rider.toml")
     assert {k: v[0] for k, v in uploaded["cells"].items()} == expected.parameters.values
     assert uploaded["cells"]["mB"][1] > 0  # the sigmas estimate reports (the files give none for mB)
+
+
+def test_principal_moments_keep_the_trace_and_the_determinant(browser_jason):
+    v = browser_jason.parameters.values
+    for body in ("B", "H"):
+        p = bicycle.parameter_table(browser_jason.parameters)["principal"][body]
+        xx, zz, xz = v[f"I{body}xx"], v[f"I{body}zz"], v[f"I{body}xz"]
+        assert sum(p["plane"]) == pytest.approx(xx + zz)
+        assert p["plane"][0] * p["plane"][1] == pytest.approx(xx * zz - xz**2)
+        c, s = math.cos(p["angle"]), math.sin(p["angle"])
+        assert c * c * xx + 2 * c * s * xz + s * s * zz == pytest.approx(p["plane"][0])  # about the first axis

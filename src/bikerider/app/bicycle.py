@@ -18,6 +18,8 @@ import tomllib
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
+import numpy as np
+
 from bikerider import notes
 from bikerider.app.steer_frame import (
     ASSEMBLY_INPUTS,
@@ -169,6 +171,7 @@ def parameter_table(parameters: BenchmarkParameters) -> dict:
     assembly_sigma = first_order_sigmas(front_assembly, floats, s, ASSEMBLY_INPUTS)
     return {
         "rows": rows,
+        "principal": {body: principal_moments(parameters, body) for body in rules.BODIES},
         "steer_frame": [
             {"name": n, "unit": STEER_FRAME_UNITS[n], "value": steer[n], "sigma": steer_sigma[n]}
             for n in STEER_FRAME_NAMES
@@ -179,6 +182,20 @@ def parameter_table(parameters: BenchmarkParameters) -> dict:
             "I_steer_axis": assembly["I_steer_axis"],
             "I_steer_axis_sigma": assembly_sigma["I_steer_axis"],
         },
+    }
+
+
+def principal_moments(parameters: BenchmarkParameters, body: str) -> dict:
+    """The principal moments of inertia of body ``B`` or ``H`` about its centre of mass [kg m^2], the
+    two in the XZ plane with the angle of the first principal axis from +x (downwards positive, the
+    benchmark frame) [rad], and ``Iyy`` when the set determines it."""
+    v = parameters.values
+    xx, yy, zz, xz = (v[name] for name in rules.tensor_entries(body))
+    moments, vectors = np.linalg.eigh(np.array([[xx, xz], [xz, zz]], dtype=float))
+    return {
+        "plane": [float(m) for m in moments],
+        "angle": float(np.arctan2(vectors[1, 0], vectors[0, 0])),
+        "yy": None if yy is None else float(yy),
     }
 
 

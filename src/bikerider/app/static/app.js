@@ -357,8 +357,14 @@ function buildSteer(table) {
     body.querySelector(`td[data-sigma="${row.name}"]`).textContent = fmt(row.sigma, 3);
   }
   const a = table.assembly;
+  const principal = (b) => {
+    const p = table.principal[b];
+    return `${b}: ${fmt(p.plane[0], 4)}, ${fmt(p.plane[1], 4)} in the xz plane (first axis ${fmt(p.angle * 180 / Math.PI, 3)} deg from x)` +
+      (p.yy === null ? "" : `, Iyy ${fmt(p.yy, 4)}`);
+  };
   $("assembly").textContent = `Front assembly H + F: mass ${fmt(a.mass, 4)} +/- ${fmt(a.mass_sigma, 2)} kg, ` +
-    `moment of inertia about the steer axis ${fmt(a.I_steer_axis, 4)} +/- ${fmt(a.I_steer_axis_sigma, 2)} kg m^2 (first order)`;
+    `moment of inertia about the steer axis ${fmt(a.I_steer_axis, 4)} +/- ${fmt(a.I_steer_axis_sigma, 2)} kg m^2 (first order). ` +
+    `Principal moments [kg m^2] of ${principal("B")}; of ${principal("H")}.`;
 }
 
 function onEdit(event) {
