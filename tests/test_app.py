@@ -116,8 +116,12 @@ def test_each_input_change_runs_each_computation_once(app, browser_jason):
     request = {"cells": bicycle.cells_of(browser_jason.parameters), "speed": 5.0, "map": {"x": "c"}}
     first = app.update(request).data()
     assert first["ok"]
-    everything = {name: 1 for name in dynamics.COMPUTATIONS if name != "closed_loop"}  # no gains given
-    assert dict(app.dynamics.calls) == everything
+    everything = {name: 1 for name in ("eigenvalues", "uncertainty", "side_view", "bode", "map")}
+    assert dict(app.dynamics.calls) == everything  # no closed loop without gains, no Monte Carlo yet
+    for _ in range(2):  # the Monte Carlo sigmas, asked for apart: once
+        assert app.monte_carlo(request).data()["monte_carlo"]["samples"] == dynamics.MONTE_CARLO_SAMPLES
+    assert dict(app.dynamics.calls) == {**everything, "monte_carlo": 1}
+    app.dynamics.calls.pop("monte_carlo")
     app.update(request)  # the same page again: nothing runs
     assert dict(app.dynamics.calls) == everything
     app.update({**request, "speed": 6.0})  # a new speed: the Bode diagram alone
@@ -168,8 +172,12 @@ def test_the_figures_data_agree_with_the_model(app, browser_jason):
     assert reply["eigenvalues"]["weave"] == pytest.approx(critical.weave)
     assert reply["eigenvalues"]["capsize"] == pytest.approx(critical.capsize)
     assert reply["eigenvalues"]["speeds"][1] == pytest.approx(0.1) and len(reply["eigenvalues"]["speeds"]) == 101
-    sigma = reply["uncertainty"]["speeds"]["weave"]
-    assert 0 < sigma["monte_carlo"] < 1 and sigma["first_order"] == pytest.approx(sigma["monte_carlo"], rel=0.2)
+    first_order = reply["uncertainty"]["speeds"]["weave"]
+    sigma = app.monte_carlo({"cells": bicycle.cells_of(browser_jason.parameters)}).data()["monte_carlo"]["speeds"][
+        "weave"
+    ]
+    assert sigma["first_order"] == pytest.approx(first_order, rel=1e-9)
+    assert 0 < sigma["monte_carlo"] < 1 and sigma["monte_carlo"] == pytest.approx(first_order, rel=0.2)
     band = reply["uncertainty"]["band"]["weave"]
     assert any(s is not None and s > 0 for s in band["sigma_real"])
     assert reply["map"] is None and reply["bode"]["speed"] == 5.0

@@ -135,6 +135,9 @@ def test_the_page_in_a_browser(server, browser, shots):
     after = dict(app.dynamics.calls)
     for name in ("eigenvalues", "uncertainty", "side_view", "bode", "map"):
         assert after[name] - before.get(name, 0) == edits, (name, before, after)
+    # The Monte Carlo sigmas of the speeds follow once the edits pause: at most once per edit.
+    _wait(lambda: "Monte Carlo, 2000 draws" in browser.find_element(By.ID, "speeds").text, 20, "the Monte Carlo sigmas")
+    assert 1 <= app.dynamics.calls["monte_carlo"] - before.get("monte_carlo", 0) <= edits
     latencies = _latencies(browser)[n:]
     breakdown = browser.execute_script("return window.bikerider.breakdown.slice()")[n:]
     p95 = statistics.quantiles(latencies, n=20)[-1]

@@ -7,9 +7,10 @@ computation once, a new speed runs the Bode diagram alone, and :attr:`Dynamics.c
 runs (the tests hold the page to it).  Speeds are those of the issue's target: 0 to 10 m/s in steps
 of 0.1 m/s (:data:`SPEEDS`).  The eigenvalues come from the package's NumPy functions
 (:func:`~bikerider.benchmark.mode_shapes.mode_shapes`, which tracks each mode over speed), the
-uncertainty band from :func:`~bikerider.uncertainty.propagate` (first order) and the weave and
-capsize speeds' sigmas from :func:`~bikerider.uncertainty.headline.headline_uncertainty`
-(Monte Carlo, :data:`MONTE_CARLO_SAMPLES` draws so that an edit stays fast, first order beside).
+uncertainty band and the first-order sigmas of the weave and capsize speeds from
+:func:`~bikerider.uncertainty.propagate`, and their Monte Carlo sigmas from
+:func:`~bikerider.uncertainty.headline.headline_uncertainty` (:data:`MONTE_CARLO_SAMPLES` draws),
+which the page asks for apart, once the edits pause, so that the figures follow an edit at once.
 """
 
 from __future__ import annotations
@@ -37,8 +38,8 @@ from bikerider.uncertainty.headline import headline_uncertainty
 SPEEDS = np.round(np.arange(101) * 0.1, 10)
 """Speeds of the eigenvalue figure and the maps [m/s]: 0 to 10 in steps of 0.1."""
 MONTE_CARLO_SAMPLES = 2000
-"""Draws behind the page's sigmas of the weave and capsize speeds (``estimate`` draws 10,000; the
-downloads say how many)."""
+"""Seeded draws behind the page's Monte Carlo sigmas of the weave and capsize speeds (``estimate``
+draws 10,000; the page says how many)."""
 FREQUENCIES = np.logspace(-1, 2, 160)
 """Angular frequencies of the Bode diagram [rad/s]."""
 MAP_POINTS = {1: 41, 2: 25}
@@ -87,11 +88,9 @@ def tracked_modes(parameters: BenchmarkParameters) -> dict:
 
 
 def uncertainty(parameters: BenchmarkParameters) -> dict:
-    """The one-sigma band of each labelled mode (first order, at :data:`SPEEDS`) and the sigmas of the
-    weave and capsize speeds (Monte Carlo, first order beside)."""
-    inputs = benchmark_inputs(parameters)
-    first_order = propagate(inputs, speeds=SPEEDS)
-    headline = headline_uncertainty(inputs, first_order, samples=MONTE_CARLO_SAMPLES, seed=0)
+    """The one-sigma band of each labelled mode and the sigmas of the weave and capsize speeds,
+    first order (at :data:`SPEEDS`)."""
+    first_order = propagate(benchmark_inputs(parameters), speeds=SPEEDS)
     band = {}
     e = first_order.eigenvalues
     if e is not None:
@@ -109,6 +108,16 @@ def uncertainty(parameters: BenchmarkParameters) -> dict:
                 "sigma_real": _list(np.where(has, e.sigma_real[rows, index], np.nan)),
                 "sigma_imag": _list(np.where(has, e.sigma_imag[rows, index], np.nan)),
             }
+    speeds = {name: (None if sigma is None else _finite(sigma)) for name, sigma in first_order.speeds.items()}
+    return {"band": band, "speeds": speeds, "notes": list(first_order.notes)}
+
+
+def monte_carlo(parameters: BenchmarkParameters) -> dict:
+    """The sigmas of the weave and capsize speeds from :data:`MONTE_CARLO_SAMPLES` seeded draws
+    (:func:`~bikerider.uncertainty.headline.headline_uncertainty`: half the central 68 % of the
+    samples, the interval, and the first order beside)."""
+    inputs = benchmark_inputs(parameters)
+    headline = headline_uncertainty(inputs, propagate(inputs), samples=MONTE_CARLO_SAMPLES, seed=0)
     speeds = {}
     for name, sigma in headline.speeds.items():
         speeds[name] = {
@@ -117,12 +126,7 @@ def uncertainty(parameters: BenchmarkParameters) -> dict:
             "interval": [_finite(x) for x in sigma.interval] if sigma.interval is not None else None,
             "valid": sigma.valid,
         }
-    return {
-        "band": band,
-        "speeds": speeds,
-        "samples": headline.samples,
-        "notes": [*first_order.notes, *headline.notes],
-    }
+    return {"speeds": speeds, "samples": headline.samples, "notes": list(headline.notes)}
 
 
 def side_view(parameters: BenchmarkParameters) -> dict:
@@ -288,6 +292,7 @@ COMPUTATIONS: dict[str, Callable] = {
     "bode": bode,
     "map": stability_map,
     "closed_loop": closed_loop_modes,
+    "monte_carlo": monte_carlo,
 }
 """The computations, by the name of the figure they feed."""
 
@@ -298,12 +303,12 @@ class Dynamics:
     def __init__(self) -> None:
         self.calls: Counter[str] = Counter()
         self._cache: dict[str, OrderedDict] = {name: OrderedDict() for name in COMPUTATIONS}
-        self._lock = threading.Lock()
+        self._locks = {name: threading.Lock() for name in COMPUTATIONS}  # one run of each at a time
 
     def result(self, name: str, parameters: BenchmarkParameters, *extra) -> tuple[dict, float]:
         """The result of computation ``name`` and the seconds it took (0 when kept from before)."""
         key = (parameters_key(parameters), *extra)
-        with self._lock:
+        with self._locks[name]:
             cache = self._cache[name]
             if key in cache:
                 cache.move_to_end(key)
@@ -318,7 +323,9 @@ class Dynamics:
 
     def all(self, parameters: BenchmarkParameters, speed: float, axes, gains=None) -> tuple[dict, dict]:
         """Every figure's data for one state of the page (no map without ``axes``, no closed loop
-        without ``gains``), and the milliseconds each took."""
+        without ``gains``), and the milliseconds each took.  The Monte Carlo sigmas of the speeds
+        are not among them: the page asks for them once the edits pause (``monte_carlo``), and
+        shows the first-order sigmas meanwhile."""
         out, timing = {}, {}
         for name, extra in (
             ("eigenvalues", ()),
@@ -352,6 +359,7 @@ __all__ = [
     "check_map",
     "closed_loop_modes",
     "map_sweep",
+    "monte_carlo",
     "side_view",
     "stability_map",
     "tracked_modes",

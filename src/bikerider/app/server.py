@@ -151,6 +151,14 @@ class App:
         out["map_axes"] = [list(a) for a in axes] if axes else None
         return Reply.json(out)
 
+    def monte_carlo(self, request: dict) -> Reply:
+        """The Monte Carlo sigmas of the weave and capsize speeds of the table (once edits pause)."""
+        edit = self._parameters(request)
+        if edit.parameters is None:
+            return Reply.json(edit.as_dict())
+        result, seconds = self.dynamics.result("monte_carlo", edit.parameters)
+        return Reply.json({"ok": True, "monte_carlo": result, "timing": {"monte_carlo": round(1000 * seconds, 2)}})
+
     # -- downloads --------------------------------------------------------------------------------
     def _valid(self, request: dict):
         edit = self._parameters(request)
@@ -226,6 +234,7 @@ ROUTES_POST = {
     "/api/bicycle/shipped": App.load_shipped,
     "/api/bicycle/files": App.load_files,
     "/api/update": App.update,
+    "/api/monte_carlo": App.monte_carlo,
     "/api/download": App.download,
     "/api/upload/new": App.new_upload,
     "/api/gap/run": App.gap_run,

@@ -2,7 +2,7 @@
 "use strict";
 
 const state = { cells: null, steerEdit: null, name: "bicycle", speed: 5.0, map: { x: "c", y: "" }, gains: null, last: null,
-  pending: null, busy: false, latencies: [], breakdown: [], gapFolder: null, gapJob: null };
+  pending: null, busy: false, latencies: [], breakdown: [], sequence: 0, mcTimer: null, mcDone: 0, gapFolder: null, gapJob: null };
 window.bikerider = state;  // the browser test reads state.latencies
 
 const COLOURS = { weave: "#1f77b4", capsize: "#d62728", castor: "#2ca02c", other: "#7f7f7f" };
@@ -148,15 +148,37 @@ function drawEigen(e, u) {
   el("text", { x: 512, y: 121 }, svg, "one sigma (first order)");
 }
 
-function drawSpeeds(e, u) {
-  const s = (u && u.speeds) || {};
+// The speeds with their sigmas: first order at once, the Monte Carlo sigmas (mc) once edits pause.
+function drawSpeeds(e, u, mc) {
+  const first = (u && u.speeds) || {}, sampled = (mc && mc.speeds) || {};
   const one = (key) => {
     if (e[key] === null) return `${key}: none`;
-    const m = s[key] || {};
+    if (!mc) return `${key} ${fmt(e[key], 4)} +/- ${fmt(first[key], 2)} m/s (first order; Monte Carlo follows)`;
+    const m = sampled[key] || {};
     return `${key} ${fmt(e[key], 4)} +/- ${fmt(m.monte_carlo, 2)} m/s (first order +/- ${fmt(m.first_order, 2)})`;
   };
   const intervals = e.stable_intervals.map(([a, b]) => `${fmt(a, 3)}-${b === null ? "inf" : fmt(b, 3)}`).join(", ") || "none";
-  $("speeds").textContent = `${one("weave")};  ${one("capsize")};  self-stable ${intervals} m/s;  sigmas: Monte Carlo, ${u ? u.samples : 0} draws`;
+  $("speeds").textContent = `${one("weave")};  ${one("capsize")};  self-stable ${intervals} m/s` +
+    (mc ? `;  sigmas: Monte Carlo, ${mc.samples} draws` : "");
+}
+
+// The Monte Carlo sigmas of the latest valid table, asked for once no edit came for a while.
+const MONTE_CARLO_PAUSE_MS = 400;
+function scheduleMonteCarlo(data) {
+  clearTimeout(state.mcTimer);
+  const sequence = state.sequence;
+  state.mcTimer = setTimeout(async () => {
+    if (state.busy || state.pending || sequence !== state.sequence) return;
+    try {
+      const reply = await api("/api/monte_carlo", { cells: data.cells });
+      if (sequence === state.sequence && reply.ok) {
+        state.mcDone += 1;
+        drawSpeeds(data.eigenvalues, data.uncertainty, reply.monte_carlo);
+      }
+    } catch (err) {
+      $("status").textContent = `error: ${err.message}`;
+    }
+  }, MONTE_CARLO_PAUSE_MS);
 }
 
 function drawSide(s) {
@@ -422,7 +444,9 @@ function render(data) {
   refreshTable(data.errors, data.notes);
   buildSteer(data.table);
   drawEigen(data.eigenvalues, data.uncertainty);
-  drawSpeeds(data.eigenvalues, data.uncertainty);
+  state.sequence += 1;
+  drawSpeeds(data.eigenvalues, data.uncertainty, null);
+  scheduleMonteCarlo(data);
   drawSide(data.side_view);
   drawModes(data.eigenvalues, data.speed);
   drawBode(data.bode);
