@@ -4,7 +4,7 @@ VENV ?= .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: setup demo test derive bench docs clean
+.PHONY: setup demo serve test derive bench docs clean
 
 # The editable install of this layout (generated/ mapped into the package) goes through a meta path
 # finder, after which setuptools always prints an informational "Editable installation" notice about
@@ -22,6 +22,10 @@ demo: $(STAMP)
 	$(VENV)/bin/bikerider estimate
 	@echo
 	@echo "bikerider is installed in $(VENV): run $(VENV)/bin/bikerider --help, or . $(VENV)/bin/activate to put it on the PATH"
+
+## serve: the local web page at http://127.0.0.1:8050/ (bikerider serve; docs/app.md); Ctrl+C stops it
+serve: $(STAMP)
+	$(VENV)/bin/bikerider serve
 
 ## test: lint and format check (ruff, pyproject.toml's settings), then the full test suite
 test: $(STAMP)

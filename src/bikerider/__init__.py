@@ -18,7 +18,9 @@ Dynamics toolbox (:mod:`bikerider.benchmark`, ``docs/dynamics.md``); one bicycle
     (:class:`ModeShapes`), :func:`simulate` (:class:`Simulation`), :func:`frequency_response`
     (:class:`FrequencyResponse`), :func:`stability_batch` (the stable intervals of many bicycles;
     one bicycle's: ``WhippleModel.stability()``), :func:`sweep` and :func:`stability_map`
-    (:class:`Sweep`).  Figures: :mod:`bikerider.plotting`.
+    (:class:`Sweep`); :func:`closed_loop` (:class:`ClosedLoopModel`: a :class:`ControlLaw` of
+    :class:`GainSchedule` gains on the steer torque applied to a model), :func:`lqr_gains`,
+    :func:`lqr_law`.  Figures: :mod:`bikerider.plotting`.
 Design spaces at scale (:mod:`bikerider.design`, ``docs/design_space.md``)
     :func:`design_grid`, :func:`random_designs`, :func:`design_monte_carlo` (a
     :class:`DesignSpace`), :func:`explore` (run one, chunked and resumable, into a store),
@@ -82,6 +84,12 @@ _EXPORTS = {  # public name: "module" (the same name there) or "module:name"
     "FrequencyResponse": "bikerider.benchmark.frequency_response",
     "stability_batch": "bikerider.benchmark.stability",
     "StabilityBatch": "bikerider.benchmark.stability",
+    "closed_loop": "bikerider.benchmark.closed_loop",
+    "ClosedLoopModel": "bikerider.benchmark.closed_loop",
+    "lqr_gains": "bikerider.benchmark.closed_loop",
+    "lqr_law": "bikerider.benchmark.closed_loop",
+    "ControlLaw": "bikerider.benchmark.control",
+    "GainSchedule": "bikerider.benchmark.control",
     "sweep": "bikerider.benchmark.sweep",
     "stability_map": "bikerider.benchmark.sweep",
     "Sweep": "bikerider.benchmark.sweep",

@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from bikerider.benchmark.closed_loop import closed_loop_matrix
 from bikerider.errors import InputError
 from bikerider.gap.control import GAIN_NAMES  # noqa: F401  (the order of the gain arrays)
 from bikerider.generated import gap_effects as gen
@@ -106,12 +107,8 @@ class StateSpace:
         gains = np.asarray(gains, dtype=float)
         if not np.any(gains):
             return self.A
-        n = self.A.shape[-1]
-        row = np.zeros(np.broadcast_shapes(gains.shape[:-1], self.A.shape[:-2]) + (1, n))
         phi, delta, phid, deltad = self.outputs
-        for k, index in enumerate((phi, phid, delta, deltad)):  # the order of GAIN_NAMES
-            row[..., 0, index] = gains[..., k]
-        return self.A + self.B[..., :, 1:2] @ row
+        return closed_loop_matrix(self.A, self.B[..., :, 1], gains, (phi, phid, delta, deltad))  # GAIN_NAMES order
 
 
 def _as_float(value) -> np.ndarray:

@@ -2,13 +2,16 @@
 
 from __future__ import annotations
 
+import json
 import math
 from pathlib import Path
 
 from bikerider.benchmark import BENCHMARK_NAMES, BenchmarkParameters
 from bikerider.benchmark.parameters import check_mass_matrix, uncertainty_notes
-from bikerider.errors import MISSING, ErrorCollector, InputError
+from bikerider.errors import MISSING, ErrorCollector, FileFormatError, InputError
 from bikerider.io.bicycleparameters import read_benchmark_file
+from bikerider.io.export import JSON_FORMAT
+from bikerider.io.input_file import read_input_text
 from bikerider.io.toml_input import read_toml
 from bikerider.notes import note
 from bikerider.quantity import DEG, Quantity, parse_quantity
@@ -24,6 +27,8 @@ def load_benchmark_parameters(path: str | Path) -> BenchmarkParameters:
     """Benchmark parameters from ``path``.
 
     TOML: the Meijaard names at top level or under ``[benchmark]``; ``lam_deg`` may replace ``lam``.
+    JSON: the document :func:`bikerider.io.export.parameters_to_json` writes (``values`` and
+    ``sigmas`` by Meijaard name, SI units).
     Text: one ``name = value+/-sigma`` per line (BicycleParameters ``<Name>Benchmark.txt``), read by
     :func:`bikerider.io.bicycleparameters.read_benchmark_file`, which explains what it does with the
     extra entries BicycleParameters writes.
@@ -34,6 +39,8 @@ def load_benchmark_parameters(path: str | Path) -> BenchmarkParameters:
         An unreadable file; unknown tables or names, ``lam`` beside ``lam_deg``, missing or
         impossible values: every one of them at once.
     """
+    if Path(path).suffix.lower() == ".json":
+        return read_parameters_json(path)
     if Path(path).suffix.lower() == ".toml":
         data = read_toml(path)
         if "benchmark" not in data:
@@ -59,6 +66,42 @@ def load_benchmark_parameters(path: str | Path) -> BenchmarkParameters:
         errors.raise_any()
         return parameters  # type: ignore[return-value]
     return read_benchmark_file(path).parameters
+
+
+def read_parameters_json(path: str | Path) -> BenchmarkParameters:
+    """Benchmark parameters from the JSON :func:`bikerider.io.export.parameters_to_json` writes.
+
+    Raises
+    ------
+    FileFormatError, InputError
+        Not JSON, not that document, or values no bicycle can have (every one at once).
+    """
+    text = read_input_text(path)
+    try:
+        document = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise FileFormatError(str(path), f"not JSON: {exc.msg}", exc.lineno) from None
+    if not isinstance(document, dict) or document.get("format") != JSON_FORMAT:
+        raise FileFormatError(
+            str(path),
+            f'not a parameter file: expected a JSON object with "format": "{JSON_FORMAT}" (bikerider convert)',
+        )
+    values, sigmas = document.get("values"), document.get("sigmas", {})
+    if not isinstance(values, dict) or not isinstance(sigmas, dict):
+        raise FileFormatError(str(path), 'expected "values" and "sigmas" objects of benchmark names')
+    errors = ErrorCollector()
+    table: dict[str, object] = {}
+    for key in sorted(set(sigmas) - set(values)):
+        errors.add(InputError(f"sigmas.{key}", sigmas[key], "a sigma of a name in values", str(path)))
+    for key, value in values.items():
+        if value is None:
+            continue
+        table[key] = {"value": value, "sigma": sigmas.get(key, 0.0)}
+    parameters = None
+    with errors.check():
+        parameters = parameters_from_table(table, str(path))
+    errors.raise_any()
+    return parameters  # type: ignore[return-value]
 
 
 def parameters_from_table(table: object, source: str) -> BenchmarkParameters:
