@@ -12,6 +12,10 @@ LONG_WORK_ROWS = 1000
 """Eigenvalue rows and records from which the command says, before it starts, that the work takes minutes."""
 
 
+DEFAULT_REPEATS = 10
+"""Runs per planned experiment of ``--next`` without ``--next-repeats``."""
+
+
 def add_parser(subparsers) -> None:
     p = subparsers.add_parser(
         "gap",
@@ -304,11 +308,12 @@ def _plan(args: argparse.Namespace, diagnosis):
         except ValueError:
             raise InputError("--next-noise", item, "SIGNAL=SD, e.g. steer_rate=0.02") from None
     rivals = [r.strip() for r in args.next_between.split(",")] if args.next_between else None
+    repeats = DEFAULT_REPEATS if args.next_repeats is None else args.next_repeats
     return plan_next(
         diagnosis,
         rivals=rivals,
         speeds=speeds,
-        repeats=10 if args.next_repeats is None else args.next_repeats,
+        repeats=repeats,
         noise=noise or None,
         sweeps=not args.next_no_sweeps,
         torque=torque,
