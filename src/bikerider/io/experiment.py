@@ -75,8 +75,9 @@ from bikerider.gap.records import (
 from bikerider.io.input_file import checked_input_file
 
 MAX_LOG_BYTES = 200_000_000
-"""Largest log, manifest or windows file read [bytes, unpacked]: hours of a 100 Hz log with a dozen
-columns (the project's eight SBW logs are about 0.7 MB each); a larger file is refused with its size."""
+"""Largest log or windows file (CSV manifest) read [bytes, unpacked]: hours of a 100 Hz log with a
+dozen columns (the project's eight SBW logs are about 0.7 MB each); a larger file is refused with its
+size.  A TOML manifest is a TOML file: at most 1 MiB (:data:`bikerider.io.input_file.TEXT_LIMIT`)."""
 MAX_RECORDS = 5_000
 """Most records of one run (all manifests' windows and detected decays together): each is fitted on
 every fold, about 30-40 ms and 0.15 MB a record (4,000 records took 129 s and 0.68 GB), so a larger
@@ -321,8 +322,8 @@ def read_manifest(path: str | Path) -> tuple[ExperimentSettings, list[Window]]:
     from bikerider.io.toml_input import read_toml
 
     path = Path(path)
-    text = read_text(path)  # checks the path first: a regular file of a readable size
-    data = read_toml(path)
+    data = read_toml(path)  # checks the path first: a regular file of at most 1 MiB, as every TOML file
+    text = read_text(path)
 
     def where(key: str, after: int = 0) -> str:
         line = _line_of(text, rf"^\s*\[*\s*{re.escape(key)}\b", after)
