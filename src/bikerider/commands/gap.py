@@ -191,6 +191,7 @@ def run(args: argparse.Namespace) -> int:
         )
     if args.speed is not None and not (0 < args.speed <= MAX_MAGNITUDE):  # also NaN
         raise InputError("--speed", args.speed, f"a positive speed of at most {MAX_MAGNITUDE:g} m/s (check the units)")
+    next_options = _next_options(args)  # checked before the work, as every option
     if report_folder is not None and args.experiment:
         _register_experiment_inputs(args)  # the logs and windows files the manifests name
         report_folder.check()
@@ -208,7 +209,11 @@ def run(args: argparse.Namespace) -> int:
         args.sample_rate,
     )
     result = diagnosis.as_dict()
-    plan = _plan(args, diagnosis)
+    plan = None
+    if next_options is not None:
+        from bikerider.gap.next_experiment import plan_next
+
+        plan = plan_next(diagnosis, **next_options)
     if plan is not None:
         result["next"] = plan.as_dict()
     if report_folder is not None:
@@ -245,8 +250,9 @@ def _register_experiment_inputs(args: argparse.Namespace) -> None:
         add_inputs(experiment_files(*read_experiment(path, args.columns, args.sample_rate, laws)))
 
 
-def _plan(args: argparse.Namespace, diagnosis):
-    """The next-experiment plan the options ask for (``None`` without ``--next``)."""
+def _next_options(args: argparse.Namespace) -> dict | None:
+    """The arguments of :func:`~bikerider.gap.next_experiment.plan_next` the ``--next`` options give,
+    checked before the diagnosis (``None`` without ``--next``)."""
     import math
 
     import numpy as np
@@ -267,7 +273,7 @@ def _plan(args: argparse.Namespace, diagnosis):
                 raise InputError("--" + option.replace("_", "-"), getattr(args, option), "--next as well")
         return None
     from bikerider.gap.control import MAX_MAGNITUDE
-    from bikerider.gap.next_experiment import plan_next
+    from bikerider.gap.next_experiment import MAX_NOISE
     from bikerider.gap.next_sweep import DEFAULT_RUN_TIME, DEFAULT_TORQUE, MAX_TORQUE, MIN_TORQUE, RUN_TIME_RANGE
 
     torque = DEFAULT_TORQUE if args.next_torque is None else args.next_torque
@@ -307,18 +313,21 @@ def _plan(args: argparse.Namespace, diagnosis):
             noise[name.strip()] = float(value)
         except ValueError:
             raise InputError("--next-noise", item, "SIGNAL=SD, e.g. steer_rate=0.02") from None
+        if not 0 < noise[name.strip()] <= MAX_NOISE:  # also NaN
+            raise InputError(
+                "--next-noise", item, f"a positive standard deviation of at most {MAX_NOISE:g} (rad or rad/s)"
+            )
     rivals = [r.strip() for r in args.next_between.split(",")] if args.next_between else None
     repeats = DEFAULT_REPEATS if args.next_repeats is None else args.next_repeats
-    return plan_next(
-        diagnosis,
-        rivals=rivals,
-        speeds=speeds,
-        repeats=repeats,
-        noise=noise or None,
-        sweeps=not args.next_no_sweeps,
-        torque=torque,
-        run_time=run_time,
-    )
+    return {
+        "rivals": rivals,
+        "speeds": speeds,
+        "repeats": repeats,
+        "noise": noise or None,
+        "sweeps": not args.next_no_sweeps,
+        "torque": torque,
+        "run_time": run_time,
+    }
 
 
 def diagnose_files(
