@@ -189,7 +189,7 @@ def _unused_inputs_note(result, given: str) -> None:
         if name in BENCHMARK_NAMES:  # IByy, IHyy: part of every benchmark set, unused by the linear model
             continue
         rows = [i for i, out in enumerate(result.output_names) if out != name]
-        if not np.any(jacobian[rows, j]):
+        if not np.any(np.abs(jacobian[rows, j]) > 0):  # NaN (an output not defined here) is no dependence
             unused.append(name)
     if unused:
         note(f"{given}: {', '.join(unused)}: no output depends on them (the other values given replace what they feed)")
