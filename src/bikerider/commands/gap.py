@@ -171,7 +171,7 @@ def run(args: argparse.Namespace) -> int:
     from bikerider.errors import InputError
     from bikerider.gap.control import MAX_MAGNITUDE
     from bikerider.gap.report import summary_text
-    from bikerider.io.experiment import MAX_SAMPLE_RATE
+    from bikerider.io.experiment import check_sample_rate
     from bikerider.io.output_guard import ReportFolder, folder_output
 
     report_folder = ReportFolder(folder_output("--report", args.report)) if args.report is not None else None
@@ -183,12 +183,8 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(
             "--data/--experiment", "missing", "data files (--data) or a manifest of records (--experiment)"
         )
-    if args.sample_rate is not None and not (
-        math.isfinite(args.sample_rate) and 0 < args.sample_rate <= MAX_SAMPLE_RATE
-    ):
-        raise InputError(
-            "--sample-rate", args.sample_rate, f"a positive sampling rate [Hz] of at most {MAX_SAMPLE_RATE:g}"
-        )
+    if args.sample_rate is not None:
+        check_sample_rate(args.sample_rate, "--sample-rate")
     if args.speed is not None and not (0 < args.speed <= MAX_MAGNITUDE):  # also NaN
         raise InputError("--speed", args.speed, f"a positive speed of at most {MAX_MAGNITUDE:g} m/s (check the units)")
     next_options = _next_options(args)  # checked before the work, as every option

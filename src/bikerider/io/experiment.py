@@ -83,9 +83,10 @@ MAX_RECORDS = 5_000
 every fold, about 30-40 ms and 0.15 MB a record (4,000 records took 129 s and 0.68 GB), so a larger
 set is refused with its count rather than left running for many minutes; free-decay experiments hold
 tens to hundreds.  A manifest that repeats one window many times is almost surely a mistake."""
-MAX_SAMPLE_RATE = 1e6
-"""Highest sampling rate [Hz] of a log: far above any data logger on a bicycle (100 Hz to a few kHz);
-a larger number is a typing or unit slip (and would overflow the sample counts of the windows)."""
+SAMPLE_RATES = (1e-3, 1e6)
+"""Sampling rates [Hz] of a log: far beyond any data logger on a bicycle (100 Hz to a few kHz) either
+way; a rate outside is a typing or unit slip (1e308 overflows the sample counts of the windows, a
+denormal such as 5e-324 the sample times)."""
 MAX_DETECTOR = {
     "threshold": 1e6,
     "min_rate": MAX_MAGNITUDE,
@@ -264,12 +265,8 @@ class ExperimentSettings:
             raise InputError("columns.roll_rate", "missing", "the log column of the roll rate", where)
         if "time" not in self.columns and self.sample_rate is None:
             raise InputError("sample_rate", "missing", "a sampling rate [Hz] or a time column (columns.time)", where)
-        if self.sample_rate is not None and not (
-            math.isfinite(self.sample_rate) and 0 < self.sample_rate <= MAX_SAMPLE_RATE
-        ):
-            raise InputError(
-                "sample_rate", self.sample_rate, f"a positive sampling rate [Hz] of at most {MAX_SAMPLE_RATE:g}", where
-            )
+        if self.sample_rate is not None:
+            check_sample_rate(self.sample_rate, "sample_rate", where)
         check_delimiter(self.delimiter, where)
         if self.speed_source not in SPEED_SOURCES:
             raise InputError("speed.source", self.speed_source, "one of " + ", ".join(SPEED_SOURCES), where)
@@ -741,6 +738,13 @@ def check_delimiter(value: str, where: str | None = None) -> str:
             where,
         )
     return value
+
+
+def check_sample_rate(rate: float, name: str, where: str | None = None) -> None:
+    """A sampling rate within :data:`SAMPLE_RATES` (``name``: the option or key, for the message)."""
+    low, high = SAMPLE_RATES
+    if not (math.isfinite(rate) and low <= rate <= high):  # also NaN
+        raise InputError(name, rate, f"a sampling rate from {low:g} to {high:g} Hz", where)
 
 
 def check_record_count(count: int, where: str) -> None:
