@@ -23,7 +23,8 @@ COMMANDS = ("estimate", "benchmark", "sweep", "period", "batch", "sensitivity", 
 INPUT_OPTIONS = ("file", "files", "bicycle", "rider", "inputs", "model", "data", "experiment", "control", "measured")
 """Argument destinations that name files a command reads: the run's inputs, which no output of the
 run may overwrite (``bikerider.io.output_guard``; a command adds the files it finds in an input
-folder itself)."""
+folder itself).  A command whose ``--bicycle``/``--rider`` name shipped data lists them in its
+``shipped_names`` default: those are names, not files."""
 
 LOG = logging.getLogger("bikerider")
 
@@ -52,7 +53,10 @@ def build_parser() -> argparse.ArgumentParser:
 def input_paths(args: argparse.Namespace) -> list[str]:
     """The files named by the options of :data:`INPUT_OPTIONS` (single values or lists)."""
     out: list[str] = []
+    shipped = getattr(args, "shipped_names", ())  # `--bicycle Browser` of benchmark and sweep: a name, not a file
     for dest in INPUT_OPTIONS:
+        if dest in shipped:
+            continue
         value = getattr(args, dest, None)
         values = value if isinstance(value, (list, tuple)) else [value]
         out.extend(os.fspath(v) for v in values if isinstance(v, (str, os.PathLike)) and os.fspath(v))

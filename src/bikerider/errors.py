@@ -102,8 +102,13 @@ class ErrorCollector:
         return _Keeper(self)
 
     def add(self, error: InputError) -> None:
-        """Keep ``error`` (each of them, for :class:`InputErrors`)."""
-        self.errors.extend(error.errors if isinstance(error, InputErrors) else [error])
+        """Keep ``error`` (each of them, for :class:`InputErrors`); an error already kept, word for
+        word (one value that several checks depend on, such as a pendulum's stiffness), once."""
+        seen = {str(e) for e in self.errors}
+        for e in error.errors if isinstance(error, InputErrors) else [error]:
+            if str(e) not in seen:
+                seen.add(str(e))
+                self.errors.append(e)
 
     def raise_any(self) -> None:
         """Raise what was collected: nothing, the one error, or :class:`InputErrors`."""

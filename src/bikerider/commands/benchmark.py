@@ -58,6 +58,8 @@ def add_shipped_options(p) -> None:
         help=f"a shipped bicycle instead of FILE: {', '.join(BICYCLES)} (BicycleParameters data)",
     )
     p.add_argument("--rider", metavar="NAME", help=f"with --bicycle: seat a shipped rider on it ({', '.join(RIDERS)})")
+    # Their values are names of data shipped with bikerider, not files: never inputs an output could overwrite.
+    p.set_defaults(shipped_names=("bicycle", "rider"))
 
 
 def load_parameters(args: argparse.Namespace):

@@ -12,6 +12,10 @@ LONG_WORK_ROWS = 1000
 """Eigenvalue rows and records from which the command says, before it starts, that the work takes minutes."""
 
 
+DEFAULT_REPEATS = 10
+"""Runs per planned experiment of ``--next`` without ``--next-repeats``."""
+
+
 def add_parser(subparsers) -> None:
     p = subparsers.add_parser(
         "gap",
@@ -112,7 +116,7 @@ def add_parser(subparsers) -> None:
         "--next-repeats",
         metavar="N",
         type=int,
-        default=10,
+        default=None,
         help="with --next: runs (decays or multisines) per experiment the plan is ranked for (default 10)",
     )
     p.add_argument(
@@ -167,6 +171,7 @@ def run(args: argparse.Namespace) -> int:
     from bikerider.errors import InputError
     from bikerider.gap.control import MAX_MAGNITUDE
     from bikerider.gap.report import summary_text
+    from bikerider.io.experiment import check_sample_rate
     from bikerider.io.output_guard import ReportFolder, folder_output
 
     report_folder = ReportFolder(folder_output("--report", args.report)) if args.report is not None else None
@@ -178,10 +183,14 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(
             "--data/--experiment", "missing", "data files (--data) or a manifest of records (--experiment)"
         )
-    if args.sample_rate is not None and not (math.isfinite(args.sample_rate) and args.sample_rate > 0):
-        raise InputError("--sample-rate", args.sample_rate, "a positive sampling rate [Hz]")
+    if args.sample_rate is not None:
+        check_sample_rate(args.sample_rate, "--sample-rate")
     if args.speed is not None and not (0 < args.speed <= MAX_MAGNITUDE):  # also NaN
         raise InputError("--speed", args.speed, f"a positive speed of at most {MAX_MAGNITUDE:g} m/s (check the units)")
+    next_options = _next_options(args)  # checked before the work, as every option
+    if report_folder is not None and args.experiment:
+        _register_experiment_inputs(args)  # the logs and windows files the manifests name
+        report_folder.check()
     diagnosis = _diagnose_files(
         args.model,
         tuple(args.data),
@@ -196,7 +205,11 @@ def run(args: argparse.Namespace) -> int:
         args.sample_rate,
     )
     result = diagnosis.as_dict()
-    plan = _plan(args, diagnosis)
+    plan = None
+    if next_options is not None:
+        from bikerider.gap.next_experiment import plan_next
+
+        plan = plan_next(diagnosis, **next_options)
     if plan is not None:
         result["next"] = plan.as_dict()
     if report_folder is not None:
@@ -220,8 +233,22 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _plan(args: argparse.Namespace, diagnosis):
-    """The next-experiment plan the options ask for (``None`` without ``--next``)."""
+def _register_experiment_inputs(args: argparse.Namespace) -> None:
+    """Add the files the manifests name (windows files, logs) to the run's inputs, so that no report
+    folder that holds one of them is replaced (the manifests are read again by the diagnosis: a
+    few kB, milliseconds)."""
+    from bikerider.io import gap_data
+    from bikerider.io.experiment import experiment_files, read_experiment
+    from bikerider.io.output_guard import add_inputs
+
+    laws = gap_data.read_control(args.control) if args.control is not None else {}
+    for path in args.experiment:
+        add_inputs(experiment_files(*read_experiment(path, args.columns, args.sample_rate, laws)))
+
+
+def _next_options(args: argparse.Namespace) -> dict | None:
+    """The arguments of :func:`~bikerider.gap.next_experiment.plan_next` the ``--next`` options give,
+    checked before the diagnosis (``None`` without ``--next``)."""
     import math
 
     import numpy as np
@@ -229,16 +256,25 @@ def _plan(args: argparse.Namespace, diagnosis):
     from bikerider.errors import InputError
 
     if not args.next:
-        for option in ("next_between", "next_speeds", "next_noise", "next_torque", "next_run_time", "next_no_sweeps"):
+        for option in (
+            "next_between",
+            "next_repeats",
+            "next_speeds",
+            "next_noise",
+            "next_torque",
+            "next_run_time",
+            "next_no_sweeps",
+        ):
             if getattr(args, option) not in (None, False):
                 raise InputError("--" + option.replace("_", "-"), getattr(args, option), "--next as well")
         return None
-    from bikerider.gap.next_experiment import plan_next
-    from bikerider.gap.next_sweep import DEFAULT_RUN_TIME, DEFAULT_TORQUE, MAX_TORQUE, RUN_TIME_RANGE
+    from bikerider.gap.control import MAX_MAGNITUDE
+    from bikerider.gap.next_experiment import MAX_NOISE
+    from bikerider.gap.next_sweep import DEFAULT_RUN_TIME, DEFAULT_TORQUE, MAX_TORQUE, MIN_TORQUE, RUN_TIME_RANGE
 
     torque = DEFAULT_TORQUE if args.next_torque is None else args.next_torque
-    if not 0 < torque <= MAX_TORQUE:  # also NaN
-        raise InputError("--next-torque", torque, f"a positive peak steer torque of at most {MAX_TORQUE:g} N m")
+    if not MIN_TORQUE <= torque <= MAX_TORQUE:  # also NaN
+        raise InputError("--next-torque", torque, f"a peak steer torque from {MIN_TORQUE:g} to {MAX_TORQUE:g} N m")
     run_time = DEFAULT_RUN_TIME if args.next_run_time is None else args.next_run_time
     if not RUN_TIME_RANGE[0] <= run_time <= RUN_TIME_RANGE[1]:
         raise InputError(
@@ -252,8 +288,14 @@ def _plan(args: argparse.Namespace, diagnosis):
             numbers = [float(x) for x in parts]
         except ValueError:
             numbers = []
-        if len(numbers) not in (2, 3) or not all(map(math.isfinite, numbers)) or not 0 < numbers[0] < numbers[1]:
-            raise InputError("--next-speeds", args.next_speeds, "LO:HI or LO:HI:N with 0 < LO < HI [m/s]")
+        if (
+            len(numbers) not in (2, 3)
+            or not all(map(math.isfinite, numbers))
+            or not 0 < numbers[0] < numbers[1] <= MAX_MAGNITUDE
+        ):
+            raise InputError(
+                "--next-speeds", args.next_speeds, f"LO:HI or LO:HI:N with 0 < LO < HI <= {MAX_MAGNITUDE:g} [m/s]"
+            )
         count = int(numbers[2]) if len(numbers) == 3 else 12
         if len(numbers) == 3 and (count != numbers[2] or not 2 <= count <= 100):
             raise InputError("--next-speeds", args.next_speeds, "a whole number of speeds N from 2 to 100")
@@ -267,17 +309,21 @@ def _plan(args: argparse.Namespace, diagnosis):
             noise[name.strip()] = float(value)
         except ValueError:
             raise InputError("--next-noise", item, "SIGNAL=SD, e.g. steer_rate=0.02") from None
+        if not 0 < noise[name.strip()] <= MAX_NOISE:  # also NaN
+            raise InputError(
+                "--next-noise", item, f"a positive standard deviation of at most {MAX_NOISE:g} (rad or rad/s)"
+            )
     rivals = [r.strip() for r in args.next_between.split(",")] if args.next_between else None
-    return plan_next(
-        diagnosis,
-        rivals=rivals,
-        speeds=speeds,
-        repeats=args.next_repeats,
-        noise=noise or None,
-        sweeps=not args.next_no_sweeps,
-        torque=torque,
-        run_time=run_time,
-    )
+    repeats = DEFAULT_REPEATS if args.next_repeats is None else args.next_repeats
+    return {
+        "rivals": rivals,
+        "speeds": speeds,
+        "repeats": repeats,
+        "noise": noise or None,
+        "sweeps": not args.next_no_sweeps,
+        "torque": torque,
+        "run_time": run_time,
+    }
 
 
 def diagnose_files(
@@ -336,7 +382,7 @@ def _diagnose_files(
     from bikerider.gap.effects import EFFECT_NAMES, effect
     from bikerider.gap.records import fit_records
     from bikerider.io import gap_data
-    from bikerider.io.experiment import load_records, read_experiment
+    from bikerider.io.experiment import check_record_count, load_records, read_experiment
     from bikerider.io.gap_model import load_model
 
     loaded = load_model(model, rider, rider_rel_sigma=rider_rel_sigma)
@@ -352,9 +398,14 @@ def _diagnose_files(
             records.append(gap_data.read_perturbation(path, speed, default_law))
         else:
             canonical.append(gap_data.read_canonical(path, keep))
+    windows_of = []
     for path in experiment:
-        settings, windows = read_experiment(path, columns, sample_rate, laws)
+        windows_of.append(read_experiment(path, columns, sample_rate, laws))
+    where = ", ".join(map(str, experiment))
+    check_record_count(len(records) + sum(len(w) for _, w in windows_of), where)  # before any log is read
+    for settings, windows in windows_of:
         records += load_records(settings, windows)
+    check_record_count(len(records), where)  # detected decays
     candidates = EFFECT_NAMES
     if effects:
         candidates = tuple(e.strip() for e in effects.split(","))

@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import argparse
+import math
 
 from bikerider.commands import argument_types
 from bikerider.errors import InputError
 from bikerider.generated.manifest import BENCHMARK_NAMES
-from bikerider.quantity import DEG, Quantity
+from bikerider.notes import note
+from bikerider.quantity import DEG, Quantity, check_degrees
 
 EPILOG = """\
 OUTPUT is a benchmark parameter (w, c, lam, xB, IBxx, ...), a matrix entry (M_phidelta, K2_deltadelta,
@@ -151,6 +153,7 @@ def _file_inputs(path: str) -> dict[str, Quantity]:
                     f"either {base} (radians) or {name} (degrees), not both ({base} on line {data.entries[base].line})",
                     data.where(name),
                 )
+            _degrees_check(name, entry.value.value, data.where(name))
             scaled = entry.value.scaled(DEG)
             entry = NameValueEntry(base, scaled, tuple(q.scaled(DEG) for q in entry.repeats), entry.line)
         entries[entry.name] = entry
@@ -159,6 +162,37 @@ def _file_inputs(path: str) -> dict[str, Quantity]:
         read = benchmark_from_values(converted)
         return inp.benchmark_inputs(read.parameters)
     return converted.as_dict()
+
+
+def _degrees_check(name: str, degrees: float, where: str) -> None:
+    """A ``NAME_deg`` that looks like radians: a note for ``lam_deg`` (a steer axis tilt of a few
+    degrees is possible), an error for the tube and lean angles (:func:`check_degrees`), as the
+    other readers do."""
+    if name == "lam_deg":
+        if 0 < degrees <= math.pi:
+            note(
+                f"{where}: lam_deg = {degrees:g} looks like radians ({degrees:g} rad = {math.degrees(degrees):.4g} "
+                f"deg); taken as degrees, a steer axis tilt of {degrees:g} deg"
+            )
+    else:
+        check_degrees(name, degrees, where)
+
+
+def _unused_inputs_note(result, given: str) -> None:
+    """A note naming the inputs of the file that no computed output depends on (a Table 1 length
+    beside the benchmark parameters it would have fed): they are accepted, and change nothing."""
+    import numpy as np  # heavy: imported when the command runs
+
+    jacobian = np.asarray(result.jacobian)
+    unused = []
+    for j, name in enumerate(result.input_names):
+        if name in BENCHMARK_NAMES:  # IByy, IHyy: part of every benchmark set, unused by the linear model
+            continue
+        rows = [i for i, out in enumerate(result.output_names) if out != name]
+        if not np.any(np.abs(jacobian[rows, j]) > 0):  # NaN (an output not defined here) is no dependence
+            unused.append(name)
+    if unused:
+        note(f"{given}: {', '.join(unused)}: no output depends on them (the other values given replace what they feed)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -182,6 +216,8 @@ def run(args: argparse.Namespace) -> int:
         if exc.source is not None:
             raise
         raise InputError(exc.name, exc.value, exc.expected, input_set.name) from None
+    if args.inputs is not None:
+        _unused_inputs_note(result, args.inputs)
     known = set(result.output_names) | set(result.input_names)
     output = names.check_name(args.output, known, "OUTPUT")
     print(f"Inputs: {input_set.name}")

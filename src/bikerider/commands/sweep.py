@@ -11,6 +11,7 @@ from pathlib import Path
 from bikerider import notes
 from bikerider.commands.benchmark import add_shipped_options, load_parameters
 from bikerider.commands.estimate import add_figure_options
+from bikerider.commands.sweep_checks import check_sweep_options
 from bikerider.commands.sweep_design import add_design_options, is_design_run, run_design
 from bikerider.commands.sweep_options import cell, parse_vary
 from bikerider.errors import InputError
@@ -72,6 +73,7 @@ def check_outputs(args: argparse.Namespace) -> None:
     """Refuse ``--out``, ``--plot`` and ``--store`` paths that would overwrite or remove an input."""
     from bikerider.io.output_guard import file_output, folder_output, refuse_inputs, refuse_inputs_within
 
+    check_sweep_options(args)
     if args.out is not None:
         refuse_inputs("--out", args.out, [file_output("--out", args.out)])
     if args.plot is not None:

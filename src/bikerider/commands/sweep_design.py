@@ -21,7 +21,7 @@ from pathlib import Path
 from bikerider import notes
 from bikerider.commands import argument_types
 from bikerider.commands.benchmark import load_parameters
-from bikerider.commands.sweep_options import cell, parse_vary
+from bikerider.commands.sweep_options import angle_name, cell, parse_vary
 from bikerider.errors import InputError
 from bikerider.io.atomic import atomic_write_text
 
@@ -135,8 +135,8 @@ def parse_draw(text: str):
         raise InputError(
             "--vary", text, "NAME=LOW:HIGH (uniform) or NAME=MEAN+/-SIGMA (normal) with --random"
         ) from None
-    if name.endswith("_deg"):
-        name = name[: -len("_deg")]
+    if name.strip().endswith("_deg"):
+        name = angle_name(name, text)
         draw = (draw[0], math.radians(draw[1]), math.radians(draw[2]))
     return name.strip(), draw
 

@@ -6,6 +6,30 @@ import math
 
 from bikerider.errors import InputError
 
+ANGLES = ("lam", "lam_ht", "lam_st", "lam_fl")
+"""The angles a sweep varies (benchmark ``lam``, measured tube and lean angles): the only names
+``--vary NAME_deg=...`` may give in degrees."""
+
+
+def angle_name(name: str, text: str) -> str:
+    """The angle a ``NAME_deg`` of ``--vary`` names; an error for ``_deg`` on a length, a mass, ...
+
+    Parameters
+    ----------
+    name : str
+        The name as given, ending in ``_deg``.
+    text : str
+        The whole ``--vary`` value (for the message).
+    """
+    angle = name.strip()[: -len("_deg")]
+    if angle not in ANGLES:
+        raise InputError(
+            "--vary",
+            text,
+            f"_deg only on an angle ({', '.join(a + '_deg' for a in ANGLES)}); {angle} is not one: give it in SI units",
+        )
+    return angle
+
 
 def parse_vary(text: str):
     """``NAME=START:STOP:N`` to ``(name, values)`` in SI units (``NAME_deg``: degrees to radians)."""
@@ -22,8 +46,8 @@ def parse_vary(text: str):
     if not (math.isfinite(start) and math.isfinite(stop)) or not 1 <= n <= 100_000 or stop < start:
         raise InputError("--vary", text, "a finite range START <= STOP and 1 <= N <= 100000 values")
     values = np.linspace(start, stop, n)
-    if name.endswith("_deg"):
-        name, values = name[: -len("_deg")], np.radians(values)
+    if name.strip().endswith("_deg"):
+        name, values = angle_name(name, text), np.radians(values)
     return name.strip(), values
 
 
@@ -38,4 +62,4 @@ def cell(value) -> str:
     return str(value)
 
 
-__all__ = ["cell", "parse_vary"]
+__all__ = ["ANGLES", "angle_name", "cell", "parse_vary"]

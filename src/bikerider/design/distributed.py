@@ -36,6 +36,20 @@ def dask_distributed():
     return dask.distributed
 
 
+def quiet_dask_logs() -> None:
+    """Dask's own log lines (cluster start, worker start, ...) only when bikerider logs at INFO (``-v``).
+
+    ``dask.distributed`` logs at INFO to stderr by default, in this process and in the worker
+    processes it starts (which take the configuration at start-up).
+    """
+    import dask  # with dask.distributed, imported by the caller: an optional extra
+
+    level = "info" if logging.getLogger("bikerider").getEffectiveLevel() <= logging.INFO else "warning"
+    dask.config.set({"logging.distributed": level, "distributed.logging.distributed": level})
+    for name in ("distributed", "distributed.nanny", "distributed.scheduler", "distributed.worker"):
+        logging.getLogger(name).setLevel(level.upper())
+
+
 def evaluate_chunk(space, start: int, stop: int, speeds, weave_speeds, engine: str):
     """The task a worker runs: one chunk, single-threaded (the cluster provides the parallelism)."""
     return evaluate(space, start, stop, speeds, weave_speeds, engine, threads=1)
@@ -44,6 +58,7 @@ def evaluate_chunk(space, start: int, stop: int, speeds, weave_speeds, engine: s
 def run_on_dask(store, pending: list[int], engine: str, scheduler, workers: int | None, progress) -> None:
     """Evaluate the ``pending`` chunks of ``store`` on Dask and write them (see the module docstring)."""
     distributed = dask_distributed()
+    quiet_dask_logs()
     spec = store.spec
     cluster = None
     if scheduler == "local":
@@ -55,7 +70,7 @@ def run_on_dask(store, pending: list[int], engine: str, scheduler, workers: int 
         address = scheduler
     try:
         client = distributed.Client(address, timeout=CONNECT_TIMEOUT)
-    except (OSError, TimeoutError) as exc:
+    except (OSError, TimeoutError, ValueError, TypeError) as exc:  # ValueError: an address Dask cannot parse
         if cluster is not None:
             cluster.close()
         raise InputError("--dask", str(scheduler), f"the address of a running Dask scheduler ({exc})") from None

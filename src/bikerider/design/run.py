@@ -119,6 +119,7 @@ def explore(
     else:
         _run_local(result, pending, engine, threads, progress)
     progress.close()
+    result.close()  # the run is done: its lock goes (a failed run's goes with the store object)
     return result
 
 

@@ -35,6 +35,8 @@ RANDOM_BLOCK = 65_536
 """Designs drawn from one seeded stream (the chunk size of a run does not change the designs)."""
 MAX_DESIGNS = 10**12
 """A larger space is a typing error."""
+NORMAL_REACH = 40.0
+"""Standard deviations a normal draw may reach: no float64 normal draw goes beyond 40 sigma."""
 KINDS = ("benchmark", "measurements")
 
 
@@ -315,7 +317,7 @@ def monte_carlo(base, n: int, seed: int = 0, name: str = "") -> DesignSpace:
         A base without uncertainties, or a number of designs out of range.
     """
     kind, values, sigmas, source = _base_of(base)
-    n = _check_count(n)
+    n = _check_count(n, "--monte-carlo")
     draws = tuple(
         Draw(k, "normal", values[k], sigmas[k]) for k in values if sigmas.get(k, 0.0) > 0 and math.isfinite(values[k])
     )
@@ -324,9 +326,9 @@ def monte_carlo(base, n: int, seed: int = 0, name: str = "") -> DesignSpace:
     return DesignSpace(kind, values, sigmas, draws=draws, n_random=n, seed=int(seed), name=name or source)
 
 
-def _check_count(n) -> int:
+def _check_count(n, option: str = "--random") -> int:
     if not (isinstance(n, (int, np.integer)) and 1 <= n <= MAX_DESIGNS):
-        raise InputError("--random", n, f"a whole number of designs between 1 and {MAX_DESIGNS:.0e}")
+        raise InputError(option, n, f"a whole number of designs between 1 and {MAX_DESIGNS:.0e}")
     return int(n)
 
 
@@ -338,8 +340,14 @@ def _draw(name: str, distribution: str, a: float, b: float) -> Draw:
         raise InputError(name, f"{a:g}, {b:g}", "finite bounds (uniform) or a finite mean and sigma (normal)")
     if distribution == "uniform" and not a < b:
         raise InputError(name, f"{a:g}:{b:g}", "a range LOW:HIGH with LOW < HIGH (an empty range has no designs)")
+    if distribution == "uniform" and not math.isfinite(b - a):
+        raise InputError(name, f"{a:g}:{b:g}", "a range LOW:HIGH whose width HIGH - LOW is a finite number")
     if distribution == "normal" and not b > 0:
         raise InputError(name, f"{a:g}+/-{b:g}", "a positive standard deviation")
+    if distribution == "normal" and not math.isfinite(abs(a) + NORMAL_REACH * b):
+        raise InputError(
+            name, f"{a:g}+/-{b:g}", f"a mean and sigma whose draws stay finite (|MEAN| + {NORMAL_REACH:g} SIGMA)"
+        )
     return Draw(name, distribution, a, b)
 
 

@@ -18,7 +18,9 @@ or chunk size is an error, never a silent mix.  Without a folder the store lives
 
 from __future__ import annotations
 
+import json
 import math
+import os
 import shutil
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -27,6 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from bikerider import __version__
+from bikerider.design import store_check
 from bikerider.design.engine import FIELDS
 from bikerider.design.space import DesignSpace
 from bikerider.design.validity import REASONS
@@ -98,16 +101,22 @@ class DesignStore:
     def __init__(self, group, spec: RunSpec, path: Path | None):
         self.group, self.spec, self.path = group, spec, path
         self._done_memory: set[int] = set()
+        self._lock: store_check.StoreLock | None = None
 
     # -- creation ----------------------------------------------------------------------------
     @classmethod
     def create_or_resume(cls, path: str | Path | None, spec: RunSpec, restart: bool = False) -> DesignStore:
         """Open the store of ``spec`` at ``path`` (created when missing; in memory when None).
 
+        The run holds the store's lock (:class:`bikerider.design.store_check.StoreLock`) until
+        :meth:`close` (or the end of the process); a store being resumed is checked first
+        (:meth:`verify`).
+
         Raises
         ------
         InputError
-            ``path`` holds another run (a different space, speeds or chunk size), or is not a store.
+            ``path`` holds another run (a different space, speeds or chunk size), is not a store,
+            is damaged (naming what, and ``--restart``), or another run holds it.
         """
         zarr = zarr_module()
         if path is None:
@@ -116,43 +125,78 @@ class DesignStore:
             store._create()
             return store
         path = Path(path)
-        if path.exists() and not restart:
-            if not (path / "zarr.json").exists():
-                raise InputError(
-                    "--store",
-                    str(path),
-                    "a new folder or the store of this run (this folder is not a bikerider design store)",
-                )
-            group = zarr.open_group(str(path), mode="a")
-            attrs = dict(group.attrs)
-            if attrs.get("format") != FORMAT:
-                raise InputError(
-                    "--store", str(path), "a new folder or the store of this run (not a bikerider design store)"
-                )
-            mine = spec.attributes()
-            for key in ("space", "speeds", "weave_speeds", "chunk_size"):
-                if attrs.get(key) != mine[key]:
-                    raise InputError(
-                        "--store",
-                        str(path),
-                        f"a new folder, or the same run to resume (its {key} {'differ' if key.endswith('s') else 'differs'}"
-                        "; remove the folder or give --restart to start again)",
-                    )
-            return cls(group, spec, path)
-        if path.exists() and restart:
-            # --restart removes the folder: only a design store (or nothing at all) may go.
-            if not path.is_dir() or (any(path.iterdir()) and not (path / "zarr.json").exists()):
-                raise InputError(
-                    "--store",
-                    str(path),
-                    "with --restart, a design store or an empty folder (--restart removes the folder, "
-                    "and this one is not a bikerider design store)",
-                )
-            shutil.rmtree(path)
-        group = zarr.open_group(str(path), mode="w")
-        store = cls(group, spec, path)
-        store._create()
+        _check_folder(path, restart)
+        path.mkdir(exist_ok=True)
+        lock = store_check.StoreLock(path).acquire()
+        try:
+            _check_locked_folder(path, restart)
+            if restart:
+                _clear(path)
+            if os.path.lexists(path / "zarr.json"):
+                store = cls._resume(path, spec)
+            else:
+                store = cls(zarr.open_group(str(path), mode="a"), spec, path)  # "w" would remove the lock
+                store._create()
+        except BaseException:
+            lock.release()
+            raise
+        store._lock = lock
         return store
+
+    @classmethod
+    def _resume(cls, path: Path, spec: RunSpec) -> DesignStore:
+        """The store of this run at ``path``, checked (files, metadata, finished chunks)."""
+        attrs = _checked_attributes(path)
+        mine = spec.attributes()
+        for key in ("space", "speeds", "weave_speeds", "chunk_size"):
+            if attrs.get(key) != mine[key]:
+                raise InputError(
+                    "--store",
+                    str(path),
+                    f"a new folder, or the same run to resume (its {key} {'differ' if key.endswith('s') else 'differs'}"
+                    "; remove the folder or give --restart to start again)",
+                )
+        store = cls(_open_group(path, spec, "a"), spec, path)
+        store.verify()
+        return store
+
+    def expected_arrays(self) -> dict[str, tuple[tuple[int, ...], tuple[int, ...], str]]:
+        """Every array of the run: ``name -> (shape, chunks, dtype)``."""
+        return _expected_arrays(self.spec)
+
+    def verify(self) -> None:
+        """Check that every finished chunk reads back to what the run wrote (its marker's checksums).
+
+        Raises
+        ------
+        InputError
+            Naming the damaged chunk and array, and ``--restart``.
+        """
+        if self.path is None:
+            return
+        done = self.path / "done"
+        if not done.is_dir():
+            raise store_check.damaged(self.path, f"the folder of finished-chunk markers {done} is missing")
+        for marker in sorted(done.iterdir()):
+            if not (marker.name.isdigit() and int(marker.name) < self.spec.n_chunks):
+                raise store_check.damaged(
+                    self.path, f"{marker} marks no chunk of this run (chunks 0 to {self.spec.n_chunks - 1})"
+                )
+            k = int(marker.name)
+            start, stop = self.spec.chunk_range(k)
+
+            def read(name, start=start, stop=stop):
+                if name is None:
+                    return [self.read(n, start, stop) for n in self.expected_arrays()]
+                return self.read(name, start, stop)
+
+            store_check.verify_chunk(self.path, k, read)
+
+    def close(self) -> None:
+        """Release the store's lock (another run may then open it)."""
+        lock, self._lock = self._lock, None
+        if lock is not None:
+            lock.release()
 
     def _create(self) -> None:
         n, chunk = self.spec.space.size, self.spec.chunk_size
@@ -190,14 +234,17 @@ class DesignStore:
     def write(self, k: int, result: dict[str, np.ndarray]) -> None:
         """Write chunk ``k`` (every array), then its marker."""
         start, stop = self.spec.chunk_range(k)
+        stored = {}
         for name, array in result.items():
-            self.group[name][start:stop] = array
+            target = self.group[name]
+            stored[name] = np.asarray(array).astype(target.dtype, copy=False)
+            target[start:stop] = stored[name]
         if self.path is None:
             self._done_memory.add(k)
-        else:
+        else:  # the marker records what was written, so that a later run can check it (store_check)
             marker = self.path / "done" / str(k)
-            with open(marker, "w", encoding="utf-8"):
-                pass
+            with open(marker, "w", encoding="utf-8") as stream:
+                json.dump(store_check.chunk_digest(stored), stream)
 
     # -- reading ------------------------------------------------------------------------------
     @property
@@ -262,21 +309,90 @@ def open_store(path: str | Path) -> DesignStore:
     InputError
         ``path`` is not a bikerider design store.
     """
-    zarr = zarr_module()
+    zarr_module()
     path = Path(path)
-    if not (path / "zarr.json").exists():
+    if not (path.is_dir() and os.path.lexists(path / "zarr.json")):
         raise InputError("--store", str(path), "the folder of a design-space run (bikerider sweep --store)")
-    group = zarr.open_group(str(path), mode="r")
-    attrs = dict(group.attrs)
+    attrs = _checked_attributes(path)
+    try:
+        spec = RunSpec(
+            DesignSpace.from_json(attrs["space"]),
+            np.asarray(attrs["speeds"], dtype=float),
+            np.asarray(attrs["weave_speeds"], dtype=float),
+            int(attrs["chunk_size"]),
+        )
+    except (KeyError, TypeError, ValueError) as exc:
+        raise store_check.damaged(path, f"its attributes (space, speeds, chunk size) cannot be read: {exc}") from None
+    store = DesignStore(_open_group(path, spec, "r"), spec, path)
+    store.verify()
+    return store
+
+
+# -- the folder of a store ------------------------------------------------------------------------
+def _expected_arrays(spec: RunSpec) -> dict[str, tuple[tuple[int, ...], tuple[int, ...], str]]:
+    n, chunk = spec.space.size, spec.chunk_size
+    out = {}
+    for field in FIELDS:
+        width = _width(field, spec)
+        out[field.name] = ((n,) + width, (chunk,) + width, field.dtype)
+    if not spec.space.is_grid:
+        for name in spec.space.names:
+            out[f"value:{name}"] = ((n,), (chunk,), "float64")
+    return out
+
+
+def _check_folder(path: Path, restart: bool) -> None:
+    """Refuse a ``--store`` folder that is not new, empty, or a design store (damaged or not)."""
+    if os.path.lexists(path) and not path.is_dir():
+        raise InputError("--store", str(path), "a folder for the store (this is a file)")
+    if not path.is_dir():
+        return
+    names = {p.name for p in path.iterdir()}
+    if names and not ({"zarr.json", "done", store_check.LOCK_NAME} & names):
+        shown = ", ".join(sorted(names)[:4]) + (", ..." if len(names) > 4 else "")
+        raise InputError(
+            "--store",
+            str(path),
+            "a new or empty folder, or the store of this run"
+            + (" (--restart removes the store's files)" if restart else "")
+            + f"; this folder holds {shown} and is not a bikerider design store",
+        )
+
+
+def _check_locked_folder(path: Path, restart: bool) -> None:
+    """Under the store's lock: a folder with files but no metadata is a damaged store."""
+    names = {p.name for p in path.iterdir()} - {store_check.LOCK_NAME}
+    if not restart and names and "zarr.json" not in names:
+        raise store_check.damaged(path, f"{path / 'zarr.json'}, the store's metadata, is missing")
+
+
+def _clear(path: Path) -> None:
+    """Remove the files of a store (``--restart``), keeping the folder and its lock."""
+    for entry in path.iterdir():
+        if entry.name == store_check.LOCK_NAME:
+            continue
+        if entry.is_dir() and not entry.is_symlink():
+            shutil.rmtree(entry)
+        else:
+            entry.unlink()
+
+
+def _checked_attributes(path: Path) -> dict:
+    """The group attributes of a store whose files and metadata are sound."""
+    store_check.check_files(path)
+    attrs = store_check.group_attributes(path)
     if attrs.get("format") != FORMAT:
-        raise InputError("--store", str(path), "the folder of a design-space run (bikerider sweep --store)")
-    spec = RunSpec(
-        DesignSpace.from_json(attrs["space"]),
-        np.asarray(attrs["speeds"], dtype=float),
-        np.asarray(attrs["weave_speeds"], dtype=float),
-        int(attrs["chunk_size"]),
-    )
-    return DesignStore(group, spec, path)
+        raise InputError("--store", str(path), "a new folder or the store of this run (not a bikerider design store)")
+    return attrs
+
+
+def _open_group(path: Path, spec: RunSpec, mode: str):
+    """The zarr group of a store whose arrays are those of ``spec``."""
+    store_check.check_metadata(path, _expected_arrays(spec))
+    try:
+        return zarr_module().open_group(str(path), mode=mode)
+    except Exception as exc:  # zarr raises what its parsers raise on metadata it cannot take
+        raise store_check.damaged(path, f"zarr cannot open it ({type(exc).__name__}: {str(exc)[:80]})") from None
 
 
 __all__ = ["DesignStore", "RunSpec", "open_store", "zarr_module"]

@@ -120,6 +120,9 @@ DEFAULT_REPEATS = 10
 MAX_REPEATS = 100
 ODDS = 19.0
 """Odds a resolution needs: 95 % posterior probability from even prior odds."""
+MAX_NOISE = 10.0
+"""Largest sample noise of a signal (rad, rad/s): noise beyond ten radians (per second) would drown
+any lateral motion of a bicycle; a larger value is a unit slip (and overflows the planned covariances)."""
 ASSUMED_NOISE = {
     "roll_rate": 0.01,
     "roll_angle": 0.002,
@@ -359,8 +362,10 @@ class NextExperiment:
         for name, value in (self.noise or {}).items():
             if name not in SIGNALS:
                 raise InputError("noise signal", name, "one of " + ", ".join(SIGNALS))
-            if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
-                raise InputError(f"noise of {name}", value, "a positive standard deviation (rad or rad/s)")
+            if not (isinstance(value, int | float) and math.isfinite(value) and 0 < value <= MAX_NOISE):
+                raise InputError(
+                    f"noise of {name}", value, f"a positive standard deviation of at most {MAX_NOISE:g} (rad or rad/s)"
+                )
             values[name], source[name] = float(value), "given"
         return values, source
 

@@ -53,6 +53,9 @@ LINE_SPAN = (0.25, 4.0)
 DEFAULT_TORQUE = 0.5
 """Peak steer torque of a planned multisine [N m]."""
 MAX_TORQUE = 50.0
+MIN_TORQUE = 1e-3
+"""Smallest peak torque planned [N m]: a thousandth of a newton metre is below any steer actuator's
+resolution, and much smaller torques make the predicted responses underflow."""
 DEFAULT_RUN_TIME = 10.0
 """Recorded steady-state length of one run [s]."""
 RUN_TIME_RANGE = (2.0, 600.0)

@@ -305,7 +305,7 @@ def detect_windows(roll_rate, rate: float, settings: DetectorSettings = Detector
     idx = np.flatnonzero(above)
     if idx.size == 0:
         return []
-    gap = int(round(settings.gap * rate))
+    gap = max(1, int(round(settings.gap * rate)))  # at least one sample: a slow log (0.5 Hz) has gaps too
     events = [[int(idx[0]), int(idx[0])]]
     for k in idx[1:]:
         if k - events[-1][1] <= gap:

@@ -75,8 +75,29 @@ from bikerider.gap.records import (
 from bikerider.io.input_file import checked_input_file
 
 MAX_LOG_BYTES = 200_000_000
-"""Largest log, manifest or windows file read [bytes, unpacked]: hours of a 100 Hz log with a dozen
-columns (the project's eight SBW logs are about 0.7 MB each); a larger file is refused with its size."""
+"""Largest log or windows file (CSV manifest) read [bytes, unpacked]: hours of a 100 Hz log with a
+dozen columns (the project's eight SBW logs are about 0.7 MB each); a larger file is refused with its
+size.  A TOML manifest is a TOML file: at most 1 MiB (:data:`bikerider.io.input_file.TEXT_LIMIT`)."""
+MAX_RECORDS = 5_000
+"""Most records of one run (all manifests' windows and detected decays together): each is fitted on
+every fold, about 30-40 ms and 0.15 MB a record (4,000 records took 129 s and 0.68 GB), so a larger
+set is refused with its count rather than left running for many minutes; free-decay experiments hold
+tens to hundreds.  A manifest that repeats one window many times is almost surely a mistake."""
+SAMPLE_RATES = (1e-3, 1e6)
+"""Sampling rates [Hz] of a log: far beyond any data logger on a bicycle (100 Hz to a few kHz) either
+way; a rate outside is a typing or unit slip (1e308 overflows the sample counts of the windows, a
+denormal such as 5e-324 the sample times)."""
+MAX_DETECTOR = {
+    "threshold": 1e6,
+    "min_rate": MAX_MAGNITUDE,
+    "gap": 3600.0,
+    "max_duration": 3600.0,
+    "min_duration": 3600.0,
+    "margin": 3600.0,
+}
+"""Largest value of each detector setting (noise levels, rad/s, seconds): a decay lasts seconds."""
+BAD_DELIMITERS = '"#.+-\r\n'
+"""Characters no log delimiter may be: quotes and comments, and the characters of numbers."""
 COLUMN_KEYS = SIGNALS + ("speed", "time")
 """Keys of a column map: the state signals, the speed and the time."""
 SPEED_SOURCES = ("column", "file_name", "value")
@@ -151,7 +172,7 @@ def read_log(path: str | Path, wanted: list[str], delimiter: str = ",") -> Log:
     header_at = next((k for k, line in enumerate(lines) if line.strip() and not line.lstrip().startswith("#")), None)
     if header_at is None:
         raise FileFormatError(path, "no header line (column names) found")
-    names = [c.strip() for c in next(csv.reader(io.StringIO(lines[header_at]), delimiter=delimiter))]
+    names = _csv_cells(lines[header_at], path, header_at + 1, delimiter)
     for name in wanted:
         if name not in names:
             raise FileFormatError(path, f"no column {name!r}: the log's columns are {', '.join(names)}", header_at + 1)
@@ -231,6 +252,7 @@ class ExperimentSettings:
     detector: DetectorSettings = field(default_factory=DetectorSettings)
     delimiter: str = ","
     source: str = ""
+    files: tuple[Path, ...] = ()
 
     def check(self) -> None:
         where = self.source or None
@@ -243,8 +265,9 @@ class ExperimentSettings:
             raise InputError("columns.roll_rate", "missing", "the log column of the roll rate", where)
         if "time" not in self.columns and self.sample_rate is None:
             raise InputError("sample_rate", "missing", "a sampling rate [Hz] or a time column (columns.time)", where)
-        if self.sample_rate is not None and not (math.isfinite(self.sample_rate) and self.sample_rate > 0):
-            raise InputError("sample_rate", self.sample_rate, "a positive sampling rate [Hz]", where)
+        if self.sample_rate is not None:
+            check_sample_rate(self.sample_rate, "sample_rate", where)
+        check_delimiter(self.delimiter, where)
         if self.speed_source not in SPEED_SOURCES:
             raise InputError("speed.source", self.speed_source, "one of " + ", ".join(SPEED_SOURCES), where)
         if self.speed_source == "column" and "speed" not in self.columns:
@@ -296,8 +319,8 @@ def read_manifest(path: str | Path) -> tuple[ExperimentSettings, list[Window]]:
     from bikerider.io.toml_input import read_toml
 
     path = Path(path)
-    text = read_text(path)  # checks the path first: a regular file of a readable size
-    data = read_toml(path)
+    data = read_toml(path)  # checks the path first: a regular file of at most 1 MiB, as every TOML file
+    text = read_text(path)
 
     def where(key: str, after: int = 0) -> str:
         line = _line_of(text, rf"^\s*\[*\s*{re.escape(key)}\b", after)
@@ -354,7 +377,9 @@ def read_manifest(path: str | Path) -> tuple[ExperimentSettings, list[Window]]:
     if "sample_rate" in exp:
         settings.sample_rate = _number(exp["sample_rate"], "experiment.sample_rate", where("sample_rate"))
     if "delimiter" in exp:
-        settings.delimiter = _text(exp["delimiter"], "experiment.delimiter", where("delimiter"))
+        settings.delimiter = check_delimiter(
+            _text(exp["delimiter"], "experiment.delimiter", where("delimiter")), where("delimiter")
+        )
     if "group" in exp:
         settings.group = _text(exp["group"], "experiment.group", where("group"))
     if "fit" in exp:
@@ -372,7 +397,9 @@ def read_manifest(path: str | Path) -> tuple[ExperimentSettings, list[Window]]:
     folder = path.parent / _text(exp.get("logs", "."), "experiment.logs", where("logs"))
     windows: list[Window] = []
     if "windows" in exp:
-        windows += read_windows(path.parent / _text(exp["windows"], "experiment.windows", where("windows")), folder)
+        windows_file = path.parent / _text(exp["windows"], "experiment.windows", where("windows"))
+        settings.files += (windows_file,)
+        windows += read_windows(windows_file, folder)
     files = data.get("file", [])
     if not isinstance(files, list):
         raise InputError("file", files, "[[file]] tables", where("file"))
@@ -452,6 +479,8 @@ def read_experiment(
     ``columns`` is the column map as ``signal=column,...`` (``--columns``); ``laws`` the laws of
     ``--control`` (one law acts in every window that names none).
     """
+    if str(path) == "":  # Path("") is the current folder, which would be taken for a CSV manifest
+        raise InputError("path", "", "the path of a file (an empty path names no file, and never the default one)")
     path = Path(path)
     if path.suffix.lower() == ".toml":
         if columns is not None or sample_rate is not None:
@@ -686,7 +715,9 @@ def _detector(table: object, where: str) -> DetectorSettings:
     for key, value in table.items():
         if key not in fields:
             raise InputError(f"experiment.detector.{key}", value, "one of " + ", ".join(fields), where)
-        _number(value, f"experiment.detector.{key}", where)
+        x = _number(value, f"experiment.detector.{key}", where)
+        if x > MAX_DETECTOR[key]:
+            raise InputError(f"experiment.detector.{key}", _shown(value), f"at most {MAX_DETECTOR[key]:g}", where)
     return DetectorSettings(**{k: float(v) for k, v in table.items()})
 
 
@@ -694,6 +725,47 @@ def _text(value: object, name: str, where: str) -> str:
     if not isinstance(value, str) or not value:
         raise InputError(name, value, "a text", where)
     return value
+
+
+def check_delimiter(value: str, where: str | None = None) -> str:
+    """A log delimiter: one character that is not a quote, a comment, a line end or part of a number."""
+    if len(value) != 1 or value in BAD_DELIMITERS or value.isalnum():
+        raise InputError(
+            "experiment.delimiter",
+            value,
+            "one character that separates cells, such as ',', ';', a tab or a space (not a quote, '#', a line "
+            "end, a letter, a digit or a sign)",
+            where,
+        )
+    return value
+
+
+def check_sample_rate(rate: float, name: str, where: str | None = None) -> None:
+    """A sampling rate within :data:`SAMPLE_RATES` (``name``: the option or key, for the message)."""
+    low, high = SAMPLE_RATES
+    if not (math.isfinite(rate) and low <= rate <= high):  # also NaN
+        raise InputError(name, rate, f"a sampling rate from {low:g} to {high:g} Hz", where)
+
+
+def check_record_count(count: int, where: str) -> None:
+    """Refuse more than :data:`MAX_RECORDS` records (``where``: the manifests, for the message)."""
+    if count > MAX_RECORDS:
+        raise InputError(
+            "records",
+            f"{count:,}",
+            f"at most {MAX_RECORDS:,} records in one run (each is fitted on every fold: about 30 ms and 0.15 MB "
+            "a record); check the windows for repeats, or split the experiment",
+            where,
+        )
+
+
+def experiment_files(settings: ExperimentSettings, windows: list[Window]) -> list[Path]:
+    """The files a manifest makes the run read besides itself: its windows file and every log (plain
+    and ``.gz``): inputs of the run, which no output may overwrite or remove."""
+    out = list(settings.files)
+    for w in windows:
+        out += [w.file, w.file.with_name(w.file.name + ".gz")]
+    return list(dict.fromkeys(out))
 
 
 def _number(value: object, name: str, where: str) -> float:
@@ -904,10 +976,11 @@ def _speed(log: Log, start: int, end: int, window: Window, settings: ExperimentS
     )
 
 
-def _csv_cells(line: str, path, number: int) -> list[str]:
-    """The stripped cells of one line of a windows file; a line the csv module cannot split (a cell
-    beyond its field limit, an unclosed quote) is an error naming the line."""
+def _csv_cells(line: str, path, number: int, delimiter: str = ",") -> list[str]:
+    """The stripped cells of one line of a windows file or of a log's header; a line the csv module
+    cannot split (a cell beyond its field limit, an unclosed quote) is an error naming the line."""
     try:
-        return [c.strip() for c in next(csv.reader(io.StringIO(line)))]
+        return [c.strip() for c in next(csv.reader(io.StringIO(line), delimiter=delimiter))]
     except csv.Error as exc:
-        raise FileFormatError(path, f"not a comma-separated line ({exc})", number) from None
+        kind = "comma" if delimiter == "," else repr(delimiter)
+        raise FileFormatError(path, f"not a {kind}-separated line ({str(exc)[:60]})", number) from None

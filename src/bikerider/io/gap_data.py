@@ -46,8 +46,9 @@ import numpy as np
 
 from bikerider.errors import FileFormatError, InputError
 from bikerider.gap.control import GAIN_NAMES, MAX_MAGNITUDE, ControlLaw, GainSchedule
-from bikerider.gap.data import MODES, CanonicalData, EigenvalueData, entry_name
+from bikerider.gap.data import CANONICAL_ENTRIES, MODES, CanonicalData, EigenvalueData, entry_name
 from bikerider.gap.records import MAX_RECORD_SAMPLES, Record
+from bikerider.generated.manifest import MATRIX_NAMES
 from bikerider.io.input_file import checked_input_file
 
 LOG = logging.getLogger(__name__)
@@ -127,7 +128,21 @@ def _read_table(path: str | Path) -> _Table:
         rows.append((number, cells))
     if columns is None:
         raise FileFormatError(path, "no header line (column names) found")
-    return _Table(path, columns, rows, meta)
+    table = _Table(path, columns, rows, meta)
+    _check_meta_numbers(table)
+    return table
+
+
+META_NUMBERS = {"speed": "positive", "speed_sigma": "nonnegative", "speed_min": "positive", "speed_max": "positive"}
+"""The ``# key = value`` comments that hold numbers (with the gains), and the sign they need."""
+
+
+def _check_meta_numbers(table: _Table) -> None:
+    """Every numeric ``# key = value`` comment is a number, whether or not a column makes it unused
+    (a ``# speed = abc`` beside a speed column is a mistake, not a comment to skip)."""
+    for key in (*META_NUMBERS, *GAIN_NAMES):
+        sign = META_NUMBERS.get(key)
+        _meta_number(table, key, positive=sign == "positive", nonnegative=sign == "nonnegative")
 
 
 def _number(
@@ -425,6 +440,7 @@ def read_canonical(path: str | Path, groups: list[str] | None = None) -> Canonic
             continue
         name = entry_name(cells[cols["coefficient"]])
         if name is None:
+            _check_not_a_matrix_typo(table, line, cells[cols["coefficient"]])
             skipped.add(cells[cols["coefficient"]])
             continue
         values.append(_number(table, line, "identified", cells[cols["identified"]]))
@@ -451,6 +467,19 @@ def read_canonical(path: str | Path, groups: list[str] | None = None) -> Canonic
         raise FileFormatError(table.path, "no canonical-matrix entries" + (f" in groups {groups}" if groups else ""))
     out.value, out.sigma = np.array(values), np.array(sigmas)
     return out
+
+
+def _check_not_a_matrix_typo(table: _Table, line: int, raw: str) -> None:
+    """A coefficient named like a canonical-matrix entry (``M``, ``C1``, ``K0``, ``K2`` and more) that
+    is none of them is a typo, not a row of another matrix to leave out (``HdeltaF`` is left out)."""
+    text = raw.strip()
+    if any(text.startswith(prefix) for prefix in MATRIX_NAMES):
+        raise FileFormatError(
+            table.path,
+            f"coefficient = {text!r}: expected one of the canonical-matrix entries "
+            f"{', '.join(n.replace('_', '') for n in CANONICAL_ENTRIES)} (a typing slip?)",
+            line,
+        )
 
 
 def read_control(path: str | Path) -> dict[str, ControlLaw]:

@@ -50,7 +50,8 @@ def load_model(
         from bikerider.io.toml_input import read_toml
 
         data = read_toml(path)
-        extra = {k: data[k] for k in ("rider", "upper_body", "grips", "plausible") if k in data}
+        _check_tables(data, source)
+        extra = {k: data[k] for k in MODEL_TABLES[1:] if k in data}
         if extra and "benchmark" not in data:
             raise InputError(
                 "benchmark",
@@ -89,6 +90,20 @@ def load_model(
     return GapModelInput(
         parameters, geometry, rider, source + (f" + rider {rider_path}" if rider_path else ""), plausible
     )
+
+
+MODEL_TABLES = ("benchmark", "rider", "upper_body", "grips", "plausible")
+"""The tables of a TOML model file."""
+
+
+def _check_tables(data: dict, source: str) -> None:
+    """With a ``[benchmark]`` table, every other top-level key is one of :data:`MODEL_TABLES` (a
+    file without one is a flat table of benchmark names, checked name by name)."""
+    if "benchmark" not in data:
+        return
+    for key, value in data.items():
+        if key not in MODEL_TABLES:
+            raise InputError(key, value, "one of the tables " + ", ".join(f"[{k}]" for k in MODEL_TABLES), source)
 
 
 def _plausible(table: object, source: str) -> dict[str, tuple[float, float, str]]:

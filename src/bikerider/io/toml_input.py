@@ -244,7 +244,20 @@ def _frame(
 ) -> dict[str, Quantity | None]:
     out: dict[str, Quantity | None] = {f"m{prefix}": section.quantity("mass", node=f"m{prefix}")}
     com = section.section("com", {"x", "z", "lines"})
-    if com.has("lines"):
+    if com.has("lines") and (com.has("x") or com.has("z")):
+        # Two measurements of one point: taking either silently would hide a disagreement.
+        com.reader.fail(
+            InputError(
+                com.name,
+                "x, z and lines",
+                "either x and z or the hanging lines (one measurement of the centre of mass)",
+                com.source,
+            ),
+            f"x{prefix}",
+            f"z{prefix}",
+        )
+        out[f"x{prefix}"] = out[f"z{prefix}"] = None
+    elif com.has("lines"):
         out[f"x{prefix}"], out[f"z{prefix}"] = _com_from_lines(com, prefix)
     else:
         out[f"x{prefix}"] = com.quantity("x", node=f"x{prefix}")
