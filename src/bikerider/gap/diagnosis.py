@@ -27,21 +27,27 @@ Pairs are cross-validated as well (fitted jointly on the same folds): every pair
 each, alone, predict the held-out folds better than the nominal model (by more than 1 %; an effect that makes the
 held-out predictions worse on its own is not searched further).
 
-Plausible.  A candidate fitted to all the data is plausible when every fitted value's 95 % interval
-reaches its plausible range (the literature's, or the bicycle's own ``[plausible]`` table), no value
-is pinned at a bound of the search, and every value is determined by the data (its standard error
-no larger than the width of its plausible range).  ``parameters`` is plausible when its shifts pass their
-prior test (chi-square at 1 %) with none pinned at a bound.  A set of two is plausible when both
-parts are, fitted jointly.
+Usual, and priors.  Every fitted value of a candidate (fitted to all the data) has a usual range (the
+literature's, or the bicycle's own ``[plausible]`` table) and a prior with its source
+(:class:`bikerider.gap.effects.Prior`; the ``[plausible]`` range made a prior).  A value outside its usual
+range is flagged ("above the usual ... from ...: check ..."), never refused: only what is physically
+impossible (negative damping, mass, inertia) is a bound of the fit.  A value is usable when the data
+determine it (its standard error no larger than the width of its usual range) and it is not pinned at the
+edge of the search.  A candidate is ``plausible`` when every value is usual and usable; ``parameters`` when
+its shifts pass their prior test (chi-square at 1 %) with none pinned at a bound.
 
-Selection (structural verdict).  The first plausible single candidate of the ranking that beats the
-nominal model significantly on the held-out folds is selected; a plausible pair replaces it when the
-single leaves a gap above the noise floor (held-out RMS error against the data's noise above one) and
-the pair beats it significantly.  An implausible candidate is never selected: when the best held-out
-fit needs implausible values the result says so, with the values (``best_implausible``); and when
-an implausible fit with no more fitted parameters beats the plausible choice significantly, nothing
-is selected (a plausible candidate that explains clearly less than an equally simple one would
-mislead).
+Selection (structural verdict).  The evidence for a set of effects is its held-out log-likelihood,
+``-sum(z^2) / 2`` over the held-out points, plus the log prior ratio of its fitted values
+(``ln p(value) - ln p(mode)``, :meth:`Diagnosis.log_prior`): roughly the log posterior odds against the
+nominal model, whose evidence is ``-sum(z_nominal^2) / 2``.  A candidate is eligible when it beats the
+nominal model significantly on the held-out folds, its log posterior odds against it are positive, and its
+values are usable or it explains the held-out data to the noise floor (so "structural, selected nothing"
+never stands beside a candidate at the noise floor).  The first eligible single of the ranking is
+selected, unless another eligible single's evidence is higher by more than :data:`PRIOR_ODDS` (19 to 1).
+A pair replaces it when the single leaves a gap above the noise floor (held-out RMS error against the
+data's noise above one) and an eligible pair beats it significantly with more evidence.  The values
+outside their usual range are flagged in the selection; the best held-out fit that is not selected is
+named with what it needs (``best_implausible``).
 
 How far.  For the selection, the held-out error before and after per fold and overall, and the
 fraction of the gap above the noise floor removed: with ``G = mean(z^2) - 1`` (the noise floor of
@@ -66,6 +72,9 @@ from bikerider.gap.effects import (
     LITERATURE_EXTRA,
     OBSERVATION_EFFECTS,
     TIME_DOMAIN_EFFECTS,
+    EffectParameter,
+    Prior,
+    prior_from_range,
 )
 from bikerider.gap.fit import EffectFit, GapProblem
 from bikerider.gap.model_input import GapModelInput
@@ -96,6 +105,14 @@ N_SPEED_BANDS = 3
 MAX_FOLDS = 12
 """Most folds: data in more groups are held out a block of whole groups at a time (a fold costs a fit of
 every candidate, so the folds must not grow with the data)."""
+NOISE_FLOOR = 1.0
+"""A held-out RMS error (against the data's own noise where known) at or below this is at the noise floor."""
+AMPLITUDE_SPREAD = 2.0
+"""Records whose steer-rate amplitudes span less than this factor (10th to 90th percentile) are decays of
+one amplitude: they do not tell Coulomb from viscous friction (:meth:`Diagnosis.friction_equivalent`)."""
+PRIOR_ODDS = math.log(19.0)
+"""Evidence [nats] by which another candidate must beat the first of the ranking to be selected instead
+(posterior odds 19 to 1, the 95 % of ``--next``)."""
 UNPREDICTED_Z = 1e3
 """Normalised residual given to a held-out point the fitted model cannot predict (singular model)."""
 
@@ -707,8 +724,14 @@ class Diagnosis:
             r = self.cross_validate(pair)
             self.pairs.append(r)
 
+    def score(self, r: CrossValidation) -> float:
+        """The selection's evidence for a set of effects [nats]: held-out log-likelihood ``-sum(z^2) / 2``
+        plus the log prior ratio of its values fitted to all the data (:meth:`log_prior`)."""
+        return -0.5 * float(np.sum(np.square(r.z_after))) + self.log_prior(self.fit_of(r.effects))
+
     def _select(self) -> None:
-        """Selection (module docstring): plausible only; a pair only when it beats the single."""
+        """Selection (module docstring): by held-out error and prior together; a value outside its usual
+        range is flagged, never refused; a pair only when it beats the single."""
         if self.verdict == "none":
             self.selection = {"rule": "no gap above the noise: nothing to explain"}
             return
@@ -736,96 +759,97 @@ class Diagnosis:
         p = self.problem
         held_any = np.any([h for _, h in self.folds], axis=0)
         z_nominal = p.z(p.baseline)[held_any]
+        nominal_score = -0.5 * float(np.sum(np.square(z_nominal)))
         singles = [self.cv[(r["effect"],)] for r in self.ranking]
         considered = []
+        judged: dict[tuple[str, ...], dict] = {}
+
+        def judge(r: CrossValidation, reference: np.ndarray, key: str) -> dict:
+            ok, checks = self.plausibility(self.fit_of(r.effects))
+            better, pval = significantly_better(r.z_after, reference)
+            left = r.data_after if r.data_after is not None else r.error_after
+            usable = all(c.get("usable", True) for c in checks)
+            at_floor = bool(left <= NOISE_FLOOR)
+            score = self.score(r)
+            entry = {
+                "effects": list(r.effects),
+                "heldout_error": r.error_after,
+                "plausible": ok,
+                key: better,
+                "p_value": pval,
+                "at_noise_floor": at_floor,
+                "usable": usable,
+                "log_prior": self.log_prior(self.fit_of(r.effects)),
+                "log_odds_vs_nominal": score - nominal_score,
+                "flags": [c["flag"] for c in checks if c.get("flag")],
+                "eligible": bool(better and (usable or at_floor) and score > nominal_score),
+            }
+            judged[r.effects] = {**entry, "score": score, "checks": checks}
+            considered.append(entry)
+            return judged[r.effects]
+
         best_single = None
         for r in singles:
-            ok, checks = self.plausibility(self.fit_of(r.effects))
-            better, pval = significantly_better(r.z_after, z_nominal)
-            considered.append(
-                {
-                    "effects": list(r.effects),
-                    "heldout_error": r.error_after,
-                    "plausible": ok,
-                    "beats_nominal": better,
-                    "p_value": pval,
-                }
-            )
-            if ok and better and best_single is None:
+            j = judge(r, z_nominal, "beats_nominal")
+            if not j["eligible"]:
+                continue
+            if best_single is None:
                 best_single = r
+            elif j["score"] > judged[best_single.effects]["score"] + PRIOR_ODDS:
+                best_single = r  # the prior and held-out data together favour it by more than 19 to 1
         chosen = best_single
         reference = best_single.z_after if best_single is not None else z_nominal
-        best_pair = None
         # a pair only where the single leaves a gap above the noise floor (Occam: nothing left to explain)
         left = (
             None
             if best_single is None
             else (best_single.data_after if best_single.data_after is not None else best_single.error_after)
         )
-        pairs = [] if left is not None and left <= 1.0 else getattr(self, "pairs", [])
+        pairs = [] if left is not None and left <= NOISE_FLOOR else getattr(self, "pairs", [])
+        floor_score = judged[best_single.effects]["score"] if best_single is not None else nominal_score
         for r in sorted(pairs, key=lambda r: r.error_after):
-            better, pval = significantly_better(r.z_after, reference)
-            entry = {
-                "effects": list(r.effects),
-                "heldout_error": r.error_after,
-                "plausible": None,
-                "beats_single" if best_single is not None else "beats_nominal": better,
-                "p_value": pval,
-            }
-            considered.append(entry)
-            if not better or best_pair is not None:
-                continue
-            ok, checks = self.plausibility(self.fit_of(r.effects))
-            entry["plausible"] = ok
-            if ok:
-                best_pair = r
-        if best_pair is not None:
-            chosen = best_pair
+            j = judge(r, reference, "beats_single" if best_single is not None else "beats_nominal")
+            if j["eligible"] and j["score"] > floor_score and chosen is best_single:
+                chosen = r
         rule = (
-            "the best plausible single candidate that beats the nominal model on held-out folds, or a plausible "
-            "pair that beats that single; never one that a better, implausible fit beats significantly"
+            "the first single candidate of the ranking that beats the nominal model significantly on held-out "
+            "folds with posterior odds above even (held-out log-likelihood plus log prior ratio), unless another "
+            "such candidate's odds are 19 times higher; a pair when the single leaves a gap above the noise "
+            "floor and the pair beats it significantly with higher odds; values outside their usual range are "
+            "flagged, not refused; a value the data do not determine (or pinned at the edge of the search) "
+            "is selected only when its candidate explains the held-out data to the noise floor"
         )
-        # the best held-out fit overall, and the best single one: when implausible, say so
+        # the best held-out fit overall, and the best single one: when not chosen and unusual, say why
         every = singles + list(getattr(self, "pairs", []))
         for pool, key in ((every, "best_implausible"), (singles, "best_single_implausible")):
             best = min(pool, key=lambda r: r.error_after) if pool else None
             if best is not None and (chosen is None or best.effects != chosen.effects):
                 ok, checks = self.plausibility(self.fit_of(best.effects))
                 if not ok:
+                    j = judged.get(best.effects)
                     entry = {
                         "effects": list(best.effects),
                         "heldout_error": best.error_after,
                         "why": _implausible_reasons(checks),
                     }
+                    if j is not None and chosen is not None:
+                        entry["log_odds_vs_selected"] = j["score"] - judged[chosen.effects]["score"]
                     ranked = next((r for r in self.ranking if (r["effect"],) == best.effects), None)
                     if ranked is not None:  # where the ranking (ties to the simpler) puts it
                         entry["rank"], entry["tied_with"] = ranked["rank"], list(ranked["tied_with"])
                     setattr(self, key, entry)
         if self.best_single_implausible == self.best_implausible:
             self.best_single_implausible = None
-        # ... and select nothing that an implausible fit of no more fitted parameters beats significantly
-        if chosen is not None:
-            size = _n_params(self.problem, chosen.effects)
-            rivals = [
-                r
-                for r in every
-                if _n_params(self.problem, r.effects) <= size
-                and r.effects != chosen.effects
-                and r.error_after < chosen.error_after
-            ]
-            for r in sorted(rivals, key=lambda r: r.error_after):
-                ok, checks = self.plausibility(self.fit_of(r.effects))
-                if not ok and significantly_better(r.z_after, chosen.z_after)[0]:
-                    self.best_implausible = {
-                        "effects": list(r.effects),
-                        "heldout_error": r.error_after,
-                        "why": _implausible_reasons(checks),
-                        "instead_of": list(chosen.effects),
-                    }
-                    chosen = None
-                    break
         self.selected = list(chosen.effects) if chosen is not None else []
         self.selection = {"rule": rule, "considered": considered}
+        if chosen is not None:
+            j = judged[chosen.effects]
+            self.selection.update(
+                {"log_odds_vs_nominal": j["log_odds_vs_nominal"], "log_prior": j["log_prior"], "flags": j["flags"]}
+            )
+            equivalent = self.friction_equivalent(self.fit_of(chosen.effects))
+            if equivalent is not None and not equivalent["separable"]:
+                self.selection["flags"] = self.selection["flags"] + ["steer_friction: " + equivalent["note"]]
         if parameters_note:
             self.selection["note"] = parameters_note
 
@@ -836,25 +860,14 @@ class Diagnosis:
         ``sqrt(2)`` times the RMS steer rate over the record, from a steer-rate signal, or from a
         steer-angle signal times the record's weave frequency.
         """
-        amplitudes = []
-        for k in self.record_rows:
-            f = self.records[k]
-            r = f.record
-            if "steer_rate" in r.signals and np.all(np.isfinite(r.signals["steer_rate"])):
-                x = r.signals["steer_rate"]
-                amplitudes.append(math.sqrt(2) * float(np.std(x)))
-            elif (
-                "steer_angle" in r.signals and np.all(np.isfinite(r.signals["steer_angle"])) and f.estimate is not None
-            ):
-                x = r.signals["steer_angle"]
-                amplitudes.append(math.sqrt(2) * float(np.std(x)) * abs(f.estimate.eigenvalue))
-        return float(np.median(amplitudes)) if amplitudes else None
+        amplitudes = self.steer_rate_amplitudes()
+        return float(np.median(amplitudes)) if amplitudes.size else None
 
     def plausible_range(self, name: str) -> tuple[float, float, str]:
-        """The plausible range of a fitted parameter and where it comes from."""
+        """The usual range of a fitted parameter and where it comes from (a value outside it is flagged)."""
         if name in self.model_input.plausible:
             return self.model_input.plausible[name]
-        param = next(p for e in EFFECTS.values() for p in e.parameters if p.name == name)
+        param = _parameter(name)
         lo, hi = param.literature
         if name == "c_steer":
             amplitude = self.steer_rate_amplitude()
@@ -871,8 +884,99 @@ class Diagnosis:
                 )
         return lo, hi, param.source
 
+    def steer_rate_amplitudes(self) -> np.ndarray:
+        """Each used record's steer-rate amplitude [rad/s] (as :meth:`steer_rate_amplitude`), where known."""
+        out = []
+        for k in self.record_rows:
+            f = self.records[k]
+            r = f.record
+            if "steer_rate" in r.signals and np.all(np.isfinite(r.signals["steer_rate"])):
+                out.append(math.sqrt(2) * float(np.std(r.signals["steer_rate"])))
+            elif (
+                "steer_angle" in r.signals and np.all(np.isfinite(r.signals["steer_angle"])) and f.estimate is not None
+            ):
+                x = r.signals["steer_angle"]
+                out.append(math.sqrt(2) * float(np.std(x)) * abs(f.estimate.eigenvalue))
+        return np.array(out, float)
+
+    def friction_equivalent(self, fit: EffectFit) -> dict | None:
+        """Coulomb plus viscous steer friction as the viscous damping it equals at the records' amplitude.
+
+        The describing function of Coulomb friction ``T`` on a sinusoidal steer rate of amplitude ``A`` is a
+        viscous damping ``4 T / (pi A)``, so ``c_eq = c_viscous + 4 T / (pi A)`` at the records' median
+        amplitude, with its standard error from the fit's covariance.  Records whose amplitudes span less
+        than a factor :data:`AMPLITUDE_SPREAD` (10th to 90th percentile) are decays of one amplitude: they
+        determine ``c_eq`` but not the split between Coulomb and viscous friction (``separable`` false).
+        ``None`` for a fit without steer friction or records without a steer signal.
+        """
+        if "steer_friction" not in fit.effects or "T_coulomb" not in fit.names:
+            return None
+        amplitudes = self.steer_rate_amplitudes()
+        amplitudes = amplitudes[np.isfinite(amplitudes) & (amplitudes > 0)]
+        if not amplitudes.size:
+            return None
+        a = float(np.median(amplitudes))
+        lo, hi = np.percentile(amplitudes, [10, 90])
+        spread = float(hi / lo)
+        i, j = fit.names.index("T_coulomb"), fit.names.index("c_viscous")
+        gradient = np.zeros(len(fit.names))
+        gradient[i], gradient[j] = 4 / (math.pi * a), 1.0
+        value = float(gradient @ fit.values)
+        if fit.covariance is not None and np.all(np.isfinite(fit.covariance)):
+            stderr = float(math.sqrt(max(gradient @ fit.covariance @ gradient, 0.0)))
+        else:
+            stderr = float(math.hypot(gradient[i] * fit.stderr[i], fit.stderr[j]))
+        separable = spread >= AMPLITUDE_SPREAD
+        return {
+            "c_equivalent": value,
+            "stderr": stderr,
+            "ci95": [max(value - 1.96 * stderr, 0.0), value + 1.96 * stderr],
+            "unit": "N m s/rad",
+            "amplitude": a,
+            "amplitude_spread": spread,
+            "separable": bool(separable),
+            "note": (
+                f"the records' steer-rate amplitudes span a factor {spread:.2g} (10th-90th percentile, median "
+                f"A = {a:.3g} rad/s)"
+                + (
+                    ": Coulomb and viscous friction are told apart by how the damping changes with amplitude"
+                    if separable
+                    else (
+                        ": decays of one amplitude, which cannot tell Coulomb from viscous friction; what they "
+                        f"determine is the equivalent viscous damping c_eq = c_viscous + 4 T_coulomb / (pi A) = "
+                        f"{value:.3g} [{max(value - 1.96 * stderr, 0.0):.3g}, {value + 1.96 * stderr:.3g}] "
+                        "N m s/rad, not the split"
+                    )
+                )
+            ),
+        }
+
+    def prior_of(self, name: str) -> Prior:
+        """The prior of a fitted parameter: the bicycle's own ``[plausible]`` range made a prior
+        (:func:`bikerider.gap.effects.prior_from_range`), else the registry's."""
+        if name in self.model_input.plausible:
+            lo, hi, why = self.model_input.plausible[name]
+            return prior_from_range(lo, hi, f"this bicycle's [plausible] table: {why}")
+        return _parameter(name).the_prior()
+
+    def log_prior(self, fit: EffectFit) -> float:
+        """``ln p(values) - ln p(modes)`` of a fit's values under their priors [nats, <= 0]: what the
+        selection weighs against the held-out log-likelihood (the benchmark shifts: ``-chi2 / 2`` of
+        their Gaussian prior)."""
+        total = -0.5 * fit.prior_chi2 if "parameters" in fit.effects else 0.0
+        for k, name in enumerate(fit.names):
+            if not name.startswith("parameters."):
+                total += self.prior_of(name).log_ratio(float(fit.values[k]))
+        return float(total)
+
     def plausibility(self, fit: EffectFit) -> tuple[bool, list[dict]]:
-        """Whether a fit is plausible (module docstring), with one check per fitted value."""
+        """Whether every fitted value is usual (module docstring), with one check per fitted value.
+
+        A check holds the value, its 95 % interval, the usual range and its source, the prior and its
+        log ratio, whether the data determine the value and whether it is pinned at a search bound, and a
+        ``flag`` (text) when the value lies outside the usual range.  ``usable`` is false only where the
+        data cannot carry the value (undetermined, or pinned at the edge of the search).
+        """
         from scipy.stats import chi2
 
         checks = []
@@ -889,7 +993,9 @@ class Diagnosis:
                     "value": fit.prior_chi2,
                     "literature": [0.0, limit],
                     "plausible": bool(good and not at),
+                    "usable": not at,
                     "at_bound": at,
+                    "log_prior": -0.5 * fit.prior_chi2,
                     "source": "the parameters' stated uncertainties (chi-square at 1 %)",
                 }
             )
@@ -898,34 +1004,50 @@ class Diagnosis:
             if name.startswith("parameters."):
                 continue
             lo, hi, source = self.plausible_range(name)
+            param = _parameter(name)
+            prior = self.prior_of(name)
             unit = fit.units[k]
             at_bound = name in pinned
+            ci = (float(fit.ci_low[k]), float(fit.ci_high[k]))
             if name == "m_arm":
                 # judge the arms by their inertia about the steer axis
                 inertia = arm_inertia(self.problem, fit.values[k])
-                (ilo, ihi), unit, source = LITERATURE_EXTRA["I_arm_steer"]
+                (lo, hi), unit, source = LITERATURE_EXTRA["I_arm_steer"]
                 scale = inertia / fit.values[k] if fit.values[k] > 0 else arm_inertia(self.problem, 1.0)
-                reach = fit.ci_high[k] * scale >= ilo and fit.ci_low[k] * scale <= ihi
-                value, rng, shown = inertia, [ilo, ihi], "I_arm_steer"
-                determined = math.isfinite(fit.stderr[k]) and fit.stderr[k] * scale <= UNDETERMINED * (ihi - ilo)
+                value, shown, ci = inertia, "I_arm_steer", (ci[0] * scale, ci[1] * scale)
+                determined = math.isfinite(fit.stderr[k]) and fit.stderr[k] * scale <= UNDETERMINED * (hi - lo)
             else:
-                reach = fit.ci_high[k] >= lo and fit.ci_low[k] <= hi
-                value, rng, shown = float(fit.values[k]), [lo, hi], name
+                value, shown = float(fit.values[k]), name
                 determined = math.isfinite(fit.stderr[k]) and fit.stderr[k] <= UNDETERMINED * max(hi - lo, 1e-12)
-            good = bool(reach and determined and not at_bound)
+            usual = bool(lo <= value <= hi)
+            flag = None
+            if not usual:
+                side = "above" if value > hi else "below"
+                precise = " (the data determine it: 95 % interval " if determined else " (95 % interval "
+                flag = (
+                    f"{shown} = {value:.3g} {unit}{precise}[{ci[0]:.3g}, {ci[1]:.3g}]) is {side} the usual "
+                    f"{lo:g}-{hi:.3g} {unit} from {source}"
+                    + (f": check {param.check}" if side == "above" and param.check else "")
+                )
+            good = bool(usual and determined and not at_bound)
             checks.append(
                 {
                     "name": shown,
                     "value": value,
                     "unit": unit,
-                    "literature": rng,
+                    "literature": [lo, hi],
                     "plausible": good,
-                    "in_range": bool(reach),
+                    "in_range": usual,
                     "determined": bool(determined),
                     "at_bound": bool(at_bound),
+                    "usable": bool(determined and not at_bound),
                     "bounds": [float(fit.lower[k]), float(fit.upper[k])],
-                    "ci95": [float(fit.ci_low[k]), float(fit.ci_high[k])],
+                    "ci95": list(ci),
                     "source": source,
+                    "prior": prior.describe(fit.units[k]),
+                    "prior_source": prior.source,
+                    "log_prior": prior.log_ratio(float(fit.values[k])),
+                    "flag": flag,
                 }
             )
             ok = ok and good
@@ -954,6 +1076,7 @@ class Diagnosis:
                     "data_error_after": entry["data_error_after"],
                     "data_shrink": entry["data_shrink"],
                     "folds": entry["folds"],
+                    "equivalent": self.friction_equivalent(fit),
                 }
             )
         pairs = []
@@ -968,7 +1091,14 @@ class Diagnosis:
             }
             fit = self.fit_of(r.effects)
             ok, checks = self.plausibility(fit)
-            entry.update({"plausible": ok, "parameters": _named_values(fit), "plausibility": checks})
+            entry.update(
+                {
+                    "plausible": ok,
+                    "parameters": _named_values(fit),
+                    "plausibility": checks,
+                    "equivalent": self.friction_equivalent(fit),
+                }
+            )
             pairs.append(entry)
         out = {
             "verdict": self.verdict,
@@ -1016,6 +1146,7 @@ class Diagnosis:
                 "data_error_after": cv.data_after,
                 "data_shrink": cv.data_shrink,
                 "parameters": _named_values(fit) if fit else {},
+                "equivalent": self.friction_equivalent(fit) if fit else None,
             }
         return out
 
@@ -1073,6 +1204,11 @@ def _named_values(fit: EffectFit | None) -> dict:
     }
 
 
+def _parameter(name: str) -> EffectParameter:
+    """The registry's entry of a fitted parameter, by name."""
+    return next(p for e in EFFECTS.values() for p in e.parameters if p.name == name)
+
+
 def arm_inertia(problem: GapProblem, m_arm: float) -> float:
     """Moment of inertia of the arm masses about the steer axis [kg m^2]."""
     g = problem.geometry.grips
@@ -1128,7 +1264,8 @@ def _implausible_reasons(checks: list[dict]) -> list[str]:
             )
         else:
             out.append(
-                f"{name} = {c['value']:.3g} {unit} outside the plausible {c['literature'][0]:g}-"
+                c.get("flag")
+                or f"{name} = {c['value']:.3g} {unit} outside the usual {c['literature'][0]:g}-"
                 f"{c['literature'][1]:.3g} {unit}"
             )
     return out

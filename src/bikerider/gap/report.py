@@ -150,26 +150,31 @@ def summary_text(result: dict) -> str:
         lines.append(f"  {name}: not applicable ({why})")
     lines.append("")
     lines.append("Selected: " + (", ".join(result["selected"]) if result["selected"] else "nothing"))
+    selection = result.get("selection", {})
+    if result["selected"] and selection.get("log_odds_vs_nominal") is not None:
+        lines.append(
+            f"  evidence against the nominal model: {selection['log_odds_vs_nominal']:.1f} nats (held-out "
+            f"log-likelihood plus the log prior ratio {selection['log_prior']:.2f} of its values)"
+        )
+    for flag in selection.get("flags", []):
+        lines.append(f"  flag: {flag}")
     single = result.get("best_single_implausible")
     if single:
         lines.append(
             f"The lowest held-out error of a single candidate ({single['heldout_error']:.3g}) is that of "
-            f"{'+'.join(single['effects'])}{_rank_phrase(single)}, which needs implausible values: "
+            f"{'+'.join(single['effects'])}{_rank_phrase(single)}, which needs unusual values: "
             + "; ".join(single["why"])
+            + _odds_phrase(single)
             + "."
         )
     bad = result.get("best_implausible")
     if bad:
         lines.append(
             f"The lowest held-out error of any fit, single or pair ({bad['heldout_error']:.3g}), is that of "
-            f"{'+'.join(bad['effects'])}{_rank_phrase(bad)}, which needs implausible values: "
+            f"{'+'.join(bad['effects'])}{_rank_phrase(bad)}, which needs unusual values: "
             + "; ".join(bad["why"])
-            + ". It is not selected"
-            + (
-                f"; the plausible {'+'.join(bad['instead_of'])} explains significantly less and is not selected either."
-                if bad.get("instead_of")
-                else "."
-            )
+            + _odds_phrase(bad)
+            + ". It is not selected."
         )
     if result["verdict"] == "none" and result["ranking"]:
         lines.append("No gap beyond the uncertainty of the data: nothing is selected.")
@@ -188,6 +193,14 @@ def summary_text(result: dict) -> str:
     for note in result["notes"]:
         lines.append(f"Note: {note}")
     return "\n".join(lines)
+
+
+def _odds_phrase(entry: dict) -> str:
+    """How the evidence (held-out log-likelihood plus log prior) compares with the selection's."""
+    odds = entry.get("log_odds_vs_selected")
+    if odds is None:
+        return ""
+    return f" (evidence {odds:+.1f} nats against the selection, prior included)"
 
 
 def markdown(result: dict, title: str, figures: list[tuple[str, str]]) -> str:
