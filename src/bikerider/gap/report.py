@@ -152,9 +152,12 @@ def summary_text(result: dict) -> str:
     lines.append("Selected: " + (", ".join(result["selected"]) if result["selected"] else "nothing"))
     selection = result.get("selection", {})
     if result["selected"] and selection.get("log_odds_vs_nominal") is not None:
+        lack = selection.get("lack_of_fit", 1.0)
         lines.append(
             f"  evidence against the nominal model: {selection['log_odds_vs_nominal']:.1f} nats (held-out "
-            f"log-likelihood plus the log prior ratio {selection['log_prior']:.2f} of its values)"
+            "log-likelihood"
+            + (f" with the noise inflated by the lack of fit s^2 = {lack:.3g}" if lack > 1.0 else "")
+            + f", plus the log prior ratio {selection['log_prior']:.2f} of its values)"
         )
     for flag in selection.get("flags", []):
         lines.append(f"  flag: {flag}")
@@ -200,7 +203,7 @@ def _odds_phrase(entry: dict) -> str:
     odds = entry.get("log_odds_vs_selected")
     if odds is None:
         return ""
-    return f" (evidence {odds:+.1f} nats against the selection, prior included)"
+    return f" (its evidence {odds:+.1f} nats beside the selection's, prior included)"
 
 
 def markdown(result: dict, title: str, figures: list[tuple[str, str]]) -> str:
