@@ -306,8 +306,57 @@ def section(trials: list[dict], goal: int) -> list[str]:
                 lines.append(
                     f"| {e} | {x.size} | {x.mean():+.3f} | {np.sqrt(np.mean(x**2)):.3f} | {x[np.argmax(np.abs(x))]:+.3f} |"
                 )
+    lines += _reading(trials, table, friction, pairs, rows)
     lines.append("")
     return lines
+
+
+def _reading(trials, table, friction, pairs, rows) -> list[str]:
+    """What the numbers say (the numbers computed here; the reasons from looking at the trials)."""
+    cover = [r for r in rows if r[0] != "steer_friction_records"]
+    k = sum(r[3] for r in cover)
+    n = sum(r[2] for r in cover)
+    low = [f"{r[0]} {r[1]} {_pct(r[3], r[2])}" for r in cover if r[2] and r[3] / r[2] < 0.9]
+    out = [
+        "",
+        "### Reading the results",
+        "",
+        f"* Coverage over every size of the table trials: {_pct(k, n)} (goal 90-97 %)"
+        + (f"; below 90 %: {'; '.join(low)}." if low else "."),
+        "  With this few trials per size, one miss moves a rate by several points: a coverage of 90 % measured",
+        "  on 20 trials has a 95 % binomial interval of about 70-99 %.",
+        "* Small effects hide: the smallest third of the drawn sizes is ranked first less often, as the",
+        "  parameters' uncertainty alone bends the weave as much (verdict `parameters` or `none`). That is the",
+        "  diagnosis being right about what the data carry, not a miss of the method.",
+        "* `steer_coulomb`: through eigenvalue tables Coulomb friction is named as the damping it acts as,",
+        "  and sized against `4 T / (pi A)`, the describing function of a sustained oscillation; a decay's",
+        "  amplitude falls within each run, so that reference is itself an approximation, and its bias here",
+        "  says how far the equivalent stretches, not only how the fit errs.",
+    ]
+    if friction:
+        t_rows = [r for r in rows if r[0] == "steer_friction_records" and r[1] == "T_coulomb"]
+        if t_rows:
+            r = t_rows[0]
+            viscous = [t["fitted"]["c_viscous"]["value"] for t in friction if "c_viscous" in t["fitted"]]
+            out += [
+                f"* Friction from records ({len(friction)} trials): `T_coulomb` median error {r[4]:+.0%}, coverage "
+                f"{_pct(r[3], r[2])}; the viscous part that is not there is fitted at a median "
+                f"{np.median(viscous) if viscous else math.nan:.2g} N m s/rad. The time-domain fit sizes pure",
+                "  Coulomb friction low, and the bias is not explained yet: the truth smooths the sign with `tanh(deltad / 0.02)`, the candidate with",
+                "  0.05 rad/s, which alone would push the fitted Coulomb level up, not down. Few of these trials",
+                "  select friction: the drawn sizes (half-Cauchy, scale 0.1 N m) are mostly small beside what the",
+                "  riderless bicycle's parameter uncertainty does to nine short records.",
+            ]
+    if pairs:
+        worst = max(pairs, key=lambda x: abs(x[1] - x[2]))
+        out += [
+            f"* Shrinkage: the largest error ({worst[1] - worst[2]:+.2f}, {worst[0]}) and the few others above",
+            "  0.1 come from the fresh runs as much as from the prediction: a fresh run whose weave the record",
+            "  fit gets wrong (one such run lay 16,000 standard errors from every model in trial 1009) leaves",
+            "  nothing a selection can remove, and a selection that reaches the noise floor on its held-out",
+            "  groups then 'achieves' nothing.",
+        ]
+    return out
 
 
 def _label(t: dict) -> str:
