@@ -67,9 +67,51 @@ def coverage_rows(trials: list[dict]) -> list[tuple]:
     return rows
 
 
+def _arm_inertia_factors() -> tuple[float, float]:
+    """Squared distance of the grips from the steer axis [m^2]: the diagnosis's default grips, the truth's.
+
+    The arms' mass the diagnosis fits sits at its default grips; the truth's at grips 8 cm higher and 2 cm
+    wider (``bikerider.gap.validation.TRUTH_GEOMETRY``): what the records carry is the arms' inertia about
+    the steer axis, ``m d^2``, which is scored beside the mass.
+    """
+    from bikerider.gap import validation as V
+    from bikerider.io.gap_model import load_model
+
+    root = Path(__file__).resolve().parents[2] / "src" / "bikerider" / "data" / "bicycleparameters"
+    model = load_model(
+        root / "bicycles/Rigid/Parameters/RigidBenchmark.txt", root / "riders/Jason/Parameters/JasonRigidBenchmark.txt"
+    )
+    v = model.parameters.values
+    lam, w, c = float(v["lam"]), float(v["w"]), float(v["c"])
+    axis = np.array([math.sin(lam), 0.0, math.cos(lam)])
+
+    def d2(g: dict) -> float:
+        rel = np.array([g["x_grip"] - (w + c), g["b_grip"], g["z_grip"]])
+        perp = rel - (rel @ axis) * axis
+        return float(perp @ perp)
+
+    return d2(model.geometry.grips), d2(V._truth_geometry(model)["grips"])
+
+
+def _with_arm_inertia(trials: list[dict]) -> list[dict]:
+    """Passive-arms trials with the arms' inertia about the steer axis scored beside their mass."""
+    if not any(t["effect"] == "passive_arms" for t in trials):
+        return trials
+    fitted_d2, truth_d2 = _arm_inertia_factors()
+    out = []
+    for t in trials:
+        if t["effect"] == "passive_arms" and "m_arm" in t["fitted"]:
+            t = json.loads(json.dumps(t))
+            f = t["fitted"]["m_arm"]
+            t["fitted"]["I_arm_steer"] = {"value": f["value"] * fitted_d2, "ci95": [x * fitted_d2 for x in f["ci95"]]}
+            t["reference"]["I_arm_steer"] = t["truth"]["m_arm"] * truth_d2
+        out.append(t)
+    return out
+
+
 def write_report(results: Path, doc: Path, goal: int) -> None:
     """Write part 4 into ``doc`` between the calibration markers (the rest is left as it is)."""
-    trials = load(results)
+    trials = _with_arm_inertia(load(results))
     lines = section(trials, goal)
     text = doc.read_text(encoding="utf-8") if doc.exists() else ""
     block = "\n".join([BEGIN, *lines, END])
@@ -248,7 +290,7 @@ def section(trials: list[dict], goal: int) -> list[str]:
             f"| {effect} | {name} | {n} | {_pct(inside, n)} | {bias:+.1%} | {rmse:.1%} | {mae:.3g} | {nsel} | "
             f"{_pct(insel, nsel)} |"
         )
-    before = load(BEFORE)
+    before = _with_arm_inertia(load(BEFORE))
     if before:
         now = {(t["effect"], t["seed"]): t for t in trials}
         pairs_before = [t for t in before if (t["effect"], t["seed"]) in now]
@@ -313,16 +355,36 @@ def section(trials: list[dict], goal: int) -> list[str]:
 
 def _reading(trials, table, friction, pairs, rows) -> list[str]:
     """What the numbers say (the numbers computed here; the reasons from looking at the trials)."""
-    cover = [r for r in rows if r[0] != "steer_friction_records"]
+    cover = [r for r in rows if r[0] != "steer_friction_records" and r[1] != "m_arm"]
     k = sum(r[3] for r in cover)
     n = sum(r[2] for r in cover)
     low = [f"{r[0]} {r[1]} {_pct(r[3], r[2])}" for r in cover if r[2] and r[3] / r[2] < 0.9]
+    split = {}
+    for rider in (False, True):
+        sub = [r for r in coverage_rows([t for t in table if t["rider"] == rider]) if r[1] != "m_arm"]
+        split[rider] = (sum(r[3] for r in sub), sum(r[2] for r in sub), [r for r in sub if r[2] and r[3] / r[2] < 0.9])
     out = [
         "",
         "### Reading the results",
         "",
-        f"* Coverage over every size of the table trials: {_pct(k, n)} (goal 90-97 %)"
-        + (f"; below 90 %: {'; '.join(low)}." if low else "."),
+        f"* Coverage over every size of the table trials (the arms by their inertia, not their mass): {_pct(k, n)}"
+        " (goal 90-97 %)" + (f"; below 90 %: {'; '.join(low)}." if low else "."),
+        f"* **Riderless {_pct(*split[False][:2])}, with the rider {_pct(*split[True][:2])}.** The shortfall is with",
+        "  the rider. With the rider, below 90 %: "
+        + ("; ".join(f"{r[0]} {r[1]} {_pct(r[3], r[2])}" for r in split[True][2]) or "none")
+        + ".",
+        "  For the rider's own effects part of it is the rider's geometry: the truth's differs from the",
+        "  diagnosis's default (upper body 45 % of the rider's mass instead of 50 %, hip axis 5 cm lower,",
+        "  grips 8 cm higher and 2 cm wider), as a real rider differs from any default, and the intervals carry",
+        "  the benchmark parameters' uncertainty but not the geometry's. The arms' mass is fitted at the",
+        "  default grips and is biased by the ratio of the grips' squared distances from the steer axis; their",
+        "  inertia about the axis, which is what the data carry (and what the usual range judges), is scored",
+        "  beside it. But the truths without an upper body or arms (steer stiffness, tyres, Coulomb friction)",
+        "  fall short with the rider too, where the truth's rider geometry plays no part: **not explained yet**.",
+        "  Suspects: the weave eigenvalue fitted from a 3-s roll-rate record at 4.5-9 m/s carries an extraction",
+        "  bias beyond its standard error, which tables (unlike records, compared by indirect inference) do not",
+        "  model; and the first-order propagation of the parameters' uncertainty. Riderless, the intervals meet",
+        "  the goal; with the rider they are too narrow.",
         "  With this few trials per size, one miss moves a rate by several points: a coverage of 90 % measured",
         "  on 20 trials has a 95 % binomial interval of about 70-99 %.",
         "* Small effects hide: the smallest third of the drawn sizes is ranked first less often, as the",
