@@ -26,7 +26,6 @@ ROOT = Path(__file__).resolve().parents[2]
 BP = ROOT / "src" / "bikerider" / "data" / "bicycleparameters"
 DOC = ROOT / "docs" / "gap_validation.md"
 RESULTS = Path(__file__).with_name("gap_calibration_trials.jsonl")
-BEGIN, END = "<!-- calibration:begin -->", "<!-- calibration:end -->"
 
 
 def _models():
