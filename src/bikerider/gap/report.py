@@ -617,7 +617,8 @@ def plot_ranking(result: dict):
         ax.legend(fontsize=7)
     fig.suptitle(
         "Candidates and pairs fitted on training folds, scored on held-out folds: each line from the nominal "
-        "model's error to the candidate's\n(green: plausible values; orange: implausible; grey: pair not judged)",
+        "model's error to the candidate's\n(green: usual values; orange: a value outside its usual range or not "
+        "determined, flagged; grey: pair not judged)",
         fontsize=8,
     )
     fig.tight_layout()
@@ -651,7 +652,7 @@ def plot_effects(diagnosis):
         fit = diagnosis.fit_of(effects)
         scale = fit.config.get("speed_sensor", {}).get("speed_scale", 1.0)
         plausible, _ = diagnosis.plausibility(fit)
-        label = "+".join(effects) + ("" if plausible else " (implausible)")
+        label = "+".join(effects) + ("" if plausible else " (unusual values)")
         curve = weave_curve(p.fitted_model(fit), grid, law, nominal, scale)
         style = "-" if len(effects) == 1 else ":"
         axes[0].plot(grid, curve.real, style, label=label)
