@@ -210,3 +210,28 @@ def test_docs_list_every_prior_as_the_registry_has_it():
         for p in effect.parameters:
             prior = p.the_prior()
             assert f"| `{p.name}` |" in text and prior.describe(p.unit) in text and prior.source in text, p.name
+
+
+def test_records_of_a_strong_damper_select_it_at_the_noise_floor_and_flag_it():
+    # the case from records: a steer damping far above the usual range (a rider's hands, a
+    # motor's back-EMF) explains the held-out records to the noise floor; a fixed plausible range made
+    # that "Selected: nothing"
+    from dataclasses import replace
+
+    from bikerider.gap import validation as V
+    from bikerider.gap.data import CanonicalData, EigenvalueData
+    from bikerider.gap.records import fit_records
+
+    model = load_model(BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt")
+    model = replace(model, plausible=dict(V.STEER_MOTOR))
+    truth = V.Truth("viscous", ("steer_damping",), {"c_steer": 1.2}, "viscous 1.2 N m s/rad")
+    rng = np.random.default_rng(5)
+    records = fit_records(V.measure_records(V.TruthSimulator(model, truth, rng), V.QUICK_RECORDS, rng))
+    effects = ("parameters", "steer_damping", "steer_inertia", "steer_friction")
+    out = Diagnosis(model, EigenvalueData.empty(), CanonicalData.empty(), effects, records).as_dict()
+    first = out["ranking"][0]
+    assert first["effect"] == "steer_damping" and first["data_error_after"] < 1.0  # at the noise floor
+    c = first["parameters"]["c_steer"]
+    assert c["ci95"][0] <= 1.2 <= c["ci95"][1]
+    assert "steer_damping" in out["selected"]
+    assert any(f.startswith("c_steer = ") and "above the usual" in f for f in out["selection"]["flags"])
