@@ -52,15 +52,16 @@ def test_json_has_the_documented_keys_and_finds_the_hidden_friction(capsys):
         assert key in out
 
 
-def test_eigenvalues_alone_do_not_make_the_friction_damping_plausible(capsys):
-    # Without records the 1.2 N m s/rad the data need is judged as viscous damping (0.05-0.5): it is
-    # not selected, and the report says what the best fit needs.
+def test_eigenvalues_alone_select_the_friction_damping_and_flag_it(capsys):
+    # Without records the 1.1 N m s/rad the data need lies above the usual viscous range (0.05-0.5); the
+    # data determine it, so it is selected (a prior, not a wall) and flagged with what to check.  Before
+    # issue 21 it was refused as implausible and nothing was selected.
     assert main(["gap", *MODEL, "--data", EXAMPLE, "--effects", "steer_damping,steer_inertia", "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
     assert out["ranking"][0]["effect"] == "steer_damping" and not out["ranking"][0]["plausible"]
-    assert out["selected"] == []
-    assert out["best_implausible"]["effects"] == ["steer_damping"]
-    assert any("c_steer" in why and "outside the plausible" in why for why in out["best_implausible"]["why"])
+    assert out["selected"] == ["steer_damping"]
+    flags = out["selection"]["flags"]
+    assert any(f.startswith("c_steer = ") and "above the usual 0.05-0.5" in f and "check" in f for f in flags)
 
 
 def test_text_and_report(tmp_path, capsys):

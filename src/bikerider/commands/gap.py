@@ -26,8 +26,9 @@ def add_parser(subparsers) -> None:
             "known control laws: map the gap against the combined uncertainty of data and parameters, test "
             "whether plausible parameter errors explain it, rank candidate unmodelled effects (steer damping, "
             "inertia, stiffness, friction, passive arms, rider lean, tyre slip, speed sensor) and pairs of them "
-            "by their error on held-out groups of data, and report how much of the gap the selected, plausible "
-            "effects remove. See docs/gap.md."
+            "by their error on held-out groups of data, select by that error and each parameter's literature "
+            "prior together (values outside their usual range flagged), and report how much of the gap the "
+            "selected effects remove. See docs/gap.md."
         ),
     )
     p.add_argument(

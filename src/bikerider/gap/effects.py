@@ -1,15 +1,20 @@
-"""The candidate unmodelled effects: their physical parameters, units and literature ranges.
+"""The candidate unmodelled effects: their physical parameters, units, usual ranges and priors.
 
-Each effect names the parameters the diagnosis fits, their bounds (what is physically possible)
-and their literature range (what is typical).  A fitted value whose 95 % confidence interval does
-not reach the literature range is flagged implausible.  Ranges are from the table in
-``data/gap/README.md`` of the reference material (sources quoted per parameter); the models
-themselves are derived in ``derive/gap_effects.py``.
+Each effect names the parameters the diagnosis fits, their bounds (what is physically possible, or
+the edge of the search), their usual range (what the literature measured: a value outside it is
+flagged, not refused) and their prior (:class:`Prior`, a distribution with its source), which the
+selection weighs as evidence against the held-out data (:mod:`bikerider.gap.diagnosis`).  Ranges and
+priors are from the table in ``data/gap/README.md`` of the reference material and the sources quoted
+per parameter (``docs/gap.md``, section "Priors"); the models themselves are derived in
+``derive/gap_effects.py``.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
+
+import numpy as np
 
 EFFECT_NAMES = (
     "parameters",
@@ -33,6 +38,87 @@ COULOMB_RANGE = (0.02, 0.15)
 
 
 @dataclass(frozen=True)
+class Prior:
+    """A prior distribution of one candidate parameter, with its source.
+
+    Attributes
+    ----------
+    kind : str
+        ``"lognormal"`` (a positive size: ``centre`` the median, ``spread`` the geometric standard
+        deviation, a factor above 1), ``"halfcauchy"`` (a size whose typical value may be zero:
+        ``centre`` unused, ``spread`` the scale; heavy tails, so that data can overrule it) or
+        ``"normal"`` (``centre`` the mean, ``spread`` the standard deviation).
+    centre, spread : float
+    source : str
+        Where it comes from.
+    broad : bool
+        Made broad for lack of measured values (said in the output and the docs).
+    """
+
+    kind: str
+    centre: float
+    spread: float
+    source: str
+    broad: bool = False
+
+    def log_ratio(self, x: float) -> float:
+        """``ln p(x) - ln p(mode)`` (0 at the most probable value, negative elsewhere): the evidence, in
+        nats, a fitted value ``x`` loses to its prior.  Densities of a lognormal prior are taken per unit
+        of ``ln x`` (the scale on which a size is uncertain), so the ratio does not depend on units."""
+        if self.kind == "normal":
+            return -0.5 * ((x - self.centre) / self.spread) ** 2
+        if self.kind == "halfcauchy":
+            return -math.log1p((max(x, 0.0) / self.spread) ** 2)
+        # lognormal; a value at zero (the effect absent) is taken as a millionth of the median
+        u = math.log(max(x, 1e-6 * self.centre) / self.centre) / math.log(self.spread)
+        return -0.5 * u * u
+
+    def interval(self, p: float = 0.95) -> tuple[float, float]:
+        """The central (half-Cauchy: lower) interval holding probability ``p``."""
+        from scipy.stats import norm
+
+        if self.kind == "normal":
+            z = float(norm.ppf(0.5 + p / 2))
+            return self.centre - z * self.spread, self.centre + z * self.spread
+        if self.kind == "halfcauchy":
+            return 0.0, self.spread * math.tan(math.pi * p / 2)
+        z = float(norm.ppf(0.5 + p / 2))
+        return self.centre / self.spread**z, self.centre * self.spread**z
+
+    def sample(self, rng: np.random.Generator, p: float = 0.95) -> float:
+        """A draw from the prior, restricted to its :meth:`interval` of probability ``p``."""
+        lo, hi = self.interval(p)
+        while True:
+            if self.kind == "normal":
+                x = self.centre + self.spread * float(rng.standard_normal())
+            elif self.kind == "halfcauchy":
+                x = abs(self.spread * float(rng.standard_cauchy()))
+            else:
+                x = self.centre * self.spread ** float(rng.standard_normal())
+            if lo <= x <= hi:
+                return x
+
+    def describe(self, unit: str) -> str:
+        """The prior in words, e.g. ``lognormal, median 0.3 N m s/rad, 95 % within 0.035-2.6``."""
+        lo, hi = self.interval()
+        if self.kind == "normal":
+            head = f"normal, mean {self.centre:.3g} {unit}, sd {self.spread:.3g}"
+        elif self.kind == "halfcauchy":
+            head = f"half-Cauchy, scale {self.spread:.3g} {unit}"
+        else:
+            head = f"lognormal, median {self.centre:.3g} {unit}, factor {self.spread:.3g}"
+        return f"{head}, 95 % within {lo:.3g}-{hi:.3g}" + (" (broad: few measured values)" if self.broad else "")
+
+
+def prior_from_range(lo: float, hi: float, source: str) -> Prior:
+    """The prior a stated range ``[lo, hi]`` makes (a bicycle's own ``[plausible]`` table): lognormal with
+    95 % inside the range when ``lo > 0``, else half-Cauchy with its 80 % point at ``hi``."""
+    if lo > 0 and hi > lo:
+        return Prior("lognormal", math.sqrt(lo * hi), math.exp(math.log(hi / lo) / (2 * 1.959964)), source)
+    return Prior("halfcauchy", 0.0, max(hi, 1e-12) / math.tan(math.pi * 0.8 / 2), source)
+
+
+@dataclass(frozen=True)
 class EffectParameter:
     """One fitted parameter of an effect.
 
@@ -49,6 +135,11 @@ class EffectParameter:
         Starting value of the fit (inside the literature range).
     source : str
         Where the literature range comes from.
+    prior : Prior or None
+        The prior weighed in the selection (``None``: derived from the literature range by
+        :func:`prior_from_range`).
+    check : str
+        What to check when a fitted value lies above the usual range (what else could make it large).
     """
 
     name: str
@@ -57,6 +148,12 @@ class EffectParameter:
     literature: tuple[float, float]
     start: float
     source: str
+    prior: Prior | None = None
+    check: str = ""
+
+    def the_prior(self) -> Prior:
+        """:attr:`prior`, or the one the literature range makes."""
+        return self.prior if self.prior is not None else prior_from_range(*self.literature, self.source)
 
 
 @dataclass(frozen=True)
@@ -85,6 +182,16 @@ class Effect:
 
 
 _TABLE = "data/gap/README.md literature table"
+C_STEER_PRIOR = (
+    f"{_TABLE}: bearings and seals 0.05-0.5 N m s/rad (Davis bicycle 0.34 +/- 0.04, Moore 2012); hands on "
+    "the bar 0.5-3 N m s/rad (passive arms, same table); no measured back-EMF damping of a steer motor in "
+    "the reference material, and Coulomb friction acts as a viscous damping 4 T / (pi A) at steer-rate "
+    "amplitude A: broad"
+)
+C_STEER_CHECK = (
+    "a rider's hands on the bar, a steer motor's back-EMF, a steering damper, or Coulomb friction acting "
+    "as its linear equivalent 4 T / (pi A) at the steer-rate amplitude A of the runs"
+)
 
 EFFECTS: dict[str, Effect] = {
     "parameters": Effect(
@@ -103,6 +210,8 @@ EFFECTS: dict[str, Effect] = {
                 (0.05, 0.5),
                 0.3,
                 f"{_TABLE}: steer viscous damping 0.05-0.5 N m s/rad (Davis bicycle 0.34, Moore 2012)",
+                Prior("lognormal", 0.3, 3.0, C_STEER_PRIOR, broad=True),
+                C_STEER_CHECK,
             ),
         ),
     ),
@@ -117,6 +226,16 @@ EFFECTS: dict[str, Effect] = {
                 (0.05, 0.3),
                 0.15,
                 f"{_TABLE}: passive arms, inertia about the steer axis 0.05-0.3 kg m^2",
+                Prior(
+                    "lognormal",
+                    0.1,
+                    2.5,
+                    f"{_TABLE}: hands and arms 0.05-0.3 kg m^2 about the steer axis; no measured inertia of "
+                    "accessories or of a steer motor's rotor through its gearbox in the reference material",
+                    broad=True,
+                ),
+                "hands or arms heavier than usual, a steer motor's rotor (its inertia times the gear ratio "
+                "squared), a basket or a load on the handlebar",
             ),
         ),
     ),
@@ -131,6 +250,8 @@ EFFECTS: dict[str, Effect] = {
                 (0.0, 10.0),
                 3.0,
                 f"{_TABLE}: passive arms, steer stiffness 0-10 N m/rad",
+                Prior("halfcauchy", 0.0, 3.0, f"{_TABLE}: passive arms, steer stiffness 0-10 N m/rad"),
+                "cables or a spring on the steer, a steer motor's position control, a rider holding the bar",
             ),
         ),
     ),
@@ -147,6 +268,14 @@ EFFECTS: dict[str, Effect] = {
                 2.0,
                 f"{_TABLE}: inertia about the steer axis 0.05-0.3 kg m^2, i.e. about 0.6-3.5 kg "
                 "at grips 0.29 m from the bicycle's plane (checked on the inertia, see plausibility)",
+                Prior(
+                    "lognormal",
+                    1.45,
+                    1.6,
+                    f"{_TABLE}: inertia about the steer axis 0.05-0.3 kg m^2, i.e. about 0.6-3.5 kg at grips "
+                    "0.29 m from the bicycle's plane",
+                ),
+                "the grips' place (the arms' inertia grows with the square of their distance from the axis)",
             ),
             EffectParameter(
                 "k_arm",
@@ -155,6 +284,8 @@ EFFECTS: dict[str, Effect] = {
                 (0.0, 10.0),
                 3.0,
                 f"{_TABLE}: passive arms, steer stiffness 0-10 N m/rad",
+                Prior("halfcauchy", 0.0, 3.0, f"{_TABLE}: passive arms, steer stiffness 0-10 N m/rad"),
+                "a rider gripping the bar firmly (arm stiffness grows with muscle co-contraction)",
             ),
             EffectParameter(
                 "c_arm",
@@ -163,6 +294,8 @@ EFFECTS: dict[str, Effect] = {
                 (0.5, 3.0),
                 1.0,
                 f"{_TABLE}: passive arms, steer damping 0.5-3 N m s/rad",
+                Prior("lognormal", 1.2, 1.6, f"{_TABLE}: passive arms, steer damping 0.5-3 N m s/rad"),
+                "a firm grip, or steer damping of the bicycle itself (bearings, a steer motor) beside the arms",
             ),
         ),
         needs_rider=True,
@@ -179,6 +312,14 @@ EFFECTS: dict[str, Effect] = {
                 (64.0, 256.0),
                 128.0,
                 f"{_TABLE}: about 128 N m/rad (Moore 2012); range taken as half to twice that value",
+                Prior(
+                    "lognormal",
+                    128.0,
+                    2.0,
+                    f"{_TABLE}: about 128 N m/rad (Moore 2012), one estimate: spread taken as a factor 2",
+                    broad=True,
+                ),
+                "a rider bracing the upper body (the stiffness grows with muscle tone)",
             ),
             EffectParameter(
                 "c_lean",
@@ -187,6 +328,14 @@ EFFECTS: dict[str, Effect] = {
                 (25.0, 100.0),
                 50.0,
                 f"{_TABLE}: about 50 N m s/rad (Moore 2012); range taken as half to twice that value",
+                Prior(
+                    "lognormal",
+                    50.0,
+                    2.0,
+                    f"{_TABLE}: about 50 N m s/rad (Moore 2012), one estimate: spread taken as a factor 2",
+                    broad=True,
+                ),
+                "a rider bracing the upper body",
             ),
         ),
         needs_rider=True,
@@ -203,9 +352,41 @@ EFFECTS: dict[str, Effect] = {
                 (10.0, 17.0),
                 13.0,
                 f"{_TABLE}: cornering stiffness / normal load 10-17 per rad",
+                Prior(
+                    "lognormal",
+                    13.0,
+                    1.15,
+                    f"{_TABLE}: cornering stiffness / normal load 10-17 per rad; the Magic-Formula "
+                    "Schwalbe Energizer Plus 28x1.75 (Dell'Orto et al. 2023) linearised: 10-16 per rad at "
+                    "300-600 N and 300-500 kPa (data/gap/tyres)",
+                ),
+                "tyre pressure, the load on each wheel, a tyre of another kind (knobbly, wide, tubular)",
             ),
-            EffectParameter("sigma_t", "m", (0.005, 1.0), (0.1, 0.3), 0.2, f"{_TABLE}: relaxation length 0.1-0.3 m"),
-            EffectParameter("t_p", "m", (0.0, 0.1), (0.012, 0.026), 0.019, f"{_TABLE}: pneumatic trail 12-26 mm"),
+            EffectParameter(
+                "sigma_t",
+                "m",
+                (0.005, 1.0),
+                (0.1, 0.3),
+                0.2,
+                f"{_TABLE}: relaxation length 0.1-0.3 m",
+                Prior("lognormal", 0.17, 1.35, f"{_TABLE}: relaxation length 0.1-0.3 m"),
+                "tyre pressure and width; weave eigenvalues determine it poorly (docs/gap.md, Limits)",
+            ),
+            EffectParameter(
+                "t_p",
+                "m",
+                (0.0, 0.1),
+                (0.012, 0.026),
+                0.019,
+                f"{_TABLE}: pneumatic trail 12-26 mm",
+                Prior(
+                    "lognormal",
+                    0.018,
+                    1.2,
+                    f"{_TABLE}: pneumatic trail 12-26 mm (the Magic-Formula tyre of data/gap/tyres, linearised)",
+                ),
+                "tyre pressure and load",
+            ),
         ),
         fixed={"c_gamma": 0.8},
     ),
@@ -223,6 +404,14 @@ EFFECTS: dict[str, Effect] = {
                 "a wheel encoder reads the speed within a few per cent (tyre deflection changes the rolling "
                 "radius); the SBW bicycle's encoder against its treadmill: 0.97-1.02 (Pasma 2024 calibration, "
                 "recorded = 1.0662 true - 0.128 m/s, over 1.5-5 m/s)",
+                Prior(
+                    "normal",
+                    1.0,
+                    0.025,
+                    "a wheel encoder within a few per cent (tyre deflection changes the rolling radius); the "
+                    "SBW bicycle's encoder against its treadmill 0.97-1.02 (Pasma 2024 calibration)",
+                ),
+                "the encoder's rolling radius, a treadmill's belt speed calibration",
             ),
         ),
     ),
@@ -238,6 +427,14 @@ EFFECTS: dict[str, Effect] = {
                 COULOMB_RANGE,
                 0.05,
                 f"{_TABLE}: steer Coulomb friction 0.02-0.15 N m (Davis bicycle 0.15, Moore 2012)",
+                Prior(
+                    "halfcauchy",
+                    0.0,
+                    0.1,
+                    f"{_TABLE}: steer Coulomb friction 0.02-0.15 N m; Davis bicycle 0.15 +/- 0.05 N m "
+                    "(Moore 2012); a steer motor's gearbox and seals: no measured value here (heavy tails)",
+                ),
+                "a steer motor's gearbox or brushes, tight headset bearings or seals, cables rubbing",
             ),
             EffectParameter(
                 "c_viscous",
@@ -246,6 +443,14 @@ EFFECTS: dict[str, Effect] = {
                 (0.05, 0.5),
                 0.2,
                 f"{_TABLE}: steer viscous damping 0.05-0.5 N m s/rad (Davis bicycle 0.34, Moore 2012)",
+                Prior(
+                    "halfcauchy",
+                    0.0,
+                    0.3,
+                    f"{_TABLE}: steer viscous damping 0.05-0.5 N m s/rad; Davis bicycle 0.34 +/- 0.04 N m s/rad "
+                    "(Moore 2012); zero allowed (pure Coulomb friction)",
+                ),
+                "a steer motor's back-EMF, a steering damper, grease in the bearings",
             ),
         ),
         needs_records=True,

@@ -198,26 +198,34 @@ def summary_text(result: dict) -> str:
         lines.append(f"  {name}: not applicable ({why})")
     lines.append("")
     lines.append("Selected: " + (", ".join(result["selected"]) if result["selected"] else "nothing"))
+    selection = result.get("selection", {})
+    if result["selected"] and selection.get("log_odds_vs_nominal") is not None:
+        lack = selection.get("lack_of_fit", 1.0)
+        lines.append(
+            f"  evidence against the nominal model: {selection['log_odds_vs_nominal']:.1f} nats (held-out "
+            "log-likelihood"
+            + (f" with the noise inflated by the lack of fit s^2 = {lack:.3g}" if lack > 1.0 else "")
+            + f", plus the log prior ratio {selection['log_prior']:.2f} of its values)"
+        )
+    for flag in selection.get("flags", []):
+        lines.append(f"  flag: {flag}")
     single = result.get("best_single_implausible")
     if single:
         lines.append(
             f"The lowest held-out error of a single candidate ({single['heldout_error']:.3g}) is that of "
-            f"{'+'.join(single['effects'])}{_rank_phrase(single)}, which needs implausible values: "
+            f"{'+'.join(single['effects'])}{_rank_phrase(single)}, which needs unusual values: "
             + "; ".join(single["why"])
+            + _odds_phrase(single)
             + "."
         )
     bad = result.get("best_implausible")
     if bad:
         lines.append(
             f"The lowest held-out error of any fit, single or pair ({bad['heldout_error']:.3g}), is that of "
-            f"{'+'.join(bad['effects'])}{_rank_phrase(bad)}, which needs implausible values: "
+            f"{'+'.join(bad['effects'])}{_rank_phrase(bad)}, which needs unusual values: "
             + "; ".join(bad["why"])
-            + ". It is not selected"
-            + (
-                f"; the plausible {'+'.join(bad['instead_of'])} explains significantly less and is not selected either."
-                if bad.get("instead_of")
-                else "."
-            )
+            + _odds_phrase(bad)
+            + ". It is not selected."
         )
     if result["verdict"] == "none" and result["ranking"]:
         lines.append("No gap beyond the uncertainty of the data: nothing is selected.")
@@ -236,6 +244,14 @@ def summary_text(result: dict) -> str:
     for note in result["notes"]:
         lines.append(f"Note: {note}")
     return "\n".join(lines)
+
+
+def _odds_phrase(entry: dict) -> str:
+    """How the evidence (held-out log-likelihood plus log prior) compares with the selection's."""
+    odds = entry.get("log_odds_vs_selected")
+    if odds is None:
+        return ""
+    return f" (its evidence {odds:+.1f} nats beside the selection's, prior included)"
 
 
 def markdown(result: dict, title: str, figures: list[tuple[str, str]]) -> str:
@@ -649,7 +665,8 @@ def plot_ranking(result: dict):
         ax.legend(fontsize=7)
     fig.suptitle(
         "Candidates and pairs fitted on training folds, scored on held-out folds: each line from the nominal "
-        "model's error to the candidate's\n(green: plausible values; orange: implausible; grey: pair not judged)",
+        "model's error to the candidate's\n(green: usual values; orange: a value outside its usual range or not "
+        "determined, flagged; grey: pair not judged)",
         fontsize=8,
     )
     fig.tight_layout()
@@ -709,7 +726,7 @@ def plot_effects(diagnosis):
         plausible, _ = diagnosis.plausibility(fit)
         curve = weave_curve(p.fitted_model(fit), grid, law, nominal, scale)
         at_nominal = bool(np.nanmax(np.abs(curve - base)) < 1e-3 * scale_of_base) if np.isfinite(curve).any() else False
-        label = "+".join(effects) + ("" if plausible else " (implausible)")
+        label = "+".join(effects) + ("" if plausible else " (unusual values)")
         if effects == selected:
             label += " (selected)"
         if at_nominal:

@@ -22,6 +22,10 @@ the candidate models but the benchmark parameters' meaning, and the diagnosis ru
 
 The shrinkage the diagnosis predicts (held-out, on the data it has) is compared with the shrinkage
 the selected effects achieve on a fresh data set from the same truth (new kicks, noise, speeds).
+
+The calibration study (:func:`run_trial`, :func:`run_friction_trial`; ``docs/scripts/gap_calibration.py``)
+repeats short trials per candidate effect with the sizes drawn over the candidate's prior
+(:data:`CALIBRATION_EFFECTS`) and scores identification, the fitted sizes' 95 % intervals and bias.
 """
 
 from __future__ import annotations
@@ -446,9 +450,13 @@ def _move_arms(v: dict[str, float], m_arm: float, grips: dict[str, float]) -> di
 # Measuring, diagnosing, scoring
 # ---------------------------------------------------------------------------------------------
 def measure(
-    simulator: TruthSimulator, protocol: Protocol, rng: np.random.Generator
+    simulator: TruthSimulator, protocol: Protocol, rng: np.random.Generator, amplitudes: list[float] | None = None
 ) -> tuple[EigenvalueData, list[str]]:
-    """Run every session of the protocol and extract the weave eigenvalues as from real runs."""
+    """Run every session of the protocol and extract the weave eigenvalues as from real runs.
+
+    ``amplitudes``, when given, receives each fitted run's steer-rate amplitude (``sqrt(2)`` times its
+    RMS over the fitted window, as :meth:`bikerider.gap.diagnosis.Diagnosis.steer_rate_amplitudes`).
+    """
     from bikerider.gap.extraction import weave_eigenvalue
 
     rows = {k: [] for k in ("speed", "value", "rs", "is", "group", "gains")}
@@ -457,7 +465,10 @@ def measure(
         for nominal_speed in session.speeds:
             speed = nominal_speed + protocol.speed_jitter * float(rng.uniform(-1, 1))
             kick = (float(rng.choice([-1, 1]) * rng.uniform(0.2, 0.4)), float(rng.uniform(-0.8, 0.8)))
-            t, roll_rate = simulator.run(speed, session.gains, kick, protocol.duration, protocol.rate)
+            t, states = simulator.states(
+                speed, session.gains, {"phid": kick[0], "deltad": kick[1]}, protocol.duration, protocol.rate
+            )
+            roll_rate = states["phid"]
             y = roll_rate + protocol.gyro_noise * rng.standard_normal(roll_rate.size)
             keep = t >= protocol.start
             try:
@@ -465,6 +476,8 @@ def measure(
             except FitError as exc:
                 notes.append(f"{session.group} {speed:.2f} m/s: no weave fitted ({exc})")
                 continue
+            if amplitudes is not None:
+                amplitudes.append(math.sqrt(2) * float(np.std(states["deltad"][keep])))
             rows["speed"].append(speed + protocol.speed_noise * float(rng.standard_normal()))
             rows["value"].append(complex(est.eigenvalue.real, abs(est.eigenvalue.imag)))
             rows["rs"].append(est.real_sigma)
@@ -871,3 +884,253 @@ RECORD_CASES = [
     ("sbw_null", 307),
 ]
 """The documented record cases: three truths of two seeds and two null cases."""
+
+
+# ---------------------------------------------------------------------------------------------
+# Calibration: many short trials per candidate effect, sizes drawn over its prior
+# ---------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class CalibrationEffect:
+    """A hidden effect of the calibration study and the candidate that stands for it.
+
+    Attributes
+    ----------
+    name : str
+        The truth's label.
+    candidate : str
+        The candidate whose fitted sizes are scored (its intervals' coverage, its bias).
+    sizes : tuple of str
+        The truth's parameters drawn from the candidate's priors (same names as the candidate's).
+    fixed : dict
+        Truth values held fixed.
+    rider : str
+        ``"riderless"``, ``"rider"`` or ``"both"`` (alternating trials).
+    """
+
+    name: str
+    candidate: str
+    sizes: tuple[str, ...]
+    fixed: dict[str, float] = field(default_factory=dict)
+    rider: str = "both"
+
+
+CALIBRATION_EFFECTS: tuple[CalibrationEffect, ...] = (
+    CalibrationEffect("steer_damping", "steer_damping", ("c_steer",)),
+    CalibrationEffect("steer_coulomb", "steer_damping", ("T_coulomb",)),
+    CalibrationEffect("steer_inertia", "steer_inertia", ("I_steer",)),
+    CalibrationEffect("steer_stiffness", "steer_stiffness", ("k_steer",)),
+    CalibrationEffect("passive_arms", "passive_arms", ("m_arm", "k_arm", "c_arm"), rider="rider"),
+    CalibrationEffect("rider_lean", "rider_lean", ("k_lean", "c_lean"), rider="rider"),
+    CalibrationEffect("tyre_slip", "tyre_slip", ("c_alpha", "sigma_t", "t_p"), {"c_gamma": 0.8, "mu": 1.0}),
+)
+"""The calibrated effects.  ``steer_coulomb`` is pure Coulomb steer friction simulated nonlinearly in time,
+which a table of eigenvalues can only size as a viscous damping: its size is scored against the
+describing-function equivalent ``4 T / (pi A)`` at the runs' median steer-rate amplitude ``A``."""
+
+CALIBRATION_DRAW = {"halfcauchy": 0.8}
+"""Probability of the prior's interval the sizes are drawn from (0.95 unless named here: a half-Cauchy's
+95 % reaches 12.7 times its scale, beyond any bicycle; its 80 % reaches 3.1 times)."""
+
+CALIBRATION_RIDER = Protocol(
+    (
+        Session("day1", (5.5, 7.0, 8.5)),
+        Session("day2", (6.0, 7.5, 9.0)),
+        Session("day3-controlled", (4.5, 6.0, 7.5), CONTROL),
+    ),
+    duration=3.0,
+)
+"""Short runs of a bicycle with rider: three sessions of three 3-s runs (one session under control)."""
+CALIBRATION_RIDERLESS = Protocol(
+    (
+        Session("day1", (3.0, 4.5, 6.0)),
+        Session("day2", (3.5, 5.0, 6.5)),
+        Session("day3-controlled", (2.5, 3.5, 4.5), CONTROL),
+    ),
+    duration=3.0,
+)
+"""Short runs of the riderless bicycle: three sessions of three 3-s runs (one session under control)."""
+
+
+def draw_truth(effect: CalibrationEffect, rng: np.random.Generator) -> Truth:
+    """A truth whose sizes are drawn over the candidate's priors (:data:`CALIBRATION_DRAW`)."""
+    from bikerider.gap.effects import EFFECTS
+
+    priors = {p.name: p.the_prior() for e in EFFECTS.values() for p in e.parameters}
+    if effect.name == "steer_coulomb":
+        priors["T_coulomb"] = next(p for p in EFFECTS["steer_friction"].parameters if p.name == "T_coulomb").the_prior()
+    values = dict(effect.fixed)
+    for name in effect.sizes:
+        prior = priors[name]
+        values[name] = prior.sample(rng, CALIBRATION_DRAW.get(prior.kind, 0.95))
+    effects = ("steer_damping",) if effect.name == "steer_coulomb" else (effect.candidate,)
+    text = ", ".join(f"{k} {v:.3g}" for k, v in values.items())
+    return Truth(effect.name, effects, values, text)
+
+
+@dataclass
+class Trial:
+    """One calibration trial: what was hidden, what the diagnosis found, the candidate's fitted sizes."""
+
+    effect: str
+    candidate: str
+    seed: int
+    rider: bool
+    truth: dict[str, float]
+    verdict: str
+    first: str | None
+    tied_with_first: list[str]
+    selected: list[str]
+    fitted: dict[str, dict]
+    """The candidate's own fit to all the data: ``{name: {value, ci95}}``."""
+    reference: dict[str, float]
+    """What each fitted size is scored against (the truth's value, or its equivalent)."""
+    predicted_shrink: float | None
+    achieved_shrink: float | None
+    n_measured: int
+    seconds: float
+    amplitude: float | None = None
+
+    def as_dict(self) -> dict:
+        return dict(self.__dict__)
+
+
+def run_trial(models: dict[str, GapModelInput], effect: CalibrationEffect, seed: int) -> Trial:
+    """One trial: draw the sizes and the bicycle, measure short noisy runs, diagnose blind, score.
+
+    ``models`` holds ``"riderless"`` and ``"rider"`` nominal models; with ``effect.rider == "both"`` even
+    seeds are riderless.
+    """
+    from bikerider.gap.diagnosis import Diagnosis, gap_shrink
+    from bikerider.gap.fit import GapProblem
+
+    start = time.perf_counter()
+    rng = np.random.default_rng(seed)
+    rider = effect.rider == "rider" or (effect.rider == "both" and seed % 2 == 1)
+    model = models["rider" if rider else "riderless"]
+    protocol = CALIBRATION_RIDER if rider else CALIBRATION_RIDERLESS
+    truth = draw_truth(effect, rng)
+    simulator = TruthSimulator(model, truth, rng)
+    amplitudes: list[float] = []
+    data, _ = measure(simulator, protocol, rng, amplitudes)
+    empty = CanonicalData.empty()
+    amplitude = float(np.median(amplitudes)) if amplitudes else None
+    reference = {k: truth.values[k] for k in effect.sizes}
+    if effect.name == "steer_coulomb":
+        reference = {"c_steer": 4 * truth.values["T_coulomb"] / (math.pi * amplitude) if amplitude else math.nan}
+    if len(data) < 4:
+        return Trial(
+            effect.name,
+            effect.candidate,
+            seed,
+            rider,
+            truth.values,
+            "too few runs",
+            None,
+            [],
+            [],
+            {},
+            reference,
+            None,
+            None,
+            len(data),
+            time.perf_counter() - start,
+            amplitude,
+        )
+    diagnosis = Diagnosis(model, data, empty)
+    result = diagnosis.as_dict()
+    fit = diagnosis.fit_of((effect.candidate,)) if effect.candidate in diagnosis.candidates else None
+    fitted = {}
+    if fit is not None:
+        for k, name in enumerate(fit.names):
+            fitted[name] = {"value": float(fit.values[k]), "ci95": [float(fit.ci_low[k]), float(fit.ci_high[k])]}
+    predicted = achieved = None
+    if diagnosis.selected and result["how_far"] is not None:
+        predicted = result["how_far"]["shrink"]
+        fresh, _ = measure(simulator, protocol, np.random.default_rng(seed + 1_000_000))
+        if len(fresh):
+            test = GapProblem(model, fresh, empty)
+            fitted_model = diagnosis.problem.fitted_model(diagnosis.selected_fit)
+            achieved = gap_shrink(test.z(test.baseline), test.z(test.predictor.predict(fitted_model)))
+    ranking = result["ranking"]
+    return Trial(
+        effect.name,
+        effect.candidate,
+        seed,
+        rider,
+        truth.values,
+        result["verdict"],
+        ranking[0]["effect"] if ranking else None,
+        list(ranking[0]["tied_with"]) if ranking else [],
+        list(diagnosis.selected),
+        fitted,
+        reference,
+        predicted,
+        achieved,
+        len(data),
+        time.perf_counter() - start,
+        amplitude,
+    )
+
+
+CALIBRATION_FRICTION = CalibrationEffect("steer_friction_records", "steer_friction", ("T_coulomb",), rider="riderless")
+"""Pure Coulomb steer friction diagnosed from records (fitted in the time domain), riderless under :data:`SIL`."""
+CALIBRATION_RECORDS = RecordProtocol(speeds=(2.5, 3.5, 4.5), per_speed=3)
+"""Short records of the friction trials: three speeds of three records, 1.2-2.5 s each."""
+
+
+def run_friction_trial(model: GapModelInput, seed: int, protocol: RecordProtocol = CALIBRATION_RECORDS) -> Trial:
+    """A record trial: pure Coulomb friction drawn over its prior, simulated in time, diagnosed from records.
+
+    The fitted split (``T_coulomb``, ``c_viscous``) is scored against the truth (``c_viscous`` 0), and the
+    equivalent viscous damping (:meth:`bikerider.gap.diagnosis.Diagnosis.friction_equivalent`) against
+    ``4 T / (pi A)`` at the same median amplitude ``A``.
+    """
+    from dataclasses import replace
+
+    from bikerider.gap.diagnosis import Diagnosis
+    from bikerider.gap.effects import EFFECTS
+    from bikerider.gap.records import fit_records
+
+    start = time.perf_counter()
+    model = replace(model, plausible={**STEER_MOTOR, **model.plausible})
+    rng = np.random.default_rng(seed)
+    effect = CALIBRATION_FRICTION
+    prior = next(p for p in EFFECTS["steer_friction"].parameters if p.name == "T_coulomb").the_prior()
+    T = prior.sample(rng, CALIBRATION_DRAW.get(prior.kind, 0.95))
+    truth = Truth(effect.name, ("steer_friction",), {"T_coulomb": T}, f"T_coulomb {T:.3g}")
+    simulator = TruthSimulator(model, truth, rng)
+    fits = fit_records(measure_records(simulator, protocol, rng))
+    diagnosis = Diagnosis(model, EigenvalueData.empty(), CanonicalData.empty(), records=fits)
+    result = diagnosis.as_dict()
+    fitted: dict[str, dict] = {}
+    reference = {"T_coulomb": T, "c_viscous": 0.0}
+    amplitude = None
+    if "steer_friction" in diagnosis.candidates:
+        fit = diagnosis.fit_of(("steer_friction",))
+        for k, name in enumerate(fit.names):
+            fitted[name] = {"value": float(fit.values[k]), "ci95": [float(fit.ci_low[k]), float(fit.ci_high[k])]}
+        eq = diagnosis.friction_equivalent(fit)
+        if eq is not None:
+            amplitude = eq["amplitude"]
+            fitted["c_equivalent"] = {"value": eq["c_equivalent"], "ci95": eq["ci95"], "separable": eq["separable"]}
+            reference["c_equivalent"] = 4 * T / (math.pi * amplitude)
+    ranking = result["ranking"]
+    how = result["how_far"] or {}
+    return Trial(
+        effect.name,
+        effect.candidate,
+        seed,
+        False,
+        truth.values,
+        result["verdict"],
+        ranking[0]["effect"] if ranking else None,
+        list(ranking[0]["tied_with"]) if ranking else [],
+        list(diagnosis.selected),
+        fitted,
+        reference,
+        how.get("data_shrink"),
+        None,
+        len(diagnosis.record_rows),
+        time.perf_counter() - start,
+        amplitude,
+    )

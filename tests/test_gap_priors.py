@@ -1,0 +1,237 @@
+"""Issue 21, parts 3 and 4: priors, not walls; the equivalent of friction the records cannot split; the
+calibration study's trials and report (a few trials only)."""
+
+from __future__ import annotations
+
+import math
+import sys
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+from gap_support import BP, DATA
+
+from bikerider.gap.diagnosis import Diagnosis, diagnose
+from bikerider.gap.effects import EFFECTS, Prior, prior_from_range
+from bikerider.gap.fit import EffectFit
+from bikerider.io.gap_data import read_eigenvalues
+from bikerider.io.gap_model import load_model
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+# -- priors ------------------------------------------------------------------------------------------
+def test_every_candidate_parameter_has_a_prior_with_a_source():
+    for effect in EFFECTS.values():
+        for p in effect.parameters:
+            prior = p.the_prior()
+            assert prior.source and prior.kind in ("lognormal", "halfcauchy", "normal")
+            lo, hi = prior.interval()
+            assert lo < hi and lo >= p.bounds[0] - 1e-12, p.name
+
+
+def test_the_log_prior_ratio_is_zero_at_the_mode_and_falls_off_either_side():
+    lognormal = Prior("lognormal", 0.3, 3.0, "test")
+    assert lognormal.log_ratio(0.3) == 0.0
+    assert lognormal.log_ratio(0.1) < 0 and lognormal.log_ratio(0.9) < 0
+    assert lognormal.log_ratio(0.1) == pytest.approx(lognormal.log_ratio(0.9))  # symmetric in ln x
+    assert lognormal.log_ratio(0.9) == pytest.approx(-0.5)  # one geometric sd: -1/2 nat
+    cauchy = Prior("halfcauchy", 0.0, 0.1, "test")
+    assert cauchy.log_ratio(0.0) == 0.0 and cauchy.log_ratio(0.1) == pytest.approx(-math.log(2))
+    assert cauchy.log_ratio(10.0) > -10  # heavy tails: a hundred scales costs under 10 nats
+    made = prior_from_range(0.05, 0.3, "range")
+    lo, hi = made.interval()
+    assert lo == pytest.approx(0.05) and hi == pytest.approx(0.3)
+
+
+def test_prior_draws_stay_in_the_interval_asked_for():
+    rng = np.random.default_rng(0)
+    prior = Prior("halfcauchy", 0.0, 0.1, "test")
+    x = [prior.sample(rng, 0.8) for _ in range(200)]
+    assert max(x) <= prior.interval(0.8)[1] and min(x) >= 0
+
+
+# -- selection with priors -----------------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def table_diagnosis():
+    model = load_model(
+        BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt", BP / "riders/Jason/Parameters/JasonRigidBenchmark.txt"
+    )
+    return diagnose(
+        model, read_eigenvalues(DATA / "gap_examples" / "eigenvalues.csv"), effects=("steer_damping", "steer_inertia")
+    )
+
+
+def test_a_precise_value_above_the_usual_range_is_selected_and_flagged(table_diagnosis):
+    # before: c_steer = 1.08 [0.88, 1.27] ranked first, and "Selected: nothing" (a fixed plausible 0.05-0.5)
+    d = table_diagnosis
+    assert d.verdict == "structural" and d.ranking[0]["effect"] == "steer_damping"
+    assert d.selected == ["steer_damping"]
+    (flag,) = d.selection["flags"]
+    assert "above the usual 0.05-0.5 N m s/rad" in flag and "the data determine it" in flag and ": check " in flag
+    assert d.selection["log_prior"] < 0 and d.selection["log_odds_vs_nominal"] > 0
+    from bikerider.gap.report import summary_text
+
+    text = summary_text(d.as_dict())
+    assert "Selected: steer_damping" in text and "flag: c_steer = " in text
+
+
+def _fit(values, low, high, names=("c_steer",), effects=("steer_damping",)):
+    n = len(values)
+    return EffectFit(
+        effects,
+        list(names),
+        ["N m s/rad"] * n,
+        np.array(values, float),
+        (np.array(high) - np.array(low)) / 3.92,
+        np.array(low, float),
+        np.array(high, float),
+        {},
+        {},
+        0.0,
+        0.0,
+        10,
+        True,
+        lower=np.zeros(n),
+        upper=np.full(n, 20.0),
+    )
+
+
+def test_an_interval_overlapping_the_usual_range_does_not_make_a_value_usual(table_diagnosis):
+    # before: c = 0.62 [0.42, 0.82] was called plausible because its interval reaches 0.5
+    ok, (check,) = table_diagnosis.plausibility(_fit([0.62], [0.42], [0.82]))
+    assert not ok and not check["in_range"] and check["usable"]
+    assert check["flag"].startswith("c_steer = 0.62 N m s/rad") and "above the usual" in check["flag"]
+    assert check["log_prior"] == pytest.approx(Prior("lognormal", 0.3, 3.0, "").log_ratio(0.62))
+    ok, (check,) = table_diagnosis.plausibility(_fit([0.3], [0.2], [0.4]))
+    assert ok and check["flag"] is None
+
+
+def test_a_bicycles_own_range_becomes_its_prior(table_diagnosis):
+    d = Diagnosis.__new__(Diagnosis)
+    d.model_input = SimpleNamespace(plausible={"I_steer": (0.0, 0.1, "a steer motor's rotor")})
+    prior = d.prior_of("I_steer")
+    assert prior.kind == "halfcauchy" and "steer motor" in prior.source
+    assert table_diagnosis.prior_of("I_steer").kind == "lognormal"
+
+
+def test_a_candidate_at_the_noise_floor_is_always_selected():
+    # before: steer damping well above 0.5 N m s/rad ranked first at the noise floor with "Selected: nothing"
+    from bikerider.gap import validation as V
+
+    model = load_model(BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt")
+    truth = V.Truth("viscous", ("steer_damping",), {"c_steer": 1.2}, "viscous 1.2 N m s/rad")
+    rng = np.random.default_rng(3)
+    simulator = V.TruthSimulator(model, truth, rng)
+    data, _ = V.measure(simulator, V.CALIBRATION_RIDERLESS, rng)
+    d = diagnose(model, data)
+    out = d.as_dict()
+    first = out["ranking"][0]
+    assert out["verdict"] == "structural" and first["effect"] == "steer_damping"
+    assert first["heldout_error_after"] < 1.5
+    assert first["parameters"]["c_steer"]["ci95"][0] > 0.5  # precisely above the usual range
+    assert "steer_damping" in out["selected"]
+    assert any("above the usual" in f for f in out["selection"]["flags"])
+
+
+# -- friction's equivalent -------------------------------------------------------------------------------
+def _friction_diagnosis(amplitudes):
+    d = Diagnosis.__new__(Diagnosis)
+    t = np.arange(0.0, 2.0, 0.01)
+    d.records = [
+        SimpleNamespace(record=SimpleNamespace(signals={"steer_rate": a * np.sin(2 * np.pi * 2 * t)}), estimate=None)
+        for a in amplitudes
+    ]
+    d.record_rows = {k: k for k in range(len(amplitudes))}
+    d.folds = []
+    return d
+
+
+def _friction_fit(T, c, cov):
+    fit = _fit([T, c], [0, 0], [1, 1], names=("T_coulomb", "c_viscous"), effects=("steer_friction",))
+    fit.covariance = np.array(cov)
+    fit.stderr = np.sqrt(np.diag(fit.covariance))
+    return fit
+
+
+def test_decays_of_one_amplitude_report_the_equivalent_not_the_split():
+    d = _friction_diagnosis([0.5, 0.52, 0.55, 0.48, 0.5])
+    fit = _friction_fit(0.02, 0.29, [[1e-4, -5e-4], [-5e-4, 3e-3]])
+    eq = d.friction_equivalent(fit)
+    a = eq["amplitude"]
+    assert a == pytest.approx(0.5, rel=0.02)  # sqrt(2) RMS of a sine is its amplitude
+    assert eq["c_equivalent"] == pytest.approx(0.29 + 4 * 0.02 / (math.pi * a))
+    g = np.array([4 / (math.pi * a), 1.0])
+    assert eq["stderr"] == pytest.approx(math.sqrt(g @ fit.covariance @ g))
+    assert not eq["separable"] and "cannot tell Coulomb from viscous" in eq["note"]
+
+
+def test_decays_of_many_amplitudes_carry_the_split():
+    d = _friction_diagnosis([0.2, 0.4, 0.8, 1.2, 1.6])
+    eq = d.friction_equivalent(_friction_fit(0.08, 0.0, [[1e-4, 0.0], [0.0, 1e-4]]))
+    assert eq["separable"] and eq["amplitude_spread"] >= 2
+    assert d.friction_equivalent(_fit([0.3], [0.2], [0.4])) is None  # no friction in the fit
+
+
+# -- the calibration study -----------------------------------------------------------------------------
+def test_a_few_calibration_trials_and_their_report(tmp_path):
+    import json
+
+    from bikerider.gap import validation as V
+
+    models = {"riderless": load_model(BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt")}
+    effect = next(e for e in V.CALIBRATION_EFFECTS if e.name == "steer_coulomb")
+    trial = V.run_trial(models, effect, 0)  # even seed: riderless
+    assert not trial.rider and 0 < trial.truth["T_coulomb"] <= Prior("halfcauchy", 0, 0.1, "").interval(0.8)[1]
+    c_eq = trial.reference["c_steer"]
+    assert c_eq == pytest.approx(4 * trial.truth["T_coulomb"] / (math.pi * trial.amplitude))
+    assert trial.first == "steer_damping" and "c_steer" in trial.fitted
+    results = tmp_path / "trials.jsonl"
+    results.write_text(json.dumps(trial.as_dict()) + "\n")
+    doc = tmp_path / "doc.md"
+    doc.write_text("# head\n")
+    sys.path.insert(0, str(ROOT / "docs" / "scripts"))
+    try:
+        from gap_calibration_report import write_report
+    finally:
+        sys.path.pop(0)
+    write_report(results, doc, 200)
+    text = doc.read_text()
+    assert text.startswith("# head") and "## 4. Calibration" in text
+    assert "Fewer than the 200 trials per effect" in text and "| steer_coulomb | c_steer | 1 |" in text
+    write_report(results, doc, 200)  # rewritten in place, not appended
+    assert doc.read_text().count("## 4. Calibration") == 1
+
+
+def test_docs_list_every_prior_as_the_registry_has_it():
+    text = (ROOT / "docs" / "gap.md").read_text(encoding="utf-8")
+    for effect in EFFECTS.values():
+        for p in effect.parameters:
+            prior = p.the_prior()
+            assert f"| `{p.name}` |" in text and prior.describe(p.unit) in text and prior.source in text, p.name
+
+
+def test_records_of_a_strong_damper_select_it_at_the_noise_floor_and_flag_it():
+    # the issue's case from records: a steer damping far above the usual range (a rider's hands, a
+    # motor's back-EMF) explains the held-out records to the noise floor; a fixed plausible range made
+    # that "Selected: nothing"
+    from dataclasses import replace
+
+    from bikerider.gap import validation as V
+    from bikerider.gap.data import CanonicalData, EigenvalueData
+    from bikerider.gap.records import fit_records
+
+    model = load_model(BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt")
+    model = replace(model, plausible=dict(V.STEER_MOTOR))
+    truth = V.Truth("viscous", ("steer_damping",), {"c_steer": 1.2}, "viscous 1.2 N m s/rad")
+    rng = np.random.default_rng(5)
+    records = fit_records(V.measure_records(V.TruthSimulator(model, truth, rng), V.QUICK_RECORDS, rng))
+    effects = ("parameters", "steer_damping", "steer_inertia", "steer_friction")
+    out = Diagnosis(model, EigenvalueData.empty(), CanonicalData.empty(), effects, records).as_dict()
+    first = out["ranking"][0]
+    assert first["effect"] == "steer_damping" and first["data_error_after"] < 1.0  # at the noise floor
+    c = first["parameters"]["c_steer"]
+    assert c["ci95"][0] <= 1.2 <= c["ci95"][1]
+    assert "steer_damping" in out["selected"]
+    assert any(f.startswith("c_steer = ") and "above the usual" in f for f in out["selection"]["flags"])
