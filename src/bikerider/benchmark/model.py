@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bikerider.benchmark import rules
+from bikerider.benchmark import mode_names, rules
 from bikerider.benchmark.mode_labels import MODES, ModalEigenvalues, check_speeds, label_modes
 from bikerider.benchmark.parameters import BenchmarkParameters
 from bikerider.benchmark.quartic import eigenvalues_from_polynomial
@@ -127,6 +127,12 @@ class WhippleModel:
         model.geometry = {k: np.asarray(v[k], dtype=float) for k in LATERAL_FORCE_GEOMETRY}
         return model
 
+    @classmethod
+    def from_entries(cls, entries: dict[str, float], g: float = 9.81) -> WhippleModel:
+        """Build from the sixteen entries ``M_phiphi ... K2_deltadelta`` (:meth:`entries`)."""
+        mats = [[[entries[f"{name}_{a}{b}"] for b in COORDINATES] for a in COORDINATES] for name in MATRIX_NAMES]
+        return cls(*mats, g=g)
+
     # -- matrices ---------------------------------------------------------------------------
     def _entries(self) -> dict[str, np.ndarray]:
         return matrix_entries(self.M, self.C1, self.K0, self.K2)
@@ -186,9 +192,53 @@ class WhippleModel:
                 "are too large for floating point there)",
                 self.source,
             )
-        values, labels = label_modes(np.linalg.eigvals(state).reshape(-1, 4))
+        raw = np.linalg.eigvals(state).reshape((-1,) + speeds.shape + (4,))
+        values, labels = self.name_modes(speeds, raw)
         shape = self.batch_shape + speeds.shape + (4,)
         return ModalEigenvalues(speeds, values.reshape(shape), labels.reshape(shape))
+
+    def name_modes(self, speeds: np.ndarray, raw: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Order eigenvalues ``raw`` (``(b, n, 4)``: each bicycle of the flattened batch at each of
+        ``speeds``) as weave(+), weave(-), capsize, castor by continuation from where the names are
+        unambiguous (:mod:`bikerider.benchmark.mode_names`); return them with their labels."""
+        speeds = np.asarray(speeds, dtype=float)
+        values = np.empty(raw.shape, dtype=complex)
+        labels = np.empty(raw.shape, dtype=object)
+        collisions = self.collision_speeds()
+        entries = {k: e.reshape(-1) for k, e in self._entries().items()} if self.batch_shape else None
+        g = np.broadcast_to(self.g, self.batch_shape).reshape(-1) if self.batch_shape else None
+        for b in range(raw.shape[0]):
+            if entries is None:
+                at, edges = (lambda v: np.linalg.eigvals(self.state_matrix(v))), collisions
+            else:
+                one = {k: e[b] for k, e in entries.items()}
+                at = _eigenvalues_of(one, float(g[b]))  # type: ignore[index]
+                edges = collisions.reshape(-1)[b]
+            top = float(max(10.0, 2.0 * edges[-1])) if len(edges) else 10.0
+            values[b], labels[b] = mode_names.apply(raw[b], np.abs(speeds), mode_names.naming(at, edges, top))
+        return values, labels
+
+    def collision_speeds(self):
+        """The speeds [m/s] at which two eigenvalues coincide: the positive roots, in ``u = v^2``, of
+        the discriminant of the characteristic quartic (the generated ``discriminant_polynomial``).
+
+        Returns an increasing array for one bicycle; for a batch, an object array of the batch shape
+        holding one such array per bicycle.
+        """
+        with np.errstate(over="ignore", invalid="ignore"):
+            coefficients = np.asarray(gen.discriminant_polynomial(**self._entries(), g=self.g), dtype=float)
+        flat = coefficients.reshape(-1, coefficients.shape[-1])
+        out = np.empty(flat.shape[0], dtype=object)
+        for b, c in enumerate(flat):
+            if not np.all(np.isfinite(c)):
+                raise InputError(
+                    "M, C1, K0, K2",
+                    "entries too large for floating point",
+                    "matrices whose characteristic discriminant is finite",
+                    self.source,
+                )
+            out[b] = np.sqrt(_polished_roots(c))
+        return out[0] if not self.batch_shape else out.reshape(self.batch_shape)
 
     # -- critical speeds ---------------------------------------------------------------------
     def critical_speeds(self) -> CriticalSpeeds:
@@ -223,32 +273,24 @@ class WhippleModel:
     def weave_birth_speed(self) -> float | None:
         """The speed ``v_d`` at which the weave pair is born from two real eigenvalues [m/s].
 
-        The discriminant of the characteristic quartic vanishes wherever two eigenvalues coincide;
-        as a polynomial in ``u = v^2`` it is the generated ``discriminant_polynomial`` (derived in
-        ``derive/benchmark_model.py``).  ``v_d`` is the smallest of its positive roots at which the
-        two eigenvalues with the largest real parts are real just below and a complex pair just
-        above (Meijaard et al. 2007, section 6; the other two
-        may be real or a complex pair of their own).  ``None`` when there is no such speed.
+        The discriminant of the characteristic quartic vanishes wherever two eigenvalues coincide
+        (:meth:`collision_speeds`).  ``v_d`` is the smallest of those speeds at which the two
+        eigenvalues named weave (by continuation from high speed, :mod:`bikerider.benchmark.mode_names`:
+        the two that merge there, which are not always the two largest) are real just below and a
+        complex pair just above (Meijaard et al. 2007, section 6).  ``None`` when there is no such
+        speed.
         """
         self._one_bicycle("weave_birth_speed")
-        with np.errstate(over="ignore", invalid="ignore"):
-            coefficients = np.asarray(gen.discriminant_polynomial(**self._entries(), g=self.g), dtype=float)
-        if not np.all(np.isfinite(coefficients)):
-            raise InputError(
-                "M, C1, K0, K2",
-                "entries too large for floating point",
-                "matrices whose characteristic discriminant is finite",
-                self.source,
-            )
-        slope = np.polyder(coefficients)
-        for u in polynomial_positive_real_roots(coefficients):
-            for _ in range(3):  # Newton steps: the root of a simple zero to full precision
-                step = np.polyval(coefficients, u) / np.polyval(slope, u) if np.polyval(slope, u) else 0.0
-                if not np.isfinite(step) or abs(step) > 1e-6 * u:
-                    break
-                u -= step
-            if self._pair_born_at(float(np.sqrt(u))):
-                return float(np.sqrt(u))
+        edges = self.collision_speeds()
+        if not len(edges):
+            return None
+        named = mode_names.naming(lambda v: np.linalg.eigvals(self.state_matrix(v)), edges, max(10.0, 2 * edges[-1]))
+        for i, speed in enumerate(edges):
+            below, above = named.names[i], named.names[i + 1]
+            real_below = "weave" in below[2 * named.pairs[i] :]
+            pair_above = "weave" in above[: 2 * named.pairs[i + 1]]
+            if real_below and pair_above:
+                return float(speed)
         return None
 
     def _one_bicycle(self, method: str) -> None:
@@ -261,14 +303,28 @@ class WhippleModel:
                 self.source,
             )
 
-    def _pair_born_at(self, speed: float, relative: float = 1e-6) -> bool:
-        """Whether the two eigenvalues with the largest real parts are real just below ``speed`` and
-        a complex pair just above (the other two may be real or complex on either side)."""
-        below, above = np.linalg.eigvals(self.state_matrix(np.array([speed * (1 - relative), speed * (1 + relative)])))
-        tol = 1e-9 * max(1.0, float(np.abs(above).max()))
-        top_below = below[np.argsort(-below.real)][:2]
-        top_above = above[np.argsort(-above.real)][:2]
-        return bool(np.all(np.abs(top_below.imag) <= tol) and np.all(np.abs(top_above.imag) > tol))
+
+def _polished_roots(coefficients: np.ndarray) -> np.ndarray:
+    """Positive real roots of a polynomial (highest power first), each polished by Newton steps."""
+    slope = np.polyder(coefficients)
+    out = []
+    for u in polynomial_positive_real_roots(coefficients):
+        for _ in range(3):  # Newton steps: the root of a simple zero to full precision
+            step = np.polyval(coefficients, u) / np.polyval(slope, u) if np.polyval(slope, u) else 0.0
+            if not np.isfinite(step) or abs(step) > 1e-6 * u:
+                break
+            u -= step
+        out.append(u)
+    return np.sort(np.array(out, dtype=float))
+
+
+def _eigenvalues_of(entries: dict[str, float], g: float):
+    """Speeds ``(k,)`` to the eigenvalues ``(k, 4)`` of one bicycle given by its matrix entries."""
+
+    def at(speeds):
+        return np.linalg.eigvals(gen.state_matrix(**entries, g=g, v=np.asarray(speeds, dtype=float)))
+
+    return at
 
 
 def _at(name: str, index: tuple[int, ...]) -> str:

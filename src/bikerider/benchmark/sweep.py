@@ -108,8 +108,11 @@ class Sweep:
         return rows
 
     def speed_rows(self) -> list[dict[str, object]]:
-        """One record per design and speed: swept values, speed, stable, and the eigenvalues (when
-        computed) as ``<mode>_real``/``<mode>_imag`` for weave, capsize and castor."""
+        """One record per design and speed: swept values, speed, stable, and the four eigenvalues
+        (when computed) as ``<column>_real``/``<column>_imag`` for the columns of
+        :data:`SPEED_COLUMNS` (``weave`` the member with positive imaginary part or the larger real
+        root, ``weave2`` the other), and ``modes``: the label of each of the four (``other`` where
+        one is none of weave, capsize, castor: its values are still given)."""
         stable = self.stable()
         rows = []
         for index in np.ndindex(self.shape):
@@ -118,13 +121,17 @@ class Sweep:
                 row: dict[str, object] = {**design, "speed": float(v), "stable": bool(stable[index][k])}
                 if self.eigenvalues is not None:
                     ev = self.eigenvalues[index][k]
-                    for mode, z in (("weave", ev[0]), ("capsize", ev[2]), ("castor", ev[3])):
-                        row[f"{mode}_real"] = _number(z.real)
-                        row[f"{mode}_imag"] = _number(abs(z.imag) if mode == "weave" else z.imag)
-                    if self.labels is not None and self.labels[index][k][2] == "other":
-                        row["capsize_real"] = row["capsize_imag"] = row["castor_real"] = row["castor_imag"] = None
+                    for column, z in zip(SPEED_COLUMNS, ev):
+                        row[f"{column}_real"] = _number(z.real)
+                        row[f"{column}_imag"] = _number(z.imag)
+                    if self.labels is not None:
+                        row["modes"] = " ".join(str(x) for x in self.labels[index][k])
                 rows.append(row)
         return rows
+
+
+SPEED_COLUMNS = ("weave", "weave2", "capsize", "castor")
+"""Column stems of the eigenvalues in :meth:`Sweep.speed_rows`, in the order of :data:`MODES`."""
 
 
 def _number(x) -> float | None:
