@@ -12,7 +12,7 @@ from bikerider import notes
 from bikerider.commands.benchmark import add_shipped_options, load_parameters
 from bikerider.commands.estimate import add_figure_options
 from bikerider.commands.sweep_design import add_design_options, is_design_run, run_design
-from bikerider.commands.sweep_options import cell, parse_vary
+from bikerider.commands.sweep_options import cell, degree_names, in_degrees, parse_vary, to_degrees
 from bikerider.errors import InputError
 from bikerider.io.atomic import atomic_write_text
 
@@ -116,22 +116,28 @@ def run(args: argparse.Namespace) -> int:
             args.format,
             args.dpi,
         )
+    degrees = degree_names(args.vary)  # degrees in, degrees out
     if args.json:
         out = {
             "base": name,
-            "parameters": {n: v.tolist() for n, v in zip(result.names, result.values)},
+            "parameters": {
+                (f"{n}_deg" if n in degrees else n): [to_degrees(x) if n in degrees else x for x in v.tolist()]
+                for n, v in zip(result.names, result.values)
+            },
             "speeds": speeds.tolist(),
-            "designs": result.design_rows(),
+            "designs": [in_degrees(row, degrees) for row in result.design_rows()],
         }
         if speeds.size:
             out["stable"] = result.stable().tolist()
         if args.rows == "speeds":
-            out["speed_rows"] = result.speed_rows()
+            out["speed_rows"] = [in_degrees(row, degrees) for row in result.speed_rows()]
         out["notes"] = notes.shown_with()
         text = json.dumps(out, indent=2, allow_nan=False) + "\n"
     else:
         buffer = io.StringIO()
-        rows = result.design_rows() if args.rows == "designs" else result.speed_rows()
+        rows = [
+            in_degrees(r, degrees) for r in (result.design_rows() if args.rows == "designs" else result.speed_rows())
+        ]
         for row in rows:
             if "stable_intervals" in row:
                 row["stable_intervals"] = ";".join(

@@ -18,7 +18,7 @@ from pathlib import Path
 from bikerider import notes
 from bikerider.commands import argument_types
 from bikerider.commands.benchmark import load_parameters
-from bikerider.commands.sweep_options import cell, parse_vary
+from bikerider.commands.sweep_options import cell, degree_names, in_degrees, parse_vary
 from bikerider.errors import InputError
 from bikerider.io.atomic import atomic_write_text
 
@@ -231,11 +231,11 @@ def run_design(args: argparse.Namespace) -> int:
         if args.json:
             out = {"store": str(args.store), "base": name, "kind": space.kind, **summary.as_dict()}
             if args.target_weave_speed is not None:
-                out["closest_to_weave_speed"] = _closest_dict(closest)
+                out["closest_to_weave_speed"] = _closest_dict(closest, degree_names(args.vary))
             out["notes"] = notes.shown_with()
             text = json.dumps(out, indent=2, allow_nan=False) + "\n"
         else:
-            text = _summary_text(store, summary, closest, args.target_weave_speed)
+            text = _summary_text(store, summary, closest, args.target_weave_speed, degree_names(args.vary))
     if args.out:
         atomic_write_text(args.out, text)
     else:
@@ -243,19 +243,19 @@ def run_design(args: argparse.Namespace) -> int:
     return 0
 
 
-def _closest_dict(closest) -> dict | None:
+def _closest_dict(closest, degrees: frozenset[str] = frozenset()) -> dict | None:
     if closest is None:
         return None
     return {
         "index": closest.index,
-        "values": closest.values,
+        "values": in_degrees(dict(closest.values), degrees),
         "weave_speed": closest.weave_speed,
         "capsize_speed": closest.capsize_speed if math.isfinite(closest.capsize_speed) else None,
         "stable_intervals": [[lo, hi if math.isfinite(hi) else None] for lo, hi in closest.stable_intervals],
     }
 
 
-def _summary_text(store, summary, closest, target) -> str:
+def _summary_text(store, summary, closest, target, degrees: frozenset[str] = frozenset()) -> str:
     import numpy as np
 
     space = store.spec.space
@@ -280,7 +280,7 @@ def _summary_text(store, summary, closest, target) -> str:
         if closest is None:
             lines.append(f"no self-stable design has a weave speed (target {target:g} m/s)")
         else:
-            values = ", ".join(f"{k} = {v:.6g}" for k, v in closest.values.items())
+            values = ", ".join(f"{k} = {v:.6g}" for k, v in in_degrees(dict(closest.values), degrees).items())
             lines.append(
                 f"closest to a weave speed of {target:g} m/s: design {closest.index} ({values}): weave "
                 f"{closest.weave_speed:.4f} m/s, capsize {closest.capsize_speed:.4f} m/s"
@@ -311,7 +311,7 @@ def _rows_text(args, store, closest) -> str:
     reasons = store.reason_texts(data["reason"])
     rows = []
     for i in range(n):
-        row: dict[str, object] = {k: float(v[i]) for k, v in values.items()}
+        row: dict[str, object] = in_degrees({k: float(v[i]) for k, v in values.items()}, degree_names(args.vary))
         row["valid"] = bool(data["valid"][i])
         row["reason"] = reasons[i]
         for key in ("weave_speed", "capsize_speed", "weave_frequency"):
@@ -333,7 +333,7 @@ def _rows_text(args, store, closest) -> str:
             out["speeds"] = store.spec.speeds.tolist()
             out["stable"] = store.stable().tolist()
         if args.target_weave_speed is not None:
-            out["closest_to_weave_speed"] = _closest_dict(closest)
+            out["closest_to_weave_speed"] = _closest_dict(closest, degree_names(args.vary))
         out["notes"] = notes.shown_with()
         return json.dumps(out, indent=2, allow_nan=False) + "\n"
     buffer = io.StringIO()

@@ -1,0 +1,47 @@
+"""The command line of the toolbox as a user meets it: degrees out, speed rows, readers, convert."""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+
+import numpy as np
+from strategies import run_cli
+
+import bikerider
+
+
+def _csv(text: str) -> list[dict[str, str]]:
+    return list(csv.DictReader(io.StringIO(text)))
+
+
+def test_degrees_in_degrees_out():
+    code, out, _ = run_cli(["sweep", "--bicycle", "Benchmark", "--vary", "lam_deg=10:30:3"])
+    assert code == 0
+    rows = _csv(out)
+    assert [r["lam_deg"] for r in rows] == ["10", "20", "30"] and "lam" not in rows[0]
+    code, out, _ = run_cli(["sweep", "--bicycle", "Benchmark", "--vary", "lam_deg=10:30:3", "--json"])
+    data = json.loads(out)
+    assert data["parameters"] == {"lam_deg": [10.0, 20.0, 30.0]}
+    assert [d["lam_deg"] for d in data["designs"]] == [10.0, 20.0, 30.0]
+    # SI stays SI
+    code, out, _ = run_cli(["sweep", "--bicycle", "Benchmark", "--vary", "lam=0.2:0.3:2"])
+    assert [r["lam"] for r in _csv(out)] == ["0.2", "0.3"]
+
+
+def test_speed_rows_keep_the_real_weave_pair():
+    """At 0 m/s the benchmark bicycle's eigenvalues are +/-3.13 and +/-5.53: all four are in the rows."""
+    code, out, _ = run_cli(
+        ["sweep", "--bicycle", "Benchmark", "--vary", "c=0.08:0.08:1", "--speeds", "0:5:2", "--rows", "speeds"]
+    )
+    assert code == 0
+    row = _csv(out)[0]
+    values = sorted(float(row[f"{k}_real"]) for k in ("weave", "weave2", "capsize", "castor"))
+    expected = sorted(
+        bikerider.WhippleModel.from_parameters(bikerider.named("Benchmark")).eigenvalues([0]).values[0].real
+    )
+    np.testing.assert_allclose(values, expected, rtol=1e-9)
+    assert any(math.isclose(v, 3.1316, abs_tol=1e-3) for v in values)
+    assert row["modes"] == "weave weave capsize castor"
