@@ -6,8 +6,10 @@ import csv
 import io
 import json
 import math
+from pathlib import Path
 
 import numpy as np
+import pytest
 from strategies import run_cli
 
 import bikerider
@@ -45,3 +47,44 @@ def test_speed_rows_keep_the_real_weave_pair():
     np.testing.assert_allclose(values, expected, rtol=1e-9)
     assert any(math.isclose(v, 3.1316, abs_tol=1e-3) for v in values)
     assert row["modes"] == "weave weave capsize castor"
+
+
+DATA = Path(__file__).resolve().parents[1] / "src" / "bikerider" / "data"
+SBW = str(DATA / "gap" / "pasma2024_sbw" / "sbw_bicycle.toml")
+BP = str(DATA / "bicycleparameters")
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["benchmark", SBW, "--monte-carlo", "0"],
+        ["sweep", SBW, "--vary", "c=0.05:0.1:2"],
+        ["estimate", "--bicycle", SBW, "--monte-carlo", "0"],
+        ["sensitivity", "weave_speed", "--bicycle", SBW, "--top", "2"],
+        ["sensitivity", "weave_speed", "--bicycle", f"{BP}/bicycles/Browser/RawData/BrowserMeasured.txt", "--top", "2"],
+        [
+            "sensitivity",
+            "capsize_speed",
+            "--bicycle",
+            f"{BP}/bicycles/Browser/Parameters/BrowserBenchmark.txt",
+            "--rider",
+            f"{BP}/riders/Jason/Parameters/JasonBrowserBenchmark.txt",
+            "--top",
+            "2",
+        ],
+        ["benchmark", f"{BP}/bicycles/Browser/RawData/BrowserMeasured.txt", "--monte-carlo", "0"],
+    ],
+    ids=lambda argv: " ".join(a.rsplit("/", 1)[-1] for a in argv[:3]),
+)
+def test_every_command_reads_every_bicycle_file(argv):
+    code, out, err = run_cli(argv)
+    assert code == 0, err
+    assert out
+
+
+def test_sensitivity_reads_a_benchmark_file_as_estimate_does():
+    """The same weave speed from the same BicycleParameters file through estimate and sensitivity."""
+    path = f"{BP}/bicycles/Browser/Parameters/BrowserBenchmark.txt"
+    weave = bikerider.estimate_from_files(path, with_rider=False).model.critical_speeds().weave
+    code, out, _ = run_cli(["sensitivity", "weave_speed", "--bicycle", path, "--top", "1"])
+    assert code == 0 and f"= {weave:.4f} m/s" in out
