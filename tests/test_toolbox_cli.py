@@ -13,6 +13,7 @@ import pytest
 from strategies import run_cli
 
 import bikerider
+from bikerider.io.benchmark_file import load_benchmark_parameters
 
 
 def _csv(text: str) -> list[dict[str, str]]:
@@ -88,3 +89,37 @@ def test_sensitivity_reads_a_benchmark_file_as_estimate_does():
     weave = bikerider.estimate_from_files(path, with_rider=False).model.critical_speeds().weave
     code, out, _ = run_cli(["sensitivity", "weave_speed", "--bicycle", path, "--top", "1"])
     assert code == 0 and f"= {weave:.4f} m/s" in out
+
+
+@pytest.mark.parametrize(
+    "to, filename", [("toml", "b.toml"), ("bicycleparameters", "BJBenchmark.txt"), ("json", "b.json")]
+)
+def test_convert_writes_what_reads_back_unchanged(tmp_path, to, filename):
+    out = tmp_path / filename
+    code, _, err = run_cli(
+        ["convert", "--bicycle", "Browser", "--rider", "Jason", "--to", to, "--name", "BJ", "--out", str(out)]
+    )
+    assert code == 0, err
+    original = bikerider.named("Browser", rider="Jason")
+    back = load_benchmark_parameters(out)
+    assert back.values == original.values
+    assert all(back.sigmas[k] == original.sigmas[k] for k, v in original.values.items() if v is not None)
+    # and a second conversion of the written file gives the same text
+    again = tmp_path / ("again" + out.suffix if to != "bicycleparameters" else "BJ2Benchmark.txt")
+    assert run_cli(["convert", str(out), "--to", to, "--name", "BJ", "--out", str(again)])[0] == 0
+    strip = lambda t: [line for line in t.splitlines() if not line.startswith(("source", '  "source"'))]
+    assert strip(again.read_text()) == strip(out.read_text())
+
+
+def test_convert_eigenvalues_as_csv_and_refuses_to_overwrite_its_input(tmp_path):
+    code, out, _ = run_cli(["convert", "--bicycle", "Benchmark", "--to", "eigenvalues", "--speeds", "0:10:11"])
+    rows = _csv(out)
+    assert code == 0 and len(rows) == 11 and rows[0]["modes"] == "weave weave capsize castor"
+    model = bikerider.WhippleModel.from_parameters(bikerider.named("Benchmark"))
+    assert float(rows[5]["weave_imag"]) == pytest.approx(model.eigenvalues([5.0]).values[0, 0].imag, rel=1e-12)
+    source = tmp_path / "b.toml"
+    assert run_cli(["convert", "--bicycle", "Benchmark", "--to", "toml", "--out", str(source)])[0] == 0
+    code, _, err = run_cli(["convert", str(source), "--to", "toml", "--out", str(source)])
+    assert code == 2 and "--out" in err
+    code, _, err = run_cli(["convert", "--bicycle", "Benchmark", "--to", "bicycleparameters", "--name", "my bike"])
+    assert code == 2 and "bicycle name" in err
