@@ -107,8 +107,12 @@ def test_convert_writes_what_reads_back_unchanged(tmp_path, to, filename):
     # and a second conversion of the written file gives the same text
     again = tmp_path / ("again" + out.suffix if to != "bicycleparameters" else "BJ2Benchmark.txt")
     assert run_cli(["convert", str(out), "--to", to, "--name", "BJ", "--out", str(again)])[0] == 0
-    strip = lambda t: [line for line in t.splitlines() if not line.startswith(("source", '  "source"'))]
-    assert strip(again.read_text()) == strip(out.read_text())
+    assert _without_source(again.read_text()) == _without_source(out.read_text())
+
+
+def _without_source(text: str) -> list[str]:
+    """The lines of a written file but the one naming where the values were read."""
+    return [line for line in text.splitlines() if not line.startswith(("source", '  "source"'))]
 
 
 def test_convert_eigenvalues_as_csv_and_refuses_to_overwrite_its_input(tmp_path):
