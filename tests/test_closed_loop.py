@@ -8,6 +8,7 @@ import scipy.linalg
 from random_bicycles import random_parameters
 
 import bikerider
+from bikerider import plotting
 from bikerider.benchmark.closed_loop import _quartic_discriminant, closed_loop, closed_loop_matrix, lqr_gains, lqr_law
 from bikerider.benchmark.control import ControlLaw, GainSchedule
 from bikerider.errors import InputError
@@ -140,3 +141,29 @@ def test_closed_loop_collisions_and_names(benchmark):
     for c in system.collision_speeds():
         ev = np.sort_complex(np.linalg.eigvals(system.state_matrix(c)))
         assert np.min(np.abs(np.diff(ev))) < 1e-3 * max(1.0, np.abs(ev).max())
+
+
+def test_a_sweep_under_a_law_is_each_design_under_it():
+    base = bikerider.named("Benchmark")
+    trails = np.linspace(0.02, 0.12, 4)
+    law = LAWS[0]
+    swept = bikerider.sweep(base, {"c": trails}, speeds=[4.0, 6.0], law=law)
+    for k, c in enumerate(trails):
+        one = closed_loop(bikerider.WhippleModel.from_parameters(base.with_values(c=float(c))), law).stability()
+        assert swept.stability.weave[k] == pytest.approx(one.weave, rel=1e-10)
+        assert swept.stability.capsize[k] == pytest.approx(one.capsize, rel=1e-10)
+    assert swept.law is law and swept.eigenvalues.shape == (4, 2, 4)
+    free = bikerider.sweep(base, {"c": trails})
+    assert np.all(swept.stability.weave < free.stability.weave)  # roll-rate feedback lowers the weave speed
+    no_control = bikerider.sweep(base, {"c": trails}, law=[0, 0, 0, 0])
+    np.testing.assert_allclose(no_control.stability.weave, free.stability.weave, rtol=1e-10)
+
+
+def test_the_gains_figure_draws_each_gain(tmp_path):
+    model = bikerider.WhippleModel.from_parameters(bikerider.named("Benchmark"))
+    law = lqr_law(model, np.linspace(0.5, 10, 20))
+    fig = plotting.gains_figure([law, LAWS[2]], np.linspace(0, 10, 101), title="gains", stable=[(1.0, np.inf)])
+    assert len(fig.axes) == 4
+    lines = fig.axes[1].get_lines()
+    np.testing.assert_allclose(lines[0].get_ydata(), law(np.linspace(0, 10, 101))[:, 1])
+    assert plotting.save_figure(fig, tmp_path / "gains.png").stat().st_size > 0

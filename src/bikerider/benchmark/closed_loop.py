@@ -131,6 +131,14 @@ class ClosedLoopModel:
         feedback the names say which open-loop branch an eigenvalue continues, no more."""
         speeds = check_speeds(speeds)
         raw = np.linalg.eigvals(self.state_matrix(speeds)).reshape((-1, speeds.size, 4))
+        values, labels = self.name_modes(speeds, raw)
+        shape = self.batch_shape + speeds.shape + (4,)
+        return ModalEigenvalues(speeds, values.reshape(shape), labels.reshape(shape))
+
+    def name_modes(self, speeds: np.ndarray, raw: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """As :meth:`WhippleModel.name_modes`, for the closed loop: ``raw`` ``(b, n, 4)`` ordered
+        weave(+), weave(-), capsize, castor by continuation, with the labels."""
+        speeds = np.asarray(speeds, dtype=float)
         values = np.empty(raw.shape, dtype=complex)
         labels = np.empty(raw.shape, dtype=object)
         for b, one in enumerate(self._bicycles()):
@@ -138,8 +146,7 @@ class ClosedLoopModel:
             top = float(max(10.0, 2.0 * edges[-1])) if len(edges) else 10.0
             named = mode_names.naming(lambda v: np.linalg.eigvals(one.state_matrix(v)), edges, top)
             values[b], labels[b] = mode_names.apply(raw[b], np.abs(speeds), named)
-        shape = self.batch_shape + speeds.shape + (4,)
-        return ModalEigenvalues(speeds, values.reshape(shape), labels.reshape(shape))
+        return values, labels
 
     def _bicycles(self) -> list[ClosedLoopModel]:
         """Each bicycle of the batch under the law (the model itself for one bicycle)."""

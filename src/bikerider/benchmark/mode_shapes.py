@@ -150,8 +150,9 @@ def mode_shapes(model: WhippleModel, speeds) -> ModeShapes:
 
     Parameters
     ----------
-    model : WhippleModel
-        One bicycle or a batch.
+    model : WhippleModel or ClosedLoopModel
+        One bicycle or a batch (a closed loop: shapes from the eigenvectors of its state matrix,
+        normalised the same way).
     speeds : array_like, shape (n,)
         Increasing speeds [m/s], fine enough to follow the eigenvalues.
 
@@ -162,21 +163,32 @@ def mode_shapes(model: WhippleModel, speeds) -> ModeShapes:
         capsize, castor where the labels allow (see the module docstring).
     """
     speeds = check_speeds(speeds)
-    raw = np.linalg.eigvals(model.state_matrix(speeds))
-    values = np.take_along_axis(raw, track_modes(raw), axis=-1)
+    if isinstance(model, WhippleModel):
+        raw = np.linalg.eigvals(model.state_matrix(speeds))
+        vectors = None
+    else:  # a closed loop (anything with state_matrix and name_modes): shapes from its eigenvectors
+        raw, vectors = np.linalg.eig(model.state_matrix(speeds))
+    order = track_modes(raw)
+    values = np.take_along_axis(raw, order, axis=-1)
+    if vectors is not None:
+        vectors = normalise(np.swapaxes(np.take_along_axis(vectors, order[..., None, :], axis=-1), -1, -2)[..., :2])
     flat = values.reshape((-1,) + values.shape[-2:])
+    flat_vectors = None if vectors is None else vectors.reshape((-1,) + vectors.shape[-3:])
     named = model.name_modes(speeds, flat)  # the names of WhippleModel.eigenvalues, by continuation
     all_names = []
     for k, one in enumerate(flat):  # each bicycle's columns in the order weave, weave, capsize, castor
         names = column_names(one, (named[0][k], named[1][k]))
         rank = sorted(range(4), key=lambda j: (_RANK.get(names[j], 3), -one[-1, j].imag, -one[-1, j].real))
         flat[k] = one[:, rank]
+        if flat_vectors is not None:
+            flat_vectors[k] = flat_vectors[k][:, rank]
         all_names.append(tuple(names[j] for j in rank))
     values = flat.reshape(values.shape)
     names_out = (
         all_names[0] if not model.batch_shape else np.array(all_names, dtype=object).reshape(model.batch_shape + (4,))
     )
-    return ModeShapes(speeds, values, null_vectors(model, speeds, values), names_out)
+    shapes = null_vectors(model, speeds, values) if flat_vectors is None else flat_vectors.reshape(values.shape + (2,))
+    return ModeShapes(speeds, values, shapes, names_out)
 
 
 _RANK = {"weave": 0, "capsize": 1, "castor": 2}

@@ -19,10 +19,11 @@ from dataclasses import dataclass, field, fields
 
 import numpy as np
 
+from bikerider.benchmark.closed_loop import ClosedLoopModel
 from bikerider.benchmark.model import WhippleModel
 from bikerider.benchmark.parameters import BENCHMARK_NAMES, BenchmarkParameters
 from bikerider.benchmark.rules import TIED
-from bikerider.benchmark.stability import KIND_NAMES, StabilityBatch, stability_batch
+from bikerider.benchmark.stability import KIND_NAMES, OSCILLATORY, REAL, StabilityBatch, stability_batch
 from bikerider.engine import arguments
 from bikerider.errors import InputError
 from bikerider.generated import benchmark_model as gen
@@ -66,6 +67,8 @@ class Sweep:
     stability: StabilityBatch
     eigenvalues: np.ndarray | None = None
     labels: np.ndarray | None = field(default=None)
+    law: object = None
+    """The control law every design is under (``None``: the open loop, self-stability)."""
 
     @property
     def shape(self) -> tuple[int, ...]:
@@ -193,6 +196,7 @@ def sweep(
     speeds=(),
     eigenvalues: bool = True,
     method: str = "quartic",
+    law=None,
 ) -> Sweep:
     """Evaluate every design of a grid over one or two benchmark parameters.
 
@@ -209,6 +213,10 @@ def sweep(
         Also compute the eigenvalues at ``speeds`` (``G x n`` quartics).
     method : {"quartic", "eigvals"}
         How (:meth:`WhippleModel.eigenvalues`).
+    law : ControlLaw, dict or sequence of 4 float, optional
+        A control law on the steer torque (:mod:`bikerider.benchmark.closed_loop`): every design
+        under it, its closed-loop stable intervals (one design at a time, exact per piece of the
+        law) and eigenvalues.
 
     Returns
     -------
@@ -233,7 +241,8 @@ def sweep(
             value = np.where(valid, grids[names.index(key)], value)  # invalid designs: the base values
         arguments[key] = value
     model = WhippleModel(*gen.canonical_matrices(**arguments), g=float(base.values["g"]))  # type: ignore[arg-type]
-    result = stability_batch(model.entries(), model.g)
+    system = None if law is None else ClosedLoopModel(model, law)
+    result = stability_batch(model.entries(), model.g) if system is None else _closed_loop_batch(system)
     result = StabilityBatch(
         *(
             np.where(_expand(valid, a), a, np.nan if a.dtype.kind == "f" else 0)
@@ -242,10 +251,30 @@ def sweep(
     )
     ev = labels = None
     if eigenvalues and speeds.size:
-        modal = model.eigenvalues(speeds, method=method)
+        modal = model.eigenvalues(speeds, method=method) if system is None else system.eigenvalues(speeds)
         ev = np.where(valid[..., None, None], modal.values, np.nan)
         labels = modal.labels
-    return Sweep(base, names, values, speeds, valid, reasons, result, ev, labels)
+    return Sweep(
+        base, names, values, speeds, valid, reasons, result, ev, labels, None if system is None else system.law
+    )
+
+
+def _closed_loop_batch(system: ClosedLoopModel) -> StabilityBatch:
+    """The closed-loop stability of every design, in the arrays of :class:`StabilityBatch`."""
+    shape = system.batch_shape
+    lower, upper = np.full(shape + (3,), np.nan), np.full(shape + (3,), np.nan)
+    lower_kind, upper_kind = np.zeros(shape + (3,), dtype=int), np.zeros(shape + (3,), dtype=int)
+    weave, capsize, frequency = np.full(shape, np.nan), np.full(shape, np.nan), np.full(shape, np.nan)
+    kinds = {None: 0, "real": REAL, "oscillatory": OSCILLATORY}
+    for index, one in zip(np.ndindex(shape), system._bicycles()):
+        result = one.stability()
+        for k, interval in enumerate(result.intervals[:3]):
+            lower[index + (k,)], upper[index + (k,)] = interval.lower, interval.upper
+            lower_kind[index + (k,)] = kinds[getattr(interval.lower_crossing, "kind", None)]
+            upper_kind[index + (k,)] = kinds[getattr(interval.upper_crossing, "kind", None)]
+        for array, value in ((weave, result.weave), (capsize, result.capsize), (frequency, result.weave_frequency)):
+            array[index] = np.nan if value is None else value
+    return StabilityBatch(lower, upper, lower_kind, upper_kind, weave, capsize, frequency)
 
 
 def _expand(valid: np.ndarray, array: np.ndarray) -> np.ndarray:

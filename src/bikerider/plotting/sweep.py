@@ -72,7 +72,7 @@ def plot_stability_sweep(ax, result: Sweep):
                 color=STABLE_SHADE,
                 edgecolor="#7fbf7f",
                 lw=0.5,
-                label="self-stable" if k == 0 else None,
+                label=("self-stable" if result.law is None else "stable under the law") if k == 0 else None,
                 step=None,
             )
     ax.plot(x, s.weave, color=MODE_COLOURS["weave"], label="weave speed")
