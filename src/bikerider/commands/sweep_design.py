@@ -186,6 +186,7 @@ def run_design(args: argparse.Namespace) -> int:
 
     from bikerider import design
     from bikerider.design import summary as summaries
+    from bikerider.design.distribution import speed_distributions
     from bikerider.report import parse_speeds
 
     base, name = _base(args)
@@ -224,18 +225,26 @@ def run_design(args: argparse.Namespace) -> int:
     )
     if args.plot:
         _plots(args, store, name)
+    sample = args.monte_carlo is not None or args.random is not None
+    distributions = speed_distributions(store) if sample else None  # a sample: the speeds' distribution
+    if args.plot and distributions is not None:
+        _distribution_plot(args, distributions, f"{name}: {space.size:,} designs")
     if args.store is None:
-        text = _rows_text(args, store, closest)
+        text = _rows_text(args, store, closest, distributions)
     else:
         summary = summaries.summarize(store)
         if args.json:
             out = {"store": str(args.store), "base": name, "kind": space.kind, **summary.as_dict()}
+            if distributions is not None:
+                out["distribution"] = {k: d.as_dict() for k, d in distributions.items()}
             if args.target_weave_speed is not None:
                 out["closest_to_weave_speed"] = _closest_dict(closest, degree_names(args.vary))
             out["notes"] = notes.shown_with()
             text = json.dumps(out, indent=2, allow_nan=False) + "\n"
         else:
             text = _summary_text(store, summary, closest, args.target_weave_speed, degree_names(args.vary))
+            if distributions is not None:
+                text += "\n" + "".join(d.text() + "\n" for d in distributions.values())
     if args.out:
         atomic_write_text(args.out, text)
     else:
@@ -288,7 +297,18 @@ def _summary_text(store, summary, closest, target, degrees: frozenset[str] = fro
     return "\n".join(lines) + "\n"
 
 
-def _rows_text(args, store, closest) -> str:
+def _distribution_plot(args, distributions, title: str) -> None:
+    """``speed_distribution.<format>``: the histograms of the weave and capsize speeds."""
+    from bikerider.plotting.common import save_figure
+    from bikerider.plotting.distribution import speed_distribution_figure
+
+    out = Path(args.plot)
+    out.mkdir(parents=True, exist_ok=True)
+    figure = speed_distribution_figure(distributions, title)
+    save_figure(figure, out / f"speed_distribution.{args.format}", args.format, args.dpi)
+
+
+def _rows_text(args, store, closest, distributions=None) -> str:
     """Per-design rows (CSV or JSON) of a run held in memory."""
     import numpy as np
 
@@ -332,6 +352,8 @@ def _rows_text(args, store, closest) -> str:
         if store.spec.speeds.size:
             out["speeds"] = store.spec.speeds.tolist()
             out["stable"] = store.stable().tolist()
+        if distributions is not None:
+            out["distribution"] = {k: d.as_dict() for k, d in distributions.items()}
         if args.target_weave_speed is not None:
             out["closest_to_weave_speed"] = _closest_dict(closest, degree_names(args.vary))
         out["notes"] = notes.shown_with()
