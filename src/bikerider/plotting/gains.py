@@ -16,7 +16,7 @@ GAIN_LABELS = {
 }
 
 
-def gains_figure(laws, speeds=None, title: str = "", stable=None):
+def gains_figure(laws, speeds=None, title: str = "", stable=None, stable_label: str = "closed loop stable"):
     """The gains of one or more control laws against speed.
 
     Parameters
@@ -28,6 +28,8 @@ def gains_figure(laws, speeds=None, title: str = "", stable=None):
     title : str
     stable : sequence of (float, float), optional
         Speed intervals to shade (where the closed loop is stable: ``closed_loop(...).stability()``).
+    stable_label : str
+        The legend entry of the shading.
 
     Returns
     -------
@@ -45,7 +47,7 @@ def gains_figure(laws, speeds=None, title: str = "", stable=None):
         for lo, hi in stable or ():
             lo, hi = max(lo, v[0]), min(hi, v[-1])
             if hi > lo:
-                ax.axvspan(lo, hi, color="#e6f2e6", zorder=-1, label="closed loop stable" if j == 0 else None)
+                ax.axvspan(lo, hi, color="#e6f2e6", zorder=-1, label=stable_label if j == 0 else None)
         ax.set_ylabel(f"{GAIN_LABELS[name]}\n[{GAIN_UNITS[name]}]", fontsize=8)
     axes[0].legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize=8, frameon=False)
     axes[-1].set_xlabel("speed $v$ [m/s]")
