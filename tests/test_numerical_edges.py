@@ -165,7 +165,7 @@ def test_weave_birth_speed_on_random_bicycles(mapping):
     """Against eigenvalues tracked by continuity down from 12 m/s (tests/mode_reference.py): v_d
     lies in the first grid step, in the speeds where the branches' names are certain, where the
     two weave branches turn from both real into a complex pair.  (The two largest real roots are
-    not always the ones that merge: on about 4 % of random bicycles the second and third do.)"""
+    not always the ones that merge: on 55 of 433 random bicycles they are not, docs/dynamics.md.)"""
     model = WhippleModel.from_parameters(BenchmarkParameters.from_mapping(mapping, "bench"))
     ref = reference(model, n=2401)
     v_d = model.weave_birth_speed()

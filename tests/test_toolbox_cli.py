@@ -6,6 +6,7 @@ import csv
 import io
 import json
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -127,3 +128,11 @@ def test_convert_eigenvalues_as_csv_and_refuses_to_overwrite_its_input(tmp_path)
     assert code == 2 and "--out" in err
     code, _, err = run_cli(["convert", "--bicycle", "Benchmark", "--to", "bicycleparameters", "--name", "my bike"])
     assert code == 2 and "bicycle name" in err
+
+
+def test_the_package_docstring_names_only_what_exists():
+    """Every :func:`name` the docstring lists is exported by bikerider or by the module it names."""
+    names = re.findall(r":func:`(\w+)`", bikerider.__doc__)
+    assert names
+    for name in names:
+        assert hasattr(bikerider, name), name

@@ -4,7 +4,8 @@ Where the weave pair is a complex pair (above the speed ``v_d`` where it is born
 bicycle) the names follow from the eigenvalues at that one speed: the pair is ``weave``, the larger
 real eigenvalue ``capsize``, the smaller ``castor``.  Below ``v_d`` all four are real, and which
 two are the weave pair depends on which two merge at ``v_d``: the two largest for most bicycles,
-but the second and third for about 4 % of random valid bicycles, so no rule at one speed can say.
+but not for all (55 of 433 random valid bicycles, ``docs/dynamics.md``), so no rule at one speed
+can say.
 So the names are carried by continuation:
 
 * the speeds ``c_1 < ... < c_m`` where two eigenvalues coincide (the positive roots of the
