@@ -165,23 +165,28 @@ def naming(eigenvalues_at, collisions, top_speed: float) -> Naming:
     return Naming(edges, tuple(pairs), tuple(names), paths)
 
 
-_PATH_SAMPLES = 400
+_PATH_SAMPLES = 120
 
 
 def _path(eigenvalues_at, start: float, end: float, first: np.ndarray, first_names: tuple[str, ...]):
-    """Eigenvalues tracked by continuity from ``start`` to ``end`` (``first``: those at ``start`` in
-    slot order, named ``first_names``): speeds, the tracked values ``(k, 4)`` and column names."""
+    """Eigenvalues followed by continuity from ``start`` to ``end`` through a segment with two
+    complex pairs (``first``: those at ``start`` in slot order, named ``first_names``): speeds, the
+    followed values ``(k, 4)`` (columns in the order of ``first``) and the column names.  Real
+    eigenvalues keep their slots inside a segment; only the two pairs may change their order, so at
+    each step the pairs keep the assignment that moves their upper members least."""
     speeds = np.linspace(start, end, _PATH_SAMPLES)
     values = eigenvalues_at(speeds)
-    values[0] = first
-    previous = current = first
-    tracked = np.empty_like(values)
-    tracked[0] = first
+    order, _ = slots(values)
+    slotted = np.take_along_axis(values, order, axis=-1)
+    slotted[0] = first
+    tracked = slotted.copy()
+    a, b = complex(first[0]), complex(first[2])
     for k in range(1, speeds.size):
-        predicted = 2 * current - previous if k > 1 else current
-        cost = np.abs(values[k][_PERMUTATIONS] - predicted[None, :]).sum(axis=-1)
-        previous, current = current, values[k][_PERMUTATIONS[int(np.argmin(cost))]]
-        tracked[k] = current
+        x, y = complex(slotted[k, 0]), complex(slotted[k, 2])
+        if abs(a - y) + abs(b - x) < abs(a - x) + abs(b - y):  # the pairs swapped their slot order
+            tracked[k, :2], tracked[k, 2:] = slotted[k, 2:], slotted[k, :2]
+            x, y = y, x
+        a, b = x, y
     return speeds, tracked, first_names
 
 
@@ -257,3 +262,143 @@ def _arrange(names: tuple[str, ...], s: np.ndarray) -> tuple[np.ndarray, np.ndar
 
 
 __all__ = ["Naming", "apply", "naming", "slots"]
+
+
+# -- a batch of bicycles at once ------------------------------------------------------------------
+CODES = ("weave", "capsize", "castor", "other")
+"""Name codes of the batched path."""
+_OTHER = 3
+
+
+def _consistent_codes(names: np.ndarray, pairs: np.ndarray) -> np.ndarray:
+    """:func:`_consistent` on codes ``(b, 4)`` with ``pairs`` ``(b,)``."""
+    names = names.copy()
+    for p in range(2):
+        mixed = (p < pairs) & (names[:, 2 * p] != names[:, 2 * p + 1])
+        names[mixed, 2 * p] = names[mixed, 2 * p + 1] = _OTHER
+    lone = (names == 0).sum(axis=1) != 2
+    names[lone] = np.where(names[lone] == 0, _OTHER, names[lone])
+    return names
+
+
+def batch_naming(eigenvalues_at, edges: np.ndarray, top: np.ndarray):
+    """:func:`naming` for ``b`` systems at once, where they need no per-system treatment.
+
+    Parameters
+    ----------
+    eigenvalues_at : callable
+        Speeds ``(b, k)`` to eigenvalues ``(b, k, 4)`` (each system at its own speeds); with a
+        second argument, an index array of systems, speeds ``(len(index), k)`` of those.
+    edges : numpy.ndarray, shape (b, m)
+        Each system's collision speeds, increasing, NaN-padded.
+    top : numpy.ndarray, shape (b,)
+        A speed above each system's collisions.
+
+    Returns
+    -------
+    pairs : numpy.ndarray of int, shape (b, m + 1)
+        Complex pairs of each segment (segments past a system's last edge repeat its top one).
+    names : numpy.ndarray of int, shape (b, m + 1, 4)
+        Each segment's slot names as :data:`CODES`.
+    alone : numpy.ndarray of bool, shape (b,)
+        Systems the batch does not decide (no segment with one pair, a segment with two, sides of
+        a collision that never match their segments): name them one by one with :func:`naming`.
+    """
+    b, m = edges.shape
+    count = np.isfinite(edges).sum(axis=1)
+    k = np.arange(m + 1)
+    lows = np.concatenate([np.zeros((b, 1)), edges], axis=1)[:, :m]
+    mids = 0.5 * (lows + edges)
+    samples = np.where(k[None, :m] < count[:, None], mids, top[:, None])
+    samples = np.concatenate([samples, top[:, None]], axis=1)
+    _, pairs = slots(eigenvalues_at(samples))
+    in_range = k[None, :] <= count[:, None]
+    alone = np.any(in_range & (pairs == 2), axis=1)
+    ones = np.where(in_range & (pairs == 1), k[None, :], -1)
+    anchor = ones.max(axis=1)
+    alone |= anchor < 0
+    names = np.full((b, m + 1, 4), _OTHER, dtype=np.int8)
+    rows = np.arange(b)
+    names[rows, np.maximum(anchor, 0)] = np.array([0, 0, 1, 2], dtype=np.int8)
+    if m == 0:
+        return pairs, names, alone
+    c = np.where(np.isfinite(edges), edges, top[:, None])
+    # downward across edge i (i < anchor): known segment i + 1 (above), unknown i (below); upward
+    # (anchor <= i < count): known i (below), unknown i + 1 (above)
+    down = k[None, :m] < anchor[:, None]
+    up = (k[None, :m] >= anchor[:, None]) & (k[None, :m] < count[:, None])
+    known_pairs = np.where(down, pairs[:, 1:], pairs[:, :m])
+    unknown_pairs = np.where(down, pairs[:, :m], pairs[:, 1:])
+    source = np.zeros((b, m, 4), dtype=complex)
+    target = np.zeros((b, m, 4), dtype=complex)
+    pending = down | up
+    for step in _STEPS:  # the smallest step at which both sides have their segments' structure
+        rows_pending = np.nonzero(pending.any(axis=1))[0]
+        if not rows_pending.size:
+            break
+        cc = c[rows_pending]
+        around = eigenvalues_at(np.concatenate([cc * (1 + step), cc * (1 - step)], axis=1), rows_pending)
+        order, structure = slots(around)
+        slotted = np.take_along_axis(around, order, axis=-1)
+        above, below = slotted[:, :m], slotted[:, m:]
+        d = down[rows_pending]
+        known_side = np.where(d, structure[:, :m], structure[:, m:])
+        unknown_side = np.where(d, structure[:, m:], structure[:, :m])
+        ok = pending[rows_pending] & (known_side == known_pairs[rows_pending])
+        ok &= unknown_side == unknown_pairs[rows_pending]
+        r, e = np.nonzero(ok)
+        rows_ok = rows_pending[r]
+        source[rows_ok, e] = np.where(d[r, e, None], above[r, e], below[r, e])
+        target[rows_ok, e] = np.where(d[r, e, None], below[r, e], above[r, e])
+        pending[rows_ok, e] = False
+    alone |= pending.any(axis=1)
+    cost = np.abs(source[:, :, _PERMUTATIONS] - target[:, :, None, :]).sum(axis=-1)  # (b, m, 24)
+    best = _PERMUTATIONS[np.argmin(cost, axis=-1)]  # (b, m, 4)
+    for i in range(m - 1, -1, -1):  # down from each anchor
+        sel = down[:, i]
+        if sel.any():
+            carried = np.take_along_axis(names[sel, i + 1], best[sel, i], axis=-1)
+            names[sel, i] = _consistent_codes(carried, pairs[sel, i])
+    for i in range(m):  # and up
+        sel = up[:, i]
+        if sel.any():
+            carried = np.take_along_axis(names[sel, i], best[sel, i], axis=-1)
+            names[sel, i + 1] = _consistent_codes(carried, pairs[sel, i + 1])
+    names[:, 1:] = np.where(k[None, 1:, None] > count[:, None, None], names[rows, count][:, None], names[:, 1:])
+    return pairs, names, alone
+
+
+def batch_apply(values: np.ndarray, speeds: np.ndarray, edges: np.ndarray, pairs: np.ndarray, names: np.ndarray):
+    """:func:`apply` for ``b`` systems: ``values (b, n, 4)`` at ``speeds (n,)``, named by
+    :func:`batch_naming`'s ``pairs`` and ``names``; the values in :data:`MODES` order and labels."""
+    b, n, _ = values.shape
+    order, row_pairs = slots(values)
+    finite = np.isfinite(edges)
+    segment = (finite[:, None, :] & (edges[:, None, :] <= speeds[None, :, None])).sum(axis=-1)  # (b, n)
+    last = pairs.shape[1] - 1
+    known = np.take_along_axis(pairs, segment, axis=1)
+    fits = known == row_pairs
+    for step in (-1, 1):
+        near = np.clip(segment + step, 0, np.minimum(finite.sum(axis=1), last)[:, None])
+        move = ~fits & (np.take_along_axis(pairs, near, axis=1) == row_pairs)
+        segment = np.where(move, near, segment)
+        fits |= move
+    out = np.empty((b, n, 4), dtype=complex)
+    labels = np.empty((b, n, 4), dtype=object)
+    if not fits.all():  # within rounding of a collision no segment fits: the per-speed rules
+        out[~fits], labels[~fits] = label_modes(values[~fits])
+    s = np.take_along_axis(values, order, axis=-1)
+    s = np.where(row_pairs[..., None] == 0, s.real, s)
+    row_names = names[np.arange(b)[:, None], segment]  # (b, n, 4): each row's segment's names
+    key = (row_names.astype(np.int64) * np.array([64, 16, 4, 1])).sum(axis=-1)
+    codes = np.unique(key[fits])
+    for code in codes:
+        sel = fits & (key == code) if codes.size > 1 or not fits.all() else fits
+        tuple_names = tuple(CODES[(int(code) >> shift) & 3] for shift in (6, 4, 2, 0))
+        position, label = _arrange(tuple_names, s[sel])
+        out[sel] = np.take_along_axis(s[sel], position, axis=-1)
+        labels[sel] = label
+    return out, labels
+
+
+__all__ += ["CODES", "batch_apply", "batch_naming"]

@@ -18,7 +18,7 @@ from bikerider.benchmark import mode_names, rules
 from bikerider.benchmark.mode_labels import MODES, ModalEigenvalues, check_speeds, label_modes
 from bikerider.benchmark.parameters import BenchmarkParameters
 from bikerider.benchmark.quartic import eigenvalues_from_polynomial
-from bikerider.benchmark.roots import polynomial_positive_real_roots, positive_real_roots
+from bikerider.benchmark.roots import IMAGINARY, ZERO, polynomial_positive_real_roots, positive_real_roots
 from bikerider.benchmark.stability import Stability, stability
 from bikerider.engine import arguments
 from bikerider.errors import InputError
@@ -200,23 +200,43 @@ class WhippleModel:
     def name_modes(self, speeds: np.ndarray, raw: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Order eigenvalues ``raw`` (``(b, n, 4)``: each bicycle of the flattened batch at each of
         ``speeds``) as weave(+), weave(-), capsize, castor by continuation from where the names are
-        unambiguous (:mod:`bikerider.benchmark.mode_names`); return them with their labels."""
-        speeds = np.asarray(speeds, dtype=float)
-        values = np.empty(raw.shape, dtype=complex)
-        labels = np.empty(raw.shape, dtype=object)
-        collisions = self.collision_speeds()
-        entries = {k: e.reshape(-1) for k, e in self._entries().items()} if self.batch_shape else None
-        g = np.broadcast_to(self.g, self.batch_shape).reshape(-1) if self.batch_shape else None
-        for b in range(raw.shape[0]):
-            if entries is None:
-                at, edges = (lambda v: np.linalg.eigvals(self.state_matrix(v))), collisions
-            else:
-                one = {k: e[b] for k, e in entries.items()}
-                at = _eigenvalues_of(one, float(g[b]))  # type: ignore[index]
-                edges = collisions.reshape(-1)[b]
-            top = float(max(10.0, 2.0 * edges[-1])) if len(edges) else 10.0
-            values[b], labels[b] = mode_names.apply(raw[b], np.abs(speeds), mode_names.naming(at, edges, top))
+        unambiguous (:mod:`bikerider.benchmark.mode_names`); return them with their labels.
+
+        The whole batch is named at once; a bicycle the batched path cannot decide (two complex
+        pairs in a segment, no segment with one pair) is named on its own."""
+        speeds = np.abs(np.asarray(speeds, dtype=float))
+        edges = self._collision_table()
+        entries = {k: np.asarray(e, dtype=float).reshape(-1) for k, e in self._entries().items()}
+        g = np.broadcast_to(np.asarray(self.g, dtype=float), self.batch_shape).reshape(-1)
+
+        def at(v, rows=slice(None)):  # (b, k) speeds, one row per bicycle (of ``rows``)
+            some = {k: e[rows, None] for k, e in entries.items()}
+            return np.linalg.eigvals(gen.state_matrix(**some, g=g[rows, None], v=v))
+
+        largest = np.where(np.isfinite(edges), edges, 0.0).max(axis=1, initial=0.0)
+        top = np.maximum(10.0, 2.0 * largest)
+        pairs, names, alone = mode_names.batch_naming(at, edges, top)
+        values, labels = mode_names.batch_apply(np.asarray(raw, dtype=complex), speeds, edges, pairs, names)
+        for b in np.nonzero(alone)[0]:
+            one = {k: e[b] for k, e in entries.items()}
+            row = edges[b][np.isfinite(edges[b])]
+            named = mode_names.naming(_eigenvalues_of(one, float(g[b])), row, float(top[b]))
+            values[b], labels[b] = mode_names.apply(raw[b], speeds, named)
         return values, labels
+
+    def _collision_table(self) -> np.ndarray:
+        """:meth:`collision_speeds` of every bicycle of the flattened batch, ``(b, m)``, NaN-padded."""
+        with np.errstate(over="ignore", invalid="ignore"):
+            coefficients = np.asarray(gen.discriminant_polynomial(**self._entries(), g=self.g), dtype=float)
+        flat = coefficients.reshape(-1, coefficients.shape[-1])
+        if not np.all(np.isfinite(flat)):
+            raise InputError(
+                "M, C1, K0, K2",
+                "entries too large for floating point",
+                "matrices whose characteristic discriminant is finite",
+                self.source,
+            )
+        return np.sqrt(_polished_roots_batch(flat))
 
     def collision_speeds(self):
         """The speeds [m/s] at which two eigenvalues coincide: the positive roots, in ``u = v^2``, of
@@ -225,19 +245,10 @@ class WhippleModel:
         Returns an increasing array for one bicycle; for a batch, an object array of the batch shape
         holding one such array per bicycle.
         """
-        with np.errstate(over="ignore", invalid="ignore"):
-            coefficients = np.asarray(gen.discriminant_polynomial(**self._entries(), g=self.g), dtype=float)
-        flat = coefficients.reshape(-1, coefficients.shape[-1])
-        out = np.empty(flat.shape[0], dtype=object)
-        for b, c in enumerate(flat):
-            if not np.all(np.isfinite(c)):
-                raise InputError(
-                    "M, C1, K0, K2",
-                    "entries too large for floating point",
-                    "matrices whose characteristic discriminant is finite",
-                    self.source,
-                )
-            out[b] = np.sqrt(_polished_roots(c))
+        table = self._collision_table()
+        out = np.empty(table.shape[0], dtype=object)
+        for b, row in enumerate(table):
+            out[b] = row[np.isfinite(row)]
         return out[0] if not self.batch_shape else out.reshape(self.batch_shape)
 
     # -- critical speeds ---------------------------------------------------------------------
@@ -302,6 +313,51 @@ class WhippleModel:
                 "stability_batch(model.entries(), model.g))",
                 self.source,
             )
+
+
+def _polished_roots_batch(coefficients: np.ndarray) -> np.ndarray:
+    """:func:`_polished_roots` of every row of ``coefficients`` ``(b, d + 1)`` at once (companion
+    matrices' eigenvalues, as ``numpy.roots``, with the tolerances of
+    :func:`~bikerider.benchmark.roots.polynomial_positive_real_roots`), ``(b, d)`` NaN-padded."""
+    b, d1 = coefficients.shape
+    d = d1 - 1
+    out = np.full((b, d), np.nan)
+    if b == 0 or d == 0:
+        return out
+    scale = np.abs(coefficients).max(axis=1, keepdims=True)
+    c = coefficients / np.where(scale > 0, scale, 1.0)
+    full = np.abs(c[:, 0]) > ZERO
+    for row in np.nonzero(~full)[0]:  # a lower degree: numpy.roots, one at a time
+        roots = _polished_roots(coefficients[row])
+        out[row, : roots.size] = roots
+    rows = np.nonzero(full)[0]
+    if rows.size:
+        monic = c[rows, 1:] / c[rows, :1]
+        companion = np.zeros((rows.size, d, d))
+        companion[:, 0, :] = -monic
+        companion[:, np.arange(1, d), np.arange(d - 1)] = 1.0
+        roots = np.linalg.eigvals(companion)
+        real = np.abs(roots.imag) <= IMAGINARY * np.maximum(1.0, np.abs(roots.real))
+        u = np.where(real & (roots.real > 0), roots.real, np.nan)
+        poly = coefficients[rows][:, None, :]
+        slope = poly[..., :-1] * np.arange(d, 0, -1)
+        for _ in range(3):  # Newton steps, each kept only while it is small (a simple root)
+            value = _horner(poly, u)
+            derivative = _horner(slope, u)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                step = np.where(derivative != 0, value / derivative, 0.0)
+            small = np.isfinite(step) & (np.abs(step) <= 1e-6 * u)
+            u = np.where(small, u - step, u)
+        out[rows] = np.sort(u, axis=1)  # NaN last
+    return out
+
+
+def _horner(poly: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """Polynomials ``poly`` ``(..., 1, k)`` (highest power first) at ``x`` ``(..., n)``."""
+    out = np.zeros(x.shape)
+    for j in range(poly.shape[-1]):
+        out = out * x + poly[..., j]
+    return out
 
 
 def _polished_roots(coefficients: np.ndarray) -> np.ndarray:
