@@ -17,7 +17,7 @@ import numpy as np
 from bikerider.benchmark import mode_names, rules
 from bikerider.benchmark.mode_labels import MODES, ModalEigenvalues, check_speeds, label_modes
 from bikerider.benchmark.parameters import BenchmarkParameters
-from bikerider.benchmark.quartic import eigenvalues_from_polynomial
+from bikerider.benchmark.quartic import eigenvalues_from_polynomial, quartic_roots
 from bikerider.benchmark.roots import IMAGINARY, ZERO, polynomial_positive_real_roots, positive_real_roots
 from bikerider.benchmark.stability import Stability, stability
 from bikerider.engine import arguments
@@ -211,7 +211,7 @@ class WhippleModel:
 
         def at(v, rows=slice(None)):  # (b, k) speeds, one row per bicycle (of ``rows``)
             some = {k: e[rows, None] for k, e in entries.items()}
-            return np.linalg.eigvals(gen.state_matrix(**some, g=g[rows, None], v=v))
+            return quartic_roots(gen.characteristic_coefficients(**some, g=g[rows, None], v=v))
 
         largest = np.where(np.isfinite(edges), edges, 0.0).max(axis=1, initial=0.0)
         top = np.maximum(10.0, 2.0 * largest)
@@ -377,8 +377,8 @@ def _polished_roots(coefficients: np.ndarray) -> np.ndarray:
 def _eigenvalues_of(entries: dict[str, float], g: float):
     """Speeds ``(k,)`` to the eigenvalues ``(k, 4)`` of one bicycle given by its matrix entries."""
 
-    def at(speeds):
-        return np.linalg.eigvals(gen.state_matrix(**entries, g=g, v=np.asarray(speeds, dtype=float)))
+    def at(speeds):  # the closed-form quartic: several times faster than eigvals, good to 1e-8 at a double root
+        return quartic_roots(gen.characteristic_coefficients(**entries, g=g, v=np.asarray(speeds, dtype=float)))
 
     return at
 
