@@ -136,3 +136,15 @@ def test_the_package_docstring_names_only_what_exists():
     assert names
     for name in names:
         assert hasattr(bikerider, name), name
+
+
+def test_sweep_under_a_control_file():
+    control = str(DATA / "gap_examples" / "control.toml")
+    code, out, err = run_cli(["sweep", "--bicycle", "Benchmark", "--vary", "c=0.08:0.08:1", "--control", control])
+    assert code == 0, err
+    law = bikerider.ControlLaw.constant([0.0, 5.0, -2.0, -0.5])
+    model = bikerider.WhippleModel.from_parameters(bikerider.named("Benchmark"))
+    expected = bikerider.closed_loop(model, law).critical_speeds().weave
+    assert float(_csv(out)[0]["weave_speed"]) == pytest.approx(expected, rel=1e-8)
+    code, _, err = run_cli(["sweep", "--bicycle", "Benchmark", "--monte-carlo", "3", "--control", control])
+    assert code == 2 and "--control" in err

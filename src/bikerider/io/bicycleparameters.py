@@ -338,7 +338,7 @@ def _toml_kind(text: str) -> str:
     unreadable file is left to the TOML reader, which says why)."""
     try:
         data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError:
+    except (tomllib.TOMLDecodeError, ValueError):  # ValueError: an integer too long to convert
         return "toml"
     return "benchmark" if _BENCHMARK_TOML_KEYS.intersection(data) else "toml"
 
