@@ -314,7 +314,7 @@ def detect_format(path: str | Path) -> str:
         return _toml_kind(text)
     names = set(data)
     if not names:
-        raise FileFormatError(path, "no 'name = value' entries: not a BicycleParameters file")
+        raise FileFormatError(path, "no 'name = value' entries: the file is empty or holds only comments")
     if any(_MEASURED_MARKERS.match(n) for n in names):
         return "measured"
     if names <= set(LUMPED_RIDER_NAMES) and "w" not in names:
