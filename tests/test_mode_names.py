@@ -8,7 +8,7 @@ from mode_reference import misnamed, reference
 from random_bicycles import random_parameters
 
 import bikerider
-from bikerider.benchmark import BenchmarkParameters, WhippleModel
+from bikerider.benchmark import BenchmarkParameters, WhippleModel, mode_names
 from bikerider.benchmark.mode_labels import label_modes
 
 # The bicycle of issue 24 (Meijaard names, SI): its 2nd and 3rd largest real eigenvalues merge into
@@ -86,3 +86,21 @@ def test_batches_are_named_as_each_bicycle_alone():
         alone = m.eigenvalues(speeds)
         np.testing.assert_allclose(together.values[k], alone.values, rtol=1e-12, atol=1e-12)
         assert (together.labels[k] == alone.labels).all()
+
+
+def test_the_batched_naming_equals_the_one_bicycle_naming():
+    """The batched path (every bicycle's segments at once) and mode_names.naming/apply one bicycle
+    at a time give the same names on random bicycles, at speeds near their collisions too."""
+    models = [WhippleModel.from_parameters(p) for p in random_parameters(80, seed=5)]
+    batch = WhippleModel(*(np.stack([getattr(m, k) for m in models]) for k in ("M", "C1", "K0", "K2")))
+    speeds = np.linspace(0, 12, 241)
+    raw = np.linalg.eigvals(batch.state_matrix(speeds))
+    values, labels = batch.name_modes(speeds, raw)
+    differ = 0
+    for k, m in enumerate(models):
+        edges = m.collision_speeds()
+        top = max(10.0, 2.0 * edges[-1]) if len(edges) else 10.0
+        named = mode_names.naming(lambda v, m=m: np.linalg.eigvals(m.state_matrix(v)), edges, top)
+        one_values, one_labels = mode_names.apply(raw[k], speeds, named)
+        differ += int(not ((one_labels == labels[k]).all() and np.allclose(one_values, values[k], atol=1e-12)))
+    assert differ == 0
