@@ -8,7 +8,8 @@ import scipy.linalg
 from random_bicycles import random_parameters
 
 import bikerider
-from bikerider.benchmark.closed_loop import closed_loop, closed_loop_matrix, lqr_gains, lqr_law
+from bikerider import plotting
+from bikerider.benchmark.closed_loop import _quartic_discriminant, closed_loop, closed_loop_matrix, lqr_gains, lqr_law
 from bikerider.benchmark.control import ControlLaw, GainSchedule
 from bikerider.errors import InputError
 
@@ -121,3 +122,48 @@ def test_closed_loop_matrix_broadcasts_over_a_batch():
     out = closed_loop_matrix(A, b, np.array([1.0, 2.0, 3.0, 4.0]))
     assert out.shape == (3, 2, 4, 4)
     np.testing.assert_array_equal(out[1, 1, 0], [1.0, 3.0, 2.0, 4.0])
+
+
+def test_closed_loop_collisions_and_names(benchmark):
+    coefficients = [2.0, -3.0, 0.5, 1.0, -0.25]
+    roots = np.roots(coefficients)
+    product = np.prod([(roots[i] - roots[j]) ** 2 for i in range(4) for j in range(i + 1, 4)])
+    assert _quartic_discriminant(*coefficients) == pytest.approx(coefficients[0] ** 6 * product.real, rel=1e-10)
+    # no control: the collisions and names of the open loop
+    open_loop = closed_loop(benchmark, [0, 0, 0, 0])
+    np.testing.assert_allclose(open_loop.collision_speeds(), benchmark.collision_speeds(), rtol=1e-8)
+    speeds = np.linspace(0, 10, 21)
+    a, b = open_loop.eigenvalues(speeds), benchmark.eigenvalues(speeds)
+    np.testing.assert_allclose(a.values, b.values, atol=1e-10)
+    assert (a.labels == b.labels).all()
+    # under a law: a closed-loop collision is where two eigenvalues meet
+    system = closed_loop(benchmark, LAWS[2])
+    for c in system.collision_speeds():
+        ev = np.sort_complex(np.linalg.eigvals(system.state_matrix(c)))
+        assert np.min(np.abs(np.diff(ev))) < 1e-3 * max(1.0, np.abs(ev).max())
+
+
+def test_a_sweep_under_a_law_is_each_design_under_it():
+    base = bikerider.named("Benchmark")
+    trails = np.linspace(0.02, 0.12, 4)
+    law = LAWS[0]
+    swept = bikerider.sweep(base, {"c": trails}, speeds=[4.0, 6.0], law=law)
+    for k, c in enumerate(trails):
+        one = closed_loop(bikerider.WhippleModel.from_parameters(base.with_values(c=float(c))), law).stability()
+        assert swept.stability.weave[k] == pytest.approx(one.weave, rel=1e-10)
+        assert swept.stability.capsize[k] == pytest.approx(one.capsize, rel=1e-10)
+    assert swept.law is law and swept.eigenvalues.shape == (4, 2, 4)
+    free = bikerider.sweep(base, {"c": trails})
+    assert np.all(swept.stability.weave < free.stability.weave)  # roll-rate feedback lowers the weave speed
+    no_control = bikerider.sweep(base, {"c": trails}, law=[0, 0, 0, 0])
+    np.testing.assert_allclose(no_control.stability.weave, free.stability.weave, rtol=1e-10)
+
+
+def test_the_gains_figure_draws_each_gain(tmp_path):
+    model = bikerider.WhippleModel.from_parameters(bikerider.named("Benchmark"))
+    law = lqr_law(model, np.linspace(0.5, 10, 20))
+    fig = plotting.gains_figure([law, LAWS[2]], np.linspace(0, 10, 101), title="gains", stable=[(1.0, np.inf)])
+    assert len(fig.axes) == 4
+    lines = fig.axes[1].get_lines()
+    np.testing.assert_allclose(lines[0].get_ydata(), law(np.linspace(0, 10, 101))[:, 1])
+    assert plotting.save_figure(fig, tmp_path / "gains.png").stat().st_size > 0

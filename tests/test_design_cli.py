@@ -4,9 +4,14 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
 import pytest
 
+from bikerider import explore
 from bikerider.cli import main
+from bikerider.design import monte_carlo
+from bikerider.design.distribution import speed_distributions
+from bikerider.shipped import named
 
 pytest.importorskip("zarr")
 GRID = [
@@ -156,3 +161,22 @@ def test_a_store_run_says_each_stage_and_ctrl_c_says_how_to_resume(tmp_path, cap
     assert err[-1].startswith("sweep: done in ") and err[-1].endswith("(the whole command)")
     assert main(["sweep", *argv, "--quiet"]) == 0
     assert capsys.readouterr().err == ""  # --quiet: nothing on stderr
+
+
+def test_monte_carlo_reports_the_speeds_distribution(tmp_path):
+    """Median and central intervals of the weave and capsize speeds over the sample, as the
+    benchmark command's own Monte Carlo gives them (same draws of the same sigmas)."""
+    out = tmp_path / "out.json"
+    argv = ["sweep", "--bicycle", "Browser", "--monte-carlo", "2000", "--seed", "3", "--json", "--out", str(out)]
+    assert main(argv + ["--plot", str(tmp_path / "figs"), "--quiet"]) == 0
+    data = json.loads(out.read_text())["distribution"]
+    weave = data["weave_speed"]
+    assert weave["n"] == 2000 and weave["central_95"][0] < weave["central_68"][0] < weave["median"]
+    assert weave["median"] < weave["central_68"][1] < weave["central_95"][1]
+    # the same numbers straight from the designs' weave speeds
+    params = named("Browser")
+    store = explore(monte_carlo(params, 2000, 3, "Browser"), None, quiet=True)
+    speeds = speed_distributions(store)["weave_speed"].values
+    assert weave["median"] == np.median(speeds)
+    assert weave["central_68"] == list(np.quantile(speeds, [0.16, 0.84]))
+    assert (tmp_path / "figs" / "speed_distribution.png").stat().st_size > 0

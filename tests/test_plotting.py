@@ -224,7 +224,7 @@ def test_sweep_command_csv_json_and_map(tmp_path, capsys):
         == 0
     )
     out = json.loads(capsys.readouterr().out)
-    assert out["parameters"]["lam"] == pytest.approx(np.radians([0, 10, 20, 30]).tolist())
+    assert out["parameters"]["lam_deg"] == [0.0, 10.0, 20.0, 30.0]  # degrees in, degrees out
     assert len(out["designs"]) == 12 and np.shape(out["stable"]) == (4, 3, 3)
     invalid = [d for d in out["designs"] if not d["valid"]]
     assert len(invalid) == 4 and all("mB = -10" in d["reason"] for d in invalid)

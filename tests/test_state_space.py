@@ -104,6 +104,17 @@ def test_to_control_gives_a_named_state_space(model):
     np.testing.assert_allclose(np.sort_complex(sys.poles()), np.sort_complex(np.linalg.eigvals(ss.A[1])), rtol=1e-12)
 
 
+@pytest.mark.parametrize("speed, name", [(5.5, "whipple_v5_5"), (0.25, "whipple_v0_25"), (-1.5, "whipple_vm1_5")])
+def test_to_control_works_at_any_speed(model, speed, name):
+    control = pytest.importorskip("control")
+    sys = state_space(model, [speed]).to_control(0)
+    assert sys.name == name
+    closed = control.feedback(sys, np.zeros((2, 2)))  # python-control accepts the name in an interconnection
+    np.testing.assert_allclose(
+        np.sort_complex(closed.poles()), np.sort_complex(np.linalg.eigvals(model.state_matrix(speed)))
+    )
+
+
 # -- modes ---------------------------------------------------------------------------------------
 def test_mode_shapes_are_the_normalised_eigenvectors_of_numpy_eig(model):
     speeds = np.linspace(0.0, 10.0, 201)

@@ -28,10 +28,13 @@ Design spaces at scale (:mod:`bikerider.design`, ``docs/design_space.md``)
 Bicycle and rider (:mod:`bikerider.bicycle`, :mod:`bikerider.rider`)
     :class:`BicycleBodies`, :class:`RiderMeasurements`, :class:`LumpedRider`,
     :func:`bicycle_benchmark_parameters`, :func:`merge_rider`, :func:`reduce_measured`.
-Files (:mod:`bikerider.io`)
-    :func:`load_bicycle_file`, :func:`load_benchmark_parameters`, :func:`read_measured_file`,
-    :func:`read_lumped_rider`, :func:`load_bicycle_toml`, :func:`load_rider_toml`,
-    :func:`paper_inputs`.
+Files (here, from the modules of :mod:`bikerider.io`)
+    :func:`load_bicycle_file` (any bicycle file, :mod:`bikerider.io.bicycleparameters`),
+    :func:`load_benchmark_parameters` (:mod:`bikerider.io.benchmark_file`),
+    :func:`read_measured_file`, :func:`read_lumped_rider`, :func:`load_bicycle_toml`,
+    :func:`load_rider_toml`, :func:`paper_inputs`; written: :mod:`bikerider.io.export`
+    (``parameters_to_toml``, ``parameters_to_benchmark_txt``, ``parameters_to_json``, eigenvalues
+    as CSV).
 Uncertainty (:mod:`bikerider.uncertainty`, :mod:`bikerider.engine`)
     :func:`propagate` (first-order sigmas of the estimate chain), :func:`monte_carlo`,
     :class:`UncertaintyResult`.
@@ -50,7 +53,7 @@ Layout
 ``bikerider.benchmark``   the 25 benchmark parameters, the Whipple model and its dynamics toolbox
 ``bikerider.design``      design spaces: grids and random designs over millions of bicycles
 ``bikerider.uncertainty`` the estimate chain's sensitivities, propagation and Monte Carlo
-``bikerider.io``          input files (TOML, BicycleParameters text files)
+``bikerider.io``          input files (TOML, JSON, BicycleParameters text files) and export
 ``bikerider.estimate``    the whole pipeline, measurements to model
 ``bikerider.cli``         the ``bikerider`` command line
 """

@@ -17,7 +17,7 @@ from bikerider import __version__, notes
 from bikerider.errors import BikeriderError
 from bikerider.io import output_guard
 
-COMMANDS = ("estimate", "benchmark", "sweep", "period", "batch", "sensitivity", "gap", "serve")
+COMMANDS = ("estimate", "benchmark", "sweep", "convert", "period", "batch", "sensitivity", "gap", "serve")
 """Subcommand modules under ``bikerider.commands``, in the order ``--help`` lists them."""
 
 INPUT_OPTIONS = ("file", "files", "bicycle", "rider", "inputs", "model", "data", "experiment", "control", "measured")

@@ -40,8 +40,9 @@ import numpy as np
 import scipy.linalg
 from numpy.polynomial import Polynomial
 
+from bikerider.benchmark import mode_names
 from bikerider.benchmark.control import GAIN_NAMES, ControlLaw, GainSchedule
-from bikerider.benchmark.mode_labels import ModalEigenvalues, check_speeds, label_modes
+from bikerider.benchmark.mode_labels import ModalEigenvalues, check_speeds
 from bikerider.benchmark.model import CriticalSpeeds, WhippleModel
 from bikerider.benchmark.stability import Crossing, Stability, StableInterval, _critical
 from bikerider.errors import InputError
@@ -123,13 +124,50 @@ class ClosedLoopModel:
         return closed_loop_matrix(A, b, self.gains(v))
 
     def eigenvalues(self, speeds) -> ModalEigenvalues:
-        """Closed-loop eigenvalues at each speed, named as the open loop's
-        (:meth:`WhippleModel.eigenvalues`): weave, capsize and castor where the closed loop still
-        has that structure, ``"other"`` where it does not."""
+        """Closed-loop eigenvalues at each speed, named as the open loop's are
+        (:mod:`bikerider.benchmark.mode_names`: by continuation in speed from the highest speeds
+        with one complex pair, across :meth:`collision_speeds`): ``weave``, ``capsize``, ``castor``
+        where the closed loop keeps that structure, ``"other"`` where it does not.  Under strong
+        feedback the names say which open-loop branch an eigenvalue continues, no more."""
         speeds = check_speeds(speeds)
-        values, labels = label_modes(np.linalg.eigvals(self.state_matrix(speeds)).reshape(-1, 4))
+        raw = np.linalg.eigvals(self.state_matrix(speeds)).reshape((-1, speeds.size, 4))
+        values, labels = self.name_modes(speeds, raw)
         shape = self.batch_shape + speeds.shape + (4,)
         return ModalEigenvalues(speeds, values.reshape(shape), labels.reshape(shape))
+
+    def name_modes(self, speeds: np.ndarray, raw: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """As :meth:`WhippleModel.name_modes`, for the closed loop: ``raw`` ``(b, n, 4)`` ordered
+        weave(+), weave(-), capsize, castor by continuation, with the labels."""
+        speeds = np.asarray(speeds, dtype=float)
+        values = np.empty(raw.shape, dtype=complex)
+        labels = np.empty(raw.shape, dtype=object)
+        for b, one in enumerate(self._bicycles()):
+            edges = one.collision_speeds()
+            top = float(max(10.0, 2.0 * edges[-1])) if len(edges) else 10.0
+            named = mode_names.naming(lambda v: np.linalg.eigvals(one.state_matrix(v)), edges, top)
+            values[b], labels[b] = mode_names.apply(raw[b], np.abs(speeds), named)
+        return values, labels
+
+    def _bicycles(self) -> list[ClosedLoopModel]:
+        """Each bicycle of the batch under the law (the model itself for one bicycle)."""
+        if not self.batch_shape:
+            return [self]
+        entries = {k: e.reshape(-1) for k, e in self.model.entries().items()}
+        g = np.broadcast_to(self.model.g, self.batch_shape).reshape(-1)
+        return [
+            ClosedLoopModel(
+                WhippleModel.from_entries({k: float(e[b]) for k, e in entries.items()}, float(g[b])), self.law
+            )
+            for b in range(g.size)
+        ]
+
+    def collision_speeds(self) -> np.ndarray:
+        """Speeds [m/s] where two closed-loop eigenvalues coincide: the real roots of the discriminant
+        of the characteristic quartic, a polynomial in ``v`` on each piece of the law (one bicycle)."""
+        out: list[float] = []
+        for lower, upper, (a, b, c, d, e) in self.characteristic_polynomials():
+            out.extend(_real_roots(_quartic_discriminant(a, b, c, d, e), lower, upper))
+        return np.array(sorted(out))
 
     # -- stability ---------------------------------------------------------------------------
     def characteristic_polynomials(self) -> list[tuple[float, float, list[Polynomial]]]:
@@ -224,6 +262,29 @@ class ClosedLoopModel:
 def closed_loop(model: WhippleModel, law) -> ClosedLoopModel:
     """``model`` under ``law`` (a :class:`ControlLaw`, ``{"k_phi": ...}`` or four constant gains)."""
     return ClosedLoopModel(model, law)
+
+
+def _quartic_discriminant(a, b, c, d, e):
+    """The discriminant of ``a s^4 + b s^3 + c s^2 + d s + e`` (coefficients of any ring: floats or
+    polynomials in the speed); zero exactly where two roots coincide."""
+    return (
+        256 * a**3 * e**3
+        - 192 * a**2 * b * d * e**2
+        - 128 * a**2 * c**2 * e**2
+        + 144 * a**2 * c * d**2 * e
+        - 27 * a**2 * d**4
+        + 144 * a * b**2 * c * e**2
+        - 6 * a * b**2 * d**2 * e
+        - 80 * a * b * c**2 * d * e
+        + 18 * a * b * c * d**3
+        + 16 * a * c**4 * e
+        - 4 * a * c**3 * d**2
+        - 27 * b**4 * e**2
+        + 18 * b**3 * c * d * e
+        - 4 * b**3 * d**3
+        - 4 * b**2 * c**3 * e
+        + b**2 * c**2 * d**2
+    )
 
 
 def _matrices(model: WhippleModel):

@@ -1,4 +1,10 @@
-"""Eigenvalues at speeds and their mode labels (Meijaard et al. 2007, section 6).
+"""Eigenvalues at speeds and their mode labels by rules at one speed (Meijaard et al. 2007, section 6).
+
+The models name their eigenvalues by continuation in speed (:mod:`bikerider.benchmark.mode_names`),
+which falls back on these rules only where it cannot decide (no speed with exactly one complex
+pair) and uses them for the layout of its result.  The rules at one speed are right wherever the
+weave pair is complex, but below its birth they guess: the two largest real eigenvalues are not
+always the two that merge.
 
 Mode labels, per speed:
 

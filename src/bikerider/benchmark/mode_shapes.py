@@ -17,7 +17,9 @@ come in no particular order.  :func:`track_modes` orders them so that each colum
 continuous in speed: from one speed to the next it picks, of the 24 possible assignments, the one
 closest to the linear extrapolation of the two previous speeds (so two real eigenvalues that
 cross keep their identity).  A tracked column is named by the label most of its points carry
-(:func:`bikerider.benchmark.mode_labels.label_modes`): ``weave`` (two columns), ``capsize``, ``castor``.
+(the names of :meth:`WhippleModel.eigenvalues`, carried by continuation in speed from where they
+are unambiguous, :mod:`bikerider.benchmark.mode_names`): ``weave`` (two columns), ``capsize``,
+``castor``.
 Track on a speed grid fine enough to follow the eigenvalues (steps of 0.1 m/s or less for a
 bicycle).
 """
@@ -148,8 +150,9 @@ def mode_shapes(model: WhippleModel, speeds) -> ModeShapes:
 
     Parameters
     ----------
-    model : WhippleModel
-        One bicycle or a batch.
+    model : WhippleModel or ClosedLoopModel
+        One bicycle or a batch (a closed loop: shapes from the eigenvectors of its state matrix,
+        normalised the same way).
     speeds : array_like, shape (n,)
         Increasing speeds [m/s], fine enough to follow the eigenvalues.
 
@@ -160,30 +163,44 @@ def mode_shapes(model: WhippleModel, speeds) -> ModeShapes:
         capsize, castor where the labels allow (see the module docstring).
     """
     speeds = check_speeds(speeds)
-    raw = np.linalg.eigvals(model.state_matrix(speeds))
-    values = np.take_along_axis(raw, track_modes(raw), axis=-1)
+    if isinstance(model, WhippleModel):
+        raw = np.linalg.eigvals(model.state_matrix(speeds))
+        vectors = None
+    else:  # a closed loop (anything with state_matrix and name_modes): shapes from its eigenvectors
+        raw, vectors = np.linalg.eig(model.state_matrix(speeds))
+    order = track_modes(raw)
+    values = np.take_along_axis(raw, order, axis=-1)
+    if vectors is not None:
+        vectors = normalise(np.swapaxes(np.take_along_axis(vectors, order[..., None, :], axis=-1), -1, -2)[..., :2])
     flat = values.reshape((-1,) + values.shape[-2:])
+    flat_vectors = None if vectors is None else vectors.reshape((-1,) + vectors.shape[-3:])
+    named = model.name_modes(speeds, flat)  # the names of WhippleModel.eigenvalues, by continuation
     all_names = []
     for k, one in enumerate(flat):  # each bicycle's columns in the order weave, weave, capsize, castor
-        names = column_names(one)
+        names = column_names(one, (named[0][k], named[1][k]))
         rank = sorted(range(4), key=lambda j: (_RANK.get(names[j], 3), -one[-1, j].imag, -one[-1, j].real))
         flat[k] = one[:, rank]
+        if flat_vectors is not None:
+            flat_vectors[k] = flat_vectors[k][:, rank]
         all_names.append(tuple(names[j] for j in rank))
     values = flat.reshape(values.shape)
     names_out = (
         all_names[0] if not model.batch_shape else np.array(all_names, dtype=object).reshape(model.batch_shape + (4,))
     )
-    return ModeShapes(speeds, values, null_vectors(model, speeds, values), names_out)
+    shapes = null_vectors(model, speeds, values) if flat_vectors is None else flat_vectors.reshape(values.shape + (2,))
+    return ModeShapes(speeds, values, shapes, names_out)
 
 
 _RANK = {"weave": 0, "capsize": 1, "castor": 2}
 
 
-def column_names(values: np.ndarray) -> list[str]:
-    """Names of the tracked columns of ``values`` ``(n, 4)``: the label of
-    :func:`~bikerider.benchmark.mode_labels.label_modes` most of a column's points carry (weave for two
-    columns, capsize and castor for one each; ``"other"`` for a column no label fits)."""
-    labelled, labels = label_modes(values)
+def column_names(values: np.ndarray, named: tuple[np.ndarray, np.ndarray] | None = None) -> list[str]:
+    """Names of the tracked columns of ``values`` ``(n, 4)``: the label most of a column's points
+    carry (weave for two columns, capsize and castor for one each; ``"other"`` for a column no label
+    fits).  The labels are ``named`` (values and labels as :meth:`WhippleModel.name_modes` gives
+    them, by continuation in speed) or, without it, the per-speed rules of
+    :func:`~bikerider.benchmark.mode_labels.label_modes`."""
+    labelled, labels = named if named is not None else label_modes(values)
     nearest = np.abs(values[:, :, None] - labelled[:, None, :]).argmin(axis=-1)  # (n, 4)
     point_labels = np.take_along_axis(labels, nearest, axis=-1)
     counts = [Counter(point_labels[:, k]) for k in range(4)]

@@ -14,11 +14,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bikerider.benchmark import rules
+from bikerider.benchmark import mode_names, rules
 from bikerider.benchmark.mode_labels import MODES, ModalEigenvalues, check_speeds, label_modes
 from bikerider.benchmark.parameters import BenchmarkParameters
-from bikerider.benchmark.quartic import eigenvalues_from_polynomial
-from bikerider.benchmark.roots import polynomial_positive_real_roots, positive_real_roots
+from bikerider.benchmark.quartic import eigenvalues_from_polynomial, quartic_roots
+from bikerider.benchmark.roots import IMAGINARY, ZERO, polynomial_positive_real_roots, positive_real_roots
 from bikerider.benchmark.stability import Stability, stability
 from bikerider.engine import arguments
 from bikerider.errors import InputError
@@ -127,6 +127,12 @@ class WhippleModel:
         model.geometry = {k: np.asarray(v[k], dtype=float) for k in LATERAL_FORCE_GEOMETRY}
         return model
 
+    @classmethod
+    def from_entries(cls, entries: dict[str, float], g: float = 9.81) -> WhippleModel:
+        """Build from the sixteen entries ``M_phiphi ... K2_deltadelta`` (:meth:`entries`)."""
+        mats = [[[entries[f"{name}_{a}{b}"] for b in COORDINATES] for a in COORDINATES] for name in MATRIX_NAMES]
+        return cls(*mats, g=g)
+
     # -- matrices ---------------------------------------------------------------------------
     def _entries(self) -> dict[str, np.ndarray]:
         return matrix_entries(self.M, self.C1, self.K0, self.K2)
@@ -186,9 +192,64 @@ class WhippleModel:
                 "are too large for floating point there)",
                 self.source,
             )
-        values, labels = label_modes(np.linalg.eigvals(state).reshape(-1, 4))
+        raw = np.linalg.eigvals(state).reshape((-1,) + speeds.shape + (4,))
+        values, labels = self.name_modes(speeds, raw)
         shape = self.batch_shape + speeds.shape + (4,)
         return ModalEigenvalues(speeds, values.reshape(shape), labels.reshape(shape))
+
+    def name_modes(self, speeds: np.ndarray, raw: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Order eigenvalues ``raw`` (``(b, n, 4)``: each bicycle of the flattened batch at each of
+        ``speeds``) as weave(+), weave(-), capsize, castor by continuation from where the names are
+        unambiguous (:mod:`bikerider.benchmark.mode_names`); return them with their labels.
+
+        The whole batch is named at once; a bicycle the batched path cannot decide (two complex
+        pairs in a segment, no segment with one pair) is named on its own."""
+        speeds = np.abs(np.asarray(speeds, dtype=float))
+        edges = self._collision_table()
+        entries = {k: np.asarray(e, dtype=float).reshape(-1) for k, e in self._entries().items()}
+        g = np.broadcast_to(np.asarray(self.g, dtype=float), self.batch_shape).reshape(-1)
+
+        def at(v, rows=slice(None)):  # (b, k) speeds, one row per bicycle (of ``rows``)
+            some = {k: e[rows, None] for k, e in entries.items()}
+            return quartic_roots(gen.characteristic_coefficients(**some, g=g[rows, None], v=v))
+
+        largest = np.where(np.isfinite(edges), edges, 0.0).max(axis=1, initial=0.0)
+        top = np.maximum(10.0, 2.0 * largest)
+        pairs, names, alone = mode_names.batch_naming(at, edges, top)
+        values, labels = mode_names.batch_apply(np.asarray(raw, dtype=complex), speeds, edges, pairs, names)
+        for b in np.nonzero(alone)[0]:
+            one = {k: e[b] for k, e in entries.items()}
+            row = edges[b][np.isfinite(edges[b])]
+            named = mode_names.naming(_eigenvalues_of(one, float(g[b])), row, float(top[b]))
+            values[b], labels[b] = mode_names.apply(raw[b], speeds, named)
+        return values, labels
+
+    def _collision_table(self) -> np.ndarray:
+        """:meth:`collision_speeds` of every bicycle of the flattened batch, ``(b, m)``, NaN-padded."""
+        with np.errstate(over="ignore", invalid="ignore"):
+            coefficients = np.asarray(gen.discriminant_polynomial(**self._entries(), g=self.g), dtype=float)
+        flat = coefficients.reshape(-1, coefficients.shape[-1])
+        if not np.all(np.isfinite(flat)):
+            raise InputError(
+                "M, C1, K0, K2",
+                "entries too large for floating point",
+                "matrices whose characteristic discriminant is finite",
+                self.source,
+            )
+        return np.sqrt(_polished_roots_batch(flat))
+
+    def collision_speeds(self):
+        """The speeds [m/s] at which two eigenvalues coincide: the positive roots, in ``u = v^2``, of
+        the discriminant of the characteristic quartic (the generated ``discriminant_polynomial``).
+
+        Returns an increasing array for one bicycle; for a batch, an object array of the batch shape
+        holding one such array per bicycle.
+        """
+        table = self._collision_table()
+        out = np.empty(table.shape[0], dtype=object)
+        for b, row in enumerate(table):
+            out[b] = row[np.isfinite(row)]
+        return out[0] if not self.batch_shape else out.reshape(self.batch_shape)
 
     # -- critical speeds ---------------------------------------------------------------------
     def critical_speeds(self) -> CriticalSpeeds:
@@ -223,32 +284,24 @@ class WhippleModel:
     def weave_birth_speed(self) -> float | None:
         """The speed ``v_d`` at which the weave pair is born from two real eigenvalues [m/s].
 
-        The discriminant of the characteristic quartic vanishes wherever two eigenvalues coincide;
-        as a polynomial in ``u = v^2`` it is the generated ``discriminant_polynomial`` (derived in
-        ``derive/benchmark_model.py``).  ``v_d`` is the smallest of its positive roots at which the
-        two eigenvalues with the largest real parts are real just below and a complex pair just
-        above (Meijaard et al. 2007, section 6; the other two
-        may be real or a complex pair of their own).  ``None`` when there is no such speed.
+        The discriminant of the characteristic quartic vanishes wherever two eigenvalues coincide
+        (:meth:`collision_speeds`).  ``v_d`` is the smallest of those speeds at which the two
+        eigenvalues named weave (by continuation from high speed, :mod:`bikerider.benchmark.mode_names`:
+        the two that merge there, which are not always the two largest) are real just below and a
+        complex pair just above (Meijaard et al. 2007, section 6).  ``None`` when there is no such
+        speed.
         """
         self._one_bicycle("weave_birth_speed")
-        with np.errstate(over="ignore", invalid="ignore"):
-            coefficients = np.asarray(gen.discriminant_polynomial(**self._entries(), g=self.g), dtype=float)
-        if not np.all(np.isfinite(coefficients)):
-            raise InputError(
-                "M, C1, K0, K2",
-                "entries too large for floating point",
-                "matrices whose characteristic discriminant is finite",
-                self.source,
-            )
-        slope = np.polyder(coefficients)
-        for u in polynomial_positive_real_roots(coefficients):
-            for _ in range(3):  # Newton steps: the root of a simple zero to full precision
-                step = np.polyval(coefficients, u) / np.polyval(slope, u) if np.polyval(slope, u) else 0.0
-                if not np.isfinite(step) or abs(step) > 1e-6 * u:
-                    break
-                u -= step
-            if self._pair_born_at(float(np.sqrt(u))):
-                return float(np.sqrt(u))
+        edges = self.collision_speeds()
+        if not len(edges):
+            return None
+        named = mode_names.naming(lambda v: np.linalg.eigvals(self.state_matrix(v)), edges, max(10.0, 2 * edges[-1]))
+        for i, speed in enumerate(edges):
+            below, above = named.names[i], named.names[i + 1]
+            real_below = "weave" in below[2 * named.pairs[i] :]
+            pair_above = "weave" in above[: 2 * named.pairs[i + 1]]
+            if real_below and pair_above:
+                return float(speed)
         return None
 
     def _one_bicycle(self, method: str) -> None:
@@ -261,14 +314,73 @@ class WhippleModel:
                 self.source,
             )
 
-    def _pair_born_at(self, speed: float, relative: float = 1e-6) -> bool:
-        """Whether the two eigenvalues with the largest real parts are real just below ``speed`` and
-        a complex pair just above (the other two may be real or complex on either side)."""
-        below, above = np.linalg.eigvals(self.state_matrix(np.array([speed * (1 - relative), speed * (1 + relative)])))
-        tol = 1e-9 * max(1.0, float(np.abs(above).max()))
-        top_below = below[np.argsort(-below.real)][:2]
-        top_above = above[np.argsort(-above.real)][:2]
-        return bool(np.all(np.abs(top_below.imag) <= tol) and np.all(np.abs(top_above.imag) > tol))
+
+def _polished_roots_batch(coefficients: np.ndarray) -> np.ndarray:
+    """:func:`_polished_roots` of every row of ``coefficients`` ``(b, d + 1)`` at once (companion
+    matrices' eigenvalues, as ``numpy.roots``, with the tolerances of
+    :func:`~bikerider.benchmark.roots.polynomial_positive_real_roots`), ``(b, d)`` NaN-padded."""
+    b, d1 = coefficients.shape
+    d = d1 - 1
+    out = np.full((b, d), np.nan)
+    if b == 0 or d == 0:
+        return out
+    scale = np.abs(coefficients).max(axis=1, keepdims=True)
+    c = coefficients / np.where(scale > 0, scale, 1.0)
+    full = np.abs(c[:, 0]) > ZERO
+    for row in np.nonzero(~full)[0]:  # a lower degree: numpy.roots, one at a time
+        roots = _polished_roots(coefficients[row])
+        out[row, : roots.size] = roots
+    rows = np.nonzero(full)[0]
+    if rows.size:
+        monic = c[rows, 1:] / c[rows, :1]
+        companion = np.zeros((rows.size, d, d))
+        companion[:, 0, :] = -monic
+        companion[:, np.arange(1, d), np.arange(d - 1)] = 1.0
+        roots = np.linalg.eigvals(companion)
+        real = np.abs(roots.imag) <= IMAGINARY * np.maximum(1.0, np.abs(roots.real))
+        u = np.where(real & (roots.real > 0), roots.real, np.nan)
+        poly = coefficients[rows][:, None, :]
+        slope = poly[..., :-1] * np.arange(d, 0, -1)
+        for _ in range(3):  # Newton steps, each kept only while it is small (a simple root)
+            value = _horner(poly, u)
+            derivative = _horner(slope, u)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                step = np.where(derivative != 0, value / derivative, 0.0)
+            small = np.isfinite(step) & (np.abs(step) <= 1e-6 * u)
+            u = np.where(small, u - step, u)
+        out[rows] = np.sort(u, axis=1)  # NaN last
+    return out
+
+
+def _horner(poly: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """Polynomials ``poly`` ``(..., 1, k)`` (highest power first) at ``x`` ``(..., n)``."""
+    out = np.zeros(x.shape)
+    for j in range(poly.shape[-1]):
+        out = out * x + poly[..., j]
+    return out
+
+
+def _polished_roots(coefficients: np.ndarray) -> np.ndarray:
+    """Positive real roots of a polynomial (highest power first), each polished by Newton steps."""
+    slope = np.polyder(coefficients)
+    out = []
+    for u in polynomial_positive_real_roots(coefficients):
+        for _ in range(3):  # Newton steps: the root of a simple zero to full precision
+            step = np.polyval(coefficients, u) / np.polyval(slope, u) if np.polyval(slope, u) else 0.0
+            if not np.isfinite(step) or abs(step) > 1e-6 * u:
+                break
+            u -= step
+        out.append(u)
+    return np.sort(np.array(out, dtype=float))
+
+
+def _eigenvalues_of(entries: dict[str, float], g: float):
+    """Speeds ``(k,)`` to the eigenvalues ``(k, 4)`` of one bicycle given by its matrix entries."""
+
+    def at(speeds):  # the closed-form quartic: several times faster than eigvals, good to 1e-8 at a double root
+        return quartic_roots(gen.characteristic_coefficients(**entries, g=g, v=np.asarray(speeds, dtype=float)))
+
+    return at
 
 
 def _at(name: str, index: tuple[int, ...]) -> str:

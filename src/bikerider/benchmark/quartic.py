@@ -242,7 +242,8 @@ def eigenvalues_from_polynomial(model, speeds) -> ModalEigenvalues:
     -------
     ModalEigenvalues
         As :meth:`WhippleModel.eigenvalues` returns (see the module docstring for the accuracy),
-        labelled by :func:`bikerider.benchmark.mode_labels.label_modes`; values of shape
+        named as :meth:`WhippleModel.eigenvalues` names them (by continuation,
+        :mod:`bikerider.benchmark.mode_names`); values of shape
         ``batch_shape + (n, 4)``.
 
     Raises
@@ -254,7 +255,11 @@ def eigenvalues_from_polynomial(model, speeds) -> ModalEigenvalues:
     coefficients = _check_coefficients(model.characteristic_coefficients(speeds))
     with np.errstate(all="ignore"):  # divisions by zero are masked by np.where
         roots = _factored_roots(coefficients.reshape(-1, 5))
-    values, labels = label_modes(roots.T)
+    n = speeds.size
+    if hasattr(model, "name_modes"):  # a WhippleModel: names by continuation in speed
+        values, labels = model.name_modes(speeds, roots.T.reshape(-1, n, 4))
+    else:
+        values, labels = label_modes(roots.T)
     shape = coefficients.shape[:-1] + (4,)
     return ModalEigenvalues(speeds, values.reshape(shape), labels.reshape(shape))
 

@@ -163,7 +163,7 @@ class StateSpace:
 
     def to_control(self, index=()):
         """One system as a python-control ``StateSpace`` with named signals (``pip install
-        bikerider[control]``).
+        bikerider[control]``), named by :func:`control_name` of its speed.
 
         Parameters
         ----------
@@ -193,8 +193,14 @@ class StateSpace:
             states=list(self.states),
             inputs=list(self.inputs),
             outputs=list(self.outputs),
-            name=f"whipple_v{v:g}",
+            name=control_name(v),
         )
+
+
+def control_name(speed: float) -> str:
+    """The python-control system name at ``speed``: ``whipple_v5_5`` for 5.5 m/s (python-control
+    allows no ``.`` in a name), ``whipple_vm1_5`` for -1.5 m/s."""
+    return "whipple_v" + f"{speed:g}".replace(".", "_").replace("-", "m").replace("+", "")
 
 
 def state_space(

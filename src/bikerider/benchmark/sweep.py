@@ -19,10 +19,11 @@ from dataclasses import dataclass, field, fields
 
 import numpy as np
 
+from bikerider.benchmark.closed_loop import ClosedLoopModel
 from bikerider.benchmark.model import WhippleModel
 from bikerider.benchmark.parameters import BENCHMARK_NAMES, BenchmarkParameters
 from bikerider.benchmark.rules import TIED
-from bikerider.benchmark.stability import KIND_NAMES, StabilityBatch, stability_batch
+from bikerider.benchmark.stability import KIND_NAMES, OSCILLATORY, REAL, StabilityBatch, stability_batch
 from bikerider.engine import arguments
 from bikerider.errors import InputError
 from bikerider.generated import benchmark_model as gen
@@ -66,6 +67,8 @@ class Sweep:
     stability: StabilityBatch
     eigenvalues: np.ndarray | None = None
     labels: np.ndarray | None = field(default=None)
+    law: object = None
+    """The control law every design is under (``None``: the open loop, self-stability)."""
 
     @property
     def shape(self) -> tuple[int, ...]:
@@ -108,8 +111,11 @@ class Sweep:
         return rows
 
     def speed_rows(self) -> list[dict[str, object]]:
-        """One record per design and speed: swept values, speed, stable, and the eigenvalues (when
-        computed) as ``<mode>_real``/``<mode>_imag`` for weave, capsize and castor."""
+        """One record per design and speed: swept values, speed, stable, and the four eigenvalues
+        (when computed) as ``<column>_real``/``<column>_imag`` for the columns of
+        :data:`SPEED_COLUMNS` (``weave`` the member with positive imaginary part or the larger real
+        root, ``weave2`` the other), and ``modes``: the label of each of the four (``other`` where
+        one is none of weave, capsize, castor: its values are still given)."""
         stable = self.stable()
         rows = []
         for index in np.ndindex(self.shape):
@@ -118,13 +124,17 @@ class Sweep:
                 row: dict[str, object] = {**design, "speed": float(v), "stable": bool(stable[index][k])}
                 if self.eigenvalues is not None:
                     ev = self.eigenvalues[index][k]
-                    for mode, z in (("weave", ev[0]), ("capsize", ev[2]), ("castor", ev[3])):
-                        row[f"{mode}_real"] = _number(z.real)
-                        row[f"{mode}_imag"] = _number(abs(z.imag) if mode == "weave" else z.imag)
-                    if self.labels is not None and self.labels[index][k][2] == "other":
-                        row["capsize_real"] = row["capsize_imag"] = row["castor_real"] = row["castor_imag"] = None
+                    for column, z in zip(SPEED_COLUMNS, ev):
+                        row[f"{column}_real"] = _number(z.real)
+                        row[f"{column}_imag"] = _number(z.imag)
+                    if self.labels is not None:
+                        row["modes"] = " ".join(str(x) for x in self.labels[index][k])
                 rows.append(row)
         return rows
+
+
+SPEED_COLUMNS = ("weave", "weave2", "capsize", "castor")
+"""Column stems of the eigenvalues in :meth:`Sweep.speed_rows`, in the order of :data:`MODES`."""
 
 
 def _number(x) -> float | None:
@@ -186,6 +196,7 @@ def sweep(
     speeds=(),
     eigenvalues: bool = True,
     method: str = "quartic",
+    law=None,
 ) -> Sweep:
     """Evaluate every design of a grid over one or two benchmark parameters.
 
@@ -202,6 +213,10 @@ def sweep(
         Also compute the eigenvalues at ``speeds`` (``G x n`` quartics).
     method : {"quartic", "eigvals"}
         How (:meth:`WhippleModel.eigenvalues`).
+    law : ControlLaw, dict or sequence of 4 float, optional
+        A control law on the steer torque (:mod:`bikerider.benchmark.closed_loop`): every design
+        under it, its closed-loop stable intervals (one design at a time, exact per piece of the
+        law) and eigenvalues.
 
     Returns
     -------
@@ -226,7 +241,8 @@ def sweep(
             value = np.where(valid, grids[names.index(key)], value)  # invalid designs: the base values
         arguments[key] = value
     model = WhippleModel(*gen.canonical_matrices(**arguments), g=float(base.values["g"]))  # type: ignore[arg-type]
-    result = stability_batch(model.entries(), model.g)
+    system = None if law is None else ClosedLoopModel(model, law)
+    result = stability_batch(model.entries(), model.g) if system is None else _closed_loop_batch(system)
     result = StabilityBatch(
         *(
             np.where(_expand(valid, a), a, np.nan if a.dtype.kind == "f" else 0)
@@ -235,10 +251,30 @@ def sweep(
     )
     ev = labels = None
     if eigenvalues and speeds.size:
-        modal = model.eigenvalues(speeds, method=method)
+        modal = model.eigenvalues(speeds, method=method) if system is None else system.eigenvalues(speeds)
         ev = np.where(valid[..., None, None], modal.values, np.nan)
         labels = modal.labels
-    return Sweep(base, names, values, speeds, valid, reasons, result, ev, labels)
+    return Sweep(
+        base, names, values, speeds, valid, reasons, result, ev, labels, None if system is None else system.law
+    )
+
+
+def _closed_loop_batch(system: ClosedLoopModel) -> StabilityBatch:
+    """The closed-loop stability of every design, in the arrays of :class:`StabilityBatch`."""
+    shape = system.batch_shape
+    lower, upper = np.full(shape + (3,), np.nan), np.full(shape + (3,), np.nan)
+    lower_kind, upper_kind = np.zeros(shape + (3,), dtype=int), np.zeros(shape + (3,), dtype=int)
+    weave, capsize, frequency = np.full(shape, np.nan), np.full(shape, np.nan), np.full(shape, np.nan)
+    kinds = {None: 0, "real": REAL, "oscillatory": OSCILLATORY}
+    for index, one in zip(np.ndindex(shape), system._bicycles()):
+        result = one.stability()
+        for k, interval in enumerate(result.intervals[:3]):
+            lower[index + (k,)], upper[index + (k,)] = interval.lower, interval.upper
+            lower_kind[index + (k,)] = kinds[getattr(interval.lower_crossing, "kind", None)]
+            upper_kind[index + (k,)] = kinds[getattr(interval.upper_crossing, "kind", None)]
+        for array, value in ((weave, result.weave), (capsize, result.capsize), (frequency, result.weave_frequency)):
+            array[index] = np.nan if value is None else value
+    return StabilityBatch(lower, upper, lower_kind, upper_kind, weave, capsize, frequency)
 
 
 def _expand(valid: np.ndarray, array: np.ndarray) -> np.ndarray:

@@ -32,7 +32,9 @@ def add_parser(subparsers) -> None:
         "file",
         metavar="FILE",
         nargs="?",
-        help="benchmark parameter file (.toml or name = value+/-sigma text); or --bicycle NAME",
+        help="a bicycle file as estimate reads it: benchmark parameters (.toml, .json, a BicycleParameters "
+        "<Name>Benchmark.txt, a gap model file) or raw measurements (.toml, <Name>Measured.txt: the bicycle "
+        "alone); or --bicycle NAME",
     )
     add_shipped_options(p)
     p.add_argument(
@@ -73,9 +75,15 @@ def load_parameters(args: argparse.Namespace):
 
         parameters = named(args.bicycle, args.rider)
         return parameters, parameters.source.split(" (")[0]
-    from bikerider.io.benchmark_file import load_benchmark_parameters
+    from bikerider.benchmark import BenchmarkParameters  # heavy: imported when a command runs (cli.py)
+    from bikerider.bicycle.to_benchmark import bicycle_benchmark_parameters
+    from bikerider.io.bicycleparameters import load_bicycle_file
 
-    return load_benchmark_parameters(args.file), str(args.file)
+    bicycle = load_bicycle_file(args.file)  # the reader of estimate: every bicycle file it reads
+    if isinstance(bicycle, BenchmarkParameters):
+        return bicycle, str(args.file)
+    notes.note(f"{args.file}: raw measurements reduced to the benchmark parameters of the bicycle alone (no rider)")
+    return bicycle_benchmark_parameters(bicycle), str(args.file)
 
 
 def run(args: argparse.Namespace) -> int:

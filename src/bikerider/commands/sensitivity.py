@@ -51,10 +51,18 @@ def add_parser(subparsers) -> None:
         metavar="FILE",
         help="name = value+/-sigma file of chain inputs (e.g. a BicycleParameters Benchmark.txt)",
     )
-    src.add_argument("--bicycle", metavar="TOML", help="bicycle TOML file (default: the paper's)")
+    src.add_argument(
+        "--bicycle",
+        metavar="FILE",
+        help="bicycle file, as estimate reads it: TOML, BicycleParameters <Name>Measured.txt or <Name>Benchmark.txt "
+        "(default: the paper's)",
+    )
     rider = p.add_mutually_exclusive_group()
     rider.add_argument(
-        "--rider", metavar="TOML", help="rider TOML file (default: the paper's, unless --bicycle is given)"
+        "--rider",
+        metavar="FILE",
+        help="rider file, as estimate reads it: TOML or a BicycleParameters lumped rider (default: the paper's, "
+        "unless --bicycle is given)",
     )
     rider.add_argument("--no-rider", action="store_true", help="the bicycle alone")
     p.add_argument(
@@ -101,6 +109,8 @@ def _inputs(args: argparse.Namespace):
         return inp.InputSet(quantities, sources, str(args.inputs))
     if args.bicycle is None and args.rider is None and not args.no_rider:
         return chain_inputs.paper_inputs(assume_rider_sigmas=not args.no_rider_sigmas)
+    if not _both_toml(args):
+        return _estimate_inputs(args)
     # The same checks as `estimate` (chain_inputs.raw_inputs_from_toml seats the rider: reach, knee, elbow).
     bicycle, rider = chain_inputs.paper_files()
     bicycle = args.bicycle if args.bicycle is not None else bicycle
@@ -114,6 +124,32 @@ def _inputs(args: argparse.Namespace):
     if not args.no_rider_sigmas:
         quantities = inp.with_assumed_rider_sigmas(quantities, sources)
     return inp.InputSet(quantities, sources, f"{bicycle} + {rider}")
+
+
+def _both_toml(args: argparse.Namespace) -> bool:
+    """Whether the bicycle and rider given are project TOML files (or the paper's)."""
+    from bikerider.io.bicycleparameters import detect_format
+
+    given = [path for path in (args.bicycle, args.rider) if path is not None]
+    return all(detect_format(path) == "toml" for path in given)  # raw-measurement TOML files
+
+
+def _estimate_inputs(args: argparse.Namespace):
+    """The chain inputs of any bicycle and rider ``estimate`` reads (BicycleParameters Measured,
+    Benchmark and lumped rider files too), read by the same reader as ``estimate``
+    (:func:`bikerider.estimate.estimate_from_files`, :func:`bikerider.estimate.uncertainty_inputs`)."""
+    from bikerider.estimate import estimate_from_files, uncertainty_inputs
+    from bikerider.uncertainty import inputs as inp
+
+    with_rider = not args.no_rider and not (args.bicycle is not None and args.rider is None)
+    result = estimate_from_files(args.bicycle, args.rider, with_rider=with_rider)
+    quantities = uncertainty_inputs(result)
+    named = " + ".join(str(p) for p in (args.bicycle, args.rider if with_rider else None) if p is not None)
+    source = named or "the paper's bicycle"
+    sources = {n: f"stated: {source}" if q.sigma else "exact (no sigma given)" for n, q in quantities.items()}
+    if with_rider and result.rider_model is not None and not args.no_rider_sigmas:
+        quantities = inp.with_assumed_rider_sigmas(quantities, sources)
+    return inp.InputSet(quantities, sources, source if with_rider else f"{source} (no rider)")
 
 
 def _notes(args: argparse.Namespace) -> list[str]:

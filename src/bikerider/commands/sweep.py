@@ -13,7 +13,7 @@ from bikerider.commands.benchmark import add_shipped_options, load_parameters
 from bikerider.commands.estimate import add_figure_options
 from bikerider.commands.sweep_checks import check_sweep_options
 from bikerider.commands.sweep_design import add_design_options, is_design_run, run_design
-from bikerider.commands.sweep_options import cell, parse_vary
+from bikerider.commands.sweep_options import cell, degree_names, in_degrees, parse_vary, to_degrees
 from bikerider.errors import InputError
 from bikerider.io.atomic import atomic_write_text
 
@@ -56,6 +56,13 @@ def add_parser(subparsers) -> None:
         default="designs",
         help="one row per design (default), or per design and speed (needs --speeds)",
     )
+    p.add_argument(
+        "--control",
+        metavar="FILE",
+        help="every design under a control law on the steer torque (a TOML file as gap --control reads: "
+        "[control] constant gains k_phi, k_phid, k_delta, k_deltad, or one named law [control.<name>]): "
+        "closed-loop stable intervals and eigenvalues (docs/dynamics.md)",
+    )
     p.add_argument("--json", action="store_true", help="print one JSON object instead of CSV")
     p.add_argument("--out", metavar="FILE", help="write the CSV or JSON to FILE instead of standard output")
     p.add_argument(
@@ -86,6 +93,16 @@ def check_outputs(args: argparse.Namespace) -> None:
         refuse_inputs_within("--store", args.store)
 
 
+def _control_law(path: str):
+    """The one control law of a control file (``gap --control``'s format)."""
+    from bikerider.io.gap_data import read_control
+
+    laws = read_control(path)
+    if len(laws) != 1:
+        raise InputError("--control", path, f"a file with one control law (it has {len(laws)}: {', '.join(laws)})")
+    return next(iter(laws.values()))
+
+
 def run(args: argparse.Namespace) -> int:
     import numpy as np  # heavy modules: imported when the command runs (cli.py)
 
@@ -94,6 +111,13 @@ def run(args: argparse.Namespace) -> int:
 
     check_outputs(args)
     if is_design_run(args):
+        if args.control is not None:
+            raise InputError(
+                "--control",
+                args.control,
+                "a sweep over one or two parameters without --store, --random or --monte-carlo "
+                "(design-space runs are open loop)",
+            )
         return run_design(args)
     base, name = load_parameters(args)
     if not args.vary:
@@ -106,11 +130,12 @@ def run(args: argparse.Namespace) -> int:
     speeds = parse_speeds(args.speeds) if args.speeds else np.empty(0)
     if args.rows == "speeds" and not speeds.size:
         raise InputError("--rows", "speeds", "--speeds START:STOP:N as well")
-    result = sweep(base, axes, speeds, eigenvalues=args.rows == "speeds")
+    law = _control_law(args.control) if args.control is not None else None
+    result = sweep(base, axes, speeds, eigenvalues=args.rows == "speeds", law=law)
     if args.plot:
         from bikerider import plotting  # matplotlib: only when figures are asked for
 
-        what = " and ".join(result.names)
+        what = " and ".join(result.names) + (f" under {law.name}" if law is not None else "")
         Path(args.plot).mkdir(parents=True, exist_ok=True)  # as estimate's --plot: created when missing
         plotting.save_figure(
             plotting.sweep_figure(result, f"{name}: {what}"),
@@ -118,22 +143,30 @@ def run(args: argparse.Namespace) -> int:
             args.format,
             args.dpi,
         )
+    degrees = degree_names(args.vary)  # degrees in, degrees out
     if args.json:
         out = {
             "base": name,
-            "parameters": {n: v.tolist() for n, v in zip(result.names, result.values)},
+            "parameters": {
+                (f"{n}_deg" if n in degrees else n): [to_degrees(x) if n in degrees else x for x in v.tolist()]
+                for n, v in zip(result.names, result.values)
+            },
             "speeds": speeds.tolist(),
-            "designs": result.design_rows(),
+            "designs": [in_degrees(row, degrees) for row in result.design_rows()],
         }
+        if law is not None:
+            out["control"] = {"name": law.name, "law": law.describe()}
         if speeds.size:
             out["stable"] = result.stable().tolist()
         if args.rows == "speeds":
-            out["speed_rows"] = result.speed_rows()
+            out["speed_rows"] = [in_degrees(row, degrees) for row in result.speed_rows()]
         out["notes"] = notes.shown_with()
         text = json.dumps(out, indent=2, allow_nan=False) + "\n"
     else:
         buffer = io.StringIO()
-        rows = result.design_rows() if args.rows == "designs" else result.speed_rows()
+        rows = [
+            in_degrees(r, degrees) for r in (result.design_rows() if args.rows == "designs" else result.speed_rows())
+        ]
         for row in rows:
             if "stable_intervals" in row:
                 row["stable_intervals"] = ";".join(

@@ -21,7 +21,7 @@ from pathlib import Path
 from bikerider import notes
 from bikerider.commands import argument_types
 from bikerider.commands.benchmark import load_parameters
-from bikerider.commands.sweep_options import angle_name, cell, parse_vary
+from bikerider.commands.sweep_options import angle_name, cell, degree_names, in_degrees, parse_vary
 from bikerider.errors import InputError
 from bikerider.io.atomic import atomic_write_text
 
@@ -189,6 +189,7 @@ def run_design(args: argparse.Namespace) -> int:
 
     from bikerider import design
     from bikerider.design import summary as summaries
+    from bikerider.design.distribution import speed_distributions
     from bikerider.report import parse_speeds
 
     base, name = _base(args)
@@ -234,20 +235,28 @@ def run_design(args: argparse.Namespace) -> int:
                 summary = summaries.summarize(store, progress=stages.update)
         if args.plot:
             _plots(args, store, name, summary, stages)
+        sample = args.monte_carlo is not None or args.random is not None
+        distributions = speed_distributions(store) if sample else None  # a sample: the speeds' distribution
+        if args.plot and distributions is not None:
+            _distribution_plot(args, distributions, f"{name}: {space.size:,} designs", stages)
     except KeyboardInterrupt:
         stages.interrupted(args.store, space)
         raise
     if args.store is None:
-        text = _rows_text(args, store, closest)
+        text = _rows_text(args, store, closest, distributions)
     else:
         if args.json:
             out = {"store": str(args.store), "base": name, "kind": space.kind, **summary.as_dict()}
+            if distributions is not None:
+                out["distribution"] = {k: d.as_dict() for k, d in distributions.items()}
             if args.target_weave_speed is not None:
-                out["closest_to_weave_speed"] = _closest_dict(closest)
+                out["closest_to_weave_speed"] = _closest_dict(closest, degree_names(args.vary))
             out["notes"] = notes.shown_with()
             text = json.dumps(out, indent=2, allow_nan=False) + "\n"
         else:
-            text = _summary_text(store, summary, closest, args.target_weave_speed)
+            text = _summary_text(store, summary, closest, args.target_weave_speed, degree_names(args.vary))
+            if distributions is not None:
+                text += "\n" + "".join(d.text() + "\n" for d in distributions.values())
     if args.out:
         atomic_write_text(args.out, text)
         stages.note(f"wrote {args.out}")
@@ -316,19 +325,19 @@ def _duration(seconds: float) -> str:
     return f"{minutes}:{secs:02d}" if minutes else f"{seconds:.1f} s"
 
 
-def _closest_dict(closest) -> dict | None:
+def _closest_dict(closest, degrees: frozenset[str] = frozenset()) -> dict | None:
     if closest is None:
         return None
     return {
         "index": closest.index,
-        "values": closest.values,
+        "values": in_degrees(dict(closest.values), degrees),
         "weave_speed": closest.weave_speed,
         "capsize_speed": closest.capsize_speed if math.isfinite(closest.capsize_speed) else None,
         "stable_intervals": [[lo, hi if math.isfinite(hi) else None] for lo, hi in closest.stable_intervals],
     }
 
 
-def _summary_text(store, summary, closest, target) -> str:
+def _summary_text(store, summary, closest, target, degrees: frozenset[str] = frozenset()) -> str:
     import numpy as np
 
     space = store.spec.space
@@ -353,7 +362,7 @@ def _summary_text(store, summary, closest, target) -> str:
         if closest is None:
             lines.append(f"no self-stable design has a weave speed (target {target:g} m/s)")
         else:
-            values = ", ".join(f"{k} = {v:.6g}" for k, v in closest.values.items())
+            values = ", ".join(f"{k} = {v:.6g}" for k, v in in_degrees(dict(closest.values), degrees).items())
             lines.append(
                 f"closest to a weave speed of {target:g} m/s: design {closest.index} ({values}): weave "
                 f"{closest.weave_speed:.4f} m/s, capsize {closest.capsize_speed:.4f} m/s"
@@ -361,7 +370,19 @@ def _summary_text(store, summary, closest, target) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _rows_text(args, store, closest) -> str:
+def _distribution_plot(args, distributions, title: str, stages: Stages) -> None:
+    """``speed_distribution.<format>``: the histograms of the weave and capsize speeds."""
+    from bikerider.plotting.common import save_figure
+    from bikerider.plotting.distribution import speed_distribution_figure
+
+    out = Path(args.plot)
+    out.mkdir(parents=True, exist_ok=True)
+    path = out / f"speed_distribution.{args.format}"
+    stages.note(f"writing {path}")
+    save_figure(speed_distribution_figure(distributions, title), path, args.format, args.dpi)
+
+
+def _rows_text(args, store, closest, distributions=None) -> str:
     """Per-design rows (CSV or JSON) of a run held in memory."""
     import numpy as np
 
@@ -384,7 +405,7 @@ def _rows_text(args, store, closest) -> str:
     reasons = store.reason_texts(data["reason"])
     rows = []
     for i in range(n):
-        row: dict[str, object] = {k: float(v[i]) for k, v in values.items()}
+        row: dict[str, object] = in_degrees({k: float(v[i]) for k, v in values.items()}, degree_names(args.vary))
         row["valid"] = bool(data["valid"][i])
         row["reason"] = reasons[i]
         for key in ("weave_speed", "capsize_speed", "weave_frequency"):
@@ -405,8 +426,10 @@ def _rows_text(args, store, closest) -> str:
         if store.spec.speeds.size:
             out["speeds"] = store.spec.speeds.tolist()
             out["stable"] = store.stable().tolist()
+        if distributions is not None:
+            out["distribution"] = {k: d.as_dict() for k, d in distributions.items()}
         if args.target_weave_speed is not None:
-            out["closest_to_weave_speed"] = _closest_dict(closest)
+            out["closest_to_weave_speed"] = _closest_dict(closest, degree_names(args.vary))
         out["notes"] = notes.shown_with()
         return json.dumps(out, indent=2, allow_nan=False) + "\n"
     buffer = io.StringIO()

@@ -51,6 +51,33 @@ def parse_vary(text: str):
     return name.strip(), values
 
 
+def degree_names(texts) -> frozenset[str]:
+    """The parameters a list of ``--vary`` texts gives in degrees (``lam`` for ``lam_deg=...``)."""
+    out = set()
+    for text in texts or ():
+        name = text.partition("=")[0].strip()
+        if name.endswith("_deg"):
+            out.add(name[: -len("_deg")].strip())
+    return frozenset(out)
+
+
+def in_degrees(row: dict, degrees: frozenset[str]) -> dict:
+    """``row`` with each value named in ``degrees`` shown as ``<name>_deg`` in degrees, in place of
+    the radians (degrees in, degrees out), keeping the column order."""
+    if not degrees:
+        return row
+    return {
+        (f"{k}_deg" if k in degrees else k): (to_degrees(v) if k in degrees and isinstance(v, float) else v)
+        for k, v in row.items()
+    }
+
+
+def to_degrees(radians: float) -> float:
+    """Radians to degrees, rounded to 12 significant digits: the degrees a user gave come back as
+    given (30, not the 29.999999999999996 of the round trip through radians)."""
+    return float(f"{math.degrees(radians):.12g}")
+
+
 def cell(value) -> str:
     """CSV text of a value: floats to 10 significant digits, None empty, infinity ``inf``."""
     if value is None:
@@ -62,4 +89,4 @@ def cell(value) -> str:
     return str(value)
 
 
-__all__ = ["ANGLES", "angle_name", "cell", "parse_vary"]
+__all__ = ["ANGLES", "angle_name", "cell", "degree_names", "in_degrees", "parse_vary", "to_degrees"]

@@ -18,7 +18,7 @@ from bikerider.quantity import DEG, Quantity, parse_quantity
 
 DESCRIPTIVE_KEYS = ("name", "source", "notes")
 """Keys of a benchmark table that describe it and are not read."""
-GAP_TABLES = ("rider", "upper_body", "grips")
+GAP_TABLES = ("rider", "upper_body", "grips", "plausible")
 """Tables of a ``bikerider gap --model`` file beside ``[benchmark]``: read by ``gap``, left out
 (with a note) where only the benchmark parameters are read."""
 

@@ -285,7 +285,9 @@ def load_measured_bicycle(path: str | Path) -> BicycleBodies:
 def detect_format(path: str | Path) -> str:
     """Which kind of input file ``path`` is: ``"toml"``, ``"measured"``, ``"benchmark"`` or ``"lumped_rider"``.
 
-    A ``.toml`` suffix means the project's TOML format.  Otherwise the file is read as
+    A ``.toml`` suffix means the project's TOML format: ``"benchmark"`` when it holds benchmark
+    parameters (a ``[benchmark]`` table or Meijaard names at top level), else ``"toml"`` (raw
+    measurements); ``.json`` is the parameter JSON of ``bikerider convert`` (``"benchmark"``).  Otherwise the file is read as
     ``name = value`` lines and told apart by its names: raw measurements (periods ``Tt*``/``Tc*``,
     hanging angles, rolled distances, seating measurements) make a Measured file; the benchmark
     parameters (``w``, ``c``, ``lam``, ...) a Benchmark file; only ``mB, xB, yB, zB, IBxx, IBxz,
@@ -297,8 +299,11 @@ def detect_format(path: str | Path) -> str:
         A file that is none of these (the message says what was found).
     """
     text = read_input_text(path)  # refuses an empty path, a FIFO, a folder, a huge file
-    if Path(path).suffix.lower() == ".toml":
-        return "toml"
+    suffix = Path(path).suffix.lower()
+    if suffix == ".json":
+        return "benchmark"
+    if suffix == ".toml":
+        return _toml_kind(text)
     try:
         data = parse_name_value_text(text, str(path))
     except FileFormatError as exc:
@@ -306,10 +311,10 @@ def detect_format(path: str | Path) -> str:
             tomllib.loads(text)
         except tomllib.TOMLDecodeError:
             raise exc from None
-        return "toml"
+        return _toml_kind(text)
     names = set(data)
     if not names:
-        raise FileFormatError(path, "no 'name = value' entries: not a BicycleParameters file")
+        raise FileFormatError(path, "no 'name = value' entries: the file is empty or holds only comments")
     if any(_MEASURED_MARKERS.match(n) for n in names):
         return "measured"
     if names <= set(LUMPED_RIDER_NAMES) and "w" not in names:
@@ -324,6 +329,20 @@ def detect_format(path: str | Path) -> str:
     )
 
 
+_BENCHMARK_TOML_KEYS = frozenset({"benchmark", "w", "c", "lam", "lam_deg", "rR", "rF"})
+
+
+def _toml_kind(text: str) -> str:
+    """``"benchmark"`` for a TOML file of benchmark parameters (a ``[benchmark]`` table, as a gap
+    model file has, or Meijaard names at top level), else ``"toml"`` (raw measurements; an
+    unreadable file is left to the TOML reader, which says why)."""
+    try:
+        data = tomllib.loads(text)
+    except (tomllib.TOMLDecodeError, ValueError):  # ValueError: an integer too long to convert
+        return "toml"
+    return "benchmark" if _BENCHMARK_TOML_KEYS.intersection(data) else "toml"
+
+
 def load_bicycle_file(path: str | Path) -> BicycleBodies | BenchmarkParameters:
     """Load a bicycle from any supported file.
 
@@ -333,7 +352,8 @@ def load_bicycle_file(path: str | Path) -> BicycleBodies | BenchmarkParameters:
         For a project TOML file or a BicycleParameters Measured file (raw measurements reduced,
         seating measurements included when the file has them).
     BenchmarkParameters
-        For a BicycleParameters Benchmark file.
+        For a BicycleParameters Benchmark file, a TOML file of benchmark parameters (a gap model
+        file too: its other tables are left out with a note) or the JSON of ``bikerider convert``.
 
     Raises
     ------
@@ -345,6 +365,11 @@ def load_bicycle_file(path: str | Path) -> BicycleBodies | BenchmarkParameters:
         return load_bicycle_toml(path)
     if kind == "measured":
         return load_measured_bicycle(path)
+    if kind == "benchmark" and Path(path).suffix.lower() in (".toml", ".json"):
+        # io.benchmark_file imports this module (its text reader): imported here to avoid the cycle
+        from bikerider.io.benchmark_file import load_benchmark_parameters
+
+        return load_benchmark_parameters(path)
     if kind == "benchmark":
         return read_benchmark_file(path).parameters
     raise FileFormatError(

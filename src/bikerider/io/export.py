@@ -5,8 +5,8 @@ Every value and every standard uncertainty is written with Python's shortest rou
 (``repr``), so reading a file back gives the same floats bit for bit.  ``lam`` is written in
 radians (a conversion to degrees and back could change its last bit); the TOML file gives the
 degrees in a comment.  ``IByy`` and ``IHyy`` are left out when the parameter set does not determine
-them (``None``), as the readers expect.  Eigenvalues and sweeps as CSV are written by the commands
-(``bikerider benchmark --csv``, ``bikerider sweep``) through :func:`rows_to_csv`.
+them (``None``), as the readers expect.  Eigenvalues as CSV: :func:`eigenvalue_rows` and
+:func:`rows_to_csv` (``bikerider convert --to eigenvalues``; sweeps: ``bikerider sweep``).
 """
 
 from __future__ import annotations
@@ -17,7 +17,9 @@ import json
 import math
 import re
 
-from bikerider.benchmark import BENCHMARK_NAMES, BenchmarkParameters
+import numpy as np
+
+from bikerider.benchmark import BENCHMARK_NAMES, BenchmarkParameters, ModalEigenvalues
 from bikerider.errors import InputError
 
 JSON_FORMAT = "bikerider.benchmark_parameters"
@@ -106,6 +108,29 @@ def parameters_to_json(params: BenchmarkParameters) -> str:
     return json.dumps(document, indent=2) + "\n"
 
 
+EIGENVALUE_COLUMNS = ("weave", "weave2", "capsize", "castor")
+"""Column stems of :func:`eigenvalue_rows`, in the order of
+:data:`bikerider.benchmark.mode_labels.MODES` (as ``bikerider sweep --rows speeds`` writes them)."""
+
+
+def eigenvalue_rows(eigenvalues: ModalEigenvalues) -> list[dict]:
+    """One record per speed of one bicycle's eigenvalues: ``speed``, ``<column>_real`` and
+    ``<column>_imag`` of each column of :data:`EIGENVALUE_COLUMNS`, and ``modes`` (the name of
+    each of the four: ``weave``, ``capsize``, ``castor`` or ``other``)."""
+    values = np.asarray(eigenvalues.values)
+    if values.ndim != 2:
+        raise InputError("eigenvalues", values.shape, "the eigenvalues of one bicycle, shape (n speeds, 4)")
+    rows = []
+    for k, speed in enumerate(np.asarray(eigenvalues.speeds, dtype=float)):
+        row: dict[str, object] = {"speed": float(speed)}
+        for column, z in zip(EIGENVALUE_COLUMNS, values[k]):
+            row[f"{column}_real"] = float(z.real)
+            row[f"{column}_imag"] = float(z.imag)
+        row["modes"] = " ".join(str(x) for x in eigenvalues.labels[k])
+        rows.append(row)
+    return rows
+
+
 def rows_to_csv(rows: list[dict], columns: list[str] | None = None) -> str:
     """Tidy records as CSV text (floats in round-trip form, ``None`` empty)."""
     columns = columns or (list(rows[0]) if rows else [])
@@ -122,7 +147,9 @@ def rows_to_csv(rows: list[dict], columns: list[str] | None = None) -> str:
 __all__ = [
     "JSON_FORMAT",
     "benchmark_txt_filename",
+    "EIGENVALUE_COLUMNS",
     "check_bicycle_name",
+    "eigenvalue_rows",
     "parameters_to_benchmark_txt",
     "parameters_to_json",
     "parameters_to_toml",

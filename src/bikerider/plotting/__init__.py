@@ -1,4 +1,4 @@
-"""Figures fit for a paper: eigenvalues against speed, side view, mode shapes, Bode, sweeps.
+"""Figures fit for a paper: eigenvalues against speed, side view, mode shapes, Bode, sweeps, gains.
 
 Every ``plot_*`` function draws on a matplotlib ``ax`` it is given and returns it, so figures can
 be composed; every ``*_figure`` function makes a whole figure in the bikerider style
@@ -15,6 +15,7 @@ is imported here only, with the non-interactive Agg backend.  The gallery (``doc
 :func:`plot_bode`                              frequency responses
 :func:`plot_stability_sweep`                   stable speeds against a parameter
 :func:`plot_stability_map`                     stability over two parameters
+:func:`gains_figure`                           control gains against speed (a law, LQR)
 :mod:`bikerider.plotting.design`               design spaces: self-stable fraction and stable-
                                               interval sensitivity against each parameter, slices
 ============================================  ===================================================
@@ -31,6 +32,7 @@ from bikerider.errors import InputError
 from bikerider.plotting.bode import bode_figure, plot_bode
 from bikerider.plotting.common import DEFAULT_DPI, FORMATS, check_format, pyplot, save_figure
 from bikerider.plotting.eigenvalues import eigenvalue_comparison_figure, eigenvalue_figure, plot_eigenvalues
+from bikerider.plotting.gains import gains_figure
 from bikerider.plotting.modes import mode_shape_figure, plot_mode_phasors, plot_mode_shape_speeds
 from bikerider.plotting.side_view import plot_side_view, side_view_figure
 from bikerider.plotting.sweep import plot_stability_map, plot_stability_sweep, sweep_figure
@@ -160,6 +162,7 @@ __all__ = [
     "eigenvalue_comparison_figure",
     "eigenvalue_figure",
     "figure_paths",
+    "gains_figure",
     "mode_shape_figure",
     "plot_bode",
     "plot_eigenvalues",

@@ -79,8 +79,8 @@ def plot_eigenvalues(
     ----------
     ax : matplotlib.axes.Axes
         Where to draw (real parts, and imaginary parts unless ``imag_ax`` is given).
-    model : WhippleModel
-        One bicycle.
+    model : WhippleModel or ClosedLoopModel
+        One bicycle (under a control law: :func:`bikerider.closed_loop`).
     speeds : array_like, optional
         The speed range (a fine grid over its extent is used); 0-10 m/s by default.
     imag_ax : matplotlib.axes.Axes, optional
@@ -125,6 +125,7 @@ def plot_eigenvalues(
     if uncertainty is not None:
         _band(ax, imag_target, uncertainty, color)
     stability = model.stability()
+    stable_word = "self-stable" if isinstance(model, WhippleModel) else "stable under the law"  # a closed loop
     for target in {id(ax): ax, id(imag_target): imag_target}.values():
         target.axhline(0.0, color="0.3", lw=0.6, zorder=0)
         target.set_xlim(v[0], v[-1])
@@ -137,7 +138,7 @@ def plot_eigenvalues(
                         hi,
                         color=STABLE_SHADE,
                         zorder=-1,
-                        label=f"{prefix}self-stable" if k == 0 and target is ax else None,
+                        label=f"{prefix}{stable_word}" if k == 0 and target is ax else None,
                     )
         if critical:
             marks = ((stability.weave, "weave", (0, (1, 1.5))), (stability.capsize, "capsize", (0, (4, 2))))

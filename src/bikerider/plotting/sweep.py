@@ -11,7 +11,7 @@ from bikerider.plotting.common import MODE_COLOURS, STABLE_SHADE, legend_outside
 UNITS = {
     "w": "m",
     "c": "m",
-    "lam": "rad",
+    "lam": "deg",
     "g": "m/s^2",
     "rR": "m",
     "rF": "m",
@@ -26,8 +26,17 @@ UNITS = {
 }
 
 
+ANGLES = frozenset({"lam"})
+"""Parameters that are angles: radians in the sweep, shown in degrees (as they are given)."""
+
+
 def _axis_label(name: str) -> str:
     return f"{name} [{UNITS.get(name, 'kg m^2' if name.startswith('I') else '-')}]"
+
+
+def _shown(name: str, values):
+    """Values of ``name`` as the axes show them (angles in degrees)."""
+    return np.degrees(values) if name in ANGLES else np.asarray(values, dtype=float)
 
 
 def _top(result: Sweep) -> float:
@@ -49,7 +58,7 @@ def plot_stability_sweep(ax, result: Sweep):
     """
     if len(result.names) != 1:
         raise ValueError("plot_stability_sweep needs a sweep over one parameter (plot_stability_map: two)")
-    x = result.values[0]
+    x = _shown(result.names[0], result.values[0])
     top = _top(result)
     s = result.stability
     for k in range(s.lower.shape[-1]):
@@ -63,7 +72,7 @@ def plot_stability_sweep(ax, result: Sweep):
                 color=STABLE_SHADE,
                 edgecolor="#7fbf7f",
                 lw=0.5,
-                label="self-stable" if k == 0 else None,
+                label=("self-stable" if result.law is None else "stable under the law") if k == 0 else None,
                 step=None,
             )
     ax.plot(x, s.weave, color=MODE_COLOURS["weave"], label="weave speed")
@@ -83,8 +92,9 @@ def plot_stability_sweep(ax, result: Sweep):
         ax.axvline(value, color="0.75", lw=2, zorder=0)
     if (~result.valid).any():
         ax.plot([], [], color="0.75", lw=2, label="impossible design")
-    base = result.base.values[result.names[0]]
-    ax.axvline(base, color="0.3", lw=0.7, ls=":", label=f"base value {base:.4g}")
+    base = float(_shown(result.names[0], result.base.values[result.names[0]]))
+    unit = UNITS.get(result.names[0], "kg m^2" if result.names[0].startswith("I") else "")
+    ax.axvline(base, color="0.3", lw=0.7, ls=":", label=f"base value {base:.4g} {unit}".rstrip())
     ax.set_ylim(0, top)
     ax.set_xlim(x.min(), x.max())
     ax.set_xlabel(_axis_label(result.names[0]))
@@ -103,7 +113,7 @@ def plot_stability_map(ax, result: Sweep, colorbar: bool = True):
     """
     if len(result.names) != 2:
         raise ValueError("plot_stability_map needs a sweep over two parameters")
-    x, y = result.values
+    x, y = (_shown(n, v) for n, v in zip(result.names, result.values))
     lower = result.stability.lower[..., 0].T
     upper = result.stability.upper[..., 0].T
     valid = result.valid.T
@@ -115,7 +125,7 @@ def plot_stability_map(ax, result: Sweep, colorbar: bool = True):
     if np.isfinite(finite_upper).sum() > 3:
         contours = ax.contour(x, y, finite_upper, colors="k", linewidths=0.6)
         ax.clabel(contours, fontsize=6, fmt="%.1f")
-    bx, by = result.base.values[result.names[0]], result.base.values[result.names[1]]
+    bx, by = (float(_shown(n, result.base.values[n])) for n in result.names)
     base_shown = bool(np.min(x) <= bx <= np.max(x) and np.min(y) <= by <= np.max(y))
     if base_shown:
         ax.plot(bx, by, "w*", ms=9, mec="k", mew=0.6)

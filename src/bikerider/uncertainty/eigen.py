@@ -19,7 +19,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bikerider.benchmark.mode_labels import MODES, check_speeds, label_modes
+from bikerider.benchmark.mode_labels import MODES, check_speeds
+from bikerider.benchmark.model import WhippleModel
 from bikerider.engine import arguments
 from bikerider.generated import benchmark_model as gen_model
 from bikerider.generated import sensitivities as gen
@@ -73,7 +74,8 @@ def eigen_sensitivity(entries: dict[str, float], g: float, speeds) -> EigenSensi
     yx = np.einsum("nij,nji->ni", Y_h, X)
     derivs_raw = numerator / yx[..., None]
     cond_raw = np.linalg.norm(Y_h, axis=-1) * np.linalg.norm(X, axis=-2) / np.abs(yx)
-    values, labels = label_modes(raw)
+    named = WhippleModel.from_entries({k: float(kw[k]) for k in ENTRIES}, g)  # names by continuation in speed
+    values, labels = (x[0] for x in named.name_modes(speeds, raw[None]))
     order = np.empty(values.shape, dtype=int)
     for n in range(values.shape[0]):
         free = list(range(4))

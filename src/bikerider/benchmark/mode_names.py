@@ -1,0 +1,404 @@
+"""Mode names by continuation in speed, from where they are unambiguous.
+
+Where the weave pair is a complex pair (above the speed ``v_d`` where it is born, on a usual
+bicycle) the names follow from the eigenvalues at that one speed: the pair is ``weave``, the larger
+real eigenvalue ``capsize``, the smaller ``castor``.  Below ``v_d`` all four are real, and which
+two are the weave pair depends on which two merge at ``v_d``: the two largest for most bicycles,
+but not for all (55 of 433 random valid bicycles, ``docs/dynamics.md``), so no rule at one speed
+can say.
+So the names are carried by continuation:
+
+* the speeds ``c_1 < ... < c_m`` where two eigenvalues coincide (the positive roots of the
+  discriminant of the characteristic polynomial, :meth:`WhippleModel.collision_speeds`) cut the
+  speeds into segments; inside one, real eigenvalues keep their order (two real eigenvalues of a
+  real matrix family meet only at such a speed) and complex pairs stay complex;
+* the anchor, the highest segment with exactly one complex pair (on a usual bicycle the one that
+  reaches infinite speed), is named at one speed by the rule above; without such a segment every
+  segment takes the per-speed rules of :func:`bikerider.benchmark.mode_labels.label_modes`;
+* from each segment to its neighbour, across ``c_i``: the eigenvalues just on either side of
+  ``c_i`` are matched (the assignment of the 24 with the least total distance) and carry their
+  names across, down from the anchor and up from it.  Two eigenvalues that form a complex pair
+  carry one name: two real eigenvalues of different names that merge into a pair make it
+  ``"other"`` (as the per-speed rules name a pair below both real roots), the pair's halves keep
+  that name if it splits again, and a lone ``weave`` left by such a merger is ``"other"`` too.
+
+The result, for each speed, is the four eigenvalues in the order ``weave (+imag), weave (-imag),
+capsize, castor`` with a label each (``"other"`` where an eigenvalue has none of those names); the
+same layout :func:`~bikerider.benchmark.mode_labels.label_modes` gives, so every caller reads it
+the same way.  At a speed within rounding of a collision the structure there decides the segment.
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass
+
+import numpy as np
+
+from bikerider.benchmark.mode_labels import IMAGINARY_TOLERANCE, MODES, label_modes
+
+_PERMUTATIONS = np.array(list(itertools.permutations(range(4))))
+_STEPS = (1e-7, 1e-5, 1e-3)
+"""Relative distances from a collision speed at which its two sides are compared, smallest first:
+the first at which both sides have the structure of their segments is taken."""
+
+
+def slots(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Canonical order ``(..., 4)`` of eigenvalues ``(..., 4)`` and the number of complex pairs.
+
+    Complex pairs first (falling imaginary part of the upper member; each upper member followed by
+    its conjugate), then the real eigenvalues by falling real part.  Inside a segment of speeds
+    between two collisions, the eigenvalue in each slot is one mode.
+    """
+    values = np.asarray(values, dtype=complex)
+    largest = np.abs(values).max(axis=-1, keepdims=True)
+    imag = values.imag
+    is_complex = np.abs(imag) > IMAGINARY_TOLERANCE * np.maximum(1.0, largest)
+    pairs = (is_complex & (imag > 0)).sum(axis=-1)
+    # keys, primary last: complex before real; then falling |imag| (a pair) or falling real part;
+    # then the upper member of a pair before its conjugate
+    group = np.where(is_complex, 0, 1)
+    size = np.where(is_complex, -np.abs(imag), -values.real)
+    member = np.where(imag > 0, 0, 1)
+    order = np.lexsort((member, size, group), axis=-1)
+    return order, pairs
+
+
+@dataclass(frozen=True)
+class Naming:
+    """Names of each slot (:func:`slots`) in each segment between collision speeds.
+
+    ``edges`` are the collision speeds (increasing); segment ``k`` lies between ``edges[k - 1]`` and
+    ``edges[k]`` (``0`` and ``inf`` at the ends); ``pairs[k]`` is its number of complex pairs and
+    ``names[k]`` the name of each of its four slots (for a segment with two pairs, at the end it
+    was entered from; :attr:`paths` carries them through it).
+    """
+
+    edges: np.ndarray
+    pairs: tuple[int, ...]
+    names: tuple[tuple[str, ...], ...]
+    paths: dict
+    """For a segment with two complex pairs (whose slot order may change inside it): the speeds,
+    the eigenvalues tracked along it ``(k, 4)`` and the name of each tracked column."""
+
+
+def _top_names(values: np.ndarray) -> tuple[int, tuple[str, ...]]:
+    """The names of the slots at a speed of the highest segment."""
+    order, pairs = slots(values)
+    s = values[order]
+    if pairs == 1:
+        return 1, ("weave", "weave", "capsize", "castor")
+    labelled, labels = label_modes(values[None, :])
+    names = []
+    for x in s:  # the per-speed rules, slot by slot
+        k = int(np.argmin(np.abs(labelled[0] - x)))
+        names.append(str(labels[0, k]))
+    return int(pairs), tuple(names)
+
+
+def _consistent(names: list[str], pairs: int) -> tuple[str, ...]:
+    """One name per complex pair (a pair whose members carry different names is ``"other"``), and
+    ``weave`` on two eigenvalues or none (a lone one is ``"other"``)."""
+    names = list(names)
+    for p in range(pairs):
+        a, b = names[2 * p], names[2 * p + 1]
+        if a != b:
+            names[2 * p] = names[2 * p + 1] = "other"
+    if names.count("weave") != 2:
+        names = ["other" if x == "weave" else x for x in names]
+    return tuple(names)
+
+
+def naming(eigenvalues_at, collisions, top_speed: float) -> Naming:
+    """Names of every segment, carried from the anchor segment (module docstring) to the others.
+
+    Parameters
+    ----------
+    eigenvalues_at : callable
+        Speeds ``(k,)`` to eigenvalues ``(k, 4)`` of one system.
+    collisions : array_like
+        Speeds where two eigenvalues may coincide, increasing (spurious ones do no harm: the names
+        pass through them unchanged).
+    top_speed : float
+        A speed above every collision, in the highest segment.
+    """
+    edges = np.asarray(collisions, dtype=float)
+    m = edges.size
+    lows = np.concatenate([[0.0], edges[:-1]]) if m else np.zeros(0)
+    samples = np.concatenate([0.5 * (lows + edges), [top_speed]])
+    sampled = eigenvalues_at(samples)
+    _, pairs_at = slots(sampled)
+    pairs = [int(x) for x in pairs_at]
+    names: list[tuple[str, ...]] = [()] * (m + 1)
+    paths: dict[int, tuple[np.ndarray, np.ndarray, tuple[str, ...]]] = {}
+    ones = [k for k in range(m + 1) if pairs[k] == 1]
+    if not ones:  # no segment with exactly one pair: the per-speed rules, segment by segment
+        return Naming(edges, tuple(pairs), tuple(_top_names(sampled[k])[1] for k in range(m + 1)), {})
+    anchor = ones[-1]
+    names[anchor] = ("weave", "weave", "capsize", "castor")
+    steps = np.array(_STEPS)
+    for i in list(range(anchor - 1, -1, -1)) + list(range(anchor, m)):
+        downward = i < anchor  # across edges[i], from segment i + 1 to i, or from i to i + 1
+        known, unknown = (i + 1, i) if downward else (i, i + 1)
+        c = edges[i]
+        sides = (c * (1 + steps), c * (1 - steps)) if downward else (c * (1 - steps), c * (1 + steps))
+        around = eigenvalues_at(np.concatenate(sides))
+        order, structure = slots(around)
+        ok = (structure[: steps.size] == pairs[known]) & (structure[steps.size :] == pairs[unknown])
+        if not ok.any():  # the sides never matched the segments: per-speed rules there
+            names[unknown] = _top_names(sampled[unknown])[1]
+            continue
+        j = int(np.nonzero(ok)[0][0])
+        source = around[j][order[j]]
+        target = around[steps.size + j][order[steps.size + j]]
+        known_names = _names_near(names[known], paths.get(known), sides[0][j], source)
+        cost = np.abs(source[_PERMUTATIONS] - target[None, :]).sum(axis=-1)
+        best = _PERMUTATIONS[int(np.argmin(cost))]  # target slot k is the mode of source slot best[k]
+        names[unknown] = _consistent([known_names[best[k]] for k in range(4)], pairs[unknown])
+        if pairs[unknown] == 2:  # two pairs may swap their slot order inside the segment: track them
+            start = sides[1][j]
+            if downward:
+                end = edges[i - 1] * (1 + 1e-7) if i > 0 else 0.0
+            else:
+                end = edges[i + 1] * (1 - 1e-7) if i + 1 < m else top_speed
+            paths[unknown] = _path(eigenvalues_at, start, end, target, names[unknown])
+    return Naming(edges, tuple(pairs), tuple(names), paths)
+
+
+_PATH_SAMPLES = 120
+
+
+def _path(eigenvalues_at, start: float, end: float, first: np.ndarray, first_names: tuple[str, ...]):
+    """Eigenvalues followed by continuity from ``start`` to ``end`` through a segment with two
+    complex pairs (``first``: those at ``start`` in slot order, named ``first_names``): speeds, the
+    followed values ``(k, 4)`` (columns in the order of ``first``) and the column names.  Real
+    eigenvalues keep their slots inside a segment; only the two pairs may change their order, so at
+    each step the pairs keep the assignment that moves their upper members least."""
+    speeds = np.linspace(start, end, _PATH_SAMPLES)
+    values = eigenvalues_at(speeds)
+    order, _ = slots(values)
+    slotted = np.take_along_axis(values, order, axis=-1)
+    slotted[0] = first
+    tracked = slotted.copy()
+    a, b = complex(first[0]), complex(first[2])
+    for k in range(1, speeds.size):
+        x, y = complex(slotted[k, 0]), complex(slotted[k, 2])
+        if abs(a - y) + abs(b - x) < abs(a - x) + abs(b - y):  # the pairs swapped their slot order
+            tracked[k, :2], tracked[k, 2:] = slotted[k, 2:], slotted[k, :2]
+            x, y = y, x
+        a, b = x, y
+    return speeds, tracked, first_names
+
+
+def _names_near(names: tuple[str, ...], path, speed: float, slotted: np.ndarray) -> tuple[str, ...]:
+    """The names of the slots of ``slotted`` (eigenvalues at ``speed`` in slot order): the segment's
+    names, or for a segment with a tracked path those of the path's columns they match."""
+    if path is None:
+        return names
+    speeds, tracked, column_names = path
+    row = tracked[int(np.argmin(np.abs(speeds - speed)))]
+    cost = np.abs(row[_PERMUTATIONS] - slotted[None, :]).sum(axis=-1)
+    best = _PERMUTATIONS[int(np.argmin(cost))]
+    return tuple(column_names[best[k]] for k in range(4))
+
+
+def apply(values: np.ndarray, speeds: np.ndarray, named: Naming) -> tuple[np.ndarray, np.ndarray]:
+    """``values (n, 4)`` at ``speeds (n,)`` ordered weave(+), weave(-), capsize, castor by
+    ``named``, with their labels (:data:`MODES` or ``"other"``)."""
+    values = np.asarray(values, dtype=complex)
+    order, pairs = slots(values)
+    segment = np.searchsorted(named.edges, speeds, side="right")
+    known = np.array(named.pairs)
+    fits = known[segment] == pairs
+    for step in (-1, 1):  # within rounding of a collision: the neighbouring segment that fits
+        near = np.clip(segment + step, 0, known.size - 1)
+        move = ~fits & (known[near] == pairs)
+        segment = np.where(move, near, segment)
+        fits |= move
+    out, labels = label_modes(values)  # where no segment fits: the per-speed rules
+    s = np.take_along_axis(values, order, axis=-1)
+    s = np.where(pairs[:, None] == 0, s.real, s)
+    for seg in np.unique(segment[fits]):
+        rows = np.nonzero(fits & (segment == seg))[0]
+        path = named.paths.get(int(seg))
+        if path is None:
+            position, label = _arrange(named.names[seg], s[rows])
+            out[rows] = np.take_along_axis(s[rows], position, axis=-1)
+            labels[rows] = label
+            continue
+        for r in rows:  # two complex pairs: each speed's names from the tracked path
+            position, label = _arrange(_names_near(named.names[seg], path, float(speeds[r]), s[r]), s[r : r + 1])
+            out[r], labels[r] = s[r][position[0]], label
+    return out, labels
+
+
+def _arrange(names: tuple[str, ...], s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Which slot goes to each position of :data:`MODES` (``(k, 4)``, for slot values ``s (k, 4)``
+    whose slots are named ``names``), and the label of each position."""
+    k = s.shape[0]
+    label = np.array(["other"] * 4, dtype=object)
+    taken: list[int] = []
+    position = np.zeros((k, 4), dtype=int)
+    weave = [j for j in range(4) if names[j] == "weave"]
+    slot_of: dict[int, int] = {}
+    if len(weave) == 2:
+        a, b = weave  # a pair's upper member comes first in slot order; two real roots: the larger first
+        slot_of[0], slot_of[1] = a, b
+    elif len(weave) == 1:
+        slot_of[0] = weave[0]
+    for mode_position, mode in ((2, "capsize"), (3, "castor")):
+        match = [j for j in range(4) if names[j] == mode]
+        if match:
+            slot_of[mode_position] = match[0]
+    taken = list(slot_of.values())
+    free = [j for j in range(4) if j not in taken]
+    for p in range(4):
+        if p in slot_of:
+            position[:, p] = slot_of[p]
+            label[p] = MODES[p]
+        else:
+            position[:, p] = free.pop(0)
+    return position, label
+
+
+__all__ = ["Naming", "apply", "naming", "slots"]
+
+
+# -- a batch of bicycles at once ------------------------------------------------------------------
+CODES = ("weave", "capsize", "castor", "other")
+"""Name codes of the batched path."""
+_OTHER = 3
+
+
+def _consistent_codes(names: np.ndarray, pairs: np.ndarray) -> np.ndarray:
+    """:func:`_consistent` on codes ``(b, 4)`` with ``pairs`` ``(b,)``."""
+    names = names.copy()
+    for p in range(2):
+        mixed = (p < pairs) & (names[:, 2 * p] != names[:, 2 * p + 1])
+        names[mixed, 2 * p] = names[mixed, 2 * p + 1] = _OTHER
+    lone = (names == 0).sum(axis=1) != 2
+    names[lone] = np.where(names[lone] == 0, _OTHER, names[lone])
+    return names
+
+
+def batch_naming(eigenvalues_at, edges: np.ndarray, top: np.ndarray):
+    """:func:`naming` for ``b`` systems at once, where they need no per-system treatment.
+
+    Parameters
+    ----------
+    eigenvalues_at : callable
+        Speeds ``(b, k)`` to eigenvalues ``(b, k, 4)`` (each system at its own speeds); with a
+        second argument, an index array of systems, speeds ``(len(index), k)`` of those.
+    edges : numpy.ndarray, shape (b, m)
+        Each system's collision speeds, increasing, NaN-padded.
+    top : numpy.ndarray, shape (b,)
+        A speed above each system's collisions.
+
+    Returns
+    -------
+    pairs : numpy.ndarray of int, shape (b, m + 1)
+        Complex pairs of each segment (segments past a system's last edge repeat its top one).
+    names : numpy.ndarray of int, shape (b, m + 1, 4)
+        Each segment's slot names as :data:`CODES`.
+    alone : numpy.ndarray of bool, shape (b,)
+        Systems the batch does not decide (no segment with one pair, a segment with two, sides of
+        a collision that never match their segments): name them one by one with :func:`naming`.
+    """
+    b, m = edges.shape
+    count = np.isfinite(edges).sum(axis=1)
+    k = np.arange(m + 1)
+    lows = np.concatenate([np.zeros((b, 1)), edges], axis=1)[:, :m]
+    mids = 0.5 * (lows + edges)
+    samples = np.where(k[None, :m] < count[:, None], mids, top[:, None])
+    samples = np.concatenate([samples, top[:, None]], axis=1)
+    _, pairs = slots(eigenvalues_at(samples))
+    in_range = k[None, :] <= count[:, None]
+    alone = np.any(in_range & (pairs == 2), axis=1)
+    ones = np.where(in_range & (pairs == 1), k[None, :], -1)
+    anchor = ones.max(axis=1)
+    alone |= anchor < 0
+    names = np.full((b, m + 1, 4), _OTHER, dtype=np.int8)
+    rows = np.arange(b)
+    names[rows, np.maximum(anchor, 0)] = np.array([0, 0, 1, 2], dtype=np.int8)
+    if m == 0:
+        return pairs, names, alone
+    c = np.where(np.isfinite(edges), edges, top[:, None])
+    # downward across edge i (i < anchor): known segment i + 1 (above), unknown i (below); upward
+    # (anchor <= i < count): known i (below), unknown i + 1 (above)
+    down = k[None, :m] < anchor[:, None]
+    up = (k[None, :m] >= anchor[:, None]) & (k[None, :m] < count[:, None])
+    known_pairs = np.where(down, pairs[:, 1:], pairs[:, :m])
+    unknown_pairs = np.where(down, pairs[:, :m], pairs[:, 1:])
+    source = np.zeros((b, m, 4), dtype=complex)
+    target = np.zeros((b, m, 4), dtype=complex)
+    pending = down | up
+    for step in _STEPS:  # the smallest step at which both sides have their segments' structure
+        rows_pending = np.nonzero(pending.any(axis=1))[0]
+        if not rows_pending.size:
+            break
+        cc = c[rows_pending]
+        around = eigenvalues_at(np.concatenate([cc * (1 + step), cc * (1 - step)], axis=1), rows_pending)
+        order, structure = slots(around)
+        slotted = np.take_along_axis(around, order, axis=-1)
+        above, below = slotted[:, :m], slotted[:, m:]
+        d = down[rows_pending]
+        known_side = np.where(d, structure[:, :m], structure[:, m:])
+        unknown_side = np.where(d, structure[:, m:], structure[:, :m])
+        ok = pending[rows_pending] & (known_side == known_pairs[rows_pending])
+        ok &= unknown_side == unknown_pairs[rows_pending]
+        r, e = np.nonzero(ok)
+        rows_ok = rows_pending[r]
+        source[rows_ok, e] = np.where(d[r, e, None], above[r, e], below[r, e])
+        target[rows_ok, e] = np.where(d[r, e, None], below[r, e], above[r, e])
+        pending[rows_ok, e] = False
+    alone |= pending.any(axis=1)
+    cost = np.abs(source[:, :, _PERMUTATIONS] - target[:, :, None, :]).sum(axis=-1)  # (b, m, 24)
+    best = _PERMUTATIONS[np.argmin(cost, axis=-1)]  # (b, m, 4)
+    for i in range(m - 1, -1, -1):  # down from each anchor
+        sel = down[:, i]
+        if sel.any():
+            carried = np.take_along_axis(names[sel, i + 1], best[sel, i], axis=-1)
+            names[sel, i] = _consistent_codes(carried, pairs[sel, i])
+    for i in range(m):  # and up
+        sel = up[:, i]
+        if sel.any():
+            carried = np.take_along_axis(names[sel, i], best[sel, i], axis=-1)
+            names[sel, i + 1] = _consistent_codes(carried, pairs[sel, i + 1])
+    names[:, 1:] = np.where(k[None, 1:, None] > count[:, None, None], names[rows, count][:, None], names[:, 1:])
+    return pairs, names, alone
+
+
+def batch_apply(values: np.ndarray, speeds: np.ndarray, edges: np.ndarray, pairs: np.ndarray, names: np.ndarray):
+    """:func:`apply` for ``b`` systems: ``values (b, n, 4)`` at ``speeds (n,)``, named by
+    :func:`batch_naming`'s ``pairs`` and ``names``; the values in :data:`MODES` order and labels."""
+    b, n, _ = values.shape
+    order, row_pairs = slots(values)
+    finite = np.isfinite(edges)
+    segment = (finite[:, None, :] & (edges[:, None, :] <= speeds[None, :, None])).sum(axis=-1)  # (b, n)
+    last = pairs.shape[1] - 1
+    known = np.take_along_axis(pairs, segment, axis=1)
+    fits = known == row_pairs
+    for step in (-1, 1):
+        near = np.clip(segment + step, 0, np.minimum(finite.sum(axis=1), last)[:, None])
+        move = ~fits & (np.take_along_axis(pairs, near, axis=1) == row_pairs)
+        segment = np.where(move, near, segment)
+        fits |= move
+    out = np.empty((b, n, 4), dtype=complex)
+    labels = np.empty((b, n, 4), dtype=object)
+    if not fits.all():  # within rounding of a collision no segment fits: the per-speed rules
+        out[~fits], labels[~fits] = label_modes(values[~fits])
+    s = np.take_along_axis(values, order, axis=-1)
+    s = np.where(row_pairs[..., None] == 0, s.real, s)
+    row_names = names[np.arange(b)[:, None], segment]  # (b, n, 4): each row's segment's names
+    key = (row_names.astype(np.int64) * np.array([64, 16, 4, 1])).sum(axis=-1)
+    codes = np.unique(key[fits])
+    for code in codes:
+        sel = fits & (key == code) if codes.size > 1 or not fits.all() else fits
+        tuple_names = tuple(CODES[(int(code) >> shift) & 3] for shift in (6, 4, 2, 0))
+        position, label = _arrange(tuple_names, s[sel])
+        out[sel] = np.take_along_axis(s[sel], position, axis=-1)
+        labels[sel] = label
+    return out, labels
+
+
+__all__ += ["CODES", "batch_apply", "batch_naming"]
