@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -28,6 +28,7 @@ from bikerider.errors import FitError
 from bikerider.gap.control import ControlLaw
 from bikerider.gap.data import EigenvalueData
 from bikerider.gap.extraction import WeaveEstimate, weave_eigenvalue
+from bikerider.gap.repair import repair_record
 
 LOG = logging.getLogger(__name__)
 
@@ -71,6 +72,10 @@ class Record:
         The signals its eigenvalue is fitted to, in order of preference.
     speed_measured : bool
         The speed is a sensor's reading during the record (a speed column), not a set value.
+    repairs : list of str
+        What :func:`bikerider.gap.repair.repair_record` did to the record as read (empty: nothing).
+    raw : tuple of ndarray or None
+        The recorded instants and roll rate before a repair (for figures); ``None`` when not repaired.
     """
 
     name: str
@@ -86,6 +91,8 @@ class Record:
     problem: str | None = None
     fit_signals: tuple[str, ...] = ("roll_rate",)
     speed_measured: bool = False
+    repairs: list[str] = field(default_factory=list)
+    raw: tuple[np.ndarray, np.ndarray] | None = None
 
     @property
     def gains(self) -> np.ndarray:
@@ -137,6 +144,7 @@ class RecordFit:
             "duration": r.duration,
             "used": self.used,
             "reason": self.reason,
+            "repairs": list(r.repairs),
         }
         if self.estimate is not None:
             e = self.estimate
@@ -156,9 +164,17 @@ class RecordFit:
 
 
 def fit_record(record: Record) -> RecordFit:
-    """Fit one record's weave eigenvalue; a failure becomes the record's reason, never an exception."""
+    """Repair one record as read (:func:`bikerider.gap.repair.repair_record`: time stamps, gaps,
+    clipping) and fit its weave eigenvalue; a failure becomes the record's reason, never an exception."""
     if record.problem:
         return RecordFit(record, None, reason=record.problem)
+    repaired, repair = repair_record(record)
+    if repair.repaired:
+        raw = (np.asarray(record.time, float), np.asarray(record.signals.get("roll_rate", []), float))
+        repaired = replace(repaired, repairs=list(repair.actions), raw=raw)
+    if repair.problem:
+        return RecordFit(repaired, None, reason=repair.problem)
+    record = repaired
     fits: dict[str, WeaveEstimate] = {}
     reasons: dict[str, str] = {}
     for name in record.fit_signals:

@@ -808,7 +808,8 @@ def _cut(log: Log, start: int, end: int, window: Window, settings: ExperimentSet
     name = f"{log.path.name}[{start}:{end}]"
     if "time" in settings.columns:
         t = log.columns[settings.columns["time"]][start:end]
-        time = t - t[0] if np.all(np.isfinite(t)) else np.full(end - start, np.nan)
+        first = np.flatnonzero(np.isfinite(t))
+        time = t - t[first[0]] if first.size else np.full(end - start, np.nan)  # stamps repaired when fitted
     else:
         time = np.arange(end - start) / float(settings.sample_rate)  # type: ignore[arg-type]
     signals = {}
@@ -817,22 +818,15 @@ def _cut(log: Log, start: int, end: int, window: Window, settings: ExperimentSet
         if signal in settings.columns:
             values = log.columns[settings.columns[signal]][start:end] * settings.scale.get(signal, 1.0)
             signals[signal] = values
-            missing = np.flatnonzero(~np.isfinite(values))
-            if missing.size and problem is None and signal in settings.fit + ("roll_rate",):
-                problem = (
-                    f"{signal} ({settings.columns[signal]}) has {missing.size} missing values in the window "
-                    f"(first at sample {start + int(missing[0])})"
-                )
+            # missing values are repaired (or the record left out) when it is fitted: bikerider.gap.repair
             huge = np.flatnonzero(np.abs(values) > MAX_MAGNITUDE)
             if huge.size and problem is None:
                 problem = (
                     f"{signal} ({settings.columns[signal]}) = {values[huge[0]]:g} at sample {start + int(huge[0])}: "
                     f"above {MAX_MAGNITUDE:g} {SIGNAL_UNITS[signal]} (check the column and its units)"
                 )
-    if problem is None and not np.all(np.isfinite(time)):
-        problem = "the time column has missing values in the window"
-    elif problem is None and np.any(np.diff(time) <= 0):
-        problem = "the time column does not increase in the window"
+    if problem is None and not np.any(np.isfinite(time)):
+        problem = "the time column has no value in the window"
     speed, speed_sigma, controller = _speed(log, start, end, window, settings)
     if problem is None and not (math.isfinite(speed) and speed > 0):
         problem = f"no positive speed in the window (speed {speed:g} m/s)"
