@@ -70,8 +70,10 @@ def damaged_copy(sbw: Path, out: Path, seed: int = 1, reset: bool = True, half_r
         f.write("file,start_sample,end_sample\n")
         for name, a, b in new_windows:
             f.write(f"{name},{a},{b}\n")
-    manifest = (sbw / "experiment.toml").read_text().replace(
-        "sample_rate = 100.0          # Hz: the logs have no time column", 'time_column = "t"'
+    manifest = (
+        (sbw / "experiment.toml")
+        .read_text()
+        .replace("sample_rate = 100.0          # Hz: the logs have no time column", 'time_column = "t"')
     )
     assert 'time_column = "t"' in manifest
     (out / "experiment.toml").write_text(manifest)

@@ -149,6 +149,11 @@ def add_parser(subparsers) -> None:
     )
     p.add_argument("--json", action="store_true", help="print one JSON object instead of text")
     p.add_argument(
+        "--quiet",
+        action="store_true",
+        help="no progress on standard error (by default long work shows its stage, count, rate and time left)",
+    )
+    p.add_argument(
         "--report",
         metavar="DIR",
         help="write report.md and PNG figures into DIR (new, empty, or an earlier report's folder, which is "
@@ -160,10 +165,11 @@ def add_parser(subparsers) -> None:
 def run(args: argparse.Namespace) -> int:
     import json
     import math
+    import sys
 
     import numpy as np
 
-    from bikerider import notes
+    from bikerider import notes, progress
     from bikerider.errors import InputError
     from bikerider.gap.control import MAX_MAGNITUDE
     from bikerider.gap.report import summary_text
@@ -182,46 +188,66 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("--sample-rate", args.sample_rate, "a positive sampling rate [Hz]")
     if args.speed is not None and not (0 < args.speed <= MAX_MAGNITUDE):  # also NaN
         raise InputError("--speed", args.speed, f"a positive speed of at most {MAX_MAGNITUDE:g} m/s (check the units)")
-    diagnosis = _diagnose_files(
-        args.model,
-        tuple(args.data),
-        tuple(args.experiment),
-        args.rider,
-        args.rider_rel_sigma,
-        args.control,
-        args.speed,
-        args.groups,
-        args.effects,
-        args.columns,
-        args.sample_rate,
-    )
-    result = diagnosis.as_dict()
-    plan = _plan(args, diagnosis)
-    if plan is not None:
-        result["next"] = plan.as_dict()
-    if report_folder is not None:
-        from bikerider.io.gap_report import write_report
+    plan_options = _plan_options(args)  # before the work: a bad option must not cost a diagnosis
+    reporter = None
+    try:
+        with progress.reporting(quiet=getattr(args, "quiet", False), name="bikerider gap") as reporter:
+            diagnosis = _diagnose_files(
+                args.model,
+                tuple(args.data),
+                tuple(args.experiment),
+                args.rider,
+                args.rider_rel_sigma,
+                args.control,
+                args.speed,
+                args.groups,
+                args.effects,
+                args.columns,
+                args.sample_rate,
+            )
+            result = diagnosis.as_dict()
+            plan = None
+            if plan_options is not None:
+                plan, why = _plan(diagnosis, plan_options)
+                result["next"] = plan.as_dict() if plan is not None else {"planned": False, "reason": why}
+            if report_folder is not None:
+                from bikerider.io.gap_report import write_report
 
-        with report_folder as staging:
-            path = write_report(diagnosis, staging, title=f"Sim-to-real gap: {args.model}", plan=plan)
-        result["report"] = str(report_folder.final(path))
+                progress.begin("writing the report")
+                with report_folder as staging:
+                    path = write_report(diagnosis, staging, title=f"Sim-to-real gap: {args.model}", plan=plan)
+                result["report"] = str(report_folder.final(path))
+            reporter.end()
+    except KeyboardInterrupt:
+        where = reporter.where() if reporter is not None else None
+        print(
+            ("\n" if reporter is not None and reporter.tty and reporter.bar is not None else "")
+            + "bikerider gap: interrupted"
+            + (f" during {where}" if where else "")
+            + ": nothing was kept (no report written, no file changed; the diagnosis is only printed at the end)",
+            file=sys.stderr,
+        )
+        return 130
     if args.json:
         result["notes"] = notes.shown_with(result.get("notes", []))
         print(json.dumps(_plain(result, np), indent=2, allow_nan=False))
     else:
         print(summary_text(result))
-        if plan is not None:
+        if "next" in result:
             from bikerider.gap.next_report import next_text
 
             print()
-            print(next_text(result["next"]))
+            if plan is not None:
+                print(next_text(result["next"]))
+            else:
+                print(f"What to measure next: no experiment can be planned: {result['next']['reason']}")
         if args.report:
             print(f"\nReport: {result['report']}")
     return 0
 
 
-def _plan(args: argparse.Namespace, diagnosis):
-    """The next-experiment plan the options ask for (``None`` without ``--next``)."""
+def _plan_options(args: argparse.Namespace) -> dict | None:
+    """The next-experiment options, checked (``None`` without ``--next``)."""
     import math
 
     import numpy as np
@@ -233,7 +259,6 @@ def _plan(args: argparse.Namespace, diagnosis):
             if getattr(args, option) not in (None, False):
                 raise InputError("--" + option.replace("_", "-"), getattr(args, option), "--next as well")
         return None
-    from bikerider.gap.next_experiment import plan_next
     from bikerider.gap.next_sweep import DEFAULT_RUN_TIME, DEFAULT_TORQUE, MAX_TORQUE, RUN_TIME_RANGE
 
     torque = DEFAULT_TORQUE if args.next_torque is None else args.next_torque
@@ -268,16 +293,29 @@ def _plan(args: argparse.Namespace, diagnosis):
         except ValueError:
             raise InputError("--next-noise", item, "SIGNAL=SD, e.g. steer_rate=0.02") from None
     rivals = [r.strip() for r in args.next_between.split(",")] if args.next_between else None
-    return plan_next(
-        diagnosis,
-        rivals=rivals,
-        speeds=speeds,
-        repeats=args.next_repeats,
-        noise=noise or None,
-        sweeps=not args.next_no_sweeps,
-        torque=torque,
-        run_time=run_time,
-    )
+    return {
+        "rivals": rivals,
+        "speeds": speeds,
+        "repeats": args.next_repeats,
+        "noise": noise or None,
+        "sweeps": not args.next_no_sweeps,
+        "torque": torque,
+        "run_time": run_time,
+    }
+
+
+def _plan(diagnosis, options: dict):
+    """``(plan, None)``, or ``(None, why)`` when no experiment can be planned: the diagnosis stands either way."""
+    from bikerider import progress
+    from bikerider.errors import BikeriderError
+    from bikerider.gap.next_experiment import plan_next
+
+    progress.begin("planning the next experiment")
+    try:
+        return plan_next(diagnosis, **options), None
+    except BikeriderError as exc:  # the plan's own limits (no rival, no experiment predicted), never the diagnosis's
+        logging.getLogger("bikerider.gap").info("no next experiment: %s", exc)
+        return None, str(exc)
 
 
 def diagnose_files(
@@ -331,6 +369,7 @@ def _cached(stamp, *args):
 def _diagnose_files(
     model, data, experiment, rider, rider_rel_sigma, control, speed, groups, effects, columns, sample_rate
 ):
+    from bikerider import progress
     from bikerider.gap.data import CanonicalData, EigenvalueData
     from bikerider.gap.diagnosis import diagnose
     from bikerider.gap.effects import EFFECT_NAMES, effect
@@ -339,6 +378,7 @@ def _diagnose_files(
     from bikerider.io.experiment import load_records, read_experiment
     from bikerider.io.gap_model import load_model
 
+    progress.begin("reading the inputs")
     loaded = load_model(model, rider, rider_rel_sigma=rider_rel_sigma)
     laws = gap_data.read_control(control) if control is not None else {}
     default_law = next(iter(laws.values())) if len(laws) == 1 else None

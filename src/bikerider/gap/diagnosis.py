@@ -57,6 +57,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from bikerider import progress
 from bikerider.errors import InputError
 from bikerider.gap.data import CanonicalData, EigenvalueData
 from bikerider.gap.effects import (
@@ -226,6 +227,7 @@ class Diagnosis:
                 f"{len(left)} of {len(self.records)} records left out",
                 f"enough records for a diagnosis: none could be used ({reasons})",
             )
+        progress.begin("the model's uncertainty at every observation")
         self.problem = GapProblem(model, eigen, canonical, records=self._record_set)
         self.effects = [e for e in effects]
         self.not_applicable = {}
@@ -262,6 +264,7 @@ class Diagnosis:
             self._search_pairs()
         for e in self.candidates:
             self.fit_of((e,))
+        progress.begin("selecting")
         self._select()
         self.selected_fit = self.fit_of(tuple(self.selected)) if self.selected else None
         self.elapsed = time.perf_counter() - start
@@ -281,6 +284,7 @@ class Diagnosis:
         used = [k for k, f in enumerate(self.records) if f.used]
         if not used:
             return eigen
+        progress.begin("comparing the records with the model")
         rows = eigenvalues_of(self.records)
         nominal = {k: float(model.parameters.values[k]) for k in BENCH_ARGS + ("g",)}  # type: ignore[arg-type]
         simulator = RecordSimulator([self.records[k] for k in used], nominal, model.geometry)
@@ -597,6 +601,7 @@ class Diagnosis:
         else:
             full = self.fit_of(effects)
         for name, held in self.folds:  # every fold starts from the fit to all the data
+            progress.advance()
             if timed:
                 fit = self._time_domain_fit(effects, ~held, start=full.values)
                 pred = self._time_domain_predict(fit, held)
@@ -663,6 +668,7 @@ class Diagnosis:
         return [(r, ties[r.effects]) for r in ordered]
 
     def _rank(self) -> None:
+        progress.begin("candidates", len(self.candidates) * len(self.folds), "fold fits")
         results = [self.cross_validate((e,)) for e in self.candidates]
         for rank, (r, ties) in enumerate(self._order(results), start=1):
             self.ranking.append(
@@ -703,7 +709,9 @@ class Diagnosis:
 
     def _search_pairs(self) -> None:
         self.pairs = []
-        for pair in self.pair_candidates():
+        pairs = self.pair_candidates()
+        progress.begin("pairs", len(pairs) * len(self.folds), "fold fits")
+        for pair in pairs:
             r = self.cross_validate(pair)
             self.pairs.append(r)
 

@@ -67,7 +67,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from bikerider.engine import DifferencedStage
-from bikerider.errors import FitError, InputError
+from bikerider.errors import BikeriderError, FitError, InputError
 from bikerider.gap.control import NO_CONTROL, ControlLaw
 from bikerider.gap.data import CanonicalData, EigenvalueData
 from bikerider.gap.effects import TIME_DOMAIN_EFFECTS
@@ -102,6 +102,11 @@ from bikerider.gap.next_sweep import (
 from bikerider.gap.predict import Predictor
 from bikerider.gap.records import SIGNALS, Record, RecordFit, eigenvalues_of
 from bikerider.gap.timedomain import Layout, systems
+
+
+class NoExperiment(BikeriderError):
+    """No experiment can be planned (every one considered is left out); the message says why."""
+
 
 LOG = logging.getLogger(__name__)
 
@@ -544,8 +549,16 @@ class NextExperiment:
                 why = "an uncertainty cannot be evaluated there"
             self.left_out.append({"experiment": self.points[m].describe(), "reason": why})
         keep = np.flatnonzero(~(bad | growing))
-        if not keep.size:
-            raise InputError("experiments", "none predicted", "speeds and laws where every rival shows a weave")
+        if not keep.size:  # say why, with the reasons counted: the command prints the diagnosis and this
+            counts: dict[str, int] = {}
+            for entry in self.left_out:
+                counts[entry["reason"]] = counts.get(entry["reason"], 0) + 1
+            reasons = "; ".join(f"{why} ({n} of {len(self.left_out)})" for why, n in counts.items())
+            raise NoExperiment(
+                f"none of the {len(self.left_out)} experiments considered (speeds, laws, signals, pushes) can be "
+                f"predicted by every rival ({', '.join(r.name for r in self.rivals)}): {reasons}. Other speeds "
+                "(--next-speeds) or other rivals (--next-between) may give a plan"
+            )
         self.points = [self.points[m] for m in keep]
         self.mean, self.own_cov = self.mean[:, keep], self.own_cov[:, keep]
         self.model_cov, self.data_cov = self.model_cov[keep], self.data_cov[keep]

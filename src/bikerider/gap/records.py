@@ -24,6 +24,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from bikerider import progress
 from bikerider.errors import FitError
 from bikerider.gap.control import ControlLaw
 from bikerider.gap.data import EigenvalueData
@@ -202,8 +203,11 @@ def fit_record(record: Record) -> RecordFit:
 def fit_records(records: list[Record]) -> list[RecordFit]:
     """Fit every record (see :func:`fit_record`); logs one line per record left out."""
     fits = []
+    if records:
+        progress.begin("fitting records", len(records), "records")
     for record in records:
         fit = fit_record(record)
+        progress.advance()
         if not fit.used:
             LOG.info("%s left out: %s", record.name, fit.reason)
         fits.append(fit)

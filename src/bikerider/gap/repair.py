@@ -169,7 +169,9 @@ def _clock(t: np.ndarray, rep: Repair) -> np.ndarray:
     for k in resets:
         shift = t[k] + median - t[k + 1]
         t[k + 1 :] += shift
-        rep.actions.append(f"clock reset after sample {k + 1} ({-steps[k]:.3g} s back): later stamps shifted by {shift:.3g} s")
+        rep.actions.append(
+            f"clock reset after sample {k + 1} ({-steps[k]:.3g} s back): later stamps shifted by {shift:.3g} s"
+        )
     return t
 
 
