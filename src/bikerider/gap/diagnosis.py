@@ -1061,6 +1061,7 @@ class Diagnosis:
             "used": used,
             "left_out": len(out) - used,
             "reasons": [{"record": e["record"], "reason": e["reason"]} for e in out if not e["used"]],
+            "repaired": [{"record": e["record"], "repairs": e["repairs"]} for e in out if e["used"] and e["repairs"]],
             "list": out,
         }
 

@@ -13,9 +13,10 @@ models compare with, and what was done to it (:class:`Repair`), or why it cannot
   the steer angle): the sample is dropped.  Another signal with missing values is set aside (not
   used by this record), said.
 * **Clipped (saturated) samples** of the roll rate and the fitted signals (a rate gyro saturates;
-  an angle encoder's quantised steps sit still at every peak, so it is not searched): a run of two or
-  more samples at exactly the record's largest or smallest value, entered and left by steps larger
-  than the signal's median step (a smooth peak arrives flat, a sensor's rail is hit at speed), is
+  an angle encoder's quantised steps sit still at every peak, so it is not searched): a run of samples
+  at exactly the record's largest or smallest value, two or more entered and left by steps larger
+  than the signal's median step (a smooth peak arrives flat, a sensor's rail is hit at speed), or
+  three or more in a signal that otherwise seldom repeats a value (under 5 % of its steps), is
   dropped.
 * **A constant sensor bias** needs no repair: every fit of a record (its own and each model's
   initial-state fit) has a constant offset per signal.
@@ -52,6 +53,10 @@ UNIFORM_RTOL = 1e-6
 """Steps that agree within this fraction are uniform (as :mod:`bikerider.gap.indirect` requires)."""
 MIN_CLIP_RUN = 2
 """Fewest samples at the extreme that count as clipping."""
+MIN_FLAT_RUN = 3
+"""A run this long at the extreme is clipping whatever its steps, in a signal that seldom repeats a value."""
+MAX_REPEATS = 0.05
+"""Fraction of repeated consecutive values (away from the extremes) below which a signal is continuous."""
 FINE = 8
 """Points per sampling step where the preliminary fit's second derivative is evaluated."""
 
@@ -203,6 +208,10 @@ def _clipped(y: np.ndarray, valid: np.ndarray) -> np.ndarray:
     typical = float(np.nanmedian(d[d > 0])) if np.any(d > 0) else 0.0
     if typical <= 0:
         return out
+    # how often the signal repeats a value away from its extremes: rarely for a continuous reading
+    # (a gyro logged to several digits), often for a quantised one (an encoder at rest)
+    inner = (v[1:] != np.nanmax(v)) & (v[1:] != np.nanmin(v)) & np.isfinite(d)
+    repeats = float(np.mean(d[inner] == 0)) if np.any(inner) else 1.0
     for extreme in (np.nanmax(v), np.nanmin(v)):
         at = np.flatnonzero(v == extreme)
         if at.size < MIN_CLIP_RUN:
@@ -215,7 +224,9 @@ def _clipped(y: np.ndarray, valid: np.ndarray) -> np.ndarray:
             leave = abs(v[hi + 1] - v[hi]) if hi + 1 < v.size else math.inf
             entry = entry if math.isfinite(entry) else math.inf
             leave = leave if math.isfinite(leave) else math.inf
-            if min(entry, leave) > typical and not (math.isinf(entry) and math.isinf(leave)):
+            steep = min(entry, leave) > typical and not (math.isinf(entry) and math.isinf(leave))
+            flat = run.size >= MIN_FLAT_RUN and repeats < MAX_REPEATS
+            if steep or flat:
                 out[run] = True
     return out
 
@@ -259,6 +270,9 @@ def _resample(t: np.ndarray, signals: dict, median: float, names: tuple[str, ...
         if t.size < 3:
             rep.problem = "; ".join(rep.actions) + ": too few samples left"
             return t, signals
+        if np.allclose(gaps, gaps[0], rtol=UNIFORM_RTOL, atol=0):  # what is left is uniform
+            rep.step = float(gaps[0])
+            return t, signals
     step = _round_step(median)
     grid = t[0] + step * np.arange(int(math.floor((t[-1] - t[0]) / step + 1e-9)) + 1)
     out = {k: np.interp(grid, t, v) for k, v in signals.items()}
@@ -273,3 +287,20 @@ def _resample(t: np.ndarray, signals: dict, median: float, names: tuple[str, ...
         f"(fit residual {floor:.2g})"
     )
     return grid, out
+
+
+TAGS = (
+    ("clock reset", "clock reset"),
+    ("without a time stamp", "stamps missing"),
+    ("non-increasing stamp", "duplicate stamps"),
+    ("missing", "missing values"),
+    ("clipped", "clipped"),
+    ("cut at", "cut at a gap"),
+    ("resampled", "resampled"),
+)
+"""Short names of the repairs (for figures), from the text of each action."""
+
+
+def repair_tags(actions: list[str]) -> list[str]:
+    """Short names of a record's repairs, in the order of :data:`TAGS`, for a figure's label."""
+    return [tag for key, tag in TAGS if any(key in a for a in actions)]
