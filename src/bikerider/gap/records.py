@@ -77,6 +77,9 @@ class Record:
         What :func:`bikerider.gap.repair.repair_record` did to the record as read (empty: nothing).
     raw : tuple of ndarray or None
         The recorded instants and roll rate before a repair (for figures); ``None`` when not repaired.
+    step : float or None
+        The logger's sampling step [s] (the median over its whole log, where the log has a time
+        column): the grid a record with uneven stamps is resampled onto.
     """
 
     name: str
@@ -94,6 +97,7 @@ class Record:
     speed_measured: bool = False
     repairs: list[str] = field(default_factory=list)
     raw: tuple[np.ndarray, np.ndarray] | None = None
+    step: float | None = None
 
     @property
     def gains(self) -> np.ndarray:

@@ -23,12 +23,13 @@ models compare with, and what was done to it (:class:`Repair`), or why it cannot
 * **Non-uniform time** (jitter, the gaps the drops above leave, a clock that runs otherwise than
   the nominal rate): the batched simulators of the models (:mod:`bikerider.gap.indirect`,
   :mod:`bikerider.gap.timedomain`) step by one matrix exponential of a uniform step, so the record
-  is resampled onto a uniform grid at its median step (rounded to three significant digits), by
+  is resampled onto a uniform grid at the logger's step (the median over its whole log, else over the
+  record; rounded to three significant digits), by
   linear interpolation between neighbouring samples.  The error of linear interpolation over an
-  interval ``H`` is at most ``H^2 / 8 max|y''|``; ``max|y''|`` is bounded by the record's own fit on
+  interval ``H`` is at most ``H^2 / 8 max|y''|`` (the maximum over that interval); ``y''`` is taken from the record's own fit on
   the recorded instants (a preliminary fit of the damped oscillation, :func:`bikerider.gap.
   extraction.weave_eigenvalue`, which takes any increasing time), evaluated on a fine grid.  A gap
-  is bridged only when that bound is at most the fit's residual RMS (interpolation then adds less
+  (an interval over 1.5 median steps) is bridged only when that bound is at most the fit's residual RMS (interpolation then adds less
   than the record's own misfit); the record is cut at a longer gap, keeping its longest part.  The
   bound is reported with the repair.
 
@@ -53,6 +54,8 @@ UNIFORM_RTOL = 1e-6
 """Steps that agree within this fraction are uniform (as :mod:`bikerider.gap.indirect` requires)."""
 MIN_CLIP_RUN = 2
 """Fewest samples at the extreme that count as clipping."""
+GAP_STEPS = 1.5
+"""An interval longer than this many median steps is a gap (samples missing); shorter ones are jitter."""
 MIN_FLAT_RUN = 3
 """A run this long at the extreme is clipping whatever its steps, in a signal that seldom repeats a value."""
 MAX_REPEATS = 0.05
@@ -151,7 +154,8 @@ def repair_record(record):
     if uniform and not rep.actions:
         return record, rep
     if not uniform:
-        t, signals = _resample(t, signals, median, names, rep)
+        nominal = record.step if record.step and 0.5 * median < record.step < 2 * median else median
+        t, signals = _resample(t, signals, nominal, names, rep)
         if rep.problem:
             return record, rep
     else:
@@ -247,12 +251,9 @@ def _resample(t: np.ndarray, signals: dict, median: float, names: tuple[str, ...
     except FitError as exc:
         rep.problem = f"{'; '.join(rep.actions) + '; ' if rep.actions else ''}not uniformly sampled, and {exc}"
         return t, signals
-    fine = np.linspace(t[0], t[-1], max(FINE * t.size, 16))
-    curve = fit.evaluate(fine)
-    h = fine[1] - fine[0]
-    curvature = float(np.max(np.abs(np.diff(curve, 2)))) / h**2 if fine.size > 2 else 0.0
+    bound = gaps**2 / 8 * _curvature(fit, t)  # per interval: H^2 / 8 max|y''| over it
     floor = max(fit.residual_rms, 1e-12)
-    too_long = gaps**2 / 8 * curvature > floor
+    too_long = (gaps > GAP_STEPS * median) & (bound > floor)  # a gap, and too long to bridge
     if too_long.any():
         # keep the longest stretch between gaps too long to bridge
         cuts = np.flatnonzero(too_long)
@@ -262,11 +263,11 @@ def _resample(t: np.ndarray, signals: dict, median: float, names: tuple[str, ...
         longest = float(gaps[cuts].max())
         rep.actions.append(
             f"cut at {cuts.size} gap{'s' if cuts.size > 1 else ''} too long to interpolate (up to {longest:.3g} s: "
-            f"error bound {longest**2 / 8 * curvature:.2g} above the fit's residual {floor:.2g}); "
+            f"error bound up to {float(bound[cuts].max()):.2g} above the fit's residual {floor:.2g}); "
             f"kept {t[a]:.3f}-{t[b - 1]:.3f} s"
         )
         t, signals = t[a:b], {k: v[a:b] for k, v in signals.items()}
-        gaps = np.diff(t)
+        gaps, bound = np.diff(t), bound[a : b - 1]
         if t.size < 3:
             rep.problem = "; ".join(rep.actions) + ": too few samples left"
             return t, signals
@@ -276,17 +277,26 @@ def _resample(t: np.ndarray, signals: dict, median: float, names: tuple[str, ...
     step = _round_step(median)
     grid = t[0] + step * np.arange(int(math.floor((t[-1] - t[0]) / step + 1e-9)) + 1)
     out = {k: np.interp(grid, t, v) for k, v in signals.items()}
-    largest = float(gaps.max()) if gaps.size else 0.0
-    bound = largest**2 / 8 * curvature
+    worst = float(bound.max()) if bound.size else 0.0
     rep.resampled, rep.step = True, step
-    rep.bound = {"roll_rate": bound}
+    rep.bound = {"roll_rate": worst}
     spread = (float(gaps.min()), float(gaps.max()))
     rep.actions.append(
         f"time stamps not uniform (steps {1e3 * spread[0]:.2f}-{1e3 * spread[1]:.2f} ms): resampled to "
-        f"{1e3 * step:.4g} ms by linear interpolation, roll-rate error at most {bound:.2g} rad/s "
+        f"{1e3 * step:.4g} ms by linear interpolation, roll-rate error at most {worst:.2g} rad/s "
         f"(fit residual {floor:.2g})"
     )
     return grid, out
+
+
+def _curvature(fit, t: np.ndarray) -> np.ndarray:
+    """Largest ``|y''|`` of the fitted curve over each interval between samples (a fine grid of
+    :data:`FINE` points per interval)."""
+    u = np.linspace(0.0, 1.0, FINE + 1)
+    fine = (t[:-1, None] + np.diff(t)[:, None] * u).ravel()  # (n - 1) intervals, FINE + 1 points each
+    h = 1e-3 * float(np.median(np.diff(t)))
+    second = (fit.evaluate(fine + h) - 2 * fit.evaluate(fine) + fit.evaluate(fine - h)) / h**2
+    return np.max(np.abs(second).reshape(t.size - 1, FINE + 1), axis=1)
 
 
 TAGS = (

@@ -779,9 +779,16 @@ def _find(path: Path) -> Path:
 
 
 def _rate_of(log: Log, settings: ExperimentSettings) -> float:
+    """The log's sampling rate: one over the median forward step of its time column (cached per log)."""
+    cached = getattr(log, "_rate", None)
+    if cached is not None:
+        return cached
     t = log.columns[settings.columns["time"]]
     steps = np.diff(t[np.isfinite(t)])
-    return 1.0 / float(np.median(steps)) if steps.size and np.median(steps) > 0 else 1.0
+    steps = steps[steps > 0]  # repeated stamps and clock resets are not the rate
+    rate = 1.0 / float(np.median(steps)) if steps.size else 1.0
+    log._rate = rate  # type: ignore[attr-defined]
+    return rate
 
 
 def _cut(log: Log, start: int, end: int, window: Window, settings: ExperimentSettings) -> Record:
@@ -836,6 +843,7 @@ def _cut(log: Log, start: int, end: int, window: Window, settings: ExperimentSet
     law = settings.laws[law_name] if law_name else NO_CONTROL
     group = window.group or (log.path.name.removesuffix(".gz") if settings.group == "file" else settings.group)
     measured = window.speed is None and settings.speed_source == "column"
+    step = 1.0 / _rate_of(log, settings) if "time" in settings.columns else 1.0 / float(settings.sample_rate)  # type: ignore[arg-type]
     return Record(
         name,
         where,
@@ -850,6 +858,7 @@ def _cut(log: Log, start: int, end: int, window: Window, settings: ExperimentSet
         problem,
         tuple(settings.fit),
         measured,
+        step=step,
     )
 
 
