@@ -194,7 +194,10 @@ def fit_record(record: Record) -> RecordFit:
             return RecordFit(
                 record, None, reason="none of the signals " + ", ".join(record.fit_signals) + " is in the record"
             )
-        return RecordFit(record, None, reason="; ".join(f"{k}: {v}" for k, v in reasons.items()))
+        reason = "; ".join(f"{k}: {v}" for k, v in reasons.items())
+        if record.repairs:  # say what the record was by then
+            reason += " (after the repairs: " + "; ".join(record.repairs) + ")"
+        return RecordFit(record, None, reason=reason)
     estimate, note = combine_fits(fits)
     out = RecordFit(record, estimate, fits)
     if note:
