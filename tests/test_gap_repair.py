@@ -101,6 +101,7 @@ def test_a_clock_reset_is_undone(clean):
     fit = fit_record(_record(stamps, y))
     assert any("clock reset after sample 100" in a for a in fit.record.repairs)
     assert np.allclose(fit.record.time, t)  # continues at the median step
+    assert np.allclose(fit.record.raw[0], t)  # the samples as recorded, drawn on the same time axis
     _agree(fit_record(_record(*clean)), fit, k=1e-6)  # the very same samples
 
 

@@ -175,7 +175,7 @@ def fit_record(record: Record) -> RecordFit:
         return RecordFit(record, None, reason=record.problem)
     repaired, repair = repair_record(record)
     if repair.repaired:
-        raw = (np.asarray(record.time, float), np.asarray(record.signals.get("roll_rate", []), float))
+        raw = repair.raw or (np.asarray(record.time, float), np.asarray(record.signals.get("roll_rate", []), float))
         repaired = replace(repaired, repairs=list(repair.actions), raw=raw)
     if repair.problem:
         return RecordFit(repaired, None, reason=repair.problem)

@@ -80,6 +80,8 @@ class Repair:
         Per resampled signal, the bound on the interpolation error (the signal's units).
     problem : str or None
         Why the record cannot be used after all.
+    raw : tuple of ndarray or None
+        The recorded instants (a clock reset undone) and roll rate, on the repaired record's time axis.
     """
 
     actions: list[str] = field(default_factory=list)
@@ -87,6 +89,7 @@ class Repair:
     step: float = math.nan
     bound: dict[str, float] = field(default_factory=dict)
     problem: str | None = None
+    raw: tuple[np.ndarray, np.ndarray] | None = None
 
     @property
     def repaired(self) -> bool:
@@ -120,6 +123,7 @@ def repair_record(record):
         rep.problem = "fewer than two samples with a time stamp"
         return record, rep
     t = _clock(t, rep)
+    shown = (t.copy(), signals["roll_rate"].copy()) if "roll_rate" in signals else None
     t, signals = _monotonic(t, signals, rep)
     names = essential(record)
     missing = np.zeros(t.size, bool)
@@ -160,6 +164,8 @@ def repair_record(record):
             return record, rep
     else:
         rep.step = float(steps[0])
+    if shown is not None:  # the samples as recorded, on the repaired record's time axis
+        rep.raw = (shown[0] - t[0], shown[1])
     out = replace(record, time=t - t[0], signals=signals)
     return out, rep
 
