@@ -158,7 +158,8 @@ def repair_record(record):
     if uniform and not rep.actions:
         return record, rep
     if not uniform:
-        nominal = record.step if record.step and 0.5 * median < record.step < 2 * median else median
+        hint = getattr(record, "step", None)  # the logger's step over its whole log, where known
+        nominal = hint if hint and 0.5 * median < hint < 2 * median else median
         t, signals = _resample(t, signals, nominal, names, rep)
         if rep.problem:
             return record, rep
