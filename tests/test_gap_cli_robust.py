@@ -51,11 +51,30 @@ def test_next_without_any_experiment_keeps_the_diagnosis_and_says_why(unplannabl
     assert result["next"]["planned"] is False and "grows there" in result["next"]["reason"]
 
 
-def test_each_stage_shows_a_line_on_stderr_when_it_is_not_a_terminal(unplannable):
-    _, _, err = unplannable["text"]
-    for stage in ("reading the inputs", "candidates: 6 fold fits", "pairs:", "planning the next experiment"):
-        assert f"bikerider gap: {stage}" in err
-    assert "candidates: 6 fold fits done in" in err
+def test_a_log_file_gets_a_line_per_stage_that_takes_a_while(monkeypatch):
+    # not a terminal: a stage of a second or more leaves a line when it ends, one running 5 s a
+    # progress line (then one every 30 s); a quick run, or an error found at once, leaves none
+    clock = [0.0]
+    monkeypatch.setattr(progress.time, "monotonic", lambda: clock[0])
+    stream = io.StringIO()
+    with progress.reporting(stream=stream, name="x"):
+        progress.begin("reading the inputs")
+        clock[0] += 0.2
+        progress.begin("candidates", 10, "fold fits")
+        for _ in range(10):
+            clock[0] += 1.0
+            progress.advance()
+        progress.begin("selecting")
+        clock[0] += 1.5
+    lines = stream.getvalue().splitlines()
+    assert lines[0].startswith("x: candidates [############") and "5/10 fold fits (50%), 1/s" in lines[0]
+    assert "0:05 left" in lines[0]
+    assert lines[1:] == ["x: candidates: 10 fold fits done in 0:10", "x: selecting: done in 0:02"]
+
+
+def test_an_error_found_at_once_is_the_first_line_on_stderr(capsys, tmp_path):
+    assert main(["gap", *MODEL, "--data", str(tmp_path / "missing.csv")]) == 2
+    assert capsys.readouterr().err.startswith("bikerider gap: error: ")
 
 
 def test_quiet_silences_the_progress(capsys):

@@ -101,8 +101,23 @@ class Progress:
         self.stream.flush()
 
 
+FIRST_LINE = 5.0
+"""Seconds a stage runs before its first progress line when standard error is not a terminal."""
+SHORT_STAGE = 1.0
+"""Stages shorter than this [s] leave no line when standard error is not a terminal (a quick run, or
+an error found while reading the inputs, stays a clean message)."""
+CLEAR = "\r\x1b[K"
+"""Back to the start of the terminal's line and clear it."""
+
+
 class Reporter:
-    """The stages of one command's work, one :class:`Progress` each (see the module docstring)."""
+    """The stages of one command's work, one :class:`Progress` each (see the module docstring).
+
+    On a terminal, a counted stage draws its bar in place (and leaves its final line), an uncounted
+    one shows its name until the next stage.  Otherwise (a log file, CI), a stage that runs
+    :data:`FIRST_LINE` seconds prints a progress line, then one every :data:`LOG_INTERVAL` seconds,
+    and every stage of :data:`SHORT_STAGE` seconds or more a line when it ends.
+    """
 
     def __init__(self, quiet: bool = False, stream=None, name: str = "bikerider"):
         self.quiet, self.name = quiet, name
@@ -111,37 +126,58 @@ class Reporter:
         self.stage: str | None = None
         self.bar: Progress | None = None
         self.started = time.monotonic()
+        self.shown = False  # a progress line of this stage was printed (not a terminal)
+        self.transient = False  # an uncounted stage's name is on the terminal's line
+
+    def _write(self, text: str) -> None:
+        if not self.quiet:
+            self.stream.write(text)
+            self.stream.flush()
 
     def begin(self, stage: str, total: int = 0, unit: str = "") -> None:
         self.end()
-        self.stage, self.started = stage, time.monotonic()
+        self.stage, self.started, self.shown = stage, time.monotonic(), False
         if total > 0:
-            self.bar = Progress(total, quiet=True, stream=self.stream, label=unit, prefix=f"{self.name}: {stage} ")
-            self.bar.quiet = self.quiet
-            if not self.tty and not self.quiet:  # a plain line per stage for a log file
-                self.stream.write(f"{self.name}: {stage}: {total:,} {unit} ...\n")
-                self.stream.flush()
-        elif not self.quiet:
-            self.stream.write(f"{self.name}: {stage} ...\n")
-            self.stream.flush()
+            self.bar = Progress(total, quiet=self.quiet or not self.tty, stream=self.stream, label=unit)
+            self.bar.prefix = f"{self.name}: {stage} "
+            if self.transient:
+                self._write(CLEAR)
+                self.transient = False
+        elif self.tty:
+            self._write(f"{CLEAR}{self.name}: {stage} ...")
+            self.transient = True
 
     def advance(self, n: int = 1) -> None:
-        if self.bar is not None:
-            self.bar.update(n)
+        if self.bar is None:
+            return
+        self.bar.update(n)
+        if not self.tty and not self.quiet:
+            now = time.monotonic()
+            due = FIRST_LINE if not self.shown else LOG_INTERVAL
+            if now - max(self.started, self.bar.last if self.shown else self.started) >= due:
+                self._write(self.bar.text() + "\n")
+                self.bar.last, self.shown = now, True
 
     def end(self) -> None:
         if self.stage is None:
             return
+        took = time.monotonic() - self.started
         if self.bar is not None:
             if self.tty:
                 self.bar.close()
-            elif not self.quiet:
-                self.stream.write(
-                    f"{self.name}: {self.stage}: {min(self.bar.done, self.bar.total):,} {self.bar.label} done "
-                    f"in {_duration(time.monotonic() - self.started)}\n"
-                )
-                self.stream.flush()
+            elif took >= SHORT_STAGE:
+                done = min(self.bar.done, self.bar.total)
+                self._write(f"{self.name}: {self.stage}: {done:,} {self.bar.label} done in {_duration(took)}\n")
+        elif not self.tty and took >= SHORT_STAGE:
+            self._write(f"{self.name}: {self.stage}: done in {_duration(took)}\n")
         self.stage, self.bar = None, None
+
+    def finish(self) -> None:
+        """End the last stage and clear a terminal line left by an uncounted one."""
+        self.end()
+        if self.transient:
+            self._write(CLEAR)
+            self.transient = False
 
     def where(self) -> str | None:
         """The stage running and how far it is, or ``None``."""
@@ -162,7 +198,7 @@ def reporting(quiet: bool = False, stream=None, name: str = "bikerider"):
     _ACTIVE.append(reporter)
     try:
         yield reporter
-        reporter.end()
+        reporter.finish()
     finally:
         _ACTIVE.remove(reporter)
 

@@ -217,11 +217,11 @@ def run(args: argparse.Namespace) -> int:
                 with report_folder as staging:
                     path = write_report(diagnosis, staging, title=f"Sim-to-real gap: {args.model}", plan=plan)
                 result["report"] = str(report_folder.final(path))
-            reporter.end()
+            reporter.finish()
     except KeyboardInterrupt:
         where = reporter.where() if reporter is not None else None
         print(
-            ("\n" if reporter is not None and reporter.tty and reporter.bar is not None else "")
+            ("\n" if reporter is not None and reporter.tty and (reporter.bar or reporter.transient) else "")
             + "bikerider gap: interrupted"
             + (f" during {where}" if where else "")
             + ": nothing was kept (no report written, no file changed; the diagnosis is only printed at the end)",
