@@ -120,3 +120,21 @@ def test_outside_a_command_progress_is_silent(capsys):
     progress.end()
     assert progress.current() is None
     assert capsys.readouterr().err == ""
+
+
+def test_the_text_lists_every_repaired_record(unplannable):
+    from bikerider.gap.report import summary_text
+
+    records = {
+        "total": 3,
+        "used": 2,
+        "left_out": 1,
+        "reasons": [{"record": "c", "reason": "no oscillation found"}],
+        "repaired": [{"record": "b", "repairs": ["3 missing roll_rate samples dropped", "resampled to 10 ms"]}],
+    }
+    result = json.loads(unplannable["json"][1])
+    text = summary_text({**result, "records": records})
+    assert "Records: 2 of 3 used (1 of them repaired), 1 left out" in text
+    assert "  repaired b: 3 missing roll_rate samples dropped; resampled to 10 ms" in text
+    assert "  left out c: no oscillation found" in text
+

@@ -88,10 +88,8 @@ def summary_text(result: dict) -> str:
     records = result.get("records")
     if records:
         repaired = records.get("repaired", [])
-        lines.append(
-            f"Records: {records['used']} of {records['total']} used ({len(repaired)} of them repaired), "
-            f"{records['left_out']} left out"
-        )
+        fixed = f" ({len(repaired)} of them repaired)" if repaired else ""
+        lines.append(f"Records: {records['used']} of {records['total']} used{fixed}, {records['left_out']} left out")
         for r in repaired:
             lines.append(f"  repaired {r['record']}: " + "; ".join(r["repairs"]))
         for r in records["reasons"]:
