@@ -137,4 +137,3 @@ def test_the_text_lists_every_repaired_record(unplannable):
     assert "Records: 2 of 3 used (1 of them repaired), 1 left out" in text
     assert "  repaired b: 3 missing roll_rate samples dropped; resampled to 10 ms" in text
     assert "  left out c: no oscillation found" in text
-

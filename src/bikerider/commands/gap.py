@@ -260,6 +260,7 @@ def _plan_options(args: argparse.Namespace) -> dict | None:
                 raise InputError("--" + option.replace("_", "-"), getattr(args, option), "--next as well")
         return None
     from bikerider.gap.next_sweep import DEFAULT_RUN_TIME, DEFAULT_TORQUE, MAX_TORQUE, RUN_TIME_RANGE
+    from bikerider.gap.records import SIGNALS
 
     torque = DEFAULT_TORQUE if args.next_torque is None else args.next_torque
     if not 0 < torque <= MAX_TORQUE:  # also NaN
@@ -288,6 +289,10 @@ def _plan_options(args: argparse.Namespace) -> dict | None:
         if not item.strip():
             continue
         name, _, value = item.partition("=")
+        if name.strip() not in SIGNALS:  # before the diagnosis: a typo must not cost one
+            raise InputError(
+                "--next-noise", item, "noise signal = '" + name.strip() + "': one of " + ", ".join(SIGNALS)
+            )
         try:
             noise[name.strip()] = float(value)
         except ValueError:
@@ -307,15 +312,14 @@ def _plan_options(args: argparse.Namespace) -> dict | None:
 def _plan(diagnosis, options: dict):
     """``(plan, None)``, or ``(None, why)`` when no experiment can be planned: the diagnosis stands either way."""
     from bikerider import progress
-    from bikerider.errors import BikeriderError
-    from bikerider.gap.next_experiment import plan_next
+    from bikerider.gap.next_experiment import NoExperiment, plan_next
 
     progress.begin("planning the next experiment")
     try:
         return plan_next(diagnosis, **options), None
-    except BikeriderError as exc:  # the plan's own limits (no rival, no experiment predicted), never the diagnosis's
-        logging.getLogger("bikerider.gap").info("no next experiment: %s", exc)
-        return None, str(exc)
+    except NoExperiment as exc:  # the plan's own limits (no rivals, nothing predicted); a bad option stays an error
+        logging.getLogger("bikerider.gap").info("no next experiment: %s", exc.why)
+        return None, exc.why
 
 
 def diagnose_files(
