@@ -16,6 +16,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from sbw_damage import ROLL_RATE_BIAS, damaged_copy
 
 import bikerider
@@ -36,7 +38,8 @@ def _decay(time: np.ndarray, rng) -> np.ndarray:
 
 
 def _record(time, rate, name="run") -> Record:
-    steer = 0.1 * np.exp(WEAVE.real * (time - time[0])) * np.cos(WEAVE.imag * (time - time[0]))
+    tau = np.nan_to_num(np.asarray(time, float) - (time[0] if len(time) else 0.0))
+    steer = 0.1 * np.exp(WEAVE.real * tau) * np.cos(WEAVE.imag * tau)
     return Record(
         name, name, np.asarray(time, float), {"roll_rate": rate, "steer_angle": steer}, 4.0, 0.0, "g", NO_CONTROL, 4.0
     )
@@ -201,3 +204,35 @@ def test_damaged_sbw_logs_give_the_same_diagnosis(damaged):
             lo, hi = first["steer_friction"]["parameters"][name]["ci95"]
             assert lo <= p["value"] <= hi, (name, p["value"], lo, hi)
     assert math.isfinite(hurt["how_far"]["data_shrink"])
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    seed=st.integers(0, 10_000),
+    n=st.integers(0, 400),
+    jitter=st.floats(0.0, 0.6),
+    drop=st.floats(0.0, 0.5),
+    holes=st.integers(0, 5),
+    resets=st.integers(0, 2),
+)
+def test_any_damage_ends_in_a_used_record_or_a_reason(seed, n, jitter, drop, holes, resets):
+    # a logger's worst: never an exception, never a silent NaN; a used record is uniformly sampled
+    rng = np.random.default_rng(seed)
+    t = np.arange(n) * 0.01 + rng.uniform(-jitter, jitter, n) * 0.01
+    y = _decay(t, rng) if n else np.zeros(0)
+    keep = rng.random(n) >= drop
+    t, y = t[keep], y[keep]
+    for _ in range(holes):
+        if t.size:
+            k = int(rng.integers(0, t.size))
+            (y if rng.random() < 0.7 else t)[k : k + int(rng.integers(1, 30))] = np.nan
+    for _ in range(resets):
+        if t.size:
+            t[int(rng.integers(0, t.size)) :] -= rng.uniform(0.0, 100.0)
+    fit = fit_record(_record(t, y))
+    if fit.used:
+        steps = np.diff(fit.record.time)
+        assert np.allclose(steps, steps[0], rtol=1e-6) and np.all(np.isfinite(fit.record.signals["roll_rate"]))
+        assert math.isfinite(fit.estimate.eigenvalue.real) and math.isfinite(fit.estimate.real_sigma)
+    else:
+        assert fit.reason
