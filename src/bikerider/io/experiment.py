@@ -818,9 +818,14 @@ def _cut(log: Log, start: int, end: int, window: Window, settings: ExperimentSet
         first = np.flatnonzero(np.isfinite(t))
         time = t - t[first[0]] if first.size else np.full(end - start, np.nan)  # stamps repaired when fitted
     else:
-        time = np.arange(end - start) / float(settings.sample_rate)  # type: ignore[arg-type]
+        step = 1.0 / float(settings.sample_rate) if float(settings.sample_rate) > 1e-300 else math.inf  # type: ignore[arg-type]
+        time = np.arange(end - start) * step if math.isfinite(step) else np.full(end - start, np.nan)
     signals = {}
-    problem = None
+    problem = (
+        None
+        if np.any(np.isfinite(time)) or "time" in settings.columns
+        else (f"sample_rate = {settings.sample_rate:g} Hz gives no finite sample times")
+    )
     for signal in SIGNALS:
         if signal in settings.columns:
             values = log.columns[settings.columns[signal]][start:end] * settings.scale.get(signal, 1.0)
@@ -843,7 +848,13 @@ def _cut(log: Log, start: int, end: int, window: Window, settings: ExperimentSet
     law = settings.laws[law_name] if law_name else NO_CONTROL
     group = window.group or (log.path.name.removesuffix(".gz") if settings.group == "file" else settings.group)
     measured = window.speed is None and settings.speed_source == "column"
-    step = 1.0 / _rate_of(log, settings) if "time" in settings.columns else 1.0 / float(settings.sample_rate)  # type: ignore[arg-type]
+    step = (
+        1.0 / _rate_of(log, settings)
+        if "time" in settings.columns
+        else float(time[1] - time[0])
+        if time.size > 1
+        else None
+    )
     return Record(
         name,
         where,
