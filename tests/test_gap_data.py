@@ -133,10 +133,13 @@ def test_perturbation_speed_column_and_errors(tmp_path):
         gd.read_perturbation(no_speed)
     with pytest.raises(InputError, match="speed"):
         gd.read_perturbation(no_speed, speed=-1.0)
+    # a stamp going back is a logger's, repaired when the record is fitted (bikerider.gap.repair) ...
     backwards = _write(tmp_path, "back.csv", "# speed = 5\ntime,roll_rate\n0.0,0.1\n0.2,0.2\n0.1,0.3\n")
-    with pytest.raises(FileFormatError) as info:
-        gd.read_perturbation(backwards)
-    assert info.value.line == 5
+    assert gd.read_perturbation(backwards).time.tolist() == [0.0, 0.2, 0.1]
+    # ... but a time that never advances is no time series
+    still = _write(tmp_path, "still.csv", "# speed = 5\ntime,roll_rate\n1.0,0.1\n1.0,0.2\n1.0,0.3\n")
+    with pytest.raises(FileFormatError, match="time = 1 throughout: expected increasing time stamps"):
+        gd.read_perturbation(still)
 
 
 def test_a_run_of_noise_is_left_out_with_its_reason(tmp_path):

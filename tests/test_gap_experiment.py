@@ -125,16 +125,17 @@ def test_the_encoder_speed_follows_the_experimenters_calibration(sbw):
 
 
 def test_short_strongly_damped_records_fit(sbw):
-    # 58 of the 59 windows fit (one and a half cycles down to under one, decay rates to 7 1/s); the one
-    # left out says why
+    # all 59 windows fit (one and a half cycles down to under one, decay rates to 7 1/s), as the
+    # experimenter fitted them; [10600:10845] shows its oscillation at 9 standard errors (once left out
+    # for missing 10), and the weakest of them is still far above the 5 a fit now needs
     _, _, records = sbw
     fits = fit_records(records)
     used = [f for f in fits if f.used]
-    assert len(used) == 58
+    assert len(used) == 59
     assert min(f.estimate.cycles for f in used) < 1.3 and max(-f.estimate.eigenvalue.real for f in used) > 5
     assert all(f.estimate.r2 > 0.85 for f in used)
-    (left,) = [f for f in fits if not f.used]
-    assert left.record.name.endswith("[10600:10845]") and "no oscillation" in left.reason
+    weak = next(f for f in fits if f.record.name.endswith("[10600:10845]"))
+    assert weak.estimate.r2 > 0.85 and not weak.record.repairs
 
 
 def test_the_detector_finds_the_experimenters_windows():
@@ -239,23 +240,29 @@ def test_a_bad_log_cell_names_the_log_and_its_line(tmp_path):
     assert f"{tmp_path / 'run.log'}:3" in str(info.value) and "rate = 'x'" in str(info.value)
 
 
-def test_missing_values_leave_a_record_out_not_the_run(tmp_path):
+def test_missing_values_are_repaired_or_leave_a_record_out_not_the_run(tmp_path):
     t = np.arange(300) * 0.01
     rate = np.exp(-2 * t) * np.sin(7 * t)
     rows = [f"{x:.6f},3.0" for x in rate]
     rows[150] = ",3.0"  # an empty cell, as the SBW logs have before the controller starts
     (tmp_path / "a.log").write_text("rate,v\n" + "\n".join(rows[:200]) + "\n")
     (tmp_path / "b.log").write_text("rate,v\n" + "\n".join(f"{x:.6f},3.0" for x in rate) + "\n")
+    (tmp_path / "c.log").write_text("rate,v\n" + "\n".join([",3.0"] * 280 + rows[:20]) + "\n")
     path = _write(
         tmp_path / "m.toml",
         '[experiment]\nsample_rate = 100.0\n[columns]\nroll_rate = "rate"\n'
         'speed = "v"\n[[file]]\npath = "a.log"\nwindows = [[0, 200]]\n[[file]]\npath = "b.log"\n'
-        "windows = [[0, 300]]\n",
+        'windows = [[0, 300]]\n[[file]]\npath = "c.log"\nwindows = [[0, 300]]\n',
     )
     settings, windows = read_manifest(path)
     fits = fit_records(load_records(settings, windows))
-    assert [f.used for f in fits] == [False, True]
-    assert "missing values" in fits[0].reason and "sample 150" in fits[0].reason
+    assert [f.used for f in fits] == [True, True, False]
+    # a noise-free decay: linear interpolation over the gap would err more than the fit's residual,
+    # so the record is cut there and its longer part (before the gap) is fitted
+    assert "1 missing roll_rate samples dropped (first at 1.500 s)" in fits[0].record.repairs[0]
+    assert "cut at 1 gap" in fits[0].record.repairs[1] and "kept 0.000-1.490 s" in fits[0].record.repairs[1]
+    assert not fits[1].record.repairs
+    assert "280 missing roll_rate samples dropped" in fits[2].reason
 
 
 def test_gzip_logs_are_read_transparently(tmp_path):

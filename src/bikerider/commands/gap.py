@@ -154,6 +154,11 @@ def add_parser(subparsers) -> None:
     )
     p.add_argument("--json", action="store_true", help="print one JSON object instead of text")
     p.add_argument(
+        "--quiet",
+        action="store_true",
+        help="no progress on standard error (by default long work shows its stage, count, rate and time left)",
+    )
+    p.add_argument(
         "--report",
         metavar="DIR",
         help="write report.md and PNG figures into DIR (new, empty, or an earlier report's folder, which is "
@@ -165,10 +170,11 @@ def add_parser(subparsers) -> None:
 def run(args: argparse.Namespace) -> int:
     import json
     import math
+    import sys
 
     import numpy as np
 
-    from bikerider import notes
+    from bikerider import notes, progress
     from bikerider.errors import InputError
     from bikerider.gap.control import MAX_MAGNITUDE
     from bikerider.gap.report import summary_text
@@ -188,47 +194,62 @@ def run(args: argparse.Namespace) -> int:
         check_sample_rate(args.sample_rate, "--sample-rate")
     if args.speed is not None and not (0 < args.speed <= MAX_MAGNITUDE):  # also NaN
         raise InputError("--speed", args.speed, f"a positive speed of at most {MAX_MAGNITUDE:g} m/s (check the units)")
-    next_options = _next_options(args)  # checked before the work, as every option
+    plan_options = _next_options(args)  # checked before the work, as every option
     if report_folder is not None and args.experiment:
         _register_experiment_inputs(args)  # the logs and windows files the manifests name
         report_folder.check()
-    diagnosis = _diagnose_files(
-        args.model,
-        tuple(args.data),
-        tuple(args.experiment),
-        args.rider,
-        args.rider_rel_sigma,
-        args.control,
-        args.speed,
-        args.groups,
-        args.effects,
-        args.columns,
-        args.sample_rate,
-    )
-    result = diagnosis.as_dict()
-    plan = None
-    if next_options is not None:
-        from bikerider.gap.next_experiment import plan_next
+    reporter = None
+    try:
+        with progress.reporting(quiet=getattr(args, "quiet", False), name="bikerider gap") as reporter:
+            diagnosis = _diagnose_files(
+                args.model,
+                tuple(args.data),
+                tuple(args.experiment),
+                args.rider,
+                args.rider_rel_sigma,
+                args.control,
+                args.speed,
+                args.groups,
+                args.effects,
+                args.columns,
+                args.sample_rate,
+            )
+            result = diagnosis.as_dict()
+            plan = None
+            if plan_options is not None:
+                plan, why = _plan(diagnosis, plan_options)
+                result["next"] = plan.as_dict() if plan is not None else {"planned": False, "reason": why}
+            if report_folder is not None:
+                from bikerider.io.gap_report import write_report
 
-        plan = plan_next(diagnosis, **next_options)
-    if plan is not None:
-        result["next"] = plan.as_dict()
-    if report_folder is not None:
-        from bikerider.io.gap_report import write_report
-
-        with report_folder as staging:
-            path = write_report(diagnosis, staging, title=f"Sim-to-real gap: {args.model}", plan=plan)
-        result["report"] = str(report_folder.final(path))
+                progress.begin("writing the report")
+                with report_folder as staging:
+                    path = write_report(diagnosis, staging, title=f"Sim-to-real gap: {args.model}", plan=plan)
+                result["report"] = str(report_folder.final(path))
+            reporter.finish()
+    except KeyboardInterrupt:
+        where = reporter.where() if reporter is not None else None
+        print(
+            ("\n" if reporter is not None and reporter.tty and (reporter.bar or reporter.transient) else "")
+            + "bikerider gap: interrupted"
+            + (f" during {where}" if where else "")
+            + ": nothing was kept (no report written, no file changed; the diagnosis is only printed at the end)",
+            file=sys.stderr,
+        )
+        return 130
     if args.json:
         result["notes"] = notes.shown_with(result.get("notes", []))
         print(json.dumps(_plain(result, np), indent=2, allow_nan=False))
     else:
         print(summary_text(result))
-        if plan is not None:
+        if "next" in result:
             from bikerider.gap.next_report import next_text
 
             print()
-            print(next_text(result["next"]))
+            if plan is not None:
+                print(next_text(result["next"]))
+            else:
+                print(f"What to measure next: no experiment can be planned: {result['next']['reason']}")
         if args.report:
             print(f"\nReport: {result['report']}")
     return 0
@@ -272,6 +293,7 @@ def _next_options(args: argparse.Namespace) -> dict | None:
     from bikerider.gap.control import MAX_MAGNITUDE
     from bikerider.gap.next_experiment import MAX_NOISE
     from bikerider.gap.next_sweep import DEFAULT_RUN_TIME, DEFAULT_TORQUE, MAX_TORQUE, MIN_TORQUE, RUN_TIME_RANGE
+    from bikerider.gap.records import SIGNALS
 
     torque = DEFAULT_TORQUE if args.next_torque is None else args.next_torque
     if not MIN_TORQUE <= torque <= MAX_TORQUE:  # also NaN
@@ -306,6 +328,10 @@ def _next_options(args: argparse.Namespace) -> dict | None:
         if not item.strip():
             continue
         name, _, value = item.partition("=")
+        if name.strip() not in SIGNALS:  # before the diagnosis: a typo must not cost one
+            raise InputError(
+                "--next-noise", item, "noise signal = '" + name.strip() + "': one of " + ", ".join(SIGNALS)
+            )
         try:
             noise[name.strip()] = float(value)
         except ValueError:
@@ -325,6 +351,19 @@ def _next_options(args: argparse.Namespace) -> dict | None:
         "torque": torque,
         "run_time": run_time,
     }
+
+
+def _plan(diagnosis, options: dict):
+    """``(plan, None)``, or ``(None, why)`` when no experiment can be planned: the diagnosis stands either way."""
+    from bikerider import progress
+    from bikerider.gap.next_experiment import NoExperiment, plan_next
+
+    progress.begin("planning the next experiment")
+    try:
+        return plan_next(diagnosis, **options), None
+    except NoExperiment as exc:  # the plan's own limits (no rivals, nothing predicted); a bad option stays an error
+        logging.getLogger("bikerider.gap").info("no next experiment: %s", exc.why)
+        return None, exc.why
 
 
 def diagnose_files(
@@ -378,6 +417,7 @@ def _cached(stamp, *args):
 def _diagnose_files(
     model, data, experiment, rider, rider_rel_sigma, control, speed, groups, effects, columns, sample_rate
 ):
+    from bikerider import progress
     from bikerider.gap.data import CanonicalData, EigenvalueData
     from bikerider.gap.diagnosis import diagnose
     from bikerider.gap.effects import EFFECT_NAMES, effect
@@ -386,6 +426,7 @@ def _diagnose_files(
     from bikerider.io.experiment import check_record_count, load_records, read_experiment
     from bikerider.io.gap_model import load_model
 
+    progress.begin("reading the inputs")
     loaded = load_model(model, rider, rider_rel_sigma=rider_rel_sigma)
     laws = gap_data.read_control(control) if control is not None else {}
     default_law = next(iter(laws.values())) if len(laws) == 1 else None

@@ -64,6 +64,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from bikerider import progress
 from bikerider.errors import InputError
 from bikerider.gap.data import CanonicalData, EigenvalueData
 from bikerider.gap.effects import (
@@ -244,6 +245,7 @@ class Diagnosis:
                 f"{len(left)} of {len(self.records)} records left out",
                 f"enough records for a diagnosis: none could be used ({reasons})",
             )
+        progress.begin("the model's uncertainty at every observation")
         self.problem = GapProblem(model, eigen, canonical, records=self._record_set)
         self.effects = [e for e in effects]
         self.not_applicable = {}
@@ -280,6 +282,7 @@ class Diagnosis:
             self._search_pairs()
         for e in self.candidates:
             self.fit_of((e,))
+        progress.begin("selecting")
         self._select()
         self.selected_fit = self.fit_of(tuple(self.selected)) if self.selected else None
         self.elapsed = time.perf_counter() - start
@@ -289,24 +292,69 @@ class Diagnosis:
         """Table rows plus one row per comparable record (others get their reason).
 
         A record's row holds the eigenvalue its fit found; every model predicts it by indirect
-        inference (:mod:`bikerider.gap.indirect`).  The nominal model's extraction bias decides which
-        records can be compared by their eigenvalue at all (:func:`bikerider.gap.indirect.comparable`).
+        inference (:mod:`bikerider.gap.indirect`), like with like however far its result lies from the
+        model's weave eigenvalue; a record is left out only where the model within its parameters'
+        uncertainty shows no weave the fit finds (its prediction is then undefined).
         """
-        from bikerider.gap.indirect import RecordRows, RecordSimulator, comparable
+        from bikerider.gap.indirect import RecordRows, RecordSimulator
         from bikerider.gap.models import BENCH_ARGS, EffectModel
         from bikerider.gap.predict import Predictor
 
         used = [k for k, f in enumerate(self.records) if f.used]
         if not used:
             return eigen
+        progress.begin("comparing the records with the model")
         rows = eigenvalues_of(self.records)
         nominal = {k: float(model.parameters.values[k]) for k in BENCH_ARGS + ("g",)}  # type: ignore[arg-type]
-        simulator = RecordSimulator([self.records[k] for k in used], nominal, model.geometry)
+        fits = [self.records[k] for k in used]
+        simulator = RecordSimulator(fits, nominal, model.geometry)
         apparent = simulator.settle()
         matched = Predictor(rows, CanonicalData.empty(), nominal, model.geometry).eigenvalues(
             EffectModel(nominal, model.geometry)
         )
-        bias, reasons = comparable(apparent, matched)
+        lost = np.flatnonzero(~np.isfinite(apparent))
+        if lost.size:
+            # the same fit, started from the model's own weave eigenvalue instead of the record's: far
+            # from the model, a start near the record can lead the refit of the model's response astray
+            starts = [dict(s) for s in simulator.starts]
+            for j in lost:
+                for name, p in starts[j].items():
+                    p = np.array(p, dtype=float)
+                    p[0], p[1] = matched[j].imag, -matched[j].real
+                    starts[j][name] = p
+            simulator = RecordSimulator(fits, nominal, model.geometry, starts)
+            apparent = simulator.settle()
+        # Every model predicts a record by the same fit applied to its own response (indirect
+        # inference), so how far that lies from the model's weave eigenvalue is no reason to leave a
+        # record out.  A record is left out only where the model, within its parameters' uncertainty,
+        # predicts nothing the fit finds: its prediction and its uncertainty are then undefined.
+        bias = apparent - matched
+        reasons: list[str | None] = [
+            None
+            if np.isfinite(a)
+            else (
+                "the record fit finds no weave in the model's own response over this window (less than half a "
+                "cycle, started from the record's fit and from the model's weave eigenvalue): the model predicts "
+                "nothing to compare the record with"
+            )
+            for a in apparent
+        ]
+        sigmas = model.parameters.sigmas
+        free = [k for k in BENCH_ARGS if sigmas.get(k, 0.0) > 0]
+        if free:  # the parameters' uncertainty enters through secants over +-1 sigma: those must exist too
+            values = {k: np.full(2 * len(free), v) for k, v in nominal.items()}
+            for j, k in enumerate(free):
+                values[k][2 * j] += sigmas[k]
+                values[k][2 * j + 1] -= sigmas[k]
+            shifted = simulator.apparent(values)
+            for j in range(len(used)):
+                gone = sorted({free[m // 2] for m in np.flatnonzero(~np.isfinite(shifted[:, j]))})
+                if reasons[j] is None and gone:
+                    reasons[j] = (
+                        "the record fit finds no weave in the model's response over this window when "
+                        f"{', '.join(gone[:3])}{' ...' if len(gone) > 3 else ''} moves by one standard uncertainty: "
+                        "the model's prediction of this record is undefined within its parameters' uncertainty"
+                    )
         keep = []
         for j, k in enumerate(used):
             if reasons[j] is not None:
@@ -668,6 +716,7 @@ class Diagnosis:
         else:
             full = self.fit_of(effects)
         for name, held in self.folds:  # every fold starts from the fit to all the data
+            progress.advance()
             if timed:
                 fit = self._time_domain_fit(effects, ~held, start=full.values)
                 pred = self._time_domain_predict(fit, held)
@@ -734,6 +783,7 @@ class Diagnosis:
         return [(r, ties[r.effects]) for r in ordered]
 
     def _rank(self) -> None:
+        progress.begin("candidates", len(self.candidates) * len(self.folds), "fold fits")
         results = [self.cross_validate((e,)) for e in self.candidates]
         for rank, (r, ties) in enumerate(self._order(results), start=1):
             self.ranking.append(
@@ -774,7 +824,9 @@ class Diagnosis:
 
     def _search_pairs(self) -> None:
         self.pairs = []
-        for pair in self.pair_candidates():
+        pairs = self.pair_candidates()
+        progress.begin("pairs", len(pairs) * len(self.folds), "fold fits")
+        for pair in pairs:
             r = self.cross_validate(pair)
             self.pairs.append(r)
 
@@ -1255,6 +1307,7 @@ class Diagnosis:
             "used": used,
             "left_out": len(out) - used,
             "reasons": [{"record": e["record"], "reason": e["reason"]} for e in out if not e["used"]],
+            "repaired": [{"record": e["record"], "repairs": e["repairs"]} for e in out if e["used"] and e["repairs"]],
             "list": out,
         }
 

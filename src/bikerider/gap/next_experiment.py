@@ -103,6 +103,17 @@ from bikerider.gap.predict import Predictor
 from bikerider.gap.records import SIGNALS, Record, RecordFit, eigenvalues_of
 from bikerider.gap.timedomain import Layout, systems
 
+
+class NoExperiment(InputError):
+    """No experiment can be planned from this diagnosis (no rivals to tell apart, no speed where a decay
+    shows a weave, every experiment left out); :attr:`why` says why in a sentence.  The command prints
+    the diagnosis and the reason; a bad option stays an :class:`InputError`."""
+
+    def __init__(self, name: str, value: object, expected: str, why: str | None = None):
+        super().__init__(name, value, expected)
+        self.why = why or f"{name} = {value}: expected {expected}"
+
+
 LOG = logging.getLogger(__name__)
 
 MAX_RIVALS = 3
@@ -248,9 +259,10 @@ class NextExperiment:
         if self.distortion is not None and not (isinstance(self.distortion, int | float) and 0 <= self.distortion < 1):
             raise InputError("distortion", self.distortion, "a share of the response from 0 to below 1")
         self.run_sweeps = bool(self.sweeps)
+        named = self.rivals is not None
         self.rivals = self._rivals(self.rivals)
         if len(self.rivals) < 2:
-            raise InputError(
+            raise (InputError if named else NoExperiment)(
                 "rivals",
                 [r.name for r in self.rivals],
                 "at least two candidates to tell apart (name them, or a diagnosis with two candidates that beat "
@@ -262,7 +274,7 @@ class NextExperiment:
         self.sample_noise, self.noise_source = self._signal_noise()
         self.points, self.left_out = self._experiments()
         if not self.points:
-            raise InputError("experiments", "none measurable", "speeds and laws at which a decay shows a weave")
+            raise NoExperiment("experiments", "none measurable", "speeds and laws at which a decay shows a weave")
         self._predict()
         self._drop_unpredicted()
         self.sweeps = self._plan_sweeps() if self.run_sweeps else []
@@ -291,7 +303,7 @@ class NextExperiment:
                 chosen.append(effects)
         else:
             if not d.ranking:
-                raise InputError("diagnosis", "no ranking", "a diagnosis with held-out folds (two groups or more)")
+                raise NoExperiment("diagnosis", "no ranking", "a diagnosis with held-out folds (two groups or more)")
             first = d.ranking[0]
             chosen = [(first["effect"],)] + [tuple(t.split("+")) for t in first["tied_with"]]
             chosen = [c for c in chosen if len(c) == 1 or c in d.cv]
@@ -319,7 +331,7 @@ class NextExperiment:
             return np.unique(out)
         eig = self.problem.eigen
         if not len(eig):
-            raise InputError("data", "no eigenvalue rows", "measured eigenvalues or records to plan from")
+            raise NoExperiment("data", "no eigenvalue rows", "measured eigenvalues or records to plan from")
         lo, hi = SPEED_SPAN[0] * float(eig.speed.min()), SPEED_SPAN[1] * float(eig.speed.max())
         return np.round(np.linspace(max(lo, 0.5), hi, N_SPEEDS), 2)
 
@@ -549,8 +561,19 @@ class NextExperiment:
                 why = "an uncertainty cannot be evaluated there"
             self.left_out.append({"experiment": self.points[m].describe(), "reason": why})
         keep = np.flatnonzero(~(bad | growing))
-        if not keep.size:
-            raise InputError("experiments", "none predicted", "speeds and laws where every rival shows a weave")
+        if not keep.size:  # say why, with the reasons counted: the command prints the diagnosis and this
+            counts: dict[str, int] = {}
+            for entry in self.left_out:
+                counts[entry["reason"]] = counts.get(entry["reason"], 0) + 1
+            reasons = "; ".join(f"{why} ({n} of {len(self.left_out)})" for why, n in counts.items())
+            raise NoExperiment(
+                "experiments",
+                "none predicted",
+                "speeds and laws where every rival shows a weave",
+                f"none of the {len(self.left_out)} experiments considered (speeds, laws, signals, pushes) can be "
+                f"predicted by every rival ({', '.join(r.name for r in self.rivals)}): {reasons}. Other speeds "
+                "(--next-speeds) or other rivals (--next-between) may give a plan",
+            )
         self.points = [self.points[m] for m in keep]
         self.mean, self.own_cov = self.mean[:, keep], self.own_cov[:, keep]
         self.model_cov, self.data_cov = self.model_cov[keep], self.data_cov[keep]

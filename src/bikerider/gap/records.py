@@ -20,14 +20,16 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from bikerider import progress
 from bikerider.errors import FitError
 from bikerider.gap.control import ControlLaw
 from bikerider.gap.data import EigenvalueData
 from bikerider.gap.extraction import WeaveEstimate, weave_eigenvalue
+from bikerider.gap.repair import repair_record
 
 LOG = logging.getLogger(__name__)
 
@@ -71,6 +73,13 @@ class Record:
         The signals its eigenvalue is fitted to, in order of preference.
     speed_measured : bool
         The speed is a sensor's reading during the record (a speed column), not a set value.
+    repairs : list of str
+        What :func:`bikerider.gap.repair.repair_record` did to the record as read (empty: nothing).
+    raw : tuple of ndarray or None
+        The recorded instants and roll rate before a repair (for figures); ``None`` when not repaired.
+    step : float or None
+        The logger's sampling step [s] (the median over its whole log, where the log has a time
+        column): the grid a record with uneven stamps is resampled onto.
     """
 
     name: str
@@ -86,6 +95,9 @@ class Record:
     problem: str | None = None
     fit_signals: tuple[str, ...] = ("roll_rate",)
     speed_measured: bool = False
+    repairs: list[str] = field(default_factory=list)
+    raw: tuple[np.ndarray, np.ndarray] | None = None
+    step: float | None = None
 
     @property
     def gains(self) -> np.ndarray:
@@ -137,6 +149,7 @@ class RecordFit:
             "duration": r.duration,
             "used": self.used,
             "reason": self.reason,
+            "repairs": list(r.repairs),
         }
         if self.estimate is not None:
             e = self.estimate
@@ -156,9 +169,17 @@ class RecordFit:
 
 
 def fit_record(record: Record) -> RecordFit:
-    """Fit one record's weave eigenvalue; a failure becomes the record's reason, never an exception."""
+    """Repair one record as read (:func:`bikerider.gap.repair.repair_record`: time stamps, gaps,
+    clipping) and fit its weave eigenvalue; a failure becomes the record's reason, never an exception."""
     if record.problem:
         return RecordFit(record, None, reason=record.problem)
+    repaired, repair = repair_record(record)
+    if repair.repaired:
+        raw = repair.raw or (np.asarray(record.time, float), np.asarray(record.signals.get("roll_rate", []), float))
+        repaired = replace(repaired, repairs=list(repair.actions), raw=raw)
+    if repair.problem:
+        return RecordFit(repaired, None, reason=repair.problem)
+    record = repaired
     fits: dict[str, WeaveEstimate] = {}
     reasons: dict[str, str] = {}
     for name in record.fit_signals:
@@ -173,7 +194,10 @@ def fit_record(record: Record) -> RecordFit:
             return RecordFit(
                 record, None, reason="none of the signals " + ", ".join(record.fit_signals) + " is in the record"
             )
-        return RecordFit(record, None, reason="; ".join(f"{k}: {v}" for k, v in reasons.items()))
+        reason = "; ".join(f"{k}: {v}" for k, v in reasons.items())
+        if record.repairs:  # say what the record was by then
+            reason += " (after the repairs: " + "; ".join(record.repairs) + ")"
+        return RecordFit(record, None, reason=reason)
     estimate, note = combine_fits(fits)
     out = RecordFit(record, estimate, fits)
     if note:
@@ -186,8 +210,11 @@ def fit_record(record: Record) -> RecordFit:
 def fit_records(records: list[Record]) -> list[RecordFit]:
     """Fit every record (see :func:`fit_record`); logs one line per record left out."""
     fits = []
+    if records:
+        progress.begin("fitting records", len(records), "records")
     for record in records:
         fit = fit_record(record)
+        progress.advance()
         if not fit.used:
             LOG.info("%s left out: %s", record.name, fit.reason)
         fits.append(fit)

@@ -135,7 +135,11 @@ def summary_text(result: dict) -> str:
         )
     records = result.get("records")
     if records:
-        lines.append(f"Records: {records['used']} of {records['total']} used, {records['left_out']} left out")
+        repaired = records.get("repaired", [])
+        fixed = f" ({len(repaired)} of them repaired)" if repaired else ""
+        lines.append(f"Records: {records['used']} of {records['total']} used{fixed}, {records['left_out']} left out")
+        for r in repaired:
+            lines.append(f"  repaired {r['record']}: " + "; ".join(r["repairs"]))
         for r in records["reasons"]:
             lines.append(f"  left out {r['record']}: {r['reason']}")
     for name, text in result.get("laws", {}).items():
@@ -466,6 +470,7 @@ def plot_records(diagnosis, columns: int = 6):
     """Contact sheet: every record's roll rate, its fitted decay and the model's response."""
     plt = pyplot()
     from bikerider.errors import FitError
+    from bikerider.gap.repair import repair_tags
     from bikerider.gap.timedomain import (
         OBSERVED,
         Layout,
@@ -518,6 +523,17 @@ def plot_records(diagnosis, columns: int = 6):
     for k, (ax, f) in enumerate(zip(axes.flat, fits)):
         r = f.record
         y = r.signals.get("roll_rate")
+        if r.raw is not None:  # a repaired record: the samples as recorded, then the record the fits used
+            ax.plot(r.raw[0], r.raw[1], ".", color="tab:orange", ms=1.4, zorder=1)
+            ax.text(
+                0.02,
+                0.95 if not f.used else 0.05,
+                "repaired: " + ", ".join(repair_tags(r.repairs)),
+                transform=ax.transAxes,
+                fontsize=5.2,
+                va="top" if not f.used else "bottom",
+                color="tab:orange",
+            )
         ax.plot(r.time, y, color="k", lw=0.7)
         title = f"{_short(r.name)}  {r.speed:.2f} m/s"
         if f.used:
@@ -560,7 +576,10 @@ def plot_records(diagnosis, columns: int = 6):
         "fitted decay (weave + slow mode)",
         f"{model_label}, from the record's initial state",
     ]
-    fig.legend(handles, labels, loc="upper center", ncol=3, fontsize=8, frameon=False)
+    if any(f.record.raw is not None for f in fits):
+        handles.append(plt.Line2D([], [], ls="", marker=".", color="tab:orange"))
+        labels.append("samples as recorded (repaired records)")
+    fig.legend(handles, labels, loc="upper center", ncol=len(labels), fontsize=8, frameon=False)
     fig.tight_layout(rect=(0, 0, 1, 1 - 0.45 / (1.75 * rows + 0.6)))
     return fig
 

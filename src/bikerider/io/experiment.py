@@ -851,9 +851,16 @@ def _find(path: Path) -> Path:
 
 
 def _rate_of(log: Log, settings: ExperimentSettings) -> float:
+    """The log's sampling rate: one over the median forward step of its time column (cached per log)."""
+    cached = getattr(log, "_rate", None)
+    if cached is not None:
+        return cached
     t = log.columns[settings.columns["time"]]
     steps = np.diff(t[np.isfinite(t)])
-    return 1.0 / float(np.median(steps)) if steps.size and np.median(steps) > 0 else 1.0
+    steps = steps[steps > 0]  # repeated stamps and clock resets are not the rate
+    rate = 1.0 / float(np.median(steps)) if steps.size else 1.0
+    log._rate = rate  # type: ignore[attr-defined]
+    return rate
 
 
 def _cut(log: Log, start: int, end: int, window: Window, settings: ExperimentSettings) -> Record:
@@ -880,31 +887,30 @@ def _cut(log: Log, start: int, end: int, window: Window, settings: ExperimentSet
     name = f"{log.path.name}[{start}:{end}]"
     if "time" in settings.columns:
         t = log.columns[settings.columns["time"]][start:end]
-        time = t - t[0] if np.all(np.isfinite(t)) else np.full(end - start, np.nan)
+        first = np.flatnonzero(np.isfinite(t))
+        time = t - t[first[0]] if first.size else np.full(end - start, np.nan)  # stamps repaired when fitted
     else:
-        time = np.arange(end - start) / float(settings.sample_rate)  # type: ignore[arg-type]
+        step = 1.0 / float(settings.sample_rate) if float(settings.sample_rate) > 1e-300 else math.inf  # type: ignore[arg-type]
+        time = np.arange(end - start) * step if math.isfinite(step) else np.full(end - start, np.nan)
     signals = {}
-    problem = None
+    problem = (
+        None
+        if np.any(np.isfinite(time)) or "time" in settings.columns
+        else (f"sample_rate = {settings.sample_rate:g} Hz gives no finite sample times")
+    )
     for signal in SIGNALS:
         if signal in settings.columns:
             values = log.columns[settings.columns[signal]][start:end] * settings.scale.get(signal, 1.0)
             signals[signal] = values
-            missing = np.flatnonzero(~np.isfinite(values))
-            if missing.size and problem is None and signal in settings.fit + ("roll_rate",):
-                problem = (
-                    f"{signal} ({settings.columns[signal]}) has {missing.size} missing values in the window "
-                    f"(first at sample {start + int(missing[0])})"
-                )
+            # missing values are repaired (or the record left out) when it is fitted: bikerider.gap.repair
             huge = np.flatnonzero(np.abs(values) > MAX_MAGNITUDE)
             if huge.size and problem is None:
                 problem = (
                     f"{signal} ({settings.columns[signal]}) = {values[huge[0]]:g} at sample {start + int(huge[0])}: "
                     f"above {MAX_MAGNITUDE:g} {SIGNAL_UNITS[signal]} (check the column and its units)"
                 )
-    if problem is None and not np.all(np.isfinite(time)):
-        problem = "the time column has missing values in the window"
-    elif problem is None and np.any(np.diff(time) <= 0):
-        problem = "the time column does not increase in the window"
+    if problem is None and not np.any(np.isfinite(time)):
+        problem = "the time column has no value in the window"
     speed, speed_sigma, controller = _speed(log, start, end, window, settings)
     if problem is None and not (math.isfinite(speed) and speed > 0):
         problem = f"no positive speed in the window (speed {speed:g} m/s)"
@@ -914,6 +920,13 @@ def _cut(log: Log, start: int, end: int, window: Window, settings: ExperimentSet
     law = settings.laws[law_name] if law_name else NO_CONTROL
     group = window.group or (log.path.name.removesuffix(".gz") if settings.group == "file" else settings.group)
     measured = window.speed is None and settings.speed_source == "column"
+    step = (
+        1.0 / _rate_of(log, settings)
+        if "time" in settings.columns
+        else float(time[1] - time[0])
+        if time.size > 1
+        else None
+    )
     return Record(
         name,
         where,
@@ -928,6 +941,7 @@ def _cut(log: Log, start: int, end: int, window: Window, settings: ExperimentSet
         problem,
         tuple(settings.fit),
         measured,
+        step=step,
     )
 
 
