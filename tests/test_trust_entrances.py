@@ -9,6 +9,7 @@ fuzz tests of the same entrances are in tests/test_fuzz_trust.py.
 from __future__ import annotations
 
 import json
+import math
 import os
 import re
 import subprocess
@@ -407,9 +408,20 @@ def test_degrees_on_a_length_or_mass_are_refused(argv):
 
 
 def test_degrees_on_an_angle_are_converted():
+    """lam_deg is converted once for the model (the same results as lam in radians) and shown back
+    in degrees (issue 24: degrees in, degrees out)."""
     code, out, err = run_cli(["sweep", "--bicycle", "Benchmark", "--vary", "lam_deg=0:30:2", "--json"])
     assert code == 0, err
-    assert json.loads(out)["parameters"]["lam"] == pytest.approx([0.0, 0.5235987755982988])
+    code, out_rad, err = run_cli(["sweep", "--bicycle", "Benchmark", "--vary", "lam=0:0.5235987755982988:2", "--json"])
+    assert code == 0, err
+    degrees, radians = json.loads(out), json.loads(out_rad)
+    assert degrees.pop("parameters") == {"lam_deg": [0.0, 30.0]}
+    assert radians.pop("parameters")["lam"] == pytest.approx([0.0, 0.5235987755982988])
+    degrees.pop("notes", None), radians.pop("notes", None)
+    for shown, given in zip(degrees.pop("designs"), radians.pop("designs"), strict=True):
+        assert math.radians(shown.pop("lam_deg")) == pytest.approx(given.pop("lam"), rel=1e-12)
+        assert shown == given  # the same model: lam converted once at the input
+    assert degrees == radians
 
 
 def test_monte_carlo_zero_is_blamed_on_monte_carlo():
