@@ -118,6 +118,8 @@ def test_batch_over_a_folder_with_one_corrupted_bicycle(tmp_path):
     code, out, err = run_cli(["batch", str(data), "--out", str(prefix)])
     assert code == 1  # some bicycle failed; the table still lists the others
     assert "Fisher failed" in err and "Traceback" not in err
+    assert out == ""  # --out: the table goes to the files only (issue 24)
+    out = prefix.with_suffix(".txt").read_text()
     failed = out.split("failed:")[1]
     assert "Fisher: " in failed and "FisherMeasured.txt" in failed and "not UTF-8" in failed
     header = out.splitlines()[0].split()
