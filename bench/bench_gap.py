@@ -31,7 +31,7 @@ def workload():
     import numpy as np
 
     from bikerider.gap import validation as V
-    from bikerider.gap.data import CanonicalData
+    from bikerider.gap.measured.tables import CanonicalData
     from bikerider.io.gap_model import load_model
 
     bp = ROOT / "src" / "bikerider" / "data" / "bicycleparameters"
@@ -62,9 +62,9 @@ def time_diagnosis() -> tuple[float, int, dict]:
 
 def time_sbw() -> tuple[dict[str, float], dict]:
     """Seconds of each stage of the SBW diagnosis from the raw logs, and its result."""
-    from bikerider.gap.data import CanonicalData, EigenvalueData
     from bikerider.gap.diagnosis import Diagnosis
-    from bikerider.gap.records import fit_records
+    from bikerider.gap.measured.records import fit_records
+    from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
     from bikerider.io.experiment import load_records, read_manifest
     from bikerider.io.gap_model import load_model
 

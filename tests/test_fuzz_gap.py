@@ -154,7 +154,7 @@ def test_experiment_manifests_and_logs(tmp_path_factory, data, target):
     except BikeriderError as exc:
         assert_names_file(exc, folder / "experiment.toml", folder / "windows.csv", folder / "run.log")
         return
-    from bikerider.gap.records import fit_record
+    from bikerider.gap.measured.records import fit_record
 
     for r in records:  # a record with a problem is left out with it; every other one is finite
         if r.problem is None:

@@ -20,12 +20,12 @@ from gap_support import SIL, decay_record, nominal, riderless_model
 
 import bikerider
 from bikerider.cli import main
-from bikerider.gap.data import CanonicalData, EigenvalueData
 from bikerider.gap.diagnosis import Diagnosis
 from bikerider.gap.fit import GapProblem
+from bikerider.gap.measured.records import Record, fit_records
+from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
 from bikerider.gap.models import EffectModel
 from bikerider.gap.predict import Predictor
-from bikerider.gap.records import Record, fit_records
 
 DATA = Path(bikerider.__file__).parent / "data"
 BP = DATA / "bicycleparameters"

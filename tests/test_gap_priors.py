@@ -219,8 +219,8 @@ def test_records_of_a_strong_damper_select_it_at_the_noise_floor_and_flag_it():
     from dataclasses import replace
 
     from bikerider.gap import validation as V
-    from bikerider.gap.data import CanonicalData, EigenvalueData
-    from bikerider.gap.records import fit_records
+    from bikerider.gap.measured.records import fit_records
+    from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
 
     model = load_model(BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt")
     model = replace(model, plausible=dict(V.STEER_MOTOR))

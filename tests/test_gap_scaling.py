@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 import bikerider
-from bikerider.gap.control import ControlLaw
-from bikerider.gap.data import CanonicalData, EigenvalueData
 from bikerider.gap.low_rank import low_rank_chi2
+from bikerider.gap.measured.control import ControlLaw
+from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
 
 BP = bikerider.__path__[0] + "/data/bicycleparameters"
 
@@ -105,7 +105,7 @@ def test_the_folds_do_not_grow_with_the_groups(davis):
 
 
 def test_the_scan_accumulated_in_blocks_is_the_scan_at_once(monkeypatch):
-    from bikerider.gap import extraction
+    from bikerider.gap.measured import extraction
 
     t = 0.3 + np.arange(1500) / 100.0
     y = 0.3 * np.exp(-0.8 * (t - 0.3)) * np.sin(4.5 * t) + 0.05 * np.exp(0.05 * t)

@@ -152,7 +152,7 @@ def main() -> int:
         "* each run is a time-domain simulation (`scipy.integrate.solve_ivp`, LSODA) of a random roll-rate and",
         "  steer-rate kick, 6 s at 100 Hz, with 0.01 rad/s gyro noise on the roll rate and 0.03 m/s noise on",
         "  the speed reading; the weave eigenvalue and its standard errors are fitted to the noisy roll rate",
-        "  from 0.3 s on (`bikerider.gap.extraction.weave_eigenvalue`), as from a real run; runs whose record",
+        "  from 0.3 s on (`bikerider.gap.measured.extraction.weave_eigenvalue`), as from a real run; runs whose record",
         "  holds no fittable oscillation (e.g. a fall within a second) are dropped, as an experimenter would;",
         "* the truth's benchmark parameters are the nominal ones plus a random error within their stated",
         "  uncertainty, and its rider differs from the diagnosis's default geometry (upper body 45 % of the",

@@ -176,7 +176,7 @@ def run(args: argparse.Namespace) -> int:
 
     from bikerider import notes, progress
     from bikerider.errors import InputError
-    from bikerider.gap.control import MAX_MAGNITUDE
+    from bikerider.gap.measured.control import MAX_MAGNITUDE
     from bikerider.gap.report import summary_text
     from bikerider.io.experiment import check_sample_rate
     from bikerider.io.output_guard import ReportFolder, folder_output
@@ -290,10 +290,10 @@ def _next_options(args: argparse.Namespace) -> dict | None:
             if getattr(args, option) not in (None, False):
                 raise InputError("--" + option.replace("_", "-"), getattr(args, option), "--next as well")
         return None
-    from bikerider.gap.control import MAX_MAGNITUDE
+    from bikerider.gap.measured.control import MAX_MAGNITUDE
+    from bikerider.gap.measured.records import SIGNALS
     from bikerider.gap.next_experiment import MAX_NOISE
     from bikerider.gap.next_sweep import DEFAULT_RUN_TIME, DEFAULT_TORQUE, MAX_TORQUE, MIN_TORQUE, RUN_TIME_RANGE
-    from bikerider.gap.records import SIGNALS
 
     torque = DEFAULT_TORQUE if args.next_torque is None else args.next_torque
     if not MIN_TORQUE <= torque <= MAX_TORQUE:  # also NaN
@@ -418,10 +418,10 @@ def _diagnose_files(
     model, data, experiment, rider, rider_rel_sigma, control, speed, groups, effects, columns, sample_rate
 ):
     from bikerider import progress
-    from bikerider.gap.data import CanonicalData, EigenvalueData
     from bikerider.gap.diagnosis import diagnose
     from bikerider.gap.effects import EFFECT_NAMES, effect
-    from bikerider.gap.records import fit_records
+    from bikerider.gap.measured.records import fit_records
+    from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
     from bikerider.io import gap_data
     from bikerider.io.experiment import check_record_count, load_records, read_experiment
     from bikerider.io.gap_model import load_model

@@ -66,7 +66,6 @@ import numpy as np
 
 from bikerider import progress
 from bikerider.errors import InputError
-from bikerider.gap.data import CanonicalData, EigenvalueData
 from bikerider.gap.effects import (
     COULOMB_RANGE,
     EFFECT_NAMES,
@@ -79,8 +78,9 @@ from bikerider.gap.effects import (
     prior_from_range,
 )
 from bikerider.gap.fit import EffectFit, GapProblem
+from bikerider.gap.measured.records import RecordFit, eigenvalues_of
+from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
 from bikerider.gap.model_input import GapModelInput
-from bikerider.gap.records import RecordFit, eigenvalues_of
 
 LOG = logging.getLogger(__name__)
 
@@ -209,7 +209,7 @@ class Diagnosis:
     effects : sequence of str, optional
         Candidates (default: all of :data:`EFFECT_NAMES`).
     records : list of RecordFit, optional
-        Fitted records (:func:`bikerider.gap.records.fit_records`); those fitted become eigenvalue
+        Fitted records (:func:`bikerider.gap.measured.records.fit_records`); those fitted become eigenvalue
         rows, which every model predicts by indirect inference (:mod:`bikerider.gap.indirect`), and
         the others are left out with their reason.
 

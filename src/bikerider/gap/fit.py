@@ -55,8 +55,8 @@ import numpy as np
 
 from bikerider.engine import DifferencedStage
 from bikerider.errors import InputError
-from bikerider.gap.data import CanonicalData, EigenvalueData
 from bikerider.gap.effects import EFFECTS, OBSERVATION_EFFECTS
+from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
 from bikerider.gap.model_input import GapModelInput
 from bikerider.gap.models import BENCH_ARGS, STRUCTURAL_KEYS, EffectModel
 from bikerider.gap.predict import Predictor

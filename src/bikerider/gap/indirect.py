@@ -1,6 +1,6 @@
 """Indirect inference on records: what the record fit finds in a model's own response over each record.
 
-A record's weave eigenvalue is what :func:`bikerider.gap.extraction.weave_eigenvalue` finds in a
+A record's weave eigenvalue is what :func:`bikerider.gap.measured.extraction.weave_eigenvalue` finds in a
 short decay that also holds the castor and slow modes and the control's action.  A model's
 prediction of that observation is therefore not its weave eigenvalue but what the *same* fit finds
 in the model's own response over the record's window, from the initial state fitted to the record
@@ -37,8 +37,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from bikerider.errors import FitError
-from bikerider.gap.extraction import EXTRA_MODE_RANGE, MIN_CYCLES
-from bikerider.gap.records import RecordFit
+from bikerider.gap.measured.extraction import EXTRA_MODE_RANGE, MIN_CYCLES
+from bikerider.gap.measured.records import RecordFit
 
 OBSERVED = {"roll_angle": 0, "steer_angle": 1, "roll_rate": 2, "steer_rate": 3}
 """Record signals and the index of their state among ``(phi, delta, phid, deltad)``."""
@@ -60,7 +60,7 @@ is then settled far below any record's standard error)."""
 
 
 # ---------------------------------------------------------------------------------------------
-# The extraction models (as bikerider.gap.extraction), batched, by variable projection
+# The extraction models (as bikerider.gap.measured.extraction), batched, by variable projection
 # ---------------------------------------------------------------------------------------------
 # Both models are linear in four of their parameters (amplitudes, offset, the extra mode's amplitude
 # or the drift) given the others (frequency, decay, the extra mode's eigenvalue).  The batched fit
@@ -69,7 +69,7 @@ is then settled far below any record's standard error)."""
 # the near-degenerate directions of offset and slow mode.
 LAMBDA_BOUNDS = (EXTRA_MODE_RANGE[0] + 1e-6, EXTRA_MODE_RANGE[1] - 1e-6)
 """The two-mode fit's extra real mode is kept inside the range the record fit accepts
-(:data:`bikerider.gap.extraction.EXTRA_MODE_RANGE`): the same estimator on data and on models (the
+(:data:`bikerider.gap.measured.extraction.EXTRA_MODE_RANGE`): the same estimator on data and on models (the
 model's response could otherwise lend the extra exponential to its faster castor mode)."""
 NONLINEAR = {"two-mode": (0, 1, 6), "plain": (0, 1)}
 """Positions of the nonlinear parameters in each model's parameter vector."""
@@ -116,7 +116,7 @@ def levenberg_marquardt(
     steps in the nonlinear parameters, Marquardt's scaling and one damping factor per row.  A row
     stops when the reduction a step achieves, or the linearised model predicts for it, is below
     :data:`LM_TOLERANCE` of the signal's sum of squares, or the step below :data:`LM_STEP` relative.
-    A row whose frequency falls below half a cycle over its samples (:data:`bikerider.gap.extraction.
+    A row whose frequency falls below half a cycle over its samples (:data:`bikerider.gap.measured.extraction.
     MIN_CYCLES`: the response holds no weave the record fit would accept) stops there and is NaN.
     Returns the full parameter vectors (in the model's order) and the residual sums of squares
     (``inf`` where the fit broke down).
@@ -239,7 +239,7 @@ class RecordBatch:
 def fit_weights(fit: RecordFit) -> list[tuple[str, complex]]:
     """The signals a record's eigenvalue came from and their weights (real part + i imaginary part).
 
-    Inverse-variance weights of the record's own fits where :func:`bikerider.gap.records.combine_fits`
+    Inverse-variance weights of the record's own fits where :func:`bikerider.gap.measured.records.combine_fits`
     combined them, else the first signal alone: a model's apparent eigenvalue combines its refits
     with the same weights, so it is a smooth function of the model.
     """

@@ -68,10 +68,11 @@ import numpy as np
 
 from bikerider.engine import DifferencedStage
 from bikerider.errors import FitError, InputError
-from bikerider.gap.control import NO_CONTROL, ControlLaw
-from bikerider.gap.data import CanonicalData, EigenvalueData
 from bikerider.gap.effects import TIME_DOMAIN_EFFECTS
-from bikerider.gap.extraction import (
+from bikerider.gap.fit import EffectFit
+from bikerider.gap.indirect import LAMBDA_BOUNDS, RecordSimulator, comparable, levenberg_marquardt
+from bikerider.gap.measured.control import NO_CONTROL, ControlLaw
+from bikerider.gap.measured.extraction import (
     MIN_CYCLES,
     MIN_R2,
     _accept_two_mode,
@@ -79,8 +80,8 @@ from bikerider.gap.extraction import (
     _two_mode_jacobian,
     weave_eigenvalue,
 )
-from bikerider.gap.fit import EffectFit
-from bikerider.gap.indirect import LAMBDA_BOUNDS, RecordSimulator, comparable, levenberg_marquardt
+from bikerider.gap.measured.records import SIGNALS, Record, RecordFit, eigenvalues_of
+from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
 from bikerider.gap.models import EffectModel
 from bikerider.gap.next_sweep import (
     DEFAULT_RUN_TIME,
@@ -100,7 +101,6 @@ from bikerider.gap.next_sweep import (
     weave_shift,
 )
 from bikerider.gap.predict import Predictor
-from bikerider.gap.records import SIGNALS, Record, RecordFit, eigenvalues_of
 from bikerider.gap.timedomain import Layout, systems
 
 
@@ -223,7 +223,7 @@ class NextExperiment:
     noise : dict, optional
         Sample noise of signals (overrides what the data give and :data:`ASSUMED_NOISE`).
     signals : sequence of str, optional
-        Signals to consider with records (default: every one of :data:`bikerider.gap.records.SIGNALS`).
+        Signals to consider with records (default: every one of :data:`bikerider.gap.measured.records.SIGNALS`).
     sweeps : bool
         Also plan steer-torque frequency responses (:mod:`bikerider.gap.next_sweep`).
     torque : float
@@ -461,7 +461,7 @@ class NextExperiment:
     def _fit_templates(self, records: list[Record]) -> list[RecordFit]:
         """Fit every template as a record is fitted, batched: the record fit's two-mode function, started
         from the nominal model's weave and slow eigenvalues, judged by the record fit's acceptance rules
-        (:func:`bikerider.gap.extraction._accept_two_mode`: a significant oscillation, half a cycle and
+        (:func:`bikerider.gap.measured.extraction._accept_two_mode`: a significant oscillation, half a cycle and
         more with a clear decay, the slow mode in range)."""
         from types import SimpleNamespace
 

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from bikerider.benchmark.model import label_modes
-from bikerider.gap.data import CANONICAL_ENTRIES, CanonicalData, EigenvalueData
+from bikerider.gap.measured.tables import CANONICAL_ENTRIES, CanonicalData, EigenvalueData
 from bikerider.gap.models import EffectModel, RiderGeometry
 
 N_SPEEDS = 5

@@ -470,7 +470,7 @@ def plot_records(diagnosis, columns: int = 6):
     """Contact sheet: every record's roll rate, its fitted decay and the model's response."""
     plt = pyplot()
     from bikerider.errors import FitError
-    from bikerider.gap.repair import repair_tags
+    from bikerider.gap.measured.repair import repair_tags
     from bikerider.gap.timedomain import (
         OBSERVED,
         Layout,

@@ -29,8 +29,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from bikerider.errors import FitError
+from bikerider.gap.measured.records import Record
 from bikerider.gap.models import EffectModel
-from bikerider.gap.records import Record
 
 OBSERVED = {"roll_angle": 0, "steer_angle": 1, "roll_rate": 2, "steer_rate": 3}
 """Record signals and the index of their state among ``(phi, delta, phid, deltad)``."""

@@ -15,7 +15,7 @@ the candidate models but the benchmark parameters' meaning, and the diagnosis ru
 * every run is a time-domain simulation (:func:`scipy.integrate.solve_ivp`) of a perturbation
   (random roll-rate and steer-rate kick), with gyro noise on the roll rate and noise on the speed
   reading, and the weave eigenvalue is extracted from the noisy roll rate by
-  :func:`bikerider.gap.extraction.weave_eigenvalue`, as from a real run;
+  :func:`bikerider.gap.measured.extraction.weave_eigenvalue`, as from a real run;
 * the truth's benchmark parameters differ from the nominal ones by a random draw within their
   stated uncertainty, and the rider's geometry differs from the diagnosis's default (upper body
   45 % of the rider's mass instead of 50 %, hip axis 5 cm lower, grips 8 cm higher and 2 cm wider).
@@ -38,9 +38,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from bikerider.errors import FitError
-from bikerider.gap.control import ControlLaw, GainSchedule
-from bikerider.gap.data import CanonicalData, EigenvalueData
 from bikerider.gap.fit import POSITIVE
+from bikerider.gap.measured.control import ControlLaw, GainSchedule
+from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
 from bikerider.gap.model_input import GapModelInput
 from bikerider.gap.models import BENCH_ARGS
 
@@ -457,7 +457,7 @@ def measure(
     ``amplitudes``, when given, receives each fitted run's steer-rate amplitude (``sqrt(2)`` times its
     RMS over the fitted window, as :meth:`bikerider.gap.diagnosis.Diagnosis.steer_rate_amplitudes`).
     """
-    from bikerider.gap.extraction import weave_eigenvalue
+    from bikerider.gap.measured.extraction import weave_eigenvalue
 
     rows = {k: [] for k in ("speed", "value", "rs", "is", "group", "gains")}
     notes = []
@@ -762,7 +762,7 @@ QUICK_RECORDS = RecordProtocol(speeds=(2.5, 3.5, 4.5), per_speed=4)
 
 def measure_records(simulator: TruthSimulator, protocol: RecordProtocol, rng: np.random.Generator):
     """Records of every speed: the truth simulated from a random post-push state, noisy and quantised."""
-    from bikerider.gap.records import Record
+    from bikerider.gap.measured.records import Record
 
     scale = simulator.truth.values.get("speed_scale", 1.0)
     records = []
@@ -822,7 +822,7 @@ def run_record_case(model: GapModelInput, truth_name: str, seed: int, protocol: 
 
     model = replace(model, plausible={**STEER_MOTOR, **model.plausible})
     from bikerider.gap.diagnosis import Diagnosis, gap_shrink
-    from bikerider.gap.records import fit_records
+    from bikerider.gap.measured.records import fit_records
 
     start = time.perf_counter()
     truth = RECORD_TRUTHS[truth_name]
@@ -1089,7 +1089,7 @@ def run_friction_trial(model: GapModelInput, seed: int, protocol: RecordProtocol
 
     from bikerider.gap.diagnosis import Diagnosis
     from bikerider.gap.effects import EFFECTS
-    from bikerider.gap.records import fit_records
+    from bikerider.gap.measured.records import fit_records
 
     start = time.perf_counter()
     model = replace(model, plausible={**STEER_MOTOR, **model.plausible})

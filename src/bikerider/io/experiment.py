@@ -32,7 +32,7 @@ Manifest (TOML)
         unit = "km/h"                    # of the pattern's number: "m/s" or "km/h"
         calibration = { gain = 1.0662, offset = -0.1276 }  # recorded = gain * true + offset
 
-        [control.sil]                    # named laws (bikerider.gap.control)
+        [control.sil]                    # named laws (bikerider.gap.measured.control)
         k_phid = { K = 2.0, v0 = 6.5, when = "below" }
 
         [[file]]
@@ -63,8 +63,8 @@ from pathlib import Path
 import numpy as np
 
 from bikerider.errors import FileFormatError, InputError
-from bikerider.gap.control import GAIN_NAMES, MAX_MAGNITUDE, NO_CONTROL, ControlLaw, GainSchedule
-from bikerider.gap.records import (
+from bikerider.gap.measured.control import GAIN_NAMES, MAX_MAGNITUDE, NO_CONTROL, ControlLaw, GainSchedule
+from bikerider.gap.measured.records import (
     MAX_RECORD_SAMPLES,
     SIGNAL_UNITS,
     SIGNALS,
@@ -902,7 +902,7 @@ def _cut(log: Log, start: int, end: int, window: Window, settings: ExperimentSet
         if signal in settings.columns:
             values = log.columns[settings.columns[signal]][start:end] * settings.scale.get(signal, 1.0)
             signals[signal] = values
-            # missing values are repaired (or the record left out) when it is fitted: bikerider.gap.repair
+            # missing values are repaired (or the record left out) when it is fitted: bikerider.gap.measured.repair
             huge = np.flatnonzero(np.abs(values) > MAX_MAGNITUDE)
             if huge.size and problem is None:
                 problem = (

@@ -28,7 +28,7 @@ errors).  When a fast-growing capsize mode (a fall) swamps the record, the plain
 the two-mode fit alone finds the weave.  Records should start after the perturbation.
 
 Every refusal is a :class:`~bikerider.errors.FitError` whose message says why; the records of an
-experiment turn it into the record's reason for being left out (:mod:`bikerider.gap.records`).
+experiment turn it into the record's reason for being left out (:mod:`bikerider.gap.measured.records`).
 A model's own response over a record is fitted the same way, batched, by
 :mod:`bikerider.gap.indirect` (indirect inference).
 """

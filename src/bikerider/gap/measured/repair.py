@@ -1,7 +1,7 @@
 """Records as labs write them: time stamps, gaps and saturation repaired on purpose, each said.
 
 A data logger's record is seldom a clean uniform series.  :func:`repair_record` takes a
-:class:`~bikerider.gap.records.Record` as it was read and returns the record the fits and the
+:class:`~bikerider.gap.measured.records.Record` as it was read and returns the record the fits and the
 models compare with, and what was done to it (:class:`Repair`), or why it cannot be used:
 
 * **Time stamps that are not finite** (an empty time cell): the sample is dropped.
@@ -45,7 +45,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from bikerider.errors import FitError
-from bikerider.gap.extraction import weave_eigenvalue
+from bikerider.gap.measured.extraction import weave_eigenvalue
 
 RESET_STEPS = 10.0
 """A stamp this many median steps (or more) before the previous one is a clock reset; a smaller step
