@@ -103,7 +103,7 @@ def _hostile(draw, data: bytes) -> tuple[str, bytes]:
 @FUZZ
 @given(st.data())
 def test_control_files(tmp_path_factory, data):
-    from bikerider.gap.models import EffectModel
+    from bikerider.gap.candidates.effect_model import EffectModel
     from bikerider.io.gap_data import read_control
     from bikerider.io.gap_model import load_model
 

@@ -11,7 +11,7 @@ from bikerider.generated import gap_effects as gen
 
 from bikerider.benchmark.model import label_modes
 from bikerider.errors import InputError
-from bikerider.gap.models import BENCH_ARGS, EffectModel, RiderGeometry
+from bikerider.gap.candidates.effect_model import BENCH_ARGS, EffectModel, RiderGeometry
 from bikerider.io.gap_model import load_model
 
 ZERO_EXTRAS = dict(I_steer=0.0, c_steer=0.0, k_steer=0.0, m_arm=0.0, k_arm=0.0, c_arm=0.0)

@@ -20,11 +20,11 @@ from gap_support import SIL, decay_record, nominal, riderless_model
 
 import bikerider
 from bikerider.cli import main
+from bikerider.gap.candidates.effect_model import EffectModel
 from bikerider.gap.diagnosis import Diagnosis
 from bikerider.gap.fit import GapProblem
 from bikerider.gap.measured.records import Record, fit_records
 from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
-from bikerider.gap.models import EffectModel
 from bikerider.gap.predict import Predictor
 
 DATA = Path(bikerider.__file__).parent / "data"

@@ -11,10 +11,10 @@ import pytest
 from gap_support import BP, DATA, decay_record, nominal, riderless_model
 
 from bikerider.cli import main
+from bikerider.gap.candidates.effect_model import EffectModel
 from bikerider.gap.diagnosis import Diagnosis
 from bikerider.gap.measured.records import fit_records
 from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
-from bikerider.gap.models import EffectModel
 from bikerider.gap.next_experiment import ODDS, NextExperiment, fit_residual, resolution_probability, signal_noise
 from bikerider.io.gap_model import load_model
 

@@ -11,9 +11,9 @@ from gap_support import BP, DATA, SIL, nominal, riderless_model
 from test_gap_next import _table
 
 from bikerider.cli import main
+from bikerider.gap.candidates.effect_model import EffectModel
 from bikerider.gap.diagnosis import Diagnosis
 from bikerider.gap.measured.tables import CanonicalData
-from bikerider.gap.models import EffectModel
 from bikerider.gap.next_experiment import NextExperiment
 from bikerider.gap.next_sweep import line_amplitude, linearised_friction, lines_for, response, weave_shift
 

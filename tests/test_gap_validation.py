@@ -108,7 +108,7 @@ def test_the_truths_whipple_matrices_are_meijaards(tmp_path):
     import numpy as np
     from bikerider.generated import benchmark_model as bm
 
-    from bikerider.gap.models import BENCH_ARGS
+    from bikerider.gap.candidates.effect_model import BENCH_ARGS
 
     for path in (
         BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt",

@@ -127,7 +127,7 @@ def write_report(results: Path, doc: Path, goal: int) -> None:
 
 def section(trials: list[dict], goal: int) -> list[str]:
     from bikerider.gap import validation as V
-    from bikerider.gap.effects import EFFECTS
+    from bikerider.gap.candidates.effects import EFFECTS
 
     table = [t for t in trials if t["effect"] != V.CALIBRATION_FRICTION.name]
     friction = [t for t in trials if t["effect"] == V.CALIBRATION_FRICTION.name]

@@ -320,7 +320,7 @@ def _sign_and_shape(diagnosis) -> dict:
     """The controller's sign against the model, and the measured steer/roll-rate ratio against the model's."""
     import numpy as np
 
-    from bikerider.gap.models import EffectModel
+    from bikerider.gap.candidates.effect_model import EffectModel
 
     p = diagnosis.problem
     law = p.eigen.laws["sil"]

@@ -418,8 +418,8 @@ def _diagnose_files(
     model, data, experiment, rider, rider_rel_sigma, control, speed, groups, effects, columns, sample_rate
 ):
     from bikerider import progress
+    from bikerider.gap.candidates.effects import EFFECT_NAMES, effect
     from bikerider.gap.diagnosis import diagnose
-    from bikerider.gap.effects import EFFECT_NAMES, effect
     from bikerider.gap.measured.records import fit_records
     from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
     from bikerider.io import gap_data

@@ -29,7 +29,7 @@ held-out predictions worse on its own is not searched further).
 
 Usual, and priors.  Every fitted value of a candidate (fitted to all the data) has a usual range (the
 literature's, or the bicycle's own ``[plausible]`` table) and a prior with its source
-(:class:`bikerider.gap.effects.Prior`; the ``[plausible]`` range made a prior).  A value outside its usual
+(:class:`bikerider.gap.candidates.effects.Prior`; the ``[plausible]`` range made a prior).  A value outside its usual
 range is flagged ("above the usual ... from ...: check ..."), never refused: only what is physically
 impossible (negative damping, mass, inertia) is a bound of the fit.  A value is usable when the data
 determine it (its standard error no larger than the width of its usual range) and it is not pinned at the
@@ -66,7 +66,7 @@ import numpy as np
 
 from bikerider import progress
 from bikerider.errors import InputError
-from bikerider.gap.effects import (
+from bikerider.gap.candidates.effects import (
     COULOMB_RANGE,
     EFFECT_NAMES,
     EFFECTS,
@@ -77,10 +77,10 @@ from bikerider.gap.effects import (
     Prior,
     prior_from_range,
 )
+from bikerider.gap.candidates.nominal import GapModelInput
 from bikerider.gap.fit import EffectFit, GapProblem
 from bikerider.gap.measured.records import RecordFit, eigenvalues_of
 from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
-from bikerider.gap.model_input import GapModelInput
 
 LOG = logging.getLogger(__name__)
 
@@ -296,8 +296,8 @@ class Diagnosis:
         model's weave eigenvalue; a record is left out only where the model within its parameters'
         uncertainty shows no weave the fit finds (its prediction is then undefined).
         """
+        from bikerider.gap.candidates.effect_model import BENCH_ARGS, EffectModel
         from bikerider.gap.indirect import RecordRows, RecordSimulator
-        from bikerider.gap.models import BENCH_ARGS, EffectModel
         from bikerider.gap.predict import Predictor
 
         used = [k for k, f in enumerate(self.records) if f.used]
@@ -1075,7 +1075,7 @@ class Diagnosis:
 
     def prior_of(self, name: str) -> Prior:
         """The prior of a fitted parameter: the bicycle's own ``[plausible]`` range made a prior
-        (:func:`bikerider.gap.effects.prior_from_range`), else the registry's."""
+        (:func:`bikerider.gap.candidates.effects.prior_from_range`), else the registry's."""
         if name in self.model_input.plausible:
             lo, hi, why = self.model_input.plausible[name]
             return prior_from_range(lo, hi, f"this bicycle's [plausible] table: {why}")

@@ -55,10 +55,10 @@ import numpy as np
 
 from bikerider.engine import DifferencedStage
 from bikerider.errors import InputError
-from bikerider.gap.effects import EFFECTS, OBSERVATION_EFFECTS
+from bikerider.gap.candidates.effect_model import BENCH_ARGS, STRUCTURAL_KEYS, EffectModel
+from bikerider.gap.candidates.effects import EFFECTS, OBSERVATION_EFFECTS
+from bikerider.gap.candidates.nominal import GapModelInput
 from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
-from bikerider.gap.model_input import GapModelInput
-from bikerider.gap.models import BENCH_ARGS, STRUCTURAL_KEYS, EffectModel
 from bikerider.gap.predict import Predictor
 
 if TYPE_CHECKING:

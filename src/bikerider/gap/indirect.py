@@ -351,12 +351,12 @@ class RecordSimulator:
     def closed_loop(self, values: dict, config: dict, scale, index: np.ndarray) -> tuple[np.ndarray, tuple]:
         """Closed-loop ``A (P, R, n, n)`` of records ``index`` for batched linear models.
 
-        ``values`` and ``config`` as :class:`bikerider.gap.models.EffectModel` takes them, each value
+        ``values`` and ``config`` as :class:`bikerider.gap.candidates.effect_model.EffectModel` takes them, each value
         a number or an array of ``P`` (shape ``(P,)`` or ``(P, 1)``); ``scale`` ``None``, ``(P,)`` (the
         speed of the records a sensor read) or ``(P, R_all)`` (every record's own, e.g. for the
         speed's uncertainty).  The control gains stay those of the recorded speed.
         """
-        from bikerider.gap.models import EffectModel
+        from bikerider.gap.candidates.effect_model import EffectModel
 
         P = _batch_size(values, config, scale)
         R = index.size

@@ -68,7 +68,8 @@ import numpy as np
 
 from bikerider.engine import DifferencedStage
 from bikerider.errors import FitError, InputError
-from bikerider.gap.effects import TIME_DOMAIN_EFFECTS
+from bikerider.gap.candidates.effect_model import EffectModel
+from bikerider.gap.candidates.effects import TIME_DOMAIN_EFFECTS
 from bikerider.gap.fit import EffectFit
 from bikerider.gap.indirect import LAMBDA_BOUNDS, RecordSimulator, comparable, levenberg_marquardt
 from bikerider.gap.measured.control import NO_CONTROL, ControlLaw
@@ -82,7 +83,6 @@ from bikerider.gap.measured.extraction import (
 )
 from bikerider.gap.measured.records import SIGNALS, Record, RecordFit, eigenvalues_of
 from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
-from bikerider.gap.models import EffectModel
 from bikerider.gap.next_sweep import (
     DEFAULT_RUN_TIME,
     DEFAULT_SAMPLE_RATE,

@@ -15,7 +15,7 @@ rivals part at the weave resonance (damping sets its height and width) and on it
 below it, inertia above it).
 
 Prediction.  A linear rival's closed loop ``x' = A x + b T`` (``A`` from
-:meth:`~bikerider.gap.models.EffectModel.state_space` and ``closed_loop`` with the law's gains, ``b``
+:meth:`~bikerider.gap.candidates.effect_model.EffectModel.state_space` and ``closed_loop`` with the law's gains, ``b``
 its steer-torque column) predicts ``H(w) = c (i w I - A)^-1 b``.  Steer Coulomb friction ``T_c
 sign(delta')`` is replaced by its random-input describing function (statistical linearisation,
 Booton 1954): for a steer rate of standard deviation ``s`` (a multisine of several lines is nearly

@@ -29,9 +29,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from bikerider.gap.candidates.nominal import GapModelInput
 from bikerider.gap.diagnosis import Diagnosis
 from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
-from bikerider.gap.model_input import GapModelInput
 from bikerider.gap.next_experiment import NextExperiment
 from bikerider.gap.validation import TRUTHS, Protocol, Session, TruthSimulator, measure
 

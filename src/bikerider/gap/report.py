@@ -24,7 +24,7 @@ import math
 
 import numpy as np
 
-from bikerider.gap.effects import EFFECTS
+from bikerider.gap.candidates.effects import EFFECTS
 
 
 def pyplot():
@@ -337,7 +337,7 @@ def parameter_band(problem, speeds: np.ndarray, law, reference_model) -> np.ndar
 
     Returns ``(S,)`` complex: the real part's uncertainty plus i times the imaginary part's.
     """
-    from bikerider.gap.models import EffectModel
+    from bikerider.gap.candidates.effect_model import EffectModel
 
     if not problem.free:
         return np.zeros(speeds.size, complex)
@@ -360,7 +360,7 @@ def _selected_model(diagnosis):
     p = diagnosis.problem
     scale = fit.config.get("speed_sensor", {}).get("speed_scale", 1.0)
     if "steer_friction" in fit.effects:
-        from bikerider.gap.models import EffectModel
+        from bikerider.gap.candidates.effect_model import EffectModel
 
         c = fit.config["steer_friction"]["c_viscous"]
         linear = {e: v for e, v in fit.config.items() if e not in ("steer_friction", "speed_sensor")}
@@ -372,7 +372,7 @@ def _selected_model(diagnosis):
 def plot_eigenvalues(diagnosis):
     """Measured and predicted weave against speed, one curve per control law (module docstring)."""
     plt = pyplot()
-    from bikerider.gap.models import EffectModel
+    from bikerider.gap.candidates.effect_model import EffectModel
 
     p = diagnosis.problem
     e = p.predictor.eigen
@@ -490,7 +490,7 @@ def plot_records(diagnosis, columns: int = 6):
     if chosen is not None:
         model, model_label = chosen[0], chosen[2]
     else:
-        from bikerider.gap.models import EffectModel
+        from bikerider.gap.candidates.effect_model import EffectModel
 
         model, model_label = EffectModel(p.nominal, p.geometry), "nominal model"
     responses = {}
@@ -719,7 +719,7 @@ def plot_effects(diagnosis):
     whose apparent eigenvalue depends on each record's amplitude), as its prediction of each record.
     """
     plt = pyplot()
-    from bikerider.gap.models import EffectModel
+    from bikerider.gap.candidates.effect_model import EffectModel
 
     p = diagnosis.problem
     e = p.predictor.eigen
@@ -796,7 +796,7 @@ def _time_domain_selection(effects: tuple[str, ...]) -> bool:
 def plot_time_response(diagnosis):
     """Roll rate after a kick at the median speed: the nominal model and the selection (with its friction)."""
     plt = pyplot()
-    from bikerider.gap.models import EffectModel
+    from bikerider.gap.candidates.effect_model import EffectModel
 
     p = diagnosis.problem
     e = p.predictor.eigen

@@ -38,11 +38,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from bikerider.errors import FitError
+from bikerider.gap.candidates.effect_model import BENCH_ARGS
+from bikerider.gap.candidates.nominal import GapModelInput
 from bikerider.gap.fit import POSITIVE
 from bikerider.gap.measured.control import ControlLaw, GainSchedule
 from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
-from bikerider.gap.model_input import GapModelInput
-from bikerider.gap.models import BENCH_ARGS
 
 LOG = logging.getLogger(__name__)
 
@@ -953,7 +953,7 @@ CALIBRATION_RIDERLESS = Protocol(
 
 def draw_truth(effect: CalibrationEffect, rng: np.random.Generator) -> Truth:
     """A truth whose sizes are drawn over the candidate's priors (:data:`CALIBRATION_DRAW`)."""
-    from bikerider.gap.effects import EFFECTS
+    from bikerider.gap.candidates.effects import EFFECTS
 
     priors = {p.name: p.the_prior() for e in EFFECTS.values() for p in e.parameters}
     if effect.name == "steer_coulomb":
@@ -1087,8 +1087,8 @@ def run_friction_trial(model: GapModelInput, seed: int, protocol: RecordProtocol
     """
     from dataclasses import replace
 
+    from bikerider.gap.candidates.effects import EFFECTS
     from bikerider.gap.diagnosis import Diagnosis
-    from bikerider.gap.effects import EFFECTS
     from bikerider.gap.measured.records import fit_records
 
     start = time.perf_counter()

@@ -2,11 +2,11 @@
 
 ``--model`` takes a TOML file (``[benchmark]`` with optional ``[rider]``, ``[upper_body]``,
 ``[grips]`` and ``[plausible]`` tables) or a BicycleParameters ``<Name>Benchmark.txt``; ``--rider``
-adds a lumped rider.  :mod:`bikerider.gap.model_input` describes the tables and the default rider
+adds a lumped rider.  :mod:`bikerider.gap.candidates.nominal` describes the tables and the default rider
 geometry.
 
 ``[plausible]`` states what this bicycle's own knowledge says a candidate's parameter may be,
-replacing the literature range of :mod:`bikerider.gap.effects` for this bicycle::
+replacing the literature range of :mod:`bikerider.gap.candidates.effects` for this bicycle::
 
     [plausible]
     I_steer = { range = [0.0, 0.1], why = "motor rotor through the gearbox; front-assembly inertia 0-0.1 kg m^2" }
@@ -18,8 +18,8 @@ from pathlib import Path
 
 from bikerider.benchmark import BenchmarkParameters
 from bikerider.errors import InputError
-from bikerider.gap.model_input import RIDER_KEYS, GapModelInput, default_geometry, table_numbers
-from bikerider.gap.models import GRIP_KEYS, UPPER_BODY_KEYS, RiderGeometry
+from bikerider.gap.candidates.effect_model import GRIP_KEYS, UPPER_BODY_KEYS, RiderGeometry
+from bikerider.gap.candidates.nominal import RIDER_KEYS, GapModelInput, default_geometry, table_numbers
 from bikerider.io.input_file import checked_input_file
 
 MAX_MODEL_BYTES = 1_000_000
@@ -110,7 +110,7 @@ def _plausible(table: object, source: str) -> dict[str, tuple[float, float, str]
     """``[plausible]``: ``name = { range = [lo, hi], why = "..." }`` for candidate parameters."""
     import math
 
-    from bikerider.gap.effects import EFFECTS
+    from bikerider.gap.candidates.effects import EFFECTS
 
     known = {p.name for e in EFFECTS.values() for p in e.parameters}
     if not isinstance(table, dict):

@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 
 from bikerider.benchmark import BenchmarkParameters
 from bikerider.errors import InputError
-from bikerider.gap.models import RiderGeometry
+from bikerider.gap.candidates.effect_model import RiderGeometry
 from bikerider.quantity import parse_quantity
 
 UPPER_BODY_FRACTION = 0.5
