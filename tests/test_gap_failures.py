@@ -22,10 +22,10 @@ import bikerider
 from bikerider.cli import main
 from bikerider.gap.candidates.effect_model import EffectModel
 from bikerider.gap.diagnosis import Diagnosis
-from bikerider.gap.fit import GapProblem
+from bikerider.gap.inference.predict import Predictor
+from bikerider.gap.inference.problem import GapProblem
 from bikerider.gap.measured.records import Record, fit_records
 from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
-from bikerider.gap.predict import Predictor
 
 DATA = Path(bikerider.__file__).parent / "data"
 BP = DATA / "bicycleparameters"

@@ -1,6 +1,6 @@
 """The pieces that keep ``gap``'s cost linear in the data (the timings themselves: bench/bench_gap_scaling.py).
 
-The gap test no longer forms the n x n covariance (:mod:`bikerider.gap.low_rank`), the folds do not
+The gap test no longer forms the n x n covariance (:mod:`bikerider.gap.inference.low_rank`), the folds do not
 grow with the number of groups, and the record fit's grid scan accumulates its normal equations in
 blocks; each must give what the direct computation gives.
 """
@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import bikerider
-from bikerider.gap.low_rank import low_rank_chi2
+from bikerider.gap.inference.low_rank import low_rank_chi2
 from bikerider.gap.measured.control import ControlLaw
 from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
 

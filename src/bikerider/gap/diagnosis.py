@@ -1,7 +1,7 @@
 """Where, whether, which and how far: the sim-to-real gap diagnosis.
 
 Where.  Every measured scalar's residual (measured minus nominal model) is divided by the combined
-standard uncertainty of data and model parameters (:mod:`bikerider.gap.fit`); residuals are
+standard uncertainty of data and model parameters (:mod:`bikerider.gap.inference.problem`); residuals are
 summarised in a gap map by mode (weave, capsize, castor, or identified canonical entries), speed
 band and quantity (real part, imaginary part, entry), each cell with its chi-square and p-value.
 
@@ -78,7 +78,7 @@ from bikerider.gap.candidates.effects import (
     prior_from_range,
 )
 from bikerider.gap.candidates.nominal import GapModelInput
-from bikerider.gap.fit import EffectFit, GapProblem
+from bikerider.gap.inference.problem import EffectFit, GapProblem
 from bikerider.gap.measured.records import RecordFit, eigenvalues_of
 from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
 
@@ -210,7 +210,7 @@ class Diagnosis:
         Candidates (default: all of :data:`EFFECT_NAMES`).
     records : list of RecordFit, optional
         Fitted records (:func:`bikerider.gap.measured.records.fit_records`); those fitted become eigenvalue
-        rows, which every model predicts by indirect inference (:mod:`bikerider.gap.indirect`), and
+        rows, which every model predicts by indirect inference (:mod:`bikerider.gap.inference.indirect`), and
         the others are left out with their reason.
 
     Raises
@@ -292,13 +292,13 @@ class Diagnosis:
         """Table rows plus one row per comparable record (others get their reason).
 
         A record's row holds the eigenvalue its fit found; every model predicts it by indirect
-        inference (:mod:`bikerider.gap.indirect`), like with like however far its result lies from the
+        inference (:mod:`bikerider.gap.inference.indirect`), like with like however far its result lies from the
         model's weave eigenvalue; a record is left out only where the model within its parameters'
         uncertainty shows no weave the fit finds (its prediction is then undefined).
         """
         from bikerider.gap.candidates.effect_model import BENCH_ARGS, EffectModel
-        from bikerider.gap.indirect import RecordRows, RecordSimulator
-        from bikerider.gap.predict import Predictor
+        from bikerider.gap.inference.indirect import RecordRows, RecordSimulator
+        from bikerider.gap.inference.predict import Predictor
 
         used = [k for k, f in enumerate(self.records) if f.used]
         if not used:
@@ -465,13 +465,13 @@ class Diagnosis:
         self, effects: tuple[str, ...], mask: np.ndarray | None, start=None, jackknife: bool = True
     ) -> EffectFit:
         """A time-domain candidate (steer friction, alone or with one linear effect) fitted to the records
-        in ``mask`` (:func:`bikerider.gap.timedomain.fit_time_domain`).
+        in ``mask`` (:func:`bikerider.gap.inference.timedomain.fit_time_domain`).
 
         The fit to all the data gets standard errors by the jackknife over the held-out folds' fits
         (leave one group out), when there are three folds or more, and 95 % intervals from Student's t
         with one degree of freedom fewer than the folds (:func:`jackknife_quantile`).
         """
-        from bikerider.gap.timedomain import Layout, fit_time_domain
+        from bikerider.gap.inference.timedomain import Layout, fit_time_domain
 
         cached = self._time_domain_full.get(effects) if mask is None else None
         if cached is not None and (not jackknife or np.all(np.isfinite(cached.stderr))):
@@ -530,7 +530,7 @@ class Diagnosis:
         """Predicted observations of the records in ``mask`` under a time-domain fit: what the record fit
         finds in the candidate's simulated response over each record (indirect inference, as for every
         candidate)."""
-        from bikerider.gap.timedomain import Layout
+        from bikerider.gap.inference.timedomain import Layout
 
         idx = self._record_indices(mask)
         pred = np.full(len(self.problem.obs), np.nan)
@@ -649,7 +649,7 @@ class Diagnosis:
     def _gap_test(self) -> dict:
         from scipy.stats import chi2
 
-        from bikerider.gap.low_rank import low_rank_chi2
+        from bikerider.gap.inference.low_rank import low_rank_chi2
 
         p = self.problem
         r = p.y - p.baseline
@@ -708,7 +708,7 @@ class Diagnosis:
         if timed:
             start = None
             if len(effects) > 1 and ("steer_friction",) in self._time_domain_full:  # from the friction alone
-                from bikerider.gap.timedomain import Layout
+                from bikerider.gap.inference.timedomain import Layout
 
                 alone = self._time_domain_full[("steer_friction",)].values
                 start = list(alone) + [1.0 if n == "speed_scale" else 0.0 for _, n in Layout.of(effects).names[2:]]

@@ -19,7 +19,7 @@ samples, scaled), with each signal's noise (the larger of its records' sample-to
 :func:`signal_noise`, and what their own fits leave, :func:`fit_residual`), and fitted as a record is fitted
 (the record fit's two-mode function, started from the nominal model's eigenvalues, judged by the record
 fit's acceptance rules); every rival predicts it by indirect inference (the same
-fit applied to the rival's own response over the template, :mod:`bikerider.gap.indirect`; the
+fit applied to the rival's own response over the template, :mod:`bikerider.gap.inference.indirect`; the
 nonlinear friction by its simulated response).  A template the record fit cannot fit, or whose fit
 the nominal model's own response bends by more than 20 %, is not a measurement the diagnosis could
 use, and is left out of the plan with its reason.
@@ -70,8 +70,10 @@ from bikerider.engine import DifferencedStage
 from bikerider.errors import FitError, InputError
 from bikerider.gap.candidates.effect_model import EffectModel
 from bikerider.gap.candidates.effects import TIME_DOMAIN_EFFECTS
-from bikerider.gap.fit import EffectFit
-from bikerider.gap.indirect import LAMBDA_BOUNDS, RecordSimulator, comparable, levenberg_marquardt
+from bikerider.gap.inference.indirect import LAMBDA_BOUNDS, RecordSimulator, comparable, levenberg_marquardt
+from bikerider.gap.inference.predict import Predictor
+from bikerider.gap.inference.problem import EffectFit
+from bikerider.gap.inference.timedomain import Layout, systems
 from bikerider.gap.measured.control import NO_CONTROL, ControlLaw
 from bikerider.gap.measured.extraction import (
     MIN_CYCLES,
@@ -100,8 +102,6 @@ from bikerider.gap.next_sweep import (
     split,
     weave_shift,
 )
-from bikerider.gap.predict import Predictor
-from bikerider.gap.timedomain import Layout, systems
 
 
 class NoExperiment(InputError):

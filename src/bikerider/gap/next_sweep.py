@@ -206,7 +206,7 @@ def noise_covariance(sweep: Sweep, sigma_y: float, sample_rate: float) -> np.nda
 
 
 def run_stand_in(sweep: Sweep, gains: np.ndarray, speed_measured: bool):
-    """What :func:`bikerider.gap.timedomain.systems` reads of a record, for a sweep."""
+    """What :func:`bikerider.gap.inference.timedomain.systems` reads of a record, for a sweep."""
     return SimpleNamespace(speed=sweep.speed, speed_measured=speed_measured, gains=np.asarray(gains, float))
 
 

@@ -470,8 +470,7 @@ def plot_records(diagnosis, columns: int = 6):
     """Contact sheet: every record's roll rate, its fitted decay and the model's response."""
     plt = pyplot()
     from bikerider.errors import FitError
-    from bikerider.gap.measured.repair import repair_tags
-    from bikerider.gap.timedomain import (
+    from bikerider.gap.inference.timedomain import (
         OBSERVED,
         Layout,
         closed_loop,
@@ -481,6 +480,7 @@ def plot_records(diagnosis, columns: int = 6):
         simulate_linear,
         systems,
     )
+    from bikerider.gap.measured.repair import repair_tags
 
     fits = diagnosis.records
     if not fits:
@@ -812,7 +812,7 @@ def plot_time_response(diagnosis):
         model, scale, label = chosen
         fit = diagnosis.selected_fit
         if "steer_friction" in fit.effects:
-            from bikerider.gap.timedomain import simulate_friction
+            from bikerider.gap.inference.timedomain import simulate_friction
 
             ss = model.state_space([speed * scale])
             A = ss.closed_loop(None if gains is None else np.asarray(gains)[None, :])[0]

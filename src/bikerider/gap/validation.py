@@ -40,7 +40,7 @@ import numpy as np
 from bikerider.errors import FitError
 from bikerider.gap.candidates.effect_model import BENCH_ARGS
 from bikerider.gap.candidates.nominal import GapModelInput
-from bikerider.gap.fit import POSITIVE
+from bikerider.gap.inference.problem import POSITIVE
 from bikerider.gap.measured.control import ControlLaw, GainSchedule
 from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
 
@@ -538,7 +538,7 @@ class CaseResult:
 def run_case(model: GapModelInput, truth_name: str, seed: int, protocol: Protocol = FULL) -> CaseResult:
     """Generate data from one truth, diagnose it blind, and score the predicted shrinkage."""
     from bikerider.gap.diagnosis import Diagnosis, gap_shrink
-    from bikerider.gap.fit import GapProblem
+    from bikerider.gap.inference.problem import GapProblem
 
     start = time.perf_counter()
     truth = TRUTHS[truth_name]
@@ -1001,7 +1001,7 @@ def run_trial(models: dict[str, GapModelInput], effect: CalibrationEffect, seed:
     seeds are riderless.
     """
     from bikerider.gap.diagnosis import Diagnosis, gap_shrink
-    from bikerider.gap.fit import GapProblem
+    from bikerider.gap.inference.problem import GapProblem
 
     start = time.perf_counter()
     rng = np.random.default_rng(seed)

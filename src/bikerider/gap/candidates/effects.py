@@ -31,7 +31,7 @@ EFFECT_NAMES = (
 OBSERVATION_EFFECTS = ("speed_sensor",)
 """Candidates that change how the data were taken rather than the bicycle (no model parameter)."""
 TIME_DOMAIN_EFFECTS = ("steer_friction",)
-"""Nonlinear candidates fitted in the time domain to records (:mod:`bikerider.gap.timedomain`)."""
+"""Nonlinear candidates fitted in the time domain to records (:mod:`bikerider.gap.inference.timedomain`)."""
 COULOMB_RANGE = (0.02, 0.15)
 """Steer Coulomb friction of the literature [N m] (data/gap/README.md table; Davis bicycle 0.15 +/-
 0.05, Moore 2012)."""

@@ -21,8 +21,8 @@ models compare with, and what was done to it (:class:`Repair`), or why it cannot
 * **A constant sensor bias** needs no repair: every fit of a record (its own and each model's
   initial-state fit) has a constant offset per signal.
 * **Non-uniform time** (jitter, the gaps the drops above leave, a clock that runs otherwise than
-  the nominal rate): the batched simulators of the models (:mod:`bikerider.gap.indirect`,
-  :mod:`bikerider.gap.timedomain`) step by one matrix exponential of a uniform step, so the record
+  the nominal rate): the batched simulators of the models (:mod:`bikerider.gap.inference.indirect`,
+  :mod:`bikerider.gap.inference.timedomain`) step by one matrix exponential of a uniform step, so the record
   is resampled onto a uniform grid at the logger's step (the median over its whole log, else over the
   record; rounded to three significant digits), by
   linear interpolation between neighbouring samples.  The error of linear interpolation over an
@@ -51,7 +51,7 @@ RESET_STEPS = 10.0
 """A stamp this many median steps (or more) before the previous one is a clock reset; a smaller step
 back is a sample out of order (dropped)."""
 UNIFORM_RTOL = 1e-6
-"""Steps that agree within this fraction are uniform (as :mod:`bikerider.gap.indirect` requires)."""
+"""Steps that agree within this fraction are uniform (as :mod:`bikerider.gap.inference.indirect` requires)."""
 MIN_CLIP_RUN = 2
 """Fewest samples at the extreme that count as clipping."""
 GAP_STEPS = 1.5

@@ -17,14 +17,14 @@ records in one batched computation:
   state, so the output rows ``C Phi(t_k)`` follow by repeated multiplication);
 * each record's initial state, and a constant offset per signal, by linear least squares on the
   record's signals (roll rate and steer angle where logged), each weighted by its scatter over the
-  record, as in :func:`bikerider.gap.timedomain.initial_states`;
+  record, as in :func:`bikerider.gap.inference.timedomain.initial_states`;
 * the simulated signals from that state, fitted by batched least squares of the same model (two-mode
   or plain, as the record's own fit) started from the record's own fit (variable projection with
   Levenberg-Marquardt steps; ``tests/test_gap_indirect.py`` holds it to SciPy's least squares one
   record at a time); signals combined with the weights of the record's own fit.
 
 :func:`extract` is the last step alone, for responses simulated otherwise (the nonlinear friction
-of :mod:`bikerider.gap.timedomain`), so every candidate's apparent eigenvalue comes from one
+of :mod:`bikerider.gap.inference.timedomain`), so every candidate's apparent eigenvalue comes from one
 extraction.  Where the extraction finds no weave in a model's response (a fit that leaves the
 range the record fit accepts), the prediction is NaN.
 """
@@ -405,11 +405,11 @@ class RecordSimulator:
     def apparent_time_domain(self, layout, theta) -> np.ndarray:
         """Apparent eigenvalue of every record ``(P, R)`` under a time-domain candidate (steer friction).
 
-        The response comes from :func:`bikerider.gap.timedomain.friction_states` (each record's
+        The response comes from :func:`bikerider.gap.inference.timedomain.friction_states` (each record's
         initial state refitted under the nonlinear model), the extraction is :func:`extract`, as for
         every linear model.
         """
-        from bikerider.gap.timedomain import Batch, friction_states, systems
+        from bikerider.gap.inference.timedomain import Batch, friction_states, systems
 
         theta = np.atleast_2d(np.asarray(theta, dtype=float))
         out = np.full((theta.shape[0], len(self.fits)), np.nan + 1j * np.nan)
@@ -446,7 +446,7 @@ def _linear_response(batch: RecordBatch, A: np.ndarray, outputs: tuple) -> np.nd
     linear least squares on the record's state signals, each weighted by its scatter
     (:func:`_initial_states`).
     """
-    from bikerider.gap.timedomain import expm
+    from bikerider.gap.inference.timedomain import expm
 
     P, R, n = A.shape[0], A.shape[1], A.shape[-1]
     rows = [outputs[OBSERVED[s]] for s in batch.signals]
