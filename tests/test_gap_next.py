@@ -15,7 +15,7 @@ from bikerider.gap.candidates.effect_model import EffectModel
 from bikerider.gap.diagnosis import Diagnosis
 from bikerider.gap.measured.records import fit_records
 from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
-from bikerider.gap.next_experiment import ODDS, NextExperiment, fit_residual, resolution_probability, signal_noise
+from bikerider.gap.plan.ranking import ODDS, NextExperiment, fit_residual, resolution_probability, signal_noise
 from bikerider.io.gap_model import load_model
 
 

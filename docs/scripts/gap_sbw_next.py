@@ -20,7 +20,7 @@ FIGURE = ROOT / "docs" / "gap_sbw_next.png"
 
 def _sbw_next(diagnosis):
     """What to measure next on the steer-by-wire bicycle (``bikerider gap --next``)."""
-    from bikerider.gap.next_experiment import plan_next
+    from bikerider.gap.plan.ranking import plan_next
 
     plan = plan_next(diagnosis)
     out = plan.as_dict(top=len(plan.plan))

@@ -4,7 +4,7 @@ A job takes an upload folder (:mod:`bikerider.app.uploads`) and the names in it 
 manifests (``--experiment``) and data tables (``--data``), and runs the package's own entry point,
 :func:`bikerider.commands.gap.diagnose_files` (handed to :class:`GapJobs` by ``bikerider serve``:
 the page never re-implements the diagnosis), then the next-experiment plan
-(:func:`bikerider.gap.next_experiment.plan_next`, the defaults of ``gap --next``) and the report
+(:func:`bikerider.gap.plan.ranking.plan_next`, the defaults of ``gap --next``) and the report
 folder (:func:`bikerider.io.gap_report.write_report`, as ``gap --report``).  The diagnosis has no
 hook that says how far it is, so the progress is the step it is on (reading and fitting, planning,
 writing the report), the seconds since it started and the messages the package logs meanwhile.
@@ -160,8 +160,8 @@ class GapJobs:
 
     def _run(self, job: GapJob) -> None:
         # The report's figures and text: matplotlib is loaded only when a diagnosis runs.
-        from bikerider.gap.next_experiment import plan_next
         from bikerider.gap.next_report import next_text
+        from bikerider.gap.plan.ranking import plan_next
         from bikerider.gap.report import summary_text
         from bikerider.io.gap_report import write_report
 

@@ -269,7 +269,7 @@ def _register_experiment_inputs(args: argparse.Namespace) -> None:
 
 
 def _next_options(args: argparse.Namespace) -> dict | None:
-    """The arguments of :func:`~bikerider.gap.next_experiment.plan_next` the ``--next`` options give,
+    """The arguments of :func:`~bikerider.gap.plan.ranking.plan_next` the ``--next`` options give,
     checked before the diagnosis (``None`` without ``--next``)."""
     import math
 
@@ -292,8 +292,8 @@ def _next_options(args: argparse.Namespace) -> dict | None:
         return None
     from bikerider.gap.measured.control import MAX_MAGNITUDE
     from bikerider.gap.measured.records import SIGNALS
-    from bikerider.gap.next_experiment import MAX_NOISE
-    from bikerider.gap.next_sweep import DEFAULT_RUN_TIME, DEFAULT_TORQUE, MAX_TORQUE, MIN_TORQUE, RUN_TIME_RANGE
+    from bikerider.gap.plan.ranking import MAX_NOISE
+    from bikerider.gap.plan.sweeps import DEFAULT_RUN_TIME, DEFAULT_TORQUE, MAX_TORQUE, MIN_TORQUE, RUN_TIME_RANGE
 
     torque = DEFAULT_TORQUE if args.next_torque is None else args.next_torque
     if not MIN_TORQUE <= torque <= MAX_TORQUE:  # also NaN
@@ -356,7 +356,7 @@ def _next_options(args: argparse.Namespace) -> dict | None:
 def _plan(diagnosis, options: dict):
     """``(plan, None)``, or ``(None, why)`` when no experiment can be planned: the diagnosis stands either way."""
     from bikerider import progress
-    from bikerider.gap.next_experiment import NoExperiment, plan_next
+    from bikerider.gap.plan.ranking import NoExperiment, plan_next
 
     progress.begin("planning the next experiment")
     try:

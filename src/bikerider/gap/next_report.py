@@ -1,4 +1,4 @@
-"""Text and figure of a plan for the next experiment (:mod:`bikerider.gap.next_experiment`)."""
+"""Text and figure of a plan for the next experiment (:mod:`bikerider.gap.plan.ranking`)."""
 
 from __future__ import annotations
 

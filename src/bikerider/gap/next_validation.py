@@ -5,7 +5,7 @@ Cases are the hidden truths of :mod:`bikerider.gap.validation` measured by a nar
 candidates tie.  For every case whose first-ranked candidate is tied with another and the hidden
 effect is among them:
 
-* the plan (:class:`bikerider.gap.next_experiment.NextExperiment`, the tied candidates as rivals,
+* the plan (:class:`bikerider.gap.plan.ranking.NextExperiment`, the tied candidates as rivals,
   :data:`FOLLOW_UP` decays; multisines are left out, since the diagnosis that judges the follow-up reads
   no frequency responses) recommends one experiment, a speed and a control law;
 * *planned*: :data:`FOLLOW_UP` new runs of that experiment, simulated by the independent truth
@@ -32,7 +32,7 @@ import numpy as np
 from bikerider.gap.candidates.nominal import GapModelInput
 from bikerider.gap.diagnosis import Diagnosis
 from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
-from bikerider.gap.next_experiment import NextExperiment
+from bikerider.gap.plan.ranking import NextExperiment
 from bikerider.gap.validation import TRUTHS, Protocol, Session, TruthSimulator, measure
 
 LOG = logging.getLogger(__name__)

@@ -35,7 +35,7 @@ def write_report(
     """Write ``report.md`` and the figures into ``folder`` (created if needed); return the report path.
 
     Figures of a previous report in the folder that this one does not link are removed.  With
-    ``plan`` (:class:`bikerider.gap.next_experiment.NextExperiment`), also the next experiment's
+    ``plan`` (:class:`bikerider.gap.plan.ranking.NextExperiment`), also the next experiment's
     plan and its figure of the rivals' predictions diverging over speed.
 
     Raises

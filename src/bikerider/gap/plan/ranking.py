@@ -85,7 +85,7 @@ from bikerider.gap.measured.extraction import (
 )
 from bikerider.gap.measured.records import SIGNALS, Record, RecordFit, eigenvalues_of
 from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
-from bikerider.gap.next_sweep import (
+from bikerider.gap.plan.sweeps import (
     DEFAULT_RUN_TIME,
     DEFAULT_SAMPLE_RATE,
     DEFAULT_TORQUE,
@@ -225,7 +225,7 @@ class NextExperiment:
     signals : sequence of str, optional
         Signals to consider with records (default: every one of :data:`bikerider.gap.measured.records.SIGNALS`).
     sweeps : bool
-        Also plan steer-torque frequency responses (:mod:`bikerider.gap.next_sweep`).
+        Also plan steer-torque frequency responses (:mod:`bikerider.gap.plan.sweeps`).
     torque : float
         Peak steer torque of a planned multisine [N m].
     run_time : float
@@ -711,7 +711,7 @@ class NextExperiment:
 
     # -- sweeps ----------------------------------------------------------------------------------------
     def _plan_sweeps(self) -> list[Sweep]:
-        """Multisine runs per speed, law and output, around the nominal weave (:mod:`bikerider.gap.next_sweep`);
+        """Multisine runs per speed, law and output, around the nominal weave (:mod:`bikerider.gap.plan.sweeps`);
         where the nominal closed loop is unstable or shows no weave, left out with the reason."""
         nominal = EffectModel(self.problem.nominal, self.problem.geometry)
         out = []
@@ -812,7 +812,7 @@ class NextExperiment:
 
     def _predict_sweeps(self) -> None:
         """Every rival's frequency responses and their uncertainties (module docstring of
-        :mod:`bikerider.gap.next_sweep`); sweeps where a rival's loop is unstable are left out."""
+        :mod:`bikerider.gap.plan.sweeps`); sweeps where a rival's loop is unstable are left out."""
 
         R, p = len(self.rivals), self.problem
         if not self.sweeps:
