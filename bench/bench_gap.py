@@ -9,7 +9,7 @@ held out in turn, select, and build the result.  Goal: at most 60 s on 2 cores.
 Item 1, measured on the Davis instrumented bicycle with rider Jason: 21 runs (three sessions of
 seven, one under a known control) simulated by :mod:`bikerider.gap.validation` with a hidden leaning
 upper body and steer friction, weave eigenvalues fitted from the noisy roll rates.  Timed:
-:class:`bikerider.gap.diagnosis.Diagnosis` (gap map, parameter fit, the candidates and their pairs on
+:class:`bikerider.gap.diagnosis.result.Diagnosis` (gap map, parameter fit, the candidates and their pairs on
 three held-out folds, selection, full-data fits) and ``as_dict``.  Goal: at most 30 s on 2 cores.
 
 Run alone: ``.venv/bin/python bench/bench_gap.py``.
@@ -52,7 +52,7 @@ def workload():
 
 
 def time_diagnosis() -> tuple[float, int, dict]:
-    from bikerider.gap.diagnosis import Diagnosis
+    from bikerider.gap.diagnosis.result import Diagnosis
 
     model, data, empty = workload()
     start = time.perf_counter()
@@ -62,7 +62,7 @@ def time_diagnosis() -> tuple[float, int, dict]:
 
 def time_sbw() -> tuple[dict[str, float], dict]:
     """Seconds of each stage of the SBW diagnosis from the raw logs, and its result."""
-    from bikerider.gap.diagnosis import Diagnosis
+    from bikerider.gap.diagnosis.result import Diagnosis
     from bikerider.gap.measured.records import fit_records
     from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
     from bikerider.io.experiment import load_records, read_manifest

@@ -77,7 +77,7 @@ def _measured(fn) -> tuple[float, int]:
 
 
 def time_rows(n: int, model) -> tuple[float, int]:
-    from bikerider.gap.diagnosis import Diagnosis
+    from bikerider.gap.diagnosis.result import Diagnosis
     from bikerider.gap.measured.tables import CanonicalData
 
     data = eigenvalue_table(n)

@@ -21,7 +21,7 @@ from gap_support import SIL, decay_record, nominal, riderless_model
 import bikerider
 from bikerider.cli import main
 from bikerider.gap.candidates.effect_model import EffectModel
-from bikerider.gap.diagnosis import Diagnosis
+from bikerider.gap.diagnosis.result import Diagnosis
 from bikerider.gap.inference.predict import Predictor
 from bikerider.gap.inference.problem import GapProblem
 from bikerider.gap.measured.records import Record, fit_records

@@ -8,7 +8,7 @@ import pytest
 from gap_support import SIL, decay_record, nominal, riderless_model
 
 from bikerider.gap.candidates.effect_model import EffectModel
-from bikerider.gap.diagnosis import Diagnosis
+from bikerider.gap.diagnosis.result import Diagnosis
 from bikerider.gap.inference.indirect import LAMBDA_BOUNDS, RecordSimulator, eigenvalue_of, levenberg_marquardt
 from bikerider.gap.measured.extraction import _two_mode
 from bikerider.gap.measured.records import Record, fit_records

@@ -12,7 +12,7 @@ from gap_support import BP, DATA, decay_record, nominal, riderless_model
 
 from bikerider.cli import main
 from bikerider.gap.candidates.effect_model import EffectModel
-from bikerider.gap.diagnosis import Diagnosis
+from bikerider.gap.diagnosis.result import Diagnosis
 from bikerider.gap.measured.records import fit_records
 from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
 from bikerider.gap.plan.ranking import ODDS, NextExperiment, fit_residual, resolution_probability, signal_noise

@@ -12,7 +12,7 @@ from test_gap_next import _table
 
 from bikerider.cli import main
 from bikerider.gap.candidates.effect_model import EffectModel
-from bikerider.gap.diagnosis import Diagnosis
+from bikerider.gap.diagnosis.result import Diagnosis
 from bikerider.gap.measured.tables import CanonicalData
 from bikerider.gap.plan.ranking import NextExperiment
 from bikerider.gap.plan.sweeps import line_amplitude, linearised_friction, lines_for, response, weave_shift

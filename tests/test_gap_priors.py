@@ -13,7 +13,7 @@ import pytest
 from gap_support import BP, DATA
 
 from bikerider.gap.candidates.effects import EFFECTS, Prior, prior_from_range
-from bikerider.gap.diagnosis import Diagnosis, diagnose
+from bikerider.gap.diagnosis.result import Diagnosis, diagnose
 from bikerider.gap.inference.problem import EffectFit
 from bikerider.io.gap_data import read_eigenvalues
 from bikerider.io.gap_model import load_model

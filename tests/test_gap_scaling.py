@@ -80,7 +80,7 @@ def test_a_table_taken_as_exact_gets_a_meaningful_gap_statistic(davis):
     # Found with 12 rows at distinct speeds and no uncertainties (no replicates): the dense solve of a
     # singular covariance gave chi2 = -1.8e17 and verdict "parameters".  24 exact observations cannot
     # all be met by shifts of 23 parameters: the gap is certain.
-    from bikerider.gap.diagnosis import Diagnosis
+    from bikerider.gap.diagnosis.result import Diagnosis
 
     d = Diagnosis(davis, _table(np.linspace(4, 9, 12), ["g"] * 12), CanonicalData.empty(), ())
     assert d.gap_test["chi2"] == np.inf and d.gap_test["significant"] and d.verdict == "structural"
@@ -88,7 +88,7 @@ def test_a_table_taken_as_exact_gets_a_meaningful_gap_statistic(davis):
 
 
 def test_the_folds_do_not_grow_with_the_groups(davis):
-    from bikerider.gap.diagnosis import MAX_FOLDS, Diagnosis
+    from bikerider.gap.diagnosis.result import MAX_FOLDS, Diagnosis
 
     n = 3 * MAX_FOLDS + 1
     groups = [f"run{k:03d}" for k in range(n)]

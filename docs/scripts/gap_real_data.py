@@ -32,7 +32,7 @@ TREADMILL2ENC_GAIN and TREADMILL2ENC_BIAS)."""
 
 
 def _diagnose(model, groups=None, eigen_file=None):
-    from bikerider.gap.diagnosis import diagnose
+    from bikerider.gap.diagnosis.result import diagnose
     from bikerider.io import gap_data as gd
 
     eigen = gd.read_eigenvalues(eigen_file) if eigen_file else None

@@ -117,7 +117,7 @@ class GapJobs:
     uploads : UploadFolders
     diagnose : callable
         ``diagnose(model, data, experiment)`` with paths as strings, returning a
-        :class:`bikerider.gap.diagnosis.Diagnosis` (``bikerider serve`` passes
+        :class:`bikerider.gap.diagnosis.result.Diagnosis` (``bikerider serve`` passes
         :func:`bikerider.commands.gap.diagnose_files`).
     """
 

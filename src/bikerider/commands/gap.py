@@ -419,7 +419,7 @@ def _diagnose_files(
 ):
     from bikerider import progress
     from bikerider.gap.candidates.effects import EFFECT_NAMES, effect
-    from bikerider.gap.diagnosis import diagnose
+    from bikerider.gap.diagnosis.result import diagnose
     from bikerider.gap.measured.records import fit_records
     from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
     from bikerider.io import gap_data

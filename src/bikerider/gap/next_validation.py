@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from bikerider.gap.candidates.nominal import GapModelInput
-from bikerider.gap.diagnosis import Diagnosis
+from bikerider.gap.diagnosis.result import Diagnosis
 from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
 from bikerider.gap.plan.ranking import NextExperiment
 from bikerider.gap.validation import TRUTHS, Protocol, Session, TruthSimulator, measure

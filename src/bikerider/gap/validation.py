@@ -455,7 +455,7 @@ def measure(
     """Run every session of the protocol and extract the weave eigenvalues as from real runs.
 
     ``amplitudes``, when given, receives each fitted run's steer-rate amplitude (``sqrt(2)`` times its
-    RMS over the fitted window, as :meth:`bikerider.gap.diagnosis.Diagnosis.steer_rate_amplitudes`).
+    RMS over the fitted window, as :meth:`bikerider.gap.diagnosis.result.Diagnosis.steer_rate_amplitudes`).
     """
     from bikerider.gap.measured.extraction import weave_eigenvalue
 
@@ -537,7 +537,7 @@ class CaseResult:
 
 def run_case(model: GapModelInput, truth_name: str, seed: int, protocol: Protocol = FULL) -> CaseResult:
     """Generate data from one truth, diagnose it blind, and score the predicted shrinkage."""
-    from bikerider.gap.diagnosis import Diagnosis, gap_shrink
+    from bikerider.gap.diagnosis.result import Diagnosis, gap_shrink
     from bikerider.gap.inference.problem import GapProblem
 
     start = time.perf_counter()
@@ -821,7 +821,7 @@ def run_record_case(model: GapModelInput, truth_name: str, seed: int, protocol: 
     from dataclasses import replace
 
     model = replace(model, plausible={**STEER_MOTOR, **model.plausible})
-    from bikerider.gap.diagnosis import Diagnosis, gap_shrink
+    from bikerider.gap.diagnosis.result import Diagnosis, gap_shrink
     from bikerider.gap.measured.records import fit_records
 
     start = time.perf_counter()
@@ -1000,7 +1000,7 @@ def run_trial(models: dict[str, GapModelInput], effect: CalibrationEffect, seed:
     ``models`` holds ``"riderless"`` and ``"rider"`` nominal models; with ``effect.rider == "both"`` even
     seeds are riderless.
     """
-    from bikerider.gap.diagnosis import Diagnosis, gap_shrink
+    from bikerider.gap.diagnosis.result import Diagnosis, gap_shrink
     from bikerider.gap.inference.problem import GapProblem
 
     start = time.perf_counter()
@@ -1082,13 +1082,13 @@ def run_friction_trial(model: GapModelInput, seed: int, protocol: RecordProtocol
     """A record trial: pure Coulomb friction drawn over its prior, simulated in time, diagnosed from records.
 
     The fitted split (``T_coulomb``, ``c_viscous``) is scored against the truth (``c_viscous`` 0), and the
-    equivalent viscous damping (:meth:`bikerider.gap.diagnosis.Diagnosis.friction_equivalent`) against
+    equivalent viscous damping (:meth:`bikerider.gap.diagnosis.result.Diagnosis.friction_equivalent`) against
     ``4 T / (pi A)`` at the same median amplitude ``A``.
     """
     from dataclasses import replace
 
     from bikerider.gap.candidates.effects import EFFECTS
-    from bikerider.gap.diagnosis import Diagnosis
+    from bikerider.gap.diagnosis.result import Diagnosis
     from bikerider.gap.measured.records import fit_records
 
     start = time.perf_counter()

@@ -3,7 +3,7 @@
 Each effect names the parameters the diagnosis fits, their bounds (what is physically possible, or
 the edge of the search), their usual range (what the literature measured: a value outside it is
 flagged, not refused) and their prior (:class:`Prior`, a distribution with its source), which the
-selection weighs as evidence against the held-out data (:mod:`bikerider.gap.diagnosis`).  Ranges and
+selection weighs as evidence against the held-out data (:mod:`bikerider.gap.diagnosis.result`).  Ranges and
 priors are from the table in ``data/gap/README.md`` of the reference material and the sources quoted
 per parameter (``docs/gap.md``, section "Priors"); the models themselves are derived in
 ``derive/gap_effects.py``.

@@ -212,7 +212,7 @@ class NextExperiment:
 
     Parameters
     ----------
-    diagnosis : bikerider.gap.diagnosis.Diagnosis
+    diagnosis : bikerider.gap.diagnosis.result.Diagnosis
     rivals : sequence of str, optional
         Candidates to tell apart (``"steer_damping"``, ``"parameters+steer_damping"``); default as the
         module docstring says.
