@@ -77,7 +77,7 @@ def test_added_steer_inertia_equals_a_front_frame_inertia_about_the_steer_axis(b
 def test_arm_masses_equal_moving_point_masses_from_rear_body_to_handlebar(bench):
     # Lagrangian (point masses on the front frame minus the same on the rear frame) against the
     # parallel-axis theorem on the benchmark bodies (the validation truth's implementation).
-    from bikerider.gap.validation import _move_arms
+    from validation.cases import _move_arms
 
     moved = _move_arms(dict(bench), 3.0, GRIPS)
     for v in (2.0, 6.0):
@@ -91,7 +91,7 @@ def test_arm_masses_equal_moving_point_masses_from_rear_body_to_handlebar(bench)
 def test_rider_lean_matches_the_hand_derived_coupling(bench):
     # The validation truth assembles the lean coupling by Newton-Euler; the candidate comes from the
     # Lagrangian with the nonholonomic projection.  Their leading 2x2 blocks are Meijaard's.
-    from bikerider.gap.validation import TRUTHS, TruthSimulator
+    from validation.cases import TRUTHS, TruthSimulator
 
     sim = TruthSimulator.__new__(TruthSimulator)  # only the parts _lean_terms reads
     sim.values = dict(bench, g=9.81)
