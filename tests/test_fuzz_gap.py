@@ -300,9 +300,9 @@ def test_long_work_is_announced_before_it_starts(monkeypatch, caplog):
     # before: a large table ran for minutes without a line of output (shown at default verbosity)
     import logging
 
-    from bikerider.commands import gap
+    from bikerider import diagnose as pipeline
 
-    monkeypatch.setattr(gap, "LONG_WORK_ROWS", 10)
+    monkeypatch.setattr(pipeline, "LONG_WORK_ROWS", 10)
     with caplog.at_level(logging.WARNING, logger="bikerider"):
         code, out, err = run_cli(["gap", *KOOIJMAN, "--data", str(EXAMPLES / "eigenvalues.csv"), *FEW])
     assert code == 0, err

@@ -222,7 +222,7 @@ def test_default_rider_geometry_from_the_davis_bicycle_and_jason():
 
 
 def test_each_effect_can_be_plotted_on_its_own(bench, geometry, tmp_path):
-    from bikerider.gap.report import plot_effect
+    from bikerider.plotting.gap import plot_effect
 
     values = dict(bench, g=9.81)
     for name, params in {

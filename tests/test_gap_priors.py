@@ -71,7 +71,7 @@ def test_a_precise_value_above_the_usual_range_is_selected_and_flagged(table_dia
     (flag,) = d.selection["flags"]
     assert "above the usual 0.05-0.5 N m s/rad" in flag and "the data determine it" in flag and ": check " in flag
     assert d.selection["log_prior"] < 0 and d.selection["log_odds_vs_nominal"] > 0
-    from bikerider.gap.report import summary_text
+    from bikerider.gap.text import summary_text
 
     text = summary_text(d.as_dict())
     assert "Selected: steer_damping" in text and "flag: c_steer = " in text

@@ -188,7 +188,7 @@ def test_damaged_sbw_logs_give_the_same_record_fits(damaged):
 
 @pytest.mark.slow
 def test_damaged_sbw_logs_give_the_same_diagnosis(damaged):
-    from bikerider.commands.gap import diagnose_files
+    from bikerider.diagnose import diagnose_files
 
     out, manifest = damaged
     clean = diagnose_files(str(SBW / "sbw_bicycle.toml"), experiment=(str(SBW / "experiment.toml"),)).as_dict()

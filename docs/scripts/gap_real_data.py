@@ -366,7 +366,7 @@ def _sbw_section() -> list[str]:
     """Section 3: the steer-by-wire bicycle of Pasma (2024), from the raw logs."""
     import numpy as np
 
-    from bikerider.commands.gap import diagnose_files
+    from bikerider.diagnose import diagnose_files
 
     model = SBW / "sbw_bicycle.toml"
     manifest = SBW / "experiment.toml"

@@ -114,9 +114,9 @@ def _sbw_next(diagnosis):
 
 
 def main() -> int:
-    from bikerider.commands.gap import diagnose_files
-    from bikerider.gap.next_report import plot_next
-    from bikerider.gap.report import pyplot
+    from bikerider.diagnose import diagnose_files
+    from bikerider.plotting.common import pyplot
+    from bikerider.plotting.gap_plan import plot_next
 
     diagnosis = diagnose_files(str(SBW / "sbw_bicycle.toml"), experiment=(str(SBW / "experiment.toml"),))
     lines, plan, out = _sbw_next(diagnosis)

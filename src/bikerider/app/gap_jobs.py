@@ -2,10 +2,10 @@
 
 A job takes an upload folder (:mod:`bikerider.app.uploads`) and the names in it of the model, the
 manifests (``--experiment``) and data tables (``--data``), and runs the package's own entry point,
-:func:`bikerider.commands.gap.diagnose_files` (handed to :class:`GapJobs` by ``bikerider serve``:
+:func:`bikerider.diagnose.diagnose_files` (handed to :class:`GapJobs` by ``bikerider serve``:
 the page never re-implements the diagnosis), then the next-experiment plan
 (:func:`bikerider.gap.plan.ranking.plan_next`, the defaults of ``gap --next``) and the report
-folder (:func:`bikerider.io.gap_report.write_report`, as ``gap --report``).  The diagnosis has no
+folder (:func:`bikerider.diagnose.write_report`, as ``gap --report``).  The diagnosis has no
 hook that says how far it is, so the progress is the step it is on (reading and fitting, planning,
 writing the report), the seconds since it started and the messages the package logs meanwhile.
 One job runs at a time (the machine's cores are the diagnosis's); others wait their turn.
@@ -118,7 +118,7 @@ class GapJobs:
     diagnose : callable
         ``diagnose(model, data, experiment)`` with paths as strings, returning a
         :class:`bikerider.gap.diagnosis.result.Diagnosis` (``bikerider serve`` passes
-        :func:`bikerider.commands.gap.diagnose_files`).
+        :func:`bikerider.diagnose.diagnose_files`).
     """
 
     def __init__(self, uploads: UploadFolders, diagnose: Callable) -> None:
@@ -160,10 +160,9 @@ class GapJobs:
 
     def _run(self, job: GapJob) -> None:
         # The report's figures and text: matplotlib is loaded only when a diagnosis runs.
-        from bikerider.gap.next_report import next_text
+        from bikerider.diagnose import write_report
         from bikerider.gap.plan.ranking import plan_next
-        from bikerider.gap.report import summary_text
-        from bikerider.io.gap_report import write_report
+        from bikerider.gap.text import next_text, summary_text
 
         with self._one_at_a_time:
             handler = _JobLog(job)
