@@ -10,7 +10,8 @@ import pytest
 import bikerider
 from bikerider.errors import InputError
 from bikerider.gap.candidates.effect_model import BENCH_ARGS, EffectModel
-from bikerider.gap.diagnosis.result import Diagnosis, gap_shrink, significantly_better
+from bikerider.gap.diagnosis.result import Diagnosis
+from bikerider.gap.diagnosis.statistics import gap_shrink, significantly_better
 from bikerider.gap.inference.predict import Predictor
 from bikerider.gap.inference.problem import GapProblem
 from bikerider.gap.measured.tables import CanonicalData, EigenvalueData

@@ -537,7 +537,8 @@ class CaseResult:
 
 def run_case(model: GapModelInput, truth_name: str, seed: int, protocol: Protocol = FULL) -> CaseResult:
     """Generate data from one truth, diagnose it blind, and score the predicted shrinkage."""
-    from bikerider.gap.diagnosis.result import Diagnosis, gap_shrink
+    from bikerider.gap.diagnosis.result import Diagnosis
+    from bikerider.gap.diagnosis.statistics import gap_shrink
     from bikerider.gap.inference.problem import GapProblem
 
     start = time.perf_counter()
@@ -821,7 +822,8 @@ def run_record_case(model: GapModelInput, truth_name: str, seed: int, protocol: 
     from dataclasses import replace
 
     model = replace(model, plausible={**STEER_MOTOR, **model.plausible})
-    from bikerider.gap.diagnosis.result import Diagnosis, gap_shrink
+    from bikerider.gap.diagnosis.result import Diagnosis
+    from bikerider.gap.diagnosis.statistics import gap_shrink
     from bikerider.gap.measured.records import fit_records
 
     start = time.perf_counter()
@@ -1000,7 +1002,8 @@ def run_trial(models: dict[str, GapModelInput], effect: CalibrationEffect, seed:
     ``models`` holds ``"riderless"`` and ``"rider"`` nominal models; with ``effect.rider == "both"`` even
     seeds are riderless.
     """
-    from bikerider.gap.diagnosis.result import Diagnosis, gap_shrink
+    from bikerider.gap.diagnosis.result import Diagnosis
+    from bikerider.gap.diagnosis.statistics import gap_shrink
     from bikerider.gap.inference.problem import GapProblem
 
     start = time.perf_counter()
