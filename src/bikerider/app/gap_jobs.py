@@ -16,6 +16,7 @@ from __future__ import annotations
 import io
 import logging
 import math
+import re
 import threading
 import time
 import uuid
@@ -163,6 +164,7 @@ class GapJobs:
         from bikerider.diagnose import write_report
         from bikerider.gap.plan.ranking import plan_next
         from bikerider.gap.text import next_text, summary_text
+        from bikerider.io.gap_report import linked_figures
 
         with self._one_at_a_time:
             handler = _JobLog(job)
@@ -186,8 +188,6 @@ class GapJobs:
                 job.step = STEPS[3]
                 report = job.folder.parent / f"report-{job.ident}"
                 job.report = write_report(diagnosis, report, title=f"Sim-to-real gap: {job.model.name}", plan=plan)
-                from bikerider.io.gap_report import linked_figures
-
                 captions = dict(_captions(job.report))
                 job.figures = [(name, captions.get(name, name)) for name in sorted(linked_figures(job.report))]
                 job.result = plain({k: result[k] for k in result if k not in ("next",)})
@@ -229,8 +229,6 @@ class GapJobs:
 
 def _captions(report: Path) -> list[tuple[str, str]]:
     """``(figure file, caption)`` of each figure a report links."""
-    import re
-
     text = report.read_text(encoding="utf-8")
     return [(m.group(2), m.group(1)) for m in re.finditer(r"!\[([^\]]*)\]\(([^()/\\]+\.png)\)", text)]
 

@@ -162,6 +162,7 @@ def add_parser(subparsers) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    # heavy (NumPy, the gap): imported when the command runs, so `bikerider --help` starts fast (cli.py)
     import json
     import math
     import sys
@@ -250,6 +251,7 @@ def _register_experiment_inputs(args: argparse.Namespace) -> None:
     """Add the files the manifests name (windows files, logs) to the run's inputs, so that no report
     folder that holds one of them is replaced (the manifests are read again by the diagnosis: a
     few kB, milliseconds)."""
+    # heavy (NumPy, the gap): imported when the command runs, so `bikerider --help` starts fast (cli.py)
     from bikerider.io import gap_data
     from bikerider.io.experiment import experiment_files, read_experiment
     from bikerider.io.output_guard import add_inputs
@@ -262,6 +264,7 @@ def _register_experiment_inputs(args: argparse.Namespace) -> None:
 def _next_options(args: argparse.Namespace) -> dict | None:
     """The arguments of :func:`~bikerider.gap.plan.ranking.plan_next` the ``--next`` options give,
     checked before the diagnosis (``None`` without ``--next``)."""
+    # heavy (NumPy, the gap): imported when the command runs, so `bikerider --help` starts fast (cli.py)
     import math
 
     import numpy as np
@@ -281,6 +284,7 @@ def _next_options(args: argparse.Namespace) -> dict | None:
             if getattr(args, option) not in (None, False):
                 raise InputError("--" + option.replace("_", "-"), getattr(args, option), "--next as well")
         return None
+    # heavy (NumPy, the gap): imported when the command runs, so `bikerider --help` starts fast (cli.py)
     from bikerider.gap.measured.control import MAX_MAGNITUDE
     from bikerider.gap.measured.records import SIGNALS
     from bikerider.gap.plan.ranking import MAX_NOISE
@@ -346,6 +350,7 @@ def _next_options(args: argparse.Namespace) -> dict | None:
 
 def _plain(value, np):
     """JSON-ready: NumPy scalars to Python, non-finite floats to None."""
+    # heavy (NumPy, the gap): imported when the command runs, so `bikerider --help` starts fast (cli.py)
     import math
 
     if isinstance(value, dict):

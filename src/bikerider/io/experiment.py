@@ -73,6 +73,7 @@ from bikerider.gap.measured.records import (
     detect_windows,
 )
 from bikerider.io.input_file import checked_input_file
+from bikerider.io.toml_input import read_toml
 
 MAX_LOG_BYTES = 200_000_000
 """Largest log or windows file (CSV manifest) read [bytes, unpacked]: hours of a 100 Hz log with a
@@ -316,7 +317,6 @@ def _line_of(text: str, pattern: str, after: int = 0) -> int | None:
 
 def read_manifest(path: str | Path) -> tuple[ExperimentSettings, list[Window]]:
     """Read a TOML manifest (see the module docstring): the settings and the windows to cut."""
-    from bikerider.io.toml_input import read_toml
 
     path = Path(path)
     data = read_toml(path)  # checks the path first: a regular file of at most 1 MiB, as every TOML file

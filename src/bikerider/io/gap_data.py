@@ -49,7 +49,10 @@ from bikerider.gap.measured.control import GAIN_NAMES, MAX_MAGNITUDE, ControlLaw
 from bikerider.gap.measured.records import MAX_RECORD_SAMPLES, Record
 from bikerider.gap.measured.tables import CANONICAL_ENTRIES, MODES, CanonicalData, EigenvalueData, entry_name
 from bikerider.generated.manifest import MATRIX_NAMES
+from bikerider.io.experiment import read_laws, read_text
 from bikerider.io.input_file import checked_input_file
+from bikerider.io.toml_input import read_toml
+from bikerider.quantity import parse_quantity
 
 LOG = logging.getLogger(__name__)
 
@@ -489,9 +492,6 @@ def read_control(path: str | Path) -> dict[str, ControlLaw]:
     gains), or named laws ``[control.<name>]`` whose gains may be schedules in speed (see
     :mod:`bikerider.gap.measured.control`).
     """
-    from bikerider.io.experiment import read_laws, read_text
-    from bikerider.io.toml_input import read_toml
-    from bikerider.quantity import parse_quantity
 
     data = read_toml(checked_input_file(path, MAX_CONTROL_BYTES, "control file"))
     table = data.get("control", data)

@@ -14,13 +14,20 @@ replacing the literature range of :mod:`bikerider.gap.candidates.effects` for th
 
 from __future__ import annotations
 
+import math
+from dataclasses import replace
 from pathlib import Path
 
 from bikerider.benchmark import BenchmarkParameters
 from bikerider.errors import InputError
 from bikerider.gap.candidates.effect_model import GRIP_KEYS, UPPER_BODY_KEYS, RiderGeometry
+from bikerider.gap.candidates.effects import EFFECTS
 from bikerider.gap.candidates.nominal import RIDER_KEYS, GapModelInput, default_geometry, table_numbers
+from bikerider.io.benchmark_file import load_benchmark_parameters, parameters_from_table
+from bikerider.io.bicycleparameters import merge_rider, read_lumped_rider
 from bikerider.io.input_file import checked_input_file
+from bikerider.io.toml_input import read_toml
+from bikerider.quantity import Quantity
 
 MAX_MODEL_BYTES = 1_000_000
 """Largest model or rider file read [bytes] (they hold a few dozen values: a few kB)."""
@@ -41,14 +48,11 @@ def load_model(
     InputError
         A missing or impossible value (names the file, the key and what was expected).
     """
-    from bikerider.io.benchmark_file import load_benchmark_parameters, parameters_from_table
 
     path = checked_input_file(path, MAX_MODEL_BYTES, "model file")
     source = str(path)
     tables: dict[str, object] = {}
     if path.suffix.lower() == ".toml":
-        from bikerider.io.toml_input import read_toml
-
         data = read_toml(path)
         _check_tables(data, source)
         extra = {k: data[k] for k in MODEL_TABLES[1:] if k in data}
@@ -108,9 +112,6 @@ def _check_tables(data: dict, source: str) -> None:
 
 def _plausible(table: object, source: str) -> dict[str, tuple[float, float, str]]:
     """``[plausible]``: ``name = { range = [lo, hi], why = "..." }`` for candidate parameters."""
-    import math
-
-    from bikerider.gap.candidates.effects import EFFECTS
 
     known = {p.name for e in EFFECTS.values() for p in e.parameters}
     if not isinstance(table, dict):
@@ -144,10 +145,6 @@ def _plausible(table: object, source: str) -> dict[str, tuple[float, float, str]
 def _merge_rider(
     parameters: BenchmarkParameters, rider_path: Path, rel_sigma: float = 0.0
 ) -> tuple[BenchmarkParameters, dict[str, float]]:
-    from dataclasses import replace
-
-    from bikerider.io.bicycleparameters import merge_rider, read_lumped_rider
-    from bikerider.quantity import Quantity
 
     lumped = read_lumped_rider(rider_path)
     if rel_sigma > 0:

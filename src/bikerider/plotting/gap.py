@@ -21,9 +21,26 @@ response) for users exploring a candidate.
 from __future__ import annotations
 
 import math
+import textwrap
 
 import numpy as np
+from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
+from bikerider.benchmark.model import label_modes
+from bikerider.errors import FitError
+from bikerider.gap.candidates.effect_model import EffectModel
+from bikerider.gap.inference.timedomain import (
+    OBSERVED,
+    Layout,
+    closed_loop,
+    friction_states,
+    initial_states,
+    make_batches,
+    simulate_friction,
+    simulate_linear,
+    systems,
+)
+from bikerider.gap.measured.repair import repair_tags
 from bikerider.plotting.common import pyplot
 
 
@@ -43,7 +60,6 @@ def weave_curve(model, speeds: np.ndarray, law, reference_model, speed_scale: fl
     The law's gains are those at the recorded speed; the model runs at ``speed_scale`` times it.
     Matched to ``reference_model``'s weave (the nominal model under the same law).
     """
-    from bikerider.benchmark.model import label_modes
 
     gains = law(speeds)
     ref, _ = label_modes(reference_model.eigenvalues(speeds, gains))
@@ -62,7 +78,6 @@ def parameter_band(problem, speeds: np.ndarray, law, reference_model) -> np.ndar
 
     Returns ``(S,)`` complex: the real part's uncertainty plus i times the imaginary part's.
     """
-    from bikerider.gap.candidates.effect_model import EffectModel
 
     if not problem.free:
         return np.zeros(speeds.size, complex)
@@ -85,8 +100,6 @@ def _selected_model(diagnosis):
     p = diagnosis.problem
     scale = fit.config.get("speed_sensor", {}).get("speed_scale", 1.0)
     if "steer_friction" in fit.effects:
-        from bikerider.gap.candidates.effect_model import EffectModel
-
         c = fit.config["steer_friction"]["c_viscous"]
         linear = {e: v for e, v in fit.config.items() if e not in ("steer_friction", "speed_sensor")}
         model = EffectModel(p.nominal, p.geometry, {"steer_damping": {"c_steer": c}, **linear})
@@ -97,7 +110,6 @@ def _selected_model(diagnosis):
 def plot_eigenvalues(diagnosis):
     """Measured and predicted weave against speed, one curve per control law (module docstring)."""
     plt = pyplot()
-    from bikerider.gap.candidates.effect_model import EffectModel
 
     p = diagnosis.problem
     e = p.predictor.eigen
@@ -194,18 +206,6 @@ def plot_eigenvalues(diagnosis):
 def plot_records(diagnosis, columns: int = 6):
     """Contact sheet: every record's roll rate, its fitted decay and the model's response."""
     plt = pyplot()
-    from bikerider.errors import FitError
-    from bikerider.gap.inference.timedomain import (
-        OBSERVED,
-        Layout,
-        closed_loop,
-        friction_states,
-        initial_states,
-        make_batches,
-        simulate_linear,
-        systems,
-    )
-    from bikerider.gap.measured.repair import repair_tags
 
     fits = diagnosis.records
     if not fits:
@@ -215,8 +215,6 @@ def plot_records(diagnosis, columns: int = 6):
     if chosen is not None:
         model, model_label = chosen[0], chosen[2]
     else:
-        from bikerider.gap.candidates.effect_model import EffectModel
-
         model, model_label = EffectModel(p.nominal, p.geometry), "nominal model"
     responses = {}
     used = [k for k, f in enumerate(fits) if f.used]
@@ -319,7 +317,6 @@ def _short(name: str) -> str:
 
 
 def _wrap(text: str, width: int) -> str:
-    import textwrap
 
     return "\n".join(textwrap.wrap(text, width)[:6])
 
@@ -420,7 +417,6 @@ def plot_ranking(result: dict):
 def _decade_axis(ax, values) -> None:
     """A log x axis over ``values`` (positive) spanning at least a decade, about their geometric
     middle, with plain numbers at 1, 2 and 5 times the powers of ten (``0.5``, not ``5x10^-1``)."""
-    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
     v = np.asarray([x for x in values if np.isfinite(x) and x > 0], dtype=float)
     lo, hi = (float(v.min()), float(v.max())) if v.size else (0.1, 10.0)
@@ -444,7 +440,6 @@ def plot_effects(diagnosis):
     whose apparent eigenvalue depends on each record's amplitude), as its prediction of each record.
     """
     plt = pyplot()
-    from bikerider.gap.candidates.effect_model import EffectModel
 
     p = diagnosis.problem
     e = p.predictor.eigen
@@ -521,7 +516,6 @@ def _time_domain_selection(effects: tuple[str, ...]) -> bool:
 def plot_time_response(diagnosis):
     """Roll rate after a kick at the median speed: the nominal model and the selection (with its friction)."""
     plt = pyplot()
-    from bikerider.gap.candidates.effect_model import EffectModel
 
     p = diagnosis.problem
     e = p.predictor.eigen
@@ -537,8 +531,6 @@ def plot_time_response(diagnosis):
         model, scale, label = chosen
         fit = diagnosis.selected_fit
         if "steer_friction" in fit.effects:
-            from bikerider.gap.inference.timedomain import simulate_friction
-
             ss = model.state_space([speed * scale])
             A = ss.closed_loop(None if gains is None else np.asarray(gains)[None, :])[0]
             x0 = np.zeros(A.shape[-1])

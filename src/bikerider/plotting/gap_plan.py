@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+from matplotlib.ticker import NullFormatter
 
 from bikerider.plotting.common import pyplot
 
@@ -116,7 +117,6 @@ def _sweep_row(axes, plan, sweeps, colours):
     unit = "rad/s" if best.output == "roll_rate" else "rad"
     axes[0].set_ylabel(f"|{best.output.replace('_', ' ')} / steer torque| [{unit} / N m]")
     axes[1].set_ylabel("phase [deg]")
-    from matplotlib.ticker import NullFormatter
 
     for ax in axes[:2]:
         ax.set_xscale("log")

@@ -15,6 +15,9 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.stats import norm
+
+from bikerider.errors import InputError
 
 EFFECT_NAMES = (
     "parameters",
@@ -75,7 +78,6 @@ class Prior:
 
     def interval(self, p: float = 0.95) -> tuple[float, float]:
         """The central (half-Cauchy: lower) interval holding probability ``p``."""
-        from scipy.stats import norm
 
         if self.kind == "normal":
             z = float(norm.ppf(0.5 + p / 2))
@@ -474,7 +476,6 @@ def effect(name: str) -> Effect:
     InputError
         For an unknown name (the message lists the candidates).
     """
-    from bikerider.errors import InputError
 
     try:
         return EFFECTS[name]

@@ -57,15 +57,18 @@ normalised residuals is ``E[z^2] = 1``), ``shrink = (G_before - G_after) / G_bef
 
 from __future__ import annotations
 
+import itertools
 import logging
 import math
 import time
 from dataclasses import dataclass, field, replace
 
 import numpy as np
+from scipy.stats import chi2
 
 from bikerider import progress
 from bikerider.errors import InputError
+from bikerider.gap.candidates.effect_model import BENCH_ARGS, EffectModel
 from bikerider.gap.candidates.effects import (
     COULOMB_RANGE,
     EFFECT_NAMES,
@@ -87,7 +90,11 @@ from bikerider.gap.diagnosis.statistics import (
     rms,
     significantly_better,
 )
+from bikerider.gap.inference.indirect import RecordRows, RecordSimulator
+from bikerider.gap.inference.low_rank import low_rank_chi2
+from bikerider.gap.inference.predict import Predictor
 from bikerider.gap.inference.problem import EffectFit, GapProblem
+from bikerider.gap.inference.timedomain import Layout, fit_time_domain
 from bikerider.gap.measured.records import RecordFit, eigenvalues_of
 from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
 
@@ -257,9 +264,6 @@ class Diagnosis:
         model's weave eigenvalue; a record is left out only where the model within its parameters'
         uncertainty shows no weave the fit finds (its prediction is then undefined).
         """
-        from bikerider.gap.candidates.effect_model import BENCH_ARGS, EffectModel
-        from bikerider.gap.inference.indirect import RecordRows, RecordSimulator
-        from bikerider.gap.inference.predict import Predictor
 
         used = [k for k, f in enumerate(self.records) if f.used]
         if not used:
@@ -432,7 +436,6 @@ class Diagnosis:
         (leave one group out), when there are three folds or more, and 95 % intervals from Student's t
         with one degree of freedom fewer than the folds (:func:`jackknife_quantile`).
         """
-        from bikerider.gap.inference.timedomain import Layout, fit_time_domain
 
         cached = self._time_domain_full.get(effects) if mask is None else None
         if cached is not None and (not jackknife or np.all(np.isfinite(cached.stderr))):
@@ -491,7 +494,6 @@ class Diagnosis:
         """Predicted observations of the records in ``mask`` under a time-domain fit: what the record fit
         finds in the candidate's simulated response over each record (indirect inference, as for every
         candidate)."""
-        from bikerider.gap.inference.timedomain import Layout
 
         idx = self._record_indices(mask)
         pred = np.full(len(self.problem.obs), np.nan)
@@ -559,7 +561,6 @@ class Diagnosis:
 
     # -- where -----------------------------------------------------------------------------------
     def _gap_map(self) -> list[dict]:
-        from scipy.stats import chi2
 
         p = self.problem
         obs = p.obs
@@ -608,9 +609,6 @@ class Diagnosis:
         return cells
 
     def _gap_test(self) -> dict:
-        from scipy.stats import chi2
-
-        from bikerider.gap.inference.low_rank import low_rank_chi2
 
         p = self.problem
         r = p.y - p.baseline
@@ -638,7 +636,6 @@ class Diagnosis:
 
     # -- whether ----------------------------------------------------------------------------------
     def _verdict(self) -> str:
-        from scipy.stats import chi2
 
         fit = self.parameter_fit
         if fit is not None:
@@ -669,8 +666,6 @@ class Diagnosis:
         if timed:
             start = None
             if len(effects) > 1 and ("steer_friction",) in self._time_domain_full:  # from the friction alone
-                from bikerider.gap.inference.timedomain import Layout
-
                 alone = self._time_domain_full[("steer_friction",)].values
                 start = list(alone) + [1.0 if n == "speed_scale" else 0.0 for _, n in Layout.of(effects).names[2:]]
             full = self._time_domain_fit(effects, None, start=start, jackknife=False)
@@ -766,7 +761,6 @@ class Diagnosis:
         """Pairs searched on the held-out folds (module docstring): any two linear candidates that each,
         alone, predict the held-out folds better than the nominal model (by :data:`HELPFUL`), fitted jointly; and steer
         friction (in the time domain) with each such one of :data:`TIME_DOMAIN_PARTNERS`."""
-        import itertools
 
         helpful = [
             e
@@ -1060,7 +1054,6 @@ class Diagnosis:
         ``flag`` (text) when the value lies outside the usual range.  ``usable`` is false only where the
         data cannot carry the value (undetermined, or pinned at the edge of the search).
         """
-        from scipy.stats import chi2
 
         checks = []
         ok = True
@@ -1292,7 +1285,6 @@ def arm_inertia(problem: GapProblem, m_arm: float) -> float:
 
 def _data_only_cell(problem: GapProblem, idx: list[int], alpha: float) -> dict:
     """A gap-map cell's RMS residual and significance against the data's uncertainty alone."""
-    from scipy.stats import chi2
 
     var = problem.var_data[idx]
     if not np.all(var > 0):
