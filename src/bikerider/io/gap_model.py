@@ -22,12 +22,12 @@ from bikerider.benchmark import BenchmarkParameters
 from bikerider.errors import InputError
 from bikerider.gap.candidates.effect_model import GRIP_KEYS, UPPER_BODY_KEYS, RiderGeometry
 from bikerider.gap.candidates.effects import EFFECTS
-from bikerider.gap.candidates.nominal import RIDER_KEYS, GapModelInput, default_geometry, table_numbers
+from bikerider.gap.candidates.nominal import RIDER_KEYS, GapModelInput
 from bikerider.io.benchmark_file import load_benchmark_parameters, parameters_from_table
 from bikerider.io.bicycleparameters import merge_rider, read_lumped_rider
 from bikerider.io.input_file import checked_input_file
 from bikerider.io.toml_input import read_toml
-from bikerider.quantity import Quantity
+from bikerider.quantity import Quantity, parse_quantity
 
 MAX_MODEL_BYTES = 1_000_000
 """Largest model or rider file read [bytes] (they hold a few dozen values: a few kB)."""
@@ -67,7 +67,7 @@ def load_model(
         parameters = parameters_from_table(data.get("benchmark", data), source)
     else:
         parameters = load_benchmark_parameters(path)
-    rider = table_numbers(tables["rider"], "rider", RIDER_KEYS, source) if "rider" in tables else None
+    rider = _table_numbers(tables["rider"], "rider", RIDER_KEYS, source) if "rider" in tables else None
     if rider_path is not None:
         if rider is not None:
             raise InputError("rider", str(rider_path), "one rider: the model file already has a [rider] table", source)
@@ -77,17 +77,17 @@ def load_model(
         raise InputError(
             "rider.mass", rider["mass"], f"a positive mass below the rear body's {parameters['mB']} kg", source
         )
-    geometry = default_geometry(parameters, rider)
+    geometry = GapModelInput.default_geometry(parameters, rider)
     if "upper_body" in tables:
         geometry = RiderGeometry(
-            table_numbers(tables["upper_body"], "upper_body", UPPER_BODY_KEYS, source),
+            _table_numbers(tables["upper_body"], "upper_body", UPPER_BODY_KEYS, source),
             geometry.grips,
             geometry.notes + "; upper body from the model file",
         )
     if "grips" in tables:
         geometry = RiderGeometry(
             geometry.upper_body,
-            table_numbers(tables["grips"], "grips", GRIP_KEYS, source),
+            _table_numbers(tables["grips"], "grips", GRIP_KEYS, source),
             geometry.notes + "; grips from the model file",
         )
     plausible = _plausible(tables["plausible"], source) if "plausible" in tables else {}
@@ -164,3 +164,18 @@ def _merge_rider(
         "Izz": values["IBrzz"],
     }
     return merge_rider(parameters, lumped), rider
+
+
+def _table_numbers(table: object, name: str, keys: tuple[str, ...], source: str) -> dict[str, float]:
+    """The numbers of a model file's table ``[name]``: exactly ``keys``, each a number or ``"v +/- sigma"``."""
+    if not isinstance(table, dict):
+        raise InputError(name, table, "a table", source)
+    unknown = sorted(set(table) - set(keys))
+    if unknown:
+        raise InputError(f"{name}.{unknown[0]}", table[unknown[0]], "one of " + ", ".join(keys), source)
+    out = {}
+    for key in keys:
+        if key not in table:
+            raise InputError(f"{name}.{key}", "missing", "a value", source)
+        out[key] = parse_quantity(table[key], f"{name}.{key}", source).value
+    return out
