@@ -88,7 +88,8 @@ def test_a_table_taken_as_exact_gets_a_meaningful_gap_statistic(davis):
 
 
 def test_the_folds_do_not_grow_with_the_groups(davis):
-    from bikerider.gap.diagnosis.result import MAX_FOLDS, Diagnosis
+    from bikerider.gap.diagnosis.folds import MAX_FOLDS
+    from bikerider.gap.diagnosis.result import Diagnosis
 
     n = 3 * MAX_FOLDS + 1
     groups = [f"run{k:03d}" for k in range(n)]

@@ -15,7 +15,7 @@ freedom) plausible parameter errors explain the gap (``parameters``), else it is
 With verdict ``parameters`` the parameter fit is selected when it is plausible; when it needs
 implausible shifts the candidates are compared as for a structural gap.
 
-Which.  Folds are the data's groups (runs, riders, environments; more than :data:`MAX_FOLDS` groups
+Which.  Folds are the data's groups (runs, riders, environments; more than :data:`~bikerider.gap.diagnosis.folds.MAX_FOLDS` groups
 are held out in blocks of whole groups), or, for a single group, contiguous speed bands; never
 random points.  Every candidate is fitted on the training folds and scored on
 the held-out fold; the held-out error is the root mean square of the normalised residuals over all
@@ -81,6 +81,7 @@ from bikerider.gap.candidates.effects import (
     prior_from_range,
 )
 from bikerider.gap.candidates.nominal import GapModelInput
+from bikerider.gap.diagnosis.folds import N_SPEED_BANDS, folds
 from bikerider.gap.diagnosis.statistics import (
     ALPHA,
     _n_params,
@@ -113,10 +114,6 @@ changes nothing and pairs nothing)."""
 UNDETERMINED = 1.0
 """A fitted value whose standard error exceeds this many times the width of its plausible range is
 not determined by the data (the data narrow it down less than the literature already does)."""
-N_SPEED_BANDS = 3
-MAX_FOLDS = 12
-"""Most folds: data in more groups are held out a block of whole groups at a time (a fold costs a fit of
-every candidate, so the folds must not grow with the data)."""
 NOISE_FLOOR = 1.0
 """A held-out RMS error (against the data's own noise where known) at or below this is at the noise floor."""
 AMPLITUDE_SPREAD = 2.0
@@ -233,7 +230,7 @@ class Diagnosis:
         if not self.problem.free and "parameters" in self.effects:
             self.not_applicable["parameters"] = "the model file gives no parameter uncertainties"
         self.candidates = [e for e in self.effects if e not in self.not_applicable]
-        self.folds = self._folds()
+        self.folds = folds(self.problem.obs)
         self.gap_map = self._gap_map()
         self.gap_test = self._gap_test()
         self.full_fits: dict[tuple[str, ...], EffectFit] = {}
@@ -542,23 +539,6 @@ class Diagnosis:
         return self._selected_predictions
 
     # -- folds --------------------------------------------------------------------------------------
-    def _folds(self) -> list[tuple[str, np.ndarray]]:
-        obs = self.problem.obs
-        groups, member = np.unique(np.asarray(obs.group, dtype=str), return_inverse=True)
-        if groups.size > MAX_FOLDS:  # whole groups, consecutive in name order, share a fold
-            blocks = np.array_split(np.arange(groups.size), MAX_FOLDS)
-            return [
-                (f"groups {groups[b[0]]} to {groups[b[-1]]} ({b.size})", (member >= b[0]) & (member <= b[-1]))
-                for b in blocks
-            ]
-        if groups.size >= 2:
-            return [(f"group {g}", member == k) for k, g in enumerate(groups)]
-        speeds = np.unique(obs.speed)
-        if speeds.size < 2:
-            return []
-        bands = np.array_split(speeds, min(N_SPEED_BANDS, speeds.size))
-        return [(f"speeds {b[0]:.2f}-{b[-1]:.2f} m/s", (obs.speed >= b[0]) & (obs.speed <= b[-1])) for b in bands]
-
     # -- where -----------------------------------------------------------------------------------
     def _gap_map(self) -> list[dict]:
 
