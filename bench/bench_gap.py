@@ -7,9 +7,9 @@ cross-validate every candidate (steer friction in the time domain) and the pairs
 held out in turn, select, and build the result.  Goal: at most 60 s on 2 cores.
 
 Item 1, measured on the Davis instrumented bicycle with rider Jason: 21 runs (three sessions of
-seven, one under a known control) simulated by :mod:`bikerider.gap.validation` with a hidden leaning
+seven, one under a known control) simulated by :mod:`validation.cases` with a hidden leaning
 upper body and steer friction, weave eigenvalues fitted from the noisy roll rates.  Timed:
-:class:`bikerider.gap.diagnosis.Diagnosis` (gap map, parameter fit, the candidates and their pairs on
+:class:`bikerider.gap.diagnosis.result.Diagnosis` (gap map, parameter fit, the candidates and their pairs on
 three held-out folds, selection, full-data fits) and ``as_dict``.  Goal: at most 30 s on 2 cores.
 
 Run alone: ``.venv/bin/python bench/bench_gap.py``.
@@ -22,6 +22,9 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
+
+if str(ROOT) not in sys.path:  # validation/ (the gap's blind-check harnesses) lives beside src/, not installed
+    sys.path.insert(0, str(ROOT))
 GOAL_SECONDS = 30.0
 SBW_GOAL_SECONDS = 60.0
 SBW = ROOT / "src" / "bikerider" / "data" / "gap" / "pasma2024_sbw"
@@ -30,9 +33,9 @@ SBW = ROOT / "src" / "bikerider" / "data" / "gap" / "pasma2024_sbw"
 def workload():
     import numpy as np
 
-    from bikerider.gap import validation as V
-    from bikerider.gap.data import CanonicalData
+    from bikerider.gap.measured.tables import CanonicalData
     from bikerider.io.gap_model import load_model
+    from validation import cases as V
 
     bp = ROOT / "src" / "bikerider" / "data" / "bicycleparameters"
     model = load_model(
@@ -52,7 +55,7 @@ def workload():
 
 
 def time_diagnosis() -> tuple[float, int, dict]:
-    from bikerider.gap.diagnosis import Diagnosis
+    from bikerider.gap.diagnosis.result import Diagnosis
 
     model, data, empty = workload()
     start = time.perf_counter()
@@ -62,9 +65,9 @@ def time_diagnosis() -> tuple[float, int, dict]:
 
 def time_sbw() -> tuple[dict[str, float], dict]:
     """Seconds of each stage of the SBW diagnosis from the raw logs, and its result."""
-    from bikerider.gap.data import CanonicalData, EigenvalueData
-    from bikerider.gap.diagnosis import Diagnosis
-    from bikerider.gap.records import fit_records
+    from bikerider.gap.diagnosis.result import Diagnosis
+    from bikerider.gap.measured.records import fit_records
+    from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
     from bikerider.io.experiment import load_records, read_manifest
     from bikerider.io.gap_model import load_model
 

@@ -43,8 +43,8 @@ def eigenvalue_table(n: int):
     """``n`` weave eigenvalues near the model's, one group, no stated uncertainty (fixed seed)."""
     import numpy as np
 
-    from bikerider.gap.control import ControlLaw
-    from bikerider.gap.data import EigenvalueData
+    from bikerider.gap.measured.control import ControlLaw
+    from bikerider.gap.measured.tables import EigenvalueData
 
     rng = np.random.default_rng(12)
     speed = rng.uniform(4.0, 9.0, n)
@@ -77,8 +77,8 @@ def _measured(fn) -> tuple[float, int]:
 
 
 def time_rows(n: int, model) -> tuple[float, int]:
-    from bikerider.gap.data import CanonicalData
-    from bikerider.gap.diagnosis import Diagnosis
+    from bikerider.gap.diagnosis.result import Diagnosis
+    from bikerider.gap.measured.tables import CanonicalData
 
     data = eigenvalue_table(n)
     return _measured(lambda: Diagnosis(model, data, CanonicalData.empty(), ("steer_damping",)).as_dict())
@@ -87,8 +87,8 @@ def time_rows(n: int, model) -> tuple[float, int]:
 def record(n: int):
     import numpy as np
 
-    from bikerider.gap.control import ControlLaw
-    from bikerider.gap.records import Record
+    from bikerider.gap.measured.control import ControlLaw
+    from bikerider.gap.measured.records import Record
 
     t = np.arange(n) / 100.0
     rng = np.random.default_rng(3)
@@ -98,7 +98,7 @@ def record(n: int):
 
 
 def time_samples(n: int) -> tuple[float, int]:
-    from bikerider.gap.records import fit_records
+    from bikerider.gap.measured.records import fit_records
 
     r = record(n)
     return _measured(lambda: fit_records([r]))

@@ -8,9 +8,9 @@ from pathlib import Path
 import numpy as np
 
 import bikerider
-from bikerider.gap.control import ControlLaw, GainSchedule
-from bikerider.gap.models import BENCH_ARGS, EffectModel
-from bikerider.gap.records import Record
+from bikerider.gap.candidates.effect_model import BENCH_ARGS, EffectModel
+from bikerider.gap.measured.control import ControlLaw, GainSchedule
+from bikerider.gap.measured.records import Record
 from bikerider.io.gap_model import load_model
 
 DATA = Path(bikerider.__file__).parent / "data"

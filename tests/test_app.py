@@ -288,7 +288,7 @@ def _wait_for(job, seconds=120):
 
 
 def test_a_diagnosis_runs_in_the_background_with_the_packages_entry_point(tmp_path):
-    from bikerider.commands.gap import diagnose_files
+    from bikerider.diagnose import diagnose_files
 
     uploads = UploadFolders(tmp_path)
     try:

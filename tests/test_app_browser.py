@@ -35,7 +35,7 @@ LATENCY_GOAL_MS = 300.0
 @pytest.fixture(scope="module")
 def server():
     from bikerider.app.server import App, make_server
-    from bikerider.commands.gap import diagnose_files
+    from bikerider.diagnose import diagnose_files
 
     app = App(diagnose=lambda model, data, experiment: diagnose_files(model, data, experiment))
     httpd = make_server(app, "127.0.0.1", 0)

@@ -103,7 +103,7 @@ def _hostile(draw, data: bytes) -> tuple[str, bytes]:
 @FUZZ
 @given(st.data())
 def test_control_files(tmp_path_factory, data):
-    from bikerider.gap.models import EffectModel
+    from bikerider.gap.candidates.effect_model import EffectModel
     from bikerider.io.gap_data import read_control
     from bikerider.io.gap_model import load_model
 
@@ -154,7 +154,7 @@ def test_experiment_manifests_and_logs(tmp_path_factory, data, target):
     except BikeriderError as exc:
         assert_names_file(exc, folder / "experiment.toml", folder / "windows.csv", folder / "run.log")
         return
-    from bikerider.gap.records import fit_record
+    from bikerider.gap.measured.records import fit_record
 
     for r in records:  # a record with a problem is left out with it; every other one is finite
         if r.problem is None:
@@ -300,9 +300,9 @@ def test_long_work_is_announced_before_it_starts(monkeypatch, caplog):
     # before: a large table ran for minutes without a line of output (shown at default verbosity)
     import logging
 
-    from bikerider.commands import gap
+    from bikerider import diagnose as pipeline
 
-    monkeypatch.setattr(gap, "LONG_WORK_ROWS", 10)
+    monkeypatch.setattr(pipeline, "LONG_WORK_ROWS", 10)
     with caplog.at_level(logging.WARNING, logger="bikerider"):
         code, out, err = run_cli(["gap", *KOOIJMAN, "--data", str(EXAMPLES / "eigenvalues.csv"), *FEW])
     assert code == 0, err

@@ -333,7 +333,7 @@ def test_gap_perturbation_run(tmp_path_factory, data):
     except BikeriderError as exc:
         assert_names_file(exc, path)
         return
-    from bikerider.gap.records import fit_record
+    from bikerider.gap.measured.records import fit_record
 
     fit = fit_record(run)  # a run that cannot be fitted is left out with a reason, never an exception
     assert_all_finite([run.speed, run.speed_sigma, run.time, run.signals], what)

@@ -84,14 +84,14 @@ def test_quiet_silences_the_progress(capsys):
 
 
 def test_ctrl_c_stops_with_a_message_saying_what_was_kept(monkeypatch, capsys, tmp_path):
-    from bikerider.commands import gap
+    from bikerider import diagnose as pipeline
 
     def interrupted(*args):
         progress.begin("candidates", 10, "fold fits")
         progress.advance(3)
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(gap, "_diagnose_files", interrupted)
+    monkeypatch.setattr(pipeline, "run_diagnosis", interrupted)
     report = tmp_path / "report"
     assert main(["gap", *MODEL, "--data", EXAMPLE, "--report", str(report)]) == 130
     err = capsys.readouterr().err
@@ -123,7 +123,7 @@ def test_outside_a_command_progress_is_silent(capsys):
 
 
 def test_the_text_lists_every_repaired_record(unplannable):
-    from bikerider.gap.report import summary_text
+    from bikerider.gap.text import summary_text
 
     records = {
         "total": 3,

@@ -10,8 +10,8 @@ import pytest
 
 import bikerider
 from bikerider.errors import FileFormatError, FitError, InputError
-from bikerider.gap.extraction import weave_eigenvalue
-from bikerider.gap.records import fit_record
+from bikerider.gap.measured.extraction import weave_eigenvalue
+from bikerider.gap.measured.records import fit_record
 from bikerider.io import gap_data as gd
 from bikerider.io.gap_model import load_model
 
@@ -133,7 +133,7 @@ def test_perturbation_speed_column_and_errors(tmp_path):
         gd.read_perturbation(no_speed)
     with pytest.raises(InputError, match="speed"):
         gd.read_perturbation(no_speed, speed=-1.0)
-    # a stamp going back is a logger's, repaired when the record is fitted (bikerider.gap.repair) ...
+    # a stamp going back is a logger's, repaired when the record is fitted (bikerider.gap.measured.repair) ...
     backwards = _write(tmp_path, "back.csv", "# speed = 5\ntime,roll_rate\n0.0,0.1\n0.2,0.2\n0.1,0.3\n")
     assert gd.read_perturbation(backwards).time.tolist() == [0.0, 0.2, 0.1]
     # ... but a time that never advances is no time series

@@ -9,11 +9,12 @@ import pytest
 
 import bikerider
 from bikerider.errors import InputError
-from bikerider.gap.data import CanonicalData, EigenvalueData
-from bikerider.gap.diagnosis import Diagnosis, gap_shrink, significantly_better
-from bikerider.gap.fit import GapProblem
-from bikerider.gap.models import BENCH_ARGS, EffectModel
-from bikerider.gap.predict import Predictor
+from bikerider.gap.candidates.effect_model import BENCH_ARGS, EffectModel
+from bikerider.gap.diagnosis.result import Diagnosis
+from bikerider.gap.diagnosis.statistics import gap_shrink, significantly_better
+from bikerider.gap.inference.predict import Predictor
+from bikerider.gap.inference.problem import GapProblem
+from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
 from bikerider.io.gap_data import read_canonical
 from bikerider.io.gap_model import load_model
 

@@ -11,7 +11,7 @@ from bikerider.generated import gap_effects as gen
 
 from bikerider.benchmark.model import label_modes
 from bikerider.errors import InputError
-from bikerider.gap.models import BENCH_ARGS, EffectModel, RiderGeometry
+from bikerider.gap.candidates.effect_model import BENCH_ARGS, EffectModel, RiderGeometry
 from bikerider.io.gap_model import load_model
 
 ZERO_EXTRAS = dict(I_steer=0.0, c_steer=0.0, k_steer=0.0, m_arm=0.0, k_arm=0.0, c_arm=0.0)
@@ -77,7 +77,7 @@ def test_added_steer_inertia_equals_a_front_frame_inertia_about_the_steer_axis(b
 def test_arm_masses_equal_moving_point_masses_from_rear_body_to_handlebar(bench):
     # Lagrangian (point masses on the front frame minus the same on the rear frame) against the
     # parallel-axis theorem on the benchmark bodies (the validation truth's implementation).
-    from bikerider.gap.validation import _move_arms
+    from validation.cases import _move_arms
 
     moved = _move_arms(dict(bench), 3.0, GRIPS)
     for v in (2.0, 6.0):
@@ -91,7 +91,7 @@ def test_arm_masses_equal_moving_point_masses_from_rear_body_to_handlebar(bench)
 def test_rider_lean_matches_the_hand_derived_coupling(bench):
     # The validation truth assembles the lean coupling by Newton-Euler; the candidate comes from the
     # Lagrangian with the nonholonomic projection.  Their leading 2x2 blocks are Meijaard's.
-    from bikerider.gap.validation import TRUTHS, TruthSimulator
+    from validation.cases import TRUTHS, TruthSimulator
 
     sim = TruthSimulator.__new__(TruthSimulator)  # only the parts _lean_terms reads
     sim.values = dict(bench, g=9.81)
@@ -222,7 +222,7 @@ def test_default_rider_geometry_from_the_davis_bicycle_and_jason():
 
 
 def test_each_effect_can_be_plotted_on_its_own(bench, geometry, tmp_path):
-    from bikerider.gap.report import plot_effect
+    from bikerider.plotting.gap import plot_effect
 
     values = dict(bench, g=9.81)
     for name, params in {

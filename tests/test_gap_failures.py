@@ -20,12 +20,12 @@ from gap_support import SIL, decay_record, nominal, riderless_model
 
 import bikerider
 from bikerider.cli import main
-from bikerider.gap.data import CanonicalData, EigenvalueData
-from bikerider.gap.diagnosis import Diagnosis
-from bikerider.gap.fit import GapProblem
-from bikerider.gap.models import EffectModel
-from bikerider.gap.predict import Predictor
-from bikerider.gap.records import Record, fit_records
+from bikerider.gap.candidates.effect_model import EffectModel
+from bikerider.gap.diagnosis.result import Diagnosis
+from bikerider.gap.inference.predict import Predictor
+from bikerider.gap.inference.problem import GapProblem
+from bikerider.gap.measured.records import Record, fit_records
+from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
 
 DATA = Path(bikerider.__file__).parent / "data"
 BP = DATA / "bicycleparameters"
@@ -141,7 +141,7 @@ def test_1_the_command_goes_on_past_a_run_it_cannot_fit(tmp_path, capsys):
 
 # 2 ----------------------------------------------------------------------------------------------
 def test_2_one_predicted_curve_per_control_law(riderless):
-    from bikerider.gap.report import plot_eigenvalues
+    from bikerider.plotting.gap import plot_eigenvalues
 
     speeds = np.linspace(2.0, 5.0, 13)  # 13 rows, 13 different gains of one speed-scheduled law
     reference = Predictor(
@@ -222,7 +222,7 @@ def test_3_and_6_nothing_implausible_is_selected(example):
 def test_3_the_text_says_what_the_ranking_is(example):
     # before: "The best single candidate, parameters, needs implausible values" while steer_friction ranked
     # first (tied, and first as the simpler): the text now names the measure and the candidate's rank
-    from bikerider.gap.report import summary_text
+    from bikerider.gap.text import summary_text
 
     text = summary_text(example)
     single = example["best_single_implausible"]

@@ -1,5 +1,5 @@
 """Indirect inference on records: every candidate predicts a record by what the record fit finds in its
-own simulated response (``bikerider.gap.indirect``), the comparison like with like for every candidate."""
+own simulated response (``bikerider.gap.inference.indirect``), the comparison like with like for every candidate."""
 
 from __future__ import annotations
 
@@ -7,12 +7,12 @@ import numpy as np
 import pytest
 from gap_support import SIL, decay_record, nominal, riderless_model
 
-from bikerider.gap.data import CanonicalData, EigenvalueData
-from bikerider.gap.diagnosis import Diagnosis
-from bikerider.gap.extraction import _two_mode
-from bikerider.gap.indirect import LAMBDA_BOUNDS, RecordSimulator, eigenvalue_of, levenberg_marquardt
-from bikerider.gap.models import EffectModel
-from bikerider.gap.records import Record, fit_records
+from bikerider.gap.candidates.effect_model import EffectModel
+from bikerider.gap.diagnosis.result import Diagnosis
+from bikerider.gap.inference.indirect import LAMBDA_BOUNDS, RecordSimulator, eigenvalue_of, levenberg_marquardt
+from bikerider.gap.measured.extraction import _two_mode
+from bikerider.gap.measured.records import Record, fit_records
+from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
 
 
 @pytest.fixture(scope="module")

@@ -1,5 +1,5 @@
 """What to measure next (``bikerider gap --next``): the plan's numbers, its records path, the command, and
-the blind check against runs spread evenly (``bikerider.gap.next_validation``)."""
+the blind check against runs spread evenly (``validation.plan_cases``)."""
 
 from __future__ import annotations
 
@@ -11,11 +11,11 @@ import pytest
 from gap_support import BP, DATA, decay_record, nominal, riderless_model
 
 from bikerider.cli import main
-from bikerider.gap.data import CanonicalData, EigenvalueData
-from bikerider.gap.diagnosis import Diagnosis
-from bikerider.gap.models import EffectModel
-from bikerider.gap.next_experiment import ODDS, NextExperiment, fit_residual, resolution_probability, signal_noise
-from bikerider.gap.records import fit_records
+from bikerider.gap.candidates.effect_model import EffectModel
+from bikerider.gap.diagnosis.result import Diagnosis
+from bikerider.gap.measured.records import fit_records
+from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
+from bikerider.gap.plan.ranking import ODDS, NextExperiment, fit_residual, resolution_probability, signal_noise
 from bikerider.io.gap_model import load_model
 
 
@@ -240,7 +240,7 @@ def test_bad_next_options_exit_2(capsys, extra, message):
 def test_blind_check_follows_the_plan_with_an_independent_simulation():
     # rider lean hidden, measured between 6 and 7.2 m/s only: rider lean ties with tyre slip; ten runs
     # where the plan says (by the hand-typed Meijaard model, LSODA, noise and the record fit) resolve it
-    from bikerider.gap.next_validation import run_next_case
+    from validation.plan_cases import run_next_case
 
     model = load_model(
         BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt", BP / "riders/Jason/Parameters/JasonRigidBenchmark.txt"

@@ -1,4 +1,4 @@
-"""Steer-torque multisines in the next-experiment plan (``bikerider.gap.next_sweep``): the frequency
+"""Steer-torque multisines in the next-experiment plan (``bikerider.gap.plan.sweeps``): the frequency
 response each rival predicts, the runs' noise, and a plan where a multisine sees what a decay does not."""
 
 from __future__ import annotations
@@ -11,11 +11,11 @@ from gap_support import BP, DATA, SIL, nominal, riderless_model
 from test_gap_next import _table
 
 from bikerider.cli import main
-from bikerider.gap.data import CanonicalData
-from bikerider.gap.diagnosis import Diagnosis
-from bikerider.gap.models import EffectModel
-from bikerider.gap.next_experiment import NextExperiment
-from bikerider.gap.next_sweep import line_amplitude, linearised_friction, lines_for, response, weave_shift
+from bikerider.gap.candidates.effect_model import EffectModel
+from bikerider.gap.diagnosis.result import Diagnosis
+from bikerider.gap.measured.tables import CanonicalData
+from bikerider.gap.plan.ranking import NextExperiment
+from bikerider.gap.plan.sweeps import line_amplitude, linearised_friction, lines_for, response, weave_shift
 
 
 @pytest.fixture(scope="module")

@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 from gap_support import BP, DATA
 
-from bikerider.gap.diagnosis import Diagnosis, diagnose
-from bikerider.gap.effects import EFFECTS, Prior, prior_from_range
-from bikerider.gap.fit import EffectFit
+from bikerider.gap.candidates.effects import EFFECTS, Prior, prior_from_range
+from bikerider.gap.diagnosis.result import Diagnosis, diagnose
+from bikerider.gap.inference.problem import EffectFit
 from bikerider.io.gap_data import read_eigenvalues
 from bikerider.io.gap_model import load_model
 
@@ -71,7 +71,7 @@ def test_a_precise_value_above_the_usual_range_is_selected_and_flagged(table_dia
     (flag,) = d.selection["flags"]
     assert "above the usual 0.05-0.5 N m s/rad" in flag and "the data determine it" in flag and ": check " in flag
     assert d.selection["log_prior"] < 0 and d.selection["log_odds_vs_nominal"] > 0
-    from bikerider.gap.report import summary_text
+    from bikerider.gap.text import summary_text
 
     text = summary_text(d.as_dict())
     assert "Selected: steer_damping" in text and "flag: c_steer = " in text
@@ -118,7 +118,7 @@ def test_a_bicycles_own_range_becomes_its_prior(table_diagnosis):
 
 def test_a_candidate_at_the_noise_floor_is_always_selected():
     # before: steer damping well above 0.5 N m s/rad ranked first at the noise floor with "Selected: nothing"
-    from bikerider.gap import validation as V
+    from validation import cases as V
 
     model = load_model(BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt")
     truth = V.Truth("viscous", ("steer_damping",), {"c_steer": 1.2}, "viscous 1.2 N m s/rad")
@@ -178,7 +178,7 @@ def test_decays_of_many_amplitudes_carry_the_split():
 def test_a_few_calibration_trials_and_their_report(tmp_path):
     import json
 
-    from bikerider.gap import validation as V
+    from validation import cases as V
 
     models = {"riderless": load_model(BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt")}
     effect = next(e for e in V.CALIBRATION_EFFECTS if e.name == "steer_coulomb")
@@ -218,9 +218,9 @@ def test_records_of_a_strong_damper_select_it_at_the_noise_floor_and_flag_it():
     # that "Selected: nothing"
     from dataclasses import replace
 
-    from bikerider.gap import validation as V
-    from bikerider.gap.data import CanonicalData, EigenvalueData
-    from bikerider.gap.records import fit_records
+    from bikerider.gap.measured.records import fit_records
+    from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
+    from validation import cases as V
 
     model = load_model(BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt")
     model = replace(model, plausible=dict(V.STEER_MOTOR))

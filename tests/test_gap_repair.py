@@ -21,9 +21,9 @@ from hypothesis import strategies as st
 from sbw_damage import ROLL_RATE_BIAS, damaged_copy
 
 import bikerider
-from bikerider.gap.control import NO_CONTROL
-from bikerider.gap.records import Record, fit_record, fit_records
-from bikerider.gap.repair import repair_record, repair_tags
+from bikerider.gap.measured.control import NO_CONTROL
+from bikerider.gap.measured.records import Record, fit_record, fit_records
+from bikerider.gap.measured.repair import repair_record, repair_tags
 from bikerider.io.experiment import load_records, read_experiment
 
 SBW = Path(bikerider.__file__).parent / "data" / "gap" / "pasma2024_sbw"
@@ -188,7 +188,7 @@ def test_damaged_sbw_logs_give_the_same_record_fits(damaged):
 
 @pytest.mark.slow
 def test_damaged_sbw_logs_give_the_same_diagnosis(damaged):
-    from bikerider.commands.gap import diagnose_files
+    from bikerider.diagnose import diagnose_files
 
     out, manifest = damaged
     clean = diagnose_files(str(SBW / "sbw_bicycle.toml"), experiment=(str(SBW / "experiment.toml"),)).as_dict()

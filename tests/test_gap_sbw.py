@@ -20,7 +20,7 @@ SBW = Path(bikerider.__file__).parent / "data" / "gap" / "pasma2024_sbw"
 
 @pytest.fixture(scope="module")
 def sbw():
-    from bikerider.commands.gap import diagnose_files
+    from bikerider.diagnose import diagnose_files
 
     diagnosis = diagnose_files(str(SBW / "sbw_bicycle.toml"), experiment=(str(SBW / "experiment.toml"),))
     return diagnosis, diagnosis.as_dict()
@@ -76,8 +76,8 @@ def test_the_experimenters_other_hypotheses_are_judged(sbw):
 
 @pytest.mark.slow
 def test_the_report_shows_the_records_and_one_curve_per_law(sbw, tmp_path):
-    from bikerider.gap.report import plot_eigenvalues
-    from bikerider.io.gap_report import write_report
+    from bikerider.diagnose import write_report
+    from bikerider.plotting.gap import plot_eigenvalues
 
     diagnosis, _ = sbw
     path = write_report(diagnosis, tmp_path / "rep")
@@ -121,7 +121,7 @@ def test_the_command_line_on_part_of_the_experiment(tmp_path, capsys):
 def test_the_effects_figure_shows_the_nominal_and_the_selection(sbw):
     """issue 24: effects.png drew the nominal curve under the candidates fitted at it, and left out the
     selected steer_friction (a time-domain effect, without a linear curve)."""
-    from bikerider.gap.report import plot_effects, pyplot
+    from bikerider.plotting.gap import plot_effects, pyplot
 
     diagnosis, _ = sbw
     fig = plot_effects(diagnosis)

@@ -1,6 +1,6 @@
 """The pieces that keep ``gap``'s cost linear in the data (the timings themselves: bench/bench_gap_scaling.py).
 
-The gap test no longer forms the n x n covariance (:mod:`bikerider.gap.low_rank`), the folds do not
+The gap test no longer forms the n x n covariance (:mod:`bikerider.gap.inference.low_rank`), the folds do not
 grow with the number of groups, and the record fit's grid scan accumulates its normal equations in
 blocks; each must give what the direct computation gives.
 """
@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 import bikerider
-from bikerider.gap.control import ControlLaw
-from bikerider.gap.data import CanonicalData, EigenvalueData
-from bikerider.gap.low_rank import low_rank_chi2
+from bikerider.gap.inference.low_rank import low_rank_chi2
+from bikerider.gap.measured.control import ControlLaw
+from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
 
 BP = bikerider.__path__[0] + "/data/bicycleparameters"
 
@@ -80,7 +80,7 @@ def test_a_table_taken_as_exact_gets_a_meaningful_gap_statistic(davis):
     # Found with 12 rows at distinct speeds and no uncertainties (no replicates): the dense solve of a
     # singular covariance gave chi2 = -1.8e17 and verdict "parameters".  24 exact observations cannot
     # all be met by shifts of 23 parameters: the gap is certain.
-    from bikerider.gap.diagnosis import Diagnosis
+    from bikerider.gap.diagnosis.result import Diagnosis
 
     d = Diagnosis(davis, _table(np.linspace(4, 9, 12), ["g"] * 12), CanonicalData.empty(), ())
     assert d.gap_test["chi2"] == np.inf and d.gap_test["significant"] and d.verdict == "structural"
@@ -88,7 +88,8 @@ def test_a_table_taken_as_exact_gets_a_meaningful_gap_statistic(davis):
 
 
 def test_the_folds_do_not_grow_with_the_groups(davis):
-    from bikerider.gap.diagnosis import MAX_FOLDS, Diagnosis
+    from bikerider.gap.diagnosis.folds import MAX_FOLDS
+    from bikerider.gap.diagnosis.result import Diagnosis
 
     n = 3 * MAX_FOLDS + 1
     groups = [f"run{k:03d}" for k in range(n)]
@@ -105,7 +106,7 @@ def test_the_folds_do_not_grow_with_the_groups(davis):
 
 
 def test_the_scan_accumulated_in_blocks_is_the_scan_at_once(monkeypatch):
-    from bikerider.gap import extraction
+    from bikerider.gap.measured import extraction
 
     t = 0.3 + np.arange(1500) / 100.0
     y = 0.3 * np.exp(-0.8 * (t - 0.3)) * np.sin(4.5 * t) + 0.05 * np.exp(0.05 * t)

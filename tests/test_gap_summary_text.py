@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from bikerider.gap.report import _interval_text, _law_text, _values, summary_text
+from bikerider.gap.text import _interval_text, _law_text, _values, summary_text
 
 
 def _result(parameter_fit: bool = True) -> dict:
@@ -71,7 +71,7 @@ def test_fitted_values_zero_and_narrow_intervals():
 
 def test_the_ranking_axis_spans_a_decade_with_plain_labels():
     """issue 24: ranking.png's log axis spanned less than a decade, labelled "6x10^-1"."""
-    from bikerider.gap.report import plot_ranking, pyplot
+    from bikerider.plotting.gap import plot_ranking, pyplot
 
     def row(effect, after, data_after, plausible):
         return {

@@ -18,7 +18,7 @@ import pytest
 import scipy.linalg
 from bikerider.generated import gap_effects as gen
 
-from bikerider.gap.models import BENCH_ARGS, EffectModel, RiderGeometry
+from bikerider.gap.candidates.effect_model import BENCH_ARGS, EffectModel, RiderGeometry
 
 GEOMETRY = RiderGeometry(
     dict(m_u=40.0, x_u=0.3, z_u=-1.2, IUxx=1.5, IUxz=0.3, IUzz=1.0, z_lean=-0.95),

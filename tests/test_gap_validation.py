@@ -1,7 +1,7 @@
 """The diagnosis run blind on data from hidden truths (reduced set; docs/gap_validation.md has the full one).
 
 The truths are simulated in the time domain by an implementation independent of the candidate
-models (bikerider.gap.validation); the weave eigenvalues are fitted from noisy roll rates.  Goals
+models (validation.cases); the weave eigenvalues are fitted from noisy roll rates.  Goals
 of the full set: the hidden effect ranks first in at least 9 of 10 effect cases and parameter error
 alone raises no structural verdict in at least 9 of 10 null cases.  This reduced set (the quick
 protocol: 3 sessions of 4 runs) demands every case right, with fixed seeds, and the predicted
@@ -15,8 +15,8 @@ from pathlib import Path
 import pytest
 
 import bikerider
-from bikerider.gap import validation as V
 from bikerider.io.gap_model import load_model
+from validation import cases as V
 
 BP = Path(bikerider.__file__).parent / "data" / "bicycleparameters"
 CASES = [("null", 11), ("null", 12), ("steer_damping", 13), ("rider_lean", 14), ("tyre_slip", 15)]
@@ -108,7 +108,7 @@ def test_the_truths_whipple_matrices_are_meijaards(tmp_path):
     import numpy as np
     from bikerider.generated import benchmark_model as bm
 
-    from bikerider.gap.models import BENCH_ARGS
+    from bikerider.gap.candidates.effect_model import BENCH_ARGS
 
     for path in (
         BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt",

@@ -327,11 +327,11 @@ def test_a_log_header_cell_beyond_the_csv_field_limit_is_refused_naming_the_line
     ],
 )
 def test_hostile_next_options_are_refused_before_the_diagnosis(monkeypatch, options, says):
-    from bikerider.commands import gap
+    from bikerider import diagnose as pipeline
 
     # before: LinAlgError (speeds), OverflowError (noise), a NumPy RuntimeWarning (torque), each
     # after the whole diagnosis
-    monkeypatch.setattr(gap, "_diagnose_files", lambda *a: pytest.fail("the diagnosis ran"))
+    monkeypatch.setattr(pipeline, "run_diagnosis", lambda *a: pytest.fail("the diagnosis ran"))
     code, _, err = run_cli(["gap", *KOOIJMAN, "--data", str(EXAMPLES / "eigenvalues.csv"), "--next", *options])
     assert code == 2 and says in _error(err, "gap")
 
@@ -485,9 +485,9 @@ def test_an_output_inside_the_store_is_refused(finished_store, tmp_path, option)
     ],
 )
 def test_an_option_without_the_one_it_works_with_is_refused(monkeypatch, argv, says):
-    from bikerider.commands import gap
+    from bikerider import diagnose as pipeline
 
-    monkeypatch.setattr(gap, "_diagnose_files", lambda *a: pytest.fail("the diagnosis ran"))
+    monkeypatch.setattr(pipeline, "run_diagnosis", lambda *a: pytest.fail("the diagnosis ran"))
     code, _, err = run_cli(argv)
     assert code == 2 and says in _error(err, argv[0])
 

@@ -3,7 +3,7 @@ docs/gap_validation.md.
 
 Every trial draws a hidden effect's sizes over its prior and the bicycle's parameters from their stated
 uncertainties, simulates short noisy runs with the independent truth of
-:mod:`bikerider.gap.validation` (Coulomb friction nonlinear in time), diagnoses them blind and scores the
+:mod:`validation.cases` (Coulomb friction nonlinear in time), diagnoses them blind and scores the
 ranking, the selection, the candidate's fitted sizes and their 95 % intervals, and the predicted against
 the achieved shrinkage.  Trials go round the effects in turn (a run stopped early stays balanced) and are
 appended to a JSON-lines file as they finish; the report is written from that file.  Run from the project
@@ -23,6 +23,9 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
+
+if str(ROOT) not in sys.path:  # validation/ (the gap's blind-check harnesses) lives beside src/, not installed
+    sys.path.insert(0, str(ROOT))
 BP = ROOT / "src" / "bikerider" / "data" / "bicycleparameters"
 DOC = ROOT / "docs" / "gap_validation.md"
 RESULTS = Path(__file__).with_name("gap_calibration_trials.jsonl")
@@ -42,7 +45,7 @@ def run(trials: int, friction_every: int, max_minutes: float, out: Path, seed0: 
     """Run up to ``trials`` per effect (a friction-from-records trial every ``friction_every`` rounds)."""
     import logging
 
-    from bikerider.gap import validation as V
+    from validation import cases as V
 
     logging.disable(logging.WARNING)
     models = _models()

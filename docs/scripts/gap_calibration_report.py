@@ -4,10 +4,15 @@ from __future__ import annotations
 
 import json
 import math
+import sys
 from collections import Counter, defaultdict
 from pathlib import Path
 
 import numpy as np
+
+ROOT = Path(__file__).resolve().parents[2]
+if str(ROOT) not in sys.path:  # validation/ (the gap's blind-check harnesses) lives beside src/, not installed
+    sys.path.insert(0, str(ROOT))
 
 BEGIN, END = "<!-- calibration:begin -->", "<!-- calibration:end -->"
 BEFORE = Path(__file__).with_name("gap_calibration_before.jsonl")
@@ -71,11 +76,11 @@ def _arm_inertia_factors() -> tuple[float, float]:
     """Squared distance of the grips from the steer axis [m^2]: the diagnosis's default grips, the truth's.
 
     The arms' mass the diagnosis fits sits at its default grips; the truth's at grips 8 cm higher and 2 cm
-    wider (``bikerider.gap.validation.TRUTH_GEOMETRY``): what the records carry is the arms' inertia about
+    wider (``validation.cases.TRUTH_GEOMETRY``): what the records carry is the arms' inertia about
     the steer axis, ``m d^2``, which is scored beside the mass.
     """
-    from bikerider.gap import validation as V
     from bikerider.io.gap_model import load_model
+    from validation import cases as V
 
     root = Path(__file__).resolve().parents[2] / "src" / "bikerider" / "data" / "bicycleparameters"
     model = load_model(
@@ -126,8 +131,8 @@ def write_report(results: Path, doc: Path, goal: int) -> None:
 
 
 def section(trials: list[dict], goal: int) -> list[str]:
-    from bikerider.gap import validation as V
-    from bikerider.gap.effects import EFFECTS
+    from bikerider.gap.candidates.effects import EFFECTS
+    from validation import cases as V
 
     table = [t for t in trials if t["effect"] != V.CALIBRATION_FRICTION.name]
     friction = [t for t in trials if t["effect"] == V.CALIBRATION_FRICTION.name]

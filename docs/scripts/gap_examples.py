@@ -2,7 +2,7 @@
 
 The examples are synthetic: the Davis instrumented bicycle with its rider Jason (BicycleParameters
 files in bikerider/data/bicycleparameters) simulated in the time domain by
-:mod:`bikerider.gap.validation` with a hidden steer damping (0.3 N m s/rad viscous, 0.05 N m
+:mod:`validation.cases` with a hidden steer damping (0.3 N m s/rad viscous, 0.05 N m
 Coulomb), so a user can see the diagnosis find it.  Run from the project root::
 
     .venv/bin/python docs/scripts/gap_examples.py
@@ -16,6 +16,9 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[2]
+
+if str(ROOT) not in sys.path:  # validation/ (the gap's blind-check harnesses) lives beside src/, not installed
+    sys.path.insert(0, str(ROOT))
 OUT = Path(sys.argv[1]) if len(sys.argv) > 1 else ROOT / "src" / "bikerider" / "data" / "gap_examples"
 BP = ROOT / "src" / "bikerider" / "data" / "bicycleparameters"
 RIGID = BP / "bicycles" / "Rigid" / "Parameters" / "RigidBenchmark.txt"
@@ -24,8 +27,8 @@ SEED = 7
 
 
 def main() -> int:
-    from bikerider.gap import validation as V
     from bikerider.io.gap_model import load_model
+    from validation import cases as V
 
     OUT.mkdir(parents=True, exist_ok=True)
     model = load_model(RIGID, JASON)

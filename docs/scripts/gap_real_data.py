@@ -32,7 +32,7 @@ TREADMILL2ENC_GAIN and TREADMILL2ENC_BIAS)."""
 
 
 def _diagnose(model, groups=None, eigen_file=None):
-    from bikerider.gap.diagnosis import diagnose
+    from bikerider.gap.diagnosis.result import diagnose
     from bikerider.io import gap_data as gd
 
     eigen = gd.read_eigenvalues(eigen_file) if eigen_file else None
@@ -320,7 +320,7 @@ def _sign_and_shape(diagnosis) -> dict:
     """The controller's sign against the model, and the measured steer/roll-rate ratio against the model's."""
     import numpy as np
 
-    from bikerider.gap.models import EffectModel
+    from bikerider.gap.candidates.effect_model import EffectModel
 
     p = diagnosis.problem
     law = p.eigen.laws["sil"]
@@ -366,7 +366,7 @@ def _sbw_section() -> list[str]:
     """Section 3: the steer-by-wire bicycle of Pasma (2024), from the raw logs."""
     import numpy as np
 
-    from bikerider.commands.gap import diagnose_files
+    from bikerider.diagnose import diagnose_files
 
     model = SBW / "sbw_bicycle.toml"
     manifest = SBW / "experiment.toml"

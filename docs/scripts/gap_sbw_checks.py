@@ -27,8 +27,8 @@ CALIBRATION = (1.0661904761904761, -0.12761904761904752)
 
 
 def _run(model_file: str, *, calibration=None, fit=None) -> dict:
-    from bikerider.gap.diagnosis import diagnose
-    from bikerider.gap.records import fit_records
+    from bikerider.gap.diagnosis.result import diagnose
+    from bikerider.gap.measured.records import fit_records
     from bikerider.io.experiment import load_records, read_manifest
     from bikerider.io.gap_model import load_model
 

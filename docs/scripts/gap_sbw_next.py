@@ -20,7 +20,7 @@ FIGURE = ROOT / "docs" / "gap_sbw_next.png"
 
 def _sbw_next(diagnosis):
     """What to measure next on the steer-by-wire bicycle (``bikerider gap --next``)."""
-    from bikerider.gap.next_experiment import plan_next
+    from bikerider.gap.plan.ranking import plan_next
 
     plan = plan_next(diagnosis)
     out = plan.as_dict(top=len(plan.plan))
@@ -114,9 +114,9 @@ def _sbw_next(diagnosis):
 
 
 def main() -> int:
-    from bikerider.commands.gap import diagnose_files
-    from bikerider.gap.next_report import plot_next
-    from bikerider.gap.report import pyplot
+    from bikerider.diagnose import diagnose_files
+    from bikerider.plotting.common import pyplot
+    from bikerider.plotting.gap_plan import plot_next
 
     diagnosis = diagnose_files(str(SBW / "sbw_bicycle.toml"), experiment=(str(SBW / "experiment.toml"),))
     lines, plan, out = _sbw_next(diagnosis)

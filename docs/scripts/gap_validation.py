@@ -1,10 +1,10 @@
 """Run the gap diagnosis blind on data from hidden truths and write docs/gap_validation.md.
 
-Part 1: ten effect cases and ten null cases (:data:`bikerider.gap.validation.FULL_CASES`) on the
+Part 1: ten effect cases and ten null cases (:data:`validation.cases.FULL_CASES`) on the
 Davis instrumented bicycle with rider Jason, each with the full protocol (three sessions of six
 runs, weave eigenvalue tables); the results before issue 11 are quoted from
 ``gap_validation_before.md`` beside this script.  Part 2: records of the steer-by-wire kind
-(:data:`bikerider.gap.validation.RECORD_CASES`): short, strongly damped decays under a
+(:data:`validation.cases.RECORD_CASES`): short, strongly damped decays under a
 speed-scheduled control, one or two effects at once, diagnosed from the records.
 Run from the project root (takes several minutes)::
 
@@ -21,6 +21,9 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[2]
+
+if str(ROOT) not in sys.path:  # validation/ (the gap's blind-check harnesses) lives beside src/, not installed
+    sys.path.insert(0, str(ROOT))
 BP = ROOT / "src" / "bikerider" / "data" / "bicycleparameters"
 OUT = ROOT / "docs" / "gap_validation.md"
 BEFORE = Path(__file__).with_name("gap_validation_before.md")
@@ -108,8 +111,8 @@ def _f(x, digits=2):
 
 
 def main() -> int:
-    from bikerider.gap import validation as V
     from bikerider.io.gap_model import load_model
+    from validation import cases as V
 
     logging.basicConfig(level=logging.INFO, format="%(message)s")
     model = load_model(
@@ -139,7 +142,7 @@ def main() -> int:
         "The diagnosis (`bikerider gap`) sees only the nominal model (the Davis instrumented bicycle",
         "`RigidBenchmark.txt` with the lumped rider `JasonRigidBenchmark.txt`, BicycleParameters) and the",
         "measured weave eigenvalues. The measurements come from a hidden truth simulated by",
-        "`bikerider.gap.validation`, an implementation that shares nothing with the candidate models but the",
+        "`validation.cases`, an implementation that shares nothing with the candidate models but the",
         "meaning of the benchmark parameters:",
         "",
         "* the truth's equations are assembled by hand: the Whipple matrices from Meijaard et al. (2007)",
@@ -152,7 +155,7 @@ def main() -> int:
         "* each run is a time-domain simulation (`scipy.integrate.solve_ivp`, LSODA) of a random roll-rate and",
         "  steer-rate kick, 6 s at 100 Hz, with 0.01 rad/s gyro noise on the roll rate and 0.03 m/s noise on",
         "  the speed reading; the weave eigenvalue and its standard errors are fitted to the noisy roll rate",
-        "  from 0.3 s on (`bikerider.gap.extraction.weave_eigenvalue`), as from a real run; runs whose record",
+        "  from 0.3 s on (`bikerider.gap.measured.extraction.weave_eigenvalue`), as from a real run; runs whose record",
         "  holds no fittable oscillation (e.g. a fall within a second) are dropped, as an experimenter would;",
         "* the truth's benchmark parameters are the nominal ones plus a random error within their stated",
         "  uncertainty, and its rider differs from the diagnosis's default geometry (upper body 45 % of the",
@@ -271,8 +274,8 @@ def _calibration_block() -> str:
 
 def _record_cases() -> list[str]:
     """Part 2: the record cases (simulated, fitted and diagnosed from the records)."""
-    from bikerider.gap import validation as V
     from bikerider.io.gap_model import load_model
+    from validation import cases as V
 
     model = load_model(BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt")
     start = time.perf_counter()
@@ -294,7 +297,7 @@ def _record_cases() -> list[str]:
         "records by what the same fit finds in the candidate's own response (indirect inference), fits the",
         "candidates (steer friction in the time domain) and searches singles and pairs on held-out speeds.",
         "The records come from the same independent truth as part 1 (Meijaard's Appendix A typed in by hand,",
-        "`bikerider.gap.validation.meijaard_matrices`, integrated by LSODA; Coulomb friction smoothed by",
+        "`validation.cases.meijaard_matrices`, integrated by LSODA; Coulomb friction smoothed by",
         "`tanh(deltad / 0.02)`, not the diagnosis's 0.05), with the truth's parameters drawn within their",
         "uncertainty:",
         "",
@@ -359,8 +362,8 @@ def _record_cases() -> list[str]:
 
 
 def _next_cases(model) -> list[str]:
-    """Part 3: the blind check of the next-experiment plan (``bikerider.gap.next_validation``)."""
-    from bikerider.gap import next_validation as N
+    """Part 3: the blind check of the next-experiment plan (``validation.plan_cases``)."""
+    from validation import plan_cases as N
 
     start = time.perf_counter()
     cases = N.run_next_suite(model)
@@ -379,7 +382,7 @@ def _next_cases(model) -> list[str]:
         "The Davis bicycle with rider Jason and the hidden truths of part 1, measured by a narrow protocol",
         f"(three sessions without control: {sessions}), as a lab that ran near one speed; the",
         "diagnosis of such data often ends in a tie. For every case whose first-ranked candidate is tied with",
-        "another and the hidden effect is among them (`bikerider.gap.next_validation`):",
+        "another and the hidden effect is among them (`validation.plan_cases`):",
         "",
         f"* the plan (`bikerider gap --next`, the tied candidates as rivals, {N.FOLLOW_UP} decays) recommends one",
         "  experiment (speed and control law);",

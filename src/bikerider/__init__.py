@@ -38,6 +38,12 @@ Files (here, from the modules of :mod:`bikerider.io`)
 Uncertainty (:mod:`bikerider.uncertainty`, :mod:`bikerider.engine`)
     :func:`propagate` (first-order sigmas of the estimate chain), :func:`monte_carlo`,
     :class:`UncertaintyResult`.
+Sim-to-real gap (:mod:`bikerider.gap`, its face; ``docs/gap.md``)
+    :func:`diagnose_files` (the pipeline of :mod:`bikerider.diagnose`: files to a diagnosis),
+    :func:`write_gap_report`; readers :func:`load_gap_model`, :func:`read_gap_eigenvalues`,
+    :func:`read_gap_perturbation`; figures :func:`gap_effect_figure`, :func:`gap_plan_figure`.  The
+    diagnosis itself (``diagnose``, ``Diagnosis``, ``plan_next``, ``EFFECTS``, ``fit_records``, ...)
+    is imported from :mod:`bikerider.gap`.
 Values and errors
     :class:`Quantity`, :class:`BikeriderError`, :class:`InputError`, :class:`FileFormatError`,
     :class:`FitError`.
@@ -118,6 +124,13 @@ _EXPORTS = {  # public name: "module" (the same name there) or "module:name"
     "propagate": "bikerider.uncertainty",
     "monte_carlo": "bikerider.uncertainty",
     "UncertaintyResult": "bikerider.uncertainty",
+    "diagnose_files": "bikerider.diagnose",
+    "write_gap_report": "bikerider.diagnose:write_report",
+    "load_gap_model": "bikerider.io.gap_model:load_model",
+    "read_gap_eigenvalues": "bikerider.io.gap_data:read_eigenvalues",
+    "read_gap_perturbation": "bikerider.io.gap_data:read_perturbation",
+    "gap_effect_figure": "bikerider.plotting.gap:plot_effect",
+    "gap_plan_figure": "bikerider.plotting.gap_plan:plot_next",
     "Quantity": "bikerider.quantity",
     "BikeriderError": "bikerider.errors",
     "InputError": "bikerider.errors",

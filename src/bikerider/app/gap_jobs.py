@@ -2,10 +2,10 @@
 
 A job takes an upload folder (:mod:`bikerider.app.uploads`) and the names in it of the model, the
 manifests (``--experiment``) and data tables (``--data``), and runs the package's own entry point,
-:func:`bikerider.commands.gap.diagnose_files` (handed to :class:`GapJobs` by ``bikerider serve``:
+:func:`bikerider.diagnose.diagnose_files` (handed to :class:`GapJobs` by ``bikerider serve``:
 the page never re-implements the diagnosis), then the next-experiment plan
-(:func:`bikerider.gap.next_experiment.plan_next`, the defaults of ``gap --next``) and the report
-folder (:func:`bikerider.io.gap_report.write_report`, as ``gap --report``).  The diagnosis has no
+(:func:`bikerider.gap.plan.ranking.plan_next`, the defaults of ``gap --next``) and the report
+folder (:func:`bikerider.diagnose.write_report`, as ``gap --report``).  The diagnosis has no
 hook that says how far it is, so the progress is the step it is on (reading and fitting, planning,
 writing the report), the seconds since it started and the messages the package logs meanwhile.
 One job runs at a time (the machine's cores are the diagnosis's); others wait their turn.
@@ -16,6 +16,7 @@ from __future__ import annotations
 import io
 import logging
 import math
+import re
 import threading
 import time
 import uuid
@@ -117,8 +118,8 @@ class GapJobs:
     uploads : UploadFolders
     diagnose : callable
         ``diagnose(model, data, experiment)`` with paths as strings, returning a
-        :class:`bikerider.gap.diagnosis.Diagnosis` (``bikerider serve`` passes
-        :func:`bikerider.commands.gap.diagnose_files`).
+        :class:`bikerider.gap.diagnosis.result.Diagnosis` (``bikerider serve`` passes
+        :func:`bikerider.diagnose.diagnose_files`).
     """
 
     def __init__(self, uploads: UploadFolders, diagnose: Callable) -> None:
@@ -160,10 +161,10 @@ class GapJobs:
 
     def _run(self, job: GapJob) -> None:
         # The report's figures and text: matplotlib is loaded only when a diagnosis runs.
-        from bikerider.gap.next_experiment import plan_next
-        from bikerider.gap.next_report import next_text
-        from bikerider.gap.report import summary_text
-        from bikerider.io.gap_report import write_report
+        from bikerider.diagnose import write_report
+        from bikerider.gap.plan.ranking import plan_next
+        from bikerider.gap.text import next_text, summary_text
+        from bikerider.io.gap_report import linked_figures
 
         with self._one_at_a_time:
             handler = _JobLog(job)
@@ -187,8 +188,6 @@ class GapJobs:
                 job.step = STEPS[3]
                 report = job.folder.parent / f"report-{job.ident}"
                 job.report = write_report(diagnosis, report, title=f"Sim-to-real gap: {job.model.name}", plan=plan)
-                from bikerider.io.gap_report import linked_figures
-
                 captions = dict(_captions(job.report))
                 job.figures = [(name, captions.get(name, name)) for name in sorted(linked_figures(job.report))]
                 job.result = plain({k: result[k] for k in result if k not in ("next",)})
@@ -230,8 +229,6 @@ class GapJobs:
 
 def _captions(report: Path) -> list[tuple[str, str]]:
     """``(figure file, caption)`` of each figure a report links."""
-    import re
-
     text = report.read_text(encoding="utf-8")
     return [(m.group(2), m.group(1)) for m in re.finditer(r"!\[([^\]]*)\]\(([^()/\\]+\.png)\)", text)]
 

@@ -76,7 +76,7 @@ class App:
     ----------
     diagnose : callable, optional
         The gap diagnosis from files (``bikerider serve`` passes
-        :func:`bikerider.commands.gap.diagnose_files`); without it the gap endpoints say so.
+        :func:`bikerider.diagnose.diagnose_files`); without it the gap endpoints say so.
     upload_root : path, optional
         Where the private upload folder is made (default: the system's temporary folder).
     """

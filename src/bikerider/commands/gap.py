@@ -3,14 +3,8 @@
 from __future__ import annotations
 
 import argparse
-import functools
-import logging
 
 from bikerider.commands import argument_types
-
-LONG_WORK_ROWS = 1000
-"""Eigenvalue rows and records from which the command says, before it starts, that the work takes minutes."""
-
 
 DEFAULT_REPEATS = 10
 """Runs per planned experiment of ``--next`` without ``--next-repeats``."""
@@ -168,16 +162,18 @@ def add_parser(subparsers) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    # heavy (NumPy, the gap): imported when the command runs, so `bikerider --help` starts fast (cli.py)
     import json
     import math
     import sys
 
     import numpy as np
 
+    from bikerider import diagnose as pipeline
     from bikerider import notes, progress
     from bikerider.errors import InputError
-    from bikerider.gap.control import MAX_MAGNITUDE
-    from bikerider.gap.report import summary_text
+    from bikerider.gap.measured.control import MAX_MAGNITUDE
+    from bikerider.gap.text import next_text, summary_text
     from bikerider.io.experiment import check_sample_rate
     from bikerider.io.output_guard import ReportFolder, folder_output
 
@@ -201,7 +197,7 @@ def run(args: argparse.Namespace) -> int:
     reporter = None
     try:
         with progress.reporting(quiet=getattr(args, "quiet", False), name="bikerider gap") as reporter:
-            diagnosis = _diagnose_files(
+            diagnosis = pipeline.run_diagnosis(
                 args.model,
                 tuple(args.data),
                 tuple(args.experiment),
@@ -217,14 +213,12 @@ def run(args: argparse.Namespace) -> int:
             result = diagnosis.as_dict()
             plan = None
             if plan_options is not None:
-                plan, why = _plan(diagnosis, plan_options)
+                plan, why = pipeline.plan_or_reason(diagnosis, plan_options)
                 result["next"] = plan.as_dict() if plan is not None else {"planned": False, "reason": why}
             if report_folder is not None:
-                from bikerider.io.gap_report import write_report
-
                 progress.begin("writing the report")
                 with report_folder as staging:
-                    path = write_report(diagnosis, staging, title=f"Sim-to-real gap: {args.model}", plan=plan)
+                    path = pipeline.write_report(diagnosis, staging, title=f"Sim-to-real gap: {args.model}", plan=plan)
                 result["report"] = str(report_folder.final(path))
             reporter.finish()
     except KeyboardInterrupt:
@@ -243,8 +237,6 @@ def run(args: argparse.Namespace) -> int:
     else:
         print(summary_text(result))
         if "next" in result:
-            from bikerider.gap.next_report import next_text
-
             print()
             if plan is not None:
                 print(next_text(result["next"]))
@@ -259,6 +251,7 @@ def _register_experiment_inputs(args: argparse.Namespace) -> None:
     """Add the files the manifests name (windows files, logs) to the run's inputs, so that no report
     folder that holds one of them is replaced (the manifests are read again by the diagnosis: a
     few kB, milliseconds)."""
+    # heavy (NumPy, the gap): imported when the command runs, so `bikerider --help` starts fast (cli.py)
     from bikerider.io import gap_data
     from bikerider.io.experiment import experiment_files, read_experiment
     from bikerider.io.output_guard import add_inputs
@@ -269,8 +262,9 @@ def _register_experiment_inputs(args: argparse.Namespace) -> None:
 
 
 def _next_options(args: argparse.Namespace) -> dict | None:
-    """The arguments of :func:`~bikerider.gap.next_experiment.plan_next` the ``--next`` options give,
+    """The arguments of :func:`~bikerider.gap.plan.ranking.plan_next` the ``--next`` options give,
     checked before the diagnosis (``None`` without ``--next``)."""
+    # heavy (NumPy, the gap): imported when the command runs, so `bikerider --help` starts fast (cli.py)
     import math
 
     import numpy as np
@@ -290,10 +284,11 @@ def _next_options(args: argparse.Namespace) -> dict | None:
             if getattr(args, option) not in (None, False):
                 raise InputError("--" + option.replace("_", "-"), getattr(args, option), "--next as well")
         return None
-    from bikerider.gap.control import MAX_MAGNITUDE
-    from bikerider.gap.next_experiment import MAX_NOISE
-    from bikerider.gap.next_sweep import DEFAULT_RUN_TIME, DEFAULT_TORQUE, MAX_TORQUE, MIN_TORQUE, RUN_TIME_RANGE
-    from bikerider.gap.records import SIGNALS
+    # heavy (NumPy, the gap): imported when the command runs, so `bikerider --help` starts fast (cli.py)
+    from bikerider.gap.measured.control import MAX_MAGNITUDE
+    from bikerider.gap.measured.records import SIGNALS
+    from bikerider.gap.plan.ranking import MAX_NOISE
+    from bikerider.gap.plan.sweeps import DEFAULT_RUN_TIME, DEFAULT_TORQUE, MAX_TORQUE, MIN_TORQUE, RUN_TIME_RANGE
 
     torque = DEFAULT_TORQUE if args.next_torque is None else args.next_torque
     if not MIN_TORQUE <= torque <= MAX_TORQUE:  # also NaN
@@ -353,120 +348,9 @@ def _next_options(args: argparse.Namespace) -> dict | None:
     }
 
 
-def _plan(diagnosis, options: dict):
-    """``(plan, None)``, or ``(None, why)`` when no experiment can be planned: the diagnosis stands either way."""
-    from bikerider import progress
-    from bikerider.gap.next_experiment import NoExperiment, plan_next
-
-    progress.begin("planning the next experiment")
-    try:
-        return plan_next(diagnosis, **options), None
-    except NoExperiment as exc:  # the plan's own limits (no rivals, nothing predicted); a bad option stays an error
-        logging.getLogger("bikerider.gap").info("no next experiment: %s", exc.why)
-        return None, exc.why
-
-
-def diagnose_files(
-    model: str,
-    data: tuple[str, ...] = (),
-    experiment: tuple[str, ...] = (),
-    *,
-    rider: str | None = None,
-    rider_rel_sigma: float = 0.0,
-    control: str | None = None,
-    speed: float | None = None,
-    groups: str | None = None,
-    effects: str | None = None,
-    columns: str | None = None,
-    sample_rate: float | None = None,
-):
-    """Read every input of a diagnosis from its files and run it (the command's work, without output).
-
-    Arguments as the command's options (``groups`` and ``effects`` comma-separated).  The result is
-    cached within a process for the same arguments and unchanged input files (the documents and the
-    tests of the shipped steer-by-wire experiment share one run; the command itself does not cache).
-    """
-    import os
-
-    files = [model, rider, control, *data, *experiment]
-    stamp = tuple(
-        (str(f), os.stat(f).st_mtime_ns, os.stat(f).st_size) if f and os.path.isfile(f) else (str(f), None)
-        for f in files
-    )
-    return _cached(
-        stamp,
-        model,
-        tuple(data),
-        tuple(experiment),
-        rider,
-        rider_rel_sigma,
-        control,
-        speed,
-        groups,
-        effects,
-        columns,
-        sample_rate,
-    )
-
-
-@functools.lru_cache(maxsize=2)
-def _cached(stamp, *args):
-    return _diagnose_files(*args)
-
-
-def _diagnose_files(
-    model, data, experiment, rider, rider_rel_sigma, control, speed, groups, effects, columns, sample_rate
-):
-    from bikerider import progress
-    from bikerider.gap.data import CanonicalData, EigenvalueData
-    from bikerider.gap.diagnosis import diagnose
-    from bikerider.gap.effects import EFFECT_NAMES, effect
-    from bikerider.gap.records import fit_records
-    from bikerider.io import gap_data
-    from bikerider.io.experiment import check_record_count, load_records, read_experiment
-    from bikerider.io.gap_model import load_model
-
-    progress.begin("reading the inputs")
-    loaded = load_model(model, rider, rider_rel_sigma=rider_rel_sigma)
-    laws = gap_data.read_control(control) if control is not None else {}
-    default_law = next(iter(laws.values())) if len(laws) == 1 else None
-    keep = [g.strip() for g in groups.split(",")] if groups else None
-    eigen, canonical, records = [], [], []
-    for path in data:
-        kind = gap_data.detect_kind(path)
-        if kind == "eigenvalues":
-            eigen.append(gap_data.read_eigenvalues(path, default_law, laws))
-        elif kind == "perturbation":
-            records.append(gap_data.read_perturbation(path, speed, default_law))
-        else:
-            canonical.append(gap_data.read_canonical(path, keep))
-    windows_of = []
-    for path in experiment:
-        windows_of.append(read_experiment(path, columns, sample_rate, laws))
-    where = ", ".join(map(str, experiment))
-    check_record_count(len(records) + sum(len(w) for _, w in windows_of), where)  # before any log is read
-    for settings, windows in windows_of:
-        records += load_records(settings, windows)
-    check_record_count(len(records), where)  # detected decays
-    candidates = EFFECT_NAMES
-    if effects:
-        candidates = tuple(e.strip() for e in effects.split(","))
-        for name in candidates:
-            effect(name)
-    table = EigenvalueData.concatenate(eigen)
-    if len(table) + len(records) >= LONG_WORK_ROWS:  # a progress line: the user sees why it takes long
-        logging.getLogger("bikerider.gap").warning(
-            "%d eigenvalue rows and %d records, candidates %s: each is fitted on every fold, which may take "
-            "minutes (fewer --effects are faster)",
-            len(table),
-            len(records),
-            ", ".join(candidates),
-        )
-    return diagnose(loaded, table, CanonicalData.concatenate(canonical), candidates, fit_records(records))
-
-
 def _plain(value, np):
     """JSON-ready: NumPy scalars to Python, non-finite floats to None."""
+    # heavy (NumPy, the gap): imported when the command runs, so `bikerider --help` starts fast (cli.py)
     import math
 
     if isinstance(value, dict):

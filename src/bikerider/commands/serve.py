@@ -37,7 +37,7 @@ def run(args: argparse.Namespace) -> int:
     import webbrowser
 
     from bikerider.app.server import App, make_server
-    from bikerider.commands.gap import diagnose_files
+    from bikerider.diagnose import diagnose_files
     from bikerider.errors import InputError
 
     if not 0 <= args.port <= 65535:

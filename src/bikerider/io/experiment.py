@@ -32,7 +32,7 @@ Manifest (TOML)
         unit = "km/h"                    # of the pattern's number: "m/s" or "km/h"
         calibration = { gain = 1.0662, offset = -0.1276 }  # recorded = gain * true + offset
 
-        [control.sil]                    # named laws (bikerider.gap.control)
+        [control.sil]                    # named laws (bikerider.gap.measured.control)
         k_phid = { K = 2.0, v0 = 6.5, when = "below" }
 
         [[file]]
@@ -63,8 +63,8 @@ from pathlib import Path
 import numpy as np
 
 from bikerider.errors import FileFormatError, InputError
-from bikerider.gap.control import GAIN_NAMES, MAX_MAGNITUDE, NO_CONTROL, ControlLaw, GainSchedule
-from bikerider.gap.records import (
+from bikerider.gap.measured.control import GAIN_NAMES, MAX_MAGNITUDE, NO_CONTROL, ControlLaw, GainSchedule
+from bikerider.gap.measured.records import (
     MAX_RECORD_SAMPLES,
     SIGNAL_UNITS,
     SIGNALS,
@@ -73,6 +73,7 @@ from bikerider.gap.records import (
     detect_windows,
 )
 from bikerider.io.input_file import checked_input_file
+from bikerider.io.toml_input import read_toml
 
 MAX_LOG_BYTES = 200_000_000
 """Largest log or windows file (CSV manifest) read [bytes, unpacked]: hours of a 100 Hz log with a
@@ -316,7 +317,6 @@ def _line_of(text: str, pattern: str, after: int = 0) -> int | None:
 
 def read_manifest(path: str | Path) -> tuple[ExperimentSettings, list[Window]]:
     """Read a TOML manifest (see the module docstring): the settings and the windows to cut."""
-    from bikerider.io.toml_input import read_toml
 
     path = Path(path)
     data = read_toml(path)  # checks the path first: a regular file of at most 1 MiB, as every TOML file
@@ -902,7 +902,7 @@ def _cut(log: Log, start: int, end: int, window: Window, settings: ExperimentSet
         if signal in settings.columns:
             values = log.columns[settings.columns[signal]][start:end] * settings.scale.get(signal, 1.0)
             signals[signal] = values
-            # missing values are repaired (or the record left out) when it is fitted: bikerider.gap.repair
+            # missing values are repaired (or the record left out) when it is fitted: bikerider.gap.measured.repair
             huge = np.flatnonzero(np.abs(values) > MAX_MAGNITUDE)
             if huge.size and problem is None:
                 problem = (

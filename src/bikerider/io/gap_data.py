@@ -1,7 +1,7 @@
 """Read the tables of the gap diagnosis: eigenvalues, perturbation time series, identified matrices.
 
 Raw logs cut into records by a manifest are read by :mod:`bikerider.io.experiment`; the data
-classes these readers build are in :mod:`bikerider.gap.data` and :mod:`bikerider.gap.records`.
+classes these readers build are in :mod:`bikerider.gap.measured.tables` and :mod:`bikerider.gap.measured.records`.
 
 Formats (comma-separated, a header line of column names; lines starting with ``#`` are comments;
 a comment ``# key = value`` sets a file-wide value, e.g. ``# speed = 4.2``, ``# group = run3`` or a
@@ -12,7 +12,7 @@ Eigenvalues against speed
     uncertainties, > 0), ``speed_sigma``, ``group`` (a run, a rider, a day: the unit the diagnosis
     holds out), ``mode`` (``weave``, ``capsize``, ``castor``; default ``weave`` when ``imag != 0``,
     otherwise the nearer real mode of the model), the control gains ``k_phi, k_phid, k_delta,
-    k_deltad`` (see :mod:`bikerider.gap.control`) or ``control``, the name of a law given with
+    k_deltad`` (see :mod:`bikerider.gap.measured.control`) or ``control``, the name of a law given with
     the data (its gains evaluated at the row's speed).
 Perturbation time series (one run per file)
     Columns ``time`` [s] and ``roll_rate`` [rad/s]; optional ``steer_angle`` [rad], ``steer_rate``
@@ -20,7 +20,7 @@ Perturbation time series (one run per file)
     the speed uncertainty), a ``# speed = ...`` comment or the caller.  The file should hold the free
     decay after the perturbation.  The weave eigenvalue is fitted to the roll rate (and to the steer
     rate when given, the two combined by inverse-variance weighting when they agree) with
-    :func:`bikerider.gap.extraction.weave_eigenvalue` (a
+    :func:`bikerider.gap.measured.extraction.weave_eigenvalue` (a
     :func:`~bikerider.fitting.damped_oscillation.fit_damped_oscillation` fit refined with the slow
     capsize mode).
 Identified canonical-matrix entries
@@ -45,11 +45,14 @@ from pathlib import Path
 import numpy as np
 
 from bikerider.errors import FileFormatError, InputError
-from bikerider.gap.control import GAIN_NAMES, MAX_MAGNITUDE, ControlLaw, GainSchedule
-from bikerider.gap.data import CANONICAL_ENTRIES, MODES, CanonicalData, EigenvalueData, entry_name
-from bikerider.gap.records import MAX_RECORD_SAMPLES, Record
+from bikerider.gap.measured.control import GAIN_NAMES, MAX_MAGNITUDE, ControlLaw, GainSchedule
+from bikerider.gap.measured.records import MAX_RECORD_SAMPLES, Record
+from bikerider.gap.measured.tables import CANONICAL_ENTRIES, MODES, CanonicalData, EigenvalueData, entry_name
 from bikerider.generated.manifest import MATRIX_NAMES
+from bikerider.io.experiment import read_laws, read_text
 from bikerider.io.input_file import checked_input_file
+from bikerider.io.toml_input import read_toml
+from bikerider.quantity import parse_quantity
 
 LOG = logging.getLogger(__name__)
 
@@ -76,7 +79,7 @@ candidates), so a larger table is refused rather than left running for hours."""
 MAX_TABLE_BYTES = 16_000_000
 """Largest data table read [bytes]: far above any table of measured eigenvalues or identified entries
 (:data:`MAX_EIGENVALUE_ROWS` rows take about 1 MB) or a perturbation run of
-:data:`~bikerider.gap.records.MAX_RECORD_SAMPLES` samples (a few MB); a larger file is refused with its
+:data:`~bikerider.gap.measured.records.MAX_RECORD_SAMPLES` samples (a few MB); a larger file is refused with its
 size before it is read."""
 
 
@@ -357,7 +360,7 @@ def read_perturbation(
     if len(table.rows) < 2:
         raise FileFormatError(table.path, f"{len(table.rows)} samples: a time series needs many")
     # stamps that repeat, go back or jump (a logger's clock) are repaired when the record is fitted,
-    # each repair said (bikerider.gap.repair); only a run whose time never advances is refused
+    # each repair said (bikerider.gap.measured.repair); only a run whose time never advances is refused
     if not np.any(np.diff(data["time"]) > 0):
         raise FileFormatError(table.path, f"time = {data['time'][0]:g} throughout: expected increasing time stamps")
     if "speed" in data:
@@ -487,11 +490,8 @@ def read_control(path: str | Path) -> dict[str, ControlLaw]:
 
     ``[control]`` with constant gains ``k_phi, k_phid, k_delta, k_deltad`` (one law, named by its
     gains), or named laws ``[control.<name>]`` whose gains may be schedules in speed (see
-    :mod:`bikerider.gap.control`).
+    :mod:`bikerider.gap.measured.control`).
     """
-    from bikerider.io.experiment import read_laws, read_text
-    from bikerider.io.toml_input import read_toml
-    from bikerider.quantity import parse_quantity
 
     data = read_toml(checked_input_file(path, MAX_CONTROL_BYTES, "control file"))
     table = data.get("control", data)

@@ -2,11 +2,11 @@
 
 ``--model`` takes a TOML file (``[benchmark]`` with optional ``[rider]``, ``[upper_body]``,
 ``[grips]`` and ``[plausible]`` tables) or a BicycleParameters ``<Name>Benchmark.txt``; ``--rider``
-adds a lumped rider.  :mod:`bikerider.gap.model_input` describes the tables and the default rider
+adds a lumped rider.  :mod:`bikerider.gap.candidates.nominal` describes the tables and the default rider
 geometry.
 
 ``[plausible]`` states what this bicycle's own knowledge says a candidate's parameter may be,
-replacing the literature range of :mod:`bikerider.gap.effects` for this bicycle::
+replacing the literature range of :mod:`bikerider.gap.candidates.effects` for this bicycle::
 
     [plausible]
     I_steer = { range = [0.0, 0.1], why = "motor rotor through the gearbox; front-assembly inertia 0-0.1 kg m^2" }
@@ -14,13 +14,20 @@ replacing the literature range of :mod:`bikerider.gap.effects` for this bicycle:
 
 from __future__ import annotations
 
+import math
+from dataclasses import replace
 from pathlib import Path
 
 from bikerider.benchmark import BenchmarkParameters
 from bikerider.errors import InputError
-from bikerider.gap.model_input import RIDER_KEYS, GapModelInput, default_geometry, table_numbers
-from bikerider.gap.models import GRIP_KEYS, UPPER_BODY_KEYS, RiderGeometry
+from bikerider.gap.candidates.effect_model import GRIP_KEYS, UPPER_BODY_KEYS, RiderGeometry
+from bikerider.gap.candidates.effects import EFFECTS
+from bikerider.gap.candidates.nominal import RIDER_KEYS, GapModelInput
+from bikerider.io.benchmark_file import load_benchmark_parameters, parameters_from_table
+from bikerider.io.bicycleparameters import merge_rider, read_lumped_rider
 from bikerider.io.input_file import checked_input_file
+from bikerider.io.toml_input import read_toml
+from bikerider.quantity import Quantity, parse_quantity
 
 MAX_MODEL_BYTES = 1_000_000
 """Largest model or rider file read [bytes] (they hold a few dozen values: a few kB)."""
@@ -41,14 +48,11 @@ def load_model(
     InputError
         A missing or impossible value (names the file, the key and what was expected).
     """
-    from bikerider.io.benchmark_file import load_benchmark_parameters, parameters_from_table
 
     path = checked_input_file(path, MAX_MODEL_BYTES, "model file")
     source = str(path)
     tables: dict[str, object] = {}
     if path.suffix.lower() == ".toml":
-        from bikerider.io.toml_input import read_toml
-
         data = read_toml(path)
         _check_tables(data, source)
         extra = {k: data[k] for k in MODEL_TABLES[1:] if k in data}
@@ -63,7 +67,7 @@ def load_model(
         parameters = parameters_from_table(data.get("benchmark", data), source)
     else:
         parameters = load_benchmark_parameters(path)
-    rider = table_numbers(tables["rider"], "rider", RIDER_KEYS, source) if "rider" in tables else None
+    rider = _table_numbers(tables["rider"], "rider", RIDER_KEYS, source) if "rider" in tables else None
     if rider_path is not None:
         if rider is not None:
             raise InputError("rider", str(rider_path), "one rider: the model file already has a [rider] table", source)
@@ -73,17 +77,17 @@ def load_model(
         raise InputError(
             "rider.mass", rider["mass"], f"a positive mass below the rear body's {parameters['mB']} kg", source
         )
-    geometry = default_geometry(parameters, rider)
+    geometry = GapModelInput.default_geometry(parameters, rider)
     if "upper_body" in tables:
         geometry = RiderGeometry(
-            table_numbers(tables["upper_body"], "upper_body", UPPER_BODY_KEYS, source),
+            _table_numbers(tables["upper_body"], "upper_body", UPPER_BODY_KEYS, source),
             geometry.grips,
             geometry.notes + "; upper body from the model file",
         )
     if "grips" in tables:
         geometry = RiderGeometry(
             geometry.upper_body,
-            table_numbers(tables["grips"], "grips", GRIP_KEYS, source),
+            _table_numbers(tables["grips"], "grips", GRIP_KEYS, source),
             geometry.notes + "; grips from the model file",
         )
     plausible = _plausible(tables["plausible"], source) if "plausible" in tables else {}
@@ -108,9 +112,6 @@ def _check_tables(data: dict, source: str) -> None:
 
 def _plausible(table: object, source: str) -> dict[str, tuple[float, float, str]]:
     """``[plausible]``: ``name = { range = [lo, hi], why = "..." }`` for candidate parameters."""
-    import math
-
-    from bikerider.gap.effects import EFFECTS
 
     known = {p.name for e in EFFECTS.values() for p in e.parameters}
     if not isinstance(table, dict):
@@ -144,10 +145,6 @@ def _plausible(table: object, source: str) -> dict[str, tuple[float, float, str]
 def _merge_rider(
     parameters: BenchmarkParameters, rider_path: Path, rel_sigma: float = 0.0
 ) -> tuple[BenchmarkParameters, dict[str, float]]:
-    from dataclasses import replace
-
-    from bikerider.io.bicycleparameters import merge_rider, read_lumped_rider
-    from bikerider.quantity import Quantity
 
     lumped = read_lumped_rider(rider_path)
     if rel_sigma > 0:
@@ -167,3 +164,18 @@ def _merge_rider(
         "Izz": values["IBrzz"],
     }
     return merge_rider(parameters, lumped), rider
+
+
+def _table_numbers(table: object, name: str, keys: tuple[str, ...], source: str) -> dict[str, float]:
+    """The numbers of a model file's table ``[name]``: exactly ``keys``, each a number or ``"v +/- sigma"``."""
+    if not isinstance(table, dict):
+        raise InputError(name, table, "a table", source)
+    unknown = sorted(set(table) - set(keys))
+    if unknown:
+        raise InputError(f"{name}.{unknown[0]}", table[unknown[0]], "one of " + ", ".join(keys), source)
+    out = {}
+    for key in keys:
+        if key not in table:
+            raise InputError(f"{name}.{key}", "missing", "a value", source)
+        out[key] = parse_quantity(table[key], f"{name}.{key}", source).value
+    return out

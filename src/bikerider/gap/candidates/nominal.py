@@ -12,7 +12,7 @@ The files are read by :func:`bikerider.io.gap_model.load_model`; ``--model`` tak
 Benchmark.txt``) to the rear body (Moore et al. 2009, Eqs. 15-16).
 
 Default geometry, used when a file does not give it (documented approximations, see
-:func:`default_geometry`): the upper body that can lean is half the rider's mass, its centre
+:meth:`GapModelInput.default_geometry`): the upper body that can lean is half the rider's mass, its centre
 0.2 m above the rider's centre of mass, the hip axis 0.1 m below it; the grips sit at the
 handlebar-and-fork centre of mass, 0.29 m either side of the bicycle's plane.
 """
@@ -22,9 +22,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from bikerider.benchmark import BenchmarkParameters
-from bikerider.errors import InputError
-from bikerider.gap.models import RiderGeometry
-from bikerider.quantity import parse_quantity
+from bikerider.gap.candidates.effect_model import RiderGeometry
 
 UPPER_BODY_FRACTION = 0.5
 """Share of the rider's mass above the hips (head, trunk above the pelvis, arms).  de Leva (1996)
@@ -55,51 +53,37 @@ class GapModelInput:
     ``{parameter: (low, high, why)}``, replacing the literature range (``[plausible]`` in a TOML
     model file)."""
 
+    @staticmethod
+    def default_geometry(parameters: BenchmarkParameters, rider: dict[str, float] | None) -> RiderGeometry:
+        """Upper body and grips from the rider's lumped body (or none without a rider).
 
-def default_geometry(parameters: BenchmarkParameters, rider: dict[str, float] | None) -> RiderGeometry:
-    """Upper body and grips from the rider's lumped body (or none without a rider).
-
-    Parameters
-    ----------
-    parameters : BenchmarkParameters
-        With the rider included in the rear body.
-    rider : dict or None
-        ``mass, x, z, Ixx, Ixz, Izz`` of the rider (benchmark frame), or ``None``.
-    """
-    v = parameters.values
-    grips = {"x_grip": float(v["xH"]), "z_grip": float(v["zH"]), "b_grip": GRIP_HALF_WIDTH}
-    notes = ["grips at the handlebar-and-fork centre of mass, 0.29 m either side (default)"]
-    upper = None
-    if rider is not None:
-        m_u = UPPER_BODY_FRACTION * rider["mass"]
-        kx, kz = UPPER_BODY_RADII
-        upper = {
-            "m_u": m_u,
-            "x_u": rider["x"],
-            "z_u": rider["z"] - UPPER_BODY_RISE,
-            "IUxx": m_u * kx**2,
-            "IUxz": 0.0,
-            "IUzz": m_u * kz**2,
-            "z_lean": rider["z"] + HIP_DROP,
-        }
-        notes.append(
-            f"upper body: {UPPER_BODY_FRACTION:.0%} of the rider's {rider['mass']:.1f} kg, "
-            f"{UPPER_BODY_RISE} m above the rider's centre of mass, hip axis {HIP_DROP} m below it (default)"
-        )
-    else:
-        notes.append("no rider: rider_lean and passive_arms do not apply")
-    return RiderGeometry(upper, grips, "; ".join(notes))
-
-
-def table_numbers(table: object, name: str, keys: tuple[str, ...], source: str) -> dict[str, float]:
-    if not isinstance(table, dict):
-        raise InputError(name, table, "a table", source)
-    unknown = sorted(set(table) - set(keys))
-    if unknown:
-        raise InputError(f"{name}.{unknown[0]}", table[unknown[0]], "one of " + ", ".join(keys), source)
-    out = {}
-    for key in keys:
-        if key not in table:
-            raise InputError(f"{name}.{key}", "missing", "a value", source)
-        out[key] = parse_quantity(table[key], f"{name}.{key}", source).value
-    return out
+        Parameters
+        ----------
+        parameters : BenchmarkParameters
+            With the rider included in the rear body.
+        rider : dict or None
+            ``mass, x, z, Ixx, Ixz, Izz`` of the rider (benchmark frame), or ``None``.
+        """
+        v = parameters.values
+        grips = {"x_grip": float(v["xH"]), "z_grip": float(v["zH"]), "b_grip": GRIP_HALF_WIDTH}
+        notes = ["grips at the handlebar-and-fork centre of mass, 0.29 m either side (default)"]
+        upper = None
+        if rider is not None:
+            m_u = UPPER_BODY_FRACTION * rider["mass"]
+            kx, kz = UPPER_BODY_RADII
+            upper = {
+                "m_u": m_u,
+                "x_u": rider["x"],
+                "z_u": rider["z"] - UPPER_BODY_RISE,
+                "IUxx": m_u * kx**2,
+                "IUxz": 0.0,
+                "IUzz": m_u * kz**2,
+                "z_lean": rider["z"] + HIP_DROP,
+            }
+            notes.append(
+                f"upper body: {UPPER_BODY_FRACTION:.0%} of the rider's {rider['mass']:.1f} kg, "
+                f"{UPPER_BODY_RISE} m above the rider's centre of mass, hip axis {HIP_DROP} m below it (default)"
+            )
+        else:
+            notes.append("no rider: rider_lean and passive_arms do not apply")
+        return RiderGeometry(upper, grips, "; ".join(notes))

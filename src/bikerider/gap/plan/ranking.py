@@ -68,10 +68,14 @@ import numpy as np
 
 from bikerider.engine import DifferencedStage
 from bikerider.errors import FitError, InputError
-from bikerider.gap.control import NO_CONTROL, ControlLaw
-from bikerider.gap.data import CanonicalData, EigenvalueData
-from bikerider.gap.effects import TIME_DOMAIN_EFFECTS
-from bikerider.gap.extraction import (
+from bikerider.gap.candidates.effect_model import EffectModel
+from bikerider.gap.candidates.effects import TIME_DOMAIN_EFFECTS
+from bikerider.gap.inference.indirect import LAMBDA_BOUNDS, RecordSimulator, comparable, levenberg_marquardt
+from bikerider.gap.inference.predict import Predictor
+from bikerider.gap.inference.problem import EffectFit
+from bikerider.gap.inference.timedomain import Layout, systems
+from bikerider.gap.measured.control import NO_CONTROL, ControlLaw
+from bikerider.gap.measured.extraction import (
     MIN_CYCLES,
     MIN_R2,
     _accept_two_mode,
@@ -79,10 +83,9 @@ from bikerider.gap.extraction import (
     _two_mode_jacobian,
     weave_eigenvalue,
 )
-from bikerider.gap.fit import EffectFit
-from bikerider.gap.indirect import LAMBDA_BOUNDS, RecordSimulator, comparable, levenberg_marquardt
-from bikerider.gap.models import EffectModel
-from bikerider.gap.next_sweep import (
+from bikerider.gap.measured.records import SIGNALS, Record, RecordFit, eigenvalues_of
+from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
+from bikerider.gap.plan.sweeps import (
     DEFAULT_RUN_TIME,
     DEFAULT_SAMPLE_RATE,
     DEFAULT_TORQUE,
@@ -99,9 +102,6 @@ from bikerider.gap.next_sweep import (
     split,
     weave_shift,
 )
-from bikerider.gap.predict import Predictor
-from bikerider.gap.records import SIGNALS, Record, RecordFit, eigenvalues_of
-from bikerider.gap.timedomain import Layout, systems
 
 
 class NoExperiment(InputError):

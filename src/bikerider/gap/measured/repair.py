@@ -1,7 +1,7 @@
 """Records as labs write them: time stamps, gaps and saturation repaired on purpose, each said.
 
 A data logger's record is seldom a clean uniform series.  :func:`repair_record` takes a
-:class:`~bikerider.gap.records.Record` as it was read and returns the record the fits and the
+:class:`~bikerider.gap.measured.records.Record` as it was read and returns the record the fits and the
 models compare with, and what was done to it (:class:`Repair`), or why it cannot be used:
 
 * **Time stamps that are not finite** (an empty time cell): the sample is dropped.
@@ -21,8 +21,8 @@ models compare with, and what was done to it (:class:`Repair`), or why it cannot
 * **A constant sensor bias** needs no repair: every fit of a record (its own and each model's
   initial-state fit) has a constant offset per signal.
 * **Non-uniform time** (jitter, the gaps the drops above leave, a clock that runs otherwise than
-  the nominal rate): the batched simulators of the models (:mod:`bikerider.gap.indirect`,
-  :mod:`bikerider.gap.timedomain`) step by one matrix exponential of a uniform step, so the record
+  the nominal rate): the batched simulators of the models (:mod:`bikerider.gap.inference.indirect`,
+  :mod:`bikerider.gap.inference.timedomain`) step by one matrix exponential of a uniform step, so the record
   is resampled onto a uniform grid at the logger's step (the median over its whole log, else over the
   record; rounded to three significant digits), by
   linear interpolation between neighbouring samples.  The error of linear interpolation over an
@@ -45,13 +45,13 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from bikerider.errors import FitError
-from bikerider.gap.extraction import weave_eigenvalue
+from bikerider.gap.measured.extraction import weave_eigenvalue
 
 RESET_STEPS = 10.0
 """A stamp this many median steps (or more) before the previous one is a clock reset; a smaller step
 back is a sample out of order (dropped)."""
 UNIFORM_RTOL = 1e-6
-"""Steps that agree within this fraction are uniform (as :mod:`bikerider.gap.indirect` requires)."""
+"""Steps that agree within this fraction are uniform (as :mod:`bikerider.gap.inference.indirect` requires)."""
 MIN_CLIP_RUN = 2
 """Fewest samples at the extreme that count as clipping."""
 GAP_STEPS = 1.5

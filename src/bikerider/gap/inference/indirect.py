@@ -37,8 +37,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from bikerider.errors import FitError
-from bikerider.gap.extraction import EXTRA_MODE_RANGE, MIN_CYCLES
-from bikerider.gap.records import RecordFit
+from bikerider.gap.measured.extraction import EXTRA_MODE_RANGE, MIN_CYCLES
+from bikerider.gap.measured.records import RecordFit
 
 OBSERVED = {"roll_angle": 0, "steer_angle": 1, "roll_rate": 2, "steer_rate": 3}
 """Record signals and the index of their state among ``(phi, delta, phid, deltad)``."""
@@ -356,7 +356,7 @@ class RecordSimulator:
         speed of the records a sensor read) or ``(P, R_all)`` (every record's own, e.g. for the
         speed's uncertainty).  The control gains stay those of the recorded speed.
         """
-        from bikerider.gap.models import EffectModel
+        from bikerider.gap.candidates.effect_model import EffectModel
 
         P = _batch_size(values, config, scale)
         R = index.size
@@ -409,7 +409,7 @@ class RecordSimulator:
         initial state refitted under the nonlinear model), the extraction is :func:`extract`, as for
         every linear model.
         """
-        from bikerider.gap.timedomain import Batch, friction_states, systems
+        from bikerider.gap.inference.timedomain import Batch, friction_states, systems
 
         theta = np.atleast_2d(np.asarray(theta, dtype=float))
         out = np.full((theta.shape[0], len(self.fits)), np.nan + 1j * np.nan)
@@ -446,7 +446,7 @@ def _linear_response(batch: RecordBatch, A: np.ndarray, outputs: tuple) -> np.nd
     linear least squares on the record's state signals, each weighted by its scatter
     (:func:`_initial_states`).
     """
-    from bikerider.gap.timedomain import expm
+    from bikerider.gap.inference.timedomain import expm
 
     P, R, n = A.shape[0], A.shape[1], A.shape[-1]
     rows = [outputs[OBSERVED[s]] for s in batch.signals]

@@ -2,7 +2,7 @@
 
 The readers of the files these come from are in :mod:`bikerider.io.gap_data` (tables) and
 :mod:`bikerider.io.experiment` (raw records and the manifests that describe them); records become
-eigenvalue rows through :mod:`bikerider.gap.records`.
+eigenvalue rows through :mod:`bikerider.gap.measured.records`.
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from bikerider.errors import InputError
-from bikerider.gap.control import ControlLaw, constant_law_name
+from bikerider.gap.measured.control import ControlLaw, constant_law_name
 from bikerider.generated.manifest import MATRIX_NAMES
 
 MODES = ("weave", "capsize", "castor")

@@ -55,14 +55,14 @@ import numpy as np
 
 from bikerider.engine import DifferencedStage
 from bikerider.errors import InputError
-from bikerider.gap.data import CanonicalData, EigenvalueData
-from bikerider.gap.effects import EFFECTS, OBSERVATION_EFFECTS
-from bikerider.gap.model_input import GapModelInput
-from bikerider.gap.models import BENCH_ARGS, STRUCTURAL_KEYS, EffectModel
-from bikerider.gap.predict import Predictor
+from bikerider.gap.candidates.effect_model import BENCH_ARGS, STRUCTURAL_KEYS, EffectModel
+from bikerider.gap.candidates.effects import EFFECTS, OBSERVATION_EFFECTS
+from bikerider.gap.candidates.nominal import GapModelInput
+from bikerider.gap.inference.predict import Predictor
+from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
 
 if TYPE_CHECKING:
-    from bikerider.gap.indirect import RecordRows
+    from bikerider.gap.inference.indirect import RecordRows
 
 LOG = logging.getLogger(__name__)
 MAX_STARTS = 32

@@ -1,15 +1,15 @@
 """Blind check of the next-experiment plan: does following it resolve a tie more often than more of the same?
 
-Cases are the hidden truths of :mod:`bikerider.gap.validation` measured by a narrow protocol
+Cases are the hidden truths of :mod:`validation.cases` measured by a narrow protocol
 (:data:`NARROW`: three sessions at 6-7.2 m/s, as a lab that has run only near one speed), where
 candidates tie.  For every case whose first-ranked candidate is tied with another and the hidden
 effect is among them:
 
-* the plan (:class:`bikerider.gap.next_experiment.NextExperiment`, the tied candidates as rivals,
+* the plan (:class:`bikerider.gap.plan.ranking.NextExperiment`, the tied candidates as rivals,
   :data:`FOLLOW_UP` decays; multisines are left out, since the diagnosis that judges the follow-up reads
   no frequency responses) recommends one experiment, a speed and a control law;
 * *planned*: :data:`FOLLOW_UP` new runs of that experiment, simulated by the independent truth
-  (:class:`bikerider.gap.validation.TruthSimulator`: Meijaard's Appendix A typed in by hand, the
+  (:class:`validation.cases.TruthSimulator`: Meijaard's Appendix A typed in by hand, the
   nonlinear effects, LSODA, noise, the weave fitted from the noisy roll rate), as a new session;
 * *spread evenly*: the same number of runs under the data's own control laws in turn, at speeds spread
   evenly over the range where the plan found a decay to record under that law (more of the same
@@ -29,11 +29,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from bikerider.gap.data import CanonicalData, EigenvalueData
-from bikerider.gap.diagnosis import Diagnosis
-from bikerider.gap.model_input import GapModelInput
-from bikerider.gap.next_experiment import NextExperiment
-from bikerider.gap.validation import TRUTHS, Protocol, Session, TruthSimulator, measure
+from bikerider.gap.candidates.nominal import GapModelInput
+from bikerider.gap.diagnosis.result import Diagnosis
+from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
+from bikerider.gap.plan.ranking import NextExperiment
+from validation.cases import TRUTHS, Protocol, Session, TruthSimulator, measure
 
 LOG = logging.getLogger(__name__)
 

@@ -1,7 +1,7 @@
-"""Text summary, markdown and figures of a gap diagnosis (matplotlib, Agg backend).
+"""Figures of a gap diagnosis (matplotlib, Agg backend, the house style of :mod:`bikerider.plotting.common`).
 
-The figure functions return matplotlib figures; :func:`bikerider.io.gap_report.write_report`
-writes them with ``report.md`` into a folder:
+The figure functions return matplotlib figures; :func:`bikerider.diagnose.write_report` writes them
+with ``report.md`` (:func:`bikerider.gap.text.markdown`) into a folder:
 
 ``records.png``
     a contact sheet of the records: each record's roll rate with its fitted decay, the model's
@@ -21,285 +21,27 @@ response) for users exploring a candidate.
 from __future__ import annotations
 
 import math
+import textwrap
 
 import numpy as np
+from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
-from bikerider.gap.effects import EFFECTS
-
-
-def pyplot():
-    """matplotlib's pyplot on the Agg backend."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
-def _fmt(x, digits: int = 3) -> str:
-    if x is None:
-        return "-"
-    if isinstance(x, float):
-        if not math.isfinite(x):
-            return str(x)
-        return f"{x:.{digits}g}"
-    return str(x)
-
-
-def _num(x) -> str:
-    """A held-out error or shrinkage to two decimals (``-`` when there is none)."""
-    return "-" if x is None or (isinstance(x, float) and not math.isfinite(x)) else f"{x:.2f}"
-
-
-ZERO = 1e-6
-"""A fitted value below this share of its 95 % interval's larger end is shown as 0 (an optimiser's
-1e-20 for a value at the bound 0)."""
-
-
-def _interval_text(value: float, low: float, high: float) -> str:
-    """``value [low, high]`` with three significant digits, or more where three would show ends that
-    differ as equal (a well determined value: ``11.4711 [11.47106, 11.47114]``, not ``11.5 [11.5,
-    11.5]``); a value or end within :data:`ZERO` of 0, relative to the interval, as 0."""
-    numbers = [value, low, high]
-    finite = [abs(x) for x in numbers if math.isfinite(x)]
-    scale = max(finite, default=0.0)
-    numbers = [0.0 if math.isfinite(x) and abs(x) < ZERO * scale else x for x in numbers]
-    digits = 3
-    while digits < 9:
-        texts = [f"{x:.{digits}g}" for x in numbers]
-        if all(texts[i] != texts[j] for i in range(3) for j in range(i) if numbers[i] != numbers[j]):
-            break
-        digits += 1
-    texts = [f"{x:.{digits}g}" for x in numbers]
-    return f"{texts[0]} [{texts[1]}, {texts[2]}]"
-
-
-def _values(params: dict) -> str:
-    return ", ".join(
-        f"{k} = {_interval_text(v['value'], v['ci95'][0], v['ci95'][1])} {v['unit']}"
-        for k, v in params.items()
-        if not k.startswith("parameters.")
-    )
-
-
-def _law_text(name: str, text: str) -> str:
-    """``Control law NAME: GAINS``, or ``Control law: GAINS`` when the name is the gains themselves
-    (an unnamed ``[control]`` table)."""
-
-    def squeeze(x: str) -> str:
-        return "".join(c for c in x if c not in " ,;")
-
-    return f"Control law: {text}" if squeeze(name) == squeeze(text) else f"Control law {name}: {text}"
-
-
-# ---------------------------------------------------------------------------------------------
-# Text
-# ---------------------------------------------------------------------------------------------
-def summary_text(result: dict) -> str:
-    """A plain-text summary of :meth:`Diagnosis.as_dict` for the terminal."""
-    lines = []
-    test = result["gap"]["test"]
-    lines.append(f"Verdict: {result['verdict']}")
-    # Two scales, each named on screen: against the combined uncertainty (data and parameters) and
-    # against the data's noise alone; the parameter fit's chi2 belongs to the second.
-    n = max(test["dof"], 1)
-    lines.append(
-        "Gap against the combined uncertainty of data and parameters (full covariance: the shared "
-        "parameters correlate the residuals):"
-    )
-    lines.append(
-        f"  chi2 = {test['chi2']:.1f} on {test['dof']} observations, chi2/n = {test['chi2'] / n:.2f}, p = {test['p_value']:.2g}"
-    )
-    lines.append(
-        f"  each residual over its own combined sigma, correlation left out (the scale of the held-out "
-        f"errors below): RMS {test['rms_z']:.2f}"
-    )
-    lines.append("Gap against the data's noise alone (the parameters taken as exact):")
-    data = test["data_only"]
-    lines.append(
-        f"  nominal parameters: chi2 = {data['chi2']:.1f}, chi2/n = {data['chi2'] / n:.2f}, p = {data['p_value']:.2g}"
-    )
-    if result.get("parameter_fit") and result["parameter_fit"].get("test"):
-        pt = result["parameter_fit"]["test"]
-        lines.append(
-            f"  parameters fitted within their uncertainty: chi2 = {pt['chi2']:.1f} (data "
-            f"{pt['chi2'] - pt['prior_chi2']:.1f} + prior {pt['prior_chi2']:.1f} on {pt['prior_dof']} parameters), "
-            f"chi2/n = {pt['chi2'] / max(pt['dof'], 1):.2f}, p = {pt['p_value']:.2g}"
-        )
-    unc = result.get("uncertainty") or {}
-    if unc.get("largest"):
-        lines.append(
-            f"Typical standard uncertainty: data {_fmt(unc['data'])}, model parameters {_fmt(unc['parameters'])} "
-            "(largest: " + ", ".join(f"{u['parameter']} {_fmt(u['rms_effect'], 2)}" for u in unc["largest"][:4]) + ")"
-        )
-    records = result.get("records")
-    if records:
-        repaired = records.get("repaired", [])
-        fixed = f" ({len(repaired)} of them repaired)" if repaired else ""
-        lines.append(f"Records: {records['used']} of {records['total']} used{fixed}, {records['left_out']} left out")
-        for r in repaired:
-            lines.append(f"  repaired {r['record']}: " + "; ".join(r["repairs"]))
-        for r in records["reasons"]:
-            lines.append(f"  left out {r['record']}: {r['reason']}")
-    for name, text in result.get("laws", {}).items():
-        if text != "no control":
-            lines.append(_law_text(name, text))
-    lines.append("")
-    lines.append("Where (gap map; cells significant against the combined uncertainty, or * against the data's alone):")
-    lines.append(
-        f"  {'mode':<10} {'speed band':<14} {'quantity':<26} {'n':>3} {'measured-model':>15} {'sigma':>8} "
-        f"{'RMS z':>7} {'data z':>7}"
-    )
-    shown = [c for c in result["gap"]["map"] if c["significant"] or c.get("significant_data")]
-    for cell in shown:
-        band = f"{cell['speed_band'][0]:.1f}-{cell['speed_band'][1]:.1f}"
-        star = "" if cell["significant"] else " *"
-        data_z = "-" if cell.get("rms_z_data") is None else f"{cell['rms_z_data']:.2f}"
-        lines.append(
-            f"  {cell['mode']:<10} {band:<14} {cell['quantity']:<26} {cell['n']:>3} "
-            f"{cell['mean_residual']:>15.4g} {cell['combined_sigma']:>8.3g} {cell['rms_z']:>7.2f} {data_z:>7}{star}"
-        )
-    if not shown:
-        lines.append("  (none)")
-    lines.append("")
-    if result["ranking"]:
-        lines.append(
-            "Which (held-out error: RMS of residuals over the combined uncertainty, and over the data's alone; "
-            "folds: " + ", ".join(result["folds"]) + "):"
-        )
-        lines.append(
-            f"  {'rank':<5}{'effect':<17}{'before':>8}{'after':>8}{'shrink':>8}{'data: after':>12}"
-            f"{'shrink':>8}  plausible  fitted"
-        )
-        first = result["ranking"][0]
-        lines.append(
-            f"  {'':<5}{'(nominal)':<17}{first['heldout_error_before']:>8.2f}{'':>16}"
-            f"{_num(first.get('data_error_before')):>12}"
-        )
-        for r in result["ranking"]:
-            params = _values(r["parameters"])
-            if r["effect"] == "parameters":
-                params = f"{len(r['parameters'])} benchmark parameters shifted"
-            ties = f"  (tied with {', '.join(r['tied_with'])})" if r["tied_with"] else ""
-            lines.append(
-                f"  {r['rank']:<5}{r['effect']:<17}{r['heldout_error_before']:>8.2f}{r['heldout_error_after']:>8.2f}"
-                f"{_num(r['shrink']):>8}{_num(r.get('data_error_after')):>12}{_num(r.get('data_shrink')):>8}"
-                f"  {'yes' if r['plausible'] else 'no':<9}  {params}{ties}"
-            )
-        if result.get("pairs"):
-            lines.append("  pairs (fitted jointly), best first:")
-            for p in result["pairs"][:5]:
-                plaus = {True: "yes", False: "no", None: "-"}[p.get("plausible")]
-                lines.append(
-                    f"       {'+'.join(p['effects']):<30}{p['heldout_error_after']:>8.2f}{_num(p['shrink']):>8}"
-                    f"{_num(p.get('data_error_after')):>12}{_num(p.get('data_shrink')):>8}  {plaus:<9}  "
-                    f"{_values(p.get('parameters', {}))}"
-                )
-    else:
-        lines.append("Which: no ranking (" + "; ".join(result["notes"][-1:]) + ")")
-    for name, why in result.get("not_applicable", {}).items():
-        lines.append(f"  {name}: not applicable ({why})")
-    lines.append("")
-    lines.append("Selected: " + (", ".join(result["selected"]) if result["selected"] else "nothing"))
-    selection = result.get("selection", {})
-    if result["selected"] and selection.get("log_odds_vs_nominal") is not None:
-        lack = selection.get("lack_of_fit", 1.0)
-        lines.append(
-            f"  evidence against the nominal model: {selection['log_odds_vs_nominal']:.1f} nats (held-out "
-            "log-likelihood"
-            + (f" with the noise inflated by the lack of fit s^2 = {lack:.3g}" if lack > 1.0 else "")
-            + f", plus the log prior ratio {selection['log_prior']:.2f} of its values)"
-        )
-    for flag in selection.get("flags", []):
-        lines.append(f"  flag: {flag}")
-    single = result.get("best_single_implausible")
-    if single:
-        lines.append(
-            f"The lowest held-out error of a single candidate ({single['heldout_error']:.3g}) is that of "
-            f"{'+'.join(single['effects'])}{_rank_phrase(single)}, which needs unusual values: "
-            + "; ".join(single["why"])
-            + _odds_phrase(single)
-            + "."
-        )
-    bad = result.get("best_implausible")
-    if bad:
-        lines.append(
-            f"The lowest held-out error of any fit, single or pair ({bad['heldout_error']:.3g}), is that of "
-            f"{'+'.join(bad['effects'])}{_rank_phrase(bad)}, which needs unusual values: "
-            + "; ".join(bad["why"])
-            + _odds_phrase(bad)
-            + ". It is not selected."
-        )
-    if result["verdict"] == "none" and result["ranking"]:
-        lines.append("No gap beyond the uncertainty of the data: nothing is selected.")
-    if result.get("selection", {}).get("note"):
-        lines.append("Note: " + result["selection"]["note"] + ".")
-    hf = result.get("how_far")
-    if hf:
-        lines.append(
-            f"How far: held-out error {hf['heldout_error_before']:.2f} -> {hf['heldout_error_after']:.2f}; "
-            f"gap above the noise floor removed: {_fmt(hf['shrink'], 2)} (against the data's own noise: "
-            f"{_fmt(hf.get('data_error_before'))} -> {_fmt(hf.get('data_error_after'))}, "
-            f"{_fmt(hf.get('data_shrink'), 2)} removed)"
-        )
-        for f in hf["folds"]:
-            lines.append(f"  {f['fold']}: {f['error_before']:.2f} -> {f['error_after']:.2f} ({f['n']} observations)")
-    for note in result["notes"]:
-        lines.append(f"Note: {note}")
-    return "\n".join(lines)
-
-
-def _odds_phrase(entry: dict) -> str:
-    """How the evidence (held-out log-likelihood plus log prior) compares with the selection's."""
-    odds = entry.get("log_odds_vs_selected")
-    if odds is None:
-        return ""
-    return f" (its evidence {odds:+.1f} nats beside the selection's, prior included)"
-
-
-def markdown(result: dict, title: str, figures: list[tuple[str, str]]) -> str:
-    """``report.md``: the summary, the candidates, the records and the figures."""
-    md = [
-        f"# {title}",
-        "",
-        f"Model: `{result['model']['source']}`  ",
-        f"Rider geometry: {result['model']['geometry']}",
-        "",
-        f"**Verdict: {result['verdict']}** — selected: {', '.join(result['selected']) or 'nothing'}",
-        "",
-    ]
-    md += ["```", summary_text(result), "```", ""]
-    if result.get("next"):
-        from bikerider.gap.next_report import next_text
-
-        md += ["## Next experiment", "", "```", next_text(result["next"], rows=12), "```", ""]
-    md += ["## Candidates", "", "| effect | what it is |", "|---|---|"]
-    md += [f"| {e.name} | {e.description} |" for e in EFFECTS.values()]
-    md += [""]
-    records = result.get("records")
-    if records:
-        md += [
-            "## Records",
-            "",
-            "| record | group | law | speed [m/s] | eigenvalue [1/s] | r^2 | cycles | used |",
-            "|---|---|---|---|---|---|---|---|",
-        ]
-        for r in records["list"]:
-            if r["used"]:
-                value = f"{r['real']:.2f} ± {r['real_sigma']:.2f} + ({r['imag']:.2f} ± {r['imag_sigma']:.2f}) i"
-                md.append(
-                    f"| {r['record']} | {r['group']} | {r['law']} | {r['speed']:.2f} | {value} | {r['r2']:.3f} | "
-                    f"{r['cycles']:.1f} | yes |"
-                )
-            else:
-                md.append(
-                    f"| {r['record']} | {r['group']} | {r['law']} | {r['speed']:.2f} | - | - | - | no: {r['reason']} |"
-                )
-        md += [""]
-    for name, caption in figures:
-        md += [f"## {caption}", "", f"![{caption}]({name})", ""]
-    return "\n".join(md)
+from bikerider.benchmark.model import label_modes
+from bikerider.errors import FitError
+from bikerider.gap.candidates.effect_model import EffectModel
+from bikerider.gap.inference.timedomain import (
+    OBSERVED,
+    Layout,
+    closed_loop,
+    friction_states,
+    initial_states,
+    make_batches,
+    simulate_friction,
+    simulate_linear,
+    systems,
+)
+from bikerider.gap.measured.repair import repair_tags
+from bikerider.plotting.common import pyplot
 
 
 # ---------------------------------------------------------------------------------------------
@@ -318,7 +60,6 @@ def weave_curve(model, speeds: np.ndarray, law, reference_model, speed_scale: fl
     The law's gains are those at the recorded speed; the model runs at ``speed_scale`` times it.
     Matched to ``reference_model``'s weave (the nominal model under the same law).
     """
-    from bikerider.benchmark.model import label_modes
 
     gains = law(speeds)
     ref, _ = label_modes(reference_model.eigenvalues(speeds, gains))
@@ -337,7 +78,6 @@ def parameter_band(problem, speeds: np.ndarray, law, reference_model) -> np.ndar
 
     Returns ``(S,)`` complex: the real part's uncertainty plus i times the imaginary part's.
     """
-    from bikerider.gap.models import EffectModel
 
     if not problem.free:
         return np.zeros(speeds.size, complex)
@@ -360,8 +100,6 @@ def _selected_model(diagnosis):
     p = diagnosis.problem
     scale = fit.config.get("speed_sensor", {}).get("speed_scale", 1.0)
     if "steer_friction" in fit.effects:
-        from bikerider.gap.models import EffectModel
-
         c = fit.config["steer_friction"]["c_viscous"]
         linear = {e: v for e, v in fit.config.items() if e not in ("steer_friction", "speed_sensor")}
         model = EffectModel(p.nominal, p.geometry, {"steer_damping": {"c_steer": c}, **linear})
@@ -372,7 +110,6 @@ def _selected_model(diagnosis):
 def plot_eigenvalues(diagnosis):
     """Measured and predicted weave against speed, one curve per control law (module docstring)."""
     plt = pyplot()
-    from bikerider.gap.models import EffectModel
 
     p = diagnosis.problem
     e = p.predictor.eigen
@@ -469,18 +206,6 @@ def plot_eigenvalues(diagnosis):
 def plot_records(diagnosis, columns: int = 6):
     """Contact sheet: every record's roll rate, its fitted decay and the model's response."""
     plt = pyplot()
-    from bikerider.errors import FitError
-    from bikerider.gap.repair import repair_tags
-    from bikerider.gap.timedomain import (
-        OBSERVED,
-        Layout,
-        closed_loop,
-        friction_states,
-        initial_states,
-        make_batches,
-        simulate_linear,
-        systems,
-    )
 
     fits = diagnosis.records
     if not fits:
@@ -490,8 +215,6 @@ def plot_records(diagnosis, columns: int = 6):
     if chosen is not None:
         model, model_label = chosen[0], chosen[2]
     else:
-        from bikerider.gap.models import EffectModel
-
         model, model_label = EffectModel(p.nominal, p.geometry), "nominal model"
     responses = {}
     used = [k for k, f in enumerate(fits) if f.used]
@@ -594,7 +317,6 @@ def _short(name: str) -> str:
 
 
 def _wrap(text: str, width: int) -> str:
-    import textwrap
 
     return "\n".join(textwrap.wrap(text, width)[:6])
 
@@ -695,7 +417,6 @@ def plot_ranking(result: dict):
 def _decade_axis(ax, values) -> None:
     """A log x axis over ``values`` (positive) spanning at least a decade, about their geometric
     middle, with plain numbers at 1, 2 and 5 times the powers of ten (``0.5``, not ``5x10^-1``)."""
-    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
     v = np.asarray([x for x in values if np.isfinite(x) and x > 0], dtype=float)
     lo, hi = (float(v.min()), float(v.max())) if v.size else (0.1, 10.0)
@@ -719,7 +440,6 @@ def plot_effects(diagnosis):
     whose apparent eigenvalue depends on each record's amplitude), as its prediction of each record.
     """
     plt = pyplot()
-    from bikerider.gap.models import EffectModel
 
     p = diagnosis.problem
     e = p.predictor.eigen
@@ -796,7 +516,6 @@ def _time_domain_selection(effects: tuple[str, ...]) -> bool:
 def plot_time_response(diagnosis):
     """Roll rate after a kick at the median speed: the nominal model and the selection (with its friction)."""
     plt = pyplot()
-    from bikerider.gap.models import EffectModel
 
     p = diagnosis.problem
     e = p.predictor.eigen
@@ -812,8 +531,6 @@ def plot_time_response(diagnosis):
         model, scale, label = chosen
         fit = diagnosis.selected_fit
         if "steer_friction" in fit.effects:
-            from bikerider.gap.timedomain import simulate_friction
-
             ss = model.state_space([speed * scale])
             A = ss.closed_loop(None if gains is None else np.asarray(gains)[None, :])[0]
             x0 = np.zeros(A.shape[-1])
@@ -903,16 +620,3 @@ def figures(diagnosis, result: dict) -> list[tuple[str, str, object]]:
         ("time_response.png", "Time response", plot_time_response(diagnosis)),
     ]
     return [(name, caption, fig) for name, caption, fig in out if fig is not None]
-
-
-def _rank_phrase(entry: dict) -> str:
-    """`` (ranked 2nd: tied with steer_friction, which has fewer fitted values)`` for a ranked single."""
-    if "rank" not in entry:
-        return ""
-    ties = entry.get("tied_with") or []
-    if entry["rank"] == 1 or not ties:
-        return f" (ranked {entry['rank']})"
-    return (
-        f" (ranked {entry['rank']}: tied with {', '.join(ties)}; within a tie the candidate with fewer fitted "
-        "values ranks first)"
-    )

@@ -26,8 +26,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from bikerider.benchmark.model import label_modes
-from bikerider.gap.data import CANONICAL_ENTRIES, CanonicalData, EigenvalueData
-from bikerider.gap.models import EffectModel, RiderGeometry
+from bikerider.gap.candidates.effect_model import EffectModel, RiderGeometry
+from bikerider.gap.measured.tables import CANONICAL_ENTRIES, CanonicalData, EigenvalueData
 
 N_SPEEDS = 5
 """Speeds spanning each identified subset's range."""
@@ -253,7 +253,7 @@ class Predictor:
 
 
 def _nominal_entries(nominal: dict[str, float], entries: list[str]) -> np.ndarray:
-    from bikerider.gap.models import BENCH_ARGS
+    from bikerider.gap.candidates.effect_model import BENCH_ARGS
     from bikerider.generated import benchmark_model as bm
 
     M, C1, K0, K2 = bm.canonical_matrices(**{k: nominal[k] for k in BENCH_ARGS})

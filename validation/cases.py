@@ -15,7 +15,7 @@ the candidate models but the benchmark parameters' meaning, and the diagnosis ru
 * every run is a time-domain simulation (:func:`scipy.integrate.solve_ivp`) of a perturbation
   (random roll-rate and steer-rate kick), with gyro noise on the roll rate and noise on the speed
   reading, and the weave eigenvalue is extracted from the noisy roll rate by
-  :func:`bikerider.gap.extraction.weave_eigenvalue`, as from a real run;
+  :func:`bikerider.gap.measured.extraction.weave_eigenvalue`, as from a real run;
 * the truth's benchmark parameters differ from the nominal ones by a random draw within their
   stated uncertainty, and the rider's geometry differs from the diagnosis's default (upper body
   45 % of the rider's mass instead of 50 %, hip axis 5 cm lower, grips 8 cm higher and 2 cm wider).
@@ -38,11 +38,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from bikerider.errors import FitError
-from bikerider.gap.control import ControlLaw, GainSchedule
-from bikerider.gap.data import CanonicalData, EigenvalueData
-from bikerider.gap.fit import POSITIVE
-from bikerider.gap.model_input import GapModelInput
-from bikerider.gap.models import BENCH_ARGS
+from bikerider.gap.candidates.effect_model import BENCH_ARGS
+from bikerider.gap.candidates.nominal import GapModelInput
+from bikerider.gap.inference.problem import POSITIVE
+from bikerider.gap.measured.control import ControlLaw, GainSchedule
+from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
 
 LOG = logging.getLogger(__name__)
 
@@ -455,9 +455,9 @@ def measure(
     """Run every session of the protocol and extract the weave eigenvalues as from real runs.
 
     ``amplitudes``, when given, receives each fitted run's steer-rate amplitude (``sqrt(2)`` times its
-    RMS over the fitted window, as :meth:`bikerider.gap.diagnosis.Diagnosis.steer_rate_amplitudes`).
+    RMS over the fitted window, as :meth:`bikerider.gap.diagnosis.result.Diagnosis.steer_rate_amplitudes`).
     """
-    from bikerider.gap.extraction import weave_eigenvalue
+    from bikerider.gap.measured.extraction import weave_eigenvalue
 
     rows = {k: [] for k in ("speed", "value", "rs", "is", "group", "gains")}
     notes = []
@@ -537,8 +537,9 @@ class CaseResult:
 
 def run_case(model: GapModelInput, truth_name: str, seed: int, protocol: Protocol = FULL) -> CaseResult:
     """Generate data from one truth, diagnose it blind, and score the predicted shrinkage."""
-    from bikerider.gap.diagnosis import Diagnosis, gap_shrink
-    from bikerider.gap.fit import GapProblem
+    from bikerider.gap.diagnosis.result import Diagnosis
+    from bikerider.gap.diagnosis.statistics import gap_shrink
+    from bikerider.gap.inference.problem import GapProblem
 
     start = time.perf_counter()
     truth = TRUTHS[truth_name]
@@ -762,7 +763,7 @@ QUICK_RECORDS = RecordProtocol(speeds=(2.5, 3.5, 4.5), per_speed=4)
 
 def measure_records(simulator: TruthSimulator, protocol: RecordProtocol, rng: np.random.Generator):
     """Records of every speed: the truth simulated from a random post-push state, noisy and quantised."""
-    from bikerider.gap.records import Record
+    from bikerider.gap.measured.records import Record
 
     scale = simulator.truth.values.get("speed_scale", 1.0)
     records = []
@@ -821,8 +822,9 @@ def run_record_case(model: GapModelInput, truth_name: str, seed: int, protocol: 
     from dataclasses import replace
 
     model = replace(model, plausible={**STEER_MOTOR, **model.plausible})
-    from bikerider.gap.diagnosis import Diagnosis, gap_shrink
-    from bikerider.gap.records import fit_records
+    from bikerider.gap.diagnosis.result import Diagnosis
+    from bikerider.gap.diagnosis.statistics import gap_shrink
+    from bikerider.gap.measured.records import fit_records
 
     start = time.perf_counter()
     truth = RECORD_TRUTHS[truth_name]
@@ -953,7 +955,7 @@ CALIBRATION_RIDERLESS = Protocol(
 
 def draw_truth(effect: CalibrationEffect, rng: np.random.Generator) -> Truth:
     """A truth whose sizes are drawn over the candidate's priors (:data:`CALIBRATION_DRAW`)."""
-    from bikerider.gap.effects import EFFECTS
+    from bikerider.gap.candidates.effects import EFFECTS
 
     priors = {p.name: p.the_prior() for e in EFFECTS.values() for p in e.parameters}
     if effect.name == "steer_coulomb":
@@ -1000,8 +1002,9 @@ def run_trial(models: dict[str, GapModelInput], effect: CalibrationEffect, seed:
     ``models`` holds ``"riderless"`` and ``"rider"`` nominal models; with ``effect.rider == "both"`` even
     seeds are riderless.
     """
-    from bikerider.gap.diagnosis import Diagnosis, gap_shrink
-    from bikerider.gap.fit import GapProblem
+    from bikerider.gap.diagnosis.result import Diagnosis
+    from bikerider.gap.diagnosis.statistics import gap_shrink
+    from bikerider.gap.inference.problem import GapProblem
 
     start = time.perf_counter()
     rng = np.random.default_rng(seed)
@@ -1082,14 +1085,14 @@ def run_friction_trial(model: GapModelInput, seed: int, protocol: RecordProtocol
     """A record trial: pure Coulomb friction drawn over its prior, simulated in time, diagnosed from records.
 
     The fitted split (``T_coulomb``, ``c_viscous``) is scored against the truth (``c_viscous`` 0), and the
-    equivalent viscous damping (:meth:`bikerider.gap.diagnosis.Diagnosis.friction_equivalent`) against
+    equivalent viscous damping (:meth:`bikerider.gap.diagnosis.result.Diagnosis.friction_equivalent`) against
     ``4 T / (pi A)`` at the same median amplitude ``A``.
     """
     from dataclasses import replace
 
-    from bikerider.gap.diagnosis import Diagnosis
-    from bikerider.gap.effects import EFFECTS
-    from bikerider.gap.records import fit_records
+    from bikerider.gap.candidates.effects import EFFECTS
+    from bikerider.gap.diagnosis.result import Diagnosis
+    from bikerider.gap.measured.records import fit_records
 
     start = time.perf_counter()
     model = replace(model, plausible={**STEER_MOTOR, **model.plausible})

@@ -28,7 +28,7 @@ import numpy as np
 
 from bikerider.benchmark.closed_loop import closed_loop_matrix
 from bikerider.errors import InputError
-from bikerider.gap.control import GAIN_NAMES  # noqa: F401  (the order of the gain arrays)
+from bikerider.gap.measured.control import GAIN_NAMES  # noqa: F401  (the order of the gain arrays)
 from bikerider.generated import gap_effects as gen
 from bikerider.generated.manifest import FUNCTIONS, TYRE_ARGS, UPPER_BODY_ARGS
 

@@ -1,7 +1,7 @@
 """Where, whether, which and how far: the sim-to-real gap diagnosis.
 
 Where.  Every measured scalar's residual (measured minus nominal model) is divided by the combined
-standard uncertainty of data and model parameters (:mod:`bikerider.gap.fit`); residuals are
+standard uncertainty of data and model parameters (:mod:`bikerider.gap.inference.problem`); residuals are
 summarised in a gap map by mode (weave, capsize, castor, or identified canonical entries), speed
 band and quantity (real part, imaginary part, entry), each cell with its chi-square and p-value.
 
@@ -15,7 +15,7 @@ freedom) plausible parameter errors explain the gap (``parameters``), else it is
 With verdict ``parameters`` the parameter fit is selected when it is plausible; when it needs
 implausible shifts the candidates are compared as for a structural gap.
 
-Which.  Folds are the data's groups (runs, riders, environments; more than :data:`MAX_FOLDS` groups
+Which.  Folds are the data's groups (runs, riders, environments; more than :data:`~bikerider.gap.diagnosis.folds.MAX_FOLDS` groups
 are held out in blocks of whole groups), or, for a single group, contiguous speed bands; never
 random points.  Every candidate is fitted on the training folds and scored on
 the held-out fold; the held-out error is the root mean square of the normalised residuals over all
@@ -29,7 +29,7 @@ held-out predictions worse on its own is not searched further).
 
 Usual, and priors.  Every fitted value of a candidate (fitted to all the data) has a usual range (the
 literature's, or the bicycle's own ``[plausible]`` table) and a prior with its source
-(:class:`bikerider.gap.effects.Prior`; the ``[plausible]`` range made a prior).  A value outside its usual
+(:class:`bikerider.gap.candidates.effects.Prior`; the ``[plausible]`` range made a prior).  A value outside its usual
 range is flagged ("above the usual ... from ...: check ..."), never refused: only what is physically
 impossible (negative damping, mass, inertia) is a bound of the fit.  A value is usable when the data
 determine it (its standard error no larger than the width of its usual range) and it is not pinned at the
@@ -57,17 +57,19 @@ normalised residuals is ``E[z^2] = 1``), ``shrink = (G_before - G_after) / G_bef
 
 from __future__ import annotations
 
+import itertools
 import logging
 import math
 import time
 from dataclasses import dataclass, field, replace
 
 import numpy as np
+from scipy.stats import chi2
 
 from bikerider import progress
 from bikerider.errors import InputError
-from bikerider.gap.data import CanonicalData, EigenvalueData
-from bikerider.gap.effects import (
+from bikerider.gap.candidates.effect_model import BENCH_ARGS, EffectModel
+from bikerider.gap.candidates.effects import (
     COULOMB_RANGE,
     EFFECT_NAMES,
     EFFECTS,
@@ -78,18 +80,27 @@ from bikerider.gap.effects import (
     Prior,
     prior_from_range,
 )
-from bikerider.gap.fit import EffectFit, GapProblem
-from bikerider.gap.model_input import GapModelInput
-from bikerider.gap.records import RecordFit, eigenvalues_of
+from bikerider.gap.candidates.nominal import GapModelInput
+from bikerider.gap.diagnosis.folds import N_SPEED_BANDS, folds
+from bikerider.gap.diagnosis.statistics import (
+    ALPHA,
+    _n_params,
+    _named_values,
+    gap_shrink,
+    jackknife_quantile,
+    rms,
+    significantly_better,
+)
+from bikerider.gap.inference.indirect import RecordRows, RecordSimulator
+from bikerider.gap.inference.low_rank import low_rank_chi2
+from bikerider.gap.inference.predict import Predictor
+from bikerider.gap.inference.problem import EffectFit, GapProblem
+from bikerider.gap.inference.timedomain import Layout, fit_time_domain
+from bikerider.gap.measured.records import RecordFit, eigenvalues_of
+from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
 
 LOG = logging.getLogger(__name__)
 
-ALPHA = 0.01
-"""Significance level of the gap tests."""
-TIE_RELATIVE = 0.05
-"""Held-out errors closer than this fraction of the better one are a tie."""
-TIE_P = 0.05
-"""One-sided p-value a better held-out error must reach to break a tie."""
 MAX_SELECTED = 2
 """Most effects selected together (pairs are searched on the held-out folds)."""
 TIME_DOMAIN_PARTNERS = ("steer_inertia", "steer_stiffness", "speed_sensor")
@@ -103,10 +114,6 @@ changes nothing and pairs nothing)."""
 UNDETERMINED = 1.0
 """A fitted value whose standard error exceeds this many times the width of its plausible range is
 not determined by the data (the data narrow it down less than the literature already does)."""
-N_SPEED_BANDS = 3
-MAX_FOLDS = 12
-"""Most folds: data in more groups are held out a block of whole groups at a time (a fold costs a fit of
-every candidate, so the folds must not grow with the data)."""
 NOISE_FLOOR = 1.0
 """A held-out RMS error (against the data's own noise where known) at or below this is at the noise floor."""
 AMPLITUDE_SPREAD = 2.0
@@ -155,48 +162,6 @@ class CrossValidation:
     data_shrink: float | None = None
 
 
-def rms(z: np.ndarray) -> float:
-    return float(np.sqrt(np.mean(np.square(z)))) if z.size else math.nan
-
-
-def gap_shrink(z_before: np.ndarray, z_after: np.ndarray) -> float | None:
-    """``(G_before - G_after) / G_before`` with ``G = mean(z^2) - 1``; ``None`` when ``G_before <= 0``."""
-    g_before = float(np.mean(np.square(z_before))) - 1.0
-    g_after = float(np.mean(np.square(z_after))) - 1.0
-    if not g_before > 0:
-        return None
-    return (g_before - max(g_after, 0.0)) / g_before
-
-
-N_BOOTSTRAP = 2000
-"""Resamples of the paired bootstrap in :func:`significantly_better`."""
-BOOTSTRAP_BLOCK = 1_000_000
-"""Resampled points drawn at a time by :func:`significantly_better` (bounds its memory)."""
-
-
-def significantly_better(z_better: np.ndarray, z_worse: np.ndarray) -> tuple[bool, float]:
-    """Whether held-out residuals ``z_better`` beat ``z_worse``; returns (significant, p).
-
-    Paired bootstrap over the held-out points (:data:`N_BOOTSTRAP` resamples, fixed seed): ``p`` is
-    the fraction of resamples in which the RMS of ``z_better`` is not below that of ``z_worse``.
-    Significant when ``p <`` :data:`TIE_P` and the RMS error is lower by more than
-    :data:`TIE_RELATIVE`.  Points of one fold share a fit, so the test is optimistic about
-    independence; it is a screening rule, not an exact test.
-    """
-    a, b = np.square(z_better), np.square(z_worse)
-    n = a.size
-    if n < 3:
-        return False, 1.0
-    rng = np.random.default_rng(0)
-    rows = max(1, BOOTSTRAP_BLOCK // n)  # resamples drawn at a time: memory bounded for any n
-    not_better = 0
-    for done in range(0, N_BOOTSTRAP, rows):
-        index = rng.integers(0, n, size=(min(rows, N_BOOTSTRAP - done), n))
-        not_better += int(np.sum(a[index].sum(axis=1) >= b[index].sum(axis=1)))
-    p = not_better / N_BOOTSTRAP
-    return p < TIE_P and rms(z_better) < (1 - TIE_RELATIVE) * rms(z_worse), p
-
-
 class Diagnosis:
     """Run the diagnosis of one bicycle's data; results in :meth:`as_dict`.
 
@@ -209,8 +174,8 @@ class Diagnosis:
     effects : sequence of str, optional
         Candidates (default: all of :data:`EFFECT_NAMES`).
     records : list of RecordFit, optional
-        Fitted records (:func:`bikerider.gap.records.fit_records`); those fitted become eigenvalue
-        rows, which every model predicts by indirect inference (:mod:`bikerider.gap.indirect`), and
+        Fitted records (:func:`bikerider.gap.measured.records.fit_records`); those fitted become eigenvalue
+        rows, which every model predicts by indirect inference (:mod:`bikerider.gap.inference.indirect`), and
         the others are left out with their reason.
 
     Raises
@@ -265,7 +230,7 @@ class Diagnosis:
         if not self.problem.free and "parameters" in self.effects:
             self.not_applicable["parameters"] = "the model file gives no parameter uncertainties"
         self.candidates = [e for e in self.effects if e not in self.not_applicable]
-        self.folds = self._folds()
+        self.folds = folds(self.problem.obs)
         self.gap_map = self._gap_map()
         self.gap_test = self._gap_test()
         self.full_fits: dict[tuple[str, ...], EffectFit] = {}
@@ -292,13 +257,10 @@ class Diagnosis:
         """Table rows plus one row per comparable record (others get their reason).
 
         A record's row holds the eigenvalue its fit found; every model predicts it by indirect
-        inference (:mod:`bikerider.gap.indirect`), like with like however far its result lies from the
+        inference (:mod:`bikerider.gap.inference.indirect`), like with like however far its result lies from the
         model's weave eigenvalue; a record is left out only where the model within its parameters'
         uncertainty shows no weave the fit finds (its prediction is then undefined).
         """
-        from bikerider.gap.indirect import RecordRows, RecordSimulator
-        from bikerider.gap.models import BENCH_ARGS, EffectModel
-        from bikerider.gap.predict import Predictor
 
         used = [k for k, f in enumerate(self.records) if f.used]
         if not used:
@@ -465,13 +427,12 @@ class Diagnosis:
         self, effects: tuple[str, ...], mask: np.ndarray | None, start=None, jackknife: bool = True
     ) -> EffectFit:
         """A time-domain candidate (steer friction, alone or with one linear effect) fitted to the records
-        in ``mask`` (:func:`bikerider.gap.timedomain.fit_time_domain`).
+        in ``mask`` (:func:`bikerider.gap.inference.timedomain.fit_time_domain`).
 
         The fit to all the data gets standard errors by the jackknife over the held-out folds' fits
         (leave one group out), when there are three folds or more, and 95 % intervals from Student's t
         with one degree of freedom fewer than the folds (:func:`jackknife_quantile`).
         """
-        from bikerider.gap.timedomain import Layout, fit_time_domain
 
         cached = self._time_domain_full.get(effects) if mask is None else None
         if cached is not None and (not jackknife or np.all(np.isfinite(cached.stderr))):
@@ -504,22 +465,22 @@ class Diagnosis:
             config.setdefault(effect, {})[param] = float(value)
         units = [next(p.unit for p in EFFECTS[e].parameters if p.name == n) for e, n in layout.names]
         out = EffectFit(
-            effects,
-            [n for _, n in layout.names],
-            units,
-            values,
-            stderr,
-            ci_low,
-            ci_high,
-            config,
-            {},
-            cost,
-            0.0,
-            n,
-            success,
-            "time-domain fit",
-            lower,
-            upper,
+            effects=effects,
+            names=[n for _, n in layout.names],
+            units=units,
+            values=values,
+            stderr=stderr,
+            ci_low=ci_low,
+            ci_high=ci_high,
+            config=config,
+            shift={},
+            chi2=cost,
+            prior_chi2=0.0,
+            n=n,
+            success=success,
+            message="time-domain fit",
+            lower=lower,
+            upper=upper,
             covariance=covariance,
         )
         if mask is None:
@@ -530,7 +491,6 @@ class Diagnosis:
         """Predicted observations of the records in ``mask`` under a time-domain fit: what the record fit
         finds in the candidate's simulated response over each record (indirect inference, as for every
         candidate)."""
-        from bikerider.gap.timedomain import Layout
 
         idx = self._record_indices(mask)
         pred = np.full(len(self.problem.obs), np.nan)
@@ -579,26 +539,8 @@ class Diagnosis:
         return self._selected_predictions
 
     # -- folds --------------------------------------------------------------------------------------
-    def _folds(self) -> list[tuple[str, np.ndarray]]:
-        obs = self.problem.obs
-        groups, member = np.unique(np.asarray(obs.group, dtype=str), return_inverse=True)
-        if groups.size > MAX_FOLDS:  # whole groups, consecutive in name order, share a fold
-            blocks = np.array_split(np.arange(groups.size), MAX_FOLDS)
-            return [
-                (f"groups {groups[b[0]]} to {groups[b[-1]]} ({b.size})", (member >= b[0]) & (member <= b[-1]))
-                for b in blocks
-            ]
-        if groups.size >= 2:
-            return [(f"group {g}", member == k) for k, g in enumerate(groups)]
-        speeds = np.unique(obs.speed)
-        if speeds.size < 2:
-            return []
-        bands = np.array_split(speeds, min(N_SPEED_BANDS, speeds.size))
-        return [(f"speeds {b[0]:.2f}-{b[-1]:.2f} m/s", (obs.speed >= b[0]) & (obs.speed <= b[-1])) for b in bands]
-
     # -- where -----------------------------------------------------------------------------------
     def _gap_map(self) -> list[dict]:
-        from scipy.stats import chi2
 
         p = self.problem
         obs = p.obs
@@ -647,9 +589,6 @@ class Diagnosis:
         return cells
 
     def _gap_test(self) -> dict:
-        from scipy.stats import chi2
-
-        from bikerider.gap.low_rank import low_rank_chi2
 
         p = self.problem
         r = p.y - p.baseline
@@ -677,7 +616,6 @@ class Diagnosis:
 
     # -- whether ----------------------------------------------------------------------------------
     def _verdict(self) -> str:
-        from scipy.stats import chi2
 
         fit = self.parameter_fit
         if fit is not None:
@@ -708,8 +646,6 @@ class Diagnosis:
         if timed:
             start = None
             if len(effects) > 1 and ("steer_friction",) in self._time_domain_full:  # from the friction alone
-                from bikerider.gap.timedomain import Layout
-
                 alone = self._time_domain_full[("steer_friction",)].values
                 start = list(alone) + [1.0 if n == "speed_scale" else 0.0 for _, n in Layout.of(effects).names[2:]]
             full = self._time_domain_fit(effects, None, start=start, jackknife=False)
@@ -805,7 +741,6 @@ class Diagnosis:
         """Pairs searched on the held-out folds (module docstring): any two linear candidates that each,
         alone, predict the held-out folds better than the nominal model (by :data:`HELPFUL`), fitted jointly; and steer
         friction (in the time domain) with each such one of :data:`TIME_DOMAIN_PARTNERS`."""
-        import itertools
 
         helpful = [
             e
@@ -1075,7 +1010,7 @@ class Diagnosis:
 
     def prior_of(self, name: str) -> Prior:
         """The prior of a fitted parameter: the bicycle's own ``[plausible]`` range made a prior
-        (:func:`bikerider.gap.effects.prior_from_range`), else the registry's."""
+        (:func:`bikerider.gap.candidates.effects.prior_from_range`), else the registry's."""
         if name in self.model_input.plausible:
             lo, hi, why = self.model_input.plausible[name]
             return prior_from_range(lo, hi, f"this bicycle's [plausible] table: {why}")
@@ -1099,7 +1034,6 @@ class Diagnosis:
         ``flag`` (text) when the value lies outside the usual range.  ``usable`` is false only where the
         data cannot carry the value (undetermined, or pinned at the edge of the search).
         """
-        from scipy.stats import chi2
 
         checks = []
         ok = True
@@ -1312,31 +1246,6 @@ class Diagnosis:
         }
 
 
-def _n_params(problem: GapProblem, effects: tuple[str, ...]) -> int:
-    n = 0
-    for e in effects:
-        n += len(problem.free) if e == "parameters" else len(EFFECTS[e].parameters)
-    return n
-
-
-def _named_values(fit: EffectFit | None) -> dict:
-    if fit is None:
-        return {}
-    return {
-        name: {"value": float(v), "stderr": float(s), "ci95": [float(lo), float(hi)], "unit": u}
-        for name, v, s, lo, hi, u in zip(fit.names, fit.values, fit.stderr, fit.ci_low, fit.ci_high, fit.units)
-    }
-
-
-def jackknife_quantile(folds: int) -> float:
-    """The 97.5 % point of Student's t with ``folds - 1`` degrees of freedom: a jackknife over ``folds``
-    fits estimates a standard error with that many, so the normal 1.96 would make its 95 % intervals too
-    narrow (4.30 for three folds, 2.26 for ten)."""
-    from scipy.stats import t as student_t
-
-    return float(student_t.ppf(0.975, max(folds - 1, 1)))
-
-
 def _parameter(name: str) -> EffectParameter:
     """The registry's entry of a fitted parameter, by name."""
     return next(p for e in EFFECTS.values() for p in e.parameters if p.name == name)
@@ -1356,7 +1265,6 @@ def arm_inertia(problem: GapProblem, m_arm: float) -> float:
 
 def _data_only_cell(problem: GapProblem, idx: list[int], alpha: float) -> dict:
     """A gap-map cell's RMS residual and significance against the data's uncertainty alone."""
-    from scipy.stats import chi2
 
     var = problem.var_data[idx]
     if not np.all(var > 0):

@@ -3,7 +3,7 @@
 Each effect names the parameters the diagnosis fits, their bounds (what is physically possible, or
 the edge of the search), their usual range (what the literature measured: a value outside it is
 flagged, not refused) and their prior (:class:`Prior`, a distribution with its source), which the
-selection weighs as evidence against the held-out data (:mod:`bikerider.gap.diagnosis`).  Ranges and
+selection weighs as evidence against the held-out data (:mod:`bikerider.gap.diagnosis.result`).  Ranges and
 priors are from the table in ``data/gap/README.md`` of the reference material and the sources quoted
 per parameter (``docs/gap.md``, section "Priors"); the models themselves are derived in
 ``derive/gap_effects.py``.
@@ -15,6 +15,9 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.stats import norm
+
+from bikerider.errors import InputError
 
 EFFECT_NAMES = (
     "parameters",
@@ -31,7 +34,7 @@ EFFECT_NAMES = (
 OBSERVATION_EFFECTS = ("speed_sensor",)
 """Candidates that change how the data were taken rather than the bicycle (no model parameter)."""
 TIME_DOMAIN_EFFECTS = ("steer_friction",)
-"""Nonlinear candidates fitted in the time domain to records (:mod:`bikerider.gap.timedomain`)."""
+"""Nonlinear candidates fitted in the time domain to records (:mod:`bikerider.gap.inference.timedomain`)."""
 COULOMB_RANGE = (0.02, 0.15)
 """Steer Coulomb friction of the literature [N m] (data/gap/README.md table; Davis bicycle 0.15 +/-
 0.05, Moore 2012)."""
@@ -75,7 +78,6 @@ class Prior:
 
     def interval(self, p: float = 0.95) -> tuple[float, float]:
         """The central (half-Cauchy: lower) interval holding probability ``p``."""
-        from scipy.stats import norm
 
         if self.kind == "normal":
             z = float(norm.ppf(0.5 + p / 2))
@@ -474,7 +476,6 @@ def effect(name: str) -> Effect:
     InputError
         For an unknown name (the message lists the candidates).
     """
-    from bikerider.errors import InputError
 
     try:
         return EFFECTS[name]

@@ -29,8 +29,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from bikerider.errors import FitError
-from bikerider.gap.models import EffectModel
-from bikerider.gap.records import Record
+from bikerider.gap.candidates.effect_model import EffectModel
+from bikerider.gap.measured.records import Record
 
 OBSERVED = {"roll_angle": 0, "steer_angle": 1, "roll_rate": 2, "steer_rate": 3}
 """Record signals and the index of their state among ``(phi, delta, phid, deltad)``."""
@@ -153,7 +153,7 @@ class Layout:
 
     @staticmethod
     def of(effects: tuple[str, ...]) -> Layout:
-        from bikerider.gap.effects import EFFECTS
+        from bikerider.gap.candidates.effects import EFFECTS
 
         names, lower, upper, start = [], [], [], []
         for effect in sorted(effects, key=lambda e: e != "steer_friction"):
@@ -200,7 +200,7 @@ def systems(values: dict, geometry, records: list[Record], layout: Layout, theta
     flat_speeds = (np.where(measured[None, :], scale[:, None], 1.0) * speeds[None, :]).ravel()
     flat_values = {k: v for k, v in values.items()}
     flat_config = {e: {k: np.repeat(v, R) for k, v in p.items()} for e, p in config.items()}
-    from bikerider.gap.models import EffectModel
+    from bikerider.gap.candidates.effect_model import EffectModel
 
     ss = EffectModel(flat_values, geometry, flat_config).state_space(flat_speeds)
     A = ss.closed_loop(np.tile(gains, (P, 1)))

@@ -7,7 +7,7 @@ readers (:mod:`bikerider.io.experiment`) cut records from logs with a manifest; 
 found wanting while they are read (a window with missing values, a speed that cannot be read) keep
 the reason in :attr:`Record.problem` and are left out, never stopping the diagnosis.
 
-:func:`fit_records` fits each record's weave eigenvalue (:func:`bikerider.gap.extraction.
+:func:`fit_records` fits each record's weave eigenvalue (:func:`bikerider.gap.measured.extraction.
 weave_eigenvalue`: a damped oscillation with the slow capsize mode, half a cycle and more when
 the decay is clear) to the roll rate and, where asked, to other signals, combined when they agree.
 A record that cannot be fitted is left out with the fit's reason.  Every fit carries its quality:
@@ -26,10 +26,10 @@ import numpy as np
 
 from bikerider import progress
 from bikerider.errors import FitError
-from bikerider.gap.control import ControlLaw
-from bikerider.gap.data import EigenvalueData
-from bikerider.gap.extraction import WeaveEstimate, weave_eigenvalue
-from bikerider.gap.repair import repair_record
+from bikerider.gap.measured.control import ControlLaw
+from bikerider.gap.measured.extraction import WeaveEstimate, weave_eigenvalue
+from bikerider.gap.measured.repair import repair_record
+from bikerider.gap.measured.tables import EigenvalueData
 
 LOG = logging.getLogger(__name__)
 
@@ -74,7 +74,7 @@ class Record:
     speed_measured : bool
         The speed is a sensor's reading during the record (a speed column), not a set value.
     repairs : list of str
-        What :func:`bikerider.gap.repair.repair_record` did to the record as read (empty: nothing).
+        What :func:`bikerider.gap.measured.repair.repair_record` did to the record as read (empty: nothing).
     raw : tuple of ndarray or None
         The recorded instants and roll rate before a repair (for figures); ``None`` when not repaired.
     step : float or None
@@ -169,7 +169,7 @@ class RecordFit:
 
 
 def fit_record(record: Record) -> RecordFit:
-    """Repair one record as read (:func:`bikerider.gap.repair.repair_record`: time stamps, gaps,
+    """Repair one record as read (:func:`bikerider.gap.measured.repair.repair_record`: time stamps, gaps,
     clipping) and fit its weave eigenvalue; a failure becomes the record's reason, never an exception."""
     if record.problem:
         return RecordFit(record, None, reason=record.problem)

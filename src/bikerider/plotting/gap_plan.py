@@ -1,102 +1,17 @@
-"""Text and figure of a plan for the next experiment (:mod:`bikerider.gap.next_experiment`)."""
+"""Figure of a plan for the next experiment (:mod:`bikerider.gap.plan.ranking`; its text is :func:`bikerider.gap.text.next_text`)."""
 
 from __future__ import annotations
 
 import numpy as np
+from matplotlib.ticker import NullFormatter
 
-
-def next_text(result: dict, rows: int = 8) -> str:
-    """The plan in words: rivals, measure, noise, the ranked experiments, the best per signal and law."""
-    rivals = [" + ".join(r["effects"]) for r in result["rivals"]]
-    width = max([78] + [len(item["text"]) + 2 for item in result["plan"][:rows]])
-    lines = [
-        "Next experiment: to tell " + ", ".join(rivals[:-1]) + " and " + rivals[-1] + " apart "
-        f"({result['rivals_rule']})",
-        f"Measure: {result['measure']}.",
-    ]
-    missing = [r for r in result["rivals"] if r.get("heldout_error")]
-    if missing:
-        lines.append(
-            "Misfit: "
-            + ", ".join(f"{' + '.join(r['effects'])} misses held-out data by {r['heldout_error']:.2f}" for r in missing)
-            + " (RMS over the uncertainties, 1 the noise floor); the plan counts the misfit as a systematic error of "
-            "each rival's prediction, so two rivals that both miss the data by more than they differ are not told apart."
-        )
-    lines += [
-        "Noise: "
-        + result["noise"]["note"]
-        + (
-            "; sample noise "
-            + ", ".join(
-                f"{s.replace('_', ' ')} {v['value']:.2g} ({_short_source(v['source'])})"
-                for s, v in result["noise"]["signals"].items()
-            )
-            if result["noise"]["signals"]
-            else ""
-        )
-        + ".",
-    ]
-    if result.get("sweeps"):
-        sw = result["sweeps"]
-        lines.append(
-            f"Multisines: {sw['torque']:g} N m peak, {sw['run_time']:g} s per run; {sw['note']}; the share a linear "
-            f"model misses {sw['distortion']['value']:.2f} per line ({_short_source(sw['distortion']['source'])})."
-        )
-    lines += [
-        f"  {'rank':<5}{'experiment':<{width}}{'P':>6}{'n 95%':>7}{'limit':>7}  d per pair (first true/second true)",
-    ]
-    for k, item in enumerate(result["plan"][:rows], start=1):
-        need = "-" if item["decays_for_95"] is None else str(item["decays_for_95"])
-        pairs = ", ".join(
-            f"{'/'.join(p['rivals'])} {p['separation'][0]:.1f}/{p['separation'][1]:.1f}" for p in item["pairs"]
-        )
-        lines.append(
-            f"  {k:<5}{item['text']:<{width}}{item['resolution_probability']:>6.2f}{need:>7}{item['limit']:>7.2f}  {pairs}"
-        )
-    if result.get("best_per_signal"):
-        lines.append(
-            "  best per signal: "
-            + "; ".join(
-                f"{s.replace('_', ' ')} {v['resolution_probability']:.2f} at {v['speed']:.2f} m/s"
-                for s, v in result["best_per_signal"].items()
-            )
-        )
-    lines.append(
-        "  best per law: "
-        + "; ".join(
-            f"{law} {v['resolution_probability']:.2f} at {v['speed']:.2f} m/s"
-            for law, v in result["best_per_law"].items()
-        )
-    )
-    best = result["plan"][0] if result["plan"] else None
-    if best is not None:
-        if best["decays_for_95"] is not None:
-            verb = "tells" if best["decays_for_95"] == 1 else "tell"
-            lines.append(f"Recommendation: {best['text_for_95']} {verb} the rivals apart with 95 % probability.")
-        else:
-            lines.append(
-                f"Recommendation: no experiment considered reaches 95 % within {result['max_repeats']} runs; the best, "
-                f"{best['text']}, reaches {best['resolution_probability']:.2f} (at most {best['limit']:.2f} with any "
-                "number of runs: the rivals' own uncertainty and their misfit on held-out data keep it there)."
-            )
-    if result["left_out"]:
-        lines.append(
-            f"  {len(result['left_out'])} experiments left out (e.g. {result['left_out'][0]['experiment']}: "
-            f"{result['left_out'][0]['reason']})"
-        )
-    return "\n".join(lines)
-
-
-def _short_source(source: str) -> str:
-    return "data" if source.startswith(("the data", "the records")) else source.split(" ")[0]
+from bikerider.plotting.common import pyplot
 
 
 def plot_next(plan, result: dict | None = None):
     """Predictions of the rivals diverging over speed (the best plan item's law, signal and push), with
     one standard deviation of each for the planned decays, the data, and the resolution probability
     against speed for every law."""
-    from bikerider.gap.report import pyplot
-
     plt = pyplot()
     result = result or plan.as_dict()
     decays = [item for item in plan.plan if item["experiment"].kind == "decay"]
@@ -202,7 +117,6 @@ def _sweep_row(axes, plan, sweeps, colours):
     unit = "rad/s" if best.output == "roll_rate" else "rad"
     axes[0].set_ylabel(f"|{best.output.replace('_', ' ')} / steer torque| [{unit} / N m]")
     axes[1].set_ylabel("phase [deg]")
-    from matplotlib.ticker import NullFormatter
 
     for ax in axes[:2]:
         ax.set_xscale("log")
