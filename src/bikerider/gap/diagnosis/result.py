@@ -86,6 +86,7 @@ from bikerider.gap.diagnosis.statistics import (
     ALPHA,
     _n_params,
     _named_values,
+    at_noise_floor,
     gap_shrink,
     jackknife_quantile,
     rms,
@@ -114,8 +115,6 @@ changes nothing and pairs nothing)."""
 UNDETERMINED = 1.0
 """A fitted value whose standard error exceeds this many times the width of its plausible range is
 not determined by the data (the data narrow it down less than the literature already does)."""
-NOISE_FLOOR = 1.0
-"""A held-out RMS error (against the data's own noise where known) at or below this is at the noise floor."""
 AMPLITUDE_SPREAD = 2.0
 """Records whose steer-rate amplitudes span less than this factor (10th to 90th percentile) are decays of
 one amplitude: they do not tell Coulomb from viscous friction (:meth:`Diagnosis.friction_equivalent`)."""
@@ -822,7 +821,7 @@ class Diagnosis:
             better, pval = significantly_better(r.z_after, reference)
             left = r.data_after if r.data_after is not None else r.error_after
             usable = all(c.get("usable", True) for c in checks)
-            at_floor = bool(left <= NOISE_FLOOR)
+            at_floor = at_noise_floor(left, r.z_after.size)
             score = self.score(r, lack)
             entry = {
                 "effects": list(r.effects),
@@ -858,7 +857,8 @@ class Diagnosis:
             if best_single is None
             else (best_single.data_after if best_single.data_after is not None else best_single.error_after)
         )
-        pairs = [] if left is not None and left <= NOISE_FLOOR else getattr(self, "pairs", [])
+        floor_reached = left is not None and at_noise_floor(left, best_single.z_after.size)
+        pairs = [] if floor_reached else getattr(self, "pairs", [])
         floor_score = judged[best_single.effects]["score"] if best_single is not None else nominal_score
         for r in sorted(pairs, key=lambda r: r.error_after):
             j = judge(r, reference, "beats_single" if best_single is not None else "beats_nominal")

@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from scipy.stats import chi2
 from scipy.stats import t as student_t
 
 from bikerider.gap.candidates.effects import EFFECTS
@@ -28,6 +29,20 @@ N_BOOTSTRAP = 2000
 
 BOOTSTRAP_BLOCK = 1_000_000
 """Resampled points drawn at a time by :func:`significantly_better` (bounds its memory)."""
+
+
+NOISE_FLOOR_LEVEL = 0.05
+"""Held-out residuals are at the noise floor when noise alone would give a larger sum of squares with
+at least this probability (:func:`at_noise_floor`)."""
+
+
+def at_noise_floor(rms_error: float, n: int) -> bool:
+    """Whether ``n`` held-out residuals of RMS ``rms_error`` (in units of their noise) are consistent
+    with the noise alone: ``n rms^2`` within the chi-square's upper 95 % point with ``n`` degrees of
+    freedom.  A bare ``rms <= 1`` would call pure noise "above the floor" half the time."""
+    if not (n > 0 and math.isfinite(rms_error)):
+        return False
+    return bool(n * rms_error**2 <= chi2.ppf(1.0 - NOISE_FLOOR_LEVEL, n))
 
 
 def rms(z: np.ndarray) -> float:
