@@ -326,7 +326,12 @@ def batch_naming(eigenvalues_at, edges: np.ndarray, top: np.ndarray):
     mids = 0.5 * (lows + edges)
     samples = np.where(k[None, :m] < count[:, None], mids, top[:, None])
     samples = np.concatenate([samples, top[:, None]], axis=1)
-    _, pairs = slots(eigenvalues_at(samples))
+    c = np.where(np.isfinite(edges), edges, top[:, None])
+    # one evaluation for the segments' samples and both sides of each collision at the first step
+    # (each speed's eigenvalues do not depend on the others evaluated with it)
+    evaluated = eigenvalues_at(np.concatenate([samples, c * (1 + _STEPS[0]), c * (1 - _STEPS[0])], axis=1))
+    evaluated_order, evaluated_pairs = slots(evaluated)
+    pairs = evaluated_pairs[:, : m + 1]
     in_range = k[None, :] <= count[:, None]
     alone = np.any(in_range & (pairs == 2), axis=1)
     ones = np.where(in_range & (pairs == 1), k[None, :], -1)
@@ -337,7 +342,6 @@ def batch_naming(eigenvalues_at, edges: np.ndarray, top: np.ndarray):
     names[rows, np.maximum(anchor, 0)] = np.array([0, 0, 1, 2], dtype=np.int8)
     if m == 0:
         return pairs, names, alone
-    c = np.where(np.isfinite(edges), edges, top[:, None])
     # downward across edge i (i < anchor): known segment i + 1 (above), unknown i (below); upward
     # (anchor <= i < count): known i (below), unknown i + 1 (above)
     down = k[None, :m] < anchor[:, None]
@@ -347,13 +351,17 @@ def batch_naming(eigenvalues_at, edges: np.ndarray, top: np.ndarray):
     source = np.zeros((b, m, 4), dtype=complex)
     target = np.zeros((b, m, 4), dtype=complex)
     pending = down | up
-    for step in _STEPS:  # the smallest step at which both sides have their segments' structure
+    for s, step in enumerate(_STEPS):  # the smallest step at which both sides have their segments' structure
         rows_pending = np.nonzero(pending.any(axis=1))[0]
         if not rows_pending.size:
             break
-        cc = c[rows_pending]
-        around = eigenvalues_at(np.concatenate([cc * (1 + step), cc * (1 - step)], axis=1), rows_pending)
-        order, structure = slots(around)
+        if s == 0:  # evaluated above
+            around = evaluated[rows_pending, m + 1 :]
+            order, structure = evaluated_order[rows_pending, m + 1 :], evaluated_pairs[rows_pending, m + 1 :]
+        else:
+            cc = c[rows_pending]
+            around = eigenvalues_at(np.concatenate([cc * (1 + step), cc * (1 - step)], axis=1), rows_pending)
+            order, structure = slots(around)
         slotted = np.take_along_axis(around, order, axis=-1)
         above, below = slotted[:, :m], slotted[:, m:]
         d = down[rows_pending]
