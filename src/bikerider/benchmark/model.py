@@ -206,6 +206,7 @@ class WhippleModel:
         pairs in a segment, no segment with one pair) is named on its own."""
         speeds = np.abs(np.asarray(speeds, dtype=float))
         edges = self._collision_table()
+        edges = edges[:, : int(np.isfinite(edges).sum(axis=1).max(initial=0))]  # NaN padding only: no column
         entries = {k: np.asarray(e, dtype=float).reshape(-1) for k, e in self._entries().items()}
         g = np.broadcast_to(np.asarray(self.g, dtype=float), self.batch_shape).reshape(-1)
 
