@@ -143,7 +143,13 @@ def naming(eigenvalues_at, collisions, top_speed: float) -> Naming:
     m = edges.size
     lows = np.concatenate([[0.0], edges[:-1]]) if m else np.zeros(0)
     samples = np.concatenate([0.5 * (lows + edges), [top_speed]])
-    sampled = eigenvalues_at(samples)
+    steps = np.array(_STEPS)
+    # one evaluation for the samples and both sides of every collision at every step
+    above_all, below_all = edges[:, None] * (1 + steps), edges[:, None] * (1 - steps)
+    evaluated = eigenvalues_at(np.concatenate([samples, above_all.ravel(), below_all.ravel()]))
+    sampled = evaluated[: m + 1]
+    above_values = evaluated[m + 1 : m + 1 + m * steps.size].reshape(m, steps.size, 4)
+    below_values = evaluated[m + 1 + m * steps.size :].reshape(m, steps.size, 4)
     _, pairs_at = slots(sampled)
     pairs = [int(x) for x in pairs_at]
     names: list[tuple[str, ...]] = [()] * (m + 1)
@@ -153,13 +159,11 @@ def naming(eigenvalues_at, collisions, top_speed: float) -> Naming:
         return Naming(edges, tuple(pairs), tuple(_top_names(sampled[k])[1] for k in range(m + 1)), {})
     anchor = ones[-1]
     names[anchor] = ("weave", "weave", "capsize", "castor")
-    steps = np.array(_STEPS)
     for i in list(range(anchor - 1, -1, -1)) + list(range(anchor, m)):
         downward = i < anchor  # across edges[i], from segment i + 1 to i, or from i to i + 1
         known, unknown = (i + 1, i) if downward else (i, i + 1)
-        c = edges[i]
-        sides = (c * (1 + steps), c * (1 - steps)) if downward else (c * (1 - steps), c * (1 + steps))
-        around = eigenvalues_at(np.concatenate(sides))
+        sides = (above_all[i], below_all[i]) if downward else (below_all[i], above_all[i])
+        around = np.concatenate([above_values[i], below_values[i]] if downward else [below_values[i], above_values[i]])
         order, structure = slots(around)
         ok = (structure[: steps.size] == pairs[known]) & (structure[steps.size :] == pairs[unknown])
         if not ok.any():  # the sides never matched the segments: per-speed rules there
@@ -196,14 +200,23 @@ def _path(eigenvalues_at, start: float, end: float, first: np.ndarray, first_nam
     order, _ = slots(values)
     slotted = np.take_along_axis(values, order, axis=-1)
     slotted[0] = first
+    # Step by step: the upper members (a, b) followed to speed k - 1 and those in slots 0 and 2 at k,
+    # (x, y), are swapped at k when |a - y| + |b - x| < |a - x| + |b - y|.  With (p, q) the slots
+    # 0 and 2 at k - 1, (a, b) is (p, q) or (q, p), so with cross = |p - y| + |q - x| and
+    # straight = |p - x| + |q - y| the followed order at k is swapped iff cross < straight (not
+    # swapped at k - 1) or straight < cross (swapped at k - 1): it flips each time cross < straight
+    # and is reset to the slot order where neither is smaller (a tie or NaN), all speeds at once.
+    p, q = slotted[:-1, 0], slotted[:-1, 2]
+    x, y = slotted[1:, 0], slotted[1:, 2]
+    cross = np.abs(p - y) + np.abs(q - x)
+    straight = np.abs(p - x) + np.abs(q - y)
+    flip = np.concatenate([[False], cross < straight])
+    reset = np.concatenate([[True], ~(cross < straight) & ~(straight < cross)])
+    count = np.cumsum(flip)
+    last = np.maximum.accumulate(np.where(reset, np.arange(speeds.size), 0))
+    swapped = (count - count[last]) % 2 == 1
     tracked = slotted.copy()
-    a, b = complex(first[0]), complex(first[2])
-    for k in range(1, speeds.size):
-        x, y = complex(slotted[k, 0]), complex(slotted[k, 2])
-        if abs(a - y) + abs(b - x) < abs(a - x) + abs(b - y):  # the pairs swapped their slot order
-            tracked[k, :2], tracked[k, 2:] = slotted[k, 2:], slotted[k, :2]
-            x, y = y, x
-        a, b = x, y
+    tracked[swapped] = slotted[swapped][:, [2, 3, 0, 1]]
     return speeds, tracked, first_names
 
 
@@ -243,9 +256,17 @@ def apply(values: np.ndarray, speeds: np.ndarray, named: Naming) -> tuple[np.nda
             out[rows] = s[rows][:, position]
             labels[rows] = label
             continue
-        for r in rows:  # two complex pairs: each speed's names from the tracked path
-            position, label = _arrange(_names_near(named.names[seg], path, float(speeds[r]), s[r]))
-            out[r], labels[r] = s[r][position], label
+        # two complex pairs: each speed's names from the tracked path (:func:`_names_near`, all rows)
+        path_speeds, tracked, column_names = path
+        row = tracked[np.argmin(np.abs(path_speeds[None, :] - speeds[rows, None]), axis=1)]
+        cost = np.abs(row[:, _PERMUTATIONS] - s[rows][:, None, :]).sum(axis=-1)
+        best = _PERMUTATIONS[np.argmin(cost, axis=-1)]  # (rows, 4)
+        kinds, which = np.unique(best, axis=0, return_inverse=True)
+        for kind, permutation in enumerate(kinds):
+            chosen = rows[which.reshape(-1) == kind]
+            position, label = _arrange(tuple(column_names[permutation[k]] for k in range(4)))
+            out[chosen] = s[chosen][:, position]
+            labels[chosen] = label
     return out, labels
 
 
