@@ -429,8 +429,10 @@ def batch_apply(values: np.ndarray, speeds: np.ndarray, edges: np.ndarray, pairs
         fits |= move
     row_names = names[np.arange(b)[:, None], segment]  # (b, n, 4): each row's segment's names
     key = (row_names.astype(np.int64) * np.array([64, 16, 4, 1])).sum(axis=-1)
-    codes, which = np.unique(key, return_inverse=True)
-    which = which.reshape(key.shape)
+    codes = np.flatnonzero(np.bincount(key.reshape(-1), minlength=256))  # the codes present, no sort
+    lookup = np.zeros(256, dtype=np.intp)
+    lookup[codes] = np.arange(codes.size)
+    which = lookup[key]
     # each code's arrangement (which slot goes to each position) and labels, then all rows at once
     arranged = [_arrange(tuple(CODES[(int(c) >> shift) & 3] for shift in (6, 4, 2, 0))) for c in codes]
     position = np.array([p for p, _ in arranged], dtype=np.intp).reshape(codes.size, 4)
