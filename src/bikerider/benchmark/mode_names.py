@@ -126,7 +126,17 @@ def _consistent(names: list[str], pairs: int) -> tuple[str, ...]:
     return tuple(names)
 
 
-def naming(eigenvalues_at, collisions, top_speed: float) -> Naming:
+def naming_speeds(collisions, top_speed: float) -> np.ndarray:
+    """The speeds :func:`naming` evaluates first: the middle of each segment, ``top_speed``, then
+    each collision times ``1 + step`` and times ``1 - step`` for each of the steps."""
+    edges = np.asarray(collisions, dtype=float)
+    lows = np.concatenate([[0.0], edges[:-1]]) if edges.size else np.zeros(0)
+    steps = np.array(_STEPS)
+    above, below = edges[:, None] * (1 + steps), edges[:, None] * (1 - steps)
+    return np.concatenate([0.5 * (lows + edges), [top_speed], above.ravel(), below.ravel()])
+
+
+def naming(eigenvalues_at, collisions, top_speed: float, evaluated: np.ndarray | None = None) -> Naming:
     """Names of every segment, carried from the anchor segment (module docstring) to the others.
 
     Parameters
@@ -138,15 +148,16 @@ def naming(eigenvalues_at, collisions, top_speed: float) -> Naming:
         pass through them unchanged).
     top_speed : float
         A speed above every collision, in the highest segment.
+    evaluated : numpy.ndarray, optional
+        ``eigenvalues_at(naming_speeds(collisions, top_speed))`` if already computed (a batch
+        evaluates those of several systems at once).
     """
     edges = np.asarray(collisions, dtype=float)
     m = edges.size
-    lows = np.concatenate([[0.0], edges[:-1]]) if m else np.zeros(0)
-    samples = np.concatenate([0.5 * (lows + edges), [top_speed]])
     steps = np.array(_STEPS)
-    # one evaluation for the samples and both sides of every collision at every step
     above_all, below_all = edges[:, None] * (1 + steps), edges[:, None] * (1 - steps)
-    evaluated = eigenvalues_at(np.concatenate([samples, above_all.ravel(), below_all.ravel()]))
+    if evaluated is None:  # one evaluation for the samples and both sides of every collision at every step
+        evaluated = eigenvalues_at(naming_speeds(edges, top_speed))
     sampled = evaluated[: m + 1]
     above_values = evaluated[m + 1 : m + 1 + m * steps.size].reshape(m, steps.size, 4)
     below_values = evaluated[m + 1 + m * steps.size :].reshape(m, steps.size, 4)
@@ -297,7 +308,7 @@ def _arrange(names: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray]:
     return position, label
 
 
-__all__ = ["Naming", "apply", "naming", "slots"]
+__all__ = ["Naming", "apply", "naming", "naming_speeds", "slots"]
 
 
 # -- a batch of bicycles at once ------------------------------------------------------------------

@@ -218,10 +218,16 @@ class WhippleModel:
         top = np.maximum(10.0, 2.0 * largest)
         pairs, names, alone = mode_names.batch_naming(at, edges, top)
         values, labels = mode_names.batch_apply(np.asarray(raw, dtype=complex), speeds, edges, pairs, names)
-        for b in np.nonzero(alone)[0]:
-            one = {k: e[b] for k, e in entries.items()}
-            row = edges[b][np.isfinite(edges[b])]
-            named = mode_names.naming(_eigenvalues_of(one, float(g[b])), row, float(top[b]))
+        lone = np.nonzero(alone)[0]
+        rows = [edges[b][np.isfinite(edges[b])] for b in lone]
+        first = [mode_names.naming_speeds(row, float(top[b])) for b, row in zip(lone, rows)]
+        width = max((x.size for x in first), default=0)
+        padded = np.array([np.pad(x, (0, width - x.size), constant_values=x[-1]) for x in first]).reshape(lone.size, width)
+        evaluated = at(padded, lone) if lone.size else None  # all their first evaluations at once
+        for k, (b, row) in enumerate(zip(lone, rows)):
+            one = {key: e[b] for key, e in entries.items()}
+            at_b = _eigenvalues_of(one, float(g[b]))
+            named = mode_names.naming(at_b, row, float(top[b]), evaluated[k, : first[k].size])
             values[b], labels[b] = mode_names.apply(raw[b], speeds, named)
         return values, labels
 
