@@ -429,7 +429,9 @@ def batch_apply(values: np.ndarray, speeds: np.ndarray, edges: np.ndarray, pairs
     b, n, _ = values.shape
     order, row_pairs = slots(values)
     finite = np.isfinite(edges)
-    segment = (finite[:, None, :] & (edges[:, None, :] <= speeds[None, :, None])).sum(axis=-1)  # (b, n)
+    segment = np.zeros((b, n), dtype=np.intp)  # (b, n): the collisions at or below each speed (NaN: never)
+    for column in edges.T:
+        segment += column[:, None] <= speeds[None, :]
     last = pairs.shape[1] - 1
     known = np.take_along_axis(pairs, segment, axis=1)
     fits = known == row_pairs
@@ -438,8 +440,8 @@ def batch_apply(values: np.ndarray, speeds: np.ndarray, edges: np.ndarray, pairs
         move = ~fits & (np.take_along_axis(pairs, near, axis=1) == row_pairs)
         segment = np.where(move, near, segment)
         fits |= move
-    row_names = names[np.arange(b)[:, None], segment]  # (b, n, 4): each row's segment's names
-    key = (row_names.astype(np.int64) * np.array([64, 16, 4, 1])).sum(axis=-1)
+    segment_key = (names.astype(np.int64) * np.array([64, 16, 4, 1])).sum(axis=-1)  # (b, m + 1): names as one code
+    key = np.take_along_axis(segment_key, segment, axis=1)  # (b, n): each row's segment's names
     codes = np.flatnonzero(np.bincount(key.reshape(-1), minlength=256))  # the codes present, no sort
     lookup = np.zeros(256, dtype=np.intp)
     lookup[codes] = np.arange(codes.size)
@@ -450,7 +452,7 @@ def batch_apply(values: np.ndarray, speeds: np.ndarray, edges: np.ndarray, pairs
     label = np.array([x for _, x in arranged], dtype=object).reshape(codes.size, 4)
     index = np.take_along_axis(order, position[which], axis=-1)
     out = np.take_along_axis(values, index, axis=-1)
-    out = np.where(row_pairs[..., None] == 0, out.real, out)
+    out.imag[row_pairs == 0] = 0.0  # four real eigenvalues: no rounding residue in the imaginary parts
     labels = label[which]
     if not fits.all():  # within rounding of a collision no segment fits: the per-speed rules
         out[~fits], labels[~fits] = label_modes(values[~fits])
