@@ -58,7 +58,13 @@ def slots(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     # keys, primary last: complex before real; then falling |imag| (a pair) or falling real part;
     # then the upper member of a pair before its conjugate
     size = np.where(is_complex, -np.abs(imag), -values.real)
+    if values.size <= _FEW:  # numpy.lexsort: the same order, less overhead on a few rows
+        return np.lexsort((np.where(imag > 0, 0, 1), size, np.where(is_complex, 0, 1)), axis=-1), pairs
     return _order(is_complex, size, imag > 0), pairs
+
+
+_FEW = 4 * 256
+"""Up to this many eigenvalues :func:`slots` sorts with ``numpy.lexsort``, above with :func:`_order`."""
 
 
 def _order(is_complex: np.ndarray, size: np.ndarray, upper: np.ndarray) -> np.ndarray:
@@ -159,10 +165,8 @@ def naming(eigenvalues_at, collisions, top_speed: float, evaluated: np.ndarray |
     if evaluated is None:  # one evaluation for the samples and both sides of every collision at every step
         evaluated = eigenvalues_at(naming_speeds(edges, top_speed))
     sampled = evaluated[: m + 1]
-    above_values = evaluated[m + 1 : m + 1 + m * steps.size].reshape(m, steps.size, 4)
-    below_values = evaluated[m + 1 + m * steps.size :].reshape(m, steps.size, 4)
-    _, pairs_at = slots(sampled)
-    pairs = [int(x) for x in pairs_at]
+    evaluated_order, evaluated_structure = slots(evaluated)  # each speed on its own: once for all
+    pairs = [int(x) for x in evaluated_structure[: m + 1]]
     names: list[tuple[str, ...]] = [()] * (m + 1)
     paths: dict[int, tuple[np.ndarray, np.ndarray, tuple[str, ...]]] = {}
     ones = [k for k in range(m + 1) if pairs[k] == 1]
@@ -174,8 +178,12 @@ def naming(eigenvalues_at, collisions, top_speed: float, evaluated: np.ndarray |
         downward = i < anchor  # across edges[i], from segment i + 1 to i, or from i to i + 1
         known, unknown = (i + 1, i) if downward else (i, i + 1)
         sides = (above_all[i], below_all[i]) if downward else (below_all[i], above_all[i])
-        around = np.concatenate([above_values[i], below_values[i]] if downward else [below_values[i], above_values[i]])
-        order, structure = slots(around)
+        above_at = slice(m + 1 + i * steps.size, m + 1 + (i + 1) * steps.size)
+        below_at = slice(m + 1 + (m + i) * steps.size, m + 1 + (m + i + 1) * steps.size)
+        parts = (above_at, below_at) if downward else (below_at, above_at)
+        around = np.concatenate([evaluated[x] for x in parts])
+        order = np.concatenate([evaluated_order[x] for x in parts])
+        structure = np.concatenate([evaluated_structure[x] for x in parts])
         ok = (structure[: steps.size] == pairs[known]) & (structure[steps.size :] == pairs[unknown])
         if not ok.any():  # the sides never matched the segments: per-speed rules there
             names[unknown] = _top_names(sampled[unknown])[1]
