@@ -264,7 +264,10 @@ def apply(values: np.ndarray, speeds: np.ndarray, named: Naming) -> tuple[np.nda
         move = ~fits & (known[near] == pairs)
         segment = np.where(move, near, segment)
         fits |= move
-    out, labels = label_modes(values)  # where no segment fits: the per-speed rules
+    if fits.all():  # every row is named below
+        out, labels = np.empty(values.shape, dtype=complex), np.empty(values.shape, dtype=object)
+    else:  # where no segment fits: the per-speed rules
+        out, labels = label_modes(values)
     s = np.take_along_axis(values, order, axis=-1)
     s = np.where(pairs[:, None] == 0, s.real, s)
     for seg in np.unique(segment[fits]):
