@@ -208,6 +208,33 @@ def naming(eigenvalues_at, collisions, top_speed: float, evaluated: np.ndarray |
 _PATH_SAMPLES = 120
 
 
+def path_speeds(collisions, top_speed: float, evaluated: np.ndarray) -> list[np.ndarray]:
+    """The speeds at which :func:`naming` will follow the eigenvalues through each segment with two
+    complex pairs (:func:`_path`), given its first evaluations ``evaluated`` (at
+    :func:`naming_speeds`), for the usual case that each collision's sides match their segments at
+    the first step; so a batch can evaluate them all at once.  A speed list it does not predict is
+    evaluated by :func:`naming` itself, so a wrong prediction costs time, never a name."""
+    edges = np.asarray(collisions, dtype=float)
+    m = edges.size
+    steps = np.array(_STEPS)
+    above_all, below_all = edges[:, None] * (1 + steps), edges[:, None] * (1 - steps)
+    _, pairs = slots(evaluated[: m + 1])
+    ones = np.nonzero(pairs == 1)[0]
+    if not ones.size:
+        return []
+    anchor = int(ones[-1])
+    out = []
+    for unknown in np.nonzero(pairs == 2)[0]:
+        if unknown < anchor:  # entered downward across edges[unknown]
+            i = int(unknown)
+            start, end = below_all[i][0], (edges[i - 1] * (1 + 1e-7) if i > 0 else 0.0)
+        else:  # upward across edges[unknown - 1]
+            i = int(unknown) - 1
+            start, end = above_all[i][0], (edges[i + 1] * (1 - 1e-7) if i + 1 < m else top_speed)
+        out.append(np.linspace(start, end, _PATH_SAMPLES))
+    return out
+
+
 def _path(eigenvalues_at, start: float, end: float, first: np.ndarray, first_names: tuple[str, ...]):
     """Eigenvalues followed by continuity from ``start`` to ``end`` through a segment with two
     complex pairs (``first``: those at ``start`` in slot order, named ``first_names``): speeds, the
@@ -319,7 +346,7 @@ def _arrange(names: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray]:
     return position, label
 
 
-__all__ = ["Naming", "apply", "naming", "naming_speeds", "slots"]
+__all__ = ["Naming", "apply", "naming", "naming_speeds", "path_speeds", "slots"]
 
 
 # -- a batch of bicycles at once ------------------------------------------------------------------

@@ -224,9 +224,15 @@ class WhippleModel:
         width = max((x.size for x in first), default=0)
         padded = np.array([np.pad(x, (0, width - x.size), constant_values=x[-1]) for x in first]).reshape(lone.size, width)
         evaluated = at(padded, lone) if lone.size else None  # all their first evaluations at once
+        ahead = [mode_names.path_speeds(row, float(top[b]), evaluated[k, : first[k].size]) for k, (b, row) in enumerate(zip(lone, rows))]
+        owner = np.array([b for b, speeds in zip(lone, ahead) for _ in speeds], dtype=np.intp)
+        followed = at(np.array([x for speeds in ahead for x in speeds]).reshape(owner.size, -1), owner) if owner.size else None
+        served: list[dict[bytes, np.ndarray]] = [{} for _ in lone]
+        for p, (k, x) in enumerate((k, x) for k, speeds in enumerate(ahead) for x in speeds):
+            served[k][x.tobytes()] = followed[p]
         for k, (b, row) in enumerate(zip(lone, rows)):
             one = {key: e[b] for key, e in entries.items()}
-            at_b = _eigenvalues_of(one, float(g[b]))
+            at_b = _served(_eigenvalues_of(one, float(g[b])), served[k])
             named = mode_names.naming(at_b, row, float(top[b]), evaluated[k, : first[k].size])
             values[b], labels[b] = mode_names.apply(raw[b], speeds, named)
         return values, labels
@@ -388,6 +394,17 @@ def _eigenvalues_of(entries: dict[str, float], g: float):
         return quartic_roots(gen.characteristic_coefficients(**entries, g=g, v=np.asarray(speeds, dtype=float)))
 
     return at
+
+
+def _served(at, ready: dict[bytes, np.ndarray]):
+    """``at`` (speeds to eigenvalues), but speed lists already evaluated (``ready``, keyed by their
+    bytes) are served from there: evaluations batched over several bicycles beforehand."""
+
+    def served(speeds):
+        hit = ready.get(np.asarray(speeds, dtype=float).tobytes())
+        return hit if hit is not None else at(speeds)
+
+    return served
 
 
 def _at(name: str, index: tuple[int, ...]) -> str:
