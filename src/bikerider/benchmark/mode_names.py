@@ -63,7 +63,7 @@ def slots(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return _order(is_complex, size, imag > 0), pairs
 
 
-_FEW = 4 * 256
+_FEW = 4 * 8192
 """Up to this many eigenvalues :func:`slots` sorts with ``numpy.lexsort``, above with :func:`_order`."""
 
 
