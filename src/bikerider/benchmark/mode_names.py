@@ -399,7 +399,16 @@ def batch_naming(eigenvalues_at, edges: np.ndarray, top: np.ndarray):
     c = np.where(np.isfinite(edges), edges, top[:, None])
     # one evaluation for the segments' samples and both sides of each collision at the first step
     # (each speed's eigenvalues do not depend on the others evaluated with it)
-    evaluated = eigenvalues_at(np.concatenate([samples, c * (1 + _STEPS[0]), c * (1 - _STEPS[0])], axis=1))
+    wanted = np.concatenate([samples, c * (1 + _STEPS[0]), c * (1 - _STEPS[0])], axis=1)
+    # only the speeds in use (a system's own segments and collisions; the rest of the padded table
+    # takes the values at ``top``, its highest segment's sample), each speed on its own
+    own = k[None, :m] < count[:, None]
+    used = np.concatenate([own, np.ones((b, 1), dtype=bool), own, own], axis=1)
+    system, column = np.nonzero(used)
+    evaluated = np.empty(wanted.shape + (4,), dtype=complex)
+    if system.size:
+        evaluated[system, column] = eigenvalues_at(wanted[system, column][:, None], system)[:, 0]
+    evaluated[~used] = np.broadcast_to(evaluated[:, m : m + 1], evaluated.shape)[~used]
     evaluated_order, evaluated_pairs = slots(evaluated)
     pairs = evaluated_pairs[:, : m + 1]
     in_range = k[None, :] <= count[:, None]
