@@ -310,9 +310,10 @@ def apply(values: np.ndarray, speeds: np.ndarray, named: Naming) -> tuple[np.nda
         row = tracked[np.argmin(np.abs(path_speeds[None, :] - speeds[rows, None]), axis=1)]
         cost = np.abs(row[:, _PERMUTATIONS] - s[rows][:, None, :]).sum(axis=-1)
         best = _PERMUTATIONS[np.argmin(cost, axis=-1)]  # (rows, 4)
-        kinds, which = np.unique(best, axis=0, return_inverse=True)
-        for kind, permutation in enumerate(kinds):
-            chosen = rows[which.reshape(-1) == kind]
+        code = best @ np.array([64, 16, 4, 1])
+        for kind in np.unique(code):
+            chosen = rows[code == kind]
+            permutation = best[np.argmax(code == kind)]
             position, label = _arrange(tuple(column_names[permutation[k]] for k in range(4)))
             out[chosen] = s[chosen][:, position]
             labels[chosen] = label
