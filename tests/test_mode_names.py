@@ -104,3 +104,56 @@ def test_the_batched_naming_equals_the_one_bicycle_naming():
         one_values, one_labels = mode_names.apply(raw[k], speeds, named)
         differ += int(not ((one_labels == labels[k]).all() and np.allclose(one_values, values[k], atol=1e-12)))
     assert differ == 0
+
+
+@pytest.mark.parametrize("rows", [300, 20_000])  # numpy.lexsort below mode_names._FEW, pairwise ranks above
+def test_slots_order_is_the_lexicographic_one(rows):
+    """The slot order: complex before real, rising key (NaN last), upper member first, stable on ties."""
+    rng = np.random.default_rng(7)
+    # small integers: many exact ties; NaN and -0.0 included
+    values = (rng.integers(-2, 3, (rows, 4)) + 1j * rng.integers(-2, 3, (rows, 4))).astype(complex)
+    values[::97, 1] = np.nan
+    values[::53, 2] = complex(np.nan, 1.0)
+    values[::31, 0] = complex(-0.0, 0.0)
+    order, pairs = mode_names.slots(values)
+    largest = np.abs(values).max(axis=-1, keepdims=True)
+    is_complex = np.abs(values.imag) > mode_names.IMAGINARY_TOLERANCE * np.maximum(1.0, largest)
+    size = np.where(is_complex, -np.abs(values.imag), -values.real)
+    expected = np.lexsort((np.where(values.imag > 0, 0, 1), size, np.where(is_complex, 0, 1)), axis=-1)
+    assert np.array_equal(order, expected)
+    assert np.array_equal(pairs, (is_complex & (values.imag > 0)).sum(axis=-1))
+
+
+def _followed_step_by_step(slotted: np.ndarray) -> np.ndarray:
+    """The two complex pairs followed speed by speed, a loop (what ``mode_names._path`` does at once)."""
+    tracked = slotted.copy()
+    a, b = complex(slotted[0, 0]), complex(slotted[0, 2])
+    for k in range(1, slotted.shape[0]):
+        x, y = complex(slotted[k, 0]), complex(slotted[k, 2])
+        if abs(a - y) + abs(b - x) < abs(a - x) + abs(b - y):
+            tracked[k, :2], tracked[k, 2:] = slotted[k, 2:], slotted[k, :2]
+            x, y = y, x
+        a, b = x, y
+    return tracked
+
+
+def test_two_pair_paths_follow_the_pairs_as_a_step_by_step_loop():
+    """Every segment with two complex pairs among 200 random bicycles: the vectorised following
+    equals the loop, and it does swap the pairs somewhere (else the test would prove nothing)."""
+    paths = 0
+    swapped = 0
+    for params in random_parameters(200, 0.5, seed=11):
+        model = WhippleModel.from_parameters(params)
+        edges = model.collision_speeds()
+        if not edges.size:
+            continue
+        at = lambda v, m=model: np.linalg.eigvals(m.state_matrix(np.asarray(v)))  # noqa: E731
+        named = mode_names.naming(at, edges, max(10.0, 2 * edges[-1]))
+        for speeds, tracked, _ in named.paths.values():
+            order, _ = mode_names.slots(at(speeds))
+            slotted = np.take_along_axis(at(speeds), order, axis=-1)
+            slotted[0] = tracked[0]
+            assert np.array_equal(tracked, _followed_step_by_step(slotted))
+            paths += 1
+            swapped += int(np.any(tracked[:, 0] != slotted[:, 0]))
+    assert paths >= 3 and swapped >= 1

@@ -57,11 +57,34 @@ def slots(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     pairs = (is_complex & (imag > 0)).sum(axis=-1)
     # keys, primary last: complex before real; then falling |imag| (a pair) or falling real part;
     # then the upper member of a pair before its conjugate
-    group = np.where(is_complex, 0, 1)
     size = np.where(is_complex, -np.abs(imag), -values.real)
-    member = np.where(imag > 0, 0, 1)
-    order = np.lexsort((member, size, group), axis=-1)
-    return order, pairs
+    if values.size <= _FEW:  # numpy.lexsort: the same order, less overhead on a few rows
+        return np.lexsort((np.where(imag > 0, 0, 1), size, np.where(is_complex, 0, 1)), axis=-1), pairs
+    return _order(is_complex, size, imag > 0), pairs
+
+
+_FEW = 4 * 8192
+"""Up to this many eigenvalues :func:`slots` sorts with ``numpy.lexsort``, above with :func:`_order`."""
+
+
+def _order(is_complex: np.ndarray, size: np.ndarray, upper: np.ndarray) -> np.ndarray:
+    """The stable order of four keys per row, primary first: complex before real, rising ``size``
+    (NaN last), ``upper`` before not; the order ``numpy.lexsort`` gives, many times faster on short
+    rows: each element's rank is counted from the six pairwise comparisons."""
+    nan = np.isnan(size)
+    rank = np.zeros(size.shape, dtype=np.intp)
+    for i, j in itertools.combinations(range(4), 2):
+        gi, gj, si, sj = is_complex[..., i], is_complex[..., j], size[..., i], size[..., j]
+        ni, nj = nan[..., i], nan[..., j]
+        same_size = (si == sj) | (ni & nj)
+        smaller = (si < sj) | (~ni & nj)
+        # i before j (i < j, so an exact tie keeps i first)
+        first = (gi & ~gj) | ((gi == gj) & (smaller | (same_size & (upper[..., i] | ~upper[..., j]))))
+        rank[..., j] += first
+        rank[..., i] += ~first
+    order = np.empty_like(rank)
+    np.put_along_axis(order, rank, np.arange(4), axis=-1)
+    return order
 
 
 @dataclass(frozen=True)
@@ -109,7 +132,17 @@ def _consistent(names: list[str], pairs: int) -> tuple[str, ...]:
     return tuple(names)
 
 
-def naming(eigenvalues_at, collisions, top_speed: float) -> Naming:
+def naming_speeds(collisions, top_speed: float) -> np.ndarray:
+    """The speeds :func:`naming` evaluates first: the middle of each segment, ``top_speed``, then
+    each collision times ``1 + step`` and times ``1 - step`` for each of the steps."""
+    edges = np.asarray(collisions, dtype=float)
+    lows = np.concatenate([[0.0], edges[:-1]]) if edges.size else np.zeros(0)
+    steps = np.array(_STEPS)
+    above, below = edges[:, None] * (1 + steps), edges[:, None] * (1 - steps)
+    return np.concatenate([0.5 * (lows + edges), [top_speed], above.ravel(), below.ravel()])
+
+
+def naming(eigenvalues_at, collisions, top_speed: float, evaluated: np.ndarray | None = None) -> Naming:
     """Names of every segment, carried from the anchor segment (module docstring) to the others.
 
     Parameters
@@ -121,14 +154,19 @@ def naming(eigenvalues_at, collisions, top_speed: float) -> Naming:
         pass through them unchanged).
     top_speed : float
         A speed above every collision, in the highest segment.
+    evaluated : numpy.ndarray, optional
+        ``eigenvalues_at(naming_speeds(collisions, top_speed))`` if already computed (a batch
+        evaluates those of several systems at once).
     """
     edges = np.asarray(collisions, dtype=float)
     m = edges.size
-    lows = np.concatenate([[0.0], edges[:-1]]) if m else np.zeros(0)
-    samples = np.concatenate([0.5 * (lows + edges), [top_speed]])
-    sampled = eigenvalues_at(samples)
-    _, pairs_at = slots(sampled)
-    pairs = [int(x) for x in pairs_at]
+    steps = np.array(_STEPS)
+    above_all, below_all = edges[:, None] * (1 + steps), edges[:, None] * (1 - steps)
+    if evaluated is None:  # one evaluation for the samples and both sides of every collision at every step
+        evaluated = eigenvalues_at(naming_speeds(edges, top_speed))
+    sampled = evaluated[: m + 1]
+    evaluated_order, evaluated_structure = slots(evaluated)  # each speed on its own: once for all
+    pairs = [int(x) for x in evaluated_structure[: m + 1]]
     names: list[tuple[str, ...]] = [()] * (m + 1)
     paths: dict[int, tuple[np.ndarray, np.ndarray, tuple[str, ...]]] = {}
     ones = [k for k in range(m + 1) if pairs[k] == 1]
@@ -136,14 +174,16 @@ def naming(eigenvalues_at, collisions, top_speed: float) -> Naming:
         return Naming(edges, tuple(pairs), tuple(_top_names(sampled[k])[1] for k in range(m + 1)), {})
     anchor = ones[-1]
     names[anchor] = ("weave", "weave", "capsize", "castor")
-    steps = np.array(_STEPS)
     for i in list(range(anchor - 1, -1, -1)) + list(range(anchor, m)):
         downward = i < anchor  # across edges[i], from segment i + 1 to i, or from i to i + 1
         known, unknown = (i + 1, i) if downward else (i, i + 1)
-        c = edges[i]
-        sides = (c * (1 + steps), c * (1 - steps)) if downward else (c * (1 - steps), c * (1 + steps))
-        around = eigenvalues_at(np.concatenate(sides))
-        order, structure = slots(around)
+        sides = (above_all[i], below_all[i]) if downward else (below_all[i], above_all[i])
+        above_at = slice(m + 1 + i * steps.size, m + 1 + (i + 1) * steps.size)
+        below_at = slice(m + 1 + (m + i) * steps.size, m + 1 + (m + i + 1) * steps.size)
+        parts = (above_at, below_at) if downward else (below_at, above_at)
+        around = np.concatenate([evaluated[x] for x in parts])
+        order = np.concatenate([evaluated_order[x] for x in parts])
+        structure = np.concatenate([evaluated_structure[x] for x in parts])
         ok = (structure[: steps.size] == pairs[known]) & (structure[steps.size :] == pairs[unknown])
         if not ok.any():  # the sides never matched the segments: per-speed rules there
             names[unknown] = _top_names(sampled[unknown])[1]
@@ -168,6 +208,33 @@ def naming(eigenvalues_at, collisions, top_speed: float) -> Naming:
 _PATH_SAMPLES = 120
 
 
+def path_speeds(collisions, top_speed: float, evaluated: np.ndarray) -> list[np.ndarray]:
+    """The speeds at which :func:`naming` will follow the eigenvalues through each segment with two
+    complex pairs (:func:`_path`), given its first evaluations ``evaluated`` (at
+    :func:`naming_speeds`), for the usual case that each collision's sides match their segments at
+    the first step; so a batch can evaluate them all at once.  A speed list it does not predict is
+    evaluated by :func:`naming` itself, so a wrong prediction costs time, never a name."""
+    edges = np.asarray(collisions, dtype=float)
+    m = edges.size
+    steps = np.array(_STEPS)
+    above_all, below_all = edges[:, None] * (1 + steps), edges[:, None] * (1 - steps)
+    _, pairs = slots(evaluated[: m + 1])
+    ones = np.nonzero(pairs == 1)[0]
+    if not ones.size:
+        return []
+    anchor = int(ones[-1])
+    out = []
+    for unknown in np.nonzero(pairs == 2)[0]:
+        if unknown < anchor:  # entered downward across edges[unknown]
+            i = int(unknown)
+            start, end = below_all[i][0], (edges[i - 1] * (1 + 1e-7) if i > 0 else 0.0)
+        else:  # upward across edges[unknown - 1]
+            i = int(unknown) - 1
+            start, end = above_all[i][0], (edges[i + 1] * (1 - 1e-7) if i + 1 < m else top_speed)
+        out.append(np.linspace(start, end, _PATH_SAMPLES))
+    return out
+
+
 def _path(eigenvalues_at, start: float, end: float, first: np.ndarray, first_names: tuple[str, ...]):
     """Eigenvalues followed by continuity from ``start`` to ``end`` through a segment with two
     complex pairs (``first``: those at ``start`` in slot order, named ``first_names``): speeds, the
@@ -179,14 +246,23 @@ def _path(eigenvalues_at, start: float, end: float, first: np.ndarray, first_nam
     order, _ = slots(values)
     slotted = np.take_along_axis(values, order, axis=-1)
     slotted[0] = first
+    # Step by step: the upper members (a, b) followed to speed k - 1 and those in slots 0 and 2 at k,
+    # (x, y), are swapped at k when |a - y| + |b - x| < |a - x| + |b - y|.  With (p, q) the slots
+    # 0 and 2 at k - 1, (a, b) is (p, q) or (q, p), so with cross = |p - y| + |q - x| and
+    # straight = |p - x| + |q - y| the followed order at k is swapped iff cross < straight (not
+    # swapped at k - 1) or straight < cross (swapped at k - 1): it flips each time cross < straight
+    # and is reset to the slot order where neither is smaller (a tie or NaN), all speeds at once.
+    p, q = slotted[:-1, 0], slotted[:-1, 2]
+    x, y = slotted[1:, 0], slotted[1:, 2]
+    cross = np.abs(p - y) + np.abs(q - x)
+    straight = np.abs(p - x) + np.abs(q - y)
+    flip = np.concatenate([[False], cross < straight])
+    reset = np.concatenate([[True], ~(cross < straight) & ~(straight < cross)])
+    count = np.cumsum(flip)
+    last = np.maximum.accumulate(np.where(reset, np.arange(speeds.size), 0))
+    swapped = (count - count[last]) % 2 == 1
     tracked = slotted.copy()
-    a, b = complex(first[0]), complex(first[2])
-    for k in range(1, speeds.size):
-        x, y = complex(slotted[k, 0]), complex(slotted[k, 2])
-        if abs(a - y) + abs(b - x) < abs(a - x) + abs(b - y):  # the pairs swapped their slot order
-            tracked[k, :2], tracked[k, 2:] = slotted[k, 2:], slotted[k, :2]
-            x, y = y, x
-        a, b = x, y
+    tracked[swapped] = slotted[swapped][:, [2, 3, 0, 1]]
     return speeds, tracked, first_names
 
 
@@ -215,30 +291,40 @@ def apply(values: np.ndarray, speeds: np.ndarray, named: Naming) -> tuple[np.nda
         move = ~fits & (known[near] == pairs)
         segment = np.where(move, near, segment)
         fits |= move
-    out, labels = label_modes(values)  # where no segment fits: the per-speed rules
+    if fits.all():  # every row is named below
+        out, labels = np.empty(values.shape, dtype=complex), np.empty(values.shape, dtype=object)
+    else:  # where no segment fits: the per-speed rules
+        out, labels = label_modes(values)
     s = np.take_along_axis(values, order, axis=-1)
     s = np.where(pairs[:, None] == 0, s.real, s)
     for seg in np.unique(segment[fits]):
         rows = np.nonzero(fits & (segment == seg))[0]
         path = named.paths.get(int(seg))
         if path is None:
-            position, label = _arrange(named.names[seg], s[rows])
-            out[rows] = np.take_along_axis(s[rows], position, axis=-1)
+            position, label = _arrange(named.names[seg])
+            out[rows] = s[rows][:, position]
             labels[rows] = label
             continue
-        for r in rows:  # two complex pairs: each speed's names from the tracked path
-            position, label = _arrange(_names_near(named.names[seg], path, float(speeds[r]), s[r]), s[r : r + 1])
-            out[r], labels[r] = s[r][position[0]], label
+        # two complex pairs: each speed's names from the tracked path (:func:`_names_near`, all rows)
+        path_speeds, tracked, column_names = path
+        row = tracked[np.argmin(np.abs(path_speeds[None, :] - speeds[rows, None]), axis=1)]
+        cost = np.abs(row[:, _PERMUTATIONS] - s[rows][:, None, :]).sum(axis=-1)
+        best = _PERMUTATIONS[np.argmin(cost, axis=-1)]  # (rows, 4)
+        code = best @ np.array([64, 16, 4, 1])
+        for kind in np.unique(code):
+            chosen = rows[code == kind]
+            permutation = best[np.argmax(code == kind)]
+            position, label = _arrange(tuple(column_names[permutation[k]] for k in range(4)))
+            out[chosen] = s[chosen][:, position]
+            labels[chosen] = label
     return out, labels
 
 
-def _arrange(names: tuple[str, ...], s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Which slot goes to each position of :data:`MODES` (``(k, 4)``, for slot values ``s (k, 4)``
-    whose slots are named ``names``), and the label of each position."""
-    k = s.shape[0]
+def _arrange(names: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray]:
+    """Which slot goes to each position of :data:`MODES` (``(4,)``, for slots named ``names``) and
+    the label of each position."""
     label = np.array(["other"] * 4, dtype=object)
-    taken: list[int] = []
-    position = np.zeros((k, 4), dtype=int)
+    position = np.zeros(4, dtype=np.intp)
     weave = [j for j in range(4) if names[j] == "weave"]
     slot_of: dict[int, int] = {}
     if len(weave) == 2:
@@ -254,14 +340,14 @@ def _arrange(names: tuple[str, ...], s: np.ndarray) -> tuple[np.ndarray, np.ndar
     free = [j for j in range(4) if j not in taken]
     for p in range(4):
         if p in slot_of:
-            position[:, p] = slot_of[p]
+            position[p] = slot_of[p]
             label[p] = MODES[p]
         else:
-            position[:, p] = free.pop(0)
+            position[p] = free.pop(0)
     return position, label
 
 
-__all__ = ["Naming", "apply", "naming", "slots"]
+__all__ = ["Naming", "apply", "naming", "naming_speeds", "path_speeds", "slots"]
 
 
 # -- a batch of bicycles at once ------------------------------------------------------------------
@@ -311,7 +397,21 @@ def batch_naming(eigenvalues_at, edges: np.ndarray, top: np.ndarray):
     mids = 0.5 * (lows + edges)
     samples = np.where(k[None, :m] < count[:, None], mids, top[:, None])
     samples = np.concatenate([samples, top[:, None]], axis=1)
-    _, pairs = slots(eigenvalues_at(samples))
+    c = np.where(np.isfinite(edges), edges, top[:, None])
+    # one evaluation for the segments' samples and both sides of each collision at the first step
+    # (each speed's eigenvalues do not depend on the others evaluated with it)
+    wanted = np.concatenate([samples, c * (1 + _STEPS[0]), c * (1 - _STEPS[0])], axis=1)
+    # only the speeds in use (a system's own segments and collisions; the rest of the padded table
+    # takes the values at ``top``, its highest segment's sample), each speed on its own
+    own = k[None, :m] < count[:, None]
+    used = np.concatenate([own, np.ones((b, 1), dtype=bool), own, own], axis=1)
+    system, column = np.nonzero(used)
+    evaluated = np.empty(wanted.shape + (4,), dtype=complex)
+    if system.size:
+        evaluated[system, column] = eigenvalues_at(wanted[system, column][:, None], system)[:, 0]
+    evaluated[~used] = np.broadcast_to(evaluated[:, m : m + 1], evaluated.shape)[~used]
+    evaluated_order, evaluated_pairs = slots(evaluated)
+    pairs = evaluated_pairs[:, : m + 1]
     in_range = k[None, :] <= count[:, None]
     alone = np.any(in_range & (pairs == 2), axis=1)
     ones = np.where(in_range & (pairs == 1), k[None, :], -1)
@@ -322,7 +422,6 @@ def batch_naming(eigenvalues_at, edges: np.ndarray, top: np.ndarray):
     names[rows, np.maximum(anchor, 0)] = np.array([0, 0, 1, 2], dtype=np.int8)
     if m == 0:
         return pairs, names, alone
-    c = np.where(np.isfinite(edges), edges, top[:, None])
     # downward across edge i (i < anchor): known segment i + 1 (above), unknown i (below); upward
     # (anchor <= i < count): known i (below), unknown i + 1 (above)
     down = k[None, :m] < anchor[:, None]
@@ -332,13 +431,17 @@ def batch_naming(eigenvalues_at, edges: np.ndarray, top: np.ndarray):
     source = np.zeros((b, m, 4), dtype=complex)
     target = np.zeros((b, m, 4), dtype=complex)
     pending = down | up
-    for step in _STEPS:  # the smallest step at which both sides have their segments' structure
+    for s, step in enumerate(_STEPS):  # the smallest step at which both sides have their segments' structure
         rows_pending = np.nonzero(pending.any(axis=1))[0]
         if not rows_pending.size:
             break
-        cc = c[rows_pending]
-        around = eigenvalues_at(np.concatenate([cc * (1 + step), cc * (1 - step)], axis=1), rows_pending)
-        order, structure = slots(around)
+        if s == 0:  # evaluated above
+            around = evaluated[rows_pending, m + 1 :]
+            order, structure = evaluated_order[rows_pending, m + 1 :], evaluated_pairs[rows_pending, m + 1 :]
+        else:
+            cc = c[rows_pending]
+            around = eigenvalues_at(np.concatenate([cc * (1 + step), cc * (1 - step)], axis=1), rows_pending)
+            order, structure = slots(around)
         slotted = np.take_along_axis(around, order, axis=-1)
         above, below = slotted[:, :m], slotted[:, m:]
         d = down[rows_pending]
@@ -374,7 +477,9 @@ def batch_apply(values: np.ndarray, speeds: np.ndarray, edges: np.ndarray, pairs
     b, n, _ = values.shape
     order, row_pairs = slots(values)
     finite = np.isfinite(edges)
-    segment = (finite[:, None, :] & (edges[:, None, :] <= speeds[None, :, None])).sum(axis=-1)  # (b, n)
+    segment = np.zeros((b, n), dtype=np.intp)  # (b, n): the collisions at or below each speed (NaN: never)
+    for column in edges.T:
+        segment += column[:, None] <= speeds[None, :]
     last = pairs.shape[1] - 1
     known = np.take_along_axis(pairs, segment, axis=1)
     fits = known == row_pairs
@@ -383,21 +488,22 @@ def batch_apply(values: np.ndarray, speeds: np.ndarray, edges: np.ndarray, pairs
         move = ~fits & (np.take_along_axis(pairs, near, axis=1) == row_pairs)
         segment = np.where(move, near, segment)
         fits |= move
-    out = np.empty((b, n, 4), dtype=complex)
-    labels = np.empty((b, n, 4), dtype=object)
+    segment_key = (names.astype(np.int64) * np.array([64, 16, 4, 1])).sum(axis=-1)  # (b, m + 1): names as one code
+    key = np.take_along_axis(segment_key, segment, axis=1)  # (b, n): each row's segment's names
+    codes = np.flatnonzero(np.bincount(key.reshape(-1), minlength=256))  # the codes present, no sort
+    lookup = np.zeros(256, dtype=np.intp)
+    lookup[codes] = np.arange(codes.size)
+    which = lookup[key]
+    # each code's arrangement (which slot goes to each position) and labels, then all rows at once
+    arranged = [_arrange(tuple(CODES[(int(c) >> shift) & 3] for shift in (6, 4, 2, 0))) for c in codes]
+    position = np.array([p for p, _ in arranged], dtype=np.intp).reshape(codes.size, 4)
+    label = np.array([x for _, x in arranged], dtype=object).reshape(codes.size, 4)
+    index = np.take_along_axis(order, position[which], axis=-1)
+    out = np.take_along_axis(values, index, axis=-1)
+    out.imag[row_pairs == 0] = 0.0  # four real eigenvalues: no rounding residue in the imaginary parts
+    labels = label[which]
     if not fits.all():  # within rounding of a collision no segment fits: the per-speed rules
         out[~fits], labels[~fits] = label_modes(values[~fits])
-    s = np.take_along_axis(values, order, axis=-1)
-    s = np.where(row_pairs[..., None] == 0, s.real, s)
-    row_names = names[np.arange(b)[:, None], segment]  # (b, n, 4): each row's segment's names
-    key = (row_names.astype(np.int64) * np.array([64, 16, 4, 1])).sum(axis=-1)
-    codes = np.unique(key[fits])
-    for code in codes:
-        sel = fits & (key == code) if codes.size > 1 or not fits.all() else fits
-        tuple_names = tuple(CODES[(int(code) >> shift) & 3] for shift in (6, 4, 2, 0))
-        position, label = _arrange(tuple_names, s[sel])
-        out[sel] = np.take_along_axis(s[sel], position, axis=-1)
-        labels[sel] = label
     return out, labels
 
 

@@ -206,6 +206,7 @@ class WhippleModel:
         pairs in a segment, no segment with one pair) is named on its own."""
         speeds = np.abs(np.asarray(speeds, dtype=float))
         edges = self._collision_table()
+        edges = edges[:, : int(np.isfinite(edges).sum(axis=1).max(initial=0))]  # NaN padding only: no column
         entries = {k: np.asarray(e, dtype=float).reshape(-1) for k, e in self._entries().items()}
         g = np.broadcast_to(np.asarray(self.g, dtype=float), self.batch_shape).reshape(-1)
 
@@ -217,10 +218,7 @@ class WhippleModel:
         top = np.maximum(10.0, 2.0 * largest)
         pairs, names, alone = mode_names.batch_naming(at, edges, top)
         values, labels = mode_names.batch_apply(np.asarray(raw, dtype=complex), speeds, edges, pairs, names)
-        for b in np.nonzero(alone)[0]:
-            one = {k: e[b] for k, e in entries.items()}
-            row = edges[b][np.isfinite(edges[b])]
-            named = mode_names.naming(_eigenvalues_of(one, float(g[b])), row, float(top[b]))
+        for b, named in _name_one_by_one(at, entries, g, edges, top, np.nonzero(alone)[0]):
             values[b], labels[b] = mode_names.apply(raw[b], speeds, named)
         return values, labels
 
@@ -381,6 +379,47 @@ def _eigenvalues_of(entries: dict[str, float], g: float):
         return quartic_roots(gen.characteristic_coefficients(**entries, g=g, v=np.asarray(speeds, dtype=float)))
 
     return at
+
+
+def _name_one_by_one(at, entries: dict[str, np.ndarray], g: np.ndarray, edges: np.ndarray, top: np.ndarray, lone):
+    """:func:`mode_names.naming` of each bicycle ``lone`` of a flattened batch (``at``: batched
+    speeds to eigenvalues, ``entries``/``g`` per bicycle, ``edges`` NaN-padded collision speeds,
+    ``top`` a speed above them), yielding ``(bicycle, naming)``.  Their evaluations are batched:
+    first all their :func:`mode_names.naming_speeds` in one call, then all their predicted
+    :func:`mode_names.path_speeds` in another, served to each naming by speed list."""
+    rows = [edges[b][np.isfinite(edges[b])] for b in lone]
+    first = [mode_names.naming_speeds(row, float(top[b])) for b, row in zip(lone, rows)]
+    width = max((x.size for x in first), default=0)
+    padded = np.array([np.pad(x, (0, width - x.size), constant_values=x[-1]) for x in first])
+    evaluated = at(padded.reshape(len(lone), width), lone) if len(lone) else None
+    ahead = [
+        mode_names.path_speeds(row, float(top[b]), evaluated[k, : first[k].size])
+        for k, (b, row) in enumerate(zip(lone, rows))
+    ]
+    owner = np.array([b for b, speeds in zip(lone, ahead) for _ in speeds], dtype=np.intp)
+    if owner.size:
+        followed = at(np.array([x for speeds in ahead for x in speeds]).reshape(owner.size, -1), owner)
+    served: list[dict[bytes, np.ndarray]] = [{} for _ in lone]
+    p = 0
+    for k, speeds in enumerate(ahead):
+        for x in speeds:
+            served[k][x.tobytes()] = followed[p]
+            p += 1
+    for k, (b, row) in enumerate(zip(lone, rows)):
+        one = {key: e[b] for key, e in entries.items()}
+        at_b = _served(_eigenvalues_of(one, float(g[b])), served[k])
+        yield b, mode_names.naming(at_b, row, float(top[b]), evaluated[k, : first[k].size])
+
+
+def _served(at, ready: dict[bytes, np.ndarray]):
+    """``at`` (speeds to eigenvalues), but speed lists already evaluated (``ready``, keyed by their
+    bytes) are served from there: evaluations batched over several bicycles beforehand."""
+
+    def served(speeds):
+        hit = ready.get(np.asarray(speeds, dtype=float).tobytes())
+        return hit if hit is not None else at(speeds)
+
+    return served
 
 
 def _at(name: str, index: tuple[int, ...]) -> str:
