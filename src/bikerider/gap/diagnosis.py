@@ -479,7 +479,7 @@ class Diagnosis:
 
     # -- where -----------------------------------------------------------------------------------
     def _gap_map(self) -> list[dict]:
-        from scipy.stats import chi2
+        from bikerider.gap.distributions import chi2
 
         p = self.problem
         obs = p.obs
@@ -528,8 +528,7 @@ class Diagnosis:
         return cells
 
     def _gap_test(self) -> dict:
-        from scipy.stats import chi2
-
+        from bikerider.gap.distributions import chi2
         from bikerider.gap.low_rank import low_rank_chi2
 
         p = self.problem
@@ -558,7 +557,7 @@ class Diagnosis:
 
     # -- whether ----------------------------------------------------------------------------------
     def _verdict(self) -> str:
-        from scipy.stats import chi2
+        from bikerider.gap.distributions import chi2
 
         fit = self.parameter_fit
         if fit is not None:
@@ -873,7 +872,7 @@ class Diagnosis:
 
     def plausibility(self, fit: EffectFit) -> tuple[bool, list[dict]]:
         """Whether a fit is plausible (module docstring), with one check per fitted value."""
-        from scipy.stats import chi2
+        from bikerider.gap.distributions import chi2
 
         checks = []
         ok = True
@@ -1087,7 +1086,7 @@ def arm_inertia(problem: GapProblem, m_arm: float) -> float:
 
 def _data_only_cell(problem: GapProblem, idx: list[int], alpha: float) -> dict:
     """A gap-map cell's RMS residual and significance against the data's uncertainty alone."""
-    from scipy.stats import chi2
+    from bikerider.gap.distributions import chi2
 
     var = problem.var_data[idx]
     if not np.all(var > 0):
