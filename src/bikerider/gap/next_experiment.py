@@ -338,12 +338,14 @@ class NextExperiment:
         self.signal_fits: dict[str, list] = {}
         if self.records:
             d = self.diagnosis
+            own = {id(d.records[k].record): d.records[k].fits for k in d.record_rows}
             for name in SIGNALS:
                 held = [d.records[k].record for k in d.record_rows if name in d.records[k].record.signals]
                 scatter = [x for x in (signal_noise(r.signals[name]) for r in held) if x > 0]
                 if not scatter:
                     continue
-                fits = [(r.speed, record_fit(r.time, r.signals[name])) for r in held]
+                # a signal the diagnosis fitted: its record fit as the diagnosis made it (the same call)
+                fits = [(r.speed, _own_fit(own.get(id(r), {}), name, r)) for r in held]
                 self.signal_fits[name] = [(v, f) for v, f in fits if f is not None]
                 left = [f.residual_rms for _, f in self.signal_fits[name]]
                 values[name] = max(float(np.median(scatter)), float(np.median(left)) if left else 0.0)
@@ -1190,6 +1192,13 @@ def record_fit(time, samples):
         return weave_eigenvalue(time, samples)
     except FitError:
         return None
+
+
+def _own_fit(fits: dict, name: str, record: Record):
+    """``record``'s fit of signal ``name``: the diagnosis's own (``fits``) where it made one, else
+    :func:`record_fit` (the same fit)."""
+    fit = fits.get(name)
+    return fit if fit is not None else record_fit(record.time, record.signals[name])
 
 
 def fit_residual(time, samples) -> float | None:
