@@ -58,6 +58,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from bikerider.errors import InputError
+from bikerider.gap.blas_threads import single_blas_thread
 from bikerider.gap.data import CanonicalData, EigenvalueData
 from bikerider.gap.effects import (
     COULOMB_RANGE,
@@ -200,6 +201,7 @@ class Diagnosis:
         When no observation remains (every record left out): too few records for a diagnosis.
     """
 
+    @single_blas_thread
     def __init__(
         self,
         model: GapModelInput,

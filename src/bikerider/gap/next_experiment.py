@@ -68,6 +68,7 @@ import numpy as np
 
 from bikerider.engine import DifferencedStage
 from bikerider.errors import FitError, InputError
+from bikerider.gap.blas_threads import single_blas_thread
 from bikerider.gap.control import NO_CONTROL, ControlLaw
 from bikerider.gap.data import CanonicalData, EigenvalueData
 from bikerider.gap.effects import TIME_DOMAIN_EFFECTS
@@ -232,6 +233,7 @@ class NextExperiment:
     run_time: float = DEFAULT_RUN_TIME
     distortion: float | None = None
 
+    @single_blas_thread
     def __post_init__(self):
         d = self.diagnosis
         self.problem = d.problem
