@@ -197,6 +197,7 @@ class GapProblem:
         self.records = records
         self.record_obs = self._record_observations()
         self._memo: OrderedDict[tuple, np.ndarray] = OrderedDict()
+        self._layouts: dict[tuple[str, ...], _Layout] = {}
         self.baseline = self.predict_models(self.nominal, {})[0]
         # each record row's extraction bias under the nominal model (apparent minus weave eigenvalue):
         # the starting offset of the fits' iterated bias correction, and the replicate scatter's reference
@@ -381,6 +382,13 @@ class GapProblem:
 
     # -- models ------------------------------------------------------------------------------------
     def layout(self, effects: tuple[str, ...]) -> _Layout:
+        """How the parameter vector of a set of effects maps onto the models (worked out once per set)."""
+        effects = tuple(effects)
+        if effects not in self._layouts:
+            self._layouts[effects] = self._new_layout(effects)
+        return self._layouts[effects]
+
+    def _new_layout(self, effects: tuple[str, ...]) -> _Layout:
         lay = _Layout(tuple(effects))
         grids = []
         for name in effects:

@@ -149,8 +149,9 @@ def levenberg_marquardt(
             if not np.any(active):
                 break
             idx = np.flatnonzero(active)
-            JT = np.swapaxes(J[idx], 1, 2)
-            H = JT @ J[idx]
+            J_idx = J[idx]
+            JT = np.swapaxes(J_idx, 1, 2)
+            H = JT @ J_idx
             g = (JT @ r[idx][..., None])[..., 0]
             if kind == "two-mode":  # the extra mode held at a bound it presses against (active set)
                 lam = theta[idx, 2]
