@@ -70,6 +70,7 @@ from bikerider.gap.effects import (
 )
 from bikerider.gap.fit import EffectFit, GapProblem
 from bikerider.gap.model_input import GapModelInput
+from bikerider.gap.parallel import cross_validate_all
 from bikerider.gap.records import RecordFit, eigenvalues_of
 
 LOG = logging.getLogger(__name__)
@@ -664,6 +665,7 @@ class Diagnosis:
         return [(r, ties[r.effects]) for r in ordered]
 
     def _rank(self) -> None:
+        cross_validate_all(self, [(e,) for e in self.candidates])  # on every core; the same results
         results = [self.cross_validate((e,)) for e in self.candidates]
         for rank, (r, ties) in enumerate(self._order(results), start=1):
             self.ranking.append(
@@ -704,6 +706,7 @@ class Diagnosis:
 
     def _search_pairs(self) -> None:
         self.pairs = []
+        cross_validate_all(self, self.pair_candidates())  # on every core; the same results
         for pair in self.pair_candidates():
             r = self.cross_validate(pair)
             self.pairs.append(r)

@@ -100,6 +100,7 @@ from bikerider.gap.next_sweep import (
     split,
     weave_shift,
 )
+from bikerider.gap.parallel import map_forked
 from bikerider.gap.predict import Predictor
 from bikerider.gap.records import SIGNALS, Record, RecordFit, eigenvalues_of
 from bikerider.gap.timedomain import Layout, systems
@@ -340,19 +341,26 @@ class NextExperiment:
         self.signal_fits: dict[str, list] = {}
         if self.records:
             d = self.diagnosis
-            own = {id(d.records[k].record): d.records[k].fits for k in d.record_rows}
+            held = {
+                name: [d.records[k].record for k in d.record_rows if name in d.records[k].record.signals]
+                for name in SIGNALS
+            }
+            # every record's fit of every signal: the diagnosis's own where it fitted the signal (the same
+            # call), the others fitted one per core
+            scatter = {n: [x for x in (signal_noise(r.signals[n]) for r in held[n]) if x > 0] for n in SIGNALS}
+            own = {(id(d.records[k].record), n): f for k in d.record_rows for n, f in d.records[k].fits.items()}
+            todo = [(n, r) for n in SIGNALS if scatter[n] for r in held[n] if (id(r), n) not in own]
+            fitted = map_forked(lambda item: record_fit(item[1].time, item[1].signals[item[0]]), todo)
+            own.update({(id(r), n): f for (n, r), f in zip(todo, fitted)})
             for name in SIGNALS:
-                held = [d.records[k].record for k in d.record_rows if name in d.records[k].record.signals]
-                scatter = [x for x in (signal_noise(r.signals[name]) for r in held) if x > 0]
-                if not scatter:
+                if not scatter[name]:
                     continue
-                # a signal the diagnosis fitted: its record fit as the diagnosis made it (the same call)
-                fits = [(r.speed, _own_fit(own.get(id(r), {}), name, r)) for r in held]
+                fits = [(r.speed, own[(id(r), name)]) for r in held[name]]
                 self.signal_fits[name] = [(v, f) for v, f in fits if f is not None]
                 left = [f.residual_rms for _, f in self.signal_fits[name]]
-                values[name] = max(float(np.median(scatter)), float(np.median(left)) if left else 0.0)
+                values[name] = max(float(np.median(scatter[name])), float(np.median(left)) if left else 0.0)
                 source[name] = (
-                    f"the data's records: the larger of their sample-to-sample scatter ({np.median(scatter):.2g}) "
+                    f"the data's records: the larger of their sample-to-sample scatter ({np.median(scatter[name]):.2g}) "
                     "and what their own fits leave ("
                     + (f"{np.median(left):.2g}, RMS residual over {len(left)} records" if left else "no fit")
                     + ")"
@@ -502,28 +510,40 @@ class NextExperiment:
         p = self.problem
         self.mean = np.zeros((len(self.rivals), n), complex)
         self.own_cov = np.zeros((len(self.rivals), n, 2, 2))
-        for k, rival in enumerate(self.rivals):
+        base = self._reference_points()
+
+        def task(k: int):
+            """Rival ``k``'s prediction and own covariance; the nominal parameters' covariance for ``-1``."""
+            if k < 0:
+                # the nominal parameters' uncertainty, as the diagnosis carries it
+                stage = DifferencedStage(
+                    "nominal parameters",
+                    lambda v: _split(self._predict_linear((), np.zeros((np.size(next(iter(v.values()))), 0)), v, base)),
+                    p.free,
+                    range(2 * len(base)),
+                    dict(zip(p.free, p.free_sigma)),
+                    batched=True,
+                )
+                J = (stage.jacobian({k: p.nominal[k] for k in p.free}) * p.free_sigma).reshape(2, len(base), -1)
+                return np.einsum("anj,bnj->nab", J, J)
+            rival = self.rivals[k]
             fit = rival.fit
-            self.mean[k] = self._predict_rival(rival, fit.values[None, :])[0]
+            mean = self._predict_rival(rival, fit.values[None, :])[0]
             if not fit.names:
-                continue
-            J, cov = _secants(fit, lambda X, rival=rival: _split(self._predict_rival(rival, X)))
+                return mean, None
+            J, cov = _secants(fit, lambda X: _split(self._predict_rival(rival, X)))
             J = J.reshape(2, n, -1)  # per unit of each value
-            self.own_cov[k] = np.einsum("anj,jk,bnk->nab", J, cov, J)
-        # the nominal parameters' uncertainty, as the diagnosis carries it
+            return mean, np.einsum("anj,jk,bnk->nab", J, cov, J)
+
+        # the rivals and the nominal parameters are independent: one per core
+        results = map_forked(task, list(range(len(self.rivals))) + ([-1] if p.free else []))
+        for k, (mean, own) in enumerate(results[: len(self.rivals)]):
+            self.mean[k] = mean
+            if own is not None:
+                self.own_cov[k] = own
         self.model_cov = np.zeros((n, 2, 2))
         if p.free:
-            base = self._reference_points()
-            stage = DifferencedStage(
-                "nominal parameters",
-                lambda v: _split(self._predict_linear((), np.zeros((np.size(next(iter(v.values()))), 0)), v, base)),
-                p.free,
-                range(2 * len(base)),
-                dict(zip(p.free, p.free_sigma)),
-                batched=True,
-            )
-            J = (stage.jacobian({k: p.nominal[k] for k in p.free}) * p.free_sigma).reshape(2, len(base), -1)
-            cov = np.einsum("anj,bnj->nab", J, J)
+            cov = results[-1]
             index = {(e.speed, e.law): m for m, e in enumerate(base)}
             for m, e in enumerate(self.points):
                 self.model_cov[m] = cov[index[(e.speed, e.law)]]
@@ -1194,13 +1214,6 @@ def record_fit(time, samples):
         return weave_eigenvalue(time, samples)
     except FitError:
         return None
-
-
-def _own_fit(fits: dict, name: str, record: Record):
-    """``record``'s fit of signal ``name``: the diagnosis's own (``fits``) where it made one, else
-    :func:`record_fit` (the same fit)."""
-    fit = fits.get(name)
-    return fit if fit is not None else record_fit(record.time, record.signals[name])
 
 
 def fit_residual(time, samples) -> float | None:

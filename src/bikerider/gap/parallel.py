@@ -1,0 +1,133 @@
+"""Independent pieces of the diagnosis and the plan at once, one per core (forked worker processes).
+
+The diagnosis cross-validates every candidate, then every pair, each on its own: a fit to all the
+data and one per held-out fold.  Those are independent of each other, so
+:func:`cross_validate_all` hands them to worker processes, forked from the process that holds the
+diagnosis (the data, the fitted nominal model and the fits made so far are shared, not copied),
+and takes back each one's :class:`~bikerider.gap.diagnosis.CrossValidation` and the full-data fits
+it made.  Every computation is the same as in one process (the order of the work changes nothing:
+each fit depends only on its own candidate), so the results are identical; the time is shared
+among the cores.
+
+:func:`map_forked` does the same for any list of independent tasks (the plan's record fits and its
+rivals' predictions).
+
+Workers: one per core the process may use, or ``$BIKERIDER_GAP_WORKERS`` (``1``: everything in the
+one process).  Worker processes are used only where ``fork`` exists (Linux) and not from inside a
+worker process of another pool.
+"""
+
+from __future__ import annotations
+
+import logging
+import multiprocessing
+import os
+import signal
+import sys
+
+from bikerider.errors import InputError
+
+LOG = logging.getLogger(__name__)
+WORKERS_ENV = "BIKERIDER_GAP_WORKERS"
+"""Environment variable: how many worker processes the diagnosis may use (``1``: none)."""
+
+_DIAGNOSIS = None
+"""The diagnosis the forked workers work on (set just before they are forked)."""
+_TASK = None
+"""The function :func:`map_forked`'s workers call (set just before they are forked)."""
+
+
+def workers() -> int:
+    """Worker processes to use: ``$BIKERIDER_GAP_WORKERS`` or the cores this process may run on."""
+    value = os.environ.get(WORKERS_ENV, "").strip()
+    if value:
+        try:
+            count = int(value)
+        except ValueError:
+            count = 0
+        if count < 1:
+            raise InputError(WORKERS_ENV, value, "a whole number of worker processes, 1 or more (1: no workers)")
+        return count
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        return os.cpu_count() or 1
+
+
+def _can_fork(count: int) -> bool:
+    return (
+        count >= 2
+        and sys.platform.startswith("linux")
+        and "fork" in multiprocessing.get_all_start_methods()
+        and not multiprocessing.current_process().daemon
+    )
+
+
+def _call(item):
+    return _TASK(item)
+
+
+def map_forked(function, items) -> list:
+    """``[function(item) for item in items]``, the calls shared among worker processes (forked, so
+    ``function`` may be any callable, a closure included; the items and results are pickled).
+
+    In the one process when there are fewer than two workers or items, or no ``fork``.
+    """
+    global _TASK
+    items = list(items)
+    count = min(workers(), len(items))
+    if not _can_fork(count):
+        return [function(item) for item in items]
+    _TASK = function
+    try:
+        with multiprocessing.get_context("fork").Pool(count, initializer=_quiet_interrupt) as pool:
+            return pool.map(_call, items, chunksize=1)
+    finally:
+        _TASK = None
+
+
+def _cost(effects: tuple[str, ...]) -> int:
+    """A rough rank of a candidate's cost, to start the longest first (time-domain fits, then the
+    fits with many values)."""
+    return 4 * ("steer_friction" in effects) + 2 * ("parameters" in effects) + ("tyre_slip" in effects) + len(effects)
+
+
+def _quiet_interrupt() -> None:
+    # the parent process handles Ctrl-C (and ends the workers); a worker stops without a traceback
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def _work(effects: tuple[str, ...]):
+    d = _DIAGNOSIS
+    known_full, known_timed = set(d.full_fits), set(d._time_domain_full)
+    result = d.cross_validate(effects)
+    full = {k: v for k, v in d.full_fits.items() if k not in known_full}
+    timed = {k: v for k, v in d._time_domain_full.items() if k not in known_timed}
+    return effects, result, full, timed
+
+
+def cross_validate_all(diagnosis, effect_sets) -> None:
+    """Cross-validate ``effect_sets`` (tuples of effect names) of ``diagnosis`` on worker processes.
+
+    Fills the diagnosis's caches (``cv``, ``full_fits``, its time-domain fits) as its own
+    ``cross_validate`` would; with fewer than two workers or sets to do, does nothing (the
+    diagnosis then works them out one by one when it asks for them).
+    """
+    global _DIAGNOSIS
+    todo = [tuple(e) for e in dict.fromkeys(tuple(e) for e in effect_sets) if tuple(e) not in diagnosis.cv]
+    count = min(workers(), len(todo))
+    if not _can_fork(count):
+        return
+    todo.sort(key=_cost, reverse=True)
+    LOG.debug("cross-validating %d candidate sets on %d worker processes", len(todo), count)
+    _DIAGNOSIS = diagnosis
+    try:
+        with multiprocessing.get_context("fork").Pool(count, initializer=_quiet_interrupt) as pool:
+            for effects, result, full, timed in pool.imap_unordered(_work, todo):
+                diagnosis.cv[effects] = result
+                for key, fit in full.items():
+                    diagnosis.full_fits.setdefault(key, fit)
+                for key, fit in timed.items():
+                    diagnosis._time_domain_full.setdefault(key, fit)
+    finally:
+        _DIAGNOSIS = None
