@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -28,6 +28,7 @@ from bikerider.errors import FitError
 from bikerider.gap.control import ControlLaw
 from bikerider.gap.data import EigenvalueData
 from bikerider.gap.extraction import WeaveEstimate, weave_eigenvalue
+from bikerider.gap.parallel import map_forked
 
 LOG = logging.getLogger(__name__)
 
@@ -185,12 +186,11 @@ def fit_record(record: Record) -> RecordFit:
 
 def fit_records(records: list[Record]) -> list[RecordFit]:
     """Fit every record (see :func:`fit_record`); logs one line per record left out."""
-    fits = []
-    for record in records:
-        fit = fit_record(record)
+    # independent fits, one per core (the same results); each keeps the caller's record object
+    fits = [replace(fit, record=record) for record, fit in zip(records, map_forked(fit_record, records))]
+    for record, fit in zip(records, fits):
         if not fit.used:
             LOG.info("%s left out: %s", record.name, fit.reason)
-        fits.append(fit)
     return fits
 
 
