@@ -100,7 +100,7 @@ from bikerider.gap.next_sweep import (
     split,
     weave_shift,
 )
-from bikerider.gap.parallel import map_forked
+from bikerider.gap.parallel import map_forked, workers
 from bikerider.gap.predict import Predictor
 from bikerider.gap.records import SIGNALS, Record, RecordFit, eigenvalues_of
 from bikerider.gap.timedomain import Layout, systems
@@ -511,36 +511,47 @@ class NextExperiment:
         self.mean = np.zeros((len(self.rivals), n), complex)
         self.own_cov = np.zeros((len(self.rivals), n, 2, 2))
         base = self._reference_points()
+        # independent pieces, one per core: each rival's prediction at its fit and at its secants' points
+        # (a linear rival's points in chunks: each point's prediction is its own), and the nominal
+        # parameters' uncertainty as the diagnosis carries it
+        jobs: list[tuple[int, np.ndarray | None]] = []
+        secants = {}
+        for k, rival in enumerate(self.rivals):
+            jobs.append((k, rival.fit.values[None, :]))
+            if rival.fit.names:
+                X, width, cov = _secant_points(rival.fit)
+                secants[k] = (width, cov, len(jobs))
+                size = len(X) if rival.nonlinear else max(4, -(-len(X) // (2 * workers())))
+                jobs += [(k, X[lo : lo + size]) for lo in range(0, len(X), size)]
+        if p.free:
+            jobs.append((-1, None))
 
-        def task(k: int):
-            """Rival ``k``'s prediction and own covariance; the nominal parameters' covariance for ``-1``."""
-            if k < 0:
-                # the nominal parameters' uncertainty, as the diagnosis carries it
-                stage = DifferencedStage(
-                    "nominal parameters",
-                    lambda v: _split(self._predict_linear((), np.zeros((np.size(next(iter(v.values()))), 0)), v, base)),
-                    p.free,
-                    range(2 * len(base)),
-                    dict(zip(p.free, p.free_sigma)),
-                    batched=True,
-                )
-                J = (stage.jacobian({k: p.nominal[k] for k in p.free}) * p.free_sigma).reshape(2, len(base), -1)
-                return np.einsum("anj,bnj->nab", J, J)
-            rival = self.rivals[k]
-            fit = rival.fit
-            mean = self._predict_rival(rival, fit.values[None, :])[0]
-            if not fit.names:
-                return mean, None
-            J, cov = _secants(fit, lambda X: _split(self._predict_rival(rival, X)))
-            J = J.reshape(2, n, -1)  # per unit of each value
-            return mean, np.einsum("anj,jk,bnk->nab", J, cov, J)
+        def task(job):
+            k, X = job
+            if k >= 0:
+                return self._predict_rival(self.rivals[k], X)
+            stage = DifferencedStage(
+                "nominal parameters",
+                lambda v: _split(self._predict_linear((), np.zeros((np.size(next(iter(v.values()))), 0)), v, base)),
+                p.free,
+                range(2 * len(base)),
+                dict(zip(p.free, p.free_sigma)),
+                batched=True,
+            )
+            J = (stage.jacobian({k: p.nominal[k] for k in p.free}) * p.free_sigma).reshape(2, len(base), -1)
+            return np.einsum("anj,bnj->nab", J, J)
 
-        # the rivals and the nominal parameters are independent: one per core
-        results = map_forked(task, list(range(len(self.rivals))) + ([-1] if p.free else []))
-        for k, (mean, own) in enumerate(results[: len(self.rivals)]):
-            self.mean[k] = mean
-            if own is not None:
-                self.own_cov[k] = own
+        order = sorted(range(len(jobs)), key=lambda j: -(0 if jobs[j][1] is None else len(jobs[j][1])))
+        done = dict(zip(order, map_forked(task, [jobs[j] for j in order])))
+        results = [done[j] for j in range(len(jobs))]
+        for k, rival in enumerate(self.rivals):
+            first = next(j for j, job in enumerate(jobs) if job[0] == k)
+            self.mean[k] = results[first][0]
+            if k in secants:
+                width, cov, start = secants[k]
+                pred = np.concatenate([results[j] for j in range(start, len(jobs)) if jobs[j][0] == k])
+                J = _secant_slopes(_split(pred), width).reshape(2, n, -1)  # per unit of each value
+                self.own_cov[k] = np.einsum("anj,jk,bnk->nab", J, cov, J)
         self.model_cov = np.zeros((n, 2, 2))
         if p.free:
             cov = results[-1]
@@ -1160,6 +1171,13 @@ def _secants(fit: EffectFit, predict) -> tuple[np.ndarray, np.ndarray]:
     secants over +-1 standard deviation kept inside the search bounds (a tyre's relaxation length or an
     inertia stepped below zero would be no model at all), so not by the engine's central differences.
     """
+    X, width, cov = _secant_points(fit)
+    return _secant_slopes(predict(X), width), cov
+
+
+def _secant_points(fit: EffectFit) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The ``2 p`` fitted-value vectors of :func:`_secants` (each value up, then down), the secants'
+    widths and the values' covariance."""
     span = (fit.upper - fit.lower) / math.sqrt(12)
     cov = _bounded_covariance(fit, span)
     sigma = np.sqrt(np.diag(cov))
@@ -1169,9 +1187,13 @@ def _secants(fit: EffectFit, predict) -> tuple[np.ndarray, np.ndarray]:
     X = np.repeat(fit.values[None, :], 2 * fit.values.size, axis=0)
     for j in range(fit.values.size):
         X[2 * j, j], X[2 * j + 1, j] = up[j], down[j]
-    pred = predict(X)  # (2 p, m)
     width = np.where(up > down, up - down, np.inf)
-    return ((pred[0::2] - pred[1::2]) / width[:, None]).T, cov
+    return X, width, cov
+
+
+def _secant_slopes(pred: np.ndarray, width: np.ndarray) -> np.ndarray:
+    """Slopes ``(m, p)`` from the predictions ``(2 p, m)`` at :func:`_secant_points`."""
+    return ((pred[0::2] - pred[1::2]) / width[:, None]).T
 
 
 def _bounded_covariance(fit: EffectFit, span: np.ndarray) -> np.ndarray:
