@@ -149,9 +149,8 @@ def levenberg_marquardt(
             if not np.any(active):
                 break
             idx = np.flatnonzero(active)
-            J_idx = J[idx]
-            JT = np.swapaxes(J_idx, 1, 2)
-            H = JT @ J_idx
+            JT = np.swapaxes(J[idx], 1, 2)
+            H = JT @ J[idx]  # two copies: NumPy forms A^T A of one buffer otherwise (syrk), rounding differently
             g = (JT @ r[idx][..., None])[..., 0]
             if kind == "two-mode":  # the extra mode held at a bound it presses against (active set)
                 lam = theta[idx, 2]
