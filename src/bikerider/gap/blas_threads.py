@@ -80,6 +80,14 @@ def one_blas_thread() -> Iterator[None]:
                 put(count)
 
 
+def limit_to_one_thread() -> None:
+    """Limit OpenBLAS to one thread for the rest of the process (a worker process of
+    :mod:`bikerider.gap.parallel`: its siblings use the other cores)."""
+    for get, put in _controls():
+        if get() != 1:
+            put(1)
+
+
 def single_blas_thread(function):
     """Decorator: run ``function`` inside :func:`one_blas_thread`."""
 

@@ -26,6 +26,7 @@ import signal
 import sys
 
 from bikerider.errors import InputError
+from bikerider.gap.blas_threads import limit_to_one_thread
 
 LOG = logging.getLogger(__name__)
 WORKERS_ENV = "BIKERIDER_GAP_WORKERS"
@@ -80,7 +81,10 @@ def map_forked(function, items) -> list:
         return [function(item) for item in items]
     _TASK = function
     try:
-        with multiprocessing.get_context("fork").Pool(count, initializer=_quiet_interrupt) as pool:
+        pool = _pool(count)
+        if pool is None:
+            return [function(item) for item in items]
+        with pool:
             return pool.map(_call, items, chunksize=1)
     finally:
         _TASK = None
@@ -92,9 +96,20 @@ def _cost(effects: tuple[str, ...]) -> int:
     return 4 * ("steer_friction" in effects) + 2 * ("parameters" in effects) + ("tyre_slip" in effects) + len(effects)
 
 
-def _quiet_interrupt() -> None:
+def _start_worker() -> None:
     # the parent process handles Ctrl-C (and ends the workers); a worker stops without a traceback
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    limit_to_one_thread()  # one BLAS thread per worker: the workers share the cores
+
+
+def _pool(count: int):
+    """A pool of ``count`` forked workers, or ``None`` where the system cannot make one (no shared
+    memory for its locks, a process limit): the work then runs in this process."""
+    try:
+        return multiprocessing.get_context("fork").Pool(count, initializer=_start_worker)
+    except OSError as exc:
+        LOG.info("no worker processes (%s): working in one process", exc)
+        return None
 
 
 def _work(effects: tuple[str, ...]):
@@ -122,7 +137,10 @@ def cross_validate_all(diagnosis, effect_sets) -> None:
     LOG.debug("cross-validating %d candidate sets on %d worker processes", len(todo), count)
     _DIAGNOSIS = diagnosis
     try:
-        with multiprocessing.get_context("fork").Pool(count, initializer=_quiet_interrupt) as pool:
+        pool = _pool(count)
+        if pool is None:
+            return
+        with pool:
             for effects, result, full, timed in pool.imap_unordered(_work, todo):
                 diagnosis.cv[effects] = result
                 for key, fit in full.items():
