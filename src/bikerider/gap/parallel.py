@@ -19,6 +19,7 @@ worker process of another pool.
 
 from __future__ import annotations
 
+import gc
 import logging
 import multiprocessing
 import os
@@ -88,6 +89,7 @@ def map_forked(function, items) -> list:
             return pool.map(_call, items, chunksize=1)
     finally:
         _TASK = None
+        gc.unfreeze()
 
 
 def _cost(effects: tuple[str, ...]) -> int:
@@ -106,6 +108,9 @@ def _pool(count: int):
     """A pool of ``count`` forked workers, or ``None`` where the system cannot make one (no shared
     memory for its locks, a process limit): the work then runs in this process."""
     try:
+        # the objects made so far stay out of the workers' garbage collection: it would touch (and so
+        # copy) every page they share with this process
+        gc.freeze()
         return multiprocessing.get_context("fork").Pool(count, initializer=_start_worker)
     except OSError as exc:
         LOG.info("no worker processes (%s): working in one process", exc)
@@ -149,3 +154,4 @@ def cross_validate_all(diagnosis, effect_sets) -> None:
                     diagnosis._time_domain_full.setdefault(key, fit)
     finally:
         _DIAGNOSIS = None
+        gc.unfreeze()
