@@ -33,6 +33,12 @@ LOG = logging.getLogger(__name__)
 WORKERS_ENV = "BIKERIDER_GAP_WORKERS"
 """Environment variable: how many worker processes the diagnosis may use (``1``: none)."""
 
+MIN_OBSERVATIONS = 100
+"""Without records, the fewest observations for which the candidates are cross-validated on workers
+(below it a candidate takes about as long as starting the workers)."""
+MIN_RECORDS = 8
+"""The fewest records fitted on workers (a record fit takes a few hundredths of a second)."""
+
 _DIAGNOSIS = None
 """The diagnosis the forked workers work on (set just before they are forked)."""
 _TASK = None
@@ -69,16 +75,17 @@ def _call(item):
     return _TASK(item)
 
 
-def map_forked(function, items) -> list:
+def map_forked(function, items, min_items: int = 2) -> list:
     """``[function(item) for item in items]``, the calls shared among worker processes (forked, so
     ``function`` may be any callable, a closure included; the items and results are pickled).
 
-    In the one process when there are fewer than two workers or items, or no ``fork``.
+    In the one process when there are fewer than two workers, fewer than ``min_items`` items (work
+    too small to pay for starting the workers, about a tenth of a second), or no ``fork``.
     """
     global _TASK
     items = list(items)
     count = min(workers(), len(items))
-    if not _can_fork(count):
+    if len(items) < min_items or not _can_fork(count):
         return [function(item) for item in items]
     _TASK = function
     try:
@@ -136,7 +143,8 @@ def cross_validate_all(diagnosis, effect_sets) -> None:
     global _DIAGNOSIS
     todo = [tuple(e) for e in dict.fromkeys(tuple(e) for e in effect_sets) if tuple(e) not in diagnosis.cv]
     count = min(workers(), len(todo))
-    if not _can_fork(count):
+    # workers pay where the candidates are costly: records (each fit simulates them) or many observations
+    if not _can_fork(count) or not (diagnosis.record_rows or len(diagnosis.problem.obs) >= MIN_OBSERVATIONS):
         return
     todo.sort(key=_cost, reverse=True)
     LOG.debug("cross-validating %d candidate sets on %d worker processes", len(todo), count)

@@ -28,7 +28,7 @@ from bikerider.errors import FitError
 from bikerider.gap.control import ControlLaw
 from bikerider.gap.data import EigenvalueData
 from bikerider.gap.extraction import WeaveEstimate, weave_eigenvalue
-from bikerider.gap.parallel import map_forked
+from bikerider.gap.parallel import MIN_RECORDS, map_forked
 
 LOG = logging.getLogger(__name__)
 
@@ -187,7 +187,10 @@ def fit_record(record: Record) -> RecordFit:
 def fit_records(records: list[Record]) -> list[RecordFit]:
     """Fit every record (see :func:`fit_record`); logs one line per record left out."""
     # independent fits, one per core (the same results); each keeps the caller's record object
-    fits = [replace(fit, record=record) for record, fit in zip(records, map_forked(fit_record, records))]
+    fits = [
+        replace(fit, record=record)
+        for record, fit in zip(records, map_forked(fit_record, records, min_items=MIN_RECORDS))
+    ]
     for record, fit in zip(records, fits):
         if not fit.used:
             LOG.info("%s left out: %s", record.name, fit.reason)
