@@ -64,10 +64,10 @@ import time
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-from scipy.stats import chi2
 
 from bikerider import progress
 from bikerider.errors import InputError
+from bikerider.gap.blas_threads import single_blas_thread
 from bikerider.gap.candidates.effect_model import BENCH_ARGS, EffectModel
 from bikerider.gap.candidates.effects import (
     COULOMB_RANGE,
@@ -92,6 +92,7 @@ from bikerider.gap.diagnosis.statistics import (
     rms,
     significantly_better,
 )
+from bikerider.gap.distributions import chi2
 from bikerider.gap.inference.indirect import RecordRows, RecordSimulator
 from bikerider.gap.inference.low_rank import low_rank_chi2
 from bikerider.gap.inference.predict import Predictor
@@ -99,6 +100,7 @@ from bikerider.gap.inference.problem import EffectFit, GapProblem
 from bikerider.gap.inference.timedomain import Layout, fit_time_domain
 from bikerider.gap.measured.records import RecordFit, eigenvalues_of
 from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
+from bikerider.gap.parallel import cross_validate_all
 
 LOG = logging.getLogger(__name__)
 
@@ -183,6 +185,7 @@ class Diagnosis:
         When no observation remains (every record left out): too few records for a diagnosis.
     """
 
+    @single_blas_thread
     def __init__(
         self,
         model: GapModelInput,
@@ -719,6 +722,7 @@ class Diagnosis:
 
     def _rank(self) -> None:
         progress.begin("candidates", len(self.candidates) * len(self.folds), "fold fits")
+        cross_validate_all(self, [(e,) for e in self.candidates])  # on every core; the same results
         results = [self.cross_validate((e,)) for e in self.candidates]
         for rank, (r, ties) in enumerate(self._order(results), start=1):
             self.ranking.append(
@@ -760,6 +764,7 @@ class Diagnosis:
         self.pairs = []
         pairs = self.pair_candidates()
         progress.begin("pairs", len(pairs) * len(self.folds), "fold fits")
+        cross_validate_all(self, pairs)  # on every core; the same results
         for pair in pairs:
             r = self.cross_validate(pair)
             self.pairs.append(r)

@@ -9,10 +9,10 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.stats import chi2
 from scipy.stats import t as student_t
 
 from bikerider.gap.candidates.effects import EFFECTS
+from bikerider.gap.distributions import chi2
 from bikerider.gap.inference.problem import EffectFit, GapProblem
 
 ALPHA = 0.01

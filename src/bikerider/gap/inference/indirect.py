@@ -77,11 +77,13 @@ LINEAR = {"two-mode": (2, 3, 4, 5), "plain": (3, 4, 2, 5)}
 """Positions of the coefficients of :func:`_basis`'s four functions in each model's parameter vector."""
 
 
-def _project(kind: str, theta: np.ndarray, y: np.ndarray, w: np.ndarray, tau: np.ndarray):
+def _project(kind: str, theta: np.ndarray, y: np.ndarray, w: np.ndarray, tau: np.ndarray, jacobian: bool = True):
     """Linear coefficients, weighted residuals, cost and Kaufman's Jacobian at ``theta``.
 
     Two-mode: ``theta = (omega, sigma, lambda)``, basis ``e sin, e cos, 1, exp(lambda t)`` with
-    ``e = exp(-sigma t)``; plain: ``theta = (omega, sigma)``, basis ``e sin, e cos, 1, t``.
+    ``e = exp(-sigma t)``; plain: ``theta = (omega, sigma)``, basis ``e sin, e cos, 1, t``.  Without
+    ``jacobian`` the last item is what :func:`_kaufman` needs to form it for some of the rows later
+    (a trial step that is rejected needs none).
     """
     omega, sigma = theta[:, 0, None], theta[:, 1, None]
     decay = np.exp(-sigma * tau)
@@ -97,14 +99,24 @@ def _project(kind: str, theta: np.ndarray, y: np.ndarray, w: np.ndarray, tau: np
     gram = gram + 1e-12 * np.maximum(np.trace(gram, axis1=1, axis2=2), 1e-300)[:, None, None] * np.eye(4)
     coef = np.linalg.solve(gram, phi_wT @ (y * w)[..., None])[..., 0]  # (B, 4)
     r = ((phi @ coef[..., None])[..., 0] - y) * w
+    parts = (es, ec, grow, phi_w, gram)
+    if not jacobian:
+        return coef, r, np.sum(r * r, axis=1), parts
+    return coef, r, np.sum(r * r, axis=1), _kaufman(coef, w, tau, parts)
+
+
+def _kaufman(coef: np.ndarray, w: np.ndarray, tau: np.ndarray, parts: tuple) -> np.ndarray:
+    """Kaufman's Jacobian ``(B, N, k)`` of the weighted residuals in the nonlinear parameters, from the
+    coefficients and the basis of :func:`_project` (each row on its own)."""
+    es, ec, grow, phi_w, gram = parts
     a, b = coef[:, 0, None], coef[:, 1, None]
     columns = [tau * (a * ec - b * es), -tau * (a * es + b * ec)]  # d/d omega, sigma
     if grow is not None:
         columns.append(coef[:, 3, None] * tau * grow)  # d/d lambda
     J = np.stack(columns, axis=-1) * w[..., None]
     # Kaufman: the part of J the linear coefficients cannot follow
-    J = J - phi_w @ np.linalg.solve(gram, phi_wT @ J)
-    return coef, r, np.sum(r * r, axis=1), J
+    phi_wT = np.swapaxes(phi_w, 1, 2)
+    return J - phi_w @ np.linalg.solve(gram, phi_wT @ J)
 
 
 def levenberg_marquardt(
@@ -138,7 +150,7 @@ def levenberg_marquardt(
                 break
             idx = np.flatnonzero(active)
             JT = np.swapaxes(J[idx], 1, 2)
-            H = JT @ J[idx]
+            H = JT @ J[idx]  # two copies: NumPy forms A^T A of one buffer otherwise (syrk), rounding differently
             g = (JT @ r[idx][..., None])[..., 0]
             if kind == "two-mode":  # the extra mode held at a bound it presses against (active set)
                 lam = theta[idx, 2]
@@ -156,13 +168,16 @@ def levenberg_marquardt(
             trial = theta[idx] + step
             if kind == "two-mode":  # the extra mode stays where the record fit accepts it
                 trial[:, 2] = np.clip(trial[:, 2], *LAMBDA_BOUNDS)
-            coef2, r2, cost2, J2 = _project(kind, trial, y[idx], w[idx], tau)
+            coef2, r2, cost2, parts = _project(kind, trial, y[idx], w[idx], tau, jacobian=False)
             better = np.isfinite(cost2) & (cost2 <= cost[idx])
             predicted = -(2 * np.sum(g * step, axis=1) + np.einsum("bk,bkl,bl->b", step, H, step))
             gain = np.where(better, cost[idx] - cost2, predicted)
             small_step = np.max(np.abs(step) / (np.abs(theta[idx]) + 1e-6), axis=1) < LM_STEP
             good = idx[better]
-            theta[good], coef[good], r[good], J[good] = trial[better], coef2[better], r2[better], J2[better]
+            if good.size:  # the Jacobian only where the step is taken
+                kept = tuple(None if part is None else part[better] for part in parts)
+                J[good] = _kaufman(coef2[better], w[good], tau, kept)
+            theta[good], coef[good], r[good] = trial[better], coef2[better], r2[better]
             cost[good] = cost2[better]
             mu[idx] = np.where(better, mu[idx] / 3.0, mu[idx] * 4.0)
             # no weave left: less than half a cycle over the record (the fit then wanders off)

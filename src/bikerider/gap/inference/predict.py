@@ -209,29 +209,47 @@ class Predictor:
 
     def _match(self, ev: np.ndarray) -> np.ndarray:
         """The eigenvalue of each row's mode among a model's eigenvalues ``(..., S, n)``."""
-        ref = np.array([self._reference[k, _MODE_INDEX[m]] for k, m in enumerate(self.eigen.mode)])  # (S,)
+        ref, want_complex = self._match_reference()
         scale = 1e-9 * np.maximum(1.0, np.abs(ev).max(axis=-1, keepdims=True))
         upper = ev.imag > -scale
         oscillating = ev.imag > scale
-        ref_complex = np.abs(ref.imag) > 1e-9 * np.maximum(1.0, np.abs(ref))
-        is_weave = np.array([m == "weave" for m in self.eigen.mode])
-        want_complex = (is_weave & ref_complex)[:, None]
         allowed = np.where(want_complex, oscillating, upper)
         distance = np.abs(ev - ref[:, None]) + _PENALTY * ~allowed + _PENALTY * ~upper
         pick = np.argmin(distance, axis=-1)
         matched = np.take_along_axis(ev, pick[..., None], axis=-1)[..., 0]
         return matched.real + 1j * np.abs(matched.imag)
 
+    def _match_reference(self) -> tuple[np.ndarray, np.ndarray]:
+        """Each row's reference eigenvalue ``(S,)`` and whether an oscillating one is wanted ``(S, 1)``
+        (worked out once: the rows' modes are settled when the predictor is made)."""
+        if getattr(self, "_match_cache", None) is None:
+            ref = np.array([self._reference[k, _MODE_INDEX[m]] for k, m in enumerate(self.eigen.mode)])  # (S,)
+            ref_complex = np.abs(ref.imag) > 1e-9 * np.maximum(1.0, np.abs(ref))
+            is_weave = np.array([m == "weave" for m in self.eigen.mode])
+            self._match_cache = (ref, (is_weave & ref_complex)[:, None])
+        return self._match_cache
+
     def _predict_eigen(self, model: EffectModel, speed_scale=None) -> np.ndarray:
         return self._stack_eigen(self.eigenvalues(model, speed_scale))
 
     def _stack_eigen(self, matched: np.ndarray) -> np.ndarray:
-        cols = []
-        for k, mode in enumerate(self.eigen.mode):
-            cols.append(matched[..., k].real)
-            if mode == "weave":
-                cols.append(matched[..., k].imag)
-        return np.stack(cols, axis=-1)
+        """Observations ``(..., n_obs_eigen)`` of matched eigenvalues ``(..., S)``: each row's real part,
+        then a weave's imaginary part."""
+        if getattr(self, "_stack_cache", None) is None:
+            real, imag, weave, k = [], [], [], 0
+            for row, mode in enumerate(self.eigen.mode):
+                real.append(k)
+                k += 1
+                if mode == "weave":
+                    imag.append(k)
+                    weave.append(row)
+                    k += 1
+            self._stack_cache = (np.array(real, int), np.array(imag, int), np.array(weave, int), k)
+        real, imag, weave, n = self._stack_cache
+        out = np.empty(matched.shape[:-1] + (n,))
+        out[..., real] = matched.real
+        out[..., imag] = matched[..., weave].imag
+        return out
 
     def _predict_canonical(self, model: EffectModel) -> np.ndarray:
         identified = {}

@@ -48,6 +48,7 @@ from __future__ import annotations
 import itertools
 import logging
 import math
+from collections import OrderedDict
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
@@ -86,6 +87,8 @@ then moves by a small fraction of one."""
 MAX_BIAS_STEP = 0.2
 """Largest move of a fitted value in one step of the iterated bias correction, as a fraction of its
 search range (a longer Gauss-Newton step is shortened to it)."""
+MEMO_ELEMENTS = 1 << 20
+"""Most predicted numbers :meth:`GapProblem.predict_batch` keeps (8 MB), the most recently used."""
 
 
 @dataclass
@@ -193,6 +196,8 @@ class GapProblem:
         self.y = self.obs.value
         self.records = records
         self.record_obs = self._record_observations()
+        self._memo: OrderedDict[tuple, np.ndarray] = OrderedDict()
+        self._layouts: dict[tuple[str, ...], _Layout] = {}
         self.baseline = self.predict_models(self.nominal, {})[0]
         # each record row's extraction bias under the nominal model (apparent minus weave eigenvalue):
         # the starting offset of the fits' iterated bias correction, and the replicate scatter's reference
@@ -377,6 +382,13 @@ class GapProblem:
 
     # -- models ------------------------------------------------------------------------------------
     def layout(self, effects: tuple[str, ...]) -> _Layout:
+        """How the parameter vector of a set of effects maps onto the models (worked out once per set)."""
+        effects = tuple(effects)
+        if effects not in self._layouts:
+            self._layouts[effects] = self._new_layout(effects)
+        return self._layouts[effects]
+
+    def _new_layout(self, effects: tuple[str, ...]) -> _Layout:
         lay = _Layout(tuple(effects))
         grids = []
         for name in effects:
@@ -480,11 +492,64 @@ class GapProblem:
         return out
 
     def predict_batch(self, lay: _Layout, x: np.ndarray, indirect: bool = True) -> np.ndarray:
-        """Predictions ``(P, n_obs)`` for parameter vectors ``x`` ``(P, p)`` (see :meth:`predict_models`)."""
-        x = np.atleast_2d(x)
-        values, config, scale = self.configure(lay, x)
+        """Predictions ``(P, n_obs)`` for parameter vectors ``x`` ``(P, p)`` (see :meth:`predict_models`).
+
+        Each parameter vector's predictions are kept (:data:`MEMO_ELEMENTS` numbers at most, the most
+        recently used): the fits evaluate the same vectors again (a fold's fit starts where the fit to
+        all the data ended, a Jacobian at the point just evaluated), and a vector's predictions do
+        not depend on the others evaluated with it.  With ``indirect``, the weave eigenvalues come
+        from the same store and only the rows fitted from records are simulated.
+        """
+        x = np.atleast_2d(np.asarray(x, dtype=float))
+        if not indirect or self.records is None or not len(self.record_obs):
+            return self._memo_rows(lay, x, False, lambda X: self._predict_rows(lay, X, False))
+
+        def simulate(X: np.ndarray) -> np.ndarray:
+            base = self._memo_rows(lay, X, False, lambda Y: self._predict_rows(lay, Y, False))
+            values, config, scale = self.configure(lay, X)
+            try:
+                with np.errstate(all="ignore"):
+                    apparent = self.records.simulator.apparent(values, config, scale)
+            except np.linalg.LinAlgError:
+                return np.full((X.shape[0], len(self.obs)), np.nan)
+            out = np.array(np.broadcast_to(base, (max(base.shape[0], apparent.shape[0]), base.shape[1])))
+            out[:, self.record_obs[:, 0]] = apparent.real
+            out[:, self.record_obs[:, 1]] = apparent.imag
+            return out
+
+        return self._memo_rows(lay, x, True, simulate)
+
+    def _predict_rows(self, lay: _Layout, X: np.ndarray, indirect: bool) -> np.ndarray:
+        values, config, scale = self.configure(lay, X)
         out = self.predict_models(values, config, scale, indirect=indirect)
-        return np.broadcast_to(out, (x.shape[0], out.shape[-1]))
+        return np.broadcast_to(out, (X.shape[0], out.shape[-1]))
+
+    def _memo_rows(self, lay: _Layout, X: np.ndarray, indirect: bool, compute) -> np.ndarray:
+        """Rows of ``compute(X)`` ``(P, n_obs)``, each computed once per parameter vector (the store
+        of :meth:`predict_batch`); the vectors not yet in it are computed together in one call."""
+        memo = self._memo
+        keys = [(lay.effects, indirect, row.tobytes()) for row in X]
+        new = list(dict.fromkeys(k for k in keys if k not in memo))
+        if new:
+            first = {k: i for i, k in reversed(list(enumerate(keys)))}
+            rows = np.asarray(compute(X[[first[k] for k in new]]), dtype=float)
+            rows = np.broadcast_to(rows, (len(new), rows.shape[-1]))
+            limit = max(1, MEMO_ELEMENTS // max(rows.shape[-1], 1))
+            for k, row in zip(new, rows):
+                memo[k] = row.copy()
+            while len(memo) > limit:
+                memo.popitem(last=False)
+            fresh = dict(zip(new, rows))
+        else:
+            fresh = {}
+        out = np.empty((X.shape[0], len(self.obs)))
+        for i, k in enumerate(keys):
+            row = fresh.get(k)
+            if row is None:
+                row = memo[k]
+                memo.move_to_end(k)
+            out[i] = row
+        return out
 
     def z(self, prediction: np.ndarray) -> np.ndarray:
         """Residuals ``(prediction - y) / sqrt(data + model variance)``."""

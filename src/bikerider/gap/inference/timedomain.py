@@ -295,15 +295,31 @@ def simulate_friction(
     aug[..., :n, n] = b
     E = expm(aug * h)
     Phi, Gamma = E[..., :n, :n], E[..., :n, n]
-    T_c = np.asarray(T_c, dtype=float)[..., None]
-    x = np.array(x0, dtype=float)
-    out = np.empty(x.shape[:-1] + (N, n))
+    # The loop runs N * substeps times on small arrays: every system is a column of arrays whose
+    # last axis runs over the systems (state rows first), so each step is a few vectorised operations
+    # over all of them; the matrix-vector product by einsum over that layout.
+    minus_T = -np.asarray(T_c, dtype=float)[..., None]
+    x0 = np.asarray(x0, dtype=float)
+    shape = np.broadcast_shapes(x0.shape, Gamma.shape, Phi.shape[:-1], minus_T.shape)
+    lead = shape[:-1]
+    count = math.prod(lead)
+    phi = np.ascontiguousarray(np.moveaxis(np.broadcast_to(Phi, lead + (n, n)).reshape(count, n, n), 0, -1))
+    gamma = np.ascontiguousarray(np.broadcast_to(Gamma, shape).reshape(count, n).T)  # (n, count)
+    torque = np.broadcast_to(minus_T, lead + (1,)).reshape(count)
+    x = np.ascontiguousarray(np.broadcast_to(x0, shape).reshape(count, n).T)  # (n, count)
+    out = np.empty((N, n, count))
+    u = np.empty(count)
+    push = np.empty((n, count))
     for k in range(N):
-        out[..., k, :] = x
+        out[k] = x
         for _ in range(substeps):
-            u = -T_c * np.tanh(x[..., rate_index : rate_index + 1] / SMOOTHING)
-            x = np.einsum("...ij,...j->...i", Phi, x) + Gamma * u
-    return out
+            np.divide(x[rate_index], SMOOTHING, out=u)
+            np.tanh(u, out=u)
+            np.multiply(torque, u, out=u)
+            np.multiply(gamma, u, out=push)
+            x = np.einsum("ijb,jb->ib", phi, x)
+            x += push
+    return np.moveaxis(out, -1, 0).reshape(lead + (N, n))
 
 
 def _residuals(batch: Batch, states: np.ndarray, outputs: tuple[int, ...]) -> tuple[np.ndarray, dict[str, np.ndarray]]:

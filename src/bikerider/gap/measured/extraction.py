@@ -254,10 +254,10 @@ def weave_eigenvalue(time, signal, *, min_cycles: float = MIN_CYCLES) -> WeaveEs
 
 def _weave_eigenvalue(time, signal, min_cycles: float) -> WeaveEstimate:
     from scipy.optimize import least_squares
-    from scipy.stats import f as f_dist
 
     from bikerider.errors import FitError
     from bikerider.fitting.damped_oscillation import MIN_SAMPLES, fit_damped_oscillation
+    from bikerider.gap.distributions import f as f_dist
 
     t = np.asarray(time, dtype=float)
     y = np.asarray(signal, dtype=float)

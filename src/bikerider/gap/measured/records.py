@@ -30,6 +30,7 @@ from bikerider.gap.measured.control import ControlLaw
 from bikerider.gap.measured.extraction import WeaveEstimate, weave_eigenvalue
 from bikerider.gap.measured.repair import repair_record
 from bikerider.gap.measured.tables import EigenvalueData
+from bikerider.gap.parallel import MIN_RECORDS, map_forked
 
 LOG = logging.getLogger(__name__)
 
@@ -209,15 +210,17 @@ def fit_record(record: Record) -> RecordFit:
 
 def fit_records(records: list[Record]) -> list[RecordFit]:
     """Fit every record (see :func:`fit_record`); logs one line per record left out."""
-    fits = []
     if records:
         progress.begin("fitting records", len(records), "records")
-    for record in records:
-        fit = fit_record(record)
-        progress.advance()
+    # independent fits, one per core (the same results); each keeps the caller's record object
+    fits = [
+        replace(fit, record=record)
+        for record, fit in zip(records, map_forked(fit_record, records, min_items=MIN_RECORDS))
+    ]
+    progress.advance(len(records))
+    for record, fit in zip(records, fits):
         if not fit.used:
             LOG.info("%s left out: %s", record.name, fit.reason)
-        fits.append(fit)
     return fits
 
 

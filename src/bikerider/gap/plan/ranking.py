@@ -68,6 +68,7 @@ import numpy as np
 
 from bikerider.engine import DifferencedStage
 from bikerider.errors import FitError, InputError
+from bikerider.gap.blas_threads import single_blas_thread
 from bikerider.gap.candidates.effect_model import EffectModel
 from bikerider.gap.candidates.effects import TIME_DOMAIN_EFFECTS
 from bikerider.gap.inference.indirect import LAMBDA_BOUNDS, RecordSimulator, comparable, levenberg_marquardt
@@ -85,6 +86,7 @@ from bikerider.gap.measured.extraction import (
 )
 from bikerider.gap.measured.records import SIGNALS, Record, RecordFit, eigenvalues_of
 from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
+from bikerider.gap.parallel import map_forked, workers
 from bikerider.gap.plan.sweeps import (
     DEFAULT_RUN_TIME,
     DEFAULT_SAMPLE_RATE,
@@ -246,6 +248,7 @@ class NextExperiment:
     run_time: float = DEFAULT_RUN_TIME
     distortion: float | None = None
 
+    @single_blas_thread
     def __post_init__(self):
         d = self.diagnosis
         self.problem = d.problem
@@ -353,17 +356,26 @@ class NextExperiment:
         self.signal_fits: dict[str, list] = {}
         if self.records:
             d = self.diagnosis
+            held = {
+                name: [d.records[k].record for k in d.record_rows if name in d.records[k].record.signals]
+                for name in SIGNALS
+            }
+            # every record's fit of every signal: the diagnosis's own where it fitted the signal (the same
+            # call), the others fitted one per core
+            scatter = {n: [x for x in (signal_noise(r.signals[n]) for r in held[n]) if x > 0] for n in SIGNALS}
+            own = {(id(d.records[k].record), n): f for k in d.record_rows for n, f in d.records[k].fits.items()}
+            todo = [(n, r) for n in SIGNALS if scatter[n] for r in held[n] if (id(r), n) not in own]
+            fitted = map_forked(lambda item: record_fit(item[1].time, item[1].signals[item[0]]), todo)
+            own.update({(id(r), n): f for (n, r), f in zip(todo, fitted)})
             for name in SIGNALS:
-                held = [d.records[k].record for k in d.record_rows if name in d.records[k].record.signals]
-                scatter = [x for x in (signal_noise(r.signals[name]) for r in held) if x > 0]
-                if not scatter:
+                if not scatter[name]:
                     continue
-                fits = [(r.speed, record_fit(r.time, r.signals[name])) for r in held]
+                fits = [(r.speed, own[(id(r), name)]) for r in held[name]]
                 self.signal_fits[name] = [(v, f) for v, f in fits if f is not None]
                 left = [f.residual_rms for _, f in self.signal_fits[name]]
-                values[name] = max(float(np.median(scatter)), float(np.median(left)) if left else 0.0)
+                values[name] = max(float(np.median(scatter[name])), float(np.median(left)) if left else 0.0)
                 source[name] = (
-                    f"the data's records: the larger of their sample-to-sample scatter ({np.median(scatter):.2g}) "
+                    f"the data's records: the larger of their sample-to-sample scatter ({np.median(scatter[name]):.2g}) "
                     "and what their own fits leave ("
                     + (f"{np.median(left):.2g}, RMS residual over {len(left)} records" if left else "no fit")
                     + ")"
@@ -515,18 +527,26 @@ class NextExperiment:
         p = self.problem
         self.mean = np.zeros((len(self.rivals), n), complex)
         self.own_cov = np.zeros((len(self.rivals), n, 2, 2))
+        base = self._reference_points()
+        # independent pieces, one per core: each rival's prediction at its fit and at its secants' points
+        # (a linear rival's points in chunks: each point's prediction is its own), and the nominal
+        # parameters' uncertainty as the diagnosis carries it
+        jobs: list[tuple[int, np.ndarray | None]] = []
+        secants = {}
         for k, rival in enumerate(self.rivals):
-            fit = rival.fit
-            self.mean[k] = self._predict_rival(rival, fit.values[None, :])[0]
-            if not fit.names:
-                continue
-            J, cov = _secants(fit, lambda X, rival=rival: _split(self._predict_rival(rival, X)))
-            J = J.reshape(2, n, -1)  # per unit of each value
-            self.own_cov[k] = np.einsum("anj,jk,bnk->nab", J, cov, J)
-        # the nominal parameters' uncertainty, as the diagnosis carries it
-        self.model_cov = np.zeros((n, 2, 2))
+            jobs.append((k, rival.fit.values[None, :]))
+            if rival.fit.names:
+                X, width, cov = _secant_points(rival.fit)
+                secants[k] = (width, cov, len(jobs))
+                size = len(X) if rival.nonlinear else max(4, -(-len(X) // (2 * workers())))
+                jobs += [(k, X[lo : lo + size]) for lo in range(0, len(X), size)]
         if p.free:
-            base = self._reference_points()
+            jobs.append((-1, None))
+
+        def task(job):
+            k, X = job
+            if k >= 0:
+                return self._predict_rival(self.rivals[k], X)
             stage = DifferencedStage(
                 "nominal parameters",
                 lambda v: _split(self._predict_linear((), np.zeros((np.size(next(iter(v.values()))), 0)), v, base)),
@@ -536,7 +556,22 @@ class NextExperiment:
                 batched=True,
             )
             J = (stage.jacobian({k: p.nominal[k] for k in p.free}) * p.free_sigma).reshape(2, len(base), -1)
-            cov = np.einsum("anj,bnj->nab", J, J)
+            return np.einsum("anj,bnj->nab", J, J)
+
+        order = sorted(range(len(jobs)), key=lambda j: -(0 if jobs[j][1] is None else len(jobs[j][1])))
+        done = dict(zip(order, map_forked(task, [jobs[j] for j in order])))
+        results = [done[j] for j in range(len(jobs))]
+        for k, rival in enumerate(self.rivals):
+            first = next(j for j, job in enumerate(jobs) if job[0] == k)
+            self.mean[k] = results[first][0]
+            if k in secants:
+                width, cov, start = secants[k]
+                pred = np.concatenate([results[j] for j in range(start, len(jobs)) if jobs[j][0] == k])
+                J = _secant_slopes(_split(pred), width).reshape(2, n, -1)  # per unit of each value
+                self.own_cov[k] = np.einsum("anj,jk,bnk->nab", J, cov, J)
+        self.model_cov = np.zeros((n, 2, 2))
+        if p.free:
+            cov = results[-1]
             index = {(e.speed, e.law): m for m, e in enumerate(base)}
             for m, e in enumerate(self.points):
                 self.model_cov[m] = cov[index[(e.speed, e.law)]]
@@ -1164,6 +1199,13 @@ def _secants(fit: EffectFit, predict) -> tuple[np.ndarray, np.ndarray]:
     secants over +-1 standard deviation kept inside the search bounds (a tyre's relaxation length or an
     inertia stepped below zero would be no model at all), so not by the engine's central differences.
     """
+    X, width, cov = _secant_points(fit)
+    return _secant_slopes(predict(X), width), cov
+
+
+def _secant_points(fit: EffectFit) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The ``2 p`` fitted-value vectors of :func:`_secants` (each value up, then down), the secants'
+    widths and the values' covariance."""
     span = (fit.upper - fit.lower) / math.sqrt(12)
     cov = _bounded_covariance(fit, span)
     sigma = np.sqrt(np.diag(cov))
@@ -1173,9 +1215,13 @@ def _secants(fit: EffectFit, predict) -> tuple[np.ndarray, np.ndarray]:
     X = np.repeat(fit.values[None, :], 2 * fit.values.size, axis=0)
     for j in range(fit.values.size):
         X[2 * j, j], X[2 * j + 1, j] = up[j], down[j]
-    pred = predict(X)  # (2 p, m)
     width = np.where(up > down, up - down, np.inf)
-    return ((pred[0::2] - pred[1::2]) / width[:, None]).T, cov
+    return X, width, cov
+
+
+def _secant_slopes(pred: np.ndarray, width: np.ndarray) -> np.ndarray:
+    """Slopes ``(m, p)`` from the predictions ``(2 p, m)`` at :func:`_secant_points`."""
+    return ((pred[0::2] - pred[1::2]) / width[:, None]).T
 
 
 def _bounded_covariance(fit: EffectFit, span: np.ndarray) -> np.ndarray:

@@ -1,0 +1,167 @@
+"""Independent pieces of the diagnosis and the plan at once, one per core (forked worker processes).
+
+The diagnosis cross-validates every candidate, then every pair, each on its own: a fit to all the
+data and one per held-out fold.  Those are independent of each other, so
+:func:`cross_validate_all` hands them to worker processes, forked from the process that holds the
+diagnosis (the data, the fitted nominal model and the fits made so far are shared, not copied),
+and takes back each one's :class:`~bikerider.gap.diagnosis.CrossValidation` and the full-data fits
+it made.  Every computation is the same as in one process (the order of the work changes nothing:
+each fit depends only on its own candidate), so the results are identical; the time is shared
+among the cores.
+
+:func:`map_forked` does the same for any list of independent tasks (the plan's record fits and its
+rivals' predictions).
+
+Workers: one per core the process may use, or ``$BIKERIDER_GAP_WORKERS`` (``1``: everything in the
+one process).  Worker processes are used only where ``fork`` exists (Linux) and not from inside a
+worker process of another pool.
+"""
+
+from __future__ import annotations
+
+import gc
+import logging
+import multiprocessing
+import os
+import signal
+import sys
+
+from bikerider import progress
+from bikerider.errors import InputError
+from bikerider.gap.blas_threads import limit_to_one_thread
+
+LOG = logging.getLogger(__name__)
+WORKERS_ENV = "BIKERIDER_GAP_WORKERS"
+"""Environment variable: how many worker processes the diagnosis may use (``1``: none)."""
+
+MIN_OBSERVATIONS = 100
+"""Without records, the fewest observations for which the candidates are cross-validated on workers
+(below it a candidate takes about as long as starting the workers)."""
+MIN_RECORDS = 8
+"""The fewest records fitted on workers (a record fit takes a few hundredths of a second)."""
+
+_DIAGNOSIS = None
+"""The diagnosis the forked workers work on (set just before they are forked)."""
+_TASK = None
+"""The function :func:`map_forked`'s workers call (set just before they are forked)."""
+
+
+def workers() -> int:
+    """Worker processes to use: ``$BIKERIDER_GAP_WORKERS`` or the cores this process may run on."""
+    value = os.environ.get(WORKERS_ENV, "").strip()
+    if value:
+        try:
+            count = int(value)
+        except ValueError:
+            count = 0
+        if count < 1:
+            raise InputError(WORKERS_ENV, value, "a whole number of worker processes, 1 or more (1: no workers)")
+        return count
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        return os.cpu_count() or 1
+
+
+def _can_fork(count: int) -> bool:
+    return (
+        count >= 2
+        and sys.platform.startswith("linux")
+        and "fork" in multiprocessing.get_all_start_methods()
+        and not multiprocessing.current_process().daemon
+    )
+
+
+def _call(item):
+    return _TASK(item)
+
+
+def map_forked(function, items, min_items: int = 2) -> list:
+    """``[function(item) for item in items]``, the calls shared among worker processes (forked, so
+    ``function`` may be any callable, a closure included; the items and results are pickled).
+
+    In the one process when there are fewer than two workers, fewer than ``min_items`` items (work
+    too small to pay for starting the workers, about a tenth of a second), or no ``fork``.
+    """
+    global _TASK
+    items = list(items)
+    count = min(workers(), len(items))
+    if len(items) < min_items or not _can_fork(count):
+        return [function(item) for item in items]
+    _TASK = function
+    try:
+        pool = _pool(count)
+        if pool is None:
+            return [function(item) for item in items]
+        with pool:
+            return pool.map(_call, items, chunksize=1)
+    finally:
+        _TASK = None
+        gc.unfreeze()
+
+
+def _cost(effects: tuple[str, ...]) -> int:
+    """A rough rank of a candidate's cost, to start the longest first (time-domain fits, then the
+    fits with many values)."""
+    return 4 * ("steer_friction" in effects) + 2 * ("parameters" in effects) + ("tyre_slip" in effects) + len(effects)
+
+
+def _start_worker() -> None:
+    # the parent process handles Ctrl-C (and ends the workers); a worker stops without a traceback
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    limit_to_one_thread()  # one BLAS thread per worker: the workers share the cores
+
+
+def _pool(count: int):
+    """A pool of ``count`` forked workers, or ``None`` where the system cannot make one (no shared
+    memory for its locks, a process limit): the work then runs in this process."""
+    try:
+        # the objects made so far stay out of the workers' garbage collection: it would touch (and so
+        # copy) every page they share with this process
+        gc.freeze()
+        return multiprocessing.get_context("fork").Pool(count, initializer=_start_worker)
+    except OSError as exc:
+        LOG.info("no worker processes (%s): working in one process", exc)
+        return None
+
+
+def _work(effects: tuple[str, ...]):
+    d = _DIAGNOSIS
+    known_full, known_timed = set(d.full_fits), set(d._time_domain_full)
+    result = d.cross_validate(effects)
+    full = {k: v for k, v in d.full_fits.items() if k not in known_full}
+    timed = {k: v for k, v in d._time_domain_full.items() if k not in known_timed}
+    return effects, result, full, timed
+
+
+def cross_validate_all(diagnosis, effect_sets) -> None:
+    """Cross-validate ``effect_sets`` (tuples of effect names) of ``diagnosis`` on worker processes.
+
+    Fills the diagnosis's caches (``cv``, ``full_fits``, its time-domain fits) as its own
+    ``cross_validate`` would; with fewer than two workers or sets to do, does nothing (the
+    diagnosis then works them out one by one when it asks for them).
+    """
+    global _DIAGNOSIS
+    todo = [tuple(e) for e in dict.fromkeys(tuple(e) for e in effect_sets) if tuple(e) not in diagnosis.cv]
+    count = min(workers(), len(todo))
+    # workers pay where the candidates are costly: records (each fit simulates them) or many observations
+    if not _can_fork(count) or not (diagnosis.record_rows or len(diagnosis.problem.obs) >= MIN_OBSERVATIONS):
+        return
+    todo.sort(key=_cost, reverse=True)
+    LOG.debug("cross-validating %d candidate sets on %d worker processes", len(todo), count)
+    _DIAGNOSIS = diagnosis
+    try:
+        pool = _pool(count)
+        if pool is None:
+            return
+        with pool:
+            for effects, result, full, timed in pool.imap_unordered(_work, todo):
+                diagnosis.cv[effects] = result
+                progress.advance(len(result.folds))  # in the parent: the workers' own counts are not seen
+                for key, fit in full.items():
+                    diagnosis.full_fits.setdefault(key, fit)
+                for key, fit in timed.items():
+                    diagnosis._time_domain_full.setdefault(key, fit)
+    finally:
+        _DIAGNOSIS = None
+        gc.unfreeze()
