@@ -236,3 +236,25 @@ def test_any_damage_ends_in_a_used_record_or_a_reason(seed, n, jitter, drop, hol
         assert math.isfinite(fit.estimate.eigenvalue.real) and math.isfinite(fit.estimate.real_sigma)
     else:
         assert fit.reason
+
+
+@pytest.mark.parametrize("count", ["1", "2"])
+def test_records_fitted_on_worker_processes_keep_their_repairs(clean, monkeypatch, count):
+    """fit_records with worker processes keeps the caller's record objects; a repaired record must stay
+    the repaired one (the damaged SBW copy was refused as "not uniformly sampled" when the fits came back
+    holding the caller's unrepaired record)."""
+    from bikerider.gap import parallel
+
+    monkeypatch.setenv(parallel.WORKERS_ENV, count)
+    t, y = clean
+    rng = np.random.default_rng(7)
+    jittered = t + rng.uniform(-0.0005, 0.0005, t.size)
+    records = [_record(jittered, y, f"jittered {k}") for k in range(parallel.MIN_RECORDS)]
+    records.append(_record(t, y, "clean"))
+    fits = fit_records(records)
+    for record, fit in zip(records[:-1], fits[:-1]):
+        assert fit.used, fit.reason
+        assert fit.record.repairs and fit.record is not record
+        steps = np.diff(fit.record.time)
+        assert np.allclose(steps, steps[0])  # uniformly sampled, as the comparison with models needs
+    assert fits[-1].record is records[-1]  # unrepaired: the caller's own object

@@ -212,9 +212,10 @@ def fit_records(records: list[Record]) -> list[RecordFit]:
     """Fit every record (see :func:`fit_record`); logs one line per record left out."""
     if records:
         progress.begin("fitting records", len(records), "records")
-    # independent fits, one per core (the same results); each keeps the caller's record object
+    # independent fits, one per core (the same results); each keeps the caller's record object, unless
+    # the fit holds the record as repaired (its samples then differ from the caller's)
     fits = [
-        replace(fit, record=record)
+        fit if fit.record.repairs else replace(fit, record=record)
         for record, fit in zip(records, map_forked(fit_record, records, min_items=MIN_RECORDS))
     ]
     progress.advance(len(records))
