@@ -14,8 +14,8 @@ from scipy import stats
 
 from bikerider.errors import InputError
 from bikerider.gap import blas_threads, distributions, parallel
-from bikerider.gap.diagnosis import diagnose
-from bikerider.gap.records import fit_records
+from bikerider.gap.diagnosis.result import diagnose
+from bikerider.gap.measured.records import fit_records
 from bikerider.io.gap_data import read_eigenvalues, read_perturbation
 from bikerider.io.gap_model import load_model
 

@@ -4,7 +4,7 @@ The diagnosis cross-validates every candidate, then every pair, each on its own:
 data and one per held-out fold.  Those are independent of each other, so
 :func:`cross_validate_all` hands them to worker processes, forked from the process that holds the
 diagnosis (the data, the fitted nominal model and the fits made so far are shared, not copied),
-and takes back each one's :class:`~bikerider.gap.diagnosis.CrossValidation` and the full-data fits
+and takes back each one's :class:`~bikerider.gap.diagnosis.result.CrossValidation` and the full-data fits
 it made.  Every computation is the same as in one process (the order of the work changes nothing:
 each fit depends only on its own candidate), so the results are identical; the time is shared
 among the cores.
@@ -100,12 +100,6 @@ def map_forked(function, items, min_items: int = 2) -> list:
         gc.unfreeze()
 
 
-def _cost(effects: tuple[str, ...]) -> int:
-    """A rough rank of a candidate's cost, to start the longest first (time-domain fits, then the
-    fits with many values)."""
-    return 4 * ("steer_friction" in effects) + 2 * ("parameters" in effects) + ("tyre_slip" in effects) + len(effects)
-
-
 def _start_worker() -> None:
     # the parent process handles Ctrl-C (and ends the workers); a worker stops without a traceback
     signal.signal(signal.SIGINT, signal.SIG_IGN)
@@ -134,12 +128,13 @@ def _work(effects: tuple[str, ...]):
     return effects, result, full, timed
 
 
-def cross_validate_all(diagnosis, effect_sets) -> None:
+def cross_validate_all(diagnosis, effect_sets, cost=len) -> None:
     """Cross-validate ``effect_sets`` (tuples of effect names) of ``diagnosis`` on worker processes.
 
     Fills the diagnosis's caches (``cv``, ``full_fits``, its time-domain fits) as its own
     ``cross_validate`` would; with fewer than two workers or sets to do, does nothing (the
     diagnosis then works them out one by one when it asks for them).
+    ``cost`` ranks a set's expected cost (the costliest start first).
     """
     global _DIAGNOSIS
     todo = [tuple(e) for e in dict.fromkeys(tuple(e) for e in effect_sets) if tuple(e) not in diagnosis.cv]
@@ -147,7 +142,7 @@ def cross_validate_all(diagnosis, effect_sets) -> None:
     # workers pay where the candidates are costly: records (each fit simulates them) or many observations
     if not _can_fork(count) or not (diagnosis.record_rows or len(diagnosis.problem.obs) >= MIN_OBSERVATIONS):
         return
-    todo.sort(key=_cost, reverse=True)
+    todo.sort(key=cost, reverse=True)  # the costliest first: the pool ends together
     LOG.debug("cross-validating %d candidate sets on %d worker processes", len(todo), count)
     _DIAGNOSIS = diagnosis
     try:

@@ -722,7 +722,7 @@ class Diagnosis:
 
     def _rank(self) -> None:
         progress.begin("candidates", len(self.candidates) * len(self.folds), "fold fits")
-        cross_validate_all(self, [(e,) for e in self.candidates])  # on every core; the same results
+        cross_validate_all(self, [(e,) for e in self.candidates], _fit_cost)  # on every core; the same results
         results = [self.cross_validate((e,)) for e in self.candidates]
         for rank, (r, ties) in enumerate(self._order(results), start=1):
             self.ranking.append(
@@ -764,7 +764,7 @@ class Diagnosis:
         self.pairs = []
         pairs = self.pair_candidates()
         progress.begin("pairs", len(pairs) * len(self.folds), "fold fits")
-        cross_validate_all(self, pairs)  # on every core; the same results
+        cross_validate_all(self, pairs, _fit_cost)  # on every core; the same results
         for pair in pairs:
             r = self.cross_validate(pair)
             self.pairs.append(r)
@@ -1266,6 +1266,12 @@ def arm_inertia(problem: GapProblem, m_arm: float) -> float:
     axis = np.array([math.sin(lam), 0.0, math.cos(lam)])
     perp = rel - (rel @ axis) * axis
     return float(m_arm * (perp @ perp))
+
+
+def _fit_cost(effects: tuple[str, ...]) -> int:
+    """A rough rank of a candidate's cost, to start the longest first on the worker processes: fits in
+    the time domain, then the benchmark parameters' shifts, then more effects."""
+    return 4 * any(e in TIME_DOMAIN_EFFECTS for e in effects) + 2 * ("parameters" in effects) + len(effects)
 
 
 def _data_only_cell(problem: GapProblem, idx: list[int], alpha: float) -> dict:

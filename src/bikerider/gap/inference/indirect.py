@@ -1,6 +1,6 @@
 """Indirect inference on records: what the record fit finds in a model's own response over each record.
 
-A record's weave eigenvalue is what :func:`bikerider.gap.extraction.weave_eigenvalue` finds in a
+A record's weave eigenvalue is what :func:`bikerider.gap.measured.extraction.weave_eigenvalue` finds in a
 short decay that also holds the castor and slow modes and the control's action.  A model's
 prediction of that observation is therefore not its weave eigenvalue but what the *same* fit finds
 in the model's own response over the record's window, from the initial state fitted to the record
@@ -17,14 +17,14 @@ records in one batched computation:
   state, so the output rows ``C Phi(t_k)`` follow by repeated multiplication);
 * each record's initial state, and a constant offset per signal, by linear least squares on the
   record's signals (roll rate and steer angle where logged), each weighted by its scatter over the
-  record, as in :func:`bikerider.gap.timedomain.initial_states`;
+  record, as in :func:`bikerider.gap.inference.timedomain.initial_states`;
 * the simulated signals from that state, fitted by batched least squares of the same model (two-mode
   or plain, as the record's own fit) started from the record's own fit (variable projection with
   Levenberg-Marquardt steps; ``tests/test_gap_indirect.py`` holds it to SciPy's least squares one
   record at a time); signals combined with the weights of the record's own fit.
 
 :func:`extract` is the last step alone, for responses simulated otherwise (the nonlinear friction
-of :mod:`bikerider.gap.timedomain`), so every candidate's apparent eigenvalue comes from one
+of :mod:`bikerider.gap.inference.timedomain`), so every candidate's apparent eigenvalue comes from one
 extraction.  Where the extraction finds no weave in a model's response (a fit that leaves the
 range the record fit accepts), the prediction is NaN.
 """
@@ -60,7 +60,7 @@ is then settled far below any record's standard error)."""
 
 
 # ---------------------------------------------------------------------------------------------
-# The extraction models (as bikerider.gap.extraction), batched, by variable projection
+# The extraction models (as bikerider.gap.measured.extraction), batched, by variable projection
 # ---------------------------------------------------------------------------------------------
 # Both models are linear in four of their parameters (amplitudes, offset, the extra mode's amplitude
 # or the drift) given the others (frequency, decay, the extra mode's eigenvalue).  The batched fit
@@ -69,7 +69,7 @@ is then settled far below any record's standard error)."""
 # the near-degenerate directions of offset and slow mode.
 LAMBDA_BOUNDS = (EXTRA_MODE_RANGE[0] + 1e-6, EXTRA_MODE_RANGE[1] - 1e-6)
 """The two-mode fit's extra real mode is kept inside the range the record fit accepts
-(:data:`bikerider.gap.extraction.EXTRA_MODE_RANGE`): the same estimator on data and on models (the
+(:data:`bikerider.gap.measured.extraction.EXTRA_MODE_RANGE`): the same estimator on data and on models (the
 model's response could otherwise lend the extra exponential to its faster castor mode)."""
 NONLINEAR = {"two-mode": (0, 1, 6), "plain": (0, 1)}
 """Positions of the nonlinear parameters in each model's parameter vector."""
@@ -128,7 +128,7 @@ def levenberg_marquardt(
     steps in the nonlinear parameters, Marquardt's scaling and one damping factor per row.  A row
     stops when the reduction a step achieves, or the linearised model predicts for it, is below
     :data:`LM_TOLERANCE` of the signal's sum of squares, or the step below :data:`LM_STEP` relative.
-    A row whose frequency falls below half a cycle over its samples (:data:`bikerider.gap.extraction.
+    A row whose frequency falls below half a cycle over its samples (:data:`bikerider.gap.measured.extraction.
     MIN_CYCLES`: the response holds no weave the record fit would accept) stops there and is NaN.
     Returns the full parameter vectors (in the model's order) and the residual sums of squares
     (``inf`` where the fit broke down).
@@ -254,7 +254,7 @@ class RecordBatch:
 def fit_weights(fit: RecordFit) -> list[tuple[str, complex]]:
     """The signals a record's eigenvalue came from and their weights (real part + i imaginary part).
 
-    Inverse-variance weights of the record's own fits where :func:`bikerider.gap.records.combine_fits`
+    Inverse-variance weights of the record's own fits where :func:`bikerider.gap.measured.records.combine_fits`
     combined them, else the first signal alone: a model's apparent eigenvalue combines its refits
     with the same weights, so it is a smooth function of the model.
     """
@@ -366,7 +366,7 @@ class RecordSimulator:
     def closed_loop(self, values: dict, config: dict, scale, index: np.ndarray) -> tuple[np.ndarray, tuple]:
         """Closed-loop ``A (P, R, n, n)`` of records ``index`` for batched linear models.
 
-        ``values`` and ``config`` as :class:`bikerider.gap.models.EffectModel` takes them, each value
+        ``values`` and ``config`` as :class:`bikerider.gap.candidates.effect_model.EffectModel` takes them, each value
         a number or an array of ``P`` (shape ``(P,)`` or ``(P, 1)``); ``scale`` ``None``, ``(P,)`` (the
         speed of the records a sensor read) or ``(P, R_all)`` (every record's own, e.g. for the
         speed's uncertainty).  The control gains stay those of the recorded speed.
@@ -420,7 +420,7 @@ class RecordSimulator:
     def apparent_time_domain(self, layout, theta) -> np.ndarray:
         """Apparent eigenvalue of every record ``(P, R)`` under a time-domain candidate (steer friction).
 
-        The response comes from :func:`bikerider.gap.timedomain.friction_states` (each record's
+        The response comes from :func:`bikerider.gap.inference.timedomain.friction_states` (each record's
         initial state refitted under the nonlinear model), the extraction is :func:`extract`, as for
         every linear model.
         """

@@ -1,6 +1,6 @@
 """Chi-square of residuals whose covariance is a diagonal plus a low-rank part, in linear time.
 
-The gap test of :mod:`bikerider.gap.diagnosis` weighs the residuals ``r`` (measured minus model) by
+The gap test of :mod:`bikerider.gap.diagnosis.result` weighs the residuals ``r`` (measured minus model) by
 their combined covariance ``C = D + J J^T``: ``D`` diagonal (the data's variances), ``J`` the
 model's slopes per standard uncertainty of each of its ``p`` free parameters (``n x p``, ``p``
 about 25).  Forming ``C`` costs ``n^2`` memory and solving with it ``n^3`` time; instead

@@ -15,7 +15,7 @@ Uncertainties.  Each measured scalar ``y_i`` has
 Rows fitted from records.  A record's value is what the record fit finds in a short decay, and
 every model predicts it by indirect inference: what the same fit finds in the model's own response
 over the record's window from the record's initial state fitted under that model
-(:mod:`bikerider.gap.indirect`).  The data, the nominal model (``baseline``, the gap map and test),
+(:mod:`bikerider.gap.inference.indirect`).  The data, the nominal model (``baseline``, the gap map and test),
 the parameters' and the speed's uncertainties and every held-out prediction use it.  Fits use
 *iterated bias correction*: a model's weave eigenvalues plus a fixed extraction bias are fitted
 (fast; the first bias is the nominal model's, the correction issue 11 applied to every candidate
@@ -449,7 +449,7 @@ class GapProblem:
         ``values`` and ``config`` as :class:`EffectModel` takes them (arrays of a leading size ``P``);
         ``scale`` a speed scale per model for the rows a sensor read (``speed_sensor``); ``row_scale`` a
         speed scale per eigenvalue row (the speed's uncertainty).  With ``indirect`` (the default), the
-        rows fitted from records are predicted by indirect inference (:mod:`bikerider.gap.indirect`):
+        rows fitted from records are predicted by indirect inference (:mod:`bikerider.gap.inference.indirect`):
         what the record fit finds in each model's own response over the record; otherwise by the
         models' weave eigenvalues.
         """

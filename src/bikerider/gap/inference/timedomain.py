@@ -4,7 +4,7 @@
   record's signals by linear least squares for a linear closed-loop model (the response is linear
   in the initial state), each signal weighted by its own scatter over the record.  What the record
   fit finds in a model's response from that state (the record's *apparent* eigenvalue under the
-  model, and the fit's bias) is :mod:`bikerider.gap.indirect`'s.
+  model, and the fit's bias) is :mod:`bikerider.gap.inference.indirect`'s.
 
 Nonlinear steer friction, ``T = -T_coulomb tanh(deltad / eps) - c_viscous deltad`` on the steer
 axis, is fitted in the time domain (:func:`fit_time_domain`): the closed-loop bicycle (nominal
@@ -18,7 +18,7 @@ would need shorter steps for no gain at the steer rates of these records.  Each 
 state is refitted for every trial friction (linear least squares, then Gauss-Newton steps on the
 nonlinear response).  The friction's prediction of a record's eigenvalue is what the record fit
 finds in the simulated response (indirect inference, as for every candidate; amplitude-dependent as
-friction is: :meth:`bikerider.gap.indirect.RecordSimulator.apparent_time_domain`).
+friction is: :meth:`bikerider.gap.inference.indirect.RecordSimulator.apparent_time_domain`).
 """
 
 from __future__ import annotations

@@ -28,9 +28,9 @@ errors).  When a fast-growing capsize mode (a fall) swamps the record, the plain
 the two-mode fit alone finds the weave.  Records should start after the perturbation.
 
 Every refusal is a :class:`~bikerider.errors.FitError` whose message says why; the records of an
-experiment turn it into the record's reason for being left out (:mod:`bikerider.gap.records`).
+experiment turn it into the record's reason for being left out (:mod:`bikerider.gap.measured.records`).
 A model's own response over a record is fitted the same way, batched, by
-:mod:`bikerider.gap.indirect` (indirect inference).
+:mod:`bikerider.gap.inference.indirect` (indirect inference).
 """
 
 from __future__ import annotations
@@ -102,7 +102,7 @@ EXTRA_MODE_RANGE = (-6.0, 2.0)
 """Real eigenvalues accepted for the extra mode [1/s]: a bicycle's capsize mode lies well inside;
 outside it the exponential merely fits the noise at one end of the record.  A fit whose extra mode
 runs outside (and no plain fit to fall back on) is refitted with the mode held inside the range, as
-a person would fit the record (and as :mod:`bikerider.gap.indirect` fits every model's response),
+a person would fit the record (and as :mod:`bikerider.gap.inference.indirect` fits every model's response),
 rather than left out."""
 PLAIN_START_MODES = (-1.5, -0.3, 0.3)
 """Extra-mode eigenvalues tried when the two-mode fit starts from the plain fit [1/s]."""

@@ -19,7 +19,7 @@ samples, scaled), with each signal's noise (the larger of its records' sample-to
 :func:`signal_noise`, and what their own fits leave, :func:`fit_residual`), and fitted as a record is fitted
 (the record fit's two-mode function, started from the nominal model's eigenvalues, judged by the record
 fit's acceptance rules); every rival predicts it by indirect inference (the same
-fit applied to the rival's own response over the template, :mod:`bikerider.gap.indirect`; the
+fit applied to the rival's own response over the template, :mod:`bikerider.gap.inference.indirect`; the
 nonlinear friction by its simulated response).  A template the record fit cannot fit, or whose fit
 the nominal model's own response bends by more than 20 %, is not a measurement the diagnosis could
 use, and is left out of the plan with its reason.
@@ -214,7 +214,7 @@ class NextExperiment:
 
     Parameters
     ----------
-    diagnosis : bikerider.gap.diagnosis.Diagnosis
+    diagnosis : bikerider.gap.diagnosis.result.Diagnosis
     rivals : sequence of str, optional
         Candidates to tell apart (``"steer_damping"``, ``"parameters+steer_damping"``); default as the
         module docstring says.
@@ -225,9 +225,9 @@ class NextExperiment:
     noise : dict, optional
         Sample noise of signals (overrides what the data give and :data:`ASSUMED_NOISE`).
     signals : sequence of str, optional
-        Signals to consider with records (default: every one of :data:`bikerider.gap.records.SIGNALS`).
+        Signals to consider with records (default: every one of :data:`bikerider.gap.measured.records.SIGNALS`).
     sweeps : bool
-        Also plan steer-torque frequency responses (:mod:`bikerider.gap.next_sweep`).
+        Also plan steer-torque frequency responses (:mod:`bikerider.gap.plan.sweeps`).
     torque : float
         Peak steer torque of a planned multisine [N m].
     run_time : float
@@ -473,7 +473,7 @@ class NextExperiment:
     def _fit_templates(self, records: list[Record]) -> list[RecordFit]:
         """Fit every template as a record is fitted, batched: the record fit's two-mode function, started
         from the nominal model's weave and slow eigenvalues, judged by the record fit's acceptance rules
-        (:func:`bikerider.gap.extraction._accept_two_mode`: a significant oscillation, half a cycle and
+        (:func:`bikerider.gap.measured.extraction._accept_two_mode`: a significant oscillation, half a cycle and
         more with a clear decay, the slow mode in range)."""
         from types import SimpleNamespace
 
@@ -746,7 +746,7 @@ class NextExperiment:
 
     # -- sweeps ----------------------------------------------------------------------------------------
     def _plan_sweeps(self) -> list[Sweep]:
-        """Multisine runs per speed, law and output, around the nominal weave (:mod:`bikerider.gap.next_sweep`);
+        """Multisine runs per speed, law and output, around the nominal weave (:mod:`bikerider.gap.plan.sweeps`);
         where the nominal closed loop is unstable or shows no weave, left out with the reason."""
         nominal = EffectModel(self.problem.nominal, self.problem.geometry)
         out = []
@@ -847,7 +847,7 @@ class NextExperiment:
 
     def _predict_sweeps(self) -> None:
         """Every rival's frequency responses and their uncertainties (module docstring of
-        :mod:`bikerider.gap.next_sweep`); sweeps where a rival's loop is unstable are left out."""
+        :mod:`bikerider.gap.plan.sweeps`); sweeps where a rival's loop is unstable are left out."""
 
         R, p = len(self.rivals), self.problem
         if not self.sweeps:

@@ -15,7 +15,7 @@ rivals part at the weave resonance (damping sets its height and width) and on it
 below it, inertia above it).
 
 Prediction.  A linear rival's closed loop ``x' = A x + b T`` (``A`` from
-:meth:`~bikerider.gap.models.EffectModel.state_space` and ``closed_loop`` with the law's gains, ``b``
+:meth:`~bikerider.gap.candidates.effect_model.EffectModel.state_space` and ``closed_loop`` with the law's gains, ``b``
 its steer-torque column) predicts ``H(w) = c (i w I - A)^-1 b``.  Steer Coulomb friction ``T_c
 sign(delta')`` is replaced by its random-input describing function (statistical linearisation,
 Booton 1954): for a steer rate of standard deviation ``s`` (a multisine of several lines is nearly
@@ -35,7 +35,7 @@ speed, also per run.  The bicycle itself varies from run to run as the data's we
 (:func:`weave_shift`: the response's slopes in the weave eigenvalue times the data's run-to-run
 variance), and a real run departs from any linear response at each line by a share ``rho`` of it
 (variance ``(rho |H_k|)^2 / 2`` on each part; ``rho`` from the records' fits, ``sqrt(1 - r^2)``):
-neither shrinks with a larger torque (:meth:`bikerider.gap.next_experiment.NextExperiment._predict_sweeps`).
+neither shrinks with a larger torque (:meth:`bikerider.gap.plan.ranking.NextExperiment._predict_sweeps`).
 """
 
 from __future__ import annotations
@@ -206,7 +206,7 @@ def noise_covariance(sweep: Sweep, sigma_y: float, sample_rate: float) -> np.nda
 
 
 def run_stand_in(sweep: Sweep, gains: np.ndarray, speed_measured: bool):
-    """What :func:`bikerider.gap.timedomain.systems` reads of a record, for a sweep."""
+    """What :func:`bikerider.gap.inference.timedomain.systems` reads of a record, for a sweep."""
     return SimpleNamespace(speed=sweep.speed, speed_measured=speed_measured, gains=np.asarray(gains, float))
 
 
