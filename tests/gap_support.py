@@ -15,6 +15,13 @@ from bikerider.io.gap_model import load_model
 
 DATA = Path(bikerider.__file__).parent / "data"
 BP = DATA / "bicycleparameters"
+MODEL = [
+    "--model",
+    str(BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt"),
+    "--rider",
+    str(BP / "riders/Jason/Parameters/JasonRigidBenchmark.txt"),
+]
+"""``bikerider gap`` arguments of the Davis bicycle with its rider (the shipped example's model)."""
 SIL = ControlLaw("sil", {"k_phid": GainSchedule.make_ramp(2.0, 6.5, "below")})
 """Steer into lean below 6.5 m/s, as the steer-by-wire experiment's law."""
 

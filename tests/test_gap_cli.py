@@ -6,18 +6,13 @@ import json
 from pathlib import Path
 
 import pytest
+from gap_support import MODEL
 
 import bikerider
 from bikerider.cli import main
 
 DATA = Path(bikerider.__file__).parent / "data"
 BP = DATA / "bicycleparameters"
-MODEL = [
-    "--model",
-    str(BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt"),
-    "--rider",
-    str(BP / "riders/Jason/Parameters/JasonRigidBenchmark.txt"),
-]
 EXAMPLE = str(DATA / "gap_examples" / "eigenvalues.csv")
 RUN = str(DATA / "gap_examples" / "perturbation_run.csv")
 FEW = ["--effects", "parameters,steer_damping,steer_inertia"]

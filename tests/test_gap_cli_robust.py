@@ -8,6 +8,7 @@ import json
 from pathlib import Path
 
 import pytest
+from gap_support import MODEL
 
 import bikerider
 from bikerider import progress
@@ -15,12 +16,6 @@ from bikerider.cli import main
 
 DATA = Path(bikerider.__file__).parent / "data"
 BP = DATA / "bicycleparameters"
-MODEL = [
-    "--model",
-    str(BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt"),
-    "--rider",
-    str(BP / "riders/Jason/Parameters/JasonRigidBenchmark.txt"),
-]
 EXAMPLE = str(DATA / "gap_examples" / "eigenvalues.csv")
 TWO = ["--effects", "steer_damping,steer_inertia"]
 # below 1 m/s the benchmark bicycle's weave grows under every rival: no free decay can be recorded

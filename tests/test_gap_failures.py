@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from gap_support import SIL, decay_record, nominal, riderless_model
+from gap_support import MODEL, SIL, decay_record, nominal, riderless_model
 
 import bikerider
 from bikerider.cli import main
@@ -29,12 +29,6 @@ from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
 
 DATA = Path(bikerider.__file__).parent / "data"
 BP = DATA / "bicycleparameters"
-MODEL = [
-    "--model",
-    str(BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt"),
-    "--rider",
-    str(BP / "riders/Jason/Parameters/JasonRigidBenchmark.txt"),
-]
 EXAMPLES = DATA / "gap_examples"
 
 
