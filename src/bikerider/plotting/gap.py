@@ -307,6 +307,8 @@ def _record_page(plt, page, responses: dict, model_label: str, columns: int, rep
     for _, note in notes:  # fitted inside its axes after the layout: it must not shape the layout
         note.set_in_layout(False)
     ncol = 1 if width * columns < 6 else 2
+    chars = int(width * columns * 72 / (0.6 * _SHEET_TEXT) / ncol) - 6  # a label's room (0.6 em a character)
+    labels = [textwrap.fill(label, chars) for label in labels]
     legend = fig.legend(handles, labels, loc="upper center", ncol=ncol, fontsize=_SHEET_TEXT)
     renderer = fig.canvas.get_renderer()
     key = legend.get_window_extent(renderer).height / fig.bbox.height
