@@ -85,6 +85,10 @@ def test_the_report_shows_the_records_and_one_curve_per_law(sbw, tmp_path):
         assert (tmp_path / "rep" / name).stat().st_size > 10_000
     text = path.read_text()
     assert "## Records" in text and "eigen_normal_sil6.5n2_18kph.log.gz[12961:13073]" in text
+    # the 59 records' contact sheet: three pages of at most 20, every one linked
+    pages = sorted(p.name for p in (tmp_path / "rep").glob("records*.png"))
+    assert pages == ["records.png", "records_2.png", "records_3.png"]
+    assert all(f"]({name})" in text for name in pages)
     labels = plot_eigenvalues(diagnosis).axes[0].get_legend_handles_labels()[1]
     assert [lab for lab in labels if "nominal model" in lab] == ["sil: nominal model"]
 

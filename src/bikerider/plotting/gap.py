@@ -3,10 +3,10 @@
 The figure functions return matplotlib figures; :func:`bikerider.diagnose.write_report` writes them
 with ``report.md`` (:func:`bikerider.gap.text.markdown`) into a folder:
 
-``records.png``
+``records.png`` (then ``records_2.png``, ... with more than :data:`RECORDS_PER_PAGE` records)
     a contact sheet of the records: each record's roll rate with its fitted decay, the model's
     own response from the record's initial state (selected effects, or the nominal model), and
-    the reason of every record left out;
+    the reason of every record left out (shortened to fit its panel; in full in ``report.md``);
 ``eigenvalues.png``
     measured eigenvalues against speed (error bars: data uncertainty) and one predicted curve per
     control law, nominal (dashed) and with the selected effects (solid), labelled by the law's name;
@@ -203,13 +203,31 @@ def plot_eigenvalues(diagnosis):
     return fig
 
 
-def plot_records(diagnosis, columns: int = 6):
-    """Contact sheet: every record's roll rate, its fitted decay and the model's response."""
-    plt = pyplot()
+RECORDS_PER_PAGE = 20
+"""Panels on one page of the records' contact sheet (``records.png``, ``records_2.png``, ...)."""
+SHEET_COLUMNS = 4
+"""Panels across one page of the contact sheet."""
+_PANEL = (2.9, 2.1)
+"""Size of one panel of the contact sheet [in] (axes, its title and tick labels)."""
+_SHEET_TEXT = 8.0
+"""Size of the ticks and notes of the contact sheet [pt]: readable at the report's 110 dpi."""
 
+
+def plot_records(diagnosis, columns: int = SHEET_COLUMNS, per_page: int = RECORDS_PER_PAGE) -> list:
+    """Contact sheet: every record's roll rate, its fitted decay and the model's response.
+
+    Returns one figure per page of at most ``per_page`` records (an empty list without records).
+    """
     fits = diagnosis.records
     if not fits:
-        return None
+        return []
+    responses, model_label = _record_responses(diagnosis)
+    return record_sheets(fits, responses, model_label, columns=columns, per_page=per_page)
+
+
+def _record_responses(diagnosis) -> tuple[dict, str]:
+    """The model's roll rate from every used record's initial state (by record index) and its label."""
+    fits = diagnosis.records
     chosen = _selected_model(diagnosis)
     p = diagnosis.problem
     if chosen is not None:
@@ -239,56 +257,34 @@ def plot_records(diagnosis, columns: int = 6):
                 responses[used[k]] = states[j, :L, outputs[OBSERVED["roll_rate"]]]
     except FitError:  # records not uniformly sampled: the sheet is still useful without the model's response
         responses = {}
-    rows = math.ceil(len(fits) / columns)
-    fig, axes = plt.subplots(rows, columns, figsize=(2.9 * columns, 1.75 * rows + 0.6), squeeze=False)
-    for ax in axes.flat[len(fits) :]:
-        ax.axis("off")
-    for k, (ax, f) in enumerate(zip(axes.flat, fits)):
-        r = f.record
-        y = r.signals.get("roll_rate")
-        if r.raw is not None:  # a repaired record: the samples as recorded, then the record the fits used
-            ax.plot(r.raw[0], r.raw[1], ".", color="tab:orange", ms=1.4, zorder=1)
-            ax.text(
-                0.02,
-                0.95 if not f.used else 0.05,
-                "repaired: " + ", ".join(repair_tags(r.repairs)),
-                transform=ax.transAxes,
-                fontsize=5.2,
-                va="top" if not f.used else "bottom",
-                color="tab:orange",
-            )
-        ax.plot(r.time, y, color="k", lw=0.7)
-        title = f"{_short(r.name)}  {r.speed:.2f} m/s"
-        if f.used:
-            est = f.estimate
-            ax.plot(r.time, est.evaluate(r.time), color="tab:red", lw=1.1)
-            if k in responses:
-                resp = responses[k]
-                offset = float(np.mean(y[: resp.size] - resp))
-                ax.plot(r.time[: resp.size], resp + offset, "--", color="tab:blue", lw=0.9)
-            ax.text(
-                0.98,
-                0.95,
-                f"{est.eigenvalue.real:.2f}{est.eigenvalue.imag:+.2f}i\nr2 {est.r2:.2f}",
-                transform=ax.transAxes,
-                ha="right",
-                va="top",
-                fontsize=6,
-            )
-        else:
-            ax.set_facecolor("0.93")
-            ax.text(
-                0.02,
-                0.05,
-                "left out: " + _wrap(f.reason or "", 48),
-                transform=ax.transAxes,
-                fontsize=5.2,
-                va="bottom",
-                color="tab:red",
-            )
-        ax.set_title(title, fontsize=6.5)
-        ax.tick_params(labelsize=5.5)
-        ax.grid(alpha=0.25)
+    return responses, model_label
+
+
+def record_sheets(
+    fits, responses: dict, model_label: str, columns: int = SHEET_COLUMNS, per_page: int = RECORDS_PER_PAGE
+) -> list:
+    """The pages of the contact sheet of ``fits`` (record fits), ``per_page`` panels each.
+
+    ``responses`` maps a record's index to the model's roll rate from its initial state.  A page has
+    ``columns`` panels across (fewer when there are fewer records) and only the rows it needs; the
+    explanation of a record left out is wrapped (and if need be shortened) to stay inside its panel:
+    the full reason is in ``report.md`` and the JSON result.
+    """
+    plt = pyplot()
+    repaired = any(f.record.raw is not None for f in fits)
+    pages = []
+    for start in range(0, len(fits), per_page):
+        page = list(enumerate(fits))[start : start + per_page]
+        pages.append(_record_page(plt, page, responses, model_label, min(columns, len(fits)), repaired))
+    return pages
+
+
+def _record_page(plt, page, responses: dict, model_label: str, columns: int, repaired: bool):
+    """One page of the contact sheet: the panels of ``page`` (``(index, fit)`` pairs) and the key."""
+    rows = math.ceil(len(page) / columns)
+    width, height = _PANEL
+    if columns <= 2:  # a few records: larger panels, not a thin strip
+        width, height = 3.6, 2.6
     handles = [
         plt.Line2D([], [], color="k", lw=0.8),
         plt.Line2D([], [], color="tab:red", lw=1.2),
@@ -299,12 +295,99 @@ def plot_records(diagnosis, columns: int = 6):
         "fitted decay (weave + slow mode)",
         f"{model_label}, from the record's initial state",
     ]
-    if any(f.record.raw is not None for f in fits):
+    if repaired:
         handles.append(plt.Line2D([], [], ls="", marker=".", color="tab:orange"))
         labels.append("samples as recorded (repaired records)")
-    fig.legend(handles, labels, loc="upper center", ncol=len(labels), fontsize=8, frameon=False)
-    fig.tight_layout(rect=(0, 0, 1, 1 - 0.45 / (1.75 * rows + 0.6)))
+    fig, axes = plt.subplots(rows, columns, figsize=(width * columns, height * rows + 0.5), squeeze=False)
+    for ax in axes.flat[len(page) :]:
+        ax.axis("off")
+    notes = []
+    for ax, (k, f) in zip(axes.flat, page):
+        notes += _record_panel(ax, k, f, responses)
+    for _, note in notes:  # fitted inside its axes after the layout: it must not shape the layout
+        note.set_in_layout(False)
+    ncol = 1 if width * columns < 6 else 2
+    chars = int(width * columns * 72 / (0.6 * _SHEET_TEXT) / ncol) - 6  # a label's room (0.6 em a character)
+    labels = [textwrap.fill(label, chars) for label in labels]
+    legend = fig.legend(handles, labels, loc="upper center", ncol=ncol, fontsize=_SHEET_TEXT)
+    renderer = fig.canvas.get_renderer()
+    key = legend.get_window_extent(renderer).height / fig.bbox.height
+    fig.tight_layout(rect=(0, 0, 1, 1 - key - 0.01), h_pad=0.6)
+    for ax, note in notes:
+        _fit_inside(note, ax, renderer)
     return fig
+
+
+def _record_panel(ax, k: int, f, responses: dict) -> list:
+    """Draw record fit ``f`` (index ``k``) into ``ax``; return its notes to fit inside the axes."""
+    r = f.record
+    y = r.signals.get("roll_rate")
+    notes = []
+    if r.raw is not None:  # a repaired record: the samples as recorded, then the record the fits used
+        ax.plot(r.raw[0], r.raw[1], ".", color="tab:orange", ms=1.4, zorder=1)
+        note = ax.text(
+            0.02,
+            0.95 if not f.used else 0.04,
+            "repaired: " + ", ".join(repair_tags(r.repairs)),
+            transform=ax.transAxes,
+            fontsize=_SHEET_TEXT - 1,
+            va="top" if not f.used else "bottom",
+            color="tab:orange",
+        )
+        notes.append((ax, note))
+    ax.plot(r.time, y, color="k", lw=0.7)
+    if f.used:
+        est = f.estimate
+        ax.plot(r.time, est.evaluate(r.time), color="tab:red", lw=1.1)
+        if k in responses:
+            resp = responses[k]
+            offset = float(np.mean(y[: resp.size] - resp))
+            ax.plot(r.time[: resp.size], resp + offset, "--", color="tab:blue", lw=0.9)
+        ax.text(
+            0.98,
+            0.95,
+            f"{est.eigenvalue.real:.2f}{est.eigenvalue.imag:+.2f}i\nr2 {est.r2:.2f}",
+            transform=ax.transAxes,
+            ha="right",
+            va="top",
+            fontsize=_SHEET_TEXT - 0.5,
+        )
+    else:
+        ax.set_facecolor("0.93")
+        note = ax.text(
+            0.02,
+            0.04,
+            "left out: " + (f.reason or ""),
+            transform=ax.transAxes,
+            fontsize=_SHEET_TEXT - 1,
+            va="bottom",
+            color="tab:red",
+            bbox={"facecolor": "0.93", "edgecolor": "none", "alpha": 0.8, "pad": 1},
+        )
+        notes.append((ax, note))
+    ax.set_title(f"{_short(r.name)}  {r.speed:.2f} m/s", fontsize=_SHEET_TEXT + 0.5)
+    ax.tick_params(labelsize=_SHEET_TEXT)
+    ax.grid(alpha=0.25)
+    return notes
+
+
+def _fit_inside(note, ax, renderer) -> None:
+    """Wrap ``note``'s text to the width of ``ax`` (measured), shortened with "..." to its height."""
+    text = " ".join(note.get_text().split())
+    box = ax.get_window_extent(renderer)
+    room_w, room_h = 0.94 * box.width, 0.9 * box.height
+    width = max(10, len(text))
+    while True:
+        lines = textwrap.wrap(text, width) or [""]
+        note.set_text("\n".join(lines))
+        extent = note.get_window_extent(renderer)
+        if extent.width <= room_w or width <= 10:
+            break
+        width = max(10, int(width * room_w / extent.width) if extent.width > room_w * 1.05 else width - 1)
+    while note.get_window_extent(renderer).height > room_h and len(lines) > 1:
+        lines = lines[:-1]
+        lines[-1] = lines[-1].rstrip(" .,;:") + " ..."
+        note.set_text("\n".join(lines))
 
 
 def _short(name: str) -> str:
@@ -314,11 +397,6 @@ def _short(name: str) -> str:
     if "_" in base:
         base = base.rsplit("_", 1)[-1]
     return f"{base}[{window}" if window else base
-
-
-def _wrap(text: str, width: int) -> str:
-
-    return "\n".join(textwrap.wrap(text, width)[:6])
 
 
 def plot_gap_map(result: dict):
@@ -610,8 +688,9 @@ def plot_effect(model, speeds, *, gains=None, speed: float | None = None, title:
 
 def figures(diagnosis, result: dict) -> list[tuple[str, str, object]]:
     """Every figure of a report: ``(file name, caption, figure)``, those that apply."""
-    out = [
-        ("records.png", "Records and their fitted decays", plot_records(diagnosis)),
+    sheets = plot_records(diagnosis)
+    out = [(_page_name(page), _page_caption(page, len(sheets)), fig) for page, fig in enumerate(sheets, start=1)]
+    out += [
         ("eigenvalues.png", "Measured and predicted weave eigenvalues, per control law", plot_eigenvalues(diagnosis)),
         ("effects.png", "Every candidate as fitted, on its own", plot_effects(diagnosis)),
         ("canonical.png", "Identified canonical entries", plot_canonical(diagnosis)),
@@ -620,3 +699,14 @@ def figures(diagnosis, result: dict) -> list[tuple[str, str, object]]:
         ("time_response.png", "Time response", plot_time_response(diagnosis)),
     ]
     return [(name, caption, fig) for name, caption, fig in out if fig is not None]
+
+
+def _page_name(page: int) -> str:
+    """``records.png`` for the contact sheet's first page, ``records_2.png`` ... for the others."""
+    return "records.png" if page == 1 else f"records_{page}.png"
+
+
+def _page_caption(page: int, pages: int) -> str:
+    """The caption of a page of the contact sheet (its number when there are several)."""
+    caption = "Records and their fitted decays"
+    return caption if pages == 1 else f"{caption} (page {page} of {pages})"
