@@ -586,3 +586,13 @@ def test_dask_is_quiet_at_default_verbosity(tmp_path):
     done = subprocess.run(argv, capture_output=True, text=True, timeout=300, cwd=tmp_path)
     assert done.returncode == 0, done.stderr
     assert "INFO" not in done.stderr and done.stderr.strip() == "", done.stderr
+
+
+def test_a_benchmark_file_with_a_huge_integer_is_an_error_not_a_traceback(tmp_path):
+    """A name = value file whose value has more digits than Python converts to int (found by the
+    benchmark fuzz test): the format detection's TOML attempt raised ValueError past the reader."""
+    path = tmp_path / "BigBenchmark.txt"
+    path.write_text("w = " + "7" * 5000 + "+/-0.0\nc = 0.08+/-0.0\n")
+    code, _, err = run_cli(["benchmark", str(path)])
+    assert code == 2 and "Traceback" not in err
+    assert err.startswith(f"bikerider benchmark: error: {path}:1: w")

@@ -309,7 +309,7 @@ def detect_format(path: str | Path) -> str:
     except FileFormatError as exc:
         try:
             tomllib.loads(text)
-        except tomllib.TOMLDecodeError:
+        except (tomllib.TOMLDecodeError, ValueError):  # ValueError: an integer too long to convert
             raise exc from None
         return _toml_kind(text)
     names = set(data)
