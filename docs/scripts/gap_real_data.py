@@ -362,11 +362,18 @@ def _sign_and_shape(diagnosis) -> dict:
     return out
 
 
+def _sheet_pages(records: int, per_page: int) -> str:
+    """The contact sheet's file names, as the report writes them (``records.png``, ``records_2.png``, ...)."""
+    names = ["`records.png`"] + [f"`records_{k}.png`" for k in range(2, -(-records // per_page) + 1)]
+    return names[0] if len(names) == 1 else ", ".join(names[:-1]) + " and " + names[-1]
+
+
 def _sbw_section() -> list[str]:
     """Section 3: the steer-by-wire bicycle of Pasma (2024), from the raw logs."""
     import numpy as np
 
     from bikerider.diagnose import diagnose_files
+    from bikerider.plotting.gap import RECORDS_PER_PAGE
 
     model = SBW / "sbw_bicycle.toml"
     manifest = SBW / "experiment.toml"
@@ -537,7 +544,8 @@ def _sbw_section() -> list[str]:
         )
     lines += [
         "",
-        "The contact sheet (`records.png`) overlays each record with its fitted decay and the friction model's",
+        f"The contact sheet ({_sheet_pages(rec['total'], RECORDS_PER_PAGE)} for the {rec['total']} records) "
+        "overlays each record with its fitted decay and the friction model's",
         "own response from the record's initial state.",
         "",
         "### Against the experimenter's hypotheses",
