@@ -208,8 +208,13 @@ def test_a_state_space_of_named_states_picks_its_outputs_and_closes_the_steer_lo
     assert ss.closed_loop(None) is ss.A and ss.closed_loop(np.zeros(4)) is ss.A
     with pytest.raises(InputError, match="T_delta among the inputs"):
         state_space(model, speeds, inputs=("T_phi",)).closed_loop(gains)
-    with pytest.raises(InputError, match="a state"):
+    with pytest.raises(InputError, match=r"outputs = 'phi_ddot': expected a state \(phi, delta, phi_dot, delta_dot\)"):
         _ = state_space(model, speeds, outputs=("phi_ddot",)).output_states
+    three = ("phi", "delta", "phi_dot")
+    with pytest.raises(InputError, match="outputs = 'delta_dot': expected a state"):
+        StateSpace.of_states(speeds, full.A[..., :3, :3], full.B[..., :3, :], three)
+    with pytest.raises(InputError, match="gains = 'delta_dot': expected a state"):
+        StateSpace.of_states(speeds, full.A[..., :3, :3], full.B[..., :3, :], three, outputs=three).closed_loop(gains)
 
 
 def _ode(A, B, u, t, x0):

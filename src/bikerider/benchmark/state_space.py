@@ -189,19 +189,17 @@ class StateSpace:
         states, inputs, outputs : tuple of str
             ``n`` state names, ``m`` input names and the states that are outputs.
         """
+        states = tuple(states)
         C = np.zeros((len(outputs), len(states)))
-        for k, name in enumerate(outputs):
-            C[k, states.index(name)] = 1.0
+        for k, index in enumerate(_state_index(states, outputs, "outputs")):
+            C[k, index] = 1.0
         D = np.broadcast_to(np.zeros((len(outputs), len(inputs))), A.shape[:-2] + (len(outputs), len(inputs)))
-        return cls(np.asarray(speeds, dtype=float), A, B, C, D, tuple(states), tuple(inputs), tuple(outputs))
+        return cls(np.asarray(speeds, dtype=float), A, B, C, D, states, tuple(inputs), tuple(outputs))
 
     @property
     def output_states(self) -> tuple[int, ...]:
         """The state index of each output (every output must be a state)."""
-        for name in self.outputs:
-            if name not in self.states:
-                raise InputError("outputs", name, f"a state ({', '.join(self.states)}) to have a state index")
-        return tuple(self.states.index(name) for name in self.outputs)
+        return _state_index(self.states, self.outputs, "outputs")
 
     def closed_loop(self, gains) -> np.ndarray:
         """The state matrix under the steer torque ``T_delta = k_phi phi + k_phid phi_dot + k_delta
@@ -226,7 +224,7 @@ class StateSpace:
             return self.A
         if "T_delta" not in self.inputs:
             raise InputError("inputs", list(self.inputs), "T_delta among the inputs to close the steer loop")
-        index = tuple(self.states.index(name) for name in ("phi", "phi_dot", "delta", "delta_dot"))
+        index = _state_index(self.states, GAIN_STATES, "gains")
         return closed_loop_matrix(self.A, self.B[..., :, self.inputs.index("T_delta")], gains, index)
 
     def to_control(self, index=()):
@@ -263,6 +261,18 @@ class StateSpace:
             outputs=list(self.outputs),
             name=control_name(v),
         )
+
+
+GAIN_STATES = ("phi", "phi_dot", "delta", "delta_dot")
+"""The state each gain of :data:`bikerider.benchmark.control.GAIN_NAMES` multiplies."""
+
+
+def _state_index(states: tuple[str, ...], names, kind: str) -> tuple[int, ...]:
+    """The index of each of ``names`` among ``states`` (``InputError`` naming ``kind`` if one is not a state)."""
+    for name in names:
+        if name not in states:
+            raise InputError(kind, name, f"a state ({', '.join(states)})")
+    return tuple(states.index(name) for name in names)
 
 
 def control_name(speed: float) -> str:
