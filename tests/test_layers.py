@@ -115,7 +115,7 @@ WAITING_FOR_GAPSPEED = {
     "gap/plan/ranking.py": 2,
 }
 """Imports inside functions still without a reason in the files other branches are editing (issue 22
-moved them whole; speed21 edits gap/inference, plan25 gap/plan): exactly these many, lowered as they
+moved them whole; the branches editing gap/inference and gap/plan): exactly these many, lowered as they
 move to the top (a count below its allowance fails too, so the allowance never outlives them)."""
 KNOWN_FILE_CYCLES = {frozenset({"io/benchmark_file.py", "io/bicycleparameters.py"})}
 """File-level cycles older than this test (each side imports the other inside a function)."""
