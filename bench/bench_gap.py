@@ -65,10 +65,11 @@ def time_diagnosis() -> tuple[float, int, dict]:
 
 def time_sbw() -> tuple[dict[str, float], dict]:
     """Seconds of each stage of the SBW diagnosis from the raw logs, and its result."""
+    from bikerider.diagnose import load_records
     from bikerider.gap.diagnosis.result import Diagnosis
     from bikerider.gap.measured.records import fit_records
     from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
-    from bikerider.io.experiment import load_records, read_manifest
+    from bikerider.io.experiment import read_manifest
     from bikerider.io.gap_model import load_model
 
     stages = {}

@@ -112,8 +112,9 @@ path = "run.log"
 @FUZZ
 @given(st.data(), st.sets(st.sampled_from(SETTINGS), max_size=2), st.booleans())
 def test_manifest_settings(tmp_path_factory, data, hostile, detect):
+    from bikerider.diagnose import load_records
     from bikerider.gap.measured.records import fit_record
-    from bikerider.io.experiment import load_records, read_experiment
+    from bikerider.io.experiment import read_experiment
 
     values = {key: _setting(data.draw, key, key in hostile) for key in SETTINGS}
     folder = tmp_path_factory.mktemp("manifest")

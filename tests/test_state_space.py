@@ -11,8 +11,8 @@ from scipy.integrate import solve_ivp
 from bikerider.benchmark import BenchmarkParameters, WhippleModel
 from bikerider.benchmark.frequency_response import frequency_response
 from bikerider.benchmark.mode_shapes import mode_shapes
-from bikerider.benchmark.simulation import simulate
-from bikerider.benchmark.state_space import LateralForce, input_matrix, state_space
+from bikerider.benchmark.simulation import discretise, expm, simulate
+from bikerider.benchmark.state_space import LateralForce, StateSpace, input_matrix, state_space
 from bikerider.errors import InputError
 from bikerider.io.benchmark_file import load_benchmark_parameters
 from bikerider.io.name_value_file import read_name_value_file
@@ -164,6 +164,57 @@ def test_free_response_is_the_matrix_exponential(model):
         A = model.state_matrix(v)
         for j in (1, 40, 160):
             np.testing.assert_allclose(sim.states[k, j], scipy.linalg.expm(A * t[j]) @ x0, rtol=1e-11, atol=1e-14)
+
+
+def test_expm_equals_scipy_on_a_batch_of_any_size_and_norm():
+    # the one matrix exponential (vectorised scaling and squaring) against scipy's Pade, matrix by matrix
+    rng = np.random.default_rng(3)
+    for n in (1, 4, 6, 11):
+        M = rng.standard_normal((3, 5, n, n)) * np.array([1e-3, 0.3, 2.0, 8.0, 30.0])[:, None, None]
+        got = expm(M)
+        for index in np.ndindex(M.shape[:-2]):
+            want = scipy.linalg.expm(M[index])
+            np.testing.assert_allclose(got[index], want, rtol=1e-11, atol=1e-13 * np.abs(want).max())
+    np.testing.assert_array_equal(expm(np.zeros((2, 3, 3))), np.broadcast_to(np.eye(3), (2, 3, 3)))
+
+
+def test_the_zero_order_hold_is_the_first_order_holds_leading_blocks(model):
+    # discretise(hold="zoh") exponentiates the smaller matrix [[A, B], [0, 0]] h: the same Phi and Gamma_0
+    ss = state_space(model, [1.0, 5.0, 9.0], inputs=("T_phi", "T_delta"))
+    for h in (0.01, np.array([0.002, 0.05, 0.3])):
+        Phi, G0, G1 = discretise(ss.A, ss.B, h)
+        Phi_z, G0_z, none = discretise(ss.A, ss.B, h, hold="zoh")
+        assert none is None and G1.shape == G0.shape
+        np.testing.assert_allclose(Phi_z, Phi, rtol=1e-13, atol=1e-15)
+        np.testing.assert_allclose(G0_z, G0, rtol=1e-13, atol=1e-15)
+        np.testing.assert_allclose(Phi, expm(ss.A * np.asarray(h)[..., None, None]), rtol=1e-13, atol=1e-15)
+
+
+def test_a_state_space_of_named_states_picks_its_outputs_and_closes_the_steer_loop(model):
+    speeds = np.array([2.0, 6.0])
+    full = state_space(model, speeds)
+    # the same system with its states in another order: outputs and the closed loop follow the names
+    order = [3, 1, 0, 2]
+    states = tuple(full.states[k] for k in order)
+    ss = StateSpace.of_states(speeds, full.A[..., order, :][..., :, order], full.B[..., order, :], states)
+    assert ss.outputs == ("phi", "delta", "phi_dot", "delta_dot")
+    assert ss.output_states == (2, 1, 3, 0)
+    np.testing.assert_array_equal(ss.C @ np.arange(4.0), [2.0, 1.0, 3.0, 0.0])
+    assert ss.D.shape == (2, 4, 2) and not np.any(ss.D)
+    gains = np.array([1.5, -0.4, 2.0, 0.3])  # k_phi, k_phid, k_delta, k_deltad
+    k_state_order = np.array([gains[0], gains[2], gains[1], gains[3]])  # phi, delta, phi_dot, delta_dot
+    want = full.A + full.B[..., :, 1:2] * k_state_order
+    np.testing.assert_allclose(ss.closed_loop(gains), want[..., order, :][..., :, order], rtol=1e-14, atol=1e-14)
+    assert ss.closed_loop(None) is ss.A and ss.closed_loop(np.zeros(4)) is ss.A
+    with pytest.raises(InputError, match="T_delta among the inputs"):
+        state_space(model, speeds, inputs=("T_phi",)).closed_loop(gains)
+    with pytest.raises(InputError, match=r"outputs = 'phi_ddot': expected a state \(phi, delta, phi_dot, delta_dot\)"):
+        _ = state_space(model, speeds, outputs=("phi_ddot",)).output_states
+    three = ("phi", "delta", "phi_dot")
+    with pytest.raises(InputError, match="outputs = 'delta_dot': expected a state"):
+        StateSpace.of_states(speeds, full.A[..., :3, :3], full.B[..., :3, :], three)
+    with pytest.raises(InputError, match="gains = 'delta_dot': expected a state"):
+        StateSpace.of_states(speeds, full.A[..., :3, :3], full.B[..., :3, :], three, outputs=three).closed_loop(gains)
 
 
 def _ode(A, B, u, t, x0):

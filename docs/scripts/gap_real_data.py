@@ -355,7 +355,7 @@ def _sign_and_shape(diagnosis) -> dict:
         A = ss.closed_loop(r.gains[None, :])[0]
         ev, vec = np.linalg.eig(A)
         j = int(np.argmin(np.abs(ev - lam)))
-        model_ratio = vec[ss.outputs[1], j] / vec[ss.outputs[2], j]
+        model_ratio = vec[ss.output_states[1], j] / vec[ss.output_states[2], j]
         measured = amp["steer_angle"] / amp["roll_rate"]
         phases.append((np.angle(measured, deg=True), np.angle(model_ratio, deg=True), abs(measured) / abs(model_ratio)))
     out["phases"] = np.array(phases)

@@ -27,9 +27,10 @@ CALIBRATION = (1.0661904761904761, -0.12761904761904752)
 
 
 def _run(model_file: str, *, calibration=None, fit=None) -> dict:
+    from bikerider.diagnose import load_records
     from bikerider.gap.diagnosis.result import diagnose
     from bikerider.gap.measured.records import fit_records
-    from bikerider.io.experiment import load_records, read_manifest
+    from bikerider.io.experiment import read_manifest
     from bikerider.io.gap_model import load_model
 
     settings, windows = read_manifest(SBW / "experiment.toml")

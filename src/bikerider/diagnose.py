@@ -19,13 +19,21 @@ from pathlib import Path
 from bikerider import progress
 from bikerider.gap.candidates.effects import EFFECT_NAMES, effect
 from bikerider.gap.diagnosis.result import Diagnosis, diagnose
-from bikerider.gap.measured.records import fit_records
+from bikerider.gap.measured.records import Record, detect_windows, fit_records
 from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
 from bikerider.gap.plan.ranking import NextExperiment, NoExperiment, plan_next
 from bikerider.gap.text import markdown
 from bikerider.io import gap_data
 from bikerider.io.atomic import atomic_write_bytes, atomic_write_text, figure_bytes
-from bikerider.io.experiment import check_record_count, load_records, read_experiment
+from bikerider.io.experiment import (
+    ExperimentSettings,
+    Window,
+    check_record_count,
+    cut_record,
+    detection_signal,
+    read_experiment,
+    window_logs,
+)
 from bikerider.io.gap_model import load_model
 from bikerider.io.gap_report import REPORT_NAME, check_report_folder, is_input, linked_figures, refuse_inputs
 from bikerider.plotting.gap import figures, pyplot
@@ -35,6 +43,26 @@ LOG = logging.getLogger(__name__)
 
 LONG_WORK_ROWS = 1000
 """Eigenvalue rows and records from which the command says, before it starts, that the work takes minutes."""
+
+
+def load_records(settings: ExperimentSettings, windows: list[Window]) -> list[Record]:
+    """The records of an experiment's windows: each log read once, the decays of a ``detect = true``
+    file found by :func:`bikerider.gap.measured.records.detect_windows`, every record cut.
+
+    Raises
+    ------
+    FileFormatError
+        A log that cannot be read, a column it does not have, or a window outside it (naming the
+        manifest's line).
+    """
+    records = []
+    for window, log in window_logs(settings, windows):
+        spans = [(window.start, window.end)]
+        if window.detect:
+            roll_rate, rate = detection_signal(log, settings)
+            spans = detect_windows(roll_rate, rate, settings.detector)
+        records += [cut_record(log, start, end, window, settings) for start, end in spans]
+    return records
 
 
 def diagnose_files(

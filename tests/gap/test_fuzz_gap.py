@@ -128,7 +128,8 @@ def test_control_files(tmp_path_factory, data):
 # Experiment manifests (TOML and CSV) and the logs they cut
 # ------------------------------------------------------------------------------------------
 def _experiment(folder: Path, manifest: bytes, windows: bytes, log: bytes):
-    from bikerider.io.experiment import load_records, read_experiment
+    from bikerider.diagnose import load_records
+    from bikerider.io.experiment import read_experiment
 
     (folder / "experiment.toml").write_bytes(manifest)
     (folder / "windows.csv").write_bytes(windows)
@@ -260,7 +261,8 @@ def test_a_fifo_is_refused_as_any_input(fifo, option):
 
 
 def test_a_fifo_named_as_a_log_by_a_manifest_is_refused(tmp_path, fifo):
-    from bikerider.io.experiment import load_records, read_experiment
+    from bikerider.diagnose import load_records
+    from bikerider.io.experiment import read_experiment
 
     (tmp_path / "experiment.toml").write_text(MANIFEST.replace('"run.log"', f'"{fifo.name}"'))
     settings_, windows = read_experiment(tmp_path / "experiment.toml")
@@ -313,6 +315,7 @@ def test_long_work_is_announced_before_it_starts(monkeypatch, caplog):
 
 
 def test_a_window_longer_than_a_record_is_refused(tmp_path, monkeypatch):
+    from bikerider.diagnose import load_records
     from bikerider.io import experiment
 
     monkeypatch.setattr(experiment, "MAX_RECORD_SAMPLES", 100)
@@ -320,7 +323,7 @@ def test_a_window_longer_than_a_record_is_refused(tmp_path, monkeypatch):
     (tmp_path / "run.log").write_text(_log())
     settings_, windows = experiment.read_experiment(tmp_path / "experiment.toml")
     with pytest.raises(FileFormatError, match="holds 290 samples: expected one free decay of at most 100"):
-        experiment.load_records(settings_, windows)
+        load_records(settings_, windows)
 
 
 def test_a_gzipped_log_that_unpacks_too_large_is_refused(tmp_path, monkeypatch):

@@ -22,6 +22,12 @@ Shapes.  For speeds of shape ``V`` and a model of batch shape ``S`` (``()`` for 
 ``A`` is ``S + V + (4, 4)``, ``B`` is ``S + V + (4, m)`` (``B`` does not depend on the speed; it is
 broadcast, read-only), ``C`` is ``(p, 4)`` (``S + V + (p, 4)`` when an acceleration is an output)
 and ``D`` is ``S + V + (p, m)``.
+
+Models with more states.  :class:`StateSpace` holds any number ``n`` of named states: the gap's
+models (:meth:`bikerider.gap.candidates.effect_model.EffectModel.state_space`, the Whipple bicycle
+with a leaning upper body or tyre slip) build theirs with :meth:`StateSpace.of_states`, whose
+outputs are states picked by name.  :meth:`StateSpace.closed_loop` closes the steer-torque loop of
+any of them.
 """
 
 from __future__ import annotations
@@ -30,6 +36,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from bikerider.benchmark.closed_loop import closed_loop_matrix
 from bikerider.benchmark.model import WhippleModel
 from bikerider.engine import arguments
 from bikerider.errors import InputError
@@ -146,8 +153,8 @@ class StateSpace:
     speeds : numpy.ndarray
         Speeds [m/s], shape ``V``.
     A, B, C, D : numpy.ndarray
-        Shapes ``S + V + (4, 4)``, ``S + V + (4, m)``, ``(p, 4)`` (or ``S + V + (p, 4)`` with an
-        acceleration output) and ``S + V + (p, m)``.
+        Shapes ``S + V + (n, n)``, ``S + V + (n, m)``, ``(p, n)`` (or ``S + V + (p, n)`` with an
+        acceleration output) and ``S + V + (p, m)``; ``n = 4`` for the Whipple model.
     states, inputs, outputs : tuple of str
         Names (see the module docstring).
     """
@@ -160,6 +167,65 @@ class StateSpace:
     states: tuple[str, ...]
     inputs: tuple[str, ...]
     outputs: tuple[str, ...]
+
+    @classmethod
+    def of_states(
+        cls,
+        speeds,
+        A: np.ndarray,
+        B: np.ndarray,
+        states: tuple[str, ...],
+        inputs: tuple[str, ...] = ("T_phi", "T_delta"),
+        outputs: tuple[str, ...] = ("phi", "delta", "phi_dot", "delta_dot"),
+    ) -> StateSpace:
+        """A state space whose outputs are some of its states, picked by name (``D = 0``).
+
+        Parameters
+        ----------
+        speeds : array_like
+            Speeds [m/s], shape ``V``.
+        A, B : numpy.ndarray
+            Shapes ``S + V + (n, n)`` and ``S + V + (n, m)``.
+        states, inputs, outputs : tuple of str
+            ``n`` state names, ``m`` input names and the states that are outputs.
+        """
+        states = tuple(states)
+        C = np.zeros((len(outputs), len(states)))
+        for k, index in enumerate(_state_index(states, outputs, "outputs")):
+            C[k, index] = 1.0
+        D = np.broadcast_to(np.zeros((len(outputs), len(inputs))), A.shape[:-2] + (len(outputs), len(inputs)))
+        return cls(np.asarray(speeds, dtype=float), A, B, C, D, states, tuple(inputs), tuple(outputs))
+
+    @property
+    def output_states(self) -> tuple[int, ...]:
+        """The state index of each output (every output must be a state)."""
+        return _state_index(self.states, self.outputs, "outputs")
+
+    def closed_loop(self, gains) -> np.ndarray:
+        """The state matrix under the steer torque ``T_delta = k_phi phi + k_phid phi_dot + k_delta
+        delta + k_deltad delta_dot``.
+
+        Parameters
+        ----------
+        gains : array_like or None
+            ``[k_phi, k_phid, k_delta, k_deltad]``, shape ``(4,)`` or broadcast against the leading
+            ``S + V`` dimensions; ``None`` (or all zero) for the open loop.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``A + b k^T`` (``b`` the ``T_delta`` column of ``B``), shape ``S + V + (n, n)``; ``A``
+            itself for the open loop.
+        """
+        if gains is None:
+            return self.A
+        gains = np.asarray(gains, dtype=float)
+        if not np.any(gains):
+            return self.A
+        if "T_delta" not in self.inputs:
+            raise InputError("inputs", list(self.inputs), "T_delta among the inputs to close the steer loop")
+        index = _state_index(self.states, GAIN_STATES, "gains")
+        return closed_loop_matrix(self.A, self.B[..., :, self.inputs.index("T_delta")], gains, index)
 
     def to_control(self, index=()):
         """One system as a python-control ``StateSpace`` with named signals (``pip install
@@ -181,7 +247,7 @@ class StateSpace:
             ) from None
         index = (index,) if isinstance(index, (int, np.integer)) else tuple(index)
         A = self.A[index]
-        if A.shape != (4, 4):
+        if A.ndim != 2:
             raise InputError("index", index, f"an index to one system of the leading shape {self.A.shape[:-2]}")
         v = float(np.broadcast_to(self.speeds, self.A.shape[:-2])[index])
         C = self.C if self.C.ndim == 2 else self.C[index]
@@ -195,6 +261,18 @@ class StateSpace:
             outputs=list(self.outputs),
             name=control_name(v),
         )
+
+
+GAIN_STATES = ("phi", "phi_dot", "delta", "delta_dot")
+"""The state each gain of :data:`bikerider.benchmark.control.GAIN_NAMES` multiplies."""
+
+
+def _state_index(states: tuple[str, ...], names, kind: str) -> tuple[int, ...]:
+    """The index of each of ``names`` among ``states`` (``InputError`` naming ``kind`` if one is not a state)."""
+    for name in names:
+        if name not in states:
+            raise InputError(kind, name, f"a state ({', '.join(states)})")
+    return tuple(states.index(name) for name in names)
 
 
 def control_name(speed: float) -> str:

@@ -57,6 +57,7 @@ import gzip
 import io
 import math
 import re
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -70,7 +71,6 @@ from bikerider.gap.measured.records import (
     SIGNALS,
     DetectorSettings,
     Record,
-    detect_windows,
 )
 from bikerider.io.input_file import checked_input_file
 from bikerider.io.toml_input import read_toml
@@ -804,19 +804,20 @@ def _shown(value: object) -> object:
 # ---------------------------------------------------------------------------------------------
 # Cutting the records
 # ---------------------------------------------------------------------------------------------
-def load_records(settings: ExperimentSettings, windows: list[Window]) -> list[Record]:
-    """Read each log once and cut its records (see the module docstring).
+def window_logs(settings: ExperimentSettings, windows: list[Window]) -> Iterator[tuple[Window, Log]]:
+    """Each window with its log, every log read once, when its first window comes.
+
+    The pipeline (:func:`bikerider.diagnose.load_records`) cuts the records from them, finding the
+    decays of a ``detect = true`` file in :func:`detection_signal` first.
 
     Raises
     ------
     FileFormatError
-        A log that cannot be read, a column it does not have, or a window outside it (naming the
-        manifest's line).
+        A log that cannot be read or lacks a column (naming the manifest's line, too).
     """
     settings.check()
     wanted = sorted({c for k, c in settings.columns.items()})
     logs: dict[Path, Log] = {}
-    records = []
     for window in windows:
         if window.file not in logs:
             try:
@@ -825,20 +826,13 @@ def load_records(settings: ExperimentSettings, windows: list[Window]) -> list[Re
                 where = exc.path if exc.line is None else f"{exc.path}:{exc.line}"
                 detail = str(exc).removeprefix(f"{where}: ")
                 raise FileFormatError(exc.path, f"{detail} (the log of {window.source})", exc.line) from None
-        log = logs[window.file]
-        spans = [(window.start, window.end)]
-        if window.detect:
-            rate = settings.sample_rate or _rate_of(log, settings)
-            spans = detect_windows(
-                log.columns[settings.columns["roll_rate"]] * settings.scale.get("roll_rate", 1.0),
-                rate,
-                settings.detector,
-            )
-            if not spans:
-                continue
-        for start, end in spans:
-            records.append(_cut(log, start, end, window, settings))
-    return records
+        yield window, logs[window.file]
+
+
+def detection_signal(log: Log, settings: ExperimentSettings) -> tuple[np.ndarray, float]:
+    """The roll rate [rad/s] a log's decays are detected in, and the log's sampling rate [Hz]."""
+    rate = settings.sample_rate or _rate_of(log, settings)
+    return log.columns[settings.columns["roll_rate"]] * settings.scale.get("roll_rate", 1.0), rate
 
 
 def _find(path: Path) -> Path:
@@ -863,7 +857,15 @@ def _rate_of(log: Log, settings: ExperimentSettings) -> float:
     return rate
 
 
-def _cut(log: Log, start: int, end: int, window: Window, settings: ExperimentSettings) -> Record:
+def cut_record(log: Log, start: int, end: int, window: Window, settings: ExperimentSettings) -> Record:
+    """The record of samples ``start .. end`` of ``log`` (a window, or a decay detected in it).
+
+    Raises
+    ------
+    FileFormatError
+        A window that is empty, outside its log or longer than one decay (naming the manifest's
+        line).
+    """
     where = window.source
     if not (0 <= start < end):
         raise FileFormatError(

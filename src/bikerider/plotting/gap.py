@@ -612,10 +612,12 @@ def plot_time_response(diagnosis):
             ss = model.state_space([speed * scale])
             A = ss.closed_loop(None if gains is None else np.asarray(gains)[None, :])[0]
             x0 = np.zeros(A.shape[-1])
-            x0[ss.outputs[2]] = 0.5
+            x0[ss.output_states[2]] = 0.5
             T = fit.config["steer_friction"]["T_coulomb"]
-            states = simulate_friction(A, ss.B[0][:, 1], x0, T, t[1] - t[0], t.size, ss.outputs[3])
-            ax.plot(t, states[:, ss.outputs[2]], label="+".join(fit.effects) + f" (Coulomb {T:.3g} N m, as fitted)")
+            states = simulate_friction(A, ss.B[0][:, 1], x0, T, t[1] - t[0], t.size, ss.output_states[3])
+            ax.plot(
+                t, states[:, ss.output_states[2]], label="+".join(fit.effects) + f" (Coulomb {T:.3g} N m, as fitted)"
+            )
         else:
             sel = model.simulate(speed * scale, t, gains=gains)
             ax.plot(t, sel["phid"], label=label)

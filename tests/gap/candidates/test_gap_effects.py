@@ -10,6 +10,7 @@ from bikerider.generated import benchmark_model as bm
 from bikerider.generated import gap_effects as gen
 
 from bikerider.benchmark.model import label_modes
+from bikerider.benchmark.state_space import StateSpace
 from bikerider.errors import InputError
 from bikerider.gap.candidates.effect_model import BENCH_ARGS, EffectModel, RiderGeometry
 from bikerider.io.gap_model import load_model
@@ -233,3 +234,19 @@ def test_each_effect_can_be_plotted_on_its_own(bench, geometry, tmp_path):
         figure = plot_effect(EffectModel(values, geometry, {name: params}), np.linspace(1, 8, 15), title=name)
         figure.savefig(path)
         assert path.read_bytes()[:4] == b"\x89PNG" and path.stat().st_size > 5000
+
+
+def test_every_model_is_a_benchmark_state_space_whose_outputs_are_named_states(bench, geometry):
+    tyre = {"c_alpha": 13.0, "c_gamma": 0.8, "sigma_t": 0.2, "t_p": 0.0}
+    cases = {  # effects: (number of states, state index of phi, delta, phi_dot, delta_dot)
+        (): (4, (0, 1, 2, 3)),
+        ("rider_lean",): (6, (0, 1, 3, 4)),
+        ("tyre_slip",): (8, (0, 1, 4, 5)),
+        ("rider_lean", "tyre_slip"): (10, (0, 1, 5, 6)),
+    }
+    params = {"rider_lean": {"k_lean": 100.0, "c_lean": 10.0}, "tyre_slip": tyre}
+    for effects, (n, index) in cases.items():
+        ss = EffectModel(dict(bench, g=9.81), geometry, {e: params[e] for e in effects}).state_space([3.0, 6.0])
+        assert isinstance(ss, StateSpace) and ss.A.shape == (2, n, n) and ss.B.shape == (2, n, 2)
+        assert ss.inputs == ("T_phi", "T_delta") and ss.output_states == index
+        np.testing.assert_array_equal(ss.speeds, [3.0, 6.0])

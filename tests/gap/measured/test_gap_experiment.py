@@ -13,10 +13,11 @@ import numpy as np
 import pytest
 
 import bikerider
+from bikerider.diagnose import load_records
 from bikerider.errors import FileFormatError, InputError
 from bikerider.gap.measured.control import ControlLaw, GainSchedule
 from bikerider.gap.measured.records import DetectorSettings, detect_windows, fit_records
-from bikerider.io.experiment import load_records, read_experiment, read_log, read_manifest
+from bikerider.io.experiment import read_experiment, read_log, read_manifest
 
 SBW = Path(bikerider.__file__).parent / "data" / "gap" / "pasma2024_sbw"
 

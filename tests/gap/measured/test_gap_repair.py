@@ -21,10 +21,11 @@ from hypothesis import strategies as st
 from sbw_damage import ROLL_RATE_BIAS, damaged_copy
 
 import bikerider
+from bikerider.diagnose import load_records
 from bikerider.gap.measured.control import NO_CONTROL
 from bikerider.gap.measured.records import Record, fit_record, fit_records
 from bikerider.gap.measured.repair import repair_record, repair_tags
-from bikerider.io.experiment import load_records, read_experiment
+from bikerider.io.experiment import read_experiment
 
 SBW = Path(bikerider.__file__).parent / "data" / "gap" / "pasma2024_sbw"
 WEAVE = complex(-2.5, 7.5)  # [1/s]

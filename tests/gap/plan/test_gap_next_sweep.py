@@ -45,8 +45,8 @@ def test_the_frequency_response_is_the_transfer_function_of_the_closed_loop(ride
         ss = EffectModel(nominal(riderless), riderless.geometry, effects).state_space([speed])
         A, b = ss.closed_loop(gains)[0], ss.B[0, :, 1]
         roll, steer = _second_order(riderless, effects, speed, omegas, gains)
-        assert response(A, b, ss.outputs[2], omegas) == pytest.approx(roll, rel=1e-9)
-        assert response(A, b, ss.outputs[1], omegas) == pytest.approx(steer, rel=1e-9)
+        assert response(A, b, ss.output_states[2], omegas) == pytest.approx(roll, rel=1e-9)
+        assert response(A, b, ss.output_states[1], omegas) == pytest.approx(steer, rel=1e-9)
 
 
 def test_a_multisine_has_its_peak_and_its_lines_on_the_grid():

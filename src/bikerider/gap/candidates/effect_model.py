@@ -4,10 +4,14 @@ One :class:`EffectModel` is the Whipple bicycle (benchmark parameters) plus the 
 built from the generated code of ``derive/gap_effects.py``:
 
 * no ``rider_lean`` and no ``tyre_slip``: ``whipple_extended_state_matrices`` (state
-  ``[phi, delta, phid, deltad]``);
-* ``rider_lean``: ``rider_lean_matrices`` (state ``[phi, delta, theta, phid, deltad, thetad]``);
-* ``tyre_slip``: ``tyre_slip_descriptor`` (state ``[phi, delta, (theta,) u, r, phid, deltad,
-  (thetad,) F_R, F_F]``).
+  ``[phi, delta, phi_dot, delta_dot]``);
+* ``rider_lean``: ``rider_lean_matrices`` (state ``[phi, delta, theta, phi_dot, delta_dot,
+  theta_dot]``);
+* ``tyre_slip``: ``tyre_slip_descriptor`` (state ``[phi, delta, (theta,) u, r, phi_dot, delta_dot,
+  (theta_dot,) F_R, F_F]``).
+
+Each is a :class:`bikerider.benchmark.state_space.StateSpace` (the one state-space class of the
+package), its outputs the states ``phi, delta, phi_dot, delta_dot``.
 
 Steer inertia, damping, stiffness and the passive arms enter every one of them.  A known control
 law acting during the measurements, steer torque ``T_delta = k_phi phi + k_phid phid + k_delta delta
@@ -26,7 +30,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from bikerider.benchmark.closed_loop import closed_loop_matrix
+from bikerider.benchmark.quartic import quartic_roots
+from bikerider.benchmark.simulation import expm
+from bikerider.benchmark.state_space import StateSpace
 from bikerider.errors import InputError
 from bikerider.gap.measured.control import GAIN_NAMES  # noqa: F401  (the order of the gain arrays)
 from bikerider.generated import gap_effects as gen
@@ -80,35 +86,6 @@ class RiderGeometry:
                     raise InputError(f"upper_body.{key}", value, "a finite number")
             if self.upper_body["m_u"] <= 0 or self.upper_body["IUxx"] <= 0 or self.upper_body["IUzz"] <= 0:
                 raise InputError("upper_body", self.upper_body, "a positive mass and positive moments of inertia")
-
-
-@dataclass
-class StateSpace:
-    """``x' = A x + B f`` at each speed, ``f = [T_phi, T_delta]``.
-
-    Attributes
-    ----------
-    A : ndarray, shape (..., S, n, n)
-    B : ndarray, shape (..., S, n, 2)
-    outputs : tuple of int
-        State indices of ``phi, delta, phid, deltad``.
-    states : tuple of str
-    """
-
-    A: np.ndarray
-    B: np.ndarray
-    outputs: tuple[int, int, int, int]
-    states: tuple[str, ...]
-
-    def closed_loop(self, gains: np.ndarray | None) -> np.ndarray:
-        """``A + B[:, 1] k^T C`` for gains of shape ``(4,)`` or ``(..., S, 4)``."""
-        if gains is None:
-            return self.A
-        gains = np.asarray(gains, dtype=float)
-        if not np.any(gains):
-            return self.A
-        phi, delta, phid, deltad = self.outputs
-        return closed_loop_matrix(self.A, self.B[..., :, 1], gains, (phi, phid, delta, deltad))  # GAIN_NAMES order
 
 
 def _as_float(value) -> np.ndarray:
@@ -181,6 +158,10 @@ class EffectModel:
     def state_space(self, speeds) -> StateSpace:
         """State-space matrices at each speed (shape ``(..., S, n, n)``).
 
+        Inputs ``T_phi, T_delta``; outputs the states ``phi, delta, phi_dot, delta_dot``
+        (:meth:`~bikerider.benchmark.state_space.StateSpace.output_states` gives their state
+        indices); the states are named as in the module docstring, rates with ``_dot``.
+
         Raises
         ------
         InputError
@@ -193,7 +174,7 @@ class EffectModel:
         args = self._args()
         if not self.lean and not self.tyre:
             A, B = gen.whipple_extended_state_matrices(**args, v=speeds)
-            return StateSpace(A, B, (0, 1, 2, 3), ("phi", "delta", "phid", "deltad"))
+            return StateSpace.of_states(speeds, A, B, ("phi", "delta", "phi_dot", "delta_dot"))
         lean_args = dict(args, **self._upper(), k_lean=self._extra("k_lean", 1.0), c_lean=self._extra("c_lean", 0.0))
         if not self.tyre:
             M, C, K = gen.rider_lean_matrices(**lean_args, v=speeds)
@@ -211,7 +192,7 @@ class EffectModel:
             A[..., n:, n:] = -Minv_C
             B = np.zeros(shape + (2 * n, 2))
             B[..., n:, :] = Minv_B
-            return StateSpace(A, B, (0, 1, 3, 4), ("phi", "delta", "theta", "phid", "deltad", "thetad"))
+            return StateSpace.of_states(speeds, A, B, ("phi", "delta", "theta", "phi_dot", "delta_dot", "theta_dot"))
         tyre_args = dict(lean_args, **{k: self._extra(k) for k in STRUCTURAL_KEYS["tyre_slip"]})
         E, Ad, Bd = gen.tyre_slip_descriptor(**tyre_args, v=speeds)
         names = gen_state_names()
@@ -221,10 +202,7 @@ class EffectModel:
             Ad = Ad[..., keep, :][..., :, keep]
             Bd = Bd[..., keep, :]
             names = tuple(names[k] for k in keep)
-            outputs = (0, 1, 4, 5)
-        else:
-            outputs = (0, 1, 5, 6)
-        return StateSpace(np.linalg.solve(E, Ad), np.linalg.solve(E, Bd), outputs, names)
+        return StateSpace.of_states(speeds, np.linalg.solve(E, Ad), np.linalg.solve(E, Bd), names)
 
     # -- analyses --------------------------------------------------------------------------------
     def eigenvalues(self, speeds, gains=None) -> np.ndarray:
@@ -263,7 +241,7 @@ class EffectModel:
         A = ss.A[..., None, :, :]
         B = ss.B[..., None, :, :]
         resolvent_B = np.linalg.solve(s * np.eye(n) - A, B.astype(complex))
-        G = resolvent_B[..., list(ss.outputs[:2]), :]
+        G = resolvent_B[..., list(ss.output_states[:2]), :]
         return np.linalg.inv(G)
 
     def simulate(
@@ -286,8 +264,6 @@ class EffectModel:
         dict
             ``time`` and ``phi, delta, phid, deltad`` at the sample times.
         """
-        from scipy.linalg import expm
-
         time = _as_float(time)
         if time.ndim != 1 or time.size < 2 or not np.all(np.isfinite(time)) or np.any(np.diff(time) <= 0):
             raise InputError("time", time[:5].tolist(), "increasing finite sample times")
@@ -297,7 +273,7 @@ class EffectModel:
         for name, value in (initial or {"phid": 0.5}).items():
             if name not in OUTPUT_NAMES:
                 raise InputError("initial", name, "one of " + ", ".join(OUTPUT_NAMES))
-            x0[ss.outputs[OUTPUT_NAMES.index(name)]] = float(value)
+            x0[ss.output_states[OUTPUT_NAMES.index(name)]] = float(value)
         states = np.empty((time.size, x0.size))
         states[0] = x0
         x = x0
@@ -309,7 +285,7 @@ class EffectModel:
             x = steps[dt] @ x
             states[k] = x
         out = {"time": time.copy()}
-        for name, index in zip(OUTPUT_NAMES, ss.outputs):
+        for name, index in zip(OUTPUT_NAMES, ss.output_states):
             out[name] = states[:, index].real
         return out
 
@@ -324,8 +300,6 @@ def eigenvalues_of(A: np.ndarray) -> np.ndarray:
     """
     if A.shape[-1] != 4 or not np.all(np.isfinite(A)):
         return np.linalg.eigvals(A)
-    from bikerider.benchmark.quartic import quartic_roots
-
     eye = np.eye(4)
     c = np.empty(A.shape[:-2] + (5,))
     c[..., 0] = 1.0
@@ -339,4 +313,4 @@ def eigenvalues_of(A: np.ndarray) -> np.ndarray:
 
 def gen_state_names() -> tuple[str, ...]:
     """State names of the generated tyre model (with lean)."""
-    return ("phi", "delta", "theta", "u", "r", "phid", "deltad", "thetad", "F_R", "F_F")
+    return ("phi", "delta", "theta", "u", "r", "phi_dot", "delta_dot", "theta_dot", "F_R", "F_F")

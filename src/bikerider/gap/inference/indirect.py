@@ -397,7 +397,7 @@ class RecordSimulator:
         ss = model.state_space(speeds.ravel())
         A = ss.closed_loop(np.tile(self.gains[index], (P, 1)))
         n = A.shape[-1]
-        return A.reshape(P, R, n, n), ss.outputs
+        return A.reshape(P, R, n, n), ss.output_states
 
     def apparent(self, values: dict | None = None, config: dict | None = None, scale=None) -> np.ndarray:
         """Apparent eigenvalue of every record, ``(P, R)`` complex, for batched linear models.
@@ -461,7 +461,7 @@ def _linear_response(batch: RecordBatch, A: np.ndarray, outputs: tuple) -> np.nd
     linear least squares on the record's state signals, each weighted by its scatter
     (:func:`_initial_states`).
     """
-    from bikerider.gap.inference.timedomain import expm
+    from bikerider.benchmark.simulation import expm
 
     P, R, n = A.shape[0], A.shape[1], A.shape[-1]
     rows = [outputs[OBSERVED[s]] for s in batch.signals]

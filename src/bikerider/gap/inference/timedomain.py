@@ -27,9 +27,12 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.optimize import least_squares
 
+from bikerider.benchmark.simulation import discretise, expm
 from bikerider.errors import FitError
 from bikerider.gap.candidates.effect_model import EffectModel
+from bikerider.gap.candidates.effects import EFFECTS
 from bikerider.gap.measured.records import Record
 
 OBSERVED = {"roll_angle": 0, "steer_angle": 1, "roll_rate": 2, "steer_rate": 3}
@@ -48,28 +51,6 @@ FIT_STEP = 0.02
 """Sampling step of the time-domain fits [s]: records sampled faster are compared at every k-th sample."""
 GN_STEPS = 1
 """Gauss-Newton steps refining each record's initial state under friction."""
-
-
-def expm(M: np.ndarray) -> np.ndarray:
-    """Matrix exponential of a batch of small matrices ``(..., n, n)``, vectorised.
-
-    Scaling and squaring: each matrix is scaled by a power of two to a 1-norm of at most 1/2, the
-    Taylor series is summed to degree 14 (truncation below 1e-16 relative), and the result squared
-    back.  (``scipy.linalg.expm`` loops over a batch in Python, far slower for the thousands of
-    4x4 and 5x5 matrices of a time-domain fit.)
-    """
-    M = np.asarray(M, dtype=float)
-    n = M.shape[-1]
-    norm = np.max(np.sum(np.abs(M), axis=-2), axis=-1)
-    s = np.ceil(np.log2(np.maximum(norm, 1e-300) / 0.5)).clip(0, None).astype(int)
-    X = M / (2.0**s)[..., None, None]
-    eye = np.eye(n)
-    E = eye + X / 14.0
-    for k in range(13, 0, -1):
-        E = eye + (X @ E) / k
-    for k in range(int(s.max()) if s.size else 0):
-        E = np.where((k < s)[..., None, None], E @ E, E)
-    return E
 
 
 @dataclass
@@ -153,8 +134,6 @@ class Layout:
 
     @staticmethod
     def of(effects: tuple[str, ...]) -> Layout:
-        from bikerider.gap.candidates.effects import EFFECTS
-
         names, lower, upper, start = [], [], [], []
         for effect in sorted(effects, key=lambda e: e != "steer_friction"):
             for p in EFFECTS[effect].parameters:
@@ -200,12 +179,10 @@ def systems(values: dict, geometry, records: list[Record], layout: Layout, theta
     flat_speeds = (np.where(measured[None, :], scale[:, None], 1.0) * speeds[None, :]).ravel()
     flat_values = {k: v for k, v in values.items()}
     flat_config = {e: {k: np.repeat(v, R) for k, v in p.items()} for e, p in config.items()}
-    from bikerider.gap.candidates.effect_model import EffectModel
-
     ss = EffectModel(flat_values, geometry, flat_config).state_space(flat_speeds)
     A = ss.closed_loop(np.tile(gains, (P, 1)))
     n = A.shape[-1]
-    return (A.reshape(P, R, n, n), ss.B[..., :, 1].reshape(P, R, n), ss.outputs, layout.value(theta, "T_coulomb"))
+    return (A.reshape(P, R, n, n), ss.B[..., :, 1].reshape(P, R, n), ss.output_states, layout.value(theta, "T_coulomb"))
 
 
 def closed_loop(model: EffectModel, records: list[Record]) -> tuple[np.ndarray, np.ndarray, tuple[int, ...]]:
@@ -213,7 +190,7 @@ def closed_loop(model: EffectModel, records: list[Record]) -> tuple[np.ndarray, 
     speeds = np.array([r.speed for r in records])
     gains = np.array([r.gains for r in records])
     ss = model.state_space(speeds)
-    return ss.closed_loop(gains), ss.B[..., :, 1], ss.outputs
+    return ss.closed_loop(gains), ss.B[..., :, 1], ss.output_states
 
 
 def _transitions(A: np.ndarray, dt: float, N: int) -> np.ndarray:
@@ -290,11 +267,8 @@ def simulate_friction(
     stiffness = T_max / SMOOTHING * float(np.max(np.abs(b[..., rate_index]))) if T_max > 0 else 0.0
     substeps = max(1, math.ceil(dt / MAX_STEP - 1e-9), math.ceil(dt * stiffness))
     h = dt / substeps
-    aug = np.zeros(A.shape[:-2] + (n + 1, n + 1))
-    aug[..., :n, :n] = A
-    aug[..., :n, n] = b
-    E = expm(aug * h)
-    Phi, Gamma = E[..., :n, :n], E[..., :n, n]
+    Phi, Gamma, _ = discretise(A, b[..., None], h, hold="zoh")  # the friction torque held over each step
+    Gamma = Gamma[..., 0]
     # The loop runs N * substeps times on small arrays: every system is a column of arrays whose
     # last axis runs over the systems (state rows first), so each step is a few vectorised operations
     # over all of them; the matrix-vector product by einsum over that layout.
@@ -400,8 +374,6 @@ def fit_time_domain(records: list[Record], values: dict, geometry, layout: Layou
     partner absent), else from the best of a small grid over the literature ranges of the friction
     with the partner absent.
     """
-    from scipy.optimize import least_squares
-
     batches = make_batches(records, min_step=FIT_STEP)
     lower, upper = np.asarray(layout.lower, float), np.asarray(layout.upper, float)
 

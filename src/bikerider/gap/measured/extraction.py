@@ -39,6 +39,11 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.optimize import least_squares
+
+from bikerider.errors import FitError
+from bikerider.fitting.damped_oscillation import MIN_SAMPLES, fit_damped_oscillation
+from bikerider.gap.distributions import f as f_dist
 
 
 @dataclass(frozen=True)
@@ -253,12 +258,6 @@ def weave_eigenvalue(time, signal, *, min_cycles: float = MIN_CYCLES) -> WeaveEs
 
 
 def _weave_eigenvalue(time, signal, min_cycles: float) -> WeaveEstimate:
-    from scipy.optimize import least_squares
-
-    from bikerider.errors import FitError
-    from bikerider.fitting.damped_oscillation import MIN_SAMPLES, fit_damped_oscillation
-    from bikerider.gap.distributions import f as f_dist
-
     t = np.asarray(time, dtype=float)
     y = np.asarray(signal, dtype=float)
     if t.shape != y.shape or t.ndim != 1:
@@ -350,8 +349,6 @@ def _weave_eigenvalue(time, signal, min_cycles: float) -> WeaveEstimate:
 
 def _bounded(x0: np.ndarray, tau: np.ndarray, y: np.ndarray):
     """The two-mode fit with its extra mode held inside :data:`EXTRA_MODE_RANGE` (``None`` if it fails)."""
-    from scipy.optimize import least_squares
-
     margin = 1e-6
     lower = np.full(7, -np.inf)
     upper = np.full(7, np.inf)
@@ -374,8 +371,6 @@ def _bounded(x0: np.ndarray, tau: np.ndarray, y: np.ndarray):
 
 
 def _checked(estimate: WeaveEstimate) -> WeaveEstimate:
-    from bikerider.errors import FitError
-
     if not estimate.r2 >= MIN_R2:
         raise FitError(
             f"poor fit: the damped oscillation explains r^2 = {estimate.r2:.2f} of the record "

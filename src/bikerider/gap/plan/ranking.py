@@ -806,7 +806,7 @@ class NextExperiment:
         values, config, scale, P = self._configured(effects, X, values)
         if scale is None or not measured:
             ss = EffectModel(values, p.geometry, config).state_space(speeds)
-            A, b, outputs = ss.closed_loop(gains), ss.B[..., :, 1], ss.outputs
+            A, b, outputs = ss.closed_loop(gains), ss.B[..., :, 1], ss.output_states
         else:  # a speed sensor's scale per vector: one model per vector
 
             def row(x, i):
@@ -823,7 +823,7 @@ class NextExperiment:
                 parts.append((ss.closed_loop(gains).reshape((len(sweeps),) + ss.A.shape[-2:]), ss.B[..., :, 1]))
             A = np.array([a for a, _ in parts])
             b = np.array([np.reshape(x, A.shape[1:-1]) for _, x in parts])
-            outputs = ss.outputs
+            outputs = ss.output_states
         n = A.shape[-1]
         return np.broadcast_to(A, (P, len(sweeps), n, n)), np.broadcast_to(b, (P, len(sweeps), n)), outputs
 
