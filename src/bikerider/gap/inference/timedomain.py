@@ -30,6 +30,7 @@ import numpy as np
 
 from bikerider.errors import FitError
 from bikerider.gap.candidates.effect_model import EffectModel
+from bikerider.gap.candidates.effects import EFFECTS, SPEED_SENSOR, STEER_DAMPING, STEER_FRICTION
 from bikerider.gap.measured.records import Record
 
 OBSERVED = {"roll_angle": 0, "steer_angle": 1, "roll_rate": 2, "steer_rate": 3}
@@ -153,10 +154,8 @@ class Layout:
 
     @staticmethod
     def of(effects: tuple[str, ...]) -> Layout:
-        from bikerider.gap.candidates.effects import EFFECTS
-
         names, lower, upper, start = [], [], [], []
-        for effect in sorted(effects, key=lambda e: e != "steer_friction"):
+        for effect in sorted(effects, key=lambda e: e != STEER_FRICTION):
             for p in EFFECTS[effect].parameters:
                 names.append((effect, p.name))
                 lower.append(p.bounds[0])
@@ -188,9 +187,9 @@ def systems(values: dict, geometry, records: list[Record], layout: Layout, theta
     config: dict[str, dict[str, np.ndarray]] = {}
     c = layout.value(theta, "c_viscous")
     if np.any(c != 0):
-        config["steer_damping"] = {"c_steer": c}
+        config[STEER_DAMPING] = {"c_steer": c}
     for effect, param in layout.names:
-        if effect not in ("steer_friction", "speed_sensor"):
+        if effect not in (STEER_FRICTION, SPEED_SENSOR):
             config.setdefault(effect, {})[param] = layout.value(theta, param)
     scale = layout.value(theta, "speed_scale", 1.0)
     measured = np.array([r.speed_measured for r in records])
@@ -200,8 +199,6 @@ def systems(values: dict, geometry, records: list[Record], layout: Layout, theta
     flat_speeds = (np.where(measured[None, :], scale[:, None], 1.0) * speeds[None, :]).ravel()
     flat_values = {k: v for k, v in values.items()}
     flat_config = {e: {k: np.repeat(v, R) for k, v in p.items()} for e, p in config.items()}
-    from bikerider.gap.candidates.effect_model import EffectModel
-
     ss = EffectModel(flat_values, geometry, flat_config).state_space(flat_speeds)
     A = ss.closed_loop(np.tile(gains, (P, 1)))
     n = A.shape[-1]
