@@ -20,7 +20,7 @@ from scipy.stats import norm
 from bikerider.errors import InputError
 from bikerider.generated.manifest import TYRE_ARGS
 
-# The names, typed here and nowhere else (tests/test_gap_registry.py): take them from here.
+# The names, typed here and nowhere else (tests/gap/candidates/test_gap_registry.py): take them from here.
 PARAMETERS = "parameters"
 STEER_DAMPING = "steer_damping"
 STEER_INERTIA = "steer_inertia"
