@@ -88,16 +88,7 @@ def select(
             ok, checks = priors.plausibility(fits.fit_of((PARAMETERS,)))
             if ok:
                 return Selection([PARAMETERS], {"rule": "plausible parameter errors explain the gap"})
-            parameters_note = (
-                "the gap lies within the parameters' uncertainty, but the parameter fit needs "
-                "implausible shifts (" + "; ".join(implausible_reasons(checks)) + "): the candidates "
-                "are compared as for a structural gap"
-            )
-        else:
-            parameters_note = (
-                "the gap lies within the parameters' uncertainty (parameters are not a candidate): "
-                "the candidates are compared as for a structural gap"
-            )
+        parameters_note = _parameters_note(checks if PARAMETERS in candidates else None)
     if len(fits.folds) < 2:
         return Selection([], {"rule": "fewer than two folds: no held-out comparison, nothing selected"})
     p = fits.problem
@@ -157,23 +148,8 @@ def select(
         if j["eligible"] and j["score"] > floor_score and chosen is best_single:
             chosen = r
     # the best held-out fit overall, and the best single one: when not chosen and unusual, say why
-    best_unusual = {}
-    for pool, key in ((singles + pairs, "best_implausible"), (singles, "best_single_implausible")):
-        best = min(pool, key=lambda r: r.error_after) if pool else None
-        if best is not None and (chosen is None or best.effects != chosen.effects):
-            ok, checks = priors.plausibility(fits.fit_of(best.effects))
-            if not ok:
-                j = judged.get(best.effects)
-                entry = {"effects": list(best.effects), "heldout_error": best.error_after}
-                entry["why"] = implausible_reasons(checks)
-                if j is not None and chosen is not None:
-                    entry["log_odds_vs_selected"] = j["score"] - judged[chosen.effects]["score"]
-                ranked = next((r for r in ranking if (r["effect"],) == best.effects), None)
-                if ranked is not None:  # where the ranking (ties to the simpler) puts it
-                    entry["rank"], entry["tied_with"] = ranked["rank"], list(ranked["tied_with"])
-                best_unusual[key] = entry
-    best_implausible = best_unusual.get("best_implausible")
-    best_single_implausible = best_unusual.get("best_single_implausible")
+    best_implausible = _unusual_best(singles + pairs, chosen, judged, ranking, fits, priors)
+    best_single_implausible = _unusual_best(singles, chosen, judged, ranking, fits, priors)
     if best_single_implausible == best_implausible:
         best_single_implausible = None
     selection: dict = {"rule": RULE, "considered": considered, "lack_of_fit": lack}
@@ -190,3 +166,44 @@ def select(
     return Selection(
         list(chosen.effects) if chosen is not None else [], selection, best_implausible, best_single_implausible
     )
+
+
+def _parameters_note(checks: list[dict] | None) -> str:
+    """Why a gap within the parameters' uncertainty is compared as a structural one: the parameter fit's
+    implausible shifts (its ``checks``), or ``None``: the parameters are not a candidate."""
+    if checks is None:
+        return (
+            "the gap lies within the parameters' uncertainty (parameters are not a candidate): "
+            "the candidates are compared as for a structural gap"
+        )
+    return (
+        "the gap lies within the parameters' uncertainty, but the parameter fit needs "
+        "implausible shifts (" + "; ".join(implausible_reasons(checks)) + "): the candidates "
+        "are compared as for a structural gap"
+    )
+
+
+def _unusual_best(
+    pool: list[CrossValidation],
+    chosen: CrossValidation | None,
+    judged: dict[tuple[str, ...], dict],
+    ranking: list[dict],
+    fits: Fits,
+    priors: Priors,
+) -> dict | None:
+    """The best held-out fit of ``pool`` when it is not the one chosen and its values are unusual: what
+    it needs (``why``), its log odds against the selection and its place in the ranking; else ``None``."""
+    best = min(pool, key=lambda r: r.error_after) if pool else None
+    if best is None or (chosen is not None and best.effects == chosen.effects):
+        return None
+    ok, checks = priors.plausibility(fits.fit_of(best.effects))
+    if ok:
+        return None
+    j = judged.get(best.effects)
+    entry = {"effects": list(best.effects), "heldout_error": best.error_after, "why": implausible_reasons(checks)}
+    if j is not None and chosen is not None:
+        entry["log_odds_vs_selected"] = j["score"] - judged[chosen.effects]["score"]
+    ranked = next((r for r in ranking if (r["effect"],) == best.effects), None)
+    if ranked is not None:  # where the ranking (ties to the simpler) puts it
+        entry["rank"], entry["tied_with"] = ranked["rank"], list(ranked["tied_with"])
+    return entry
