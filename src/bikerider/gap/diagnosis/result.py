@@ -1,58 +1,61 @@
 """Where, whether, which and how far: the sim-to-real gap diagnosis.
 
 Where.  Every measured scalar's residual (measured minus nominal model) is divided by the combined
-standard uncertainty of data and model parameters (:mod:`bikerider.gap.inference.problem`); residuals are
-summarised in a gap map by mode (weave, capsize, castor, or identified canonical entries), speed
+standard uncertainty of data and model parameters (:mod:`bikerider.gap.inference.problem`); residuals
+are summarised in a gap map by mode (weave, capsize, castor, or identified canonical entries), speed
 band and quantity (real part, imaginary part, entry), each cell with its chi-square and p-value.
 
-Whether.  The whole gap is tested with the full covariance, ``chi2 = r^T (D + J J^T)^-1 r`` with
-``n`` degrees of freedom, and against the data's noise alone, ``r^T D^-1 r``.  Not significant at
-:data:`~bikerider.gap.diagnosis.statistics.ALPHA` against either: verdict ``none``.  Significant against the data alone but within the
-combined uncertainty: the parameters' uncertainty covers the gap, verdict ``parameters``.  Otherwise
-the benchmark parameters are fitted with their uncertainties as a Gaussian prior (maximum a
-posteriori); if the fitted model passes the same test (data plus prior chi-square, ``n`` degrees of
-freedom) plausible parameter errors explain the gap (``parameters``), else it is ``structural``.
-With verdict ``parameters`` the parameter fit is selected when it is plausible; when it needs
-implausible shifts the candidates are compared as for a structural gap.
+Whether.  The whole gap is tested with the full covariance, ``chi2 = r^T (D + J J^T)^-1 r`` with ``n``
+degrees of freedom, and against the data's noise alone, ``r^T D^-1 r``.  Not significant at
+:data:`~bikerider.gap.diagnosis.statistics.ALPHA` against either: verdict ``none``.  Significant against
+the data alone but within the combined uncertainty: the parameters' uncertainty covers the gap, verdict
+``parameters``.  Otherwise the benchmark parameters are fitted with their uncertainties as a Gaussian
+prior (maximum a posteriori); if the fitted model passes the same test (data plus prior chi-square,
+``n`` degrees of freedom) plausible parameter errors explain the gap (``parameters``), else it is
+``structural``. With verdict ``parameters`` the parameter fit is selected when it is plausible; when it
+needs implausible shifts the candidates are compared as for a structural gap.
 
-Which.  Folds are the data's groups (runs, riders, environments; more than :data:`~bikerider.gap.diagnosis.folds.MAX_FOLDS` groups
-are held out in blocks of whole groups), or, for a single group, contiguous speed bands; never
-random points.  Every candidate is fitted on the training folds and scored on
-the held-out fold; the held-out error is the root mean square of the normalised residuals over all
-held-out points.  Candidates are ranked by it; a candidate within :data:`~bikerider.gap.diagnosis.statistics.TIE_RELATIVE` of a better
-one, or not significantly better at :data:`~bikerider.gap.diagnosis.statistics.TIE_P`, is
-tied with it, and within a tie the candidate with fewer fitted parameters ranks first (Occam).
-"Better" is a paired bootstrap of the held-out points' RMS error (:func:`~bikerider.gap.diagnosis.statistics.significantly_better`).
-Pairs are cross-validated as well (fitted jointly on the same folds): every pair of candidates that
-each, alone, predict the held-out folds better than the nominal model (by more than 1 %; an effect that makes the
-held-out predictions worse on its own is not searched further).
+Which.  Folds are the data's groups (runs, riders, environments; more than
+:data:`~bikerider.gap.diagnosis.folds.MAX_FOLDS` groups are held out in blocks of whole groups), or, for
+a single group, contiguous speed bands; never random points.  Every candidate is fitted on the training
+folds and scored on the held-out fold; the held-out error is the root mean square of the normalised
+residuals over all held-out points.  Candidates are ranked by it; a candidate within
+:data:`~bikerider.gap.diagnosis.statistics.TIE_RELATIVE` of a better one, or not significantly better at
+:data:`~bikerider.gap.diagnosis.statistics.TIE_P`, is tied with it, and within a tie the candidate with
+fewer fitted parameters ranks first (Occam). "Better" is a paired bootstrap of the held-out points' RMS
+error (:func:`~bikerider.gap.diagnosis.statistics.significantly_better`). Pairs are cross-validated as
+well (fitted jointly on the same folds): every pair of candidates that each, alone, predict the held-out
+folds better than the nominal model (by more than 1 %; an effect that makes the held-out predictions
+worse on its own is not searched further).
 
 Usual, and priors.  Every fitted value of a candidate (fitted to all the data) has a usual range (the
 literature's, or the bicycle's own ``[plausible]`` table) and a prior with its source
-(:class:`bikerider.gap.candidates.effects.Prior`; the ``[plausible]`` range made a prior).  A value outside its usual
-range is flagged ("above the usual ... from ...: check ..."), never refused: only what is physically
-impossible (negative damping, mass, inertia) is a bound of the fit.  A value is usable when the data
-determine it (its standard error no larger than the width of its usual range) and it is not pinned at the
-edge of the search.  A candidate is ``plausible`` when every value is usual and usable; ``parameters`` when
-its shifts pass their prior test (chi-square at 1 %) with none pinned at a bound.
+(:class:`bikerider.gap.candidates.effects.Prior`; the ``[plausible]`` range made a prior).  A value
+outside its usual range is flagged ("above the usual ... from ...: check ..."), never refused: only what
+is physically impossible (negative damping, mass, inertia) is a bound of the fit.  A value is usable when
+the data determine it (its standard error no larger than the width of its usual range) and it is not
+pinned at the edge of the search.  A candidate is ``plausible`` when every value is usual and usable;
+``parameters`` when its shifts pass their prior test (chi-square at 1 %) with none pinned at a bound.
 
 Selection (structural verdict).  The evidence for a set of effects is its held-out log-likelihood,
-``-sum(z^2) / (2 s^2)`` over the held-out points, plus the log prior ratio of its fitted values
-(``ln p(value) - ln p(mode)``, :meth:`~bikerider.gap.diagnosis.priors.Priors.log_prior`): roughly the log posterior odds against the
-nominal model, whose evidence is ``-sum(z_nominal^2) / (2 s^2)``.  ``s^2`` is the lack of fit, the
-smallest mean held-out ``z^2`` of any candidate or pair, at least 1 (:func:`~bikerider.gap.diagnosis.select.lack_of_fit`).  A candidate is eligible when it beats the
-nominal model significantly on the held-out folds, its log posterior odds against it are positive, and its
+``-sum(z^2) / (2 s^2)`` over the held-out points, plus the log prior ratio of its fitted values (``ln
+p(value) - ln p(mode)``, :meth:`~bikerider.gap.diagnosis.priors.Priors.log_prior`): roughly the log
+posterior odds against the nominal model, whose evidence is ``-sum(z_nominal^2) / (2 s^2)``.  ``s^2`` is
+the lack of fit, the smallest mean held-out ``z^2`` of any candidate or pair, at least 1
+(:func:`~bikerider.gap.diagnosis.select.lack_of_fit`).  A candidate is eligible when it beats the nominal
+model significantly on the held-out folds, its log posterior odds against it are positive, and its
 values are usable or it explains the held-out data to the noise floor (so "structural, selected nothing"
 never stands beside a candidate at the noise floor).  The first eligible single of the ranking is
-selected, unless another eligible single's evidence is higher by more than :data:`~bikerider.gap.diagnosis.select.PRIOR_ODDS` (19 to 1).
-A pair replaces it when the single leaves a gap above the noise floor (held-out RMS error against the
-data's noise above one) and an eligible pair beats it significantly with more evidence.  The values
-outside their usual range are flagged in the selection; the best held-out fit that is not selected is
-named with what it needs (``best_implausible``).
+selected, unless another eligible single's evidence is higher by more than
+:data:`~bikerider.gap.diagnosis.select.PRIOR_ODDS` (19 to 1). A pair replaces it when the single leaves
+a gap above the noise floor (held-out RMS error against the data's noise above one) and an eligible pair
+beats it significantly with more evidence.  The values outside their usual range are flagged in the
+selection; the best held-out fit that is not selected is named with what it needs
+(``best_implausible``).
 
-How far.  For the selection, the held-out error before and after per fold and overall, and the
-fraction of the gap above the noise floor removed: with ``G = mean(z^2) - 1`` (the noise floor of
-normalised residuals is ``E[z^2] = 1``), ``shrink = (G_before - G_after) / G_before``.
+How far.  For the selection, the held-out error before and after per fold and overall, and the fraction
+of the gap above the noise floor removed: with ``G = mean(z^2) - 1`` (the noise floor of normalised
+residuals is ``E[z^2] = 1``), ``shrink = (G_before - G_after) / G_before``.
 """
 
 from __future__ import annotations
