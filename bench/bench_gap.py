@@ -55,18 +55,18 @@ def workload():
 
 
 def time_diagnosis() -> tuple[float, int, dict]:
-    from bikerider.gap.diagnosis.result import Diagnosis
+    from bikerider.gap.diagnosis.result import diagnose
 
     model, data, empty = workload()
     start = time.perf_counter()
-    result = Diagnosis(model, data, empty).as_dict()
+    result = diagnose(model, data, empty).as_dict()
     return time.perf_counter() - start, len(data), result
 
 
 def time_sbw() -> tuple[dict[str, float], dict]:
     """Seconds of each stage of the SBW diagnosis from the raw logs, and its result."""
     from bikerider.diagnose import load_records
-    from bikerider.gap.diagnosis.result import Diagnosis
+    from bikerider.gap.diagnosis.result import diagnose
     from bikerider.gap.measured.records import fit_records
     from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
     from bikerider.io.experiment import read_manifest
@@ -82,7 +82,7 @@ def time_sbw() -> tuple[dict[str, float], dict]:
     fits = fit_records(records)
     stages["fit records"] = time.perf_counter() - t
     t = time.perf_counter()
-    result = Diagnosis(model, EigenvalueData.empty(), CanonicalData.empty(), records=fits).as_dict()
+    result = diagnose(model, EigenvalueData.empty(), CanonicalData.empty(), records=fits).as_dict()
     stages["diagnose"] = time.perf_counter() - t
     stages["total"] = time.perf_counter() - start
     return stages, result

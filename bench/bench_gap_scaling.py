@@ -77,11 +77,11 @@ def _measured(fn) -> tuple[float, int]:
 
 
 def time_rows(n: int, model) -> tuple[float, int]:
-    from bikerider.gap.diagnosis.result import Diagnosis
+    from bikerider.gap.diagnosis.result import diagnose
     from bikerider.gap.measured.tables import CanonicalData
 
     data = eigenvalue_table(n)
-    return _measured(lambda: Diagnosis(model, data, CanonicalData.empty(), ("steer_damping",)).as_dict())
+    return _measured(lambda: diagnose(model, data, CanonicalData.empty(), ("steer_damping",)).as_dict())
 
 
 def record(n: int):

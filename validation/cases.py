@@ -455,7 +455,7 @@ def measure(
     """Run every session of the protocol and extract the weave eigenvalues as from real runs.
 
     ``amplitudes``, when given, receives each fitted run's steer-rate amplitude (``sqrt(2)`` times its
-    RMS over the fitted window, as :meth:`bikerider.gap.diagnosis.result.Diagnosis.steer_rate_amplitudes`).
+    RMS over the fitted window, as :func:`bikerider.gap.diagnosis.priors.steer_rate_amplitudes`).
     """
     from bikerider.gap.measured.extraction import weave_eigenvalue
 
@@ -537,7 +537,7 @@ class CaseResult:
 
 def run_case(model: GapModelInput, truth_name: str, seed: int, protocol: Protocol = FULL) -> CaseResult:
     """Generate data from one truth, diagnose it blind, and score the predicted shrinkage."""
-    from bikerider.gap.diagnosis.result import Diagnosis
+    from bikerider.gap.diagnosis.result import diagnose
     from bikerider.gap.diagnosis.statistics import gap_shrink
     from bikerider.gap.inference.problem import GapProblem
 
@@ -547,7 +547,7 @@ def run_case(model: GapModelInput, truth_name: str, seed: int, protocol: Protoco
     simulator = TruthSimulator(model, truth, rng)
     data, notes = measure(simulator, protocol, rng)
     empty = CanonicalData([], np.empty(0), np.empty(0), [], {}, [])
-    diagnosis = Diagnosis(model, data, empty)
+    diagnosis = diagnose(model, data, empty)
     result = diagnosis.as_dict()
     predicted = actual = None
     if diagnosis.selected and result["how_far"] is not None:
@@ -822,7 +822,7 @@ def run_record_case(model: GapModelInput, truth_name: str, seed: int, protocol: 
     from dataclasses import replace
 
     model = replace(model, plausible={**STEER_MOTOR, **model.plausible})
-    from bikerider.gap.diagnosis.result import Diagnosis
+    from bikerider.gap.diagnosis.result import diagnose
     from bikerider.gap.diagnosis.statistics import gap_shrink
     from bikerider.gap.measured.records import fit_records
 
@@ -831,16 +831,16 @@ def run_record_case(model: GapModelInput, truth_name: str, seed: int, protocol: 
     rng = np.random.default_rng(seed)
     simulator = TruthSimulator(model, truth, rng)
     fits = fit_records(measure_records(simulator, protocol, rng))
-    diagnosis = Diagnosis(model, EigenvalueData.empty(), CanonicalData.empty(), records=fits)
+    diagnosis = diagnose(model, EigenvalueData.empty(), CanonicalData.empty(), records=fits)
     result = diagnosis.as_dict()
     predicted = actual = None
     if diagnosis.selected and result["how_far"] is not None:
         predicted = result["how_far"]["data_shrink"]
         fresh = fit_records(measure_records(simulator, protocol, np.random.default_rng(seed + 10_000)))
-        check = Diagnosis(model, EigenvalueData.empty(), CanonicalData.empty(), effects=(), records=fresh)
+        check = diagnose(model, EigenvalueData.empty(), CanonicalData.empty(), effects=(), records=fresh)
         p = check.problem
         if "steer_friction" in diagnosis.selected:
-            after = check._time_domain_predict(diagnosis.selected_fit, np.ones(len(p.obs), bool))
+            after = check.fits.time_domain_predict(diagnosis.selected_fit, np.ones(len(p.obs), bool))
         else:
             after = p.predict_batch(p.layout(diagnosis.selected_fit.effects), diagnosis.selected_fit.values[None, :])[0]
         sigma = np.sqrt(p.var_data)
@@ -1002,7 +1002,7 @@ def run_trial(models: dict[str, GapModelInput], effect: CalibrationEffect, seed:
     ``models`` holds ``"riderless"`` and ``"rider"`` nominal models; with ``effect.rider == "both"`` even
     seeds are riderless.
     """
-    from bikerider.gap.diagnosis.result import Diagnosis
+    from bikerider.gap.diagnosis.result import diagnose
     from bikerider.gap.diagnosis.statistics import gap_shrink
     from bikerider.gap.inference.problem import GapProblem
 
@@ -1039,7 +1039,7 @@ def run_trial(models: dict[str, GapModelInput], effect: CalibrationEffect, seed:
             time.perf_counter() - start,
             amplitude,
         )
-    diagnosis = Diagnosis(model, data, empty)
+    diagnosis = diagnose(model, data, empty)
     result = diagnosis.as_dict()
     fit = diagnosis.fit_of((effect.candidate,)) if effect.candidate in diagnosis.candidates else None
     fitted = {}
@@ -1085,13 +1085,13 @@ def run_friction_trial(model: GapModelInput, seed: int, protocol: RecordProtocol
     """A record trial: pure Coulomb friction drawn over its prior, simulated in time, diagnosed from records.
 
     The fitted split (``T_coulomb``, ``c_viscous``) is scored against the truth (``c_viscous`` 0), and the
-    equivalent viscous damping (:meth:`bikerider.gap.diagnosis.result.Diagnosis.friction_equivalent`) against
+    equivalent viscous damping (:meth:`bikerider.gap.diagnosis.priors.Priors.friction_equivalent`) against
     ``4 T / (pi A)`` at the same median amplitude ``A``.
     """
     from dataclasses import replace
 
     from bikerider.gap.candidates.effects import EFFECTS
-    from bikerider.gap.diagnosis.result import Diagnosis
+    from bikerider.gap.diagnosis.result import diagnose
     from bikerider.gap.measured.records import fit_records
 
     start = time.perf_counter()
@@ -1103,7 +1103,7 @@ def run_friction_trial(model: GapModelInput, seed: int, protocol: RecordProtocol
     truth = Truth(effect.name, ("steer_friction",), {"T_coulomb": T}, f"T_coulomb {T:.3g}")
     simulator = TruthSimulator(model, truth, rng)
     fits = fit_records(measure_records(simulator, protocol, rng))
-    diagnosis = Diagnosis(model, EigenvalueData.empty(), CanonicalData.empty(), records=fits)
+    diagnosis = diagnose(model, EigenvalueData.empty(), CanonicalData.empty(), records=fits)
     result = diagnosis.as_dict()
     fitted: dict[str, dict] = {}
     reference = {"T_coulomb": T, "c_viscous": 0.0}
@@ -1112,7 +1112,7 @@ def run_friction_trial(model: GapModelInput, seed: int, protocol: RecordProtocol
         fit = diagnosis.fit_of(("steer_friction",))
         for k, name in enumerate(fit.names):
             fitted[name] = {"value": float(fit.values[k]), "ci95": [float(fit.ci_low[k]), float(fit.ci_high[k])]}
-        eq = diagnosis.friction_equivalent(fit)
+        eq = diagnosis.priors.friction_equivalent(fit)
         if eq is not None:
             amplitude = eq["amplitude"]
             fitted["c_equivalent"] = {"value": eq["c_equivalent"], "ci95": eq["ci95"], "separable": eq["separable"]}

@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from bikerider.gap.candidates.nominal import GapModelInput
-from bikerider.gap.diagnosis.result import Diagnosis
+from bikerider.gap.diagnosis.result import diagnose
 from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
 from bikerider.gap.plan.ranking import NextExperiment
 from validation.cases import TRUTHS, Protocol, Session, TruthSimulator, measure
@@ -73,7 +73,7 @@ class NextCase:
 def _resolved(model: GapModelInput, data: EigenvalueData, rivals: list[str], hidden: tuple[str, ...]):
     """Diagnose ``data`` with the rivals alone: (resolved, first-ranked with its ties)."""
 
-    d = Diagnosis(model, data, CanonicalData.empty(), effects=tuple(rivals))
+    d = diagnose(model, data, CanonicalData.empty(), effects=tuple(rivals))
     if not d.ranking:
         return False, "no ranking"
     first = d.ranking[0]
@@ -91,7 +91,7 @@ def run_next_case(model: GapModelInput, truth_name: str, seed: int, follow_up: i
     rng = np.random.default_rng(seed)
     simulator = TruthSimulator(model, truth, rng)
     data, _ = measure(simulator, NARROW, rng)
-    diagnosis = Diagnosis(model, data, CanonicalData.empty())
+    diagnosis = diagnose(model, data, CanonicalData.empty())
     first = diagnosis.ranking[0] if diagnosis.ranking else None
     rivals = [first["effect"]] + [t for t in first["tied_with"] if "+" not in t] if first else []
     hidden = {c for h in truth.effects for c in STANDS_FOR.get(h, (h,))}

@@ -400,7 +400,7 @@ def _sbw_section() -> list[str]:
     gains_slow = law(np.array([min(f["speed"] for f in slow), max(f["speed"] for f in slow)]))[:, 1]
     left_slowest = [e for e in rec["reasons"] if "5.4kph" in e["record"]]
     n_slowest = sum(1 for f in rec["list"] if "5.4kph" in f["record"])
-    amplitude = d.steer_rate_amplitude()
+    amplitude = d.priors.steer_rate_amplitude()
     scatter = []
     for group in {f["group"] for f in rec["list"] if f["used"]}:
         values = np.array([f["imag"] for f in rec["list"] if f["used"] and f["group"] == group])

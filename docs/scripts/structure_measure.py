@@ -788,7 +788,23 @@ def main(argv=None):
                 and tgt.id == "EFFECT_NAMES"
                 and isinstance(getattr(node, "value", None), ast.Tuple)
             ):
-                registry = (m, [e.value for e in node.value.elts if isinstance(e, ast.Constant)])
+                # the names typed in the tuple, or module-level constants holding them (NAME = "name")
+                consts = {
+                    n.targets[0].id: n.value.value
+                    for n in m.tree.body
+                    if isinstance(n, ast.Assign)
+                    and isinstance(n.targets[0], ast.Name)
+                    and isinstance(n.value, ast.Constant)
+                    and isinstance(n.value.value, str)
+                }
+                registry = (
+                    m,
+                    [
+                        e.value if isinstance(e, ast.Constant) else consts[e.id]
+                        for e in node.value.elts
+                        if isinstance(e, ast.Constant) or (isinstance(e, ast.Name) and e.id in consts)
+                    ],
+                )
     p("## Candidate effect names typed as string literals outside the registry\n")
     if registry:
         reg, names = registry

@@ -4,7 +4,7 @@ The diagnosis cross-validates every candidate, then every pair, each on its own:
 data and one per held-out fold.  Those are independent of each other, so
 :func:`cross_validate_all` hands them to worker processes, forked from the process that holds the
 diagnosis (the data, the fitted nominal model and the fits made so far are shared, not copied),
-and takes back each one's :class:`~bikerider.gap.diagnosis.result.CrossValidation` and the full-data fits
+and takes back each one's :class:`~bikerider.gap.diagnosis.fits.CrossValidation` and the full-data fits
 it made.  Every computation is the same as in one process (the order of the work changes nothing:
 each fit depends only on its own candidate), so the results are identical; the time is shared
 among the cores.
@@ -40,8 +40,8 @@ MIN_OBSERVATIONS = 100
 MIN_RECORDS = 8
 """The fewest records fitted on workers (a record fit takes a few hundredths of a second)."""
 
-_DIAGNOSIS = None
-"""The diagnosis the forked workers work on (set just before they are forked)."""
+_FITS = None
+"""The diagnosis's fits the forked workers work on (set just before they are forked)."""
 _TASK = None
 """The function :func:`map_forked`'s workers call (set just before they are forked)."""
 
@@ -120,43 +120,43 @@ def _pool(count: int):
 
 
 def _work(effects: tuple[str, ...]):
-    d = _DIAGNOSIS
-    known_full, known_timed = set(d.full_fits), set(d._time_domain_full)
-    result = d.cross_validate(effects)
-    full = {k: v for k, v in d.full_fits.items() if k not in known_full}
-    timed = {k: v for k, v in d._time_domain_full.items() if k not in known_timed}
+    fits = _FITS
+    known_full, known_timed = set(fits.full), set(fits.time_domain_full)
+    result = fits.cross_validate(effects)
+    full = {k: v for k, v in fits.full.items() if k not in known_full}
+    timed = {k: v for k, v in fits.time_domain_full.items() if k not in known_timed}
     return effects, result, full, timed
 
 
-def cross_validate_all(diagnosis, effect_sets, cost=len) -> None:
-    """Cross-validate ``effect_sets`` (tuples of effect names) of ``diagnosis`` on worker processes.
+def cross_validate_all(fits, effect_sets, cost=len) -> None:
+    """Cross-validate ``effect_sets`` (tuples of effect names) of a diagnosis's fits on worker processes.
 
-    Fills the diagnosis's caches (``cv``, ``full_fits``, its time-domain fits) as its own
-    ``cross_validate`` would; with fewer than two workers or sets to do, does nothing (the
-    diagnosis then works them out one by one when it asks for them).
-    ``cost`` ranks a set's expected cost (the costliest start first).
+    Fills the caches of ``fits`` (a :class:`~bikerider.gap.diagnosis.fits.Fits`: its cross-validations,
+    its fits to all the data and its time-domain fits) as its own ``cross_validate`` would; with fewer than
+    two workers or sets to do, does nothing (the diagnosis then works them out one by one when it asks
+    for them).  ``cost`` ranks a set's expected cost (the costliest start first).
     """
-    global _DIAGNOSIS
-    todo = [tuple(e) for e in dict.fromkeys(tuple(e) for e in effect_sets) if tuple(e) not in diagnosis.cv]
+    global _FITS
+    todo = [tuple(e) for e in dict.fromkeys(tuple(e) for e in effect_sets) if tuple(e) not in fits.cv]
     count = min(workers(), len(todo))
     # workers pay where the candidates are costly: records (each fit simulates them) or many observations
-    if not _can_fork(count) or not (diagnosis.record_rows or len(diagnosis.problem.obs) >= MIN_OBSERVATIONS):
+    if not _can_fork(count) or not (fits.record_rows or len(fits.problem.obs) >= MIN_OBSERVATIONS):
         return
     todo.sort(key=cost, reverse=True)  # the costliest first: the pool ends together
     LOG.debug("cross-validating %d candidate sets on %d worker processes", len(todo), count)
-    _DIAGNOSIS = diagnosis
+    _FITS = fits
     try:
         pool = _pool(count)
         if pool is None:
             return
         with pool:
             for effects, result, full, timed in pool.imap_unordered(_work, todo):
-                diagnosis.cv[effects] = result
+                fits.cv[effects] = result
                 progress.advance(len(result.folds))  # in the parent: the workers' own counts are not seen
                 for key, fit in full.items():
-                    diagnosis.full_fits.setdefault(key, fit)
+                    fits.full.setdefault(key, fit)
                 for key, fit in timed.items():
-                    diagnosis._time_domain_full.setdefault(key, fit)
+                    fits.time_domain_full.setdefault(key, fit)
     finally:
-        _DIAGNOSIS = None
+        _FITS = None
         gc.unfreeze()

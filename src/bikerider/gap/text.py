@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import math
 
-from bikerider.gap.candidates.effects import EFFECTS
+from bikerider.gap.candidates.effects import EFFECTS, PARAMETERS
 
 
 def _fmt(x, digits: int = 3) -> str:
@@ -150,7 +150,7 @@ def summary_text(result: dict) -> str:
         )
         for r in result["ranking"]:
             params = _values(r["parameters"])
-            if r["effect"] == "parameters":
+            if r["effect"] == PARAMETERS:
                 params = f"{len(r['parameters'])} benchmark parameters shifted"
             ties = f"  (tied with {', '.join(r['tied_with'])})" if r["tied_with"] else ""
             lines.append(

@@ -29,6 +29,7 @@ from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 from bikerider.benchmark.model import label_modes
 from bikerider.errors import FitError
 from bikerider.gap.candidates.effect_model import EffectModel
+from bikerider.gap.candidates.effects import SPEED_SENSOR, STEER_DAMPING, STEER_FRICTION
 from bikerider.gap.inference.timedomain import (
     OBSERVED,
     Layout,
@@ -98,11 +99,11 @@ def _selected_model(diagnosis):
     if fit is None:
         return None
     p = diagnosis.problem
-    scale = fit.config.get("speed_sensor", {}).get("speed_scale", 1.0)
-    if "steer_friction" in fit.effects:
-        c = fit.config["steer_friction"]["c_viscous"]
-        linear = {e: v for e, v in fit.config.items() if e not in ("steer_friction", "speed_sensor")}
-        model = EffectModel(p.nominal, p.geometry, {"steer_damping": {"c_steer": c}, **linear})
+    scale = fit.config.get(SPEED_SENSOR, {}).get("speed_scale", 1.0)
+    if STEER_FRICTION in fit.effects:
+        c = fit.config[STEER_FRICTION]["c_viscous"]
+        linear = {e: v for e, v in fit.config.items() if e not in (STEER_FRICTION, SPEED_SENSOR)}
+        model = EffectModel(p.nominal, p.geometry, {STEER_DAMPING: {"c_steer": c}, **linear})
         return model, scale, f"{'+'.join(fit.effects)} without its Coulomb friction (viscous c = {c:.3g} N m s/rad)"
     return p.fitted_model(fit), scale, "with " + "+".join(diagnosis.selected)
 
@@ -237,7 +238,7 @@ def _record_responses(diagnosis) -> tuple[dict, str]:
     responses = {}
     used = [k for k, f in enumerate(fits) if f.used]
     fit = diagnosis.selected_fit
-    timed = fit is not None and "steer_friction" in fit.effects
+    timed = fit is not None and STEER_FRICTION in fit.effects
     if timed:
         model_label = (
             "+".join(fit.effects) + " (" + ", ".join(f"{n} {v:.3g}" for n, v in zip(fit.names, fit.values)) + ")"
@@ -531,16 +532,16 @@ def plot_effects(diagnosis):
     base = weave_curve(nominal, grid, law, nominal)
     linear = [
         pr
-        for pr in sorted(getattr(diagnosis, "pairs", []), key=lambda r: r.error_after)
-        if pr.effects in diagnosis.full_fits and "steer_friction" not in pr.effects
+        for pr in sorted(diagnosis.pairs, key=lambda r: r.error_after)
+        if pr.effects in diagnosis.full_fits and STEER_FRICTION not in pr.effects
     ]
-    sets = [(name,) for name in diagnosis.candidates if name != "steer_friction"] + [pr.effects for pr in linear[:2]]
+    sets = [(name,) for name in diagnosis.candidates if name != STEER_FRICTION] + [pr.effects for pr in linear[:2]]
     selected = tuple(diagnosis.selected)
     scale_of_base = max(float(np.nanmax(np.abs(base))), 1.0) if np.isfinite(base).any() else 1.0
     for effects in sets:
         fit = diagnosis.fit_of(effects)
-        scale = fit.config.get("speed_sensor", {}).get("speed_scale", 1.0)
-        plausible, _ = diagnosis.plausibility(fit)
+        scale = fit.config.get(SPEED_SENSOR, {}).get("speed_scale", 1.0)
+        plausible, _ = diagnosis.priors.plausibility(fit)
         curve = weave_curve(p.fitted_model(fit), grid, law, nominal, scale)
         at_nominal = bool(np.nanmax(np.abs(curve - base)) < 1e-3 * scale_of_base) if np.isfinite(curve).any() else False
         label = "+".join(effects) + ("" if plausible else " (unusual values)")
@@ -588,7 +589,7 @@ def plot_effects(diagnosis):
 
 def _time_domain_selection(effects: tuple[str, ...]) -> bool:
     """Whether a selection is fitted in the time domain (steer friction: no eigenvalue curve)."""
-    return "steer_friction" in effects
+    return STEER_FRICTION in effects
 
 
 def plot_time_response(diagnosis):
@@ -608,12 +609,12 @@ def plot_time_response(diagnosis):
     if chosen is not None:
         model, scale, label = chosen
         fit = diagnosis.selected_fit
-        if "steer_friction" in fit.effects:
+        if STEER_FRICTION in fit.effects:
             ss = model.state_space([speed * scale])
             A = ss.closed_loop(None if gains is None else np.asarray(gains)[None, :])[0]
             x0 = np.zeros(A.shape[-1])
             x0[ss.output_states[2]] = 0.5
-            T = fit.config["steer_friction"]["T_coulomb"]
+            T = fit.config[STEER_FRICTION]["T_coulomb"]
             states = simulate_friction(A, ss.B[0][:, 1], x0, T, t[1] - t[0], t.size, ss.output_states[3])
             ax.plot(
                 t, states[:, ss.output_states[2]], label="+".join(fit.effects) + f" (Coulomb {T:.3g} N m, as fitted)"

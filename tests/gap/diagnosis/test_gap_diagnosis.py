@@ -10,7 +10,7 @@ import pytest
 import bikerider
 from bikerider.errors import InputError
 from bikerider.gap.candidates.effect_model import BENCH_ARGS, EffectModel
-from bikerider.gap.diagnosis.result import Diagnosis
+from bikerider.gap.diagnosis.result import diagnose
 from bikerider.gap.diagnosis.statistics import gap_shrink, significantly_better
 from bikerider.gap.inference.predict import Predictor
 from bikerider.gap.inference.problem import GapProblem
@@ -82,7 +82,7 @@ def _synthetic(model, effects, seed, sigma=0.04, n_per_group=5):
 
 def test_hidden_steer_damping_is_found_ranked_and_shrinks_the_gap(davis):
     data = _synthetic(davis, {"steer_damping": {"c_steer": 0.4}}, seed=1)
-    result = Diagnosis(davis, data, EMPTY).as_dict()
+    result = diagnose(davis, data, EMPTY).as_dict()
     assert result["verdict"] == "structural"
     assert result["ranking"][0]["effect"] == "steer_damping"
     fitted = result["ranking"][0]["parameters"]["c_steer"]
@@ -102,7 +102,7 @@ def test_hidden_steer_damping_is_found_ranked_and_shrinks_the_gap(davis):
 
 def test_no_effect_gives_no_structural_verdict(davis):
     data = _synthetic(davis, {}, seed=2)
-    result = Diagnosis(davis, data, EMPTY).as_dict()
+    result = diagnose(davis, data, EMPTY).as_dict()
     assert result["verdict"] in ("none", "parameters")
     assert "steer_damping" not in result["selected"]
 
@@ -120,7 +120,7 @@ def test_one_point_gets_a_gap_map_but_no_ranking(davis):
         data.gains[:1],
         data.source[:1],
     )
-    result = Diagnosis(davis, one, EMPTY).as_dict()
+    result = diagnose(davis, one, EMPTY).as_dict()
     assert result["ranking"] == [] and len(result["gap"]["map"]) == 2
     assert any("fewer than two folds" in n for n in result["notes"])
 

@@ -21,7 +21,7 @@ from gap_support import MODEL, SIL, decay_record, nominal, riderless_model
 import bikerider
 from bikerider.cli import main
 from bikerider.gap.candidates.effect_model import EffectModel
-from bikerider.gap.diagnosis.result import Diagnosis
+from bikerider.gap.diagnosis.result import diagnose
 from bikerider.gap.inference.predict import Predictor
 from bikerider.gap.inference.problem import GapProblem
 from bikerider.gap.measured.records import Record, fit_records
@@ -78,7 +78,7 @@ def test_1_a_record_that_cannot_be_fitted_is_left_out_with_its_reason(riderless)
         problem="roll_rate has 3 missing values in the window (first at sample 12)",
     )
     fits = fit_records(good + [noise, short, gap])
-    result = Diagnosis(
+    result = diagnose(
         riderless, EigenvalueData.empty(), CanonicalData.empty(), ("steer_damping", "steer_inertia"), fits
     ).as_dict()
     records = result["records"]
@@ -106,7 +106,7 @@ def test_1_only_no_record_left_stops_and_says_so(riderless):
     from bikerider.errors import InputError
 
     with pytest.raises(InputError, match="enough records for a diagnosis: none could be used .*noise: "):
-        Diagnosis(riderless, EigenvalueData.empty(), CanonicalData.empty(), ("steer_damping",), fit_records([noise]))
+        diagnose(riderless, EigenvalueData.empty(), CanonicalData.empty(), ("steer_damping",), fit_records([noise]))
 
 
 def test_1_the_command_goes_on_past_a_run_it_cannot_fit(tmp_path, capsys):
@@ -172,7 +172,7 @@ def test_2_one_predicted_curve_per_control_law(riderless):
         ["sil"] * 13,
         {"sil": SIL},
     )
-    diagnosis = Diagnosis(riderless, data, CanonicalData.empty(), ("steer_damping",))
+    diagnosis = diagnose(riderless, data, CanonicalData.empty(), ("steer_damping",))
     fig = plot_eigenvalues(diagnosis)
     labels = fig.axes[0].get_legend_handles_labels()[1]
     assert [lab for lab in labels if "nominal model" in lab] == ["sil: nominal model"]
@@ -276,7 +276,7 @@ def test_4_the_noise_never_comes_from_residuals_against_the_model(riderless, tmp
         ["sil"] * 6,
         {"sil": SIL},
     )
-    result = Diagnosis(riderless, table, CanonicalData.empty(), ("steer_inertia", "steer_damping")).as_dict()
+    result = diagnose(riderless, table, CanonicalData.empty(), ("steer_inertia", "steer_damping")).as_dict()
     assert result["verdict"] != "none"
     assert any("taken as exact" in n for n in result["notes"])
     # the estimate does not change with the model under test

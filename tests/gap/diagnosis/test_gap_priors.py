@@ -13,7 +13,8 @@ import pytest
 from gap_support import BP, DATA
 
 from bikerider.gap.candidates.effects import EFFECTS, Prior, prior_from_range
-from bikerider.gap.diagnosis.result import Diagnosis, diagnose
+from bikerider.gap.diagnosis.priors import Priors, steer_rate_amplitudes
+from bikerider.gap.diagnosis.result import diagnose
 from bikerider.gap.inference.problem import EffectFit
 from bikerider.io.gap_data import read_eigenvalues
 from bikerider.io.gap_model import load_model
@@ -80,19 +81,19 @@ def test_a_precise_value_above_the_usual_range_is_selected_and_flagged(table_dia
 def _fit(values, low, high, names=("c_steer",), effects=("steer_damping",)):
     n = len(values)
     return EffectFit(
-        effects,
-        list(names),
-        ["N m s/rad"] * n,
-        np.array(values, float),
-        (np.array(high) - np.array(low)) / 3.92,
-        np.array(low, float),
-        np.array(high, float),
-        {},
-        {},
-        0.0,
-        0.0,
-        10,
-        True,
+        effects=effects,
+        names=list(names),
+        units=["N m s/rad"] * n,
+        values=np.array(values, float),
+        stderr=(np.array(high) - np.array(low)) / 3.92,
+        ci_low=np.array(low, float),
+        ci_high=np.array(high, float),
+        config={},
+        shift={},
+        chi2=0.0,
+        prior_chi2=0.0,
+        n=10,
+        success=True,
         lower=np.zeros(n),
         upper=np.full(n, 20.0),
     )
@@ -100,20 +101,19 @@ def _fit(values, low, high, names=("c_steer",), effects=("steer_damping",)):
 
 def test_an_interval_overlapping_the_usual_range_does_not_make_a_value_usual(table_diagnosis):
     # before: c = 0.62 [0.42, 0.82] was called plausible because its interval reaches 0.5
-    ok, (check,) = table_diagnosis.plausibility(_fit([0.62], [0.42], [0.82]))
+    ok, (check,) = table_diagnosis.priors.plausibility(_fit([0.62], [0.42], [0.82]))
     assert not ok and not check["in_range"] and check["usable"]
     assert check["flag"].startswith("c_steer = 0.62 N m s/rad") and "above the usual" in check["flag"]
     assert check["log_prior"] == pytest.approx(Prior("lognormal", 0.3, 3.0, "").log_ratio(0.62))
-    ok, (check,) = table_diagnosis.plausibility(_fit([0.3], [0.2], [0.4]))
+    ok, (check,) = table_diagnosis.priors.plausibility(_fit([0.3], [0.2], [0.4]))
     assert ok and check["flag"] is None
 
 
 def test_a_bicycles_own_range_becomes_its_prior(table_diagnosis):
-    d = Diagnosis.__new__(Diagnosis)
-    d.model_input = SimpleNamespace(plausible={"I_steer": (0.0, 0.1, "a steer motor's rotor")})
-    prior = d.prior_of("I_steer")
+    own = Priors({"I_steer": (0.0, 0.1, "a steer motor's rotor")}, np.zeros(0))
+    prior = own.prior_of("I_steer")
     assert prior.kind == "halfcauchy" and "steer motor" in prior.source
-    assert table_diagnosis.prior_of("I_steer").kind == "lognormal"
+    assert table_diagnosis.priors.prior_of("I_steer").kind == "lognormal"
 
 
 def test_a_candidate_at_the_noise_floor_is_always_selected():
@@ -137,15 +137,12 @@ def test_a_candidate_at_the_noise_floor_is_always_selected():
 
 # -- friction's equivalent -------------------------------------------------------------------------------
 def _friction_diagnosis(amplitudes):
-    d = Diagnosis.__new__(Diagnosis)
     t = np.arange(0.0, 2.0, 0.01)
-    d.records = [
+    records = [
         SimpleNamespace(record=SimpleNamespace(signals={"steer_rate": a * np.sin(2 * np.pi * 2 * t)}), estimate=None)
         for a in amplitudes
     ]
-    d.record_rows = {k: k for k in range(len(amplitudes))}
-    d.folds = []
-    return d
+    return Priors({}, steer_rate_amplitudes(records, {k: k for k in range(len(amplitudes))}))
 
 
 def _friction_fit(T, c, cov):
@@ -228,7 +225,7 @@ def test_records_of_a_strong_damper_select_it_at_the_noise_floor_and_flag_it():
     rng = np.random.default_rng(5)
     records = fit_records(V.measure_records(V.TruthSimulator(model, truth, rng), V.QUICK_RECORDS, rng))
     effects = ("parameters", "steer_damping", "steer_inertia", "steer_friction")
-    out = Diagnosis(model, EigenvalueData.empty(), CanonicalData.empty(), effects, records).as_dict()
+    out = diagnose(model, EigenvalueData.empty(), CanonicalData.empty(), effects, records).as_dict()
     first = out["ranking"][0]
     assert first["effect"] == "steer_damping" and first["data_error_after"] < 1.0  # at the noise floor
     c = first["parameters"]["c_steer"]

@@ -8,7 +8,7 @@ import pytest
 from gap_support import SIL, decay_record, nominal, riderless_model
 
 from bikerider.gap.candidates.effect_model import EffectModel
-from bikerider.gap.diagnosis.result import Diagnosis
+from bikerider.gap.diagnosis.result import diagnose
 from bikerider.gap.inference.indirect import LAMBDA_BOUNDS, RecordSimulator, eigenvalue_of, levenberg_marquardt
 from bikerider.gap.measured.extraction import _two_mode
 from bikerider.gap.measured.records import Record, fit_records
@@ -97,7 +97,7 @@ def test_every_candidate_is_judged_by_its_own_bias(riderless, damped_records):
     # noise and the iterated bias correction agrees with the full indirect-inference least squares
     from scipy.optimize import minimize_scalar
 
-    d = Diagnosis(riderless, EigenvalueData.empty(), CanonicalData.empty(), effects=(), records=damped_records)
+    d = diagnose(riderless, EigenvalueData.empty(), CanonicalData.empty(), effects=(), records=damped_records)
     p = d.problem
     fit = p.fit(("steer_damping",))
     assert fit.values[0] == pytest.approx(0.4, abs=3 * fit.stderr[0])

@@ -80,20 +80,20 @@ def test_a_table_taken_as_exact_gets_a_meaningful_gap_statistic(davis):
     # Found with 12 rows at distinct speeds and no uncertainties (no replicates): the dense solve of a
     # singular covariance gave chi2 = -1.8e17 and verdict "parameters".  24 exact observations cannot
     # all be met by shifts of 23 parameters: the gap is certain.
-    from bikerider.gap.diagnosis.result import Diagnosis
+    from bikerider.gap.diagnosis.result import diagnose
 
-    d = Diagnosis(davis, _table(np.linspace(4, 9, 12), ["g"] * 12), CanonicalData.empty(), ())
+    d = diagnose(davis, _table(np.linspace(4, 9, 12), ["g"] * 12), CanonicalData.empty(), ())
     assert d.gap_test["chi2"] == np.inf and d.gap_test["significant"] and d.verdict == "structural"
     assert d.gap_test["dof"] <= 24
 
 
 def test_the_folds_do_not_grow_with_the_groups(davis):
     from bikerider.gap.diagnosis.folds import MAX_FOLDS
-    from bikerider.gap.diagnosis.result import Diagnosis
+    from bikerider.gap.diagnosis.result import diagnose
 
     n = 3 * MAX_FOLDS + 1
     groups = [f"run{k:03d}" for k in range(n)]
-    d = Diagnosis(davis, _table(np.linspace(4, 9, n), groups, sigma=0.05), CanonicalData.empty(), ())
+    d = diagnose(davis, _table(np.linspace(4, 9, n), groups, sigma=0.05), CanonicalData.empty(), ())
     masks = np.array([held for _, held in d.folds])
     assert len(d.folds) == MAX_FOLDS
     assert np.all(masks.sum(axis=0) == 1)  # every observation held out exactly once
@@ -101,7 +101,7 @@ def test_the_folds_do_not_grow_with_the_groups(davis):
     for held in masks:  # whole groups only
         inside = set(obs_group[held])
         assert not inside & set(obs_group[~held])
-    few = Diagnosis(davis, _table(np.linspace(4, 9, 6), groups[:6], sigma=0.05), CanonicalData.empty(), ())
+    few = diagnose(davis, _table(np.linspace(4, 9, 6), groups[:6], sigma=0.05), CanonicalData.empty(), ())
     assert [name for name, _ in few.folds] == [f"group {g}" for g in groups[:6]]
 
 

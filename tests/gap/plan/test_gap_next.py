@@ -12,7 +12,7 @@ from gap_support import BP, DATA, decay_record, nominal, riderless_model
 
 from bikerider.cli import main
 from bikerider.gap.candidates.effect_model import EffectModel
-from bikerider.gap.diagnosis.result import Diagnosis
+from bikerider.gap.diagnosis.result import diagnose
 from bikerider.gap.measured.records import fit_records
 from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
 from bikerider.gap.plan.ranking import ODDS, NextExperiment, fit_residual, resolution_probability, signal_noise
@@ -65,7 +65,7 @@ def table_plan(riderless):
     # a lab that ran at 6 m/s only: steer damping and tyre slip both fit its weave
     speeds = [6.0] * 9
     data = _table(riderless, TRUTH, speeds, ["a"] * 3 + ["b"] * 3 + ["c"] * 3)
-    diagnosis = Diagnosis(riderless, data, CanonicalData.empty(), effects=tuple(RIVALS))
+    diagnosis = diagnose(riderless, data, CanonicalData.empty(), effects=tuple(RIVALS))
     return diagnosis, NextExperiment(diagnosis, rivals=RIVALS, speeds=np.linspace(3.0, 9.0, 13), repeats=5)
 
 
@@ -130,7 +130,7 @@ def test_following_the_plan_resolves_the_tie(riderless, table_plan):
 
     def rediagnose(new_speeds):
         rows = _table(riderless, TRUTH, speeds + new_speeds, groups + ["new"] * len(new_speeds), seed=1)
-        return Diagnosis(riderless, rows, CanonicalData.empty(), effects=tuple(RIVALS)).ranking[0]
+        return diagnose(riderless, rows, CanonicalData.empty(), effects=tuple(RIVALS)).ranking[0]
 
     planned = rediagnose([best.speed] * plan.repeats)
     assert planned["effect"] == "steer_damping" and not planned["tied_with"]
@@ -173,7 +173,7 @@ def test_records_are_planned_by_indirect_inference(riderless):
     # records under the SIL law: every experiment is a template decay fitted as a record, predicted by each
     # rival's own response; signals the records hold give their noise, the others are assumed
     records = [_record(riderless, v, f"{v} m/s", TRUTH, seed=k) for v in (3.0, 3.5, 4.0) for k in range(3)]
-    d = Diagnosis(
+    d = diagnose(
         riderless, EigenvalueData.empty(), CanonicalData.empty(), effects=tuple(RIVALS), records=fit_records(records)
     )
     plan = NextExperiment(d, rivals=RIVALS, speeds=[2.0, 3.0, 4.0, 5.0, 6.0], repeats=10)

@@ -12,7 +12,7 @@ from test_gap_next import _table
 
 from bikerider.cli import main
 from bikerider.gap.candidates.effect_model import EffectModel
-from bikerider.gap.diagnosis.result import Diagnosis
+from bikerider.gap.diagnosis.result import diagnose
 from bikerider.gap.measured.tables import CanonicalData
 from bikerider.gap.plan.ranking import NextExperiment
 from bikerider.gap.plan.sweeps import line_amplitude, linearised_friction, lines_for, response, weave_shift
@@ -78,7 +78,7 @@ def damping_or_inertia(riderless):
     # a lab that ran at 6 m/s without control; steer damping is the truth, steer inertia the rival
     data = _table(riderless, {"steer_damping": {"c_steer": 0.3}}, [6.0] * 9, ["a"] * 3 + ["b"] * 3 + ["c"] * 3)
     rivals = ["steer_damping", "steer_inertia"]
-    diagnosis = Diagnosis(riderless, data, CanonicalData.empty(), effects=tuple(rivals))
+    diagnosis = diagnose(riderless, data, CanonicalData.empty(), effects=tuple(rivals))
     return riderless, NextExperiment(diagnosis, rivals=rivals, speeds=[5.5, 6.0], repeats=5)
 
 

@@ -34,23 +34,18 @@ from bikerider.benchmark.quartic import quartic_roots
 from bikerider.benchmark.simulation import expm
 from bikerider.benchmark.state_space import StateSpace
 from bikerider.errors import InputError
+from bikerider.gap.candidates.effects import EFFECTS, STRUCTURAL_KEYS, TYRE_SLIP
 from bikerider.gap.measured.control import GAIN_NAMES  # noqa: F401  (the order of the gain arrays)
 from bikerider.generated import gap_effects as gen
-from bikerider.generated.manifest import FUNCTIONS, TYRE_ARGS, UPPER_BODY_ARGS
+from bikerider.generated.manifest import FUNCTIONS, UPPER_BODY_ARGS
 
 BENCH_ARGS = FUNCTIONS["benchmark_model.canonical_matrices"]["args"]
 """Benchmark parameters the linear models depend on (plus ``g``)."""
 UPPER_BODY_KEYS = UPPER_BODY_ARGS
 GRIP_KEYS = ("x_grip", "z_grip", "b_grip")
-STRUCTURAL_KEYS = {
-    "steer_inertia": ("I_steer",),
-    "steer_damping": ("c_steer",),
-    "steer_stiffness": ("k_steer",),
-    "passive_arms": ("m_arm", "k_arm", "c_arm"),
-    "rider_lean": ("k_lean", "c_lean"),
-    "tyre_slip": TYRE_ARGS,
-}
-"""The model parameters of each structural effect (``parameters`` has none of its own)."""
+FRAME_KEYS = tuple(key for e in EFFECTS.values() if not (e.adds_lean or e.adds_tyres) for key in e.structural_keys)
+"""The parameters of the effects that every generated model takes (between the frames and the arms: the
+lean and the tyres have models of their own)."""
 OUTPUT_NAMES = ("phi", "delta", "phid", "deltad")
 
 
@@ -121,18 +116,18 @@ class EffectModel:
             for key in STRUCTURAL_KEYS[name]:
                 if key not in params:
                     raise InputError(f"{name}.{key}", "missing", "a value for every parameter of the effect")
-        if ("rider_lean" in self.effects or "passive_arms" in self.effects) and self.geometry.upper_body is None:
-            name = "rider_lean" if "rider_lean" in self.effects else "passive_arms"
-            raise InputError("effect", name, "a model with a rider (this bicycle has no upper body to move)")
+        riders = [name for name in self.effects if EFFECTS[name].needs_rider]
+        if riders and self.geometry.upper_body is None:
+            raise InputError("effect", riders[0], "a model with a rider (this bicycle has no upper body to move)")
 
     # -- arguments of the generated functions ------------------------------------------------
     @property
     def lean(self) -> bool:
-        return "rider_lean" in self.effects
+        return any(EFFECTS[name].adds_lean for name in self.effects)
 
     @property
     def tyre(self) -> bool:
-        return "tyre_slip" in self.effects
+        return any(EFFECTS[name].adds_tyres for name in self.effects)
 
     def _extra(self, key: str, default: float = 0.0):
         for params in self.effects.values():
@@ -143,7 +138,7 @@ class EffectModel:
     def _args(self) -> dict[str, object]:
         args: dict[str, object] = {k: _as_float(self.values[k]) for k in BENCH_ARGS}
         args["g"] = _as_float(self.values["g"])
-        for key in ("I_steer", "c_steer", "k_steer", "m_arm", "k_arm", "c_arm"):
+        for key in FRAME_KEYS:
             args[key] = self._extra(key)
         args.update({k: float(v) for k, v in self.geometry.grips.items()})
         return args
@@ -193,7 +188,7 @@ class EffectModel:
             B = np.zeros(shape + (2 * n, 2))
             B[..., n:, :] = Minv_B
             return StateSpace.of_states(speeds, A, B, ("phi", "delta", "theta", "phi_dot", "delta_dot", "theta_dot"))
-        tyre_args = dict(lean_args, **{k: self._extra(k) for k in STRUCTURAL_KEYS["tyre_slip"]})
+        tyre_args = dict(lean_args, **{k: self._extra(k) for k in STRUCTURAL_KEYS[TYRE_SLIP]})
         E, Ad, Bd = gen.tyre_slip_descriptor(**tyre_args, v=speeds)
         names = gen_state_names()
         if not self.lean:

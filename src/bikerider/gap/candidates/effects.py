@@ -18,23 +18,30 @@ import numpy as np
 from scipy.stats import norm
 
 from bikerider.errors import InputError
+from bikerider.generated.manifest import TYRE_ARGS
 
+# The names, typed here and nowhere else (tests/gap/candidates/test_gap_registry.py): take them from here.
+PARAMETERS = "parameters"
+STEER_DAMPING = "steer_damping"
+STEER_INERTIA = "steer_inertia"
+STEER_STIFFNESS = "steer_stiffness"
+PASSIVE_ARMS = "passive_arms"
+RIDER_LEAN = "rider_lean"
+TYRE_SLIP = "tyre_slip"
+SPEED_SENSOR = "speed_sensor"
+STEER_FRICTION = "steer_friction"
 EFFECT_NAMES = (
-    "parameters",
-    "steer_damping",
-    "steer_inertia",
-    "steer_stiffness",
-    "passive_arms",
-    "rider_lean",
-    "tyre_slip",
-    "speed_sensor",
-    "steer_friction",
+    PARAMETERS,
+    STEER_DAMPING,
+    STEER_INERTIA,
+    STEER_STIFFNESS,
+    PASSIVE_ARMS,
+    RIDER_LEAN,
+    TYRE_SLIP,
+    SPEED_SENSOR,
+    STEER_FRICTION,
 )
-"""Every candidate, in the order reports list them."""
-OBSERVATION_EFFECTS = ("speed_sensor",)
-"""Candidates that change how the data were taken rather than the bicycle (no model parameter)."""
-TIME_DOMAIN_EFFECTS = ("steer_friction",)
-"""Nonlinear candidates fitted in the time domain to records (:mod:`bikerider.gap.inference.timedomain`)."""
+"""Every candidate, in the order reports list them (the keys of :data:`EFFECTS`, in this order)."""
 COULOMB_RANGE = (0.02, 0.15)
 """Steer Coulomb friction of the literature [N m] (data/gap/README.md table; Davis bicycle 0.15 +/-
 0.05, Moore 2012)."""
@@ -173,6 +180,20 @@ class Effect:
         Parameters the effect needs but does not fit, at literature mid values.
     needs_rider : bool
         Only meaningful with a rider on the bicycle.
+    needs_records : bool
+        Fitted in the time domain to records.
+    partners : tuple of str
+        For a time-domain effect: the linear candidates searched together with it as pairs (the other
+        pairs are searched between linear candidates only, to keep the time-domain fits few).
+    structural_keys : tuple of str
+        The parameters of :class:`~bikerider.gap.candidates.effect_model.EffectModel` it sets (fitted and
+        fixed); empty for an effect that is no part of the linear model (``parameters``, an observation
+        effect, a time-domain effect).
+    observation : bool
+        It changes how the data were taken rather than the bicycle (no model parameter).
+    adds_lean, adds_tyres : bool
+        It needs the model with the rider's lean degree of freedom (``rider_lean_matrices``), or with
+        the tyres' lateral forces (``tyre_slip_descriptor``), of ``derive/gap_effects.py``.
     """
 
     name: str
@@ -181,6 +202,11 @@ class Effect:
     fixed: dict[str, float] = field(default_factory=dict)
     needs_rider: bool = False
     needs_records: bool = False
+    partners: tuple[str, ...] = ()
+    structural_keys: tuple[str, ...] = ()
+    observation: bool = False
+    adds_lean: bool = False
+    adds_tyres: bool = False
 
 
 _TABLE = "data/gap/README.md literature table"
@@ -196,13 +222,13 @@ C_STEER_CHECK = (
 )
 
 EFFECTS: dict[str, Effect] = {
-    "parameters": Effect(
-        "parameters",
+    PARAMETERS: Effect(
+        PARAMETERS,
         "the benchmark parameters moved within their stated uncertainty (Gaussian prior); no new physics",
         (),
     ),
-    "steer_damping": Effect(
-        "steer_damping",
+    STEER_DAMPING: Effect(
+        STEER_DAMPING,
         "viscous damping between front and rear frame about the steer axis (bearing, rider's hands)",
         (
             EffectParameter(
@@ -216,9 +242,10 @@ EFFECTS: dict[str, Effect] = {
                 C_STEER_CHECK,
             ),
         ),
+        structural_keys=("c_steer",),
     ),
-    "steer_inertia": Effect(
-        "steer_inertia",
+    STEER_INERTIA: Effect(
+        STEER_INERTIA,
         "extra moment of inertia carried by the front frame about the steer axis (hands, accessories)",
         (
             EffectParameter(
@@ -240,9 +267,10 @@ EFFECTS: dict[str, Effect] = {
                 "squared), a basket or a load on the handlebar",
             ),
         ),
+        structural_keys=("I_steer",),
     ),
-    "steer_stiffness": Effect(
-        "steer_stiffness",
+    STEER_STIFFNESS: Effect(
+        STEER_STIFFNESS,
         "a spring between front and rear frame about the steer axis (cables, the rider's arms)",
         (
             EffectParameter(
@@ -256,9 +284,10 @@ EFFECTS: dict[str, Effect] = {
                 "cables or a spring on the steer, a steer motor's position control, a rider holding the bar",
             ),
         ),
+        structural_keys=("k_steer",),
     ),
-    "passive_arms": Effect(
-        "passive_arms",
+    PASSIVE_ARMS: Effect(
+        PASSIVE_ARMS,
         "the rider's arms: mass at the grips moving with the handlebar (taken from the rear body), "
         "a spring and a damper about the steer axis between handlebar and upper body",
         (
@@ -301,9 +330,10 @@ EFFECTS: dict[str, Effect] = {
             ),
         ),
         needs_rider=True,
+        structural_keys=("m_arm", "k_arm", "c_arm"),
     ),
-    "rider_lean": Effect(
-        "rider_lean",
+    RIDER_LEAN: Effect(
+        RIDER_LEAN,
         "the rider's upper body leaning about a longitudinal hip axis with passive stiffness and damping "
         "(a third degree of freedom)",
         (
@@ -341,9 +371,11 @@ EFFECTS: dict[str, Effect] = {
             ),
         ),
         needs_rider=True,
+        structural_keys=("k_lean", "c_lean"),
+        adds_lean=True,
     ),
-    "tyre_slip": Effect(
-        "tyre_slip",
+    TYRE_SLIP: Effect(
+        TYRE_SLIP,
         "lateral tyre forces from cornering and camber stiffness, with relaxation length and pneumatic "
         "trail, instead of rolling without slip",
         (
@@ -391,9 +423,11 @@ EFFECTS: dict[str, Effect] = {
             ),
         ),
         fixed={"c_gamma": 0.8},
+        structural_keys=TYRE_ARGS,
+        adds_tyres=True,
     ),
-    "speed_sensor": Effect(
-        "speed_sensor",
+    SPEED_SENSOR: Effect(
+        SPEED_SENSOR,
         "the bicycle ran at another speed than recorded (a wheel encoder's rolling radius, a treadmill's "
         "calibration): its speed is the recorded one times speed_scale, while the controller keeps the recorded speed",
         (
@@ -416,9 +450,10 @@ EFFECTS: dict[str, Effect] = {
                 "the encoder's rolling radius, a treadmill's belt speed calibration",
             ),
         ),
+        observation=True,
     ),
-    "steer_friction": Effect(
-        "steer_friction",
+    STEER_FRICTION: Effect(
+        STEER_FRICTION,
         "Coulomb and viscous friction about the steer axis (bearings, a steer motor's gearbox), "
         "T = -T_coulomb tanh(deltad / eps) - c_viscous deltad, fitted in the time domain to the records",
         (
@@ -456,11 +491,20 @@ EFFECTS: dict[str, Effect] = {
             ),
         ),
         needs_records=True,
+        # a steer motor's rotor inertia, a spring, and an error of the speed sensor
+        partners=(STEER_INERTIA, STEER_STIFFNESS, SPEED_SENSOR),
     ),
 }
 """The candidates.  ``tyre_slip`` holds the camber stiffness at 0.8 per rad (mid of the 0.6-0.95
 literature range; the weave eigenvalues hardly depend on it, so fitting it adds a parameter the data
 cannot determine)."""
+
+OBSERVATION_EFFECTS = tuple(name for name, e in EFFECTS.items() if e.observation)
+"""Candidates that change how the data were taken rather than the bicycle (no model parameter)."""
+TIME_DOMAIN_EFFECTS = tuple(name for name, e in EFFECTS.items() if e.needs_records)
+"""Nonlinear candidates fitted in the time domain to records (:mod:`bikerider.gap.inference.timedomain`)."""
+STRUCTURAL_KEYS = {name: e.structural_keys for name, e in EFFECTS.items() if e.structural_keys}
+"""The model parameters of each structural effect (``parameters`` has none of its own)."""
 
 LITERATURE_EXTRA = {
     "I_arm_steer": ((0.05, 0.3), "kg m^2", f"{_TABLE}: passive arms, inertia about the steer axis 0.05-0.3 kg m^2"),

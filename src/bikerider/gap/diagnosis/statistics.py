@@ -11,7 +11,7 @@ import math
 import numpy as np
 from scipy.stats import t as student_t
 
-from bikerider.gap.candidates.effects import EFFECTS
+from bikerider.gap.candidates.effects import EFFECTS, PARAMETERS
 from bikerider.gap.distributions import chi2
 from bikerider.gap.inference.problem import EffectFit, GapProblem
 
@@ -84,7 +84,7 @@ def significantly_better(z_better: np.ndarray, z_worse: np.ndarray) -> tuple[boo
 def _n_params(problem: GapProblem, effects: tuple[str, ...]) -> int:
     n = 0
     for e in effects:
-        n += len(problem.free) if e == "parameters" else len(EFFECTS[e].parameters)
+        n += len(problem.free) if e == PARAMETERS else len(EFFECTS[e].parameters)
     return n
 
 

@@ -57,7 +57,7 @@ import numpy as np
 from bikerider.engine import DifferencedStage
 from bikerider.errors import InputError
 from bikerider.gap.candidates.effect_model import BENCH_ARGS, STRUCTURAL_KEYS, EffectModel
-from bikerider.gap.candidates.effects import EFFECTS, OBSERVATION_EFFECTS
+from bikerider.gap.candidates.effects import EFFECTS, OBSERVATION_EFFECTS, PARAMETERS, SPEED_SENSOR
 from bikerider.gap.candidates.nominal import GapModelInput
 from bikerider.gap.inference.predict import Predictor
 from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
@@ -91,7 +91,7 @@ MEMO_ELEMENTS = 1 << 20
 """Most predicted numbers :meth:`GapProblem.predict_batch` keeps (8 MB), the most recently used."""
 
 
-@dataclass
+@dataclass(kw_only=True)
 class EffectFit:
     """A set of effects fitted to a subset of the observations.
 
@@ -113,6 +113,8 @@ class EffectFit:
         Number of fitted points.
     success : bool
     message : str
+
+    Built by keyword only (sixteen fields, several of one type: a position is easily mistaken).
     """
 
     effects: tuple[str, ...]
@@ -392,7 +394,7 @@ class GapProblem:
         lay = _Layout(tuple(effects))
         grids = []
         for name in effects:
-            if name == "parameters":
+            if name == PARAMETERS:
                 lay.n_shift = len(self.free)
                 continue
             for p in EFFECTS[name].parameters:
@@ -421,10 +423,10 @@ class GapProblem:
         config: dict[str, dict[str, object]] = {}
         scale: object = None
         for name in lay.effects:
-            if name != "parameters" and name not in OBSERVATION_EFFECTS:
+            if name != PARAMETERS and name not in OBSERVATION_EFFECTS:
                 config[name] = dict(EFFECTS[name].fixed)
         for j, (name, param) in enumerate(lay.structural):
-            if name == "speed_sensor":
+            if name == SPEED_SENSOR:
                 scale = x[:, j]
             else:
                 config[name][param] = x[:, j : j + 1]
@@ -725,7 +727,7 @@ class GapProblem:
             e: {k: float(np.asarray(v).ravel()[0]) for k, v in params.items()} for e, params in config.items()
         }
         if scale is not None:
-            config_out["speed_sensor"] = {"speed_scale": float(np.asarray(scale).ravel()[0])}
+            config_out[SPEED_SENSOR] = {"speed_scale": float(np.asarray(scale).ravel()[0])}
         shift = {}
         if lay.n_shift:
             for j, name in enumerate(self.free):
@@ -736,22 +738,22 @@ class GapProblem:
         data_r = r[:n]
         prior = r[n:] if lay.n_shift else np.zeros(0)
         return EffectFit(
-            tuple(lay.effects),
-            names,
-            units,
-            x,
-            stderr,
-            ci_low,
-            ci_high,
-            config_out,
-            shift,
-            float(np.sum(data_r**2)),
-            float(np.sum(prior**2)),
-            n,
-            ok,
-            str(message),
-            lo,
-            hi,
+            effects=tuple(lay.effects),
+            names=names,
+            units=units,
+            values=x,
+            stderr=stderr,
+            ci_low=ci_low,
+            ci_high=ci_high,
+            config=config_out,
+            shift=shift,
+            chi2=float(np.sum(data_r**2)),
+            prior_chi2=float(np.sum(prior**2)),
+            n=n,
+            success=ok,
+            message=str(message),
+            lower=lo,
+            upper=hi,
         )
 
     def predict_fit(self, fit: EffectFit) -> np.ndarray:

@@ -32,7 +32,7 @@ from scipy.optimize import least_squares
 from bikerider.benchmark.simulation import discretise, expm
 from bikerider.errors import FitError
 from bikerider.gap.candidates.effect_model import EffectModel
-from bikerider.gap.candidates.effects import EFFECTS
+from bikerider.gap.candidates.effects import EFFECTS, SPEED_SENSOR, STEER_DAMPING, STEER_FRICTION
 from bikerider.gap.measured.records import Record
 
 OBSERVED = {"roll_angle": 0, "steer_angle": 1, "roll_rate": 2, "steer_rate": 3}
@@ -135,7 +135,7 @@ class Layout:
     @staticmethod
     def of(effects: tuple[str, ...]) -> Layout:
         names, lower, upper, start = [], [], [], []
-        for effect in sorted(effects, key=lambda e: e != "steer_friction"):
+        for effect in sorted(effects, key=lambda e: e != STEER_FRICTION):
             for p in EFFECTS[effect].parameters:
                 names.append((effect, p.name))
                 lower.append(p.bounds[0])
@@ -167,9 +167,9 @@ def systems(values: dict, geometry, records: list[Record], layout: Layout, theta
     config: dict[str, dict[str, np.ndarray]] = {}
     c = layout.value(theta, "c_viscous")
     if np.any(c != 0):
-        config["steer_damping"] = {"c_steer": c}
+        config[STEER_DAMPING] = {"c_steer": c}
     for effect, param in layout.names:
-        if effect not in ("steer_friction", "speed_sensor"):
+        if effect not in (STEER_FRICTION, SPEED_SENSOR):
             config.setdefault(effect, {})[param] = layout.value(theta, param)
     scale = layout.value(theta, "speed_scale", 1.0)
     measured = np.array([r.speed_measured for r in records])

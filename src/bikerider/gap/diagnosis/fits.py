@@ -1,0 +1,339 @@
+"""The one place a candidate is fitted: every fit of a set of effects, to all the data or to the
+training folds, and every cross-validation, cached.
+
+A linear set of effects is fitted by :meth:`bikerider.gap.inference.problem.GapProblem.fit` (the fit
+to all the data then gets the benchmark parameters' uncertainty as the systematic error it is,
+:func:`with_parameter_uncertainty`); a set holding a time-domain effect (steer friction) is fitted
+to the records themselves (:func:`bikerider.gap.inference.timedomain.fit_time_domain`), and its fit to
+all the data gets standard errors by the jackknife over the held-out folds' fits.  So fitting and
+cross-validating call each other, and both live here.
+
+The caches fill in the order the diagnosis asks (the time-domain pairs start from the friction
+fitted alone when that is known): :func:`bikerider.gap.diagnosis.result.diagnose` asks in a fixed
+order, so the results do not depend on which worker process computed what
+(:func:`bikerider.gap.parallel.cross_validate_all`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from bikerider import progress
+from bikerider.gap.candidates.effects import EFFECTS, PARAMETERS, STEER_FRICTION, TIME_DOMAIN_EFFECTS
+from bikerider.gap.diagnosis.statistics import _named_values, gap_shrink, jackknife_quantile, rms
+from bikerider.gap.inference.problem import EffectFit, GapProblem
+from bikerider.gap.inference.timedomain import Layout, fit_time_domain
+from bikerider.gap.measured.records import RecordFit
+
+UNPREDICTED_Z = 1e3
+"""Normalised residual given to a held-out point the fitted model cannot predict (singular model)."""
+
+
+@dataclass
+class CrossValidation:
+    """Held-out errors of one set of effects.
+
+    Attributes
+    ----------
+    effects : tuple of str
+    folds : list of dict
+        ``name, n, error_before, error_after`` per fold.
+    z_before, z_after : ndarray
+        Normalised held-out residuals of every observation (each is held out once).
+    error_before, error_after : float
+        Root mean square of ``z`` over all held-out points.
+    shrink : float or None
+        Fraction of the gap above the noise floor removed (``None`` without a gap above it).
+    fits : list of EffectFit
+    data_before, data_after, data_shrink : float or None
+        The same against the data's own uncertainty alone (residuals over the data's standard
+        uncertainty, the parameters' left out): how far the held-out predictions are from the
+        measurements in units of their noise, which stays meaningful when the parameters'
+        uncertainty covers the gap.
+    """
+
+    effects: tuple[str, ...]
+    folds: list[dict]
+    z_before: np.ndarray
+    z_after: np.ndarray
+    error_before: float
+    error_after: float
+    shrink: float | None
+    fits: list[EffectFit] = field(default_factory=list)
+    data_before: float | None = None
+    data_after: float | None = None
+    data_shrink: float | None = None
+
+
+def time_domain(effects: tuple[str, ...]) -> bool:
+    """Whether a set of effects is fitted in the time domain (it holds a nonlinear candidate)."""
+    return any(e in TIME_DOMAIN_EFFECTS for e in effects)
+
+
+def obs_rows(problem: GapProblem) -> dict[int, list[int]]:
+    """Eigenvalue row -> its observation indices (real part, and imaginary part for a weave)."""
+    out: dict[int, list[int]] = {}
+    k = 0
+    e = problem.eigen
+    for row in range(len(e)):
+        n = 2 if e.mode[row] == "weave" else 1
+        out[row] = list(range(k, k + n))
+        k += n
+    return out
+
+
+class Fits:
+    """Every fit and cross-validation of the candidates of one diagnosis (a cache, filled on demand).
+
+    Parameters
+    ----------
+    problem : GapProblem
+    records : list of RecordFit
+        The diagnosis's records (those left out included).
+    record_rows : dict
+        Index in ``records`` -> its eigenvalue row, for the records used.
+    folds : list of (str, ndarray)
+        The held-out folds (:func:`bikerider.gap.diagnosis.folds.folds`).
+    """
+
+    def __init__(
+        self,
+        problem: GapProblem,
+        records: list[RecordFit],
+        record_rows: dict[int, int],
+        folds: list[tuple[str, np.ndarray]],
+    ):
+        self.problem = problem
+        self.records = records
+        self.record_rows = record_rows
+        self.folds = folds
+        self.full: dict[tuple[str, ...], EffectFit] = {}
+        """Fits to all the data, by set of effects (time-domain ones with their jackknife errors)."""
+        self.time_domain_full: dict[tuple[str, ...], EffectFit] = {}
+        """Time-domain fits to all the data, with or without their jackknife errors yet."""
+        self.cv: dict[tuple[str, ...], CrossValidation] = {}
+        """Cross-validations, by set of effects."""
+        self._predictions: dict[tuple[str, ...], np.ndarray] = {}
+
+    # -- fits to all the data -----------------------------------------------------------------------
+    def fit_of(self, effects: tuple[str, ...]) -> EffectFit:
+        """The fit of a set of effects to all the data (cached)."""
+        effects = tuple(effects)
+        if effects not in self.full:
+            if time_domain(effects):
+                self.full[effects] = self.time_domain_fit(effects, None)
+            else:
+                self.full[effects] = with_parameter_uncertainty(self.problem, self.problem.fit(effects))
+        return self.full[effects]
+
+    def record_indices(self, mask: np.ndarray | None) -> list[int]:
+        """Records whose rows are (all) in the observation mask (every record when None)."""
+        rows = obs_rows(self.problem)
+        return [k for k, row in self.record_rows.items() if mask is None or all(mask[i] for i in rows[row])]
+
+    def time_domain_fit(
+        self, effects: tuple[str, ...], mask: np.ndarray | None, start=None, jackknife: bool = True
+    ) -> EffectFit:
+        """A time-domain candidate (steer friction, alone or with one linear effect) fitted to the records
+        in ``mask`` (:func:`bikerider.gap.inference.timedomain.fit_time_domain`).
+
+        The fit to all the data gets standard errors by the jackknife over the held-out folds' fits
+        (leave one group out), when there are three folds or more, and 95 % intervals from Student's t
+        with one degree of freedom fewer than the folds (:func:`jackknife_quantile`).
+        """
+
+        cached = self.time_domain_full.get(effects) if mask is None else None
+        if cached is not None and (not jackknife or np.all(np.isfinite(cached.stderr))):
+            return cached
+        layout = Layout.of(effects)
+        lower, upper = np.array(layout.lower), np.array(layout.upper)
+        if cached is not None:
+            values, cost, n, success = cached.values, cached.chi2, cached.n, cached.success
+        else:
+            records = [self.records[k] for k in self.record_indices(mask)]
+            fit = fit_time_domain(
+                [f.record for f in records], self.problem.nominal, self.problem.geometry, layout, start=start
+            )
+            values, cost, n, success = fit.values, fit.cost, fit.n_samples, fit.success
+        stderr = np.full(values.size, np.inf)
+        covariance = None
+        if mask is None and jackknife and len(self.folds) >= 3:  # jackknife over the held-out folds' fits
+            folds = np.array([f.values for f in self.cross_validate(effects).fits])
+            g = len(folds)
+            centred = folds - folds.mean(axis=0)
+            covariance = (g - 1) / g * centred.T @ centred
+            stderr = np.sqrt(np.diag(covariance))
+            quantile = jackknife_quantile(g)
+        else:
+            quantile = 1.96
+        ci_low = np.clip(values - quantile * stderr, lower, upper)
+        ci_high = np.clip(values + quantile * stderr, lower, upper)
+        config: dict[str, dict[str, float]] = {}
+        for (effect, param), value in zip(layout.names, values):
+            config.setdefault(effect, {})[param] = float(value)
+        units = [next(p.unit for p in EFFECTS[e].parameters if p.name == n) for e, n in layout.names]
+        out = EffectFit(
+            effects=effects,
+            names=[n for _, n in layout.names],
+            units=units,
+            values=values,
+            stderr=stderr,
+            ci_low=ci_low,
+            ci_high=ci_high,
+            config=config,
+            shift={},
+            chi2=cost,
+            prior_chi2=0.0,
+            n=n,
+            success=success,
+            message="time-domain fit",
+            lower=lower,
+            upper=upper,
+            covariance=covariance,
+        )
+        if mask is None:
+            self.time_domain_full[effects] = out
+        return out
+
+    def time_domain_predict(self, fit: EffectFit, mask: np.ndarray) -> np.ndarray:
+        """Predicted observations of the records in ``mask`` under a time-domain fit: what the record fit
+        finds in the candidate's simulated response over each record (indirect inference, as for every
+        candidate)."""
+
+        idx = self.record_indices(mask)
+        pred = np.full(len(self.problem.obs), np.nan)
+        order = list(self.record_rows)
+        simulator = self.problem.records.simulator.subset([order.index(k) for k in idx])
+        apparent = simulator.apparent_time_domain(Layout.of(fit.effects), fit.values)[0]
+        rows = obs_rows(self.problem)
+        for j, k in enumerate(idx):
+            parts = rows[self.record_rows[k]]
+            pred[parts[0]] = apparent[j].real
+            if len(parts) > 1:
+                pred[parts[1]] = apparent[j].imag
+        return pred
+
+    def predictions(self, effects: tuple[str, ...]) -> np.ndarray:
+        """Every observation's prediction by the fit of ``effects`` to all the data (cached): the
+        records' apparent eigenvalues (indirect inference; amplitude-dependent in the time domain)."""
+        effects = tuple(effects)
+        if effects not in self._predictions:
+            fit = self.fit_of(effects)
+            if time_domain(effects):
+                every = np.ones(len(self.problem.obs), bool)
+                self._predictions[effects] = self.time_domain_predict(fit, every)
+            else:
+                self._predictions[effects] = self.problem.predict_fit(fit)
+        return self._predictions[effects]
+
+    # -- held out -------------------------------------------------------------------------------------
+    def cross_validate(self, effects: tuple[str, ...]) -> CrossValidation:
+        """A set of effects fitted on the training folds and scored on each held-out fold (cached)."""
+        if effects in self.cv:
+            return self.cv[effects]
+        p = self.problem
+        z_before = p.z(p.baseline)
+        z_after = np.full(len(p.obs), np.nan)
+        folds, fits = [], []
+        timed = time_domain(effects)
+        if timed:
+            start = None
+            if len(effects) > 1 and (STEER_FRICTION,) in self.time_domain_full:  # from the friction alone
+                alone = self.time_domain_full[(STEER_FRICTION,)].values
+                start = list(alone) + [1.0 if n == "speed_scale" else 0.0 for _, n in Layout.of(effects).names[2:]]
+            full = self.time_domain_fit(effects, None, start=start, jackknife=False)
+        else:
+            full = self.fit_of(effects)
+        for name, held in self.folds:  # every fold starts from the fit to all the data
+            progress.advance()
+            if timed:
+                fit = self.time_domain_fit(effects, ~held, start=full.values)
+                pred = self.time_domain_predict(fit, held)
+            else:
+                fit = p.fit(effects, ~held, start=full.values, bias=full.bias)
+                pred = p.predict_fit(fit)
+            fits.append(fit)
+            z_fold = p.z(pred)[held]
+            # a model that cannot be evaluated (singular) predicts nothing: count it as far off
+            z_after[held] = np.where(np.isfinite(z_fold), z_fold, UNPREDICTED_Z)
+            entry = {
+                "fold": name,
+                "n": int(held.sum()),
+                "error_before": rms(z_before[held]),
+                "error_after": rms(z_after[held]),
+                "fitted": _named_values(fit),
+            }
+            if np.all(p.var_data[held] > 0):
+                scale = np.sqrt(p.var_total[held] / p.var_data[held])
+                entry["data_error_before"] = rms(z_before[held] * scale)
+                entry["data_error_after"] = rms(z_after[held] * scale)
+            folds.append(entry)
+        held_any = np.any([h for _, h in self.folds], axis=0)
+        result = CrossValidation(
+            effects=effects,
+            folds=folds,
+            z_before=z_before[held_any],
+            z_after=z_after[held_any],
+            error_before=rms(z_before[held_any]),
+            error_after=rms(z_after[held_any]),
+            shrink=gap_shrink(z_before[held_any], z_after[held_any]),
+            fits=fits,
+        )
+        data_sigma = np.sqrt(p.var_data)[held_any]
+        if np.all(data_sigma > 0):
+            scale = np.sqrt(p.var_total)[held_any] / data_sigma
+            zb, za = z_before[held_any] * scale, z_after[held_any] * scale
+            result.data_before, result.data_after, result.data_shrink = rms(zb), rms(za), gap_shrink(zb, za)
+        self.cv[effects] = result
+        return result
+
+
+def with_parameter_uncertainty(p: GapProblem, fit: EffectFit) -> EffectFit:
+    """A linear fit's covariance and 95 % intervals with the benchmark parameters' uncertainty as the
+    systematic error it is.
+
+    The fit weighs each residual by the combined variance of data and parameters, as if the
+    parameters' share were independent from row to row; but one parameter error moves every row at
+    once, and does not average out over the rows.  The covariance of the fitted values is the sandwich
+    ``B A^T C A B`` (``A`` the weighted Jacobian of the predictions in the fitted values, ``B =
+    (A^T A)^-1``, ``C`` the weighted covariance of the observations: the data's variance plus
+    ``J_p J_p^T`` of the parameters' slopes per sigma), times the reduced chi-square when above one
+    (lack of fit).  Fits holding ``parameters`` fit the shifts themselves and keep their own.
+    """
+    if PARAMETERS in fit.effects or not p.free or not fit.names or not len(p.obs):
+        return fit
+    lay = p.layout(fit.effects)
+    x = np.asarray(fit.values, float)
+    lower, upper = np.asarray(fit.lower, float), np.asarray(fit.upper, float)
+    span = np.maximum(upper - lower, 1e-9)
+    h = 1e-5 * np.minimum(span, 10.0)
+    X = [x]
+    for k in range(x.size):
+        up, down = x.copy(), x.copy()
+        up[k] = min(x[k] + h[k], upper[k])
+        down[k] = max(x[k] - h[k], lower[k])
+        X += [up, down]
+    pred = p.predict_batch(lay, np.array(X), indirect=False)
+    steps = np.array([X[1 + 2 * k][k] - X[2 + 2 * k][k] for k in range(x.size)])
+    jac = np.stack([(pred[1 + 2 * k] - pred[2 + 2 * k]) / steps[k] for k in range(x.size)], axis=1)
+    w = np.sqrt(p.var_total)
+    A = jac / w[:, None]
+    if not np.all(np.isfinite(A)):
+        return fit
+    B = np.linalg.pinv(A.T @ A)
+    Jp = p.jacobian / w[:, None]
+    AC = A.T * (p.var_data / p.var_total)
+    cov = B @ (AC @ A + (A.T @ Jp) @ (Jp.T @ A)) @ B
+    dof = max(fit.n - x.size, 1)
+    cov *= max(1.0, fit.chi2 / dof)
+    stderr = np.sqrt(np.clip(np.diag(cov), 0, None))
+    stderr = np.where(np.isfinite(fit.stderr), stderr, np.inf)  # a value the data do not move stays so
+    return replace(
+        fit,
+        stderr=stderr,
+        ci_low=np.clip(x - 1.96 * stderr, lower, upper),
+        ci_high=np.clip(x + 1.96 * stderr, lower, upper),
+        covariance=cov,
+    )

@@ -1,0 +1,304 @@
+"""Usual ranges and priors: whether a fitted value is usual, usable and what evidence it loses to its
+prior; and steer friction as the viscous damping it equals at the records' amplitude (module docstring
+of :mod:`bikerider.gap.diagnosis.result`, "Usual, and priors")."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from bikerider.gap.candidates.effects import (
+    COULOMB_RANGE,
+    EFFECTS,
+    LITERATURE_EXTRA,
+    PARAMETERS,
+    STEER_FRICTION,
+    EffectParameter,
+    Prior,
+    prior_from_range,
+)
+from bikerider.gap.diagnosis.fits import time_domain
+from bikerider.gap.diagnosis.statistics import ALPHA, jackknife_quantile
+from bikerider.gap.distributions import chi2
+from bikerider.gap.inference.problem import EffectFit, GapProblem
+from bikerider.gap.measured.records import RecordFit
+
+UNDETERMINED = 1.0
+"""A fitted value whose standard error exceeds this many times the width of its plausible range is
+not determined by the data (the data narrow it down less than the literature already does)."""
+AMPLITUDE_SPREAD = 2.0
+"""Records whose steer-rate amplitudes span less than this factor (10th to 90th percentile) are decays of
+one amplitude: they do not tell Coulomb from viscous friction (:meth:`Priors.friction_equivalent`)."""
+
+
+@dataclass(frozen=True, eq=False)
+class Priors:
+    """What the diagnosis judges fitted values against.
+
+    Attributes
+    ----------
+    plausible : dict
+        The bicycle's own ``[plausible]`` table: parameter -> ``(low, high, why)``.
+    amplitudes : ndarray
+        Each used record's steer-rate amplitude [rad/s], where known (:func:`steer_rate_amplitudes`).
+    n_folds : int
+        The diagnosis's held-out folds (the jackknife's quantile of a time-domain fit).
+    problem : GapProblem or None
+        The fit problem (the arms' geometry, the uncertain parameters); needed to judge the arms'
+        mass and the benchmark parameters' shifts.
+    """
+
+    plausible: dict
+    amplitudes: np.ndarray
+    n_folds: int = 0
+    problem: GapProblem | None = None
+
+    def steer_rate_amplitude(self) -> float | None:
+        """Median steer-rate amplitude of the records used [rad/s] (None without steer signals)."""
+        return float(np.median(self.amplitudes)) if self.amplitudes.size else None
+
+    def plausible_range(self, name: str) -> tuple[float, float, str]:
+        """The usual range of a fitted parameter and where it comes from (a value outside it is flagged)."""
+        if name in self.plausible:
+            return self.plausible[name]
+        param = parameter(name)
+        lo, hi = param.literature
+        if name == "c_steer":
+            amplitude = self.steer_rate_amplitude()
+            if amplitude is not None and amplitude > 0:
+                extra = 4 * COULOMB_RANGE[1] / (math.pi * amplitude)
+                return (
+                    lo,
+                    hi + extra,
+                    (
+                        f"{param.source}; above it, the linear equivalent 4 T / (pi A) of Coulomb "
+                        f"friction T up to {COULOMB_RANGE[1]:g} N m at the records' steer-rate "
+                        f"amplitude A = {amplitude:.3g} rad/s adds up to {extra:.3g} N m s/rad"
+                    ),
+                )
+        return lo, hi, param.source
+
+    def prior_of(self, name: str) -> Prior:
+        """The prior of a fitted parameter: the bicycle's own ``[plausible]`` range made a prior
+        (:func:`bikerider.gap.candidates.effects.prior_from_range`), else the registry's."""
+        if name in self.plausible:
+            lo, hi, why = self.plausible[name]
+            return prior_from_range(lo, hi, f"this bicycle's [plausible] table: {why}")
+        return parameter(name).the_prior()
+
+    def log_prior(self, fit: EffectFit) -> float:
+        """``ln p(values) - ln p(modes)`` of a fit's values under their priors [nats, <= 0]: what the
+        selection weighs against the held-out log-likelihood (the benchmark shifts: ``-chi2 / 2`` of
+        their Gaussian prior)."""
+        total = -0.5 * fit.prior_chi2 if PARAMETERS in fit.effects else 0.0
+        for k, name in enumerate(fit.names):
+            if not name.startswith(PARAMETERS + "."):
+                total += self.prior_of(name).log_ratio(float(fit.values[k]))
+        return float(total)
+
+    def friction_equivalent(self, fit: EffectFit) -> dict | None:
+        """Coulomb plus viscous steer friction as the viscous damping it equals at the records' amplitude.
+
+        The describing function of Coulomb friction ``T`` on a sinusoidal steer rate of amplitude ``A`` is a
+        viscous damping ``4 T / (pi A)``, so ``c_eq = c_viscous + 4 T / (pi A)`` at the records' median
+        amplitude, with its standard error from the fit's covariance.  Records whose amplitudes span less
+        than a factor :data:`AMPLITUDE_SPREAD` (10th to 90th percentile) are decays of one amplitude: they
+        determine ``c_eq`` but not the split between Coulomb and viscous friction (``separable`` false).
+        ``None`` for a fit without steer friction or records without a steer signal.
+        """
+        if STEER_FRICTION not in fit.effects or "T_coulomb" not in fit.names:
+            return None
+        amplitudes = self.amplitudes[np.isfinite(self.amplitudes) & (self.amplitudes > 0)]
+        if not amplitudes.size:
+            return None
+        a = float(np.median(amplitudes))
+        lo, hi = np.percentile(amplitudes, [10, 90])
+        spread = float(hi / lo)
+        i, j = fit.names.index("T_coulomb"), fit.names.index("c_viscous")
+        gradient = np.zeros(len(fit.names))
+        gradient[i], gradient[j] = 4 / (math.pi * a), 1.0
+        value = float(gradient @ fit.values)
+        if fit.covariance is not None and np.all(np.isfinite(fit.covariance)):
+            stderr = float(math.sqrt(max(gradient @ fit.covariance @ gradient, 0.0)))
+        else:
+            stderr = float(math.hypot(gradient[i] * fit.stderr[i], fit.stderr[j]))
+        separable = spread >= AMPLITUDE_SPREAD
+        timed = time_domain(fit.effects) and fit.covariance is not None and self.n_folds >= 3
+        quantile = jackknife_quantile(self.n_folds) if timed else 1.96
+        low, high = max(value - quantile * stderr, 0.0), value + quantile * stderr
+        return {
+            "c_equivalent": value,
+            "stderr": stderr,
+            "ci95": [low, high],
+            "unit": "N m s/rad",
+            "amplitude": a,
+            "amplitude_spread": spread,
+            "separable": bool(separable),
+            "note": (
+                f"the records' steer-rate amplitudes span a factor {spread:.2g} (10th-90th percentile, median "
+                f"A = {a:.3g} rad/s)"
+                + (
+                    ": Coulomb and viscous friction are told apart by how the damping changes with amplitude"
+                    if separable
+                    else (
+                        ": decays of one amplitude, which cannot tell Coulomb from viscous friction; what they "
+                        f"determine is the equivalent viscous damping c_eq = c_viscous + 4 T_coulomb / (pi A) = "
+                        f"{value:.3g} [{low:.3g}, {high:.3g}] "
+                        "N m s/rad, not the split"
+                    )
+                )
+            ),
+        }
+
+    def plausibility(self, fit: EffectFit) -> tuple[bool, list[dict]]:
+        """Whether every fitted value is usual (module docstring), with one check per fitted value.
+
+        A check holds the value, its 95 % interval, the usual range and its source, the prior and its
+        log ratio, whether the data determine the value and whether it is pinned at a search bound, and a
+        ``flag`` (text) when the value lies outside the usual range.  ``usable`` is false only where the
+        data cannot carry the value (undetermined, or pinned at the edge of the search).
+        """
+
+        checks = []
+        ok = True
+        pinned = set(fit.at_bound()) if fit.names else set()
+        if PARAMETERS in fit.effects:
+            limit = float(chi2.ppf(1 - ALPHA, max(len(self.problem.free), 1)))
+            good = fit.prior_chi2 <= limit
+            shifted = [n for n in fit.names if n.startswith(PARAMETERS + ".")]
+            at = sorted(n.split(".", 1)[1] for n in shifted if n in pinned)
+            checks.append(
+                {
+                    "name": "sum of squared shifts / sigma^2",
+                    "value": fit.prior_chi2,
+                    "literature": [0.0, limit],
+                    "plausible": bool(good and not at),
+                    "usable": not at,
+                    "at_bound": at,
+                    "log_prior": -0.5 * fit.prior_chi2,
+                    "source": "the parameters' stated uncertainties (chi-square at 1 %)",
+                }
+            )
+            ok = ok and bool(good) and not at
+        for k, name in enumerate(fit.names):
+            if name.startswith(PARAMETERS + "."):
+                continue
+            lo, hi, source = self.plausible_range(name)
+            param = parameter(name)
+            prior = self.prior_of(name)
+            unit = fit.units[k]
+            at_bound = name in pinned
+            ci = (float(fit.ci_low[k]), float(fit.ci_high[k]))
+            if name == "m_arm":
+                # judge the arms by their inertia about the steer axis
+                inertia = arm_inertia(self.problem, fit.values[k])
+                (lo, hi), unit, source = LITERATURE_EXTRA["I_arm_steer"]
+                scale = inertia / fit.values[k] if fit.values[k] > 0 else arm_inertia(self.problem, 1.0)
+                value, shown, ci = inertia, "I_arm_steer", (ci[0] * scale, ci[1] * scale)
+                determined = math.isfinite(fit.stderr[k]) and fit.stderr[k] * scale <= UNDETERMINED * (hi - lo)
+            else:
+                value, shown = float(fit.values[k]), name
+                determined = math.isfinite(fit.stderr[k]) and fit.stderr[k] <= UNDETERMINED * max(hi - lo, 1e-12)
+            # below the usual range is usual too where the prior makes zero the most probable size
+            usual = bool(lo <= value <= hi or (value < lo and prior.kind == "halfcauchy"))
+            flag = None
+            if not usual:
+                side = "above" if value > hi else "below"
+                precise = " (the data determine it: 95 % interval " if determined else " (95 % interval "
+                flag = (
+                    f"{shown} = {value:.3g} {unit}{precise}[{ci[0]:.3g}, {ci[1]:.3g}]) is {side} the usual "
+                    f"{lo:g}-{hi:.3g} {unit} from {source}"
+                    + (f": check {param.check}" if side == "above" and param.check else "")
+                )
+            good = bool(usual and determined and not at_bound)
+            checks.append(
+                {
+                    "name": shown,
+                    "value": value,
+                    "unit": unit,
+                    "literature": [lo, hi],
+                    "plausible": good,
+                    "in_range": usual,
+                    "determined": bool(determined),
+                    "at_bound": bool(at_bound),
+                    "usable": bool(determined and not at_bound),
+                    "bounds": [float(fit.lower[k]), float(fit.upper[k])],
+                    "ci95": list(ci),
+                    "source": source,
+                    "prior": prior.describe(fit.units[k]),
+                    "prior_source": prior.source,
+                    "log_prior": prior.log_ratio(float(fit.values[k])),
+                    "flag": flag,
+                }
+            )
+            ok = ok and good
+        return ok, checks
+
+
+def steer_rate_amplitudes(records: list[RecordFit], record_rows: dict[int, int]) -> np.ndarray:
+    """Each used record's steer-rate amplitude [rad/s], where known: ``sqrt(2)`` times the RMS steer rate
+    over the record, from a steer-rate signal, or from a steer-angle signal times the record's weave
+    frequency."""
+    out = []
+    for k in record_rows:
+        f = records[k]
+        r = f.record
+        if "steer_rate" in r.signals and np.all(np.isfinite(r.signals["steer_rate"])):
+            out.append(math.sqrt(2) * float(np.std(r.signals["steer_rate"])))
+        elif "steer_angle" in r.signals and np.all(np.isfinite(r.signals["steer_angle"])) and f.estimate is not None:
+            x = r.signals["steer_angle"]
+            out.append(math.sqrt(2) * float(np.std(x)) * abs(f.estimate.eigenvalue))
+    return np.array(out, float)
+
+
+def parameter(name: str) -> EffectParameter:
+    """The registry's entry of a fitted parameter, by name."""
+    return next(p for e in EFFECTS.values() for p in e.parameters if p.name == name)
+
+
+def arm_inertia(problem: GapProblem, m_arm: float) -> float:
+    """Moment of inertia of the arm masses about the steer axis [kg m^2]."""
+    g = problem.geometry.grips
+    v = problem.nominal
+    lam, w, c = v["lam"], v["w"], v["c"]
+    # distance of a grip from the steer axis (axis through (w + c, 0, 0), direction (sin lam, 0, cos lam))
+    rel = np.array([g["x_grip"] - (w + c), g["b_grip"], g["z_grip"]])
+    axis = np.array([math.sin(lam), 0.0, math.cos(lam)])
+    perp = rel - (rel @ axis) * axis
+    return float(m_arm * (perp @ perp))
+
+
+def implausible_reasons(checks: list[dict]) -> list[str]:
+    """Why a fit is implausible, one phrase per failing value."""
+    out = []
+    for c in checks:
+        if c.get("plausible", True):
+            continue
+        name = c["name"]
+        if name.startswith("sum of squared shifts"):
+            parts = []
+            if c["value"] > c["literature"][1]:
+                parts.append(
+                    f"parameter shifts of chi-square {c['value']:.3g} (the prior allows {c['literature'][1]:.3g})"
+                )
+            if c.get("at_bound"):
+                parts.append("shifts pinned at a bound: " + ", ".join(c["at_bound"]))
+            out.append("; ".join(parts))
+            continue
+        unit = c.get("unit", "")
+        if c.get("at_bound"):
+            out.append(f"{name} = {c['value']:.3g} {unit} at its search bound {c['bounds']}")
+        elif not c.get("determined", True):
+            out.append(
+                f"{name} = {c['value']:.3g} {unit} not determined by the data (95 % interval "
+                f"[{c['ci95'][0]:.3g}, {c['ci95'][1]:.3g}])"
+            )
+        else:
+            out.append(
+                c.get("flag")
+                or f"{name} = {c['value']:.3g} {unit} outside the usual {c['literature'][0]:g}-"
+                f"{c['literature'][1]:.3g} {unit}"
+            )
+    return out
