@@ -93,11 +93,13 @@ from bikerider.gap.diagnosis.statistics import (
     significantly_better,
 )
 from bikerider.gap.distributions import chi2
+from bikerider.gap.inference.frequency_response import multisine_rows
 from bikerider.gap.inference.indirect import RecordRows, RecordSimulator
 from bikerider.gap.inference.low_rank import low_rank_chi2
 from bikerider.gap.inference.predict import Predictor
 from bikerider.gap.inference.problem import EffectFit, GapProblem
 from bikerider.gap.inference.timedomain import Layout, fit_time_domain
+from bikerider.gap.measured.multisine import FrequencyResponseData, MultisineFit
 from bikerider.gap.measured.records import RecordFit, eigenvalues_of
 from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
 from bikerider.gap.parallel import cross_validate_all
@@ -193,27 +195,30 @@ class Diagnosis:
         canonical: CanonicalData,
         effects=EFFECT_NAMES,
         records: list[RecordFit] | None = None,
+        multisines: list[MultisineFit] | None = None,
     ):
         start = time.perf_counter()
         self.model_input = model
         self.records = [replace(f) for f in records or []]  # copies: records left out here get their reason
+        self.multisines = [replace(f) for f in multisines or []]  # multisine records (multisine25)
         self.record_rows: dict[int, int] = {}  # index in self.records -> eigenvalue row
         self._time_domain_full: dict[tuple[str, ...], EffectFit] = {}
         self.bias = np.zeros(0, complex)  # each record row's extraction bias under the nominal model
         self._record_set = None
         eigen = self._with_records(model, eigen)
-        if len(eigen) + len(canonical) == 0:
-            if not self.records:
+        frf = self._with_multisines(model)  # multisine records: frequency-response rows (multisine25)
+        if len(eigen) + len(canonical) + len(frf) == 0:
+            if not self.records and not self.multisines:
                 raise InputError("data", "empty", "at least one measured eigenvalue or identified entry")
-            left = [f for f in self.records if not f.used]
+            left = [f for f in self.records + self.multisines if not f.used]  # type: ignore[operator]
             reasons = "; ".join(f"{f.record.name}: {f.reason}" for f in left[:3]) + (" ..." if len(left) > 3 else "")
             raise InputError(
                 "data",
-                f"{len(left)} of {len(self.records)} records left out",
+                f"{len(left)} of {len(self.records) + len(self.multisines)} records left out",
                 f"enough records for a diagnosis: none could be used ({reasons})",
             )
         progress.begin("the model's uncertainty at every observation")
-        self.problem = GapProblem(model, eigen, canonical, records=self._record_set)
+        self.problem = GapProblem(model, eigen, canonical, records=self._record_set, frf=frf)
         self.effects = [e for e in effects]
         self.not_applicable = {}
         for e in self.effects:
@@ -223,6 +228,11 @@ class Diagnosis:
                 self.not_applicable[e] = (
                     "needs records whose speed a sensor read during the test (a speed column); "
                     "the speeds given are taken as the speeds the bicycle ran at"
+                )
+            elif EFFECTS[e].needs_records and len(frf):  # multisine25
+                self.not_applicable[e] = (
+                    "fitted in the time domain to free decays; multisine records are compared as frequency "
+                    "responses, which the friction's time-domain fit does not predict yet"
                 )
             elif EFFECTS[e].needs_records and not self._time_domain_ready():
                 self.not_applicable[e] = (
@@ -332,6 +342,17 @@ class Diagnosis:
         self.record_rows = {k: len(eigen) + j for j, k in enumerate(still)}
         self._record_set = RecordRows(simulator.subset(keep), np.array(list(self.record_rows.values()), int))
         return EigenvalueData.concatenate([eigen, rows])
+
+    def _with_multisines(self, model: GapModelInput) -> FrequencyResponseData:
+        """Frequency-response rows of the multisine records used; those left out here get their reason
+        (:func:`bikerider.gap.inference.frequency_response.multisine_rows`).  Hook of multisine25."""
+        if not any(f.used for f in self.multisines):
+            return FrequencyResponseData.empty()
+        nominal = {k: float(model.parameters.values[k]) for k in BENCH_ARGS + ("g",)}  # type: ignore[arg-type]
+        frf, reasons = multisine_rows(self.multisines, EffectModel(nominal, model.geometry))
+        for k, why in reasons.items():
+            self.multisines[k].reason = why
+        return frf
 
     def _time_domain_ready(self) -> bool:
         used = [f for f in self.records if f.used]
@@ -549,17 +570,21 @@ class Diagnosis:
         z = -p.z(p.baseline)  # measured minus model, normalised
         eig_speeds = np.unique(obs.speed[[k == "eigenvalue" for k in obs.kind]])
         bands = np.array_split(eig_speeds, min(N_SPEED_BANDS, eig_speeds.size)) if eig_speeds.size else []
+        frf_speeds = np.unique(obs.speed[[k == "frf" for k in obs.kind]])  # multisine records (multisine25)
+        frf_bands = np.array_split(frf_speeds, min(N_SPEED_BANDS, frf_speeds.size)) if frf_speeds.size else []
         cells = []
         keys = []
         for i in range(len(obs)):
-            if obs.kind[i] == "eigenvalue":
-                band = next(b for b in bands if b[0] <= obs.speed[i] <= b[-1])
+            if obs.kind[i] in ("eigenvalue", "frf"):
+                band = next(
+                    b for b in (bands if obs.kind[i] == "eigenvalue" else frf_bands) if b[0] <= obs.speed[i] <= b[-1]
+                )
                 band_key = (float(band[0]), float(band[-1]))
             else:
                 band_key = tuple(float(x) for x in self.problem.predictor.canonical.speed_range[obs.group[i]])
             key = (
                 (obs.mode[i], band_key, obs.quantity[i])
-                if obs.kind[i] == "eigenvalue"
+                if obs.kind[i] in ("eigenvalue", "frf")
                 else ("canonical", band_key, f"{obs.quantity[i]} ({obs.group[i]})")
             )
             keys.append(key)
@@ -1230,7 +1255,7 @@ class Diagnosis:
         return out
 
     def _records_summary(self) -> dict | None:
-        if not self.records:
+        if not self.records and not self.multisines:
             return None
         rows = list(self.record_rows)
         out = []
@@ -1240,6 +1265,7 @@ class Diagnosis:
                 b = self.bias[rows.index(k)]
                 entry["bias"] = [float(b.real), float(b.imag)]
             out.append(entry)
+        out += [f.summary() for f in self.multisines]  # multisine records (multisine25), kind "multisine"
         used = sum(1 for e in out if e["used"])
         return {
             "total": len(out),
@@ -1329,8 +1355,9 @@ def diagnose(
     canonical: CanonicalData | None = None,
     effects=EFFECT_NAMES,
     records: list[RecordFit] | None = None,
+    multisines: list[MultisineFit] | None = None,
 ) -> Diagnosis:
     """Run the diagnosis (see the module docstring)."""
     eigen = eigen if eigen is not None else EigenvalueData.empty()
     canonical = canonical if canonical is not None else CanonicalData.empty()
-    return Diagnosis(model, eigen, canonical, effects, records)
+    return Diagnosis(model, eigen, canonical, effects, records, multisines)

@@ -60,6 +60,7 @@ from bikerider.gap.candidates.effect_model import BENCH_ARGS, STRUCTURAL_KEYS, E
 from bikerider.gap.candidates.effects import EFFECTS, OBSERVATION_EFFECTS
 from bikerider.gap.candidates.nominal import GapModelInput
 from bikerider.gap.inference.predict import Predictor
+from bikerider.gap.measured.multisine import FrequencyResponseData
 from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
 
 if TYPE_CHECKING:
@@ -171,9 +172,14 @@ class GapProblem:
     """
 
     def __init__(
-        self, model: GapModelInput, eigen: EigenvalueData, canonical: CanonicalData, records: RecordRows | None = None
+        self,
+        model: GapModelInput,
+        eigen: EigenvalueData,
+        canonical: CanonicalData,
+        records: RecordRows | None = None,
+        frf: FrequencyResponseData | None = None,
     ):
-        if len(eigen) + len(canonical) == 0:
+        if len(eigen) + len(canonical) + (len(frf) if frf is not None else 0) == 0:
             raise InputError("data", "empty", "at least one measured eigenvalue or identified entry")
         self.model_input = model
         self.geometry = model.geometry
@@ -191,7 +197,7 @@ class GapProblem:
         )
         self.shift_upper = np.full(len(self.free), MAX_SHIFT)
         self.eigen = eigen
-        self.predictor = Predictor(eigen, canonical, self.nominal, self.geometry)
+        self.predictor = Predictor(eigen, canonical, self.nominal, self.geometry, frf)  # frf: multisine25
         self.obs = self.predictor.observations
         self.y = self.obs.value
         self.records = records
@@ -473,7 +479,7 @@ class GapProblem:
                     eigen_part = self.predictor.predict_scaled(
                         EffectModel(flat_values, self.geometry, flat_config), np.asarray(scale, dtype=float)
                     )
-                    if len(self.predictor.canonical):
+                    if len(self.predictor.canonical) or len(self.predictor.frf):  # the rest: canonical, multisines
                         rest = self.predictor.predict(EffectModel(values, self.geometry, config))[
                             ..., eigen_part.shape[-1] :
                         ]

@@ -1,0 +1,96 @@
+"""Every model's prediction of a multisine record's frequency response, like with like.
+
+A multisine record's value at a line ``w`` is the periodic steady-state response of the signal to the
+steer torque's line (:mod:`bikerider.gap.measured.multisine`).  For a linear closed loop ``x' = A x
++ b T`` (``A`` from :meth:`~bikerider.gap.candidates.effect_model.EffectModel.state_space` and
+``closed_loop`` with the record's gains at the controller's speed, ``b`` the steer-torque column) it
+is exactly ``H(w) = e^T (i w I - A)^-1 b`` with ``e`` picking the signal (roll angle, steer angle,
+roll rate or steer rate), whatever the model's modes: no extraction bias, no initial state.  A model
+whose loop has a growing mode has no steady state; its prediction is still ``H(w)`` (what a
+periodic response would be), and the diagnosis leaves out records where the nominal model's loop
+grows (:func:`unstable_records`).
+
+Steer Coulomb friction is replaced by its random-input describing function at the record's own
+torque (:func:`bikerider.gap.plan.sweeps.linearised_friction`, as the plan predicts it); the
+harmonics friction makes are in the record's residual, and so in its standard errors.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from bikerider.gap.candidates.effect_model import EffectModel
+from bikerider.gap.measured.multisine import FrequencyResponseData
+
+SIGNAL_STATE = {"roll_angle": 0, "steer_angle": 1, "roll_rate": 2, "steer_rate": 3}
+"""Signal name to its place among the state space's outputs ``(phi, delta, phid, deltad)``."""
+
+
+def predict_frf(model: EffectModel, frf: FrequencyResponseData, speed_scale=None) -> np.ndarray:
+    """Predicted real and imaginary parts ``(..., 2 R)`` (each row's real part, then its imaginary part,
+    interleaved as the observations are) of the rows of ``frf`` under a (batched) model.
+
+    ``speed_scale`` multiplies the speed the bicycle ran at (one number, or one per row); the gains
+    stay those of the controller's reading.
+    """
+    speeds = frf.speed if speed_scale is None else frf.speed * np.asarray(speed_scale, float)
+    ss = model.state_space(np.asarray(speeds, float))
+    A = ss.closed_loop(frf.gains)  # (..., R, n, n)
+    b = ss.B[..., :, 1]  # (..., R, n)
+    n = A.shape[-1]
+    M = 1j * frf.omega[:, None, None] * np.eye(n) - A
+    x = np.linalg.solve(M, b[..., None].astype(complex))[..., 0]  # (..., R, n)
+    index = np.array([ss.outputs[SIGNAL_STATE[s]] for s in frf.signal], int)
+    H = np.take_along_axis(x, np.broadcast_to(index[:, None], x.shape[:-1] + (1,)), axis=-1)[..., 0]
+    out = np.empty(H.shape[:-1] + (2 * H.shape[-1],))
+    out[..., 0::2] = H.real
+    out[..., 1::2] = H.imag
+    return out
+
+
+def with_speed_uncertainty(frf: FrequencyResponseData, model: EffectModel) -> np.ndarray:
+    """Each row's standard error with the speed's uncertainty added: the nominal response's slope in
+    speed (central difference over the speed's own scatter, at least 1 mm/s) times that scatter, the
+    larger of its real and imaginary parts, added in quadrature."""
+    if not len(frf) or not np.any(frf.speed_sigma > 0):
+        return frf.sigma.copy()
+    h = np.minimum(np.maximum(frf.speed_sigma, 1e-3), 0.5 * frf.speed)
+    up = predict_frf(model, frf, 1 + h / frf.speed)
+    down = predict_frf(model, frf, 1 - h / frf.speed)
+    slope = (up - down) / 2 / np.repeat(h, 2) * np.repeat(frf.speed_sigma, 2)
+    per_row = np.maximum(np.abs(slope[0::2]), np.abs(slope[1::2]))
+    return np.sqrt(frf.sigma**2 + per_row**2)
+
+
+def unstable_records(frf: FrequencyResponseData, model: EffectModel, durations: dict[int, float]) -> set[int]:
+    """Records (``frf.record`` values) where the model's closed loop has a mode growing e-fold within the
+    record's duration (``durations``: record to seconds), as the plan leaves such runs out: a multisine
+    there has no steady response to compare (a slower capsize is taken as held by a rider or a catch)."""
+    ss = model.state_space(frf.speed)
+    ev = np.linalg.eigvals(ss.closed_loop(frf.gains))
+    rate = np.max(ev.real, axis=-1)
+    return {int(r) for r, g in zip(frf.record, np.ravel(rate)) if g * max(durations.get(int(r), 1.0), 1e-9) > 1.0}
+
+
+def multisine_rows(fits: list, model: EffectModel) -> tuple[FrequencyResponseData, dict[int, str]]:
+    """The observations of the multisine fits used, and the reason of each fit left out here.
+
+    Rows of records where the nominal model's loop grows e-fold within the run are left out (no steady
+    response to compare); the others' standard errors get the speed's uncertainty
+    (:func:`with_speed_uncertainty`).
+    """
+    frf = FrequencyResponseData.of(fits)
+    reasons: dict[int, str] = {}
+    if not len(frf):
+        return frf, reasons
+    durations = {k: f.record.duration for k, f in enumerate(fits)}
+    for k in sorted(unstable_records(frf, model, durations)):
+        reasons[k] = (
+            "the model's closed loop has a mode growing e-fold within the run at this speed and law: "
+            "no steady response to compare the multisine with"
+        )
+    keep = np.array([k for k in range(len(frf)) if int(frf.record[k]) not in reasons], int)
+    frf = frf.subset(keep)
+    if len(frf):
+        frf.sigma = with_speed_uncertainty(frf, model)
+    return frf, reasons
