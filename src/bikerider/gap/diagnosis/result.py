@@ -93,7 +93,7 @@ from bikerider.gap.diagnosis.statistics import (
     significantly_better,
 )
 from bikerider.gap.distributions import chi2
-from bikerider.gap.inference.frequency_response import multisine_rows
+from bikerider.gap.inference.frequency_response import multisine_rows, predict_frf_friction
 from bikerider.gap.inference.indirect import RecordRows, RecordSimulator
 from bikerider.gap.inference.low_rank import low_rank_chi2
 from bikerider.gap.inference.predict import Predictor
@@ -228,11 +228,6 @@ class Diagnosis:
                 self.not_applicable[e] = (
                     "needs records whose speed a sensor read during the test (a speed column); "
                     "the speeds given are taken as the speeds the bicycle ran at"
-                )
-            elif EFFECTS[e].needs_records and len(frf):  # multisine25
-                self.not_applicable[e] = (
-                    "fitted in the time domain to free decays; multisine records are compared as frequency "
-                    "responses, which the friction's time-domain fit does not predict yet"
                 )
             elif EFFECTS[e].needs_records and not self._time_domain_ready():
                 self.not_applicable[e] = (
@@ -526,6 +521,14 @@ class Diagnosis:
             pred[parts[0]] = apparent[j].real
             if len(parts) > 1:
                 pred[parts[1]] = apparent[j].imag
+        frf = self.problem.predictor.frf
+        if len(frf):  # multisine records: the friction's describing function at each record's torque (multisine25)
+            at = slice(len(pred) - 2 * len(frf), len(pred))
+            p = self.problem
+            whole = predict_frf_friction(
+                frf, self.multisines, p.nominal, p.geometry, Layout.of(fit.effects), fit.values
+            )
+            pred[at] = np.where(mask[at], whole, pred[at])
         return pred
 
     def nominal_bias_per_row(self) -> np.ndarray:

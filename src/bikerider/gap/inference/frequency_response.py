@@ -17,9 +17,12 @@ harmonics friction makes are in the record's residual, and so in its standard er
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from bikerider.gap.candidates.effect_model import EffectModel
+from bikerider.gap.inference.timedomain import systems
 from bikerider.gap.measured.multisine import FrequencyResponseData
 
 SIGNAL_STATE = {"roll_angle": 0, "steer_angle": 1, "roll_rate": 2, "steer_rate": 3}
@@ -94,3 +97,64 @@ def multisine_rows(fits: list, model: EffectModel) -> tuple[FrequencyResponseDat
     if len(frf):
         frf.sigma = with_speed_uncertainty(frf, model)
     return frf, reasons
+
+
+def predict_frf_friction(frf: FrequencyResponseData, fits: list, nominal: dict, geometry, layout, theta) -> np.ndarray:
+    """Predicted real and imaginary parts ``(2 R,)`` of the rows of ``frf`` under a time-domain candidate
+    (steer friction, alone or with a linear effect; :class:`bikerider.gap.inference.timedomain.Layout` and
+    its values ``theta``): each record's closed loop with the Coulomb friction replaced by its random-input
+    describing function at the record's own torque lines (:func:`bikerider.gap.plan.sweeps.linearised_friction`,
+    the amplitude the root mean square of the lines' measured amplitudes)."""
+    out = np.full(2 * len(frf), np.nan)
+    for k in sorted({int(r) for r in frf.record}):
+        rows = np.flatnonzero(frf.record == k)
+        f = fits[k]
+        A, b, outputs, friction = systems(nominal, geometry, [f.record], layout, np.atleast_2d(theta))
+        omegas = 2 * np.pi * np.asarray(f.lines, float)
+        amplitude = float(np.sqrt(np.mean(np.asarray(f.torque_amplitude, float) ** 2)))
+        A, bb = A[0, 0], b[0, 0]
+        A = describing_function_loop(A, bb, float(np.ravel(friction)[0]), outputs[3], omegas, amplitude)
+        for j in rows:
+            H = _response(A, bb, outputs[SIGNAL_STATE[frf.signal[j]]], frf.omega[j])
+            out[2 * j], out[2 * j + 1] = H.real, H.imag
+    return out
+
+
+def _response(A: np.ndarray, b: np.ndarray, index: int, omega: float) -> complex:
+    """``e_index^T (i w I - A)^-1 b`` of one system."""
+    return complex(np.linalg.solve(1j * omega * np.eye(A.shape[0]) - A, b.astype(complex))[index])
+
+
+STICK = 1e4
+"""Largest equivalent damping of the friction [N m s/rad] (the steer sticks)."""
+
+
+def describing_function_loop(
+    A: np.ndarray, b: np.ndarray, friction: float, rate: int, omegas: np.ndarray, amplitude: float
+) -> np.ndarray:
+    """``A - c b e_rate^T`` with Coulomb friction ``friction`` replaced by the viscous damping ``c`` its
+    random-input describing function gives (Booton 1954): ``c s = sqrt(2 / pi) friction`` with ``s`` the
+    steer rate's standard deviation under the multisine's lines ``omegas`` of ``amplitude`` each,
+    ``s^2 = sum_k amplitude^2 |H_rate(w_k)|^2 / 2`` of the loop with ``c`` itself (``c s`` grows with
+    ``c``: bisection on ``log c``; :data:`STICK` where the torque cannot move the steer).  The plan
+    predicts a planned multisine the same way (:mod:`bikerider.gap.plan.sweeps`)."""
+    if friction <= 0:
+        return A
+    e = np.zeros(A.shape[0])
+    e[rate] = 1.0
+
+    def loop(c):
+        return A - c * np.outer(b, e)
+
+    def c_times_sd(c):
+        H = np.array([_response(loop(c), b, rate, w) for w in omegas])
+        return c * amplitude * float(np.sqrt(np.sum(np.abs(H) ** 2) / 2))
+
+    target = math.sqrt(2 / math.pi) * friction
+    lo, hi = -8.0, math.log10(STICK)
+    if c_times_sd(10.0**hi) <= target:
+        return loop(STICK)
+    for _ in range(40):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (lo, mid) if c_times_sd(10.0**mid) > target else (mid, hi)
+    return loop(10.0 ** (0.5 * (lo + hi)))
