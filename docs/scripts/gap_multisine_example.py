@@ -31,6 +31,7 @@ ROOT = Path(__file__).resolve().parents[2]
 if str(ROOT) not in sys.path:  # validation/ (the gap's blind-check harnesses) lives beside src/, not installed
     sys.path.insert(0, str(ROOT))
 from validation.multisine import multisine_log, write_log  # noqa: E402 (after the path above)
+
 DATA = ROOT / "src" / "bikerider" / "data" / "gap"
 C_STEER = 0.6
 """The hidden steer damping [N m s/rad]."""
@@ -81,9 +82,7 @@ def main(out: Path) -> None:
             ev = nominal.eigenvalues([speed], gains)[0]
             weave_hz = float(np.max(ev.imag)) / (2 * np.pi)
             lines = lines_for(weave_hz, RUN_TIME)
-            columns = multisine_log(
-                values, speed, gains, lines, PEAK, RUN_TIME, c_steer=C_STEER, rng=rng, jitter=0.0
-            )
+            columns = multisine_log(values, speed, gains, lines, PEAK, RUN_TIME, c_steer=C_STEER, rng=rng, jitter=0.0)
             name = f"ms_{session}_{speed:.2f}.csv.gz"
             plain = out / name.removesuffix(".gz")
             write_log(plain, columns)
