@@ -134,3 +134,57 @@ def write_log(path: str | Path, columns: dict[str, np.ndarray], digits: int = 6)
     for row in data:
         rows.append(",".join("" if not math.isfinite(x) else f"{x:.{digits}g}" for x in row))
     Path(path).write_text("\n".join(rows) + "\n")
+
+
+def damage(columns: dict[str, np.ndarray], rng: np.random.Generator, *, jitter=0.05, drop=0.05, gap=("roll_rate", 3)):
+    """A copy of a run's log as a careless logger writes it: stamps jittered by ``jitter`` of a step,
+    a fraction ``drop`` of the rows dropped, and ``gap[1]`` consecutive missing cells of ``gap[0]``."""
+    out = {k: np.array(v, float) for k, v in columns.items()}
+    t = out["time"]
+    step = float(np.median(np.diff(t)))
+    out["time"] = t + jitter * step * rng.uniform(-1, 1, t.size)
+    keep = rng.random(t.size) >= drop
+    out = {k: v[keep] for k, v in out.items()}
+    name, length = gap
+    at = int(rng.integers(10, out[name].size - length - 10))
+    out[name][at : at + length] = np.nan
+    return out
+
+
+def decay_log(
+    values: dict[str, float],
+    speed: float,
+    gains,
+    duration: float,
+    *,
+    kick: float = 0.5,
+    c_steer: float = 0.0,
+    sample_rate: float = 100.0,
+    rng: np.random.Generator | None = None,
+    noise: dict[str, float] | None = None,
+) -> dict[str, np.ndarray]:
+    """A free decay after a roll-rate kick ``kick`` [rad/s] by the same truth (no torque): the columns
+    ``time, steer_torque (0), roll_rate, steer_angle, steer_rate, speed``."""
+    rng = rng if rng is not None else np.random.default_rng(0)
+    noise = NOISE if noise is None else noise
+    M, C1, K0, K2 = meijaard_matrices(values)
+    K = values["g"] * K0 + speed**2 * K2
+    C = speed * C1
+    Minv = np.linalg.inv(M)
+    k = np.asarray(gains, float)
+
+    def rhs(t, x):
+        steer = k @ np.array([x[0], x[2], x[1], x[3]]) - c_steer * x[3]
+        return np.concatenate([x[2:], Minv @ (np.array([0.0, steer]) - C @ x[2:] - K @ x[:2])])
+
+    n = int(round(duration * sample_rate))
+    t = np.arange(n) / sample_rate
+    sol = solve_ivp(rhs, (0.0, float(t[-1]) + 1e-9), np.array([0.0, 0.0, kick, 0.0]), t_eval=t, rtol=1e-8, atol=1e-10)
+    return {
+        "time": t,
+        "steer_torque": np.zeros(n),
+        "roll_rate": sol.y[2] + noise.get("roll_rate", 0.0) * rng.standard_normal(n),
+        "steer_angle": sol.y[1] + noise.get("steer_angle", 0.0) * rng.standard_normal(n),
+        "steer_rate": sol.y[3] + noise.get("steer_rate", 0.0) * rng.standard_normal(n),
+        "speed": speed + 0.02 * rng.standard_normal(n),
+    }

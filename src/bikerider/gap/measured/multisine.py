@@ -50,6 +50,8 @@ MAX_LINES = 64
 """Most lines of one multisine."""
 MIN_SAMPLES_PER_COEFFICIENT = 4
 """Fewest samples per fitted coefficient (two per line, offset and drift)."""
+MIN_EXPLAINED = 0.9
+"""Least share of the torque's variance the lines must explain (a multisine is its lines)."""
 GAP_STEPS = 1.5
 """An interval longer than this many median steps is a gap (samples missing), reported."""
 
@@ -266,6 +268,8 @@ def find_lines(time: np.ndarray, torque: np.ndarray) -> np.ndarray:
     if grid.size == 0:
         return grid
     u = torque - torque.mean()
+    if not np.any(u):  # a constant torque has no line
+        return grid[:0]
     w = 2 * math.pi * grid
     power = np.empty(grid.size)
     for start in range(0, grid.size, 256):  # chunks bound the memory of the (samples x frequencies) products
@@ -329,6 +333,14 @@ def fit_multisine(record: MultisineRecord) -> MultisineFit:
             r, reason=f"the torque has no power at {', '.join(f'{x:.3g}' for x in lines[weak][:3])} Hz: check the lines"
         )
     resid_u = r.torque - X @ coef_u
+    explained = 1.0 - float(np.var(resid_u)) / max(float(np.var(r.torque)), 1e-300)
+    if explained < MIN_EXPLAINED:
+        return MultisineFit(
+            r,
+            reason=f"the lines {', '.join(f'{x:.3g}' for x in lines[:4])}{' ...' if K > 4 else ''} Hz explain "
+            f"{100 * max(explained, 0):.0f} % of the steer torque's variance (expected {100 * MIN_EXPLAINED:.0f} % "
+            "or more): check the lines, or leave them out to find them in the torque",
+        )
     fit.notes.append(f"torque: {K} lines, residual RMS {float(np.sqrt(np.mean(resid_u**2))):.2g} N m")
     var_re = np.diag(XtX_inv)[2 : 2 + K]
     var_im = np.diag(XtX_inv)[2 + K :]

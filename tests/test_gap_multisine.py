@@ -1,0 +1,234 @@
+"""Steer-torque multisine records: read, repaired, estimated and used by the diagnosis.
+
+The runs are simulated by the independent truth of ``validation/multisine.py`` (Meijaard et al.'s
+matrices typed in by hand, integrated in time), with noise; the hidden effect is a steer damper of
+0.6 N m s/rad on the steer-by-wire bicycle under its steer-into-lean controller.
+"""
+
+from __future__ import annotations
+
+import math
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from bikerider.diagnose import diagnose_files
+from bikerider.errors import FileFormatError, InputError
+from bikerider.gap import diagnose
+from bikerider.gap.candidates.effect_model import BENCH_ARGS, EffectModel
+from bikerider.gap.inference.frequency_response import predict_frf
+from bikerider.gap.measured.multisine import FrequencyResponseData, MultisineRecord, fit_multisine
+from bikerider.gap.plan.sweeps import lines_for
+from bikerider.io.experiment import read_manifest
+from bikerider.io.gap_model import load_model
+from bikerider.io.multisine import read_multisines
+from validation.multisine import damage, decay_log, multisine_log, write_log
+
+DATA = Path(str(resources.files("bikerider") / "data" / "gap"))
+SBW = DATA / "pasma2024_sbw"
+EXAMPLE = DATA / "multisine_example"
+C_STEER = 0.6
+MODEL = load_model(SBW / "sbw_bicycle.toml")
+VALUES = {k: float(MODEL.parameters.values[k]) for k in BENCH_ARGS + ("g",)}
+LAW = read_manifest(SBW / "experiment.toml")[0].laws["sil"]
+
+HEADER = """[experiment]
+time_column = "time"
+control = "sil"
+{extra}
+[columns]
+roll_rate = "roll_rate"
+steer_angle = "steer_angle"
+steer_rate = "steer_rate"
+speed = "speed"
+
+[control.sil]
+k_phid = {{ K = 2.0, v0 = 6.5, when = "below" }}
+k_phi = {{ K = 0.7, v0 = 6.5, when = "above" }}
+"""
+
+
+def _lines(speed: float, run_time: float = 10.0) -> tuple[float, ...]:
+    ev = EffectModel(VALUES, MODEL.geometry).eigenvalues([speed], LAW(speed))[0]
+    return lines_for(float(np.max(ev.imag)) / (2 * math.pi), run_time)
+
+
+def _record(columns, speed, name="run") -> MultisineRecord:
+    signals = {k: columns[k] for k in ("roll_rate", "steer_angle", "steer_rate")}
+    return MultisineRecord(name, name, columns["time"], columns["steer_torque"], signals, speed, 0.0, "g", LAW, speed)
+
+
+def _write_runs(folder: Path, runs: list[tuple[str, dict, str]], decays=(), table: str = "") -> Path:
+    """A manifest with multisine runs ``(file, columns, group)`` and decays ``(file, columns, group)``."""
+    text = HEADER.format(extra="")
+    for file, columns, group in decays:
+        write_log(folder / file, columns)
+        text += f'\n[[file]]\npath = "{file}"\nwindows = [[0, {len(columns["time"])}]]\ngroup = "{group}"\n'
+    text += '\n[multisine]\ntorque = "steer_torque"\noutputs = ["roll_rate", "steer_angle"]\n' + table
+    for file, columns, group in runs:
+        write_log(folder / file, columns)
+        text += f'\n[[multisine.run]]\npath = "{file}"\ngroup = "{group}"\n'
+    path = folder / "experiment.toml"
+    path.write_text(text)
+    return path
+
+
+# -- the estimate ------------------------------------------------------------------------------------
+def test_the_frequency_response_agrees_with_the_model_within_its_standard_errors():
+    """A run of the truth without the damper: the estimate at every line is the model's H(w) within the
+    standard errors it states (they come from the noise, not from the model)."""
+    rng = np.random.default_rng(1)
+    z = []
+    for speed in (2.5, 4.0):
+        lines = _lines(speed)
+        columns = multisine_log(VALUES, speed, LAW(speed), lines, 0.5, 10.0, rng=rng)
+        fit = fit_multisine(_record(columns, speed))
+        assert fit.used, fit.reason
+        np.testing.assert_allclose(fit.lines, lines, rtol=1e-9)  # found in the torque
+        frf = FrequencyResponseData.of([fit])
+        predicted = predict_frf(EffectModel(VALUES, MODEL.geometry), frf)
+        measured = np.column_stack([frf.value.real, frf.value.imag]).ravel()
+        z.append((measured - predicted) / np.repeat(frf.sigma, 2))
+    z = np.concatenate(z)
+    assert 0.5 < math.sqrt(np.mean(z**2)) < 1.6, z
+    assert np.max(np.abs(z)) < 4.5
+
+
+def test_jitter_dropped_samples_and_missing_cells_are_repaired_and_said():
+    rng = np.random.default_rng(2)
+    speed = 4.0
+    clean = multisine_log(VALUES, speed, LAW(speed), _lines(speed), 0.5, 10.0, rng=rng)
+    fit = fit_multisine(_record(clean, speed))
+    damaged = fit_multisine(_record(damage(clean, rng), speed))
+    assert damaged.used, damaged.reason
+    said = " | ".join(damaged.record.repairs)
+    assert "missing roll_rate samples dropped" in said
+    assert "gap" in said or "not uniform" in said
+    assert "nothing" in said  # nothing interpolated or resampled: fitted at the recorded instants
+    for name in fit.response:
+        d = np.abs(damaged.response[name] - fit.response[name]) / np.hypot(fit.sigma[name], damaged.sigma[name])
+        assert np.max(d) < 3.0, (name, d)
+
+
+def test_a_run_with_wrong_lines_or_too_short_is_left_out_with_its_reason():
+    rng = np.random.default_rng(3)
+    columns = multisine_log(VALUES, 4.0, LAW(4.0), _lines(4.0), 0.5, 10.0, rng=rng)
+    record = _record(columns, 4.0)
+    record.lines = (0.05, 0.3)
+    fit = fit_multisine(record)
+    assert not fit.used and "shorter than one period" in fit.reason
+    record.lines = (0.3, 0.35)
+    fit = fit_multisine(record)
+    assert not fit.used and "explain" in fit.reason and "check the lines" in fit.reason
+
+
+# -- the diagnosis -----------------------------------------------------------------------------------
+def test_the_shipped_multisine_example_finds_the_hidden_damper():
+    d = diagnose_files(str(SBW / "sbw_bicycle.toml"), experiment=(str(EXAMPLE / "experiment.toml"),)).as_dict()
+    assert d["verdict"] == "structural"
+    assert d["selected"] == ["steer_damping"]
+    c = next(r for r in d["ranking"] if r["effect"] == "steer_damping")["parameters"]["c_steer"]
+    assert c["ci95"][0] <= C_STEER <= c["ci95"][1], c
+    assert d["records"]["used"] == 6 and all(e["kind"] == "multisine" for e in d["records"]["list"])
+    assert {c["mode"] for c in d["gap"]["map"]} == {"frf_roll_rate", "frf_steer_angle"}
+
+
+def test_damaged_copies_give_the_same_verdict(tmp_path):
+    rng = np.random.default_rng(4)
+    runs = []
+    for session in "abc":
+        for speed in (2.5, 4.0):
+            clean = multisine_log(VALUES, speed, LAW(speed), _lines(speed), 0.5, 10.0, c_steer=C_STEER, rng=rng)
+            runs.append((f"ms_{session}_{speed}.csv", damage(clean, rng), f"session {session}"))
+    manifest = _write_runs(tmp_path, runs)
+    before = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
+    d = diagnose_files(
+        str(SBW / "sbw_bicycle.toml"), experiment=(str(manifest),), effects="steer_damping,steer_inertia,parameters"
+    ).as_dict()
+    assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before  # no input changed
+    assert d["verdict"] == "structural" and d["selected"] == ["steer_damping"]
+    c = d["ranking"][0]["parameters"]["c_steer"]
+    assert c["ci95"][0] <= C_STEER <= c["ci95"][1], c
+    assert d["records"]["used"] == 6
+    assert len(d["records"]["repaired"]) == 6
+    assert all(any("missing roll_rate" in a for a in e["repairs"]) for e in d["records"]["repaired"])
+
+
+def test_decays_and_multisines_together(tmp_path):
+    rng = np.random.default_rng(5)
+    decays, runs = [], []
+    for session in "abc":
+        for speed in (3.0, 5.0):
+            columns = decay_log(VALUES, speed, LAW(speed), 3.0, c_steer=C_STEER, rng=rng)
+            decays.append((f"decay_{session}_{speed}.csv", columns, f"session {session}"))
+    for session in "ab":
+        speed = 4.0
+        columns = multisine_log(VALUES, speed, LAW(speed), _lines(speed), 0.5, 10.0, c_steer=C_STEER, rng=rng)
+        runs.append((f"ms_{session}.csv", columns, f"session {session}"))
+    manifest = _write_runs(tmp_path, runs, decays)
+    d = diagnose_files(
+        str(SBW / "sbw_bicycle.toml"), experiment=(str(manifest),), effects="steer_damping,steer_inertia"
+    ).as_dict()
+    kinds = [e.get("kind", "decay") for e in d["records"]["list"]]
+    assert kinds.count("multisine") == 2 and kinds.count("decay") == 6
+    assert d["records"]["used"] == 8
+    assert d["selected"] == ["steer_damping"]
+    c = d["ranking"][0]["parameters"]["c_steer"]
+    assert c["ci95"][0] <= C_STEER <= c["ci95"][1], c
+    modes = {c["mode"] for c in d["gap"]["map"]}
+    assert {"weave", "frf_roll_rate", "frf_steer_angle"} <= modes
+
+
+# -- bad input ---------------------------------------------------------------------------------------
+@pytest.mark.parametrize(
+    ("table", "run", "error", "words"),
+    [
+        ("", "", InputError, ["multisine.torque", "missing"]),
+        ('torque = "steer_torque"\nsettle = -1\n', 'path = "r.csv"\n', InputError, ["multisine.settle", "-1"]),
+        ('torque = "steer_torque"\n', 'path = "r.csv"\nlines = [0.5, -2]\n', InputError, ["lines", "positive"]),
+        ('torque = "steer_torque"\n', 'path = "r.csv"\ncontrol = "pid"\n', InputError, ["pid", "sil"]),
+        ('torque = "steer_torque"\n', 'path = "r.csv"\ncolour = 1\n', InputError, ["multisine.run.colour"]),
+        ('torque = "motor"\n', 'path = "r.csv"\n', FileFormatError, ["r.csv", "'motor'", "steer_torque"]),
+        ('torque = "steer_torque"\noutputs = ["yaw"]\n', 'path = "r.csv"\n', InputError, ["yaw"]),
+        ('torque = "steer_torque"\n', 'path = "r.csv"\nwindow = [10, 99999]\n', InputError, ["window", "99999"]),
+    ],
+)
+def test_bad_multisine_input_gets_a_clear_error(tmp_path, table, run, error, words):
+    columns = multisine_log(VALUES, 4.0, LAW(4.0), _lines(4.0), 0.5, 10.0)
+    write_log(tmp_path / "r.csv", columns)
+    path = tmp_path / "experiment.toml"
+    path.write_text(HEADER.format(extra="") + "\n[multisine]\n" + table + "\n[[multisine.run]]\n" + run)
+    settings, _ = read_manifest(path)
+    with pytest.raises(error) as info:
+        read_multisines(path, settings)
+    message = str(info.value)
+    assert str(path) in message or "r.csv" in message
+    for word in words:
+        assert word in message, message
+
+
+def test_a_huge_torque_names_the_log_line_and_value(tmp_path):
+    columns = multisine_log(VALUES, 4.0, LAW(4.0), _lines(4.0), 0.5, 10.0)
+    columns["steer_torque"][7] = 5e3
+    write_log(tmp_path / "r.csv", columns)
+    path = tmp_path / "experiment.toml"
+    path.write_text(
+        HEADER.format(extra="") + '\n[multisine]\ntorque = "steer_torque"\n[[multisine.run]]\npath = "r.csv"\n'
+    )
+    with pytest.raises(FileFormatError, match=r"r\.csv:9.*5000.*N m"):
+        read_multisines(path, read_manifest(path)[0])
+
+
+def test_a_diagnosis_whose_multisines_are_all_left_out_stops_naming_them():
+    """A run without torque (a motor that never moved): no line, left out; with nothing left the
+    diagnosis stops with an error that names the record and its reason."""
+    time = np.arange(1000) * 0.01
+    rec = MultisineRecord(
+        "flat.csv", "here", time, np.zeros(1000), {"roll_rate": np.sin(time)}, 4.0, 0.0, "g", LAW, 4.0
+    )
+    fit = fit_multisine(rec)
+    assert not fit.used and "no line" in fit.reason
+    with pytest.raises(InputError, match=r"1 of 1 records left out.*flat\.csv: no line"):
+        diagnose(MODEL, multisines=[fit])
