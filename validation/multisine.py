@@ -24,7 +24,7 @@ from scipy.integrate import solve_ivp
 
 from validation.cases import meijaard_matrices
 
-NOISE = {"roll_rate": 0.01, "steer_angle": 0.002, "steer_rate": 0.02}
+NOISE = {"roll_rate": 0.01, "steer_angle": 0.002, "steer_rate": 0.02, "roll_angle": 0.002}
 """White noise of each logged signal (rad/s, rad), as a MEMS gyro and an encoder give."""
 
 
@@ -49,8 +49,10 @@ def multisine_log(
     rng: np.random.Generator | None = None,
     noise: dict[str, float] | None = None,
     jitter: float = 0.0,
+    with_roll_angle: bool = False,
 ) -> dict[str, np.ndarray]:
-    """One run's log columns: ``time, steer_torque, roll_rate, steer_angle, steer_rate, speed``.
+    """One run's log columns: ``time, steer_torque, roll_rate, steer_angle, steer_rate, speed`` (and
+    ``roll_angle`` with ``with_roll_angle``).
 
     Parameters
     ----------
@@ -123,6 +125,8 @@ def multisine_log(
         "steer_rate": x[3] + noise.get("steer_rate", 0.0) * rng.standard_normal(n),
         "speed": speed + 0.02 * rng.standard_normal(n),
     }
+    if with_roll_angle:
+        out["roll_angle"] = x[0] + noise.get("roll_angle", 0.0) * rng.standard_normal(n)
     return out
 
 

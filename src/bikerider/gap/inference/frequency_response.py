@@ -22,7 +22,7 @@ import math
 import numpy as np
 
 from bikerider.gap.candidates.effect_model import EffectModel
-from bikerider.gap.inference.timedomain import systems
+from bikerider.gap.inference.timedomain import SMOOTHING, expm, systems
 from bikerider.gap.measured.multisine import FrequencyResponseData
 
 SIGNAL_STATE = {"roll_angle": 0, "steer_angle": 1, "roll_rate": 2, "steer_rate": 3}
@@ -102,22 +102,59 @@ def multisine_rows(fits: list, model: EffectModel) -> tuple[FrequencyResponseDat
 def predict_frf_friction(frf: FrequencyResponseData, fits: list, nominal: dict, geometry, layout, theta) -> np.ndarray:
     """Predicted real and imaginary parts ``(2 R,)`` of the rows of ``frf`` under a time-domain candidate
     (steer friction, alone or with a linear effect; :class:`bikerider.gap.inference.timedomain.Layout` and
-    its values ``theta``): each record's closed loop with the Coulomb friction replaced by its random-input
-    describing function at the record's own torque lines (:func:`bikerider.gap.plan.sweeps.linearised_friction`,
-    the amplitude the root mean square of the lines' measured amplitudes)."""
+    its values ``theta``), like with like: the candidate's closed loop, friction and all, is simulated
+    with the record's own torque (its fit at the lines, :meth:`MultisineFit.torque_at`) from rest
+    :data:`LEAD` periods of the lowest line before the record, so that it reaches its periodic steady
+    state, and its response at the record's instants is estimated at the lines exactly as the record's
+    was (:meth:`MultisineFit.estimate`): the harmonics friction makes and its amplitude dependence are
+    in the prediction, not approximated (a describing function missed the SBW-like runs by several
+    standard errors)."""
     out = np.full(2 * len(frf), np.nan)
     for k in sorted({int(r) for r in frf.record}):
         rows = np.flatnonzero(frf.record == k)
         f = fits[k]
         A, b, outputs, friction = systems(nominal, geometry, [f.record], layout, np.atleast_2d(theta))
-        omegas = 2 * np.pi * np.asarray(f.lines, float)
-        amplitude = float(np.sqrt(np.mean(np.asarray(f.torque_amplitude, float) ** 2)))
-        A, bb = A[0, 0], b[0, 0]
-        A = describing_function_loop(A, bb, float(np.ravel(friction)[0]), outputs[3], omegas, amplitude)
+        responses = simulate_torque(A[0, 0], b[0, 0], float(np.ravel(friction)[0]), outputs, f)
+        estimates = {name: f.estimate(y) for name, y in responses.items()}
         for j in rows:
-            H = _response(A, bb, outputs[SIGNAL_STATE[frf.signal[j]]], frf.omega[j])
+            line = int(np.argmin(np.abs(2 * np.pi * f.lines - frf.omega[j])))
+            H = estimates[frf.signal[j]][line]
             out[2 * j], out[2 * j + 1] = H.real, H.imag
     return out
+
+
+LEAD = 3.0
+"""Periods of the lowest line simulated before the record (at least 10 s): the transient from rest dies out."""
+MAX_STEP = 0.005
+"""Longest step of the friction simulation [s]; shorter where friction's slope at zero steer rate is stiff."""
+
+
+def simulate_torque(A: np.ndarray, b: np.ndarray, friction: float, outputs, fit) -> dict[str, np.ndarray]:
+    """The closed loop ``x' = A x + b (T(t) - friction tanh(deltad / eps))`` driven by the record's torque
+    ``T`` (:meth:`MultisineFit.torque_at`), from rest, by an exponential integrator (the linear part exact
+    over each step, the torque and the friction held); each compared signal at the record's instants
+    (linear interpolation between steps of at most :data:`MAX_STEP`)."""
+    record = fit.record
+    t_rec = np.asarray(record.time, float)
+    lead = max(LEAD / float(np.min(fit.lines)), 10.0)
+    rate_gain = abs(float(b[outputs[3]]))  # steer acceleration per N m
+    stiff = friction / SMOOTHING * rate_gain
+    h = min(MAX_STEP, 0.5 / stiff) if stiff > 0 else MAX_STEP
+    n = int(np.ceil((lead + t_rec[-1] - t_rec[0]) / h)) + 1
+    grid = t_rec[0] - lead + h * np.arange(n)
+    m = A.shape[0]
+    M = np.zeros((m + 1, m + 1))
+    M[:m, :m], M[:m, m] = A * h, b * h
+    E = expm(M[None])[0]
+    Phi, Gamma = E[:m, :m], E[:m, m]
+    torque = fit.torque_at(grid + 0.5 * h)  # held over each step at its middle
+    x = np.zeros(m)
+    states = np.empty((n, m))
+    rate = outputs[3]
+    for i in range(n):
+        states[i] = x
+        x = Phi @ x + Gamma * (torque[i] - friction * np.tanh(x[rate] / SMOOTHING))
+    return {name: np.interp(t_rec, grid, states[:, outputs[SIGNAL_STATE[name]]]) for name in fit.response}
 
 
 def _response(A: np.ndarray, b: np.ndarray, index: int, omega: float) -> complex:

@@ -150,6 +150,21 @@ class MultisineFit:
     torque_amplitude: np.ndarray = field(default_factory=lambda: np.zeros(0))
     reason: str | None = None
     notes: list[str] = field(default_factory=list)
+    torque_coefficients: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    """The torque's least-squares fit ``c0, c1, a_1..a_K, b_1..b_K`` (:func:`design`): the input a model is
+    simulated with (:func:`bikerider.gap.inference.frequency_response.predict_frf_friction`)."""
+
+    def torque_at(self, time) -> np.ndarray:
+        """The torque's fit (its lines, offset and drift) at any instants [N m]."""
+        return design(np.asarray(time, float), self.lines, self.record.time) @ self.torque_coefficients
+
+    def estimate(self, y: np.ndarray) -> np.ndarray:
+        """``H_k`` of samples ``y`` at the record's instants, as the record's own were estimated."""
+        X = design(self.record.time, self.lines)
+        coef = np.linalg.lstsq(X, y, rcond=None)[0]
+        K = self.lines.size
+        U = self.torque_coefficients[2 : 2 + K] - 1j * self.torque_coefficients[2 + K :]
+        return (coef[2 : 2 + K] - 1j * coef[2 + K :]) / U
 
     @property
     def used(self) -> bool:
@@ -278,10 +293,13 @@ def find_lines(time: np.ndarray, torque: np.ndarray) -> np.ndarray:
     return grid[power >= LINE_SHARE * power.max()]
 
 
-def _design(time: np.ndarray, lines: np.ndarray) -> np.ndarray:
-    w = 2 * math.pi * lines
+def design(time: np.ndarray, lines: np.ndarray, reference: np.ndarray | None = None) -> np.ndarray:
+    """Columns ``1, t - mean(reference), cos(2 pi f_k t)..., sin(2 pi f_k t)...`` at ``time`` (``reference``:
+    the record's instants, whose mean centres the drift; ``time`` itself by default)."""
+    w = 2 * math.pi * np.asarray(lines, float)
     ph = np.outer(time, w)
-    return np.hstack([np.ones((time.size, 1)), time[:, None] - time.mean(), np.cos(ph), np.sin(ph)])
+    centre = float(np.mean(time if reference is None else reference))
+    return np.hstack([np.ones((time.size, 1)), time[:, None] - centre, np.cos(ph), np.sin(ph)])
 
 
 def fit_multisine(record: MultisineRecord) -> MultisineFit:
@@ -298,7 +316,8 @@ def fit_multisine(record: MultisineRecord) -> MultisineFit:
         keep = t >= r.settle
         if np.count_nonzero(keep) < 3:
             return MultisineFit(r, reason=f"nothing left after the {r.settle:g} s settling time ({r.duration:.3g} s)")
-        t, r = t[keep], replace(r, torque=r.torque[keep], signals={k: v[keep] for k, v in r.signals.items()})
+        t = t[keep]
+        r = replace(r, time=t, torque=r.torque[keep], signals={k: v[keep] for k, v in r.signals.items()})
     outputs = [o for o in r.outputs if o in r.signals]
     if not outputs:
         return MultisineFit(r, reason="none of the signals " + ", ".join(r.outputs) + " is in the record")
@@ -316,7 +335,7 @@ def fit_multisine(record: MultisineRecord) -> MultisineFit:
             reason=f"{span:.3g} s of steady response: shorter than one period of the lowest line "
             f"({lines.min():.3g} Hz)",
         )
-    X = _design(t, lines)
+    X = design(t, lines)
     n, m = X.shape
     if n < MIN_SAMPLES_PER_COEFFICIENT * m:
         return MultisineFit(
@@ -326,7 +345,7 @@ def fit_multisine(record: MultisineRecord) -> MultisineFit:
     XtX_inv = np.linalg.pinv(X.T @ X)
     coef_u = XtX_inv @ (X.T @ r.torque)
     U = coef_u[2 : 2 + K] - 1j * coef_u[2 + K :]
-    fit = MultisineFit(r, lines=lines, torque_amplitude=np.abs(U))
+    fit = MultisineFit(r, lines=lines, torque_amplitude=np.abs(U), torque_coefficients=coef_u)
     weak = np.abs(U) < 1e-3 * np.abs(U).max()
     if weak.any():
         return MultisineFit(
