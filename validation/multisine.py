@@ -50,6 +50,7 @@ def multisine_log(
     noise: dict[str, float] | None = None,
     jitter: float = 0.0,
     with_roll_angle: bool = False,
+    corner: float = 0.02,
 ) -> dict[str, np.ndarray]:
     """One run's log columns: ``time, steer_torque, roll_rate, steer_angle, steer_rate, speed`` (and
     ``roll_angle`` with ``with_roll_angle``).
@@ -66,6 +67,8 @@ def multisine_log(
         The torque's peak over a period [N m].
     jitter : float
         Standard deviation of the time stamps' error, as a fraction of a step.
+    corner : float
+        The friction's ``tanh(deltad / corner)`` [rad/s] (0.02: sharper than the candidate's 0.05).
     """
     rng = rng if rng is not None else np.random.default_rng(0)
     noise = NOISE if noise is None else noise
@@ -94,7 +97,7 @@ def multisine_log(
             + k_delta * delta
             + k_deltad * deltad
             - c_steer * deltad
-            - coulomb * math.tanh(deltad / 0.02)
+            - coulomb * math.tanh(deltad / corner)
         )
         q, qd = x[:2], x[2:]
         qdd = Minv @ (np.array([0.0, steer]) - C @ qd - K @ q)
