@@ -112,7 +112,7 @@ def run_diagnosis(
     for path, (settings, windows) in zip(experiment, windows_of):
         records += load_records(settings, windows)
         multisines += read_multisines(path, settings)  # steer-torque multisine runs (multisine25)
-    check_record_count(len(records), where)  # detected decays
+    check_record_count(len(records) + len(multisines), where)  # detected decays, multisine runs
     candidates = EFFECT_NAMES
     if effects:
         candidates = tuple(e.strip() for e in effects.split(","))

@@ -40,7 +40,7 @@ import numpy as np
 
 from bikerider.gap.measured.control import ControlLaw
 from bikerider.gap.measured.records import SIGNAL_UNITS, SIGNALS
-from bikerider.gap.measured.repair import _clipped, _clock, _monotonic
+from bikerider.gap.measured.repair import Repair, _clipped, _clock, _monotonic
 
 LOG = logging.getLogger(__name__)
 
@@ -210,7 +210,8 @@ def repair_multisine(record: MultisineRecord) -> tuple[MultisineRecord, list[str
     non-uniform instants (jitter) and gaps are reported, never interpolated: the lines are fitted at the
     instants recorded.  The input record is not changed.
     """
-    actions: list[str] = []
+    rep = Repair()  # repair.py's helpers say what they did in it
+    actions = rep.actions
     t = np.asarray(record.time, float)
     torque = np.asarray(record.torque, float)
     signals = {k: np.asarray(v, float) for k, v in record.signals.items()}
@@ -223,11 +224,6 @@ def repair_multisine(record: MultisineRecord) -> tuple[MultisineRecord, list[str
     if t.size < 3:
         return record, actions, "fewer than three samples with a time stamp"
 
-    class _Rep:  # what repair.py's helpers append their actions to
-        def __init__(self):
-            self.actions = actions
-
-    rep = _Rep()
     t = _clock(t, rep)
     both = dict(signals, _torque=torque)
     t, both = _monotonic(t, both, rep)
