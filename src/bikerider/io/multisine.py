@@ -40,7 +40,6 @@ from bikerider.io.experiment import (
     Window,
     _find,
     _line_of,
-    _rate_of,
     _real,
     _shown,
     _speed,
@@ -209,8 +208,6 @@ def _run(entry, at, folder, settings, wanted, torque_column, scale, outputs, set
         problem = f"no positive speed in the run (speed {v:g} m/s)"
     law = settings.laws[law_name or settings.default_law] if (law_name or settings.default_law) else NO_CONTROL
     grp = group or (file.name.removesuffix(".gz") if settings.group == "file" else settings.group)
-    if "time" in settings.columns:
-        _rate_of(log, settings)
     return MultisineRecord(
         name,
         at,
