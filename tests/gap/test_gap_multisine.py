@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from bikerider.diagnose import diagnose_files
+from bikerider.diagnose import diagnose_files, write_report
 from bikerider.errors import FileFormatError, InputError
 from bikerider.gap import diagnose
 from bikerider.gap.candidates.effect_model import BENCH_ARGS, EffectModel
@@ -135,6 +135,14 @@ def test_the_shipped_multisine_example_finds_the_hidden_damper():
     assert c["ci95"][0] <= C_STEER <= c["ci95"][1], c
     assert d["records"]["used"] == 6 and all(e["kind"] == "multisine" for e in d["records"]["list"])
     assert {c["mode"] for c in d["gap"]["map"]} == {"frf_roll_rate", "frf_steer_angle"}
+
+
+def test_the_report_draws_the_multisine_records(tmp_path):
+    diagnosis = diagnose_files(str(SBW / "sbw_bicycle.toml"), experiment=(str(EXAMPLE / "experiment.toml"),))
+    report = write_report(diagnosis, tmp_path / "report").read_text()
+    assert (tmp_path / "report" / "multisines.png").stat().st_size > 10_000
+    assert "](multisines.png)" in report
+    assert "multisine: response of roll rate, steer angle at 9 lines" in report
 
 
 def test_damaged_copies_give_the_same_verdict(tmp_path):
