@@ -146,12 +146,15 @@ def test_the_report_draws_the_multisine_records(tmp_path):
 
 
 def test_damaged_copies_give_the_same_verdict(tmp_path):
+    """The shipped example's runs damaged as a logger might (stamps jittered by 5 % of a step, 5 % of the
+    rows dropped, three missing roll-rate cells): the same verdict and selection, the truth in the interval."""
     rng = np.random.default_rng(4)
     runs = []
-    for session in "abc":
-        for speed in (2.5, 4.0):
-            clean = multisine_log(VALUES, speed, LAW(speed), _lines(speed), 0.5, 10.0, c_steer=C_STEER, rng=rng)
-            runs.append((f"ms_{session}_{speed}.csv", damage(clean, rng), f"session {session}"))
+    for log in sorted(EXAMPLE.glob("ms_*.csv.gz")):
+        table = np.genfromtxt(log, delimiter=",", names=True)
+        clean = {name: np.asarray(table[name], float) for name in table.dtype.names}
+        session = log.name.split("_")[1]
+        runs.append((log.name.removesuffix(".gz"), damage(clean, rng), f"session {session}"))
     manifest = _write_runs(tmp_path, runs)
     before = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
     d = diagnose_files(
