@@ -13,9 +13,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from strategies import assert_all_finite, assert_names_file, mutated
 
 from bikerider.diagnose import diagnose_files, write_report
-from bikerider.errors import FileFormatError, InputError
+from bikerider.errors import BikeriderError, FileFormatError, InputError
 from bikerider.gap import diagnose
 from bikerider.gap.candidates.effect_model import BENCH_ARGS, EffectModel
 from bikerider.gap.inference.frequency_response import predict_frf, predict_frf_friction
@@ -283,3 +286,60 @@ def test_steer_friction_predicts_a_friction_driven_run_by_simulating_it():
     assert z[SMOOTHING][1] > 2 * z[SMOOTHING][0], z
     # a sharper corner than the candidate's: off by about 3 standard errors, still closer than any damper
     assert z[0.02][0] < 4.0 and z[0.02][1] > z[0.02][0], z
+
+
+# -- hostile input: a clear error naming the file, or finite values / a reason; never a traceback -----
+FUZZ_MANIFEST = """\
+[experiment]
+sample_rate = 50.0
+control = "sil"
+
+[columns]
+roll_rate = "lean_rate"
+steer_angle = "fork_angle"
+speed = "speed"
+
+[control.sil]
+k_phid = { K = 2.0, v0 = 6.5, when = "below" }
+
+[multisine]
+torque = "torque"
+outputs = ["roll_rate", "steer_angle"]
+settle = 0.5
+
+[[multisine.run]]
+path = "run.log"
+window = [0, 300]
+lines = [0.5, 1.0, 2.0]
+group = "g"
+"""
+
+
+def _fuzz_log() -> str:
+    t = np.arange(300) / 50.0
+    torque = sum(0.2 * np.cos(2 * math.pi * f * t + k) for k, f in enumerate((0.5, 1.0, 2.0)))
+    rows = ["lean_rate,fork_angle,speed,torque"]
+    rows += [f"{0.3 * u:.5f},{0.1 * u:.5f},4.0,{u:.5f}" for u in torque]
+    return "\n".join(rows) + "\n"
+
+
+@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(st.data(), st.sampled_from(["manifest", "log"]))
+def test_hostile_multisine_manifests_and_logs(tmp_path_factory, data, target):
+    files = {"manifest": FUZZ_MANIFEST.encode(), "log": _fuzz_log().encode()}
+    what, files[target] = data.draw(mutated(files[target]))
+    folder = tmp_path_factory.mktemp("fuzz")
+    (folder / "experiment.toml").write_bytes(files["manifest"])
+    (folder / "run.log").write_bytes(files["log"])
+    try:
+        settings_, _ = read_manifest(folder / "experiment.toml")
+        records = read_multisines(folder / "experiment.toml", settings_)
+    except BikeriderError as exc:
+        assert_names_file(exc, folder / "experiment.toml", folder / "run.log")
+        return
+    for r in records:
+        fit = fit_multisine(r)
+        if fit.used:
+            assert_all_finite([fit.lines, *fit.response.values(), *fit.sigma.values()], f"{target}: {what}")
+        else:
+            assert isinstance(fit.reason, str) and fit.reason, what
