@@ -60,8 +60,8 @@ def add_parser(subparsers) -> None:
         nargs="+",
         default=[],
         help="manifests of raw records: a TOML file (logs, column map, sampling rate, windows or "
-        "detection, speed source, groups, control laws) or a CSV of windows (file, start, end "
-        "[, group, control, speed]) with --columns and --sample-rate",
+        "detection, speed source, groups, control laws; steer-torque multisine runs under [multisine]) "
+        "or a CSV of windows (file, start, end [, group, control, speed]) with --columns and --sample-rate",
     )
     p.add_argument(
         "--columns",
