@@ -522,7 +522,7 @@ class Diagnosis:
             if len(parts) > 1:
                 pred[parts[1]] = apparent[j].imag
         frf = self.problem.predictor.frf
-        if len(frf):  # multisine records: the friction's describing function at each record's torque (multisine25)
+        if len(frf):  # multisine records: the friction simulated with each record's own torque (multisine25)
             at = slice(len(pred) - 2 * len(frf), len(pred))
             p = self.problem
             whole = predict_frf_friction(
