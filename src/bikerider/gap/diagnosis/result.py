@@ -228,6 +228,7 @@ class Diagnosis:
                 self.not_applicable[e] = (
                     "needs records whose speed a sensor read during the test (a speed column); "
                     "the speeds given are taken as the speeds the bicycle ran at"
+                    + ("; multisine runs are not rescaled (not yet)" if len(frf) else "")  # multisine25
                 )
             elif EFFECTS[e].needs_records and not self._time_domain_ready():
                 self.not_applicable[e] = (
