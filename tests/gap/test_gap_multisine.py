@@ -343,3 +343,22 @@ def test_hostile_multisine_manifests_and_logs(tmp_path_factory, data, target):
             assert_all_finite([fit.lines, *fit.response.values(), *fit.sigma.values()], f"{target}: {what}")
         else:
             assert isinstance(fit.reason, str) and fit.reason, what
+
+
+def test_a_speed_sensor_error_is_found_from_multisines(tmp_path):
+    """The bicycle ran 4 % faster than its wheel encoder read (the controller used the reading): the
+    multisine runs, rescaled by the speed_sensor candidate, find the scale with an interval that holds it."""
+    rng = np.random.default_rng(7)
+    runs = []
+    for session in "abc":
+        recorded = 3.5
+        columns = multisine_log(VALUES, 1.04 * recorded, LAW(recorded), _lines(recorded), 0.5, 10.0, rng=rng)
+        columns["speed"] = recorded + 0.02 * rng.standard_normal(columns["speed"].size)
+        runs.append((f"ms_{session}.csv", columns, f"session {session}"))
+    manifest = _write_runs(tmp_path, runs)
+    d = diagnose_files(
+        str(SBW / "sbw_bicycle.toml"), experiment=(str(manifest),), effects="speed_sensor,steer_damping"
+    ).as_dict()
+    assert d["selected"] == ["speed_sensor"], d["selected"]
+    scale = next(r for r in d["ranking"] if r["effect"] == "speed_sensor")["parameters"]["speed_scale"]
+    assert scale["ci95"][0] <= 1.04 <= scale["ci95"][1], scale

@@ -224,11 +224,10 @@ class Diagnosis:
         for e in self.effects:
             if EFFECTS[e].needs_rider and model.geometry.upper_body is None:
                 self.not_applicable[e] = "needs a rider on the bicycle (the model has none)"
-            elif e in OBSERVATION_EFFECTS and not np.any(eigen.speed_sensor):
-                self.not_applicable[e] = (
+            elif e in OBSERVATION_EFFECTS and not (np.any(eigen.speed_sensor) or np.any(frf.speed_sensor)):
+                self.not_applicable[e] = (  # frf: multisine runs (multisine25)
                     "needs records whose speed a sensor read during the test (a speed column); "
                     "the speeds given are taken as the speeds the bicycle ran at"
-                    + ("; multisine runs are not rescaled (not yet)" if len(frf) else "")  # multisine25
                 )
             elif EFFECTS[e].needs_records and not self._time_domain_ready():
                 self.not_applicable[e] = (

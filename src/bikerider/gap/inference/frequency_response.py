@@ -51,6 +51,38 @@ def predict_frf(model: EffectModel, frf: FrequencyResponseData, speed_scale=None
     return out
 
 
+def predict_frf_scaled(values: dict, geometry, config: dict, frf: FrequencyResponseData, scales) -> np.ndarray:
+    """Predictions ``(P, 2 R)`` for ``P`` parameter vectors, each with its own speed scale (a ``speed_sensor``
+    candidate): the scale multiplies the speed of the rows a sensor read (``frf.speed_sensor``); the gains
+    stay those of the controller's reading.  ``values`` and ``config`` hold scalars or ``(P, 1)`` arrays, as
+    :meth:`bikerider.gap.inference.problem.GapProblem.configure` gives them; every (vector, row) pair is one
+    model of a single flattened call."""
+    scales = np.ravel(np.asarray(scales, float))
+    P, R = scales.size, len(frf)
+
+    def flat(v):
+        return np.repeat(np.broadcast_to(np.asarray(v, float).reshape(-1, 1)[:, :1], (P, 1))[:, 0], R)
+
+    model = EffectModel(
+        {k: flat(v) for k, v in values.items()},
+        geometry,
+        {e: {k: flat(v) for k, v in c.items()} for e, c in config.items()},
+    )
+    speeds = (np.where(frf.speed_sensor[None, :], scales[:, None], 1.0) * frf.speed[None, :]).ravel()
+    ss = model.state_space(speeds)
+    A = ss.closed_loop(np.tile(frf.gains, (P, 1)))  # (P R, n, n)
+    b = ss.B[..., :, 1]
+    n = A.shape[-1]
+    M = 1j * np.tile(frf.omega, P)[:, None, None] * np.eye(n) - A
+    x = np.linalg.solve(M, b[..., None].astype(complex))[..., 0]  # (P R, n)
+    index = np.tile(np.array([ss.outputs[SIGNAL_STATE[s]] for s in frf.signal], int), P)
+    H = x[np.arange(P * R), index].reshape(P, R)
+    out = np.empty((P, 2 * R))
+    out[:, 0::2] = H.real
+    out[:, 1::2] = H.imag
+    return out
+
+
 def with_speed_uncertainty(frf: FrequencyResponseData, model: EffectModel) -> np.ndarray:
     """Each row's standard error with the speed's uncertainty added: the nominal response's slope in
     speed (central difference over the speed's own scatter, at least 1 mm/s) times that scatter, the

@@ -401,6 +401,8 @@ class FrequencyResponseData:
     group, source : list of str
     record : ndarray of int
         The multisine record (index into the fits given) of each row.
+    speed_sensor : ndarray of bool
+        The row's speed is a sensor's reading (a ``speed_sensor`` candidate rescales it).
     """
 
     speed: np.ndarray
@@ -413,6 +415,11 @@ class FrequencyResponseData:
     group: list[str]
     source: list[str]
     record: np.ndarray
+    speed_sensor: np.ndarray = field(default_factory=lambda: np.zeros(0, bool))
+
+    def __post_init__(self):
+        if self.speed_sensor.size != self.value.size:
+            self.speed_sensor = np.zeros(self.value.size, bool)
 
     def __len__(self) -> int:
         return int(self.value.size)
@@ -436,7 +443,20 @@ class FrequencyResponseData:
     def of(cls, fits: list[MultisineFit]) -> FrequencyResponseData:
         """Rows of the fits used (in order: record, signal, line)."""
         rows: dict[str, list] = {
-            k: [] for k in ("speed", "ss", "gains", "omega", "signal", "value", "sigma", "group", "source", "record")
+            k: []
+            for k in (
+                "speed",
+                "ss",
+                "gains",
+                "omega",
+                "signal",
+                "value",
+                "sigma",
+                "group",
+                "source",
+                "record",
+                "sensor",
+            )
         }
         for k, f in enumerate(fits):
             if not f.used:
@@ -454,6 +474,7 @@ class FrequencyResponseData:
                     rows["group"].append(r.group)
                     rows["source"].append(f"{r.name} {name} {f.lines[j]:.3g} Hz")
                     rows["record"].append(k)
+                    rows["sensor"].append(bool(r.speed_measured))
         if not rows["speed"]:
             return cls.empty()
         return cls(
@@ -467,6 +488,7 @@ class FrequencyResponseData:
             rows["group"],
             rows["source"],
             np.array(rows["record"], int),
+            np.array(rows["sensor"], bool),
         )
 
     def subset(self, keep: np.ndarray) -> FrequencyResponseData:
@@ -482,6 +504,7 @@ class FrequencyResponseData:
             [self.group[k] for k in keep],
             [self.source[k] for k in keep],
             self.record[keep],
+            self.speed_sensor[keep],
         )
 
 
