@@ -21,7 +21,7 @@ from bikerider.diagnose import diagnose_files, write_report
 from bikerider.errors import BikeriderError, FileFormatError, InputError
 from bikerider.gap import diagnose
 from bikerider.gap.candidates.effect_model import BENCH_ARGS, EffectModel
-from bikerider.gap.inference.frequency_response import predict_frf, predict_frf_friction
+from bikerider.gap.inference.frequency_response import predict_frf, predict_frf_describing, predict_frf_friction
 from bikerider.gap.inference.timedomain import SMOOTHING, Layout
 from bikerider.gap.measured.control import ControlLaw
 from bikerider.gap.measured.multisine import FrequencyResponseData, MultisineRecord, fit_multisine
@@ -278,14 +278,18 @@ def test_steer_friction_predicts_a_friction_driven_run_by_simulating_it():
         def rms_z(predicted):
             return math.sqrt(np.mean(((measured - predicted) / sigma) ** 2))
 
-        friction = predict_frf_friction(frf, [fit], VALUES, MODEL.geometry, layout, np.array([0.19, 0.05]))
-        z[corner] = (rms_z(friction), min(rms_z(predict_frf(m, frf)) for m in dampers))
+        truth = np.array([0.19, 0.05])
+        friction = predict_frf_friction(frf, [fit], VALUES, MODEL.geometry, layout, truth)
+        describing = predict_frf_describing(frf, [fit], VALUES, MODEL.geometry, layout, truth)
+        z[corner] = (rms_z(friction), min(rms_z(predict_frf(m, frf)) for m in dampers), rms_z(describing))
     # the candidate's own law: predicted to the noise (RMS z 0.84); the best damper misses by 2.0 (one run
     # at one amplitude: friction acts nearly as its linear equivalent, section "Coulomb or viscous")
     assert 0.5 < z[SMOOTHING][0] < 1.5, z
     assert z[SMOOTHING][1] > 2 * z[SMOOTHING][0], z
     # a sharper corner than the candidate's: off by about 3 standard errors, still closer than any damper
     assert z[0.02][0] < 4.0 and z[0.02][1] > z[0.02][0], z
+    # the plan's describing function, at the truth's own values, misses by far more than the simulation
+    assert z[SMOOTHING][2] > 3 * z[SMOOTHING][0] and z[0.02][2] > 1.5 * z[0.02][0], z
 
 
 # -- hostile input: a clear error naming the file, or finite values / a reason; never a traceback -----

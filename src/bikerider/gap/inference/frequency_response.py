@@ -189,6 +189,26 @@ def simulate_torque(A: np.ndarray, b: np.ndarray, friction: float, outputs, fit)
     return {name: np.interp(t_rec, grid, states[:, outputs[SIGNAL_STATE[name]]]) for name in fit.response}
 
 
+def predict_frf_describing(
+    frf: FrequencyResponseData, fits: list, nominal: dict, geometry, layout, theta
+) -> np.ndarray:
+    """What :func:`predict_frf_friction` replaced, kept for comparison (the plan predicts a planned
+    multisine so): the Coulomb friction replaced by its random-input describing function
+    (:func:`describing_function_loop`) at the record's torque, the amplitude the root mean square of its
+    lines' measured amplitudes; ``(2 R,)`` as :func:`predict_frf`."""
+    out = np.full(2 * len(frf), np.nan)
+    for k in sorted({int(r) for r in frf.record}):
+        f = fits[k]
+        A, b, outputs, friction = systems(nominal, geometry, [f.record], layout, np.atleast_2d(theta))
+        amplitude = float(np.sqrt(np.mean(np.asarray(f.torque_amplitude, float) ** 2)))
+        omegas = 2 * np.pi * np.asarray(f.lines, float)
+        loop = describing_function_loop(A[0, 0], b[0, 0], float(np.ravel(friction)[0]), outputs[3], omegas, amplitude)
+        for j in np.flatnonzero(frf.record == k):
+            H = _response(loop, b[0, 0], outputs[SIGNAL_STATE[frf.signal[j]]], frf.omega[j])
+            out[2 * j], out[2 * j + 1] = H.real, H.imag
+    return out
+
+
 def _response(A: np.ndarray, b: np.ndarray, index: int, omega: float) -> complex:
     """``e_index^T (i w I - A)^-1 b`` of one system."""
     return complex(np.linalg.solve(1j * omega * np.eye(A.shape[0]) - A, b.astype(complex))[index])
