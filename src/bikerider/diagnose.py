@@ -19,6 +19,7 @@ from pathlib import Path
 from bikerider import progress
 from bikerider.gap.candidates.effects import EFFECT_NAMES, effect
 from bikerider.gap.diagnosis.result import Diagnosis, diagnose
+from bikerider.gap.measured.multisine import fit_multisines
 from bikerider.gap.measured.records import Record, detect_windows, fit_records
 from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
 from bikerider.gap.plan.ranking import NextExperiment, NoExperiment, plan_next
@@ -36,6 +37,7 @@ from bikerider.io.experiment import (
 )
 from bikerider.io.gap_model import load_model
 from bikerider.io.gap_report import REPORT_NAME, check_report_folder, is_input, linked_figures, refuse_inputs
+from bikerider.io.multisine import read_multisines
 from bikerider.plotting.gap import figures, pyplot
 from bikerider.plotting.gap_plan import plot_next
 
@@ -134,9 +136,11 @@ def run_diagnosis(
         windows_of.append(read_experiment(path, columns, sample_rate, laws))
     where = ", ".join(map(str, experiment))
     check_record_count(len(records) + sum(len(w) for _, w in windows_of), where)  # before any log is read
-    for settings, windows in windows_of:
+    multisines = []
+    for path, (settings, windows) in zip(experiment, windows_of):
         records += load_records(settings, windows)
-    check_record_count(len(records), where)  # detected decays
+        multisines += read_multisines(path, settings)  # steer-torque multisine runs (multisine25)
+    check_record_count(len(records) + len(multisines), where)  # detected decays, multisine runs
     candidates = EFFECT_NAMES
     if effects:
         candidates = tuple(e.strip() for e in effects.split(","))
@@ -151,7 +155,14 @@ def run_diagnosis(
             len(records),
             ", ".join(candidates),
         )
-    return diagnose(loaded, table, CanonicalData.concatenate(canonical), candidates, fit_records(records))
+    return diagnose(
+        loaded,
+        table,
+        CanonicalData.concatenate(canonical),
+        candidates,
+        fit_records(records),
+        fit_multisines(multisines),
+    )
 
 
 def plan_or_reason(diagnosis: Diagnosis, options: dict) -> tuple[NextExperiment | None, str | None]:

@@ -60,8 +60,8 @@ def add_parser(subparsers) -> None:
         nargs="+",
         default=[],
         help="manifests of raw records: a TOML file (logs, column map, sampling rate, windows or "
-        "detection, speed source, groups, control laws) or a CSV of windows (file, start, end "
-        "[, group, control, speed]) with --columns and --sample-rate",
+        "detection, speed source, groups, control laws; steer-torque multisine runs under [multisine]) "
+        "or a CSV of windows (file, start, end [, group, control, speed]) with --columns and --sample-rate",
     )
     p.add_argument(
         "--columns",
@@ -254,11 +254,13 @@ def _register_experiment_inputs(args: argparse.Namespace) -> None:
     # heavy (NumPy, the gap): imported when the command runs, so `bikerider --help` starts fast (cli.py)
     from bikerider.io import gap_data
     from bikerider.io.experiment import experiment_files, read_experiment
+    from bikerider.io.multisine import multisine_files
     from bikerider.io.output_guard import add_inputs
 
     laws = gap_data.read_control(args.control) if args.control is not None else {}
     for path in args.experiment:
         add_inputs(experiment_files(*read_experiment(path, args.columns, args.sample_rate, laws)))
+        add_inputs(multisine_files(path))  # the logs of the manifest's multisine runs
 
 
 def _next_options(args: argparse.Namespace) -> dict | None:

@@ -255,7 +255,14 @@ def markdown(result: dict, title: str, figures: list[tuple[str, str]]) -> str:
             "|---|---|---|---|---|---|---|---|",
         ]
         for r in records["list"]:
-            if r["used"]:
+            if r["used"] and r.get("kind") == "multisine":  # a steer-torque multisine: its frequency response
+                lines = r["lines"]
+                value = (
+                    f"multisine: response of {', '.join(s.replace('_', ' ') for s in r['signals'])} at "
+                    f"{len(lines)} lines {lines[0]:.2g}-{lines[-1]:.2g} Hz"
+                )
+                md.append(f"| {r['record']} | {r['group']} | {r['law']} | {r['speed']:.2f} | {value} | - | - | yes |")
+            elif r["used"]:
                 value = f"{r['real']:.2f} ± {r['real_sigma']:.2f} + ({r['imag']:.2f} ± {r['imag_sigma']:.2f}) i"
                 md.append(
                     f"| {r['record']} | {r['group']} | {r['law']} | {r['speed']:.2f} | {value} | {r['r2']:.3f} | "

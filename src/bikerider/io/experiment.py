@@ -326,7 +326,7 @@ def read_manifest(path: str | Path) -> tuple[ExperimentSettings, list[Window]]:
         line = _line_of(text, rf"^\s*\[*\s*{re.escape(key)}\b", after)
         return f"{path}:{line}" if line else str(path)
 
-    allowed = {"experiment", "columns", "speed", "control", "file"}
+    allowed = {"experiment", "columns", "speed", "control", "file", "multisine"}  # multisine: bikerider.io.multisine
     for key in data:
         if key not in allowed:
             raise InputError(
@@ -409,8 +409,11 @@ def read_manifest(path: str | Path) -> tuple[ExperimentSettings, list[Window]]:
         after = line
         here = f"{path}:{line}" if line else str(path)
         windows += _file_windows(entry, folder, here, text, line, path)
-    if not windows:
-        raise FileFormatError(path, 'no records: give [experiment] windows = "FILE" or [[file]] tables with windows')
+    if not windows and "multisine" not in data:  # multisine runs are read by bikerider.io.multisine
+        raise FileFormatError(
+            path,
+            'no records: give [experiment] windows = "FILE", [[file]] tables with windows or [[multisine.run]] tables',
+        )
     for w in windows:
         if w.law is not None and w.law not in settings.laws:
             raise InputError(

@@ -43,6 +43,7 @@ from bikerider.gap.inference.timedomain import (
 )
 from bikerider.gap.measured.repair import repair_tags
 from bikerider.plotting.common import pyplot
+from bikerider.plotting.gap_multisine import plot_multisines
 
 
 # ---------------------------------------------------------------------------------------------
@@ -600,6 +601,8 @@ def plot_time_response(diagnosis):
     e = p.predictor.eigen
     speed = float(np.median(p.obs.speed))
     law = e.laws[max(set(e.law), key=e.law.count)] if len(e) else None
+    if law is None and getattr(diagnosis, "multisines", None):  # multisine records only: their law
+        law = diagnosis.multisines[0].record.law
     gains = law(speed) if law is not None else None
     t = np.linspace(0, 3, 301)
     fig, ax = plt.subplots(figsize=(7, 3.2))
@@ -700,6 +703,7 @@ def figures(diagnosis, result: dict) -> list[tuple[str, str, object]]:
         ("gap_map.png", "Gap map", plot_gap_map(result)),
         ("ranking.png", "Held-out ranking", plot_ranking(result)),
         ("time_response.png", "Time response", plot_time_response(diagnosis)),
+        ("multisines.png", "Multisine records: frequency responses at their lines", plot_multisines(diagnosis)),
     ]
     return [(name, caption, fig) for name, caption, fig in out if fig is not None]
 

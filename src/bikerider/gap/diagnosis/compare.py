@@ -3,7 +3,7 @@ indirect inference, or is left out with its reason; and which candidates the dat
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -11,9 +11,11 @@ from bikerider import progress
 from bikerider.gap.candidates.effect_model import BENCH_ARGS, EffectModel
 from bikerider.gap.candidates.effects import EFFECTS, OBSERVATION_EFFECTS, PARAMETERS
 from bikerider.gap.candidates.nominal import GapModelInput
+from bikerider.gap.inference.frequency_response import multisine_rows
 from bikerider.gap.inference.indirect import RecordRows, RecordSimulator
 from bikerider.gap.inference.predict import Predictor
 from bikerider.gap.inference.problem import GapProblem
+from bikerider.gap.measured.multisine import FrequencyResponseData, MultisineFit
 from bikerider.gap.measured.records import RecordFit, eigenvalues_of
 from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
 
@@ -34,6 +36,10 @@ class Compared:
         Each record row's extraction bias under the nominal model (complex).
     record_set : RecordRows or None
         The records' simulator and rows, for the fit problem (``None`` without records used).
+    multisines : list of MultisineFit
+        Copies of the multisine records given; those left out here carry their reason.
+    frf : FrequencyResponseData
+        The frequency-response rows of the multisine records used.
     """
 
     records: list[RecordFit]
@@ -41,6 +47,8 @@ class Compared:
     record_rows: dict[int, int]
     bias: np.ndarray
     record_set: RecordRows | None
+    multisines: list[MultisineFit] = field(default_factory=list)
+    frf: FrequencyResponseData = field(default_factory=FrequencyResponseData.empty)
 
 
 def compare_records(model: GapModelInput, eigen: EigenvalueData, records: list[RecordFit] | None) -> Compared:
@@ -121,6 +129,22 @@ def compare_records(model: GapModelInput, eigen: EigenvalueData, records: list[R
     return Compared(copies, EigenvalueData.concatenate([eigen, rows]), record_rows, bias[keep], record_set)
 
 
+def compare_multisines(
+    model: GapModelInput, multisines: list[MultisineFit] | None
+) -> tuple[list[MultisineFit], FrequencyResponseData]:
+    """Copies of the multisine records and the frequency-response rows of those used (each record
+    compared with a candidate's exact closed-loop frequency response at its lines; those left out here
+    get their reason, :func:`bikerider.gap.inference.frequency_response.multisine_rows`)."""
+    copies = [replace(f) for f in multisines or []]
+    if not any(f.used for f in copies):
+        return copies, FrequencyResponseData.empty()
+    nominal = {k: float(model.parameters.values[k]) for k in BENCH_ARGS + ("g",)}  # type: ignore[arg-type]
+    frf, reasons = multisine_rows(copies, EffectModel(nominal, model.geometry))
+    for k, why in reasons.items():
+        copies[k].reason = why
+    return copies, frf
+
+
 def time_domain_ready(compared: Compared, problem: GapProblem) -> bool:
     """Whether the records carry a time-domain fit: every eigenvalue from a record (uniformly sampled),
     no canonical entries, and records in two groups or more."""
@@ -142,7 +166,9 @@ def not_applicable(effects, model: GapModelInput, compared: Compared, problem: G
     for e in effects:
         if EFFECTS[e].needs_rider and model.geometry.upper_body is None:
             out[e] = "needs a rider on the bicycle (the model has none)"
-        elif e in OBSERVATION_EFFECTS and not np.any(compared.eigen.speed_sensor):
+        elif e in OBSERVATION_EFFECTS and not (
+            np.any(compared.eigen.speed_sensor) or np.any(compared.frf.speed_sensor)
+        ):
             out[e] = (
                 "needs records whose speed a sensor read during the test (a speed column); "
                 "the speeds given are taken as the speeds the bicycle ran at"

@@ -23,8 +23,10 @@ import numpy as np
 from bikerider import progress
 from bikerider.gap.candidates.effects import EFFECTS, PARAMETERS, STEER_FRICTION, TIME_DOMAIN_EFFECTS
 from bikerider.gap.diagnosis.statistics import _named_values, gap_shrink, jackknife_quantile, rms
+from bikerider.gap.inference.frequency_response import predict_frf_friction
 from bikerider.gap.inference.problem import EffectFit, GapProblem
 from bikerider.gap.inference.timedomain import Layout, fit_time_domain
+from bikerider.gap.measured.multisine import MultisineFit
 from bikerider.gap.measured.records import RecordFit
 
 UNPREDICTED_Z = 1e3
@@ -96,6 +98,8 @@ class Fits:
         Index in ``records`` -> its eigenvalue row, for the records used.
     folds : list of (str, ndarray)
         The held-out folds (:func:`bikerider.gap.diagnosis.folds.folds`).
+    multisines : list of MultisineFit, optional
+        The diagnosis's multisine records (their rows follow the eigenvalue rows).
     """
 
     def __init__(
@@ -104,9 +108,11 @@ class Fits:
         records: list[RecordFit],
         record_rows: dict[int, int],
         folds: list[tuple[str, np.ndarray]],
+        multisines: list[MultisineFit] | None = None,
     ):
         self.problem = problem
         self.records = records
+        self.multisines = multisines or []
         self.record_rows = record_rows
         self.folds = folds
         self.full: dict[tuple[str, ...], EffectFit] = {}
@@ -213,6 +219,14 @@ class Fits:
             pred[parts[0]] = apparent[j].real
             if len(parts) > 1:
                 pred[parts[1]] = apparent[j].imag
+        frf = self.problem.predictor.frf
+        if len(frf):  # multisine records: the friction's loop simulated with each record's own torque
+            at = slice(len(pred) - 2 * len(frf), len(pred))
+            p = self.problem
+            whole = predict_frf_friction(
+                frf, self.multisines, p.nominal, p.geometry, Layout.of(fit.effects), fit.values
+            )
+            pred[at] = np.where(mask[at], whole, pred[at])
         return pred
 
     def predictions(self, effects: tuple[str, ...]) -> np.ndarray:

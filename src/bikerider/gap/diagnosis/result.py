@@ -61,7 +61,7 @@ residuals is ``E[z^2] = 1``), ``shrink = (G_before - G_after) / G_before``.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -70,7 +70,7 @@ from bikerider.errors import InputError
 from bikerider.gap.blas_threads import single_blas_thread
 from bikerider.gap.candidates.effects import EFFECT_NAMES, PARAMETERS
 from bikerider.gap.candidates.nominal import GapModelInput
-from bikerider.gap.diagnosis.compare import compare_records, not_applicable
+from bikerider.gap.diagnosis.compare import compare_multisines, compare_records, not_applicable
 from bikerider.gap.diagnosis.fits import CrossValidation, Fits, obs_rows
 from bikerider.gap.diagnosis.folds import folds
 from bikerider.gap.diagnosis.priors import Priors, steer_rate_amplitudes
@@ -79,6 +79,7 @@ from bikerider.gap.diagnosis.statistics import _named_values
 from bikerider.gap.diagnosis.where import gap_map, gap_test, whether
 from bikerider.gap.diagnosis.which import rank, search_pairs
 from bikerider.gap.inference.problem import EffectFit, GapProblem
+from bikerider.gap.measured.multisine import MultisineFit
 from bikerider.gap.measured.records import RecordFit
 from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
 
@@ -96,6 +97,8 @@ class Diagnosis:
         Copies of the records given; those left out carry their reason.
     record_rows : dict
         Index in ``records`` -> its eigenvalue row, for the records used.
+    multisines : list of MultisineFit
+        Copies of the multisine records given; those left out carry their reason.
     bias : ndarray
         Each record row's extraction bias under the nominal model (complex).
     problem : GapProblem
@@ -132,6 +135,7 @@ class Diagnosis:
     model_input: GapModelInput
     records: list[RecordFit]
     record_rows: dict[int, int]
+    multisines: list[MultisineFit]
     bias: np.ndarray
     problem: GapProblem
     effects: list[str]
@@ -211,6 +215,7 @@ def diagnose(
     canonical: CanonicalData | None = None,
     effects=EFFECT_NAMES,
     records: list[RecordFit] | None = None,
+    multisines: list[MultisineFit] | None = None,
 ) -> Diagnosis:
     """Run the diagnosis of one bicycle's data (the module docstring): where, whether, which, priors,
     selection, in that order.
@@ -227,6 +232,10 @@ def diagnose(
         Fitted records (:func:`bikerider.gap.measured.records.fit_records`); those fitted become eigenvalue
         rows, which every model predicts by indirect inference (:mod:`bikerider.gap.inference.indirect`), and
         the others are left out with their reason.
+    multisines : list of MultisineFit, optional
+        Fitted steer-torque multisine records (:func:`bikerider.gap.measured.multisine.fit_multisines`);
+        those used become frequency-response rows at their lines, compared with each candidate's
+        closed-loop response (steer friction: its loop simulated with the record's own torque).
 
     Raises
     ------
@@ -237,15 +246,18 @@ def diagnose(
     eigen = eigen if eigen is not None else EigenvalueData.empty()
     canonical = canonical if canonical is not None else CanonicalData.empty()
     compared = compare_records(model, eigen, records)
-    if len(compared.eigen) + len(canonical) == 0:
-        _no_data(compared.records)
+    if multisines:
+        kept, frf = compare_multisines(model, multisines)
+        compared = replace(compared, multisines=kept, frf=frf)
+    if len(compared.eigen) + len(canonical) + len(compared.frf) == 0:
+        _no_data(compared.records + compared.multisines)
     progress.begin("the model's uncertainty at every observation")
-    problem = GapProblem(model, compared.eigen, canonical, records=compared.record_set)
+    problem = GapProblem(model, compared.eigen, canonical, records=compared.record_set, frf=compared.frf)
     effects = list(effects)
     skipped = not_applicable(effects, model, compared, problem)
     candidates = [e for e in effects if e not in skipped]
     held = folds(problem.obs)
-    fits = Fits(problem, compared.records, compared.record_rows, held)
+    fits = Fits(problem, compared.records, compared.record_rows, held, compared.multisines)
     # where
     where_map, test = gap_map(problem), gap_test(problem)
     # whether
@@ -268,6 +280,7 @@ def diagnose(
         model_input=model,
         records=compared.records,
         record_rows=compared.record_rows,
+        multisines=compared.multisines,
         bias=compared.bias,
         problem=problem,
         effects=effects,
@@ -292,7 +305,7 @@ def diagnose(
     )
 
 
-def _no_data(records: list[RecordFit]) -> None:
+def _no_data(records: list) -> None:
     """Raise the error of a diagnosis left without observations."""
     if not records:
         raise InputError("data", "empty", "at least one measured eigenvalue or identified entry")
@@ -422,7 +435,7 @@ def _uncertainty_summary(p: GapProblem) -> dict:
 
 def _records_summary(d: Diagnosis) -> dict | None:
     """The records used, repaired and left out (with why), and each one's summary."""
-    if not d.records:
+    if not d.records and not d.multisines:
         return None
     rows = list(d.record_rows)
     out = []
@@ -432,6 +445,7 @@ def _records_summary(d: Diagnosis) -> dict | None:
             b = d.bias[rows.index(k)]
             entry["bias"] = [float(b.real), float(b.imag)]
         out.append(entry)
+    out += [f.summary() for f in d.multisines]  # kind "multisine"
     used = sum(1 for e in out if e["used"])
     return {
         "total": len(out),

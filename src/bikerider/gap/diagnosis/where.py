@@ -40,17 +40,21 @@ def gap_map(p: GapProblem) -> list[dict]:
     z = -p.z(p.baseline)  # measured minus model, normalised
     eig_speeds = np.unique(obs.speed[[k == "eigenvalue" for k in obs.kind]])
     bands = np.array_split(eig_speeds, min(N_SPEED_BANDS, eig_speeds.size)) if eig_speeds.size else []
+    # multisine records: bands of their speeds to 0.1 m/s (a run's mean speed scatters)
+    frf_speeds = np.unique(np.round(obs.speed[[k == "frf" for k in obs.kind]], 1))
+    frf_bands = np.array_split(frf_speeds, min(N_SPEED_BANDS, frf_speeds.size)) if frf_speeds.size else []
     cells = []
     keys = []
     for i in range(len(obs)):
-        if obs.kind[i] == "eigenvalue":
-            band = next(b for b in bands if b[0] <= obs.speed[i] <= b[-1])
+        if obs.kind[i] in ("eigenvalue", "frf"):
+            v = obs.speed[i] if obs.kind[i] == "eigenvalue" else round(float(obs.speed[i]), 1)
+            band = next(b for b in (bands if obs.kind[i] == "eigenvalue" else frf_bands) if b[0] <= v <= b[-1])
             band_key = (float(band[0]), float(band[-1]))
         else:
             band_key = tuple(float(x) for x in p.predictor.canonical.speed_range[obs.group[i]])
         key = (
             (obs.mode[i], band_key, obs.quantity[i])
-            if obs.kind[i] == "eigenvalue"
+            if obs.kind[i] in ("eigenvalue", "frf")
             else ("canonical", band_key, f"{obs.quantity[i]} ({obs.group[i]})")
         )
         keys.append(key)

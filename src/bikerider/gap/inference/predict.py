@@ -27,6 +27,8 @@ import numpy as np
 
 from bikerider.benchmark.model import label_modes
 from bikerider.gap.candidates.effect_model import EffectModel, RiderGeometry
+from bikerider.gap.inference.frequency_response import predict_frf  # multisine records (multisine25)
+from bikerider.gap.measured.multisine import FrequencyResponseData
 from bikerider.gap.measured.tables import CANONICAL_ENTRIES, CanonicalData, EigenvalueData
 
 N_SPEEDS = 5
@@ -83,9 +85,15 @@ class Predictor:
     """
 
     def __init__(
-        self, eigen: EigenvalueData, canonical: CanonicalData, nominal: dict[str, float], geometry: RiderGeometry
+        self,
+        eigen: EigenvalueData,
+        canonical: CanonicalData,
+        nominal: dict[str, float],
+        geometry: RiderGeometry,
+        frf: FrequencyResponseData | None = None,
     ):
         self.eigen, self.canonical, self.nominal, self.geometry = eigen, canonical, dict(nominal), geometry
+        self.frf = frf if frf is not None else FrequencyResponseData.empty()  # multisine records, after the rest
         self._reference = None
         if len(eigen):
             ref = EffectModel(self.nominal, geometry).eigenvalues(eigen.speed, eigen.gains)
@@ -120,6 +128,12 @@ class Predictor:
             kind.append("canonical"), mode.append("canonical"), quantity.append(c.entry[k])
             speed.append(0.5 * (lo + hi)), group.append(c.group[k]), value.append(c.value[k])
             sigma.append(c.sigma[k]), source.append(c.source[k])
+        f = self.frf  # multisine records: real and imaginary part of each line's response (multisine25)
+        for k in range(len(f)):
+            for q, val in (("real", f.value[k].real), ("imag", f.value[k].imag)):
+                kind.append("frf"), mode.append(f"frf_{f.signal[k]}"), quantity.append(q)
+                speed.append(f.speed[k]), group.append(f.group[k]), value.append(val)
+                sigma.append(f.sigma[k]), source.append(f.source[k])
         return Observations(
             kind, mode, quantity, np.array(speed, float), group, np.array(value, float), np.array(sigma, float), source
         )
@@ -186,6 +200,11 @@ class Predictor:
             parts.append(self._predict_eigen(model, speed_scale))
         if len(self.canonical):
             parts.append(self._predict_canonical(model))
+        if len(self.frf):  # multisine records (multisine25); the speed scale of eigenvalue rows is not theirs
+            parts.append(predict_frf(model, self.frf))
+        if len(parts) > 1:
+            lead = np.broadcast_shapes(*(p.shape[:-1] for p in parts))
+            parts = [np.broadcast_to(p, lead + p.shape[-1:]) for p in parts]
         return np.concatenate(parts, axis=-1)
 
     def predict_scaled(self, flat_model: EffectModel, scales: np.ndarray) -> np.ndarray:

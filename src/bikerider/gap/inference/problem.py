@@ -59,7 +59,9 @@ from bikerider.errors import InputError
 from bikerider.gap.candidates.effect_model import BENCH_ARGS, STRUCTURAL_KEYS, EffectModel
 from bikerider.gap.candidates.effects import EFFECTS, OBSERVATION_EFFECTS, PARAMETERS, SPEED_SENSOR
 from bikerider.gap.candidates.nominal import GapModelInput
+from bikerider.gap.inference.frequency_response import predict_frf_scaled  # multisine records (multisine25)
 from bikerider.gap.inference.predict import Predictor
+from bikerider.gap.measured.multisine import FrequencyResponseData
 from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
 
 if TYPE_CHECKING:
@@ -173,9 +175,14 @@ class GapProblem:
     """
 
     def __init__(
-        self, model: GapModelInput, eigen: EigenvalueData, canonical: CanonicalData, records: RecordRows | None = None
+        self,
+        model: GapModelInput,
+        eigen: EigenvalueData,
+        canonical: CanonicalData,
+        records: RecordRows | None = None,
+        frf: FrequencyResponseData | None = None,
     ):
-        if len(eigen) + len(canonical) == 0:
+        if len(eigen) + len(canonical) + (len(frf) if frf is not None else 0) == 0:
             raise InputError("data", "empty", "at least one measured eigenvalue or identified entry")
         self.model_input = model
         self.geometry = model.geometry
@@ -193,7 +200,7 @@ class GapProblem:
         )
         self.shift_upper = np.full(len(self.free), MAX_SHIFT)
         self.eigen = eigen
-        self.predictor = Predictor(eigen, canonical, self.nominal, self.geometry)
+        self.predictor = Predictor(eigen, canonical, self.nominal, self.geometry, frf)  # frf: multisine25
         self.obs = self.predictor.observations
         self.y = self.obs.value
         self.records = records
@@ -472,14 +479,23 @@ class GapProblem:
 
                     flat_values = {n: flat(v) for n, v in values.items()}
                     flat_config = {e: {n: flat(v) for n, v in p.items()} for e, p in config.items()}
-                    eigen_part = self.predictor.predict_scaled(
-                        EffectModel(flat_values, self.geometry, flat_config), np.asarray(scale, dtype=float)
+                    eigen_part = (
+                        self.predictor.predict_scaled(
+                            EffectModel(flat_values, self.geometry, flat_config), np.asarray(scale, dtype=float)
+                        )
+                        if n_rows
+                        else np.zeros((P, 0))  # multisine runs only (multisine25)
                     )
-                    if len(self.predictor.canonical):
+                    if len(self.predictor.canonical) or len(self.predictor.frf):  # the rest: canonical, multisines
                         rest = self.predictor.predict(EffectModel(values, self.geometry, config))[
                             ..., eigen_part.shape[-1] :
                         ]
                         out = np.concatenate([eigen_part, np.broadcast_to(rest, (P, rest.shape[-1]))], axis=-1)
+                        frf = self.predictor.frf
+                        if len(frf) and np.any(frf.speed_sensor):  # multisine runs a sensor's speed: rescaled
+                            out[:, out.shape[-1] - 2 * len(frf) :] = predict_frf_scaled(
+                                values, self.geometry, config, frf, scale
+                            )
                     else:
                         out = eigen_part
                 out = np.atleast_2d(out)
