@@ -26,11 +26,7 @@ def _frf_predictions(diagnosis) -> tuple[np.ndarray, np.ndarray | None]:
     selected = None
     fit = diagnosis.selected_fit
     if fit is not None:
-        every = np.ones(len(p.obs), bool)
-        if "steer_friction" in fit.effects:
-            pred = diagnosis._time_domain_predict(fit, every)
-        else:
-            pred = p.predict_fit(fit)
+        pred = diagnosis.fits.predictions(tuple(fit.effects))  # time-domain effects simulated per record
         selected = pred[at][0::2] + 1j * pred[at][1::2]
     return nominal[0::2] + 1j * nominal[1::2], selected
 
