@@ -62,7 +62,7 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -154,6 +154,10 @@ MIN_REPLICATES = 3
 """Fewest records at one speed whose fits of a signal give that signal's run-to-run scatter."""
 NOISE_SEED = 2024
 """Seed of the noise added to templates (their fits' standard errors scale with it; the value does not)."""
+TEMPLATE_STATES = {"roll_rate": "phid", "roll_angle": "phi", "steer_angle": "delta", "steer_rate": "deltad"}
+"""A template's signals and the states they are."""
+SAME_SPEED = 0.03
+"""Records (or rows) whose speeds differ by less than this fraction are taken at one speed."""
 
 
 @dataclass(frozen=True)
@@ -413,25 +417,26 @@ class NextExperiment:
         """A fitted template decay per experiment (module docstring); those that fail, with the reason."""
 
         d = self.diagnosis
-        used = [d.records[k] for k in d.record_rows]
-        speeds = np.array([f.record.speed for f in used])
+        used = [d.records[k].record for k in d.record_rows]
         nominal = EffectModel(self.problem.nominal, self.problem.geometry)
-        rng = np.random.default_rng(NOISE_SEED)
+        # one window for every template: the records' median length and sampling step, and one noise
+        # pattern (the same samples scaled by each signal's noise), so a template, its fit and every
+        # prediction from it move continuously with the speed, the law and the push
+        dt = float(np.median([r.time[1] - r.time[0] for r in used]))
+        t = np.arange(int(np.median([r.time.size for r in used]))) * dt
+        pattern = np.random.default_rng(NOISE_SEED).standard_normal((len(TEMPLATE_STATES), t.size))
+        push = _push_curve(used)
+        speed_sigma = float(np.median([r.speed_sigma for r in used]))
+        measured = any(r.speed_measured for r in used)
         records: list[Record] = []
+        clean: list[dict[str, np.ndarray]] = []
         for e in experiments:
-            near = used[int(np.argmin(np.abs(speeds - e.speed)))].record
-            dt = float(near.time[1] - near.time[0])
-            t = np.arange(near.time.size) * dt
             law = self.laws[e.law]
-            out = nominal.simulate(e.speed, t, initial=_push(near, e.push), gains=law(e.speed))
+            initial = {k: e.push * v for k, v in push(e.speed).items()}
+            out = nominal.simulate(e.speed, t, initial=initial, gains=law(e.speed))
+            clean.append({name: out[state] for name, state in TEMPLATE_STATES.items()})
             signals = {
-                name: out[state] + self.sample_noise[name] * rng.standard_normal(t.size)
-                for name, state in (
-                    ("roll_rate", "phid"),
-                    ("roll_angle", "phi"),
-                    ("steer_angle", "delta"),
-                    ("steer_rate", "deltad"),
-                )
+                name: clean[-1][name] + self.sample_noise[name] * pattern[j] for j, name in enumerate(TEMPLATE_STATES)
             }
             records.append(
                 Record(
@@ -440,28 +445,31 @@ class NextExperiment:
                     t,
                     signals,
                     e.speed,
-                    near.speed_sigma,
+                    speed_sigma,
                     "next",
                     law,
                     e.speed,
                     None,
                     None,
                     (e.signal,),
-                    near.speed_measured,
+                    measured,
                 )
             )
         fits = self._fit_templates(records)
         left = [{"experiment": e.describe(), "reason": f.reason} for e, f in zip(experiments, fits) if not f.used]
-        kept = [(e, f) for e, f in zip(experiments, fits) if f.used]
+        kept = [(e, f, c) for e, f, c in zip(experiments, fits, clean) if f.used]
         if not kept:
             return {}, left
-        rows = eigenvalues_of([f for _, f in kept])
+        rows = eigenvalues_of([f for _, f, _ in kept])
         matched = Predictor(rows, _no_canonical(), self.problem.nominal, self.problem.geometry).eigenvalues(nominal)
-        simulator = RecordSimulator([f for _, f in kept], self.problem.nominal, self.problem.geometry)
+        # the rivals predict the noise-free template (the noisy one's fit gives the acceptance and the
+        # standard errors): a prediction is then a smooth function of the experiment, not of a noise draw
+        smooth = [RecordFit(replace(f.record, signals=c), f.estimate, f.fits) for _, f, c in kept]
+        simulator = RecordSimulator(smooth, self.problem.nominal, self.problem.geometry)
         _, reasons = comparable(simulator.settle(), matched)
         out = {}
         keep = []
-        for j, ((e, f), why) in enumerate(zip(kept, reasons)):
+        for j, ((e, f, _), why) in enumerate(zip(kept, reasons)):
             if why is None:
                 out[e] = f
                 keep.append(j)
@@ -645,14 +653,21 @@ class NextExperiment:
 
     def _predict_linear(self, effects, X, values=None, points=None) -> np.ndarray:
         """Predicted eigenvalue ``(P, len(points))`` of linear effects at fitted values ``X``, or of the
-        nominal model with benchmark values ``values`` (a batch)."""
+        nominal model with benchmark values ``values`` (a batch); with records, what the record fit finds
+        in the model's response over each template."""
         p = self.problem
         values, config, scale, P = self._configured(effects, X, values)
-        index = [self.points.index(e) for e in points]
         if self.records:
+            # a linear model's response is proportional to its push, and the record fit finds the same
+            # eigenvalue in it at any size: one template per speed, law and signal
+            where = {e: m for m, e in enumerate(self.points)}
+            keys = [(e.speed, e.law, e.signal) for e in points]
+            unique = {key: where[e] for key, e in zip(keys, points)}
+            index = list(unique.values())
             sub = self.simulator.subset(index) if len(index) != len(self.points) else self.simulator
-            res = sub.apparent(values, config, scale)
-            return np.broadcast_to(res, (P, len(index))).copy()
+            res = np.broadcast_to(sub.apparent(values, config, scale), (P, len(index)))
+            column = {key: j for j, key in enumerate(unique)}
+            return res[:, [column[key] for key in keys]].copy()
         rows = self._rows(points)
 
         predictor = Predictor(rows, _no_canonical(), p.nominal, p.geometry)
@@ -677,10 +692,12 @@ class NextExperiment:
             [e.describe() for e in points],
             [e.law for e in points],
             {e.law: self.laws[e.law] for e in points},
+            speed_sensor=np.full(n, self._speed_measured()) if self.records else None,
         )
 
     def _data_noise(self) -> np.ndarray:
-        """Per decay ``(n_points, 2, 2)``: the data's noise (module docstring)."""
+        """Per decay ``(n_points, 2, 2)``: the data's noise (module docstring), continuous in speed (each
+        quantity's median per speed of the data, linearly between those speeds: :func:`over_speed`)."""
         p = self.problem
         eig = p.eigen
         first = np.cumsum([0] + [2 if m == "weave" else 1 for m in eig.mode])
@@ -690,59 +707,66 @@ class NextExperiment:
         speeds = eig.speed[weave]
         decay = np.maximum(-np.array([p.baseline[first[r]] for r in weave]), MIN_DECAY)
         out = np.zeros((len(self.points), 2, 2))
+        decay, real, imag = (over_speed(speeds, x) for x in (decay, real, imag))
+        run = self._run_scatter()
+        scatter: dict[str, object] = {}
         for m, e in enumerate(self.points):
-            near = np.abs(speeds - speeds[np.argmin(np.abs(speeds - e.speed))]) < 1e-9 + 0.03 * e.speed
             if not self.records:
                 # a fitted decay rate's and frequency's standard error grows as (decay rate)^(3/2)
-                scale = (max(-float(np.mean(self.mean[:, m].real)), MIN_DECAY) / np.median(decay[near])) ** 3
-                out[m, 0, 0], out[m, 1, 1] = scale * np.median(real[near]), scale * np.median(imag[near])
+                scale = (max(-float(np.mean(self.mean[:, m].real)), MIN_DECAY) / decay(e.speed)) ** 3
+                out[m, 0, 0], out[m, 1, 1] = scale * real(e.speed), scale * imag(e.speed)
                 continue
             # records: the template's own standard errors plus the data's scatter beyond their records' own;
             # for a signal the diagnosis did not fit, the scatter of that signal's own fits when they replicate
             est = self.templates[e].estimate
-            own = self._signal_scatter(e)
-            if own is None:
-                own = self._run_scatter(e.speed)
+            if e.signal not in scatter:
+                scatter[e.signal] = self._signal_scatter(e.signal)
+            own = (scatter[e.signal] or run)(e.speed)
             out[m, 0, 0] = est.real_sigma**2 + own[0]
             out[m, 1, 1] = est.imag_sigma**2 + own[1]
         return out
 
-    def _run_scatter(self, speed: float) -> tuple[float, float]:
-        """The data's run-to-run variance (real, imaginary) of the weave eigenvalue at the data's speed
-        nearest ``speed``: with records, their scatter beyond their fits' own standard errors; from
-        tables, the rows' whole uncertainty (which of it is scatter from run to run the table does not say)."""
+    def _run_scatter(self):
+        """The data's run-to-run variance (real, imaginary) of the weave eigenvalue as a function of speed (per
+        speed of the data, linearly between them: :func:`over_speed`): with records, their scatter beyond
+        their fits' own standard errors; from tables, the rows' whole uncertainty (which of it is scatter
+        from run to run the table does not say)."""
         p = self.problem
         eig = p.eigen
         first = np.cumsum([0] + [2 if m == "weave" else 1 for m in eig.mode])
         weave = np.array([r for r in range(len(eig)) if eig.mode[r] == "weave"])
         speeds = eig.speed[weave]
-        near = np.abs(speeds - speeds[np.argmin(np.abs(speeds - speed))]) < 1e-9 + 0.03 * speed
-        real = float(np.median([p.var_data[first[r]] for r in weave[near]]))
-        imag = float(np.median([p.var_data[first[r] + 1] for r in weave[near]]))
-        if not self.records:
-            return real, imag
-        own_r = float(np.median(eig.real_sigma[weave[near]] ** 2))
-        own_i = float(np.median(eig.imag_sigma[weave[near]] ** 2))
-        return max(real - own_r, 0.0), max(imag - own_i, 0.0)
+        real = np.array([p.var_data[first[r]] for r in weave])
+        imag = np.array([p.var_data[first[r] + 1] for r in weave])
+        if self.records:  # beyond each row's own standard error, per speed
+            real = real - over_groups(speeds, eig.real_sigma[weave] ** 2)
+            imag = imag - over_groups(speeds, eig.imag_sigma[weave] ** 2)
+        real, imag = over_speed(speeds, real), over_speed(speeds, imag)
+        return lambda speed: (max(real(speed), 0.0), max(imag(speed), 0.0))
 
-    def _signal_scatter(self, e: Experiment) -> tuple[float, float] | None:
-        """Run-to-run variance (real, imaginary) of the records' own fits of ``e``'s signal at the data's
-        nearest speed, beyond their fits' standard errors; ``None`` for a signal the diagnosis fits (its
-        data uncertainty holds it) or with fewer than :data:`MIN_REPLICATES` fits there."""
+    def _signal_scatter(self, signal: str):
+        """Run-to-run variance (real, imaginary) of the records' own fits of ``signal``, beyond their fits'
+        standard errors, as a function of speed: per speed of the data with :data:`MIN_REPLICATES` fits or
+        more, linearly between those speeds; ``None`` for a signal the diagnosis fits (its data uncertainty
+        holds it) or without such a speed."""
         d = self.diagnosis
         fitted = {name for k in d.record_rows for name in d.records[k].record.fit_signals}
-        fits = self.signal_fits.get(e.signal, [])
-        if e.signal in fitted or not fits:
+        fits = self.signal_fits.get(signal, [])
+        if signal in fitted or not fits:
             return None
         speeds = np.array([v for v, _ in fits])
-        nearest = speeds[np.argmin(np.abs(speeds - e.speed))]
-        here = [f for v, f in fits if abs(v - nearest) < 1e-9 + 0.03 * e.speed]
-        if len(here) < MIN_REPLICATES:
+        groups = [g for g in speed_groups(speeds) if g.size >= MIN_REPLICATES]
+        if not groups:
             return None
-        z = np.array([f.eigenvalue for f in here])
-        own_r = float(np.median([f.real_sigma**2 for f in here]))
-        own_i = float(np.median([f.imag_sigma**2 for f in here]))
-        return max(float(np.var(z.real, ddof=1)) - own_r, 0.0), max(float(np.var(z.imag, ddof=1)) - own_i, 0.0)
+        centre, real, imag = [], [], []
+        for g in groups:
+            z = np.array([fits[k][1].eigenvalue for k in g])
+            own_r = float(np.median([fits[k][1].real_sigma ** 2 for k in g]))
+            own_i = float(np.median([fits[k][1].imag_sigma ** 2 for k in g]))
+            centre.append(float(np.median(speeds[g])))
+            real.append(max(float(np.var(z.real, ddof=1)) - own_r, 0.0))
+            imag.append(max(float(np.var(z.imag, ddof=1)) - own_i, 0.0))
+        return lambda speed: (float(np.interp(speed, centre, real)), float(np.interp(speed, centre, imag)))
 
     # -- sweeps ----------------------------------------------------------------------------------------
     def _plan_sweeps(self) -> list[Sweep]:
@@ -892,11 +916,12 @@ class NextExperiment:
         # more torque does not average it away
         A, b, outputs = self._sweep_systems(*nominal)
         self.sweep_run = np.zeros_like(self.sweep_data)
+        run = self._run_scatter()
         for m, x in enumerate(self.sweeps):
             index = outputs[2] if x.output == "roll_rate" else outputs[1]
             J = weave_shift(A[0, m], b[0, m], index, x.omegas)
             if J is not None:
-                self.sweep_run[m] = J @ np.diag(self._run_scatter(x.speed)) @ J.T
+                self.sweep_run[m] = J @ np.diag(run(x.speed)) @ J.T
         self.sweep_data += self.sweep_run
         # and what a linear response misses of a real run, line by line (next_sweep.linear_misfit)
         self.sweep_distortion, self.distortion_source = self._linear_misfit()
@@ -1286,6 +1311,65 @@ def signal_noise(samples) -> float:
     steps = steps[steps > 0]
     quantum = float(steps.min()) / math.sqrt(12) if steps.size else 0.0
     return max(mad, quantum)
+
+
+def speed_groups(speeds) -> list[np.ndarray]:
+    """Indices of ``speeds`` grouped by speed (sorted; a group ends where the next speed is more than
+    :data:`SAME_SPEED` of it above the group's last)."""
+    speeds = np.asarray(speeds, float)
+    order = np.argsort(speeds, kind="stable")
+    groups: list[list[int]] = []
+    for k in order:
+        if groups and speeds[k] - speeds[groups[-1][-1]] <= SAME_SPEED * speeds[k] + 1e-9:
+            groups[-1].append(int(k))
+        else:
+            groups.append([int(k)])
+    return [np.array(g) for g in groups]
+
+
+def over_speed(speeds, values, least: int = 1):
+    """The medians of ``values`` per speed group (:func:`speed_groups`) as a function of speed, linear between
+    the groups' median speeds (the nearest group's beyond them): continuous in speed, where the value of
+    the nearest group jumps half-way between two.  Groups of fewer than ``least`` values are skipped
+    (``None`` when none is left)."""
+    speeds, values = np.asarray(speeds, float), np.asarray(values, float)
+    groups = [g for g in speed_groups(speeds) if g.size >= least]
+    if not groups:
+        return None
+    centre = np.array([np.median(speeds[g]) for g in groups])
+    level = np.array([np.median(values[g]) for g in groups])
+    return lambda at: float(np.interp(at, centre, level))
+
+
+def over_groups(speeds, values) -> np.ndarray:
+    """Each value replaced by the median of its speed group (:func:`speed_groups`)."""
+    values = np.asarray(values, float)
+    out = np.empty_like(values)
+    for g in speed_groups(speeds):
+        out[g] = np.median(values[g])
+    return out
+
+
+def _push_curve(records: list[Record]):
+    """The data's push as a function of speed: every record's initial state (:func:`_push`), turned so its
+    roll rate is positive, its median per speed group, linearly between the groups (:func:`over_speed`),
+    so the template's push moves continuously with the speed."""
+    pushes = []
+    for r in records:
+        x = _push(r, 1.0)
+        sign = -1.0 if x.get("phid", 0.0) < 0 else 1.0
+        pushes.append({k: sign * v for k, v in x.items()})
+    speeds = np.array([r.speed for r in records])
+    names = [n for n in ("phi", "delta", "phid", "deltad") if any(n in x for x in pushes)]
+    curves = {}
+    for n in names:
+        have = [k for k, x in enumerate(pushes) if n in x]
+        curves[n] = over_speed(speeds[have], [pushes[k][n] for k in have])
+
+    def at(speed: float) -> dict[str, float]:
+        return {n: curve(speed) for n, curve in curves.items()}
+
+    return at
 
 
 def _push(record: Record, factor: float) -> dict[str, float]:
