@@ -15,7 +15,15 @@ from bikerider.gap.candidates.effect_model import EffectModel
 from bikerider.gap.diagnosis.result import Diagnosis
 from bikerider.gap.measured.tables import CanonicalData
 from bikerider.gap.plan.ranking import NextExperiment
-from bikerider.gap.plan.sweeps import line_amplitude, linearised_friction, lines_for, response, weave_shift
+from bikerider.gap.plan.sweeps import (
+    Sweep,
+    line_amplitude,
+    linearised_friction,
+    lines_for,
+    response,
+    simulated_response,
+    weave_shift,
+)
 
 
 @pytest.fixture(scope="module")
@@ -182,3 +190,42 @@ def test_the_weave_moving_from_run_to_run_moves_the_response_by_its_slopes():
         expected = np.concatenate([moved.real, moved.imag]) / (2 * h)
         assert J[:, k] == pytest.approx(expected, rel=1e-6, abs=1e-9)
     assert weave_shift(np.diag([-1.0, -2.0]), np.ones(2), 0, omegas) is None
+
+
+def _sweep_loop(riderless, speed=5.0):
+    ss = EffectModel(nominal(riderless), riderless.geometry, {}).state_space([speed])
+    A, b = ss.closed_loop(SIL(speed))[0], ss.B[0, :, 1]
+    ev = np.linalg.eigvals(A)
+    lines = lines_for(float(ev.imag.max()) / (2 * math.pi), 4.0)
+    return A, b, ss.outputs, Sweep(speed, "sil", "roll_rate", 0.5, 4.0, lines)
+
+
+def test_a_run_simulated_in_time_reads_the_transfer_function_without_friction(riderless):
+    A, b, outputs, sweep = _sweep_loop(riderless)
+    H = simulated_response(A[None, None], b[None, None], 0.0, outputs[3], (outputs[2], outputs[1]), [sweep])
+    assert H[0, 0, 0] == pytest.approx(response(A, b, outputs[2], sweep.omegas), rel=2e-3)
+    assert H[0, 0, 1] == pytest.approx(response(A, b, outputs[1], sweep.omegas), rel=2e-3)
+
+
+def test_the_plans_stick_slip_runs_match_an_independent_simulation(riderless):
+    # the multisine check's own Karnopp integrator (validation.multisine_check, 1 ms steps, state held) and
+    # the plan's (batched) read the same response of a sticking steer; the smoothed friction the diagnosis
+    # fits does not stick, and the plan counts the difference as its friction rival's own uncertainty
+    from validation.multisine_check import STEP, multisine, periodic_start, simulate
+
+    A, b, outputs, sweep = _sweep_loop(riderless)
+    friction = 0.15
+    args = (A[None, None], b[None, None], friction, outputs[3], (outputs[2], outputs[1]), [sweep])
+    stick = simulated_response(*args, stick=True)[0, 0, 0]
+    smooth = simulated_response(*args)[0, 0, 0]
+    t = np.arange(round(2 * sweep.run_time / STEP)) * STEP
+    torque, a, phases = multisine(sweep.lines, sweep.torque, sweep.run_time, t)
+    start = periodic_start(A, b, sweep.omegas, a, phases)
+    y = simulate(A, b, outputs[3], friction, torque, start)[t.size // 2 :, outputs[2]]
+    basis = np.exp(-1j * sweep.omegas[None, :] * (t[t.size // 2 :] - t[t.size // 2])[:, None])
+    independent = (y @ basis) / (torque[t.size // 2 :] @ basis)
+    linear = response(A, b, outputs[2], sweep.omegas)
+    assert np.abs(stick - independent).max() < 0.05 * np.abs(independent).max()
+    # friction changes the response by far more than the two integrators differ
+    assert np.abs(linear - independent).max() > 5 * np.abs(stick - independent).max()
+    assert np.abs(smooth - stick).max() > np.abs(stick - independent).max()

@@ -101,6 +101,7 @@ from bikerider.gap.plan.sweeps import (
     noise_covariance,
     response,
     run_stand_in,
+    simulated_response,
     split,
     weave_shift,
 )
@@ -867,7 +868,27 @@ class NextExperiment:
         return np.where(is_roll[None, :, None], roll, steer)
 
     def _sweep_rival(self, rival: Rival, X) -> np.ndarray:
-        return self._sweep_response(*self._sweep_systems(rival.effects, X, nonlinear=rival.nonlinear))
+        if rival.nonlinear:
+            return self._sweep_simulated(rival.effects, X)
+        return self._sweep_response(*self._sweep_systems(rival.effects, X))
+
+    def _sweep_simulated(self, effects, X, stick: bool = False) -> np.ndarray:
+        """Each sweep's frequency response ``(P, s, K)`` for a nonlinear rival's fitted-value vectors ``X (P, p)``:
+        its runs simulated in time with the steer's Coulomb friction and read by the DFT
+        (:func:`bikerider.gap.plan.sweeps.simulated_response`; one run per speed and law serves both outputs)."""
+        p = self.problem
+        first: dict[tuple[float, str], int] = {}
+        for m, x in enumerate(self.sweeps):
+            first.setdefault((x.speed, x.law), m)
+        runs = [self.sweeps[m] for m in first.values()]
+        measured = self._speed_measured()
+        stand_ins = [run_stand_in(x, self.laws[x.law](x.speed), measured) for x in runs]
+        A, b, outputs, friction = systems(p.nominal, p.geometry, stand_ins, Layout.of(tuple(effects)), np.atleast_2d(X))
+        H = simulated_response(A, b, friction, outputs[3], (outputs[2], outputs[1]), runs, stick)  # (P, runs, 2, K)
+        column = {key: j for j, key in enumerate(first)}
+        pick = [column[(x.speed, x.law)] for x in self.sweeps]
+        part = [0 if x.output == "roll_rate" else 1 for x in self.sweeps]
+        return H[:, pick, part]
 
     def _predict_sweeps(self) -> None:
         """Every rival's frequency responses and their uncertainties (module docstring of
@@ -876,7 +897,7 @@ class NextExperiment:
         R, p = len(self.rivals), self.problem
         if not self.sweeps:
             self.sweep_mean = np.zeros((R, 0, 0), complex)
-            self.sweep_own = np.zeros((R, 0, 0, 0))
+            self.sweep_own = self.sweep_form = np.zeros((R, 0, 0, 0))
             self.sweep_data = self.sweep_model = self.sweep_run = np.zeros((0, 0, 0))
             self.sweep_distortion, self.distortion_source = self._linear_misfit()
             return
@@ -884,6 +905,7 @@ class NextExperiment:
         s = len(self.sweeps)
         self.sweep_mean = np.zeros((R, s, K), complex)
         self.sweep_own = np.zeros((R, s, 2 * K, 2 * K))
+        self.sweep_form = np.zeros((R, s, 2 * K, 2 * K))
         unstable = np.zeros(s, bool)
         for k, rival in enumerate(self.rivals):
             fit = rival.fit
@@ -891,11 +913,21 @@ class NextExperiment:
             with np.errstate(all="ignore"):
                 # a mode that grows e-fold within the run (a slow capsize a rider or a catch holds is allowed)
                 unstable |= np.linalg.eigvals(loop[0][0]).real.max(axis=-1) >= 1.0 / self.run_time
-            self.sweep_mean[k] = self._sweep_response(*loop)[0]
+            # a nonlinear rival's response from its runs simulated in time (its describing function only
+            # judges whether the loop is stable)
+            self.sweep_mean[k] = self._sweep_rival(rival, fit.values[None, :])[0]
             if fit.names:
                 J, cov = _secants(fit, lambda X, rival=rival: split(self._sweep_rival(rival, X)).reshape(len(X), -1))
                 J = J.reshape(s, 2 * K, -1)
                 self.sweep_own[k] = np.einsum("naj,jk,nbk->nab", J, cov, J)
+            if rival.nonlinear:
+                # the friction law's form: the fitted smoothed friction against the same friction sticking
+                # (Karnopp), a systematic difference more runs do not average away
+                form = split(self._sweep_simulated(rival.effects, fit.values[None, :], stick=True)[0]) - split(
+                    self.sweep_mean[k]
+                )
+                self.sweep_form[k] = np.einsum("na,nb->nab", form, form)
+                self.sweep_own[k] += self.sweep_form[k]
         # per run: the sensor noise at the lines, and the speed scattering as the data's
         nominal = ((), np.zeros((1, 0)))
         self.sweep_data = np.array(
@@ -957,6 +989,7 @@ class NextExperiment:
         keep = np.flatnonzero(~bad)
         self.sweeps = [self.sweeps[m] for m in keep]
         self.sweep_mean, self.sweep_own = self.sweep_mean[:, keep], self.sweep_own[:, keep]
+        self.sweep_form = self.sweep_form[:, keep]
         self.sweep_data, self.sweep_model = self.sweep_data[keep], self.sweep_model[keep]
         self.sweep_run = self.sweep_run[keep]
 

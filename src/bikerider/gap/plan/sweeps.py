@@ -46,6 +46,8 @@ from types import SimpleNamespace
 
 import numpy as np
 
+from bikerider.gap.inference.timedomain import SMOOTHING, expm
+
 N_LINES = 9
 """Lines of the multisine."""
 LINE_SPAN = (0.25, 4.0)
@@ -63,6 +65,15 @@ DEFAULT_SAMPLE_RATE = 100.0
 """Sampling rate [Hz] assumed without records."""
 FRF_SIGNALS = {"roll_rate": "frf_roll_rate", "steer_angle": "frf_steer_angle"}
 """Output signal measured to the name the plan's rows carry."""
+SIMULATION_STEP = 2e-3
+"""Longest step [s] of a multisine run simulated with friction (shorter where the friction's slope at zero
+steer rate would make its explicit term stiff)."""
+STICK_STEP = 1e-3
+"""Longest step [s] of a run simulated with stick-slip friction."""
+STICK_RATE = 1e-3
+"""Steer rate [rad/s] below which the stick-slip rule may hold the steer still."""
+SETTLE_PERIODS = 1
+"""Periods of the multisine a simulated run settles for before the one read."""
 STICK_DAMPING = 1e4
 """Cap of friction's equivalent damping [N m s/rad]: the steer sticks."""
 
@@ -214,3 +225,72 @@ def split(z: np.ndarray) -> np.ndarray:
     """Complex ``(..., K)`` to real ``(..., 2 K)``: real parts, then imaginary parts."""
     z = np.asarray(z)
     return np.concatenate([z.real, z.imag], axis=-1)
+
+
+def simulated_response(
+    A, b, friction, rate_index: int, outputs: tuple[int, int], sweeps: list[Sweep], stick: bool = False
+) -> np.ndarray:
+    """Frequency responses ``(P, s, 2, K)`` (roll rate, steer angle) of runs simulated in time with steer
+    Coulomb friction: ``A (P, s, n, n)``, ``b (P, s, n)``, ``friction (P,)``, the ``s`` sweeps alike in
+    run time and number of lines (module docstring, "Prediction").  The friction as the diagnosis fits
+    it, ``T_c tanh(delta' / eps)``, or with ``stick`` by Karnopp's stick-slip rule (the steer held still
+    while the torque that takes is at most ``T_c``)."""
+    A, b = np.asarray(A, float), np.asarray(b, float)
+    P, s, n = A.shape[0], A.shape[1], A.shape[-1]
+    friction = np.broadcast_to(np.asarray(friction, float).reshape(-1), (P,))
+    run_time = float(sweeps[0].run_time)
+    slope = float(np.max(friction)) / SMOOTHING * float(np.max(np.abs(b[..., rate_index])))
+    h = min(SIMULATION_STEP, 0.5 / slope) if slope > 0 else SIMULATION_STEP
+    if stick:
+        h = min(h, STICK_STEP)
+    per_period = math.ceil(run_time / h)
+    h = run_time / per_period
+    aug = np.zeros((P, s, n + 1, n + 1))
+    aug[..., :n, :n], aug[..., :n, n] = A, b
+    E = expm(aug * h)
+    phi = np.ascontiguousarray(np.moveaxis(E[..., :n, :n].reshape(P * s, n, n), 0, -1))  # (n, n, P s)
+    gamma = np.ascontiguousarray(E[..., :n, n].reshape(P * s, n).T)  # (n, P s)
+    minus_T = -np.repeat(friction, s)
+    lines = np.array([x.lines for x in sweeps])  # (s, K)
+    omegas = 2 * math.pi * lines
+    K = lines.shape[1]
+    phases = -math.pi * np.arange(1, K + 1) * np.arange(K) / K
+    amplitude = np.array([line_amplitude(x.lines, x.torque, x.run_time) for x in sweeps])
+    # from the linear loop's periodic response (a slow mode would take longer than the run to settle)
+    start = np.einsum("sk,psk->psk", amplitude[:, None] * np.exp(1j * phases)[None, :], np.ones((P, s, K)))
+    steady = np.linalg.solve(
+        1j * omegas[None, :, :, None, None] * np.eye(n) - A[:, :, None],
+        np.broadcast_to(b[:, :, None, :, None], (P, s, K, n, 1)).astype(complex),
+    )[..., 0]
+    x = np.ascontiguousarray(np.einsum("psk,pskn->psn", start, steady).real.reshape(P * s, n).T)
+    y = np.zeros((2, K, P * s), complex)
+    u = np.zeros((K, s), complex)
+    rotate = np.exp(-1j * omegas.T * h)  # (K, s)
+    rows = list(outputs)
+    for k in range(per_period * (SETTLE_PERIODS + 1)):
+        t = k * h
+        torque = amplitude * np.cos(omegas * t + phases).sum(axis=1)  # (s,), read at the samples
+        # held over the step at its value half-way (the zero-order hold's half-step lag undone)
+        drive = np.tile(amplitude * np.cos(omegas * (t + h / 2) + phases).sum(axis=1), P)
+        if stick:
+            free = np.einsum("ijb,jb->ib", phi, x)
+            g, rate = gamma[rate_index], x[rate_index]
+            hold = -free[rate_index] / g - drive  # the friction torque that stops the steer within the step
+            can = np.abs(hold) <= -minus_T
+            slow = np.abs(rate) < STICK_RATE
+            moving = np.where(slow, np.sign(free[rate_index] + g * drive), np.sign(rate))
+            friction_torque = np.where(slow & can, hold, minus_T * moving)
+            turns = ~slow & can & ((free[rate_index] + g * (drive + friction_torque)) * rate < 0)
+            friction_torque = np.where(turns, hold, friction_torque)
+        else:
+            friction_torque = minus_T * np.tanh(x[rate_index] / SMOOTHING)
+        drive = drive + friction_torque
+        if k >= per_period * SETTLE_PERIODS:
+            if k == per_period * SETTLE_PERIODS:
+                basis = np.ones((K, s), complex)
+            y += x[rows][:, None, :] * np.tile(basis, (1, P))[None]
+            u += torque[None, :] * basis
+            basis = basis * rotate
+        x = np.einsum("ijb,jb->ib", phi, x) + gamma * drive
+    H = y / np.tile(u, (1, P))[None]  # (2, K, P s)
+    return np.moveaxis(H.reshape(2, K, P, s), (2, 3), (0, 1))
