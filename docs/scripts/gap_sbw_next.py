@@ -98,7 +98,7 @@ def _sbw_next(diagnosis):
         f"records' own fits leave (roll rate {noise['roll_rate']['value']:.2g} rad/s, roll angle "
         f"{noise['roll_angle']['value']:.2g} rad, steer angle {noise['steer_angle']['value']:.2g} rad; the steer rate",
         "is not logged and its noise is assumed), and each signal's run-to-run scatter from its own fits of the",
-        "records at the nearest speed. The roll angle is the IMU's fused estimate: it scatters from sample to",
+        "records per speed of the data (linear between those speeds). The roll angle is the IMU's fused estimate: it scatters from sample to",
         "sample about thirty times less than its fits' residual, and its errors are not independent from sample",
         "to sample as a fit's standard errors assume, so where it ranks first the roll-rate and steer-angle",
         "rows are the safer choice.",
