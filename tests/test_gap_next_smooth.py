@@ -11,7 +11,7 @@ from bikerider.gap.candidates.effect_model import EffectModel
 from bikerider.gap.diagnosis.result import Diagnosis
 from bikerider.gap.measured.records import fit_records
 from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
-from bikerider.gap.plan.ranking import NextExperiment, over_speed, speed_groups
+from bikerider.gap.plan.ranking import over_speed, plan_next, speed_groups
 
 TRUTH = {"steer_damping": {"c_steer": 0.3}}
 RIVALS = ["steer_damping", "tyre_slip"]
@@ -35,7 +35,7 @@ def fine_plan():
     d = Diagnosis(
         model, EigenvalueData.empty(), CanonicalData.empty(), effects=tuple(RIVALS), records=fit_records(records)
     )
-    return model, NextExperiment(d, rivals=RIVALS, speeds=SPEEDS, signals=["roll_rate"], sweeps=False)
+    return model, plan_next(d, rivals=RIVALS, speeds=SPEEDS, signals=["roll_rate"], sweeps=False)
 
 
 def test_the_data_noise_is_interpolated_between_the_data_speeds():

@@ -14,7 +14,7 @@ from bikerider.cli import main
 from bikerider.gap.candidates.effect_model import EffectModel
 from bikerider.gap.diagnosis.result import Diagnosis
 from bikerider.gap.measured.tables import CanonicalData
-from bikerider.gap.plan.ranking import NextExperiment
+from bikerider.gap.plan.ranking import plan_next
 from bikerider.gap.plan.sweeps import (
     Sweep,
     line_amplitude,
@@ -87,7 +87,7 @@ def damping_or_inertia(riderless):
     data = _table(riderless, {"steer_damping": {"c_steer": 0.3}}, [6.0] * 9, ["a"] * 3 + ["b"] * 3 + ["c"] * 3)
     rivals = ["steer_damping", "steer_inertia"]
     diagnosis = Diagnosis(riderless, data, CanonicalData.empty(), effects=tuple(rivals))
-    return riderless, NextExperiment(diagnosis, rivals=rivals, speeds=[5.5, 6.0], repeats=5)
+    return riderless, plan_next(diagnosis, rivals=rivals, speeds=[5.5, 6.0], repeats=5)
 
 
 def test_each_rival_predicts_its_own_frequency_response(damping_or_inertia):
@@ -106,7 +106,7 @@ def test_a_multisine_sees_what_the_decays_do_not(damping_or_inertia):
     # speed.  A real run's response departs from any linear model line by line (default without records:
     # 10 % of it), which bounds what a multisine can tell: the best of them still beats the best decay.
     _, plan = damping_or_inertia
-    ideal = NextExperiment(plan.diagnosis, rivals=["steer_damping", "steer_inertia"], speeds=[5.5, 6.0], distortion=0)
+    ideal = plan_next(plan.diagnosis, rivals=["steer_damping", "steer_inertia"], speeds=[5.5, 6.0], distortion=0)
     d = ideal.separation(ideal.repeats)[0].min(axis=0)  # (experiments,)
     n = len(ideal.points)
     for m, sweep in enumerate(ideal.sweeps):
@@ -125,15 +125,15 @@ def test_a_multisine_sees_what_the_decays_do_not(damping_or_inertia):
     # the sensor noise falls with the torque squared; the bicycle's own run-to-run variation does not
     # (the line-by-line distortion, a share of the response, does not either: left out here)
     rivals = ["steer_damping", "steer_inertia"]
-    quiet = NextExperiment(plan.diagnosis, rivals=rivals, speeds=[5.5, 6.0], distortion=0)
-    louder = NextExperiment(plan.diagnosis, rivals=rivals, speeds=[5.5, 6.0], torque=2.0, distortion=0)
+    quiet = plan_next(plan.diagnosis, rivals=rivals, speeds=[5.5, 6.0], distortion=0)
+    louder = plan_next(plan.diagnosis, rivals=rivals, speeds=[5.5, 6.0], torque=2.0, distortion=0)
     sensor, louder_sensor = quiet.sweep_data - quiet.sweep_run, louder.sweep_data - louder.sweep_run
     assert np.all(louder_sensor <= sensor / 15)
     assert louder.sweep_run == pytest.approx(quiet.sweep_run, rel=1e-9, abs=1e-30)
     assert np.all(np.trace(quiet.sweep_run, axis1=1, axis2=2) > 0)
     assert np.all(plan.sweep_data >= quiet.sweep_data)
     # without multisines the plan is the decays' alone
-    decays_only = NextExperiment(plan.diagnosis, rivals=["steer_damping", "steer_inertia"], speeds=[5.5], sweeps=False)
+    decays_only = plan_next(plan.diagnosis, rivals=["steer_damping", "steer_inertia"], speeds=[5.5], sweeps=False)
     assert not decays_only.sweeps and all(item["experiment"].kind == "decay" for item in decays_only.plan)
 
 
@@ -142,11 +142,11 @@ def test_bad_sweep_values_are_a_clear_error(damping_or_inertia):
 
     _, plan = damping_or_inertia
     with pytest.raises(InputError, match="torque = -1"):
-        NextExperiment(plan.diagnosis, rivals=["steer_damping", "steer_inertia"], torque=-1.0)
+        plan_next(plan.diagnosis, rivals=["steer_damping", "steer_inertia"], torque=-1.0)
     with pytest.raises(InputError, match="run_time = 1"):
-        NextExperiment(plan.diagnosis, rivals=["steer_damping", "steer_inertia"], run_time=1.0)
+        plan_next(plan.diagnosis, rivals=["steer_damping", "steer_inertia"], run_time=1.0)
     with pytest.raises(InputError, match="distortion = 1.5"):
-        NextExperiment(plan.diagnosis, rivals=["steer_damping", "steer_inertia"], distortion=1.5)
+        plan_next(plan.diagnosis, rivals=["steer_damping", "steer_inertia"], distortion=1.5)
 
 
 @pytest.mark.parametrize(

@@ -37,7 +37,7 @@ from scipy.linalg import expm
 from scipy.special import ndtr
 
 from bikerider.gap.inference.timedomain import Layout, systems
-from bikerider.gap.plan.ranking import ODDS, _distance
+from bikerider.gap.plan.discrimination import ODDS, distance
 from bikerider.gap.plan.sweeps import line_amplitude, run_stand_in, split
 
 STEP = 1e-3
@@ -167,7 +167,7 @@ def check(plan, items: int = 8, limit_share: float | None = None) -> list[RunChe
                 if o == t:
                     continue
                 mu_o = split(plan.sweep_mean[o, m])
-                d = float(_distance((mu_t - mu_o)[None], own[None], noise[None], truth.misfit, n)[0])
+                d = float(distance((mu_t - mu_o)[None], own[None], noise[None], truth.misfit, n)[0])
                 far = H - mu_o
                 d2 = float(far @ np.linalg.solve(S, far)) - chi_bias
                 planned[other.name], achieved[other.name] = d, math.copysign(math.sqrt(abs(d2)), d2)

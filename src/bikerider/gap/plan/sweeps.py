@@ -35,7 +35,7 @@ speed, also per run.  The bicycle itself varies from run to run as the data's we
 (:func:`weave_shift`: the response's slopes in the weave eigenvalue times the data's run-to-run
 variance), and a real run departs from any linear response at each line by a share ``rho`` of it
 (variance ``(rho |H_k|)^2 / 2`` on each part; ``rho`` from the records' fits, ``sqrt(1 - r^2)``):
-neither shrinks with a larger torque (:meth:`bikerider.gap.plan.ranking.NextExperiment._predict_sweeps`).
+neither shrinks with a larger torque (:meth:`bikerider.gap.plan.ranking._Planner._predict_sweeps`).
 """
 
 from __future__ import annotations
