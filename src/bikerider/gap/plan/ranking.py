@@ -1000,10 +1000,10 @@ class NextExperiment(_Models):
             "noise": {
                 "signals": {s: {"value": v, "source": self.noise_source[s]} for s, v in self.sample_noise.items()},
                 "note": (
-                    "per decay: the template fit's standard errors plus the data's run-to-run scatter at the nearest "
-                    "speed"
+                    "per decay: the template fit's standard errors plus the data's run-to-run scatter (per speed of "
+                    "the data, linear between them)"
                     if self.records
-                    else "per decay: the data's standard uncertainty at the nearest measured speed"
+                    else "per decay: the data's standard uncertainty (per measured speed, linear between them)"
                 ),
             },
             "plan": [item_dict(item) for item in self.plan[:top]],
@@ -1048,8 +1048,8 @@ class NextExperiment(_Models):
                     "per run: the DFT estimate's variance 2 sigma_y^2 / (N a^2) at each line (sigma_y the signal's "
                     "sample noise, N samples, a the line's torque amplitude), the data's speed scatter, and the "
                     "response moving as the weave eigenvalue moved from run to run in the data, and at each line "
-                    "the share of the response a linear model misses (distortion); friction by its random-input "
-                    "describing function at the planned torque"
+                    "the share of the response a linear model misses (distortion); a friction rival by its runs "
+                    "simulated in time, the same friction sticking (stick-slip) counted as its own uncertainty"
                 ),
             }
             if self.run_sweeps
