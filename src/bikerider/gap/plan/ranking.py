@@ -116,6 +116,7 @@ from bikerider.gap.plan.sweeps import (
     DEFAULT_TORQUE,
     FRF_SIGNALS,
     MAX_TORQUE,
+    RECORD,
     RUN_TIME_RANGE,
     Sweep,
     line_amplitude,
@@ -1044,6 +1045,7 @@ class NextExperiment(_Models):
                 "torque": float(self.torque),
                 "run_time": float(self.run_time),
                 "distortion": {"value": self.sweep_distortion, "source": self.distortion_source},
+                "record": RECORD,
                 "note": (
                     "per run: the DFT estimate's variance 2 sigma_y^2 / (N a^2) at each line (sigma_y the signal's "
                     "sample noise, N samples, a the line's torque amplitude), the data's speed scatter, and the "

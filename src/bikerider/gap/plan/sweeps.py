@@ -36,6 +36,11 @@ speed, also per run.  The bicycle itself varies from run to run as the data's we
 variance), and a real run departs from any linear response at each line by a share ``rho`` of it
 (variance ``(rho |H_k|)^2 / 2`` on each part; ``rho`` from the records' fits, ``sqrt(1 - r^2)``):
 neither shrinks with a larger torque (:meth:`bikerider.gap.plan.ranking._Planner._predict_sweeps`).
+
+What a run records (:data:`RECORD`), so that it can be read back as the plan reads it: time-stamped samples
+of the steer torque actually applied and of the response at the plan's sampling rate or faster, over
+the settling period and the recorded one; the speed; the control law and its gains; and the multisine
+(lines, phases, peak), so that ``H(w_k)`` is the response's DFT line over the applied torque's.
 """
 
 from __future__ import annotations
@@ -74,6 +79,14 @@ STICK_RATE = 1e-3
 """Steer rate [rad/s] below which the stick-slip rule may hold the steer still."""
 SETTLE_PERIODS = 1
 """Periods of the multisine a simulated run settles for before the one read."""
+RECORD = (
+    "per run: time-stamped samples (at the plan's sampling rate or faster) of the steer torque actually applied "
+    "(torque sensor, or motor current times its torque constant) and of the response (roll rate from a gyro, or "
+    "steer angle from the encoder; both where logged), over one settling period and the recorded run; the "
+    "speed (and its scatter); the control law and its gains; the multisine's lines [Hz], phases and peak torque. "
+    "The frequency response at each line is the response's DFT over the applied torque's, on the recorded period"
+)
+"""What a researcher records of each planned multisine run (the plan's JSON says it under ``sweeps.record``)."""
 STICK_DAMPING = 1e4
 """Cap of friction's equivalent damping [N m s/rad]: the steer sticks."""
 
