@@ -37,7 +37,7 @@ equations.  The lateral slip velocities of the two wheel contacts are linear in 
 * Without tyre slip they are the nonholonomic constraints; eliminating ``Y'`` and ``psi'`` and
   projecting the equations on the constraint's null space gives the Whipple form
   ``M q'' + C(v) q' + K(g, v) q = f``.  For the Whipple bodies alone this reproduces the canonical
-  matrices of Meijaard et al. (2007) Appendix A exactly (``tests/test_gap_effects.py`` checks it).
+  matrices of Meijaard et al. (2007) Appendix A exactly (``tests/gap/candidates/test_gap_effects.py`` checks it).
 * With tyre slip the lateral tyre forces are generalized forces through the partial velocities of
   the contact points, and the heading ``psi`` enters only through ``u = Y' - v psi`` (the lateral
   velocity of the rear contact relative to the heading), so the state is
@@ -47,7 +47,7 @@ equations.  The lateral slip velocities of the two wheel contacts are linear in 
   partial velocities ``Papp``, not ``P``): the limit is the no-slip kinematics with those reactions
   as multipliers, an aligning moment ``t_p F`` on each wheel (``F`` the reaction less the camber
   thrust), independent of ``sigma_t``.  It is the Whipple model only for ``t_p = 0``
-  (``tests/test_gap_tyre_limit.py``).
+  (``tests/gap/candidates/test_gap_tyre_limit.py``).
 
 Rows and columns of every matrix follow the coordinates; the rigid-rider models are the leading
 blocks with ``theta`` removed (``theta = 0`` is a holonomic constraint whose reaction acts only in

@@ -21,6 +21,9 @@ DATA = Path(__file__).parent / "data"
 ROOT = Path(__file__).resolve().parent.parent
 if str(ROOT) not in sys.path:  # validation/ (the gap's blind-check harnesses) lives beside src/, not installed
     sys.path.insert(0, str(ROOT))
+TESTS = Path(__file__).resolve().parent
+if str(TESTS) not in sys.path:  # tests/gap/... import the shared helpers here (gap_support, sbw_damage, ...)
+    sys.path.insert(0, str(TESTS))
 
 
 @pytest.fixture(scope="session")

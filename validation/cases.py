@@ -366,7 +366,7 @@ def meijaard_matrices(v: dict[str, float]) -> tuple[np.ndarray, np.ndarray, np.n
     """``M, C1, K0, K2`` of the Whipple bicycle, typed in from Meijaard et al. (2007) Appendix A.
 
     Written out by hand (no generated code), so the truth shares nothing with the candidates but the
-    meaning of the 23 parameters; ``tests/test_gap_validation.py`` holds it to the generated
+    meaning of the 23 parameters; ``tests/gap/test_gap_validation.py`` holds it to the generated
     benchmark model.  ``K0`` is per unit ``g``; the equations are
     ``M q'' + v C1 q' + (g K0 + v^2 K2) q = f`` with ``q = [roll, steer]``.
     """

@@ -158,7 +158,7 @@ def build() -> str:
         "```",
         "",
         "The nominal model (BicycleParameters Rigid with the lumped rider Jason) reproduces the Whipple entries",
-        "Moore back-computed for rider J within 0.3 % (`tests/test_gap_diagnosis.py`), so it is the model he",
+        "Moore back-computed for rider J within 0.3 % (`tests/gap/diagnosis/test_gap_diagnosis.py`), so it is the model he",
         f"compared with (weave speed {dw.weave:.2f} m/s, capsize {dw.capsize:.2f} m/s). The data are his identified",
         "entries of the roll and steer equations for rider J on the treadmill (H) and the floor (P).",
         "",

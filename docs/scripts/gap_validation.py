@@ -129,7 +129,7 @@ def main() -> int:
         "# Validation of the gap diagnosis with the effect withheld",
         "",
         "Produced by `docs/scripts/gap_validation.py` (do not edit by hand). The unit test",
-        "`tests/test_gap_validation.py` runs a reduced set of the same cases.",
+        "`tests/gap/test_gap_validation.py` runs a reduced set of the same cases.",
         "",
         "Part 1 diagnoses tables of weave eigenvalues; part 2 diagnoses raw records of the steer-by-wire",
         "kind (short, strongly damped decays under a speed-scheduled control, two effects at once); part 3",

@@ -22,7 +22,8 @@ LOG_INTERVAL = 30.0
 WIDTH = 24
 
 
-def _duration(seconds: float) -> str:
+def format_duration(seconds: float) -> str:
+    """``seconds`` as a person reads a clock: ``m:ss``, or ``h:mm:ss`` from an hour on; ``?`` when unknown."""
     if seconds != seconds or seconds == float("inf"):
         return "?"
     seconds = int(round(seconds))
@@ -77,7 +78,7 @@ class Progress:
         shown = f"{rate:,.0f}/s" if rate >= 10 else f"{rate:.2g}/s"
         return (
             f"{self.prefix}[{bar}] {now:,}/{whole:,} {self.label} ({100 * fraction:.0f}%), {shown}, "
-            f"{_duration(elapsed)} elapsed, {_duration(left)} left"
+            f"{format_duration(elapsed)} elapsed, {format_duration(left)} left"
         )
 
     def update(self, n: int) -> None:
@@ -173,9 +174,9 @@ class Reporter:
                 self.bar.close()
             elif took >= SHORT_STAGE:
                 done = min(self.bar.done, self.bar.total)
-                self._write(f"{self.name}: {self.stage}: {done:,} {self.bar.label} done in {_duration(took)}\n")
+                self._write(f"{self.name}: {self.stage}: {done:,} {self.bar.label} done in {format_duration(took)}\n")
         elif not self.tty and took >= SHORT_STAGE:
-            self._write(f"{self.name}: {self.stage}: done in {_duration(took)}\n")
+            self._write(f"{self.name}: {self.stage}: done in {format_duration(took)}\n")
         self.stage, self.bar = None, None
 
     def finish(self) -> None:

@@ -24,6 +24,7 @@ from bikerider.commands.benchmark import load_parameters
 from bikerider.commands.sweep_options import angle_name, cell, degree_names, in_degrees, parse_vary
 from bikerider.errors import InputError
 from bikerider.io.atomic import atomic_write_text
+from bikerider.progress import format_duration
 
 MAX_ROWS = 1_000_000
 """Designs a run without --store may print as rows."""
@@ -262,7 +263,7 @@ def run_design(args: argparse.Namespace) -> int:
         stages.note(f"wrote {args.out}")
     else:
         print(text, end="")
-    stages.note(f"sweep: done in {_duration(time.monotonic() - stages.started)} (the whole command)")
+    stages.note(f"sweep: done in {format_duration(time.monotonic() - stages.started)} (the whole command)")
     return 0
 
 
@@ -318,11 +319,6 @@ class Stages:
                 f"all {total} chunks stored in {folder}: rerun the same command for the summary (nothing is recomputed)"
             )
         print(f"\nbikerider sweep: interrupted; {text}", file=sys.stderr, flush=True)
-
-
-def _duration(seconds: float) -> str:
-    minutes, secs = divmod(int(round(seconds)), 60)
-    return f"{minutes}:{secs:02d}" if minutes else f"{seconds:.1f} s"
 
 
 def _closest_dict(closest, degrees: frozenset[str] = frozenset()) -> dict | None:

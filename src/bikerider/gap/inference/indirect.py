@@ -20,7 +20,7 @@ records in one batched computation:
   record, as in :func:`bikerider.gap.inference.timedomain.initial_states`;
 * the simulated signals from that state, fitted by batched least squares of the same model (two-mode
   or plain, as the record's own fit) started from the record's own fit (variable projection with
-  Levenberg-Marquardt steps; ``tests/test_gap_indirect.py`` holds it to SciPy's least squares one
+  Levenberg-Marquardt steps; ``tests/gap/inference/test_gap_indirect.py`` holds it to SciPy's least squares one
   record at a time); signals combined with the weights of the record's own fit.
 
 :func:`extract` is the last step alone, for responses simulated otherwise (the nonlinear friction

@@ -25,7 +25,7 @@ the change of the bias by Gauss-Newton steps (the fit's Jacobian held; a step is
 :data:`BIAS_TOLERANCE` of the data uncertainty (RMS over the records fitted), at most
 :data:`MAX_BIAS_ITERATIONS` evaluations.  The fit's residuals, chi-square and held-out predictions are
 those of the fitted model's own bias; only the bias's own change with the parameters is left out of
-the search direction (``tests/test_gap_indirect.py`` compares the values with a full
+the search direction (``tests/gap/inference/test_gap_indirect.py`` compares the values with a full
 indirect-inference least squares).
 
 Fits.  A set of effects is fitted by bounded nonlinear least squares

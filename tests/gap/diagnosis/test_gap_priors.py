@@ -18,7 +18,7 @@ from bikerider.gap.inference.problem import EffectFit
 from bikerider.io.gap_data import read_eigenvalues
 from bikerider.io.gap_model import load_model
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[3]
 
 
 # -- priors ------------------------------------------------------------------------------------------

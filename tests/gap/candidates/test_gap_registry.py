@@ -13,7 +13,7 @@ from pathlib import Path
 
 from bikerider.gap.candidates.effects import EFFECT_NAMES
 
-SRC = Path(__file__).resolve().parents[1] / "src" / "bikerider"
+SRC = Path(__file__).resolve().parents[3] / "src" / "bikerider"
 REGISTRY = "gap/candidates/effects.py"
 STILL_TYPED = {
     "gap/candidates/effect_model.py": 14,  # STRUCTURAL_KEYS and the model's switches

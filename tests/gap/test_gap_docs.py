@@ -13,7 +13,7 @@ import pytest
 import bikerider
 from bikerider.cli import main
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 DOC = ROOT / "docs" / "gap.md"
 DATA = Path(bikerider.__file__).parent / "data"
 
@@ -26,7 +26,7 @@ def _section(title: str) -> str:
 @pytest.mark.slow
 def test_the_python_section_runs_as_written(tmp_path, monkeypatch):
     # Every block of the section, in order, in one namespace, from a folder of its own (the figure it
-    # saves goes there).  The SBW diagnosis is the one tests/test_gap_sbw.py checks (one cached run).
+    # saves goes there).  The SBW diagnosis is the one tests/gap/test_gap_sbw.py checks (one cached run).
     monkeypatch.chdir(tmp_path)
     code = "\n".join(re.findall(r"```python\n(.*?)```", _section("Python"), re.S))
     namespace: dict = {}
@@ -48,7 +48,7 @@ def test_the_documented_example_command_gives_the_documented_result(capsys, monk
     # the tool selects steer_damping at about 1.2 N m s/rad (the friction's linear equivalent), not
     # the steer_friction candidate, which needs records in two groups or more.  The command as the
     # page writes it, from the project's root; only the two effects that decide it are searched here
-    # (tests/test_gap_failures.py runs every candidate).
+    # (tests/gap/diagnosis/test_gap_failures.py runs every candidate).
     section = _section("Examples")
     assert "steer_damping` ranked first and **selected**, c_steer about 1.2 N m s/rad" in section
     assert "steer_friction` is not applicable" in section
@@ -66,7 +66,7 @@ def test_the_documented_example_command_gives_the_documented_result(capsys, monk
 def test_the_example_readme_states_what_its_command_gives():
     # src/bikerider/data/gap_examples/README.md runs the eigenvalue table alone: the best fit, c_steer about
     # 1.1 N m s/rad, above the usual viscous range, is selected and flagged
-    # (tests/test_gap_cli.py::test_eigenvalues_alone_select_the_friction_damping_and_flag_it).
+    # (tests/gap/test_gap_cli.py::test_eigenvalues_alone_select_the_friction_damping_and_flag_it).
     text = (DATA / "gap_examples" / "README.md").read_text()
     assert "selected and flagged" in text and "c_steer" in text and "steer friction" in text
     assert "selects nothing" not in text
