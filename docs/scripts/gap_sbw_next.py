@@ -1,7 +1,7 @@
 """What to measure next on the steer-by-wire bicycle (Pasma 2024): ``bikerider gap --next`` on the
 diagnosis of docs/gap_real_data.md (section 3); writes docs/gap_sbw_next.md and docs/gap_sbw_next.png.
 
-The plan takes about half a minute beyond the diagnosis; ``make docs`` runs this script.  Run from the
+The plan takes about 12 s of processor time beyond the diagnosis; ``make docs`` runs this script.  Run from the
 project root::
 
     .venv/bin/python docs/scripts/gap_sbw_next.py
