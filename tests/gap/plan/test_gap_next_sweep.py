@@ -20,10 +20,12 @@ from bikerider.gap.plan.sweeps import (
     line_amplitude,
     linearised_friction,
     lines_for,
+    noise_covariance,
     response,
     simulated_response,
     weave_shift,
 )
+from validation.multisine_check import STEP, check, multisine, periodic_start, simulate
 
 
 @pytest.fixture(scope="module")
@@ -211,8 +213,6 @@ def test_the_plans_stick_slip_runs_match_an_independent_simulation(riderless):
     # the multisine check's own Karnopp integrator (validation.multisine_check, 1 ms steps, state held) and
     # the plan's (batched) read the same response of a sticking steer; the smoothed friction the diagnosis
     # fits does not stick, and the plan counts the difference as its friction rival's own uncertainty
-    from validation.multisine_check import STEP, multisine, periodic_start, simulate
-
     A, b, outputs, sweep = _sweep_loop(riderless)
     friction = 0.15
     args = (A[None, None], b[None, None], friction, outputs[3], (outputs[2], outputs[1]), [sweep])
@@ -229,3 +229,29 @@ def test_the_plans_stick_slip_runs_match_an_independent_simulation(riderless):
     # friction changes the response by far more than the two integrators differ
     assert np.abs(linear - independent).max() > 5 * np.abs(stick - independent).max()
     assert np.abs(smooth - stick).max() > np.abs(stick - independent).max()
+
+
+def test_the_dft_noise_of_a_run_is_what_the_plan_says():
+    # a run's white sample noise read by the DFT at the multisine's lines: the plan's variance 2 sigma^2 / (N a^2)
+    # per real and imaginary part, lines independent (Monte Carlo over 2000 runs)
+    sweep = Sweep(4.0, "sil", "roll_rate", 0.5, 4.0, lines_for(1.1, 4.0))
+    fs, sigma = 100.0, 0.03
+    t = np.arange(round(fs * sweep.run_time)) / fs
+    _, a, phases = multisine(sweep.lines, sweep.torque, sweep.run_time, t)
+    noise = np.random.default_rng(7).standard_normal((2000, t.size)) * sigma
+    H = (2 / t.size) * (noise @ np.exp(-1j * sweep.omegas[None, :] * t[:, None])) / (a * np.exp(1j * phases))
+    parts = np.concatenate([H.real, H.imag], axis=1)
+    planned = noise_covariance(sweep, sigma, fs)
+    assert np.diag(np.cov(parts.T)) == pytest.approx(np.diag(planned), rel=0.1)
+    off = np.cov(parts.T) - np.diag(np.diag(np.cov(parts.T)))
+    assert np.abs(off).max() < 0.15 * planned[0, 0]
+
+
+def test_a_linear_truth_achieves_the_planned_separation(damping_or_inertia):
+    # the multisine check (validation.multisine_check) runs the plan's first multisines in time with each rival
+    # as the truth: a linear rival's runs read its predicted response, and the separation achieved is the planned
+    _, plan = damping_or_inertia
+    for run in check(plan, items=2):
+        assert run.bias < 1e-2 * len(plan.sweeps[0].lines), (run.sweep, run.truth, run.bias)
+        for other, d in run.d_planned.items():
+            assert run.d_achieved[other] == pytest.approx(d, rel=0.02, abs=0.05)
