@@ -5,7 +5,7 @@ Cases are the hidden truths of :mod:`validation.cases` measured by a narrow prot
 candidates tie.  For every case whose first-ranked candidate is tied with another and the hidden
 effect is among them:
 
-* the plan (:class:`bikerider.gap.plan.ranking.NextExperiment`, the tied candidates as rivals,
+* the plan (:func:`bikerider.gap.plan.ranking.plan_next`, the tied candidates as rivals,
   :data:`FOLLOW_UP` decays; multisines are left out, since the diagnosis that judges the follow-up reads
   no frequency responses) recommends one experiment, a speed and a control law;
 * *planned*: :data:`FOLLOW_UP` new runs of that experiment, simulated by the independent truth
@@ -32,7 +32,7 @@ import numpy as np
 from bikerider.gap.candidates.nominal import GapModelInput
 from bikerider.gap.diagnosis.result import diagnose
 from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
-from bikerider.gap.plan.ranking import NextExperiment
+from bikerider.gap.plan.ranking import plan_next
 from validation.cases import TRUTHS, Protocol, Session, TruthSimulator, measure
 
 LOG = logging.getLogger(__name__)
@@ -101,7 +101,7 @@ def run_next_case(model: GapModelInput, truth_name: str, seed: int, follow_up: i
         case.seconds = time.perf_counter() - start
         return case
     # decays only: the follow-up is diagnosed again, and the diagnosis reads no frequency responses
-    plan = NextExperiment(diagnosis, rivals=rivals, repeats=follow_up, sweeps=False)
+    plan = plan_next(diagnosis, rivals=rivals, repeats=follow_up, sweeps=False)
     best = plan.plan[0]
     e = best["experiment"]
     case.planned, case.planned_probability = best["text"], best["resolution_probability"]

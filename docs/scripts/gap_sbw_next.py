@@ -1,7 +1,7 @@
 """What to measure next on the steer-by-wire bicycle (Pasma 2024): ``bikerider gap --next`` on the
 diagnosis of docs/gap_real_data.md (section 3); writes docs/gap_sbw_next.md and docs/gap_sbw_next.png.
 
-The plan takes about half a minute beyond the diagnosis; ``make docs`` runs this script.  Run from the
+The plan takes about 12 s of processor time beyond the diagnosis; ``make docs`` runs this script.  Run from the
 project root::
 
     .venv/bin/python docs/scripts/gap_sbw_next.py
@@ -83,12 +83,14 @@ def _sbw_next(diagnosis):
         lines += [
             f"Steer-torque multisines do it more surely ({top['text']}: {top['resolution_probability']:.2f}, "
             f"{top['decays_for_95']} run{'' if top['decays_for_95'] == 1 else 's'} for 95 %). At a peak of {out['sweeps']['torque']:g} N m, the fitted Coulomb "
-            f"friction ({coulomb:.2f} N m) takes a large share of the drive: its describing function gives the steer a",
-            "damping that falls as the steer moves faster, which no viscous rival has, and the responses part by more",
-            "than a run's noise: the sensor's, the speed's scatter, the data's run-to-run variation of the weave carried",
-            f"to the response, and the share a linear model misses of a real run ({rho:.2f} per line, sqrt(1 - r^2) of the",
-            "records' fits). They are judged by this noise model alone: the diagnosis reads no frequency responses, the",
-            "blind check does not cover them, and a steer motor's torque bandwidth is not modelled.",
+            f"friction ({coulomb:.2f} N m) takes a large share of the drive: the steer's runs, simulated in time with the",
+            "fitted friction (and again with the steer sticking, whose difference the plan counts as the friction's own",
+            "uncertainty), respond as no viscous rival does, and the responses part by more than a run's noise: the",
+            "sensor's, the speed's scatter, the data's run-to-run variation of the weave carried to the response, and",
+            f"the share a linear model misses of a real run ({rho:.2f} per line, sqrt(1 - r^2) of the records' fits).",
+            "`validation/multisine_check.py` simulates these runs by its own stick-slip integrator: they achieve the",
+            "planned separation (docs/gap.md). The diagnosis reads no frequency responses yet and the blind check does",
+            "not cover them; the torque must be what the motor delivers (its bandwidth is not modelled).",
             "",
         ]
     lines += [
@@ -96,7 +98,7 @@ def _sbw_next(diagnosis):
         f"records' own fits leave (roll rate {noise['roll_rate']['value']:.2g} rad/s, roll angle "
         f"{noise['roll_angle']['value']:.2g} rad, steer angle {noise['steer_angle']['value']:.2g} rad; the steer rate",
         "is not logged and its noise is assumed), and each signal's run-to-run scatter from its own fits of the",
-        "records at the nearest speed. The roll angle is the IMU's fused estimate: it scatters from sample to",
+        "records per speed of the data (linear between those speeds). The roll angle is the IMU's fused estimate: it scatters from sample to",
         "sample about thirty times less than its fits' residual, and its errors are not independent from sample",
         "to sample as a fit's standard errors assume, so where it ranks first the roll-rate and steer-angle",
         "rows are the safer choice.",
@@ -104,10 +106,11 @@ def _sbw_next(diagnosis):
         "![The rivals' predictions diverging over speed](gap_sbw_next.png)",
         "",
         "The figure (`next.png` of the command's report) draws the three candidates' predictions for the best",
-        "decay over speed, with bands of one standard deviation of ten decays' mean, the data as they were",
-        "taken, and the resolution probability against speed per law; its second row, the best multisine's",
-        "frequency response per candidate (magnitude and phase, bands of ten runs' mean) and the multisines'",
-        "resolution probability against speed.",
+        "decay over speed, with bands of one standard deviation of ten decays' mean, the data as taken (each",
+        "record's weave eigenvalue with its standard error), the planned speeds, and the resolution probability",
+        "against speed per law; its second row, the best multisine's frequency response per candidate (magnitude",
+        "and phase, bands of ten runs' mean) and the multisines' separation d of one run against speed (log",
+        "scale, with the d one run needs for 95 %).",
         "",
     ]
     return lines, plan, out

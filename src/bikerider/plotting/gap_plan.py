@@ -2,10 +2,18 @@
 
 from __future__ import annotations
 
-import numpy as np
-from matplotlib.ticker import NullFormatter
+import math
 
+import numpy as np
+from matplotlib.ticker import NullFormatter, ScalarFormatter
+from scipy.optimize import brentq
+from scipy.special import ndtri
+
+from bikerider.gap.plan.ranking import ODDS
 from bikerider.plotting.common import pyplot
+
+PLANNED_SHOWN = 5
+"""The first decays of the plan whose speeds the figure marks (those of the best one's law, signal and push)."""
 
 
 def plot_next(plan, result: dict | None = None):
@@ -36,12 +44,34 @@ def plot_next(plan, result: dict | None = None):
     e = plan.problem.eigen
     law_rows = [i for i in range(len(e)) if e.law[i] == best.law and e.mode[i] == "weave"]
     if law_rows:
+        # the data as taken: each record's (or row's) weave eigenvalue with its standard error
         shown = plan.diagnosis.shown_values()
-        taken = ", as the data were taken" if plan.records else ""
-        axes[0].plot(e.speed[law_rows], shown.real[law_rows], "k.", ms=4, label=f"measured ({best.law}{taken})")
-        axes[1].plot(e.speed[law_rows], shown.imag[law_rows], "k.", ms=4)
+        taken = ", each record's fit" if plan.records else ""
+        for part, (ax, sigma) in enumerate(zip(axes[:2], (e.real_sigma, e.imag_sigma))):
+            y = shown.real[law_rows] if part == 0 else shown.imag[law_rows]
+            ax.errorbar(
+                e.speed[law_rows],
+                y,
+                yerr=sigma[law_rows],
+                fmt="k.",
+                ms=4,
+                elinewidth=0.8,
+                capsize=1.5,
+                label=f"measured ({best.law}{taken}, 1 sd)" if part == 0 else None,
+            )
+    # the planned decays: the best experiments of this law, signal and push
+    planned = sorted(
+        {
+            item["experiment"].speed
+            for item in decays[:PLANNED_SHOWN]
+            if (item["experiment"].law, item["experiment"].signal, item["experiment"].push)
+            == (best.law, best.signal, best.push)
+        }
+    )
     for ax in axes[:2]:
-        ax.axvline(best.speed, color="0.3", ls=":", lw=1)
+        for k, speed in enumerate(planned):
+            ax.axvline(speed, color="0.3", ls=":", lw=1.2 if speed == best.speed else 0.8)
+        ax.plot([], [], color="0.3", ls=":", lw=1, label="planned speed" + "s" * (len(planned) > 1))
         ax.set_xlabel("speed [m/s]")
         ax.grid(alpha=0.3)
     what = best.describe().replace("decays at", "").split(",", 1)
@@ -49,7 +79,7 @@ def plot_next(plan, result: dict | None = None):
     axes[1].set_ylabel("weave imaginary part [rad/s]")
     axes[0].set_title(f"predicted under {best.law}" + (f",{what[1]}" if len(what) > 1 else ""), fontsize=9)
     axes[1].set_title(f"bands: 1 sd of the mean of {n} decays", fontsize=9)
-    axes[0].legend(fontsize=8)
+    axes[0].legend(fontsize=7)
     # resolution probability against speed, per law (the best signal and push at each speed)
     _probability_panel(axes[2], decays, plan, colours, "decays")
     if sweeps:
@@ -127,4 +157,41 @@ def _sweep_row(axes, plan, sweeps, colours):
     axes[0].set_title(f"best multisine: {best.torque:g} N m at {best.speed:.2f} m/s under {best.law}", fontsize=9)
     axes[1].set_title(f"bands: 1 sd of the mean of {plan.repeats} runs", fontsize=9)
     axes[0].legend(fontsize=8)
-    _probability_panel(axes[2], sweeps, plan, colours, "multisine runs")
+    _separation_panel(axes[2], sweeps, plan, colours)
+
+
+def _separation_panel(ax, items, plan, colours):
+    """The multisines' separation ``d`` of a single run against speed, per law (the best multisine at each
+    speed, smallest over the pairs of rivals), on a log scale, with the ``d`` one run needs for a 95 %
+    resolution: where a probability would sit at 1.00 everywhere, how far beyond it each speed and law is."""
+    d_one = plan.separation(1.0)  # (pairs, 2, points)
+    worst = d_one.min(axis=(0, 1))
+    index = {id(x): m for m, x in enumerate(plan.experiments)}
+    best = {}
+    for item in items:
+        x = item["experiment"]
+        key = (x.law, x.speed)
+        best[key] = max(best.get(key, 0.0), float(worst[index[id(x)]]))
+    for k, law in enumerate(plan.laws):
+        pts = sorted((s, d) for (name, s), d in best.items() if name == law)
+        if pts:
+            s, d = zip(*pts)
+            ax.plot(s, d, "-o", ms=3, color=colours[k % len(colours)], label=law)
+    ax.axhline(D_95, color="0.4", ls="--", lw=1, label=f"d for 95 % from one run ({D_95:.1f})")
+    ax.set_yscale("log")
+    ax.yaxis.set_major_formatter(ScalarFormatter())
+    ax.yaxis.set_minor_formatter(ScalarFormatter())
+    ax.set_xlabel("speed [m/s]")
+    ax.set_ylabel("separation d of one multisine run")
+    ax.set_title("multisines: one run's separation, smallest over the pairs", fontsize=9)
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=7)
+
+
+def _d_for(probability: float) -> float:
+    """The separation whose resolution probability ``Phi(d / 2 - ln(ODDS) / d)`` is ``probability``."""
+    z = float(ndtri(probability))
+    return brentq(lambda d: d / 2 - math.log(ODDS) / d - z, 1e-3, 1e3)
+
+
+D_95 = _d_for(0.95)

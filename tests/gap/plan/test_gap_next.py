@@ -15,7 +15,7 @@ from bikerider.gap.candidates.effect_model import EffectModel
 from bikerider.gap.diagnosis.result import diagnose
 from bikerider.gap.measured.records import fit_records
 from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
-from bikerider.gap.plan.ranking import ODDS, NextExperiment, fit_residual, resolution_probability, signal_noise
+from bikerider.gap.plan.ranking import ODDS, fit_residual, plan_next, resolution_probability, signal_noise
 from bikerider.io.gap_model import load_model
 
 
@@ -66,7 +66,7 @@ def table_plan(riderless):
     speeds = [6.0] * 9
     data = _table(riderless, TRUTH, speeds, ["a"] * 3 + ["b"] * 3 + ["c"] * 3)
     diagnosis = diagnose(riderless, data, CanonicalData.empty(), effects=tuple(RIVALS))
-    return diagnosis, NextExperiment(diagnosis, rivals=RIVALS, speeds=np.linspace(3.0, 9.0, 13), repeats=5)
+    return diagnosis, plan_next(diagnosis, rivals=RIVALS, speeds=np.linspace(3.0, 9.0, 13), repeats=5)
 
 
 def test_the_probability_of_a_resolution():
@@ -158,9 +158,9 @@ def test_bad_rivals_are_a_clear_error(table_plan):
 
     diagnosis, _ = table_plan
     with pytest.raises(InputError, match="rival = 'wobble'"):
-        NextExperiment(diagnosis, rivals=["steer_damping", "wobble"])
+        plan_next(diagnosis, rivals=["steer_damping", "wobble"])
     with pytest.raises(InputError, match="repeats"):
-        NextExperiment(diagnosis, rivals=RIVALS, repeats=0)
+        plan_next(diagnosis, rivals=RIVALS, repeats=0)
 
 
 def _record(model, speed, group, effects, seed, duration=1.8):
@@ -176,7 +176,7 @@ def test_records_are_planned_by_indirect_inference(riderless):
     d = diagnose(
         riderless, EigenvalueData.empty(), CanonicalData.empty(), effects=tuple(RIVALS), records=fit_records(records)
     )
-    plan = NextExperiment(d, rivals=RIVALS, speeds=[2.0, 3.0, 4.0, 5.0, 6.0], repeats=10)
+    plan = plan_next(d, rivals=RIVALS, speeds=[2.0, 3.0, 4.0, 5.0, 6.0], repeats=10)
     out = plan.as_dict()
     assert out["noise"]["signals"]["roll_rate"]["value"] == pytest.approx(0.01, rel=0.2)
     assert "the data's records" in out["noise"]["signals"]["steer_angle"]["source"]

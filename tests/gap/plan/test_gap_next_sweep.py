@@ -14,8 +14,18 @@ from bikerider.cli import main
 from bikerider.gap.candidates.effect_model import EffectModel
 from bikerider.gap.diagnosis.result import diagnose
 from bikerider.gap.measured.tables import CanonicalData
-from bikerider.gap.plan.ranking import NextExperiment
-from bikerider.gap.plan.sweeps import line_amplitude, linearised_friction, lines_for, response, weave_shift
+from bikerider.gap.plan.ranking import plan_next
+from bikerider.gap.plan.sweeps import (
+    Sweep,
+    line_amplitude,
+    linearised_friction,
+    lines_for,
+    noise_covariance,
+    response,
+    simulated_response,
+    weave_shift,
+)
+from validation.multisine_check import STEP, check, multisine, periodic_start, simulate
 
 
 @pytest.fixture(scope="module")
@@ -79,7 +89,7 @@ def damping_or_inertia(riderless):
     data = _table(riderless, {"steer_damping": {"c_steer": 0.3}}, [6.0] * 9, ["a"] * 3 + ["b"] * 3 + ["c"] * 3)
     rivals = ["steer_damping", "steer_inertia"]
     diagnosis = diagnose(riderless, data, CanonicalData.empty(), effects=tuple(rivals))
-    return riderless, NextExperiment(diagnosis, rivals=rivals, speeds=[5.5, 6.0], repeats=5)
+    return riderless, plan_next(diagnosis, rivals=rivals, speeds=[5.5, 6.0], repeats=5)
 
 
 def test_each_rival_predicts_its_own_frequency_response(damping_or_inertia):
@@ -98,7 +108,7 @@ def test_a_multisine_sees_what_the_decays_do_not(damping_or_inertia):
     # speed.  A real run's response departs from any linear model line by line (default without records:
     # 10 % of it), which bounds what a multisine can tell: the best of them still beats the best decay.
     _, plan = damping_or_inertia
-    ideal = NextExperiment(plan.diagnosis, rivals=["steer_damping", "steer_inertia"], speeds=[5.5, 6.0], distortion=0)
+    ideal = plan_next(plan.diagnosis, rivals=["steer_damping", "steer_inertia"], speeds=[5.5, 6.0], distortion=0)
     d = ideal.separation(ideal.repeats)[0].min(axis=0)  # (experiments,)
     n = len(ideal.points)
     for m, sweep in enumerate(ideal.sweeps):
@@ -117,15 +127,15 @@ def test_a_multisine_sees_what_the_decays_do_not(damping_or_inertia):
     # the sensor noise falls with the torque squared; the bicycle's own run-to-run variation does not
     # (the line-by-line distortion, a share of the response, does not either: left out here)
     rivals = ["steer_damping", "steer_inertia"]
-    quiet = NextExperiment(plan.diagnosis, rivals=rivals, speeds=[5.5, 6.0], distortion=0)
-    louder = NextExperiment(plan.diagnosis, rivals=rivals, speeds=[5.5, 6.0], torque=2.0, distortion=0)
+    quiet = plan_next(plan.diagnosis, rivals=rivals, speeds=[5.5, 6.0], distortion=0)
+    louder = plan_next(plan.diagnosis, rivals=rivals, speeds=[5.5, 6.0], torque=2.0, distortion=0)
     sensor, louder_sensor = quiet.sweep_data - quiet.sweep_run, louder.sweep_data - louder.sweep_run
     assert np.all(louder_sensor <= sensor / 15)
     assert louder.sweep_run == pytest.approx(quiet.sweep_run, rel=1e-9, abs=1e-30)
     assert np.all(np.trace(quiet.sweep_run, axis1=1, axis2=2) > 0)
     assert np.all(plan.sweep_data >= quiet.sweep_data)
     # without multisines the plan is the decays' alone
-    decays_only = NextExperiment(plan.diagnosis, rivals=["steer_damping", "steer_inertia"], speeds=[5.5], sweeps=False)
+    decays_only = plan_next(plan.diagnosis, rivals=["steer_damping", "steer_inertia"], speeds=[5.5], sweeps=False)
     assert not decays_only.sweeps and all(item["experiment"].kind == "decay" for item in decays_only.plan)
 
 
@@ -134,11 +144,11 @@ def test_bad_sweep_values_are_a_clear_error(damping_or_inertia):
 
     _, plan = damping_or_inertia
     with pytest.raises(InputError, match="torque = -1"):
-        NextExperiment(plan.diagnosis, rivals=["steer_damping", "steer_inertia"], torque=-1.0)
+        plan_next(plan.diagnosis, rivals=["steer_damping", "steer_inertia"], torque=-1.0)
     with pytest.raises(InputError, match="run_time = 1"):
-        NextExperiment(plan.diagnosis, rivals=["steer_damping", "steer_inertia"], run_time=1.0)
+        plan_next(plan.diagnosis, rivals=["steer_damping", "steer_inertia"], run_time=1.0)
     with pytest.raises(InputError, match="distortion = 1.5"):
-        NextExperiment(plan.diagnosis, rivals=["steer_damping", "steer_inertia"], distortion=1.5)
+        plan_next(plan.diagnosis, rivals=["steer_damping", "steer_inertia"], distortion=1.5)
 
 
 @pytest.mark.parametrize(
@@ -182,3 +192,66 @@ def test_the_weave_moving_from_run_to_run_moves_the_response_by_its_slopes():
         expected = np.concatenate([moved.real, moved.imag]) / (2 * h)
         assert J[:, k] == pytest.approx(expected, rel=1e-6, abs=1e-9)
     assert weave_shift(np.diag([-1.0, -2.0]), np.ones(2), 0, omegas) is None
+
+
+def _sweep_loop(riderless, speed=5.0):
+    ss = EffectModel(nominal(riderless), riderless.geometry, {}).state_space([speed])
+    A, b = ss.closed_loop(SIL(speed))[0], ss.B[0, :, 1]
+    ev = np.linalg.eigvals(A)
+    lines = lines_for(float(ev.imag.max()) / (2 * math.pi), 4.0)
+    return A, b, ss.output_states, Sweep(speed, "sil", "roll_rate", 0.5, 4.0, lines)
+
+
+def test_a_run_simulated_in_time_reads_the_transfer_function_without_friction(riderless):
+    A, b, outputs, sweep = _sweep_loop(riderless)
+    H = simulated_response(A[None, None], b[None, None], 0.0, outputs[3], (outputs[2], outputs[1]), [sweep])
+    assert H[0, 0, 0] == pytest.approx(response(A, b, outputs[2], sweep.omegas), rel=2e-3)
+    assert H[0, 0, 1] == pytest.approx(response(A, b, outputs[1], sweep.omegas), rel=2e-3)
+
+
+def test_the_plans_stick_slip_runs_match_an_independent_simulation(riderless):
+    # the multisine check's own Karnopp integrator (validation.multisine_check, 1 ms steps, state held) and
+    # the plan's (batched) read the same response of a sticking steer; the smoothed friction the diagnosis
+    # fits does not stick, and the plan counts the difference as its friction rival's own uncertainty
+    A, b, outputs, sweep = _sweep_loop(riderless)
+    friction = 0.15
+    args = (A[None, None], b[None, None], friction, outputs[3], (outputs[2], outputs[1]), [sweep])
+    stick = simulated_response(*args, stick=True)[0, 0, 0]
+    smooth = simulated_response(*args)[0, 0, 0]
+    t = np.arange(round(2 * sweep.run_time / STEP)) * STEP
+    torque, a, phases = multisine(sweep.lines, sweep.torque, sweep.run_time, t)
+    start = periodic_start(A, b, sweep.omegas, a, phases)
+    y = simulate(A, b, outputs[3], friction, torque, start)[t.size // 2 :, outputs[2]]
+    basis = np.exp(-1j * sweep.omegas[None, :] * (t[t.size // 2 :] - t[t.size // 2])[:, None])
+    independent = (y @ basis) / (torque[t.size // 2 :] @ basis)
+    linear = response(A, b, outputs[2], sweep.omegas)
+    assert np.abs(stick - independent).max() < 0.05 * np.abs(independent).max()
+    # friction changes the response by far more than the two integrators differ
+    assert np.abs(linear - independent).max() > 5 * np.abs(stick - independent).max()
+    assert np.abs(smooth - stick).max() > np.abs(stick - independent).max()
+
+
+def test_the_dft_noise_of_a_run_is_what_the_plan_says():
+    # a run's white sample noise read by the DFT at the multisine's lines: the plan's variance 2 sigma^2 / (N a^2)
+    # per real and imaginary part, lines independent (Monte Carlo over 2000 runs)
+    sweep = Sweep(4.0, "sil", "roll_rate", 0.5, 4.0, lines_for(1.1, 4.0))
+    fs, sigma = 100.0, 0.03
+    t = np.arange(round(fs * sweep.run_time)) / fs
+    _, a, phases = multisine(sweep.lines, sweep.torque, sweep.run_time, t)
+    noise = np.random.default_rng(7).standard_normal((2000, t.size)) * sigma
+    H = (2 / t.size) * (noise @ np.exp(-1j * sweep.omegas[None, :] * t[:, None])) / (a * np.exp(1j * phases))
+    parts = np.concatenate([H.real, H.imag], axis=1)
+    planned = noise_covariance(sweep, sigma, fs)
+    assert np.diag(np.cov(parts.T)) == pytest.approx(np.diag(planned), rel=0.1)
+    off = np.cov(parts.T) - np.diag(np.diag(np.cov(parts.T)))
+    assert np.abs(off).max() < 0.15 * planned[0, 0]
+
+
+def test_a_linear_truth_achieves_the_planned_separation(damping_or_inertia):
+    # the multisine check (validation.multisine_check) runs the plan's first multisines in time with each rival
+    # as the truth: a linear rival's runs read its predicted response, and the separation achieved is the planned
+    _, plan = damping_or_inertia
+    for run in check(plan, items=2):
+        assert run.bias < 1e-2 * len(plan.sweeps[0].lines), (run.sweep, run.truth, run.bias)
+        for other, d in run.d_planned.items():
+            assert run.d_achieved[other] == pytest.approx(d, rel=0.02, abs=0.05)

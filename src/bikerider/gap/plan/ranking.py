@@ -62,37 +62,55 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import dataclass
+from collections.abc import Sequence
+from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from bikerider.engine import DifferencedStage
-from bikerider.errors import FitError, InputError
+from bikerider.errors import InputError
 from bikerider.gap.blas_threads import single_blas_thread
 from bikerider.gap.candidates.effect_model import EffectModel
-from bikerider.gap.candidates.effects import TIME_DOMAIN_EFFECTS
-from bikerider.gap.inference.indirect import LAMBDA_BOUNDS, RecordSimulator, comparable, levenberg_marquardt
+from bikerider.gap.inference.indirect import RecordSimulator, comparable
 from bikerider.gap.inference.predict import Predictor
-from bikerider.gap.inference.problem import EffectFit
 from bikerider.gap.inference.timedomain import Layout, systems
 from bikerider.gap.measured.control import NO_CONTROL, ControlLaw
-from bikerider.gap.measured.extraction import (
-    MIN_CYCLES,
-    MIN_R2,
-    _accept_two_mode,
-    _two_mode,
-    _two_mode_jacobian,
-    weave_eigenvalue,
-)
-from bikerider.gap.measured.records import SIGNALS, Record, RecordFit, eigenvalues_of
+from bikerider.gap.measured.records import SIGNALS, RecordFit, eigenvalues_of
 from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
 from bikerider.gap.parallel import map_forked, workers
+from bikerider.gap.plan.decays import Experiment, fit_templates, template_records
+from bikerider.gap.plan.discrimination import (  # noqa: F401  (ODDS, MAX_REPEATS, resolution_probability: the plan's face)
+    DEFAULT_REPEATS,
+    MAX_REPEATS,
+    ODDS,
+    item_dict,
+    rank,
+    resolution_probability,
+    secant_points,
+    secant_slopes,
+    secants,
+    separation,
+)
+from bikerider.gap.plan.noise import (  # noqa: F401  (fit_residual, signal_noise, ...: the plan's face)
+    ASSUMED_NOISE,
+    MAX_NOISE,
+    fit_residual,
+    over_speed,
+    run_scatter,
+    sample_noise,
+    signal_noise,
+    signal_scatter,
+    speed_groups,
+)
+from bikerider.gap.plan.rivals import MAX_RIVALS, NoExperiment, Rival, choose_rivals  # noqa: F401
 from bikerider.gap.plan.sweeps import (
     DEFAULT_RUN_TIME,
     DEFAULT_SAMPLE_RATE,
     DEFAULT_TORQUE,
     FRF_SIGNALS,
     MAX_TORQUE,
+    RECORD,
     RUN_TIME_RANGE,
     Sweep,
     line_amplitude,
@@ -101,25 +119,17 @@ from bikerider.gap.plan.sweeps import (
     noise_covariance,
     response,
     run_stand_in,
+    simulated_response,
     split,
     weave_shift,
 )
 
-
-class NoExperiment(InputError):
-    """No experiment can be planned from this diagnosis (no rivals to tell apart, no speed where a decay
-    shows a weave, every experiment left out); :attr:`why` says why in a sentence.  The command prints
-    the diagnosis and the reason; a bad option stays an :class:`InputError`."""
-
-    def __init__(self, name: str, value: object, expected: str, why: str | None = None):
-        super().__init__(name, value, expected)
-        self.why = why or f"{name} = {value}: expected {expected}"
-
+if TYPE_CHECKING:  # annotations only: the diagnosis sits above the plan's floor
+    from bikerider.gap.diagnosis.result import Diagnosis
+    from bikerider.gap.inference.problem import GapProblem
 
 LOG = logging.getLogger(__name__)
 
-MAX_RIVALS = 3
-"""Most rivals chosen by default."""
 GAIN_FACTORS = (0.5, 1.5)
 """Gains of each control law of the data tried scaled by these factors (a different gain of the
 same controller)."""
@@ -129,152 +139,140 @@ N_SPEEDS = 12
 """Speeds of the default grid."""
 SPEED_SPAN = (0.6, 1.25)
 """The default grid spans these factors times the slowest and the fastest speed of the data."""
-DEFAULT_REPEATS = 10
-MAX_REPEATS = 100
-ODDS = 19.0
-"""Odds a resolution needs: 95 % posterior probability from even prior odds."""
-MAX_NOISE = 10.0
-"""Largest sample noise of a signal (rad, rad/s): noise beyond ten radians (per second) would drown
-any lateral motion of a bicycle; a larger value is a unit slip (and overflows the planned covariances)."""
-ASSUMED_NOISE = {
-    "roll_rate": 0.01,
-    "roll_angle": 0.002,
-    "steer_angle": 2 * math.pi / 8192 / math.sqrt(12),
-    "steer_rate": 0.02,
-}
-"""Sample noise assumed for a signal the data's records do not hold (rad, rad/s): a MEMS gyro, an IMU's
-angle, a 13-bit steer encoder's quantisation, its rate."""
 MIN_DECAY = 0.3
 """Smallest decay rate [1/s] the noise of a table's decays is scaled with (slower decays, and growing
 ones, are cut by the record's length rather than by their decay)."""
 ASSUMED_DISTORTION = 0.1
 """Share of a run's frequency response a linear model misses at each line (friction's harmonics, the
 treadmill's or rider's disturbances), assumed when the data hold no records to measure it."""
-MIN_REPLICATES = 3
-"""Fewest records at one speed whose fits of a signal give that signal's run-to-run scatter."""
-NOISE_SEED = 2024
-"""Seed of the noise added to templates (their fits' standard errors scale with it; the value does not)."""
 
 
-@dataclass(frozen=True)
-class Experiment:
-    """One kind of new decay.
+class _Models:
+    """What a plan and its steps build the rivals' systems from (the diagnosis, its problem, the laws and the
+    planned multisines)."""
 
-    Attributes
-    ----------
-    speed : float
-        [m/s]
-    law : str
-        Name of the control law acting (a key of :attr:`NextExperiment.laws`).
-    signal : str
-        The signal the eigenvalue is fitted to (``eigenvalue`` for tables: the data say none).
-    push : float
-        The push relative to the data's (records only).
-    """
+    def _configured(self, effects, X, values=None):
+        """The model's values, effect configuration and speed scale for fitted-value vectors ``X (P, p)`` of
+        ``effects`` (or the nominal model with benchmark values ``values``, a batch), and the batch size ``P``."""
+        p = self.problem
+        if values is None:
+            values, config, scale = p.configure(p.layout(tuple(effects)), np.atleast_2d(X))
+        else:
+            values = {**p.nominal, **{k: np.asarray(v, float).reshape(-1, 1) for k, v in values.items()}}
+            config, scale = {}, None
+        P = max([np.shape(v)[0] for v in values.values() if np.ndim(v) > 0] + [np.atleast_2d(X).shape[0]])
+        return values, config, scale, P
 
-    speed: float
-    law: str
-    signal: str = "eigenvalue"
-    push: float = 1.0
+    def _sample_rate(self, speed: float) -> float:
+        """The sampling rate [Hz] of the nearest-speed record (without records, :data:`DEFAULT_SAMPLE_RATE`)."""
+        if not self.records:
+            return DEFAULT_SAMPLE_RATE
+        d = self.diagnosis
+        used = [d.records[k].record for k in d.record_rows]
+        near = used[int(np.argmin([abs(r.speed - speed) for r in used]))]
+        return 1.0 / float(near.time[1] - near.time[0])
 
-    kind = "decay"
+    def _sweep_systems(self, effects, X, values=None, nonlinear=False, speeds=None):
+        """Closed loops ``A (P, s, n, n)``, steer-torque columns ``b (P, s, n)`` and output states of every
+        sweep for a rival's fitted-value vectors ``X (P, p)`` (or the nominal model with benchmark values
+        ``values``, a batch); friction linearised at each sweep's torque."""
 
-    def describe(self, repeats: int | None = None) -> str:
-        what = "decays" if repeats is None else (f"{repeats} decay" + ("s" if repeats != 1 else ""))
-        out = f"{what} at {self.speed:.2f} m/s under {self.law}"
-        if self.signal != "eigenvalue":
-            out += f", eigenvalue from the {self.signal.replace('_', ' ')}"
-        if self.push != 1.0:
-            out += f", pushes x{self.push:g} the data's"
-        return out
+        p = self.problem
+        sweeps = self.sweeps
+        speeds = np.array([s.speed for s in sweeps]) if speeds is None else np.asarray(speeds, float)
+        gains = np.array([self.laws[s.law](s.speed) for s in sweeps]).reshape(len(sweeps), 4)
+        measured = self._speed_measured()
+        if nonlinear:
+            runs = [
+                run_stand_in(Sweep(v, s.law, s.output, s.torque, s.run_time, s.lines), g, measured)
+                for v, s, g in zip(speeds, sweeps, gains)
+            ]
+            A, b, outputs, friction = systems(p.nominal, p.geometry, runs, Layout.of(tuple(effects)), np.atleast_2d(X))
+            omegas = np.array([s.omegas for s in sweeps])
+            amplitude = np.array([line_amplitude(s.lines, s.torque, s.run_time) for s in sweeps])
+            A = linearised_friction(A, b, friction[:, None], outputs[3], omegas[None], amplitude[None, :])
+            return A, b, outputs
+        values, config, scale, P = self._configured(effects, X, values)
+        if scale is None or not measured:
+            ss = EffectModel(values, p.geometry, config).state_space(speeds)
+            A, b, outputs = ss.closed_loop(gains), ss.B[..., :, 1], ss.output_states
+        else:  # a speed sensor's scale per vector: one model per vector
+
+            def row(x, i):
+                return np.asarray(x)[i] if np.ndim(x) > 0 and np.shape(x)[0] == P else x
+
+            parts = []
+            for i in range(P):
+                model = EffectModel(
+                    {k: row(v, i) for k, v in values.items()},
+                    p.geometry,
+                    {e: {k: row(v, i) for k, v in c.items()} for e, c in config.items()},
+                )
+                ss = model.state_space(float(np.ravel(scale)[i]) * speeds)
+                parts.append((ss.closed_loop(gains).reshape((len(sweeps),) + ss.A.shape[-2:]), ss.B[..., :, 1]))
+            A = np.array([a for a, _ in parts])
+            b = np.array([np.reshape(x, A.shape[1:-1]) for _, x in parts])
+            outputs = ss.output_states
+        n = A.shape[-1]
+        return np.broadcast_to(A, (P, len(sweeps), n, n)), np.broadcast_to(b, (P, len(sweeps), n)), outputs
+
+    def _speed_measured(self) -> bool:
+        """Whether the planned runs' speed is read by the sensor a ``speed_sensor`` rival rescales (as the data's)."""
+        if self.records:
+            d = self.diagnosis
+            return any(d.records[k].record.speed_measured for k in d.record_rows)
+        return bool(np.any(self.problem.eigen.speed_sensor))
 
 
-@dataclass
-class Rival:
-    """A candidate (or pair) to tell apart from the others, as fitted to all the data."""
-
-    effects: tuple[str, ...]
-    fit: EffectFit
-    misfit: float = 0.0
-    """Its held-out mean squared normalised residual above the noise floor, ``max(0, error^2 - 1)``: how far
-    beyond the uncertainties it misses data it was not fitted to."""
-
-    @property
-    def name(self) -> str:
-        return "+".join(self.effects)
-
-    @property
-    def nonlinear(self) -> bool:
-        return any(e in TIME_DOMAIN_EFFECTS for e in self.effects)
-
-
-@dataclass
-class NextExperiment:
-    """The ranked plan of new measurements for a diagnosis (see the module docstring).
-
-    Parameters
-    ----------
-    diagnosis : bikerider.gap.diagnosis.result.Diagnosis
-    rivals : sequence of str, optional
-        Candidates to tell apart (``"steer_damping"``, ``"parameters+steer_damping"``); default as the
-        module docstring says.
-    speeds : array_like, optional
-        Speeds to consider [m/s] (default :data:`N_SPEEDS` over :data:`SPEED_SPAN` of the data's).
-    repeats : int
-        Decays per experiment the plan is ranked for.
-    noise : dict, optional
-        Sample noise of signals (overrides what the data give and :data:`ASSUMED_NOISE`).
-    signals : sequence of str, optional
-        Signals to consider with records (default: every one of :data:`bikerider.gap.measured.records.SIGNALS`).
-    sweeps : bool
-        Also plan steer-torque frequency responses (:mod:`bikerider.gap.plan.sweeps`).
-    torque : float
-        Peak steer torque of a planned multisine [N m].
-    run_time : float
-        Recorded length of one multisine run [s].
-    distortion : float, optional
-        Share of a multisine run's response a linear model misses at each line (default: from the records'
-        fits, ``sqrt(1 - r^2)``, or :data:`ASSUMED_DISTORTION`); 0 is an ideal, linear test rig.
-    """
-
-    diagnosis: object
-    rivals: object = None
-    speeds: object = None
-    repeats: int = DEFAULT_REPEATS
-    noise: dict | None = None
-    signals: object = None
-    sweeps: object = True
-    torque: float = DEFAULT_TORQUE
-    run_time: float = DEFAULT_RUN_TIME
-    distortion: float | None = None
+class _Planner(_Models):
+    """The steps of a plan (module docstring), in order: the rivals (:func:`~bikerider.gap.plan.rivals.choose_rivals`),
+    the speeds and laws, the signals' noise (:func:`~bikerider.gap.plan.noise.sample_noise`), the decays (templates,
+    predictions, their noise), the multisines (:mod:`~bikerider.gap.plan.sweeps`); :func:`plan_next` freezes
+    what they give into a :class:`NextExperiment` and ranks it (:func:`~bikerider.gap.plan.discrimination.rank`)."""
 
     @single_blas_thread
-    def __post_init__(self):
-        d = self.diagnosis
+    def __init__(
+        self,
+        diagnosis,
+        rivals: Sequence[str] | None = None,
+        speeds=None,
+        repeats: int = DEFAULT_REPEATS,
+        noise: dict[str, float] | None = None,
+        signals: Sequence[str] | None = None,
+        sweeps: bool = True,
+        torque: float = DEFAULT_TORQUE,
+        run_time: float = DEFAULT_RUN_TIME,
+        distortion: float | None = None,
+    ):
+        d = self.diagnosis = diagnosis
         self.problem = d.problem
-        if not isinstance(self.repeats, int | np.integer) or not 1 <= self.repeats <= MAX_REPEATS:
-            raise InputError("repeats", self.repeats, f"a whole number of decays from 1 to {MAX_REPEATS}")
-        if not (isinstance(self.torque, int | float) and 0 < self.torque <= MAX_TORQUE):  # also NaN
-            raise InputError("torque", self.torque, f"a positive peak steer torque of at most {MAX_TORQUE:g} N m")
+        if not isinstance(repeats, int | np.integer) or not 1 <= repeats <= MAX_REPEATS:
+            raise InputError("repeats", repeats, f"a whole number of decays from 1 to {MAX_REPEATS}")
+        if not (isinstance(torque, int | float) and 0 < torque <= MAX_TORQUE):  # also NaN
+            raise InputError("torque", torque, f"a positive peak steer torque of at most {MAX_TORQUE:g} N m")
         lo, hi = RUN_TIME_RANGE
-        if not (isinstance(self.run_time, int | float) and lo <= self.run_time <= hi):
-            raise InputError("run_time", self.run_time, f"a recorded run length from {lo:g} to {hi:g} s")
-        if self.distortion is not None and not (isinstance(self.distortion, int | float) and 0 <= self.distortion < 1):
-            raise InputError("distortion", self.distortion, "a share of the response from 0 to below 1")
-        self.run_sweeps = bool(self.sweeps)
-        named = self.rivals is not None
-        self.rivals = self._rivals(self.rivals)
+        if not (isinstance(run_time, int | float) and lo <= run_time <= hi):
+            raise InputError("run_time", run_time, f"a recorded run length from {lo:g} to {hi:g} s")
+        if distortion is not None and not (isinstance(distortion, int | float) and 0 <= distortion < 1):
+            raise InputError("distortion", distortion, "a share of the response from 0 to below 1")
+        self.repeats, self.torque, self.run_time, self.distortion = int(repeats), torque, run_time, distortion
+        self.signals = tuple(signals) if signals else SIGNALS
+        self.run_sweeps = bool(sweeps)
+        self.named = bool(rivals)
+        self.rivals, self.all_pairs = choose_rivals(d, rivals)
         if len(self.rivals) < 2:
-            raise (InputError if named else NoExperiment)(
+            raise (InputError if rivals is not None else NoExperiment)(
                 "rivals",
                 [r.name for r in self.rivals],
                 "at least two candidates to tell apart (name them, or a diagnosis with two candidates that beat "
                 "the nominal model)",
             )
         self.records = bool(d.record_rows)
-        self.speeds = self._speeds(self.speeds)
+        self.speeds = self._speeds(speeds)
         self.laws = self._laws()
-        self.sample_noise, self.noise_source = self._signal_noise()
+        self.sample_noise, self.noise_source, self.signal_fits = sample_noise(d, noise)
+        self.templates: dict[Experiment, RecordFit] = {}
+        self.simulator: RecordSimulator | None = None
         self.points, self.left_out = self._experiments()
         if not self.points:
             raise NoExperiment("experiments", "none measurable", "speeds and laws at which a decay shows a weave")
@@ -282,48 +280,10 @@ class NextExperiment:
         self._drop_unpredicted()
         self.sweeps = self._plan_sweeps() if self.run_sweeps else []
         self._predict_sweeps()
-        self.experiments = list(self.points) + list(self.sweeps)
         if self.all_pairs:  # a tie (or rivals named): which of them
             self.pairs = [(i, j) for i in range(len(self.rivals)) for j in range(i + 1, len(self.rivals))]
         else:  # runners-up: whether the first stands against each
             self.pairs = [(0, j) for j in range(1, len(self.rivals))]
-        self.plan = self._rank()
-
-    # -- rivals --------------------------------------------------------------------------------------
-    def _rivals(self, named) -> list[Rival]:
-        d = self.diagnosis
-        self.all_pairs = True
-        self.named = bool(named)
-        if named:
-            chosen = []
-            for name in named:
-                effects = tuple(e.strip() for e in str(name).split("+"))
-                bad = [e for e in effects if e not in d.candidates]
-                if bad:
-                    raise InputError(
-                        "rival", name, "candidates of the diagnosis (" + ", ".join(d.candidates) + "), joined by +"
-                    )
-                chosen.append(effects)
-        else:
-            if not d.ranking:
-                raise NoExperiment("diagnosis", "no ranking", "a diagnosis with held-out folds (two groups or more)")
-            first = d.ranking[0]
-            chosen = [(first["effect"],)] + [tuple(t.split("+")) for t in first["tied_with"]]
-            chosen = [c for c in chosen if len(c) == 1 or c in d.cv]
-            if len(chosen) < 2:
-                self.all_pairs = False
-                for r in d.ranking[1:]:
-                    if len(chosen) >= MAX_RIVALS:
-                        break
-                    cv = d.cv[(r["effect"],)]
-                    if cv.error_after < cv.error_before and (r["effect"],) not in chosen:
-                        chosen.append((r["effect"],))
-            chosen = chosen[:MAX_RIVALS]
-        out = []
-        for c in dict.fromkeys(chosen):
-            error = d.cross_validate(c).error_after if len(d.folds) >= 2 else 1.0
-            out.append(Rival(c, d.fit_of(c), max(0.0, error**2 - 1.0) if math.isfinite(error) else 0.0))
-        return out
 
     # -- the space of experiments -----------------------------------------------------------------
     def _speeds(self, speeds) -> np.ndarray:
@@ -349,54 +309,10 @@ class NextExperiment:
         laws.setdefault(NO_CONTROL.name, NO_CONTROL)
         return laws
 
-    def _signal_noise(self) -> tuple[dict[str, float], dict[str, str]]:
-        """Sample noise of each signal: given, from the data's records, or assumed."""
-        values: dict[str, float] = {}
-        source: dict[str, str] = {}
-        self.signal_fits: dict[str, list] = {}
-        if self.records:
-            d = self.diagnosis
-            held = {
-                name: [d.records[k].record for k in d.record_rows if name in d.records[k].record.signals]
-                for name in SIGNALS
-            }
-            # every record's fit of every signal: the diagnosis's own where it fitted the signal (the same
-            # call), the others fitted one per core
-            scatter = {n: [x for x in (signal_noise(r.signals[n]) for r in held[n]) if x > 0] for n in SIGNALS}
-            own = {(id(d.records[k].record), n): f for k in d.record_rows for n, f in d.records[k].fits.items()}
-            todo = [(n, r) for n in SIGNALS if scatter[n] for r in held[n] if (id(r), n) not in own]
-            fitted = map_forked(lambda item: record_fit(item[1].time, item[1].signals[item[0]]), todo)
-            own.update({(id(r), n): f for (n, r), f in zip(todo, fitted)})
-            for name in SIGNALS:
-                if not scatter[name]:
-                    continue
-                fits = [(r.speed, own[(id(r), name)]) for r in held[name]]
-                self.signal_fits[name] = [(v, f) for v, f in fits if f is not None]
-                left = [f.residual_rms for _, f in self.signal_fits[name]]
-                values[name] = max(float(np.median(scatter[name])), float(np.median(left)) if left else 0.0)
-                source[name] = (
-                    f"the data's records: the larger of their sample-to-sample scatter ({np.median(scatter[name]):.2g}) "
-                    "and what their own fits leave ("
-                    + (f"{np.median(left):.2g}, RMS residual over {len(left)} records" if left else "no fit")
-                    + ")"
-                )
-            for name in SIGNALS:
-                if name not in values:
-                    values[name], source[name] = ASSUMED_NOISE[name], "assumed (the data hold no such signal)"
-        for name, value in (self.noise or {}).items():
-            if name not in SIGNALS:
-                raise InputError("noise signal", name, "one of " + ", ".join(SIGNALS))
-            if not (isinstance(value, int | float) and math.isfinite(value) and 0 < value <= MAX_NOISE):
-                raise InputError(
-                    f"noise of {name}", value, f"a positive standard deviation of at most {MAX_NOISE:g} (rad or rad/s)"
-                )
-            values[name], source[name] = float(value), "given"
-        return values, source
-
     def _experiments(self) -> tuple[list[Experiment], list[dict]]:
         if not self.records:
             return [Experiment(float(v), name) for name in self.laws for v in self.speeds], []
-        signals = tuple(self.signals) if self.signals else SIGNALS
+        signals = self.signals
         for s in signals:
             if s not in SIGNALS:
                 raise InputError("signal", s, "one of " + ", ".join(SIGNALS))
@@ -413,55 +329,24 @@ class NextExperiment:
         """A fitted template decay per experiment (module docstring); those that fail, with the reason."""
 
         d = self.diagnosis
-        used = [d.records[k] for k in d.record_rows]
-        speeds = np.array([f.record.speed for f in used])
+        used = [d.records[k].record for k in d.record_rows]
         nominal = EffectModel(self.problem.nominal, self.problem.geometry)
-        rng = np.random.default_rng(NOISE_SEED)
-        records: list[Record] = []
-        for e in experiments:
-            near = used[int(np.argmin(np.abs(speeds - e.speed)))].record
-            dt = float(near.time[1] - near.time[0])
-            t = np.arange(near.time.size) * dt
-            law = self.laws[e.law]
-            out = nominal.simulate(e.speed, t, initial=_push(near, e.push), gains=law(e.speed))
-            signals = {
-                name: out[state] + self.sample_noise[name] * rng.standard_normal(t.size)
-                for name, state in (
-                    ("roll_rate", "phid"),
-                    ("roll_angle", "phi"),
-                    ("steer_angle", "delta"),
-                    ("steer_rate", "deltad"),
-                )
-            }
-            records.append(
-                Record(
-                    f"next {e.describe()}",
-                    "plan",
-                    t,
-                    signals,
-                    e.speed,
-                    near.speed_sigma,
-                    "next",
-                    law,
-                    e.speed,
-                    None,
-                    None,
-                    (e.signal,),
-                    near.speed_measured,
-                )
-            )
-        fits = self._fit_templates(records)
+        records, clean = template_records(nominal, used, experiments, self.laws, self.sample_noise)
+        fits = fit_templates(nominal, records)
         left = [{"experiment": e.describe(), "reason": f.reason} for e, f in zip(experiments, fits) if not f.used]
-        kept = [(e, f) for e, f in zip(experiments, fits) if f.used]
+        kept = [(e, f, c) for e, f, c in zip(experiments, fits, clean) if f.used]
         if not kept:
             return {}, left
-        rows = eigenvalues_of([f for _, f in kept])
+        rows = eigenvalues_of([f for _, f, _ in kept])
         matched = Predictor(rows, _no_canonical(), self.problem.nominal, self.problem.geometry).eigenvalues(nominal)
-        simulator = RecordSimulator([f for _, f in kept], self.problem.nominal, self.problem.geometry)
+        # the rivals predict the noise-free template (the noisy one's fit gives the acceptance and the
+        # standard errors): a prediction is then a smooth function of the experiment, not of a noise draw
+        smooth = [RecordFit(replace(f.record, signals=c), f.estimate, f.fits) for _, f, c in kept]
+        simulator = RecordSimulator(smooth, self.problem.nominal, self.problem.geometry)
         _, reasons = comparable(simulator.settle(), matched)
         out = {}
         keep = []
-        for j, ((e, f), why) in enumerate(zip(kept, reasons)):
+        for j, ((e, f, _), why) in enumerate(zip(kept, reasons)):
             if why is None:
                 out[e] = f
                 keep.append(j)
@@ -469,56 +354,6 @@ class NextExperiment:
                 left.append({"experiment": e.describe(), "reason": why})
         self.simulator = simulator.subset(keep)
         return out, left
-
-    def _fit_templates(self, records: list[Record]) -> list[RecordFit]:
-        """Fit every template as a record is fitted, batched: the record fit's two-mode function, started
-        from the nominal model's weave and slow eigenvalues, judged by the record fit's acceptance rules
-        (:func:`bikerider.gap.measured.extraction._accept_two_mode`: a significant oscillation, half a cycle and
-        more with a clear decay, the slow mode in range)."""
-        from types import SimpleNamespace
-
-        nominal = EffectModel(self.problem.nominal, self.problem.geometry)
-        groups: dict[int, list[int]] = {}
-        for k, r in enumerate(records):
-            groups.setdefault(r.time.size, []).append(k)
-        fitted: dict[int, RecordFit] = {}
-        for size, index in groups.items():
-            tau = records[index[0]].time - records[index[0]].time[0]
-            starts, ys = [], []
-            for k in index:
-                r = records[k]
-                ev = nominal.eigenvalues([r.speed], r.gains[None, :])[0]
-                weave = ev[np.argmax(ev.imag)]
-                real = ev[np.abs(ev.imag) < 1e-9 * np.maximum(1.0, np.abs(ev))].real
-                slow = float(real.max()) if real.size else -1.0
-                lam = float(np.clip(slow, LAMBDA_BOUNDS[0], LAMBDA_BOUNDS[1]))
-                starts.append([abs(weave.imag), -weave.real, 0.0, 0.0, 0.0, 0.0, lam])
-                ys.append(r.signals[r.fit_signals[0]])
-            Y = np.array(ys)
-            with np.errstate(all="ignore"):
-                beta, cost = levenberg_marquardt("two-mode", np.array(starts), Y, np.ones(Y.shape, bool), tau)
-            for j, k in enumerate(index):
-                r, name = records[k], records[k].fit_signals[0]
-                if not np.all(np.isfinite(beta[j])):
-                    fitted[k] = RecordFit(
-                        r, None, reason=f"{name}: no weave the record fit finds (less than half a cycle)"
-                    )
-                    continue
-                fun = _two_mode(beta[j], tau) - Y[j]
-                res = SimpleNamespace(
-                    x=beta[j], cost=0.5 * float(cost[j]), jac=_two_mode_jacobian(beta[j], tau), fun=fun
-                )
-                total = float(np.sum((Y[j] - Y[j].mean()) ** 2))
-                with np.errstate(all="ignore"):
-                    two, why = _accept_two_mode(res, size, tau, total, MIN_CYCLES)
-                if two is None:
-                    fitted[k] = RecordFit(r, None, reason=f"{name}: {why}")
-                elif not two[0].r2 >= MIN_R2:
-                    fitted[k] = RecordFit(r, None, reason=f"{name}: poor fit (r^2 = {two[0].r2:.2f})")
-                else:
-                    estimate = two[0]
-                    fitted[k] = RecordFit(r, estimate, {name: estimate})
-        return [fitted[k] for k in range(len(records))]
 
     # -- predictions --------------------------------------------------------------------------------
     def _predict(self) -> None:
@@ -536,7 +371,7 @@ class NextExperiment:
         for k, rival in enumerate(self.rivals):
             jobs.append((k, rival.fit.values[None, :]))
             if rival.fit.names:
-                X, width, cov = _secant_points(rival.fit)
+                X, width, cov = secant_points(rival.fit)
                 secants[k] = (width, cov, len(jobs))
                 size = len(X) if rival.nonlinear else max(4, -(-len(X) // (2 * workers())))
                 jobs += [(k, X[lo : lo + size]) for lo in range(0, len(X), size)]
@@ -567,7 +402,7 @@ class NextExperiment:
             if k in secants:
                 width, cov, start = secants[k]
                 pred = np.concatenate([results[j] for j in range(start, len(jobs)) if jobs[j][0] == k])
-                J = _secant_slopes(_split(pred), width).reshape(2, n, -1)  # per unit of each value
+                J = secant_slopes(_split(pred), width).reshape(2, n, -1)  # per unit of each value
                 self.own_cov[k] = np.einsum("anj,jk,bnk->nab", J, cov, J)
         self.model_cov = np.zeros((n, 2, 2))
         if p.free:
@@ -631,28 +466,23 @@ class NextExperiment:
             return self.simulator.apparent_time_domain(Layout.of(rival.effects), X)
         return self._predict_linear(rival.effects, X, None, self.points)
 
-    def _configured(self, effects, X, values=None):
-        """The model's values, effect configuration and speed scale for fitted-value vectors ``X (P, p)`` of
-        ``effects`` (or the nominal model with benchmark values ``values``, a batch), and the batch size ``P``."""
-        p = self.problem
-        if values is None:
-            values, config, scale = p.configure(p.layout(tuple(effects)), np.atleast_2d(X))
-        else:
-            values = {**p.nominal, **{k: np.asarray(v, float).reshape(-1, 1) for k, v in values.items()}}
-            config, scale = {}, None
-        P = max([np.shape(v)[0] for v in values.values() if np.ndim(v) > 0] + [np.atleast_2d(X).shape[0]])
-        return values, config, scale, P
-
     def _predict_linear(self, effects, X, values=None, points=None) -> np.ndarray:
         """Predicted eigenvalue ``(P, len(points))`` of linear effects at fitted values ``X``, or of the
-        nominal model with benchmark values ``values`` (a batch)."""
+        nominal model with benchmark values ``values`` (a batch); with records, what the record fit finds
+        in the model's response over each template."""
         p = self.problem
         values, config, scale, P = self._configured(effects, X, values)
-        index = [self.points.index(e) for e in points]
         if self.records:
+            # a linear model's response is proportional to its push, and the record fit finds the same
+            # eigenvalue in it at any size: one template per speed, law and signal
+            where = {e: m for m, e in enumerate(self.points)}
+            keys = [(e.speed, e.law, e.signal) for e in points]
+            unique = {key: where[e] for key, e in zip(keys, points)}
+            index = list(unique.values())
             sub = self.simulator.subset(index) if len(index) != len(self.points) else self.simulator
-            res = sub.apparent(values, config, scale)
-            return np.broadcast_to(res, (P, len(index))).copy()
+            res = np.broadcast_to(sub.apparent(values, config, scale), (P, len(index)))
+            column = {key: j for j, key in enumerate(unique)}
+            return res[:, [column[key] for key in keys]].copy()
         rows = self._rows(points)
 
         predictor = Predictor(rows, _no_canonical(), p.nominal, p.geometry)
@@ -677,10 +507,12 @@ class NextExperiment:
             [e.describe() for e in points],
             [e.law for e in points],
             {e.law: self.laws[e.law] for e in points},
+            speed_sensor=np.full(n, self._speed_measured()) if self.records else None,
         )
 
     def _data_noise(self) -> np.ndarray:
-        """Per decay ``(n_points, 2, 2)``: the data's noise (module docstring)."""
+        """Per decay ``(n_points, 2, 2)``: the data's noise (module docstring), continuous in speed (each
+        quantity's median per speed of the data, linearly between those speeds: :func:`over_speed`)."""
         p = self.problem
         eig = p.eigen
         first = np.cumsum([0] + [2 if m == "weave" else 1 for m in eig.mode])
@@ -690,59 +522,24 @@ class NextExperiment:
         speeds = eig.speed[weave]
         decay = np.maximum(-np.array([p.baseline[first[r]] for r in weave]), MIN_DECAY)
         out = np.zeros((len(self.points), 2, 2))
+        decay, real, imag = (over_speed(speeds, x) for x in (decay, real, imag))
+        run = run_scatter(self.problem, self.records)
+        scatter: dict[str, object] = {}
         for m, e in enumerate(self.points):
-            near = np.abs(speeds - speeds[np.argmin(np.abs(speeds - e.speed))]) < 1e-9 + 0.03 * e.speed
             if not self.records:
                 # a fitted decay rate's and frequency's standard error grows as (decay rate)^(3/2)
-                scale = (max(-float(np.mean(self.mean[:, m].real)), MIN_DECAY) / np.median(decay[near])) ** 3
-                out[m, 0, 0], out[m, 1, 1] = scale * np.median(real[near]), scale * np.median(imag[near])
+                scale = (max(-float(np.mean(self.mean[:, m].real)), MIN_DECAY) / decay(e.speed)) ** 3
+                out[m, 0, 0], out[m, 1, 1] = scale * real(e.speed), scale * imag(e.speed)
                 continue
             # records: the template's own standard errors plus the data's scatter beyond their records' own;
             # for a signal the diagnosis did not fit, the scatter of that signal's own fits when they replicate
             est = self.templates[e].estimate
-            own = self._signal_scatter(e)
-            if own is None:
-                own = self._run_scatter(e.speed)
+            if e.signal not in scatter:
+                scatter[e.signal] = signal_scatter(self.diagnosis, self.signal_fits, e.signal)
+            own = (scatter[e.signal] or run)(e.speed)
             out[m, 0, 0] = est.real_sigma**2 + own[0]
             out[m, 1, 1] = est.imag_sigma**2 + own[1]
         return out
-
-    def _run_scatter(self, speed: float) -> tuple[float, float]:
-        """The data's run-to-run variance (real, imaginary) of the weave eigenvalue at the data's speed
-        nearest ``speed``: with records, their scatter beyond their fits' own standard errors; from
-        tables, the rows' whole uncertainty (which of it is scatter from run to run the table does not say)."""
-        p = self.problem
-        eig = p.eigen
-        first = np.cumsum([0] + [2 if m == "weave" else 1 for m in eig.mode])
-        weave = np.array([r for r in range(len(eig)) if eig.mode[r] == "weave"])
-        speeds = eig.speed[weave]
-        near = np.abs(speeds - speeds[np.argmin(np.abs(speeds - speed))]) < 1e-9 + 0.03 * speed
-        real = float(np.median([p.var_data[first[r]] for r in weave[near]]))
-        imag = float(np.median([p.var_data[first[r] + 1] for r in weave[near]]))
-        if not self.records:
-            return real, imag
-        own_r = float(np.median(eig.real_sigma[weave[near]] ** 2))
-        own_i = float(np.median(eig.imag_sigma[weave[near]] ** 2))
-        return max(real - own_r, 0.0), max(imag - own_i, 0.0)
-
-    def _signal_scatter(self, e: Experiment) -> tuple[float, float] | None:
-        """Run-to-run variance (real, imaginary) of the records' own fits of ``e``'s signal at the data's
-        nearest speed, beyond their fits' standard errors; ``None`` for a signal the diagnosis fits (its
-        data uncertainty holds it) or with fewer than :data:`MIN_REPLICATES` fits there."""
-        d = self.diagnosis
-        fitted = {name for k in d.record_rows for name in d.records[k].record.fit_signals}
-        fits = self.signal_fits.get(e.signal, [])
-        if e.signal in fitted or not fits:
-            return None
-        speeds = np.array([v for v, _ in fits])
-        nearest = speeds[np.argmin(np.abs(speeds - e.speed))]
-        here = [f for v, f in fits if abs(v - nearest) < 1e-9 + 0.03 * e.speed]
-        if len(here) < MIN_REPLICATES:
-            return None
-        z = np.array([f.eigenvalue for f in here])
-        own_r = float(np.median([f.real_sigma**2 for f in here]))
-        own_i = float(np.median([f.imag_sigma**2 for f in here]))
-        return max(float(np.var(z.real, ddof=1)) - own_r, 0.0), max(float(np.var(z.imag, ddof=1)) - own_i, 0.0)
 
     # -- sweeps ----------------------------------------------------------------------------------------
     def _plan_sweeps(self) -> list[Sweep]:
@@ -774,66 +571,6 @@ class NextExperiment:
                 self.left_out.append({"experiment": where, "reason": why})
         return out
 
-    def _sample_rate(self, speed: float) -> float:
-        """The sampling rate [Hz] of the nearest-speed record (without records, :data:`DEFAULT_SAMPLE_RATE`)."""
-        if not self.records:
-            return DEFAULT_SAMPLE_RATE
-        d = self.diagnosis
-        used = [d.records[k].record for k in d.record_rows]
-        near = used[int(np.argmin([abs(r.speed - speed) for r in used]))]
-        return 1.0 / float(near.time[1] - near.time[0])
-
-    def _sweep_systems(self, effects, X, values=None, nonlinear=False, speeds=None):
-        """Closed loops ``A (P, s, n, n)``, steer-torque columns ``b (P, s, n)`` and output states of every
-        sweep for a rival's fitted-value vectors ``X (P, p)`` (or the nominal model with benchmark values
-        ``values``, a batch); friction linearised at each sweep's torque."""
-
-        p = self.problem
-        sweeps = self.sweeps
-        speeds = np.array([s.speed for s in sweeps]) if speeds is None else np.asarray(speeds, float)
-        gains = np.array([self.laws[s.law](s.speed) for s in sweeps]).reshape(len(sweeps), 4)
-        measured = self._speed_measured()
-        if nonlinear:
-            runs = [
-                run_stand_in(Sweep(v, s.law, s.output, s.torque, s.run_time, s.lines), g, measured)
-                for v, s, g in zip(speeds, sweeps, gains)
-            ]
-            A, b, outputs, friction = systems(p.nominal, p.geometry, runs, Layout.of(tuple(effects)), np.atleast_2d(X))
-            omegas = np.array([s.omegas for s in sweeps])
-            amplitude = np.array([line_amplitude(s.lines, s.torque, s.run_time) for s in sweeps])
-            A = linearised_friction(A, b, friction[:, None], outputs[3], omegas[None], amplitude[None, :])
-            return A, b, outputs
-        values, config, scale, P = self._configured(effects, X, values)
-        if scale is None or not measured:
-            ss = EffectModel(values, p.geometry, config).state_space(speeds)
-            A, b, outputs = ss.closed_loop(gains), ss.B[..., :, 1], ss.output_states
-        else:  # a speed sensor's scale per vector: one model per vector
-
-            def row(x, i):
-                return np.asarray(x)[i] if np.ndim(x) > 0 and np.shape(x)[0] == P else x
-
-            parts = []
-            for i in range(P):
-                model = EffectModel(
-                    {k: row(v, i) for k, v in values.items()},
-                    p.geometry,
-                    {e: {k: row(v, i) for k, v in c.items()} for e, c in config.items()},
-                )
-                ss = model.state_space(float(np.ravel(scale)[i]) * speeds)
-                parts.append((ss.closed_loop(gains).reshape((len(sweeps),) + ss.A.shape[-2:]), ss.B[..., :, 1]))
-            A = np.array([a for a, _ in parts])
-            b = np.array([np.reshape(x, A.shape[1:-1]) for _, x in parts])
-            outputs = ss.output_states
-        n = A.shape[-1]
-        return np.broadcast_to(A, (P, len(sweeps), n, n)), np.broadcast_to(b, (P, len(sweeps), n)), outputs
-
-    def _speed_measured(self) -> bool:
-        """Whether the planned runs' speed is read by the sensor a ``speed_sensor`` rival rescales (as the data's)."""
-        if self.records:
-            d = self.diagnosis
-            return any(d.records[k].record.speed_measured for k in d.record_rows)
-        return bool(np.any(self.problem.eigen.speed_sensor))
-
     def _sweep_response(self, A, b, outputs) -> np.ndarray:
         """Each sweep's frequency response ``(P, s, K)`` from its systems."""
         omegas = np.array([s.omegas for s in self.sweeps])
@@ -843,7 +580,27 @@ class NextExperiment:
         return np.where(is_roll[None, :, None], roll, steer)
 
     def _sweep_rival(self, rival: Rival, X) -> np.ndarray:
-        return self._sweep_response(*self._sweep_systems(rival.effects, X, nonlinear=rival.nonlinear))
+        if rival.nonlinear:
+            return self._sweep_simulated(rival.effects, X)
+        return self._sweep_response(*self._sweep_systems(rival.effects, X))
+
+    def _sweep_simulated(self, effects, X, stick: bool = False) -> np.ndarray:
+        """Each sweep's frequency response ``(P, s, K)`` for a nonlinear rival's fitted-value vectors ``X (P, p)``:
+        its runs simulated in time with the steer's Coulomb friction and read by the DFT
+        (:func:`bikerider.gap.plan.sweeps.simulated_response`; one run per speed and law serves both outputs)."""
+        p = self.problem
+        first: dict[tuple[float, str], int] = {}
+        for m, x in enumerate(self.sweeps):
+            first.setdefault((x.speed, x.law), m)
+        runs = [self.sweeps[m] for m in first.values()]
+        measured = self._speed_measured()
+        stand_ins = [run_stand_in(x, self.laws[x.law](x.speed), measured) for x in runs]
+        A, b, outputs, friction = systems(p.nominal, p.geometry, stand_ins, Layout.of(tuple(effects)), np.atleast_2d(X))
+        H = simulated_response(A, b, friction, outputs[3], (outputs[2], outputs[1]), runs, stick)  # (P, runs, 2, K)
+        column = {key: j for j, key in enumerate(first)}
+        pick = [column[(x.speed, x.law)] for x in self.sweeps]
+        part = [0 if x.output == "roll_rate" else 1 for x in self.sweeps]
+        return H[:, pick, part]
 
     def _predict_sweeps(self) -> None:
         """Every rival's frequency responses and their uncertainties (module docstring of
@@ -852,7 +609,7 @@ class NextExperiment:
         R, p = len(self.rivals), self.problem
         if not self.sweeps:
             self.sweep_mean = np.zeros((R, 0, 0), complex)
-            self.sweep_own = np.zeros((R, 0, 0, 0))
+            self.sweep_own = self.sweep_form = np.zeros((R, 0, 0, 0))
             self.sweep_data = self.sweep_model = self.sweep_run = np.zeros((0, 0, 0))
             self.sweep_distortion, self.distortion_source = self._linear_misfit()
             return
@@ -860,6 +617,7 @@ class NextExperiment:
         s = len(self.sweeps)
         self.sweep_mean = np.zeros((R, s, K), complex)
         self.sweep_own = np.zeros((R, s, 2 * K, 2 * K))
+        self.sweep_form = np.zeros((R, s, 2 * K, 2 * K))
         unstable = np.zeros(s, bool)
         for k, rival in enumerate(self.rivals):
             fit = rival.fit
@@ -867,11 +625,21 @@ class NextExperiment:
             with np.errstate(all="ignore"):
                 # a mode that grows e-fold within the run (a slow capsize a rider or a catch holds is allowed)
                 unstable |= np.linalg.eigvals(loop[0][0]).real.max(axis=-1) >= 1.0 / self.run_time
-            self.sweep_mean[k] = self._sweep_response(*loop)[0]
+            # a nonlinear rival's response from its runs simulated in time (its describing function only
+            # judges whether the loop is stable)
+            self.sweep_mean[k] = self._sweep_rival(rival, fit.values[None, :])[0]
             if fit.names:
-                J, cov = _secants(fit, lambda X, rival=rival: split(self._sweep_rival(rival, X)).reshape(len(X), -1))
+                J, cov = secants(fit, lambda X, rival=rival: split(self._sweep_rival(rival, X)).reshape(len(X), -1))
                 J = J.reshape(s, 2 * K, -1)
                 self.sweep_own[k] = np.einsum("naj,jk,nbk->nab", J, cov, J)
+            if rival.nonlinear:
+                # the friction law's form: the fitted smoothed friction against the same friction sticking
+                # (Karnopp), a systematic difference more runs do not average away
+                form = split(self._sweep_simulated(rival.effects, fit.values[None, :], stick=True)[0]) - split(
+                    self.sweep_mean[k]
+                )
+                self.sweep_form[k] = np.einsum("na,nb->nab", form, form)
+                self.sweep_own[k] += self.sweep_form[k]
         # per run: the sensor noise at the lines, and the speed scattering as the data's
         nominal = ((), np.zeros((1, 0)))
         self.sweep_data = np.array(
@@ -892,11 +660,12 @@ class NextExperiment:
         # more torque does not average it away
         A, b, outputs = self._sweep_systems(*nominal)
         self.sweep_run = np.zeros_like(self.sweep_data)
+        run = run_scatter(self.problem, self.records)
         for m, x in enumerate(self.sweeps):
             index = outputs[2] if x.output == "roll_rate" else outputs[1]
             J = weave_shift(A[0, m], b[0, m], index, x.omegas)
             if J is not None:
-                self.sweep_run[m] = J @ np.diag(self._run_scatter(x.speed)) @ J.T
+                self.sweep_run[m] = J @ np.diag(run(x.speed)) @ J.T
         self.sweep_data += self.sweep_run
         # and what a linear response misses of a real run, line by line (next_sweep.linear_misfit)
         self.sweep_distortion, self.distortion_source = self._linear_misfit()
@@ -932,6 +701,7 @@ class NextExperiment:
         keep = np.flatnonzero(~bad)
         self.sweeps = [self.sweeps[m] for m in keep]
         self.sweep_mean, self.sweep_own = self.sweep_mean[:, keep], self.sweep_own[:, keep]
+        self.sweep_form = self.sweep_form[:, keep]
         self.sweep_data, self.sweep_model = self.sweep_data[keep], self.sweep_model[keep]
         self.sweep_run = self.sweep_run[keep]
 
@@ -957,77 +727,109 @@ class NextExperiment:
         eig = self.problem.eigen
         return float(np.median(eig.speed_sigma)) if len(eig) else 0.0
 
-    # -- discrimination -----------------------------------------------------------------------------
-    def separation(self, repeats: float) -> np.ndarray:
-        """``d`` of every pair at every experiment for ``repeats`` decays each, ``(n_pairs, 2, n_points)``:
-        with the pair's first rival true, and with its second (``math.inf`` repeats: the limit the true
-        rival's own uncertainty sets)."""
 
-        out = []
-        for i, j in self.pairs:
-            both = []
-            for true in (i, j):
-                misfit = self.rivals[true].misfit
-                decays = _distance(
-                    _split_last(self.mean[i] - self.mean[j]),
-                    self.own_cov[true],
-                    self.data_cov + self.model_cov,
-                    misfit,
-                    repeats,
-                )
-                sweeps = _distance(
-                    split(self.sweep_mean[i] - self.sweep_mean[j]),
-                    self.sweep_own[true],
-                    self.sweep_data + self.sweep_model,
-                    misfit,
-                    repeats,
-                )
-                both.append(np.concatenate([decays, sweeps]))
-            out.append(both)
-        return np.array(out)
+@dataclass(frozen=True, eq=False)
+class NextExperiment(_Models):
+    """The ranked plan of new measurements for a diagnosis (module docstring), as :func:`plan_next` made it.
+
+    Attributes
+    ----------
+    diagnosis : bikerider.gap.diagnosis.result.Diagnosis
+    rivals : tuple of Rival
+        The candidates (or pairs) to tell apart.
+    all_pairs : bool
+        Every pair of rivals is to be told apart (``False``: the first against each runner-up).
+    named : bool
+        The rivals were named.
+    pairs : tuple of (int, int)
+    repeats : int
+        Runs per experiment the plan is ranked for.
+    speeds : ndarray
+        Speeds considered [m/s].
+    laws : dict
+        Control laws considered, by name.
+    records : bool
+        Planned from records (templates and indirect inference) rather than tables.
+    sample_noise, noise_source : dict
+        Each signal's sample noise and where it came from.
+    signal_fits : dict
+        Every record's fit of each signal, ``(speed, fit)``.
+    points : tuple of Experiment
+        The decays planned (those left out are in ``left_out``).
+    templates : dict
+        Each decay's fitted template (records only).
+    simulator : RecordSimulator or None
+        The noise-free templates, one per decay (records only).
+    mean : ndarray
+        ``(rivals, points)`` complex: each rival's predicted weave eigenvalue.
+    own_cov, data_cov, model_cov : ndarray
+        ``(rivals, points, 2, 2)``, ``(points, 2, 2)``, ``(points, 2, 2)``: the rivals' own, one decay's data
+        noise and the nominal parameters' covariance (real, imaginary).
+    run_sweeps : bool
+    torque, run_time : float
+        The multisines' peak torque [N m] and recorded run length [s].
+    sweeps : tuple of Sweep
+    sweep_mean, sweep_own, sweep_form, sweep_data, sweep_model, sweep_run : ndarray
+        As for decays, per line (real parts, then imaginary parts); ``sweep_form`` the friction law's form
+        (part of ``sweep_own``), ``sweep_run`` the run-to-run part of ``sweep_data``.
+    sweep_distortion : float
+    distortion_source : str
+    left_out : tuple of dict
+        Experiments left out, with the reason.
+    plan : tuple of dict
+        Every experiment, best first (:func:`~bikerider.gap.plan.discrimination.rank`).
+    """
+
+    diagnosis: Diagnosis
+    problem: GapProblem
+    rivals: tuple[Rival, ...]
+    all_pairs: bool
+    named: bool
+    pairs: tuple[tuple[int, int], ...]
+    repeats: int
+    speeds: np.ndarray
+    laws: dict[str, ControlLaw]
+    records: bool
+    sample_noise: dict[str, float]
+    noise_source: dict[str, str]
+    signal_fits: dict[str, list]
+    points: tuple[Experiment, ...]
+    templates: dict[Experiment, RecordFit]
+    simulator: RecordSimulator | None
+    mean: np.ndarray
+    own_cov: np.ndarray
+    data_cov: np.ndarray
+    model_cov: np.ndarray
+    run_sweeps: bool
+    torque: float
+    run_time: float
+    sweeps: tuple[Sweep, ...]
+    sweep_mean: np.ndarray
+    sweep_own: np.ndarray
+    sweep_form: np.ndarray
+    sweep_data: np.ndarray
+    sweep_model: np.ndarray
+    sweep_run: np.ndarray
+    sweep_distortion: float
+    distortion_source: str
+    left_out: tuple[dict, ...]
+    plan: tuple[dict, ...] = field(default=())
+
+    @property
+    def experiments(self) -> list[Experiment | Sweep]:
+        """The decays, then the multisines (the order of :meth:`separation`'s last axis)."""
+        return list(self.points) + list(self.sweeps)
+
+    def separation(self, repeats: float) -> np.ndarray:
+        """``d`` of every pair at every experiment for ``repeats`` runs each, ``(n_pairs, 2, n_points)``
+        (:func:`~bikerider.gap.plan.discrimination.separation`)."""
+        return separation(self, repeats)
 
     def probability(self, repeats: float) -> np.ndarray:
         """Resolution probability of every pair at every experiment, ``(n_pairs, n_points)``: the mean over
         which of the two is true (even prior odds)."""
         return resolution_probability(self.separation(repeats)).mean(axis=1)
 
-    def _rank(self) -> list[dict]:
-        counts = np.arange(1, MAX_REPEATS + 1)
-        d_all = np.stack([self.separation(float(k)) for k in counts])  # (repeats, pairs, 2, points)
-        prob_all = resolution_probability(d_all).mean(axis=2)  # (repeats, pairs, points)
-        worst = prob_all.min(axis=1)  # (repeats, points)
-        at = self.repeats - 1
-        limit = self.probability(math.inf).min(axis=0)
-        order = np.lexsort((-d_all[at].min(axis=(0, 1)), -worst[at]))
-        plan = []
-        for m in order:
-            e = self.experiments[m]
-            enough = np.flatnonzero(worst[:, m] >= 0.95)
-            plan.append(
-                {
-                    "experiment": e,
-                    "text": e.describe(self.repeats),
-                    "text_for_95": e.describe(int(counts[enough[0]])) if enough.size else None,
-                    "resolution_probability": float(worst[at, m]),
-                    "decays_for_95": int(counts[enough[0]]) if enough.size else None,
-                    "limit": float(limit[m]),
-                    "pairs": [
-                        {
-                            "rivals": [self.rivals[i].name, self.rivals[j].name],
-                            "separation": [float(d_all[at, k, 0, m]), float(d_all[at, k, 1, m])],
-                            "expected_log_likelihood_ratio": [
-                                float(d_all[at, k, 0, m] ** 2 / 2),
-                                float(d_all[at, k, 1, m] ** 2 / 2),
-                            ],
-                            "resolution_probability": float(prob_all[at, k, m]),
-                        }
-                        for k, (i, j) in enumerate(self.pairs)
-                    ],
-                }
-            )
-        return plan
-
-    # -- output -------------------------------------------------------------------------------------
     def as_dict(self, top: int = 10) -> dict:
         """The plan and every experiment's numbers, JSON-ready."""
 
@@ -1036,7 +838,7 @@ class NextExperiment:
             for item in self.plan:
                 k = getattr(item["experiment"], key)
                 if k is not None and k not in seen:
-                    seen[k] = _item(item)
+                    seen[k] = item_dict(item)
             return seen
 
         return {
@@ -1071,13 +873,13 @@ class NextExperiment:
             "noise": {
                 "signals": {s: {"value": v, "source": self.noise_source[s]} for s, v in self.sample_noise.items()},
                 "note": (
-                    "per decay: the template fit's standard errors plus the data's run-to-run scatter at the nearest "
-                    "speed"
+                    "per decay: the template fit's standard errors plus the data's run-to-run scatter (per speed of "
+                    "the data, linear between them)"
                     if self.records
-                    else "per decay: the data's standard uncertainty at the nearest measured speed"
+                    else "per decay: the data's standard uncertainty (per measured speed, linear between them)"
                 ),
             },
-            "plan": [_item(item) for item in self.plan[:top]],
+            "plan": [item_dict(item) for item in self.plan[:top]],
             "best_per_signal": best_of("signal") if self.records or self.sweeps else None,
             "best_per_law": best_of("law"),
             "best_per_speed": {f"{k:g}": v for k, v in best_of("speed").items()},
@@ -1115,12 +917,13 @@ class NextExperiment:
                 "torque": float(self.torque),
                 "run_time": float(self.run_time),
                 "distortion": {"value": self.sweep_distortion, "source": self.distortion_source},
+                "record": RECORD,
                 "note": (
                     "per run: the DFT estimate's variance 2 sigma_y^2 / (N a^2) at each line (sigma_y the signal's "
                     "sample noise, N samples, a the line's torque amplitude), the data's speed scatter, and the "
                     "response moving as the weave eigenvalue moved from run to run in the data, and at each line "
-                    "the share of the response a linear model misses (distortion); friction by its random-input "
-                    "describing function at the planned torque"
+                    "the share of the response a linear model misses (distortion); a friction rival by its runs "
+                    "simulated in time, the same friction sticking (stick-slip) counted as its own uncertainty"
                 ),
             }
             if self.run_sweeps
@@ -1156,163 +959,10 @@ class NextExperiment:
         }
 
 
-def _item(item: dict) -> dict:
-    e = item["experiment"]
-    return {
-        "kind": e.kind,
-        "text": item["text"],
-        "text_for_95": item["text_for_95"],
-        "speed": e.speed,
-        "law": e.law,
-        "signal": e.signal,
-        "push": e.push,
-        **({"torque": e.torque, "run_time": e.run_time, "lines": list(e.lines)} if e.kind == "sweep" else {}),
-        "resolution_probability": item["resolution_probability"],
-        "decays_for_95": item["decays_for_95"],
-        "limit": item["limit"],
-        "pairs": item["pairs"],
-    }
-
-
-def _distance(delta, own, noise, misfit: float, repeats: float) -> np.ndarray:
-    """``d`` per experiment: ``delta (n, m)`` the rivals' difference, ``own (n, m, m)`` the true rival's own
-    covariance, ``noise (n, m, m)`` one run's (data plus parameters), ``misfit`` the true rival's."""
-    if not len(delta):
-        return np.zeros(0)
-    # the true rival's own uncertainty, and its misfit on held-out data (systematic: more runs do not
-    # average it away), then the runs' noise and the parameters', per run
-    S = own + misfit * noise
-    if math.isfinite(repeats):
-        S = S + noise / repeats
-    # a difference no uncertainty covers (a rival of one fitted value, endless runs): resolved
-    size = np.trace(S, axis1=-2, axis2=-1)[..., None, None]
-    S = S + (1e-9 * size + 1e-30) * np.eye(S.shape[-1])
-    x = np.linalg.solve(S, delta[..., None])[..., 0]
-    return np.sqrt(np.maximum(np.sum(delta * x, axis=-1), 0.0))
-
-
-def _secants(fit: EffectFit, predict) -> tuple[np.ndarray, np.ndarray]:
-    """Slopes ``(m, p)`` of ``predict(X (P, p)) -> (P, m)`` in a rival's fitted values, and the values'
-    covariance they carry.
-
-    The fit's covariance, each value's spread at most that of a value anywhere in its range; slopes by
-    secants over +-1 standard deviation kept inside the search bounds (a tyre's relaxation length or an
-    inertia stepped below zero would be no model at all), so not by the engine's central differences.
-    """
-    X, width, cov = _secant_points(fit)
-    return _secant_slopes(predict(X), width), cov
-
-
-def _secant_points(fit: EffectFit) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The ``2 p`` fitted-value vectors of :func:`_secants` (each value up, then down), the secants'
-    widths and the values' covariance."""
-    span = (fit.upper - fit.lower) / math.sqrt(12)
-    cov = _bounded_covariance(fit, span)
-    sigma = np.sqrt(np.diag(cov))
-    h = np.where(sigma > 0, sigma, 1e-6 * np.maximum(span, 1.0))
-    up = np.minimum(fit.values + h, fit.upper)
-    down = np.maximum(fit.values - h, fit.lower)
-    X = np.repeat(fit.values[None, :], 2 * fit.values.size, axis=0)
-    for j in range(fit.values.size):
-        X[2 * j, j], X[2 * j + 1, j] = up[j], down[j]
-    width = np.where(up > down, up - down, np.inf)
-    return X, width, cov
-
-
-def _secant_slopes(pred: np.ndarray, width: np.ndarray) -> np.ndarray:
-    """Slopes ``(m, p)`` from the predictions ``(2 p, m)`` at :func:`_secant_points`."""
-    return ((pred[0::2] - pred[1::2]) / width[:, None]).T
-
-
-def _bounded_covariance(fit: EffectFit, span: np.ndarray) -> np.ndarray:
-    """The fitted values' covariance (or their standard errors' squares), each value's standard deviation
-    capped at ``span`` (the spread of a value anywhere in its search range), correlations kept."""
-    stderr = np.where(np.isfinite(fit.stderr), fit.stderr, np.inf)
-    cov = fit.covariance
-    if cov is None or cov.shape != (stderr.size, stderr.size) or not np.all(np.isfinite(cov)):
-        cov = np.diag(np.where(np.isfinite(stderr), stderr, 0.0) ** 2)
-    sd = np.sqrt(np.clip(np.diag(cov), 0.0, None))
-    target = np.minimum(np.where(np.isfinite(stderr), sd, np.inf), span)
-    scale = np.where(sd > 0, target / np.where(sd > 0, sd, 1.0), 0.0)
-    out = cov * scale[:, None] * scale[None, :]
-    fill = ~np.isfinite(stderr) | (sd == 0) & (stderr > 0)
-    out[fill, :], out[:, fill] = 0.0, 0.0
-    out[fill, fill] = span[fill] ** 2
-    return out
-
-
-def resolution_probability(d: np.ndarray) -> np.ndarray:
-    """``Phi(d / 2 - ln(ODDS) / d)``: the new data favour the true rival by :data:`ODDS` to 1 or more."""
-    from scipy.special import ndtr
-
-    d = np.asarray(d, dtype=float)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        z = np.where(d > 0, d / 2 - math.log(ODDS) / np.where(d > 0, d, 1.0), -np.inf)
-    return ndtr(z)
-
-
-def record_fit(time, samples):
-    """The record fit of one signal of a record (``None`` when it cannot fit it).
-
-    Its RMS residual bounds the signal's noise from below where the samples' scatter does not: a
-    signal smoothed before it was logged (an IMU's fused roll angle) scatters less from sample to
-    sample than its error, and a decay departs from the fit's two-mode function by more than the
-    sensor's noise; both show in what the fit leaves, which a new decay's fit will meet too.  Its
-    eigenvalues, over the records of one speed, give the signal's own run-to-run scatter.
-    """
-    try:
-        return weave_eigenvalue(time, samples)
-    except FitError:
-        return None
-
-
-def fit_residual(time, samples) -> float | None:
-    """The RMS residual of :func:`record_fit` (``None`` when it cannot fit the signal)."""
-    fit = record_fit(time, samples)
-    return None if fit is None else float(fit.residual_rms)
-
-
-def signal_noise(samples) -> float:
-    """A signal's sample noise: the robust (median absolute deviation) scatter of its second differences
-    over sqrt(6), which a decay's own curvature hardly touches at a lab's sampling rates; for a quantised
-    signal at least its step over sqrt(12)."""
-    y = np.asarray(samples, dtype=float)
-    y = y[np.isfinite(y)]
-    if y.size < 4:
-        return 0.0
-    second = np.diff(y, 2)
-    mad = 1.4826 * float(np.median(np.abs(second - np.median(second)))) / math.sqrt(6)
-    steps = np.abs(np.diff(y))
-    steps = steps[steps > 0]
-    quantum = float(steps.min()) / math.sqrt(12) if steps.size else 0.0
-    return max(mad, quantum)
-
-
-def _push(record: Record, factor: float) -> dict[str, float]:
-    """The initial state of a record (its first samples; steer rate from the steer angle where not
-    logged), times ``factor``."""
-    s = record.signals
-    dt = float(record.time[1] - record.time[0])
-    out = {"phid": float(np.mean(s["roll_rate"][:2])) if "roll_rate" in s else 0.5}
-    if "roll_angle" in s:
-        out["phi"] = float(s["roll_angle"][0])
-    if "steer_angle" in s:
-        out["delta"] = float(s["steer_angle"][0])
-    if "steer_rate" in s:
-        out["deltad"] = float(s["steer_rate"][0])
-    elif "steer_angle" in s and s["steer_angle"].size > 3:
-        out["deltad"] = float((s["steer_angle"][3] - s["steer_angle"][0]) / (3 * dt))
-    return {k: factor * v for k, v in out.items() if math.isfinite(v)}
-
-
 def _split(z: np.ndarray) -> np.ndarray:
     """Complex ``(P, n)`` to real ``(P, 2 n)``: real parts, then imaginary parts."""
     z = np.asarray(z)
     return np.concatenate([z.real, z.imag], axis=-1)
-
-
-def _split_last(z: np.ndarray) -> np.ndarray:
-    return np.stack([z.real, z.imag], axis=-1)
 
 
 def _no_canonical():
@@ -1320,6 +970,85 @@ def _no_canonical():
     return CanonicalData.empty()
 
 
-def plan_next(diagnosis, **options) -> NextExperiment:
-    """The ranked plan of new measurements for ``diagnosis`` (see :class:`NextExperiment`)."""
-    return NextExperiment(diagnosis, **options)
+def plan_next(
+    diagnosis,
+    rivals: Sequence[str] | None = None,
+    speeds=None,
+    repeats: int = DEFAULT_REPEATS,
+    noise: dict[str, float] | None = None,
+    signals: Sequence[str] | None = None,
+    sweeps: bool = True,
+    torque: float = DEFAULT_TORQUE,
+    run_time: float = DEFAULT_RUN_TIME,
+    distortion: float | None = None,
+) -> NextExperiment:
+    """The ranked plan of new measurements for ``diagnosis`` (module docstring), frozen.
+
+    Parameters
+    ----------
+    diagnosis : bikerider.gap.diagnosis.result.Diagnosis
+    rivals : sequence of str, optional
+        Candidates to tell apart (``"steer_damping"``, ``"parameters+steer_damping"``); default as the
+        module docstring says.
+    speeds : array_like, optional
+        Speeds to consider [m/s] (default :data:`N_SPEEDS` over :data:`SPEED_SPAN` of the data's).
+    repeats : int
+        Decays per experiment the plan is ranked for.
+    noise : dict, optional
+        Sample noise of signals (overrides what the data give and :data:`~bikerider.gap.plan.noise.ASSUMED_NOISE`).
+    signals : sequence of str, optional
+        Signals to consider with records (default: every one of :data:`bikerider.gap.measured.records.SIGNALS`).
+    sweeps : bool
+        Also plan steer-torque frequency responses (:mod:`bikerider.gap.plan.sweeps`).
+    torque : float
+        Peak steer torque of a planned multisine [N m].
+    run_time : float
+        Recorded length of one multisine run [s].
+    distortion : float, optional
+        Share of a multisine run's response a linear model misses at each line (default: from the records'
+        fits, ``sqrt(1 - r^2)``, or :data:`ASSUMED_DISTORTION`); 0 is an ideal, linear test rig.
+
+    Raises
+    ------
+    NoExperiment
+        When nothing can be planned (no rivals, no measurable experiment), with the reason.
+    bikerider.errors.InputError
+        For a bad option.
+    """
+    b = _Planner(diagnosis, rivals, speeds, repeats, noise, signals, sweeps, torque, run_time, distortion)
+    unranked = NextExperiment(
+        diagnosis=b.diagnosis,
+        problem=b.problem,
+        rivals=tuple(b.rivals),
+        all_pairs=b.all_pairs,
+        named=b.named,
+        pairs=tuple(b.pairs),
+        repeats=b.repeats,
+        speeds=b.speeds,
+        laws=b.laws,
+        records=b.records,
+        sample_noise=b.sample_noise,
+        noise_source=b.noise_source,
+        signal_fits=b.signal_fits,
+        points=tuple(b.points),
+        templates=b.templates,
+        simulator=b.simulator,
+        mean=b.mean,
+        own_cov=b.own_cov,
+        data_cov=b.data_cov,
+        model_cov=b.model_cov,
+        run_sweeps=b.run_sweeps,
+        torque=float(b.torque),
+        run_time=float(b.run_time),
+        sweeps=tuple(b.sweeps),
+        sweep_mean=b.sweep_mean,
+        sweep_own=b.sweep_own,
+        sweep_form=b.sweep_form,
+        sweep_data=b.sweep_data,
+        sweep_model=b.sweep_model,
+        sweep_run=b.sweep_run,
+        sweep_distortion=b.sweep_distortion,
+        distortion_source=b.distortion_source,
+        left_out=tuple(b.left_out),
+    )
+    return replace(unranked, plan=tuple(rank(unranked)))

@@ -35,7 +35,12 @@ speed, also per run.  The bicycle itself varies from run to run as the data's we
 (:func:`weave_shift`: the response's slopes in the weave eigenvalue times the data's run-to-run
 variance), and a real run departs from any linear response at each line by a share ``rho`` of it
 (variance ``(rho |H_k|)^2 / 2`` on each part; ``rho`` from the records' fits, ``sqrt(1 - r^2)``):
-neither shrinks with a larger torque (:meth:`bikerider.gap.plan.ranking.NextExperiment._predict_sweeps`).
+neither shrinks with a larger torque (:meth:`bikerider.gap.plan.ranking._Planner._predict_sweeps`).
+
+What a run records (:data:`RECORD`), so that it can be read back as the plan reads it: time-stamped samples
+of the steer torque actually applied and of the response at the plan's sampling rate or faster, over
+the settling period and the recorded one; the speed; the control law and its gains; and the multisine
+(lines, phases, peak), so that ``H(w_k)`` is the response's DFT line over the applied torque's.
 """
 
 from __future__ import annotations
@@ -45,6 +50,9 @@ from dataclasses import dataclass
 from types import SimpleNamespace
 
 import numpy as np
+
+from bikerider.benchmark.simulation import discretise
+from bikerider.gap.inference.timedomain import SMOOTHING
 
 N_LINES = 9
 """Lines of the multisine."""
@@ -63,6 +71,23 @@ DEFAULT_SAMPLE_RATE = 100.0
 """Sampling rate [Hz] assumed without records."""
 FRF_SIGNALS = {"roll_rate": "frf_roll_rate", "steer_angle": "frf_steer_angle"}
 """Output signal measured to the name the plan's rows carry."""
+SIMULATION_STEP = 2e-3
+"""Longest step [s] of a multisine run simulated with friction (shorter where the friction's slope at zero
+steer rate would make its explicit term stiff)."""
+STICK_STEP = 1e-3
+"""Longest step [s] of a run simulated with stick-slip friction."""
+STICK_RATE = 1e-3
+"""Steer rate [rad/s] below which the stick-slip rule may hold the steer still."""
+SETTLE_PERIODS = 1
+"""Periods of the multisine a simulated run settles for before the one read."""
+RECORD = (
+    "per run: time-stamped samples (at the plan's sampling rate or faster) of the steer torque actually applied "
+    "(torque sensor, or motor current times its torque constant) and of the response (roll rate from a gyro, or "
+    "steer angle from the encoder; both where logged), over one settling period and the recorded run; the "
+    "speed (and its scatter); the control law and its gains; the multisine's lines [Hz], phases and peak torque. "
+    "The frequency response at each line is the response's DFT over the applied torque's, on the recorded period"
+)
+"""What a researcher records of each planned multisine run (the plan's JSON says it under ``sweeps.record``)."""
 STICK_DAMPING = 1e4
 """Cap of friction's equivalent damping [N m s/rad]: the steer sticks."""
 
@@ -214,3 +239,70 @@ def split(z: np.ndarray) -> np.ndarray:
     """Complex ``(..., K)`` to real ``(..., 2 K)``: real parts, then imaginary parts."""
     z = np.asarray(z)
     return np.concatenate([z.real, z.imag], axis=-1)
+
+
+def simulated_response(
+    A, b, friction, rate_index: int, outputs: tuple[int, int], sweeps: list[Sweep], stick: bool = False
+) -> np.ndarray:
+    """Frequency responses ``(P, s, 2, K)`` (roll rate, steer angle) of runs simulated in time with steer
+    Coulomb friction: ``A (P, s, n, n)``, ``b (P, s, n)``, ``friction (P,)``, the ``s`` sweeps alike in
+    run time and number of lines (module docstring, "Prediction").  The friction as the diagnosis fits
+    it, ``T_c tanh(delta' / eps)``, or with ``stick`` by Karnopp's stick-slip rule (the steer held still
+    while the torque that takes is at most ``T_c``)."""
+    A, b = np.asarray(A, float), np.asarray(b, float)
+    P, s, n = A.shape[0], A.shape[1], A.shape[-1]
+    friction = np.broadcast_to(np.asarray(friction, float).reshape(-1), (P,))
+    run_time = float(sweeps[0].run_time)
+    slope = float(np.max(friction)) / SMOOTHING * float(np.max(np.abs(b[..., rate_index])))
+    h = min(SIMULATION_STEP, 0.5 / slope) if slope > 0 else SIMULATION_STEP
+    if stick:
+        h = min(h, STICK_STEP)
+    per_period = math.ceil(run_time / h)
+    h = run_time / per_period
+    Phi, Gamma, _ = discretise(A, b[..., None], h, hold="zoh")  # the one zero-order hold
+    phi = np.ascontiguousarray(np.moveaxis(Phi.reshape(P * s, n, n), 0, -1))  # (n, n, P s)
+    gamma = np.ascontiguousarray(Gamma[..., 0].reshape(P * s, n).T)  # (n, P s)
+    minus_T = -np.repeat(friction, s)
+    lines = np.array([x.lines for x in sweeps])  # (s, K)
+    omegas = 2 * math.pi * lines
+    K = lines.shape[1]
+    phases = -math.pi * np.arange(1, K + 1) * np.arange(K) / K
+    amplitude = np.array([line_amplitude(x.lines, x.torque, x.run_time) for x in sweeps])
+    # from the linear loop's periodic response (a slow mode would take longer than the run to settle)
+    start = np.einsum("sk,psk->psk", amplitude[:, None] * np.exp(1j * phases)[None, :], np.ones((P, s, K)))
+    steady = np.linalg.solve(
+        1j * omegas[None, :, :, None, None] * np.eye(n) - A[:, :, None],
+        np.broadcast_to(b[:, :, None, :, None], (P, s, K, n, 1)).astype(complex),
+    )[..., 0]
+    x = np.ascontiguousarray(np.einsum("psk,pskn->psn", start, steady).real.reshape(P * s, n).T)
+    y = np.zeros((2, K, P * s), complex)
+    u = np.zeros((K, s), complex)
+    rotate = np.exp(-1j * omegas.T * h)  # (K, s)
+    rows = list(outputs)
+    for k in range(per_period * (SETTLE_PERIODS + 1)):
+        t = k * h
+        torque = amplitude * np.cos(omegas * t + phases).sum(axis=1)  # (s,), read at the samples
+        # held over the step at its value half-way (the zero-order hold's half-step lag undone)
+        drive = np.tile(amplitude * np.cos(omegas * (t + h / 2) + phases).sum(axis=1), P)
+        if stick:
+            free = np.einsum("ijb,jb->ib", phi, x)
+            g, rate = gamma[rate_index], x[rate_index]
+            hold = -free[rate_index] / g - drive  # the friction torque that stops the steer within the step
+            can = np.abs(hold) <= -minus_T
+            slow = np.abs(rate) < STICK_RATE
+            moving = np.where(slow, np.sign(free[rate_index] + g * drive), np.sign(rate))
+            friction_torque = np.where(slow & can, hold, minus_T * moving)
+            turns = ~slow & can & ((free[rate_index] + g * (drive + friction_torque)) * rate < 0)
+            friction_torque = np.where(turns, hold, friction_torque)
+        else:
+            friction_torque = minus_T * np.tanh(x[rate_index] / SMOOTHING)
+        drive = drive + friction_torque
+        if k >= per_period * SETTLE_PERIODS:
+            if k == per_period * SETTLE_PERIODS:
+                basis = np.ones((K, s), complex)
+            y += x[rows][:, None, :] * np.tile(basis, (1, P))[None]
+            u += torque[None, :] * basis
+            basis = basis * rotate
+        x = np.einsum("ijb,jb->ib", phi, x) + gamma * drive
+    H = y / np.tile(u, (1, P))[None]  # (2, K, P s)
+    return np.moveaxis(H.reshape(2, K, P, s), (2, 3), (0, 1))

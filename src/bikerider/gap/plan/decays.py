@@ -1,0 +1,192 @@
+"""Free decays as experiments of the plan: what one is (:class:`Experiment`), and its template.
+
+With records, a new decay is predicted from a *template*: a decay the nominal model makes from the data's
+push, with each signal's noise, fitted as a record is fitted (:func:`fit_templates`); the rivals then
+predict what that fit finds in their own response over it (indirect inference, in
+:mod:`bikerider.gap.plan.ranking`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from types import SimpleNamespace
+
+import numpy as np
+
+from bikerider.gap.candidates.effect_model import EffectModel
+from bikerider.gap.inference.indirect import LAMBDA_BOUNDS, levenberg_marquardt
+from bikerider.gap.measured.control import ControlLaw
+from bikerider.gap.measured.extraction import MIN_CYCLES, MIN_R2, _accept_two_mode, _two_mode, _two_mode_jacobian
+from bikerider.gap.measured.records import Record, RecordFit
+from bikerider.gap.plan.noise import over_speed
+
+NOISE_SEED = 2024
+"""Seed of the noise added to templates (their fits' standard errors scale with it; the value does not)."""
+TEMPLATE_STATES = {"roll_rate": "phid", "roll_angle": "phi", "steer_angle": "delta", "steer_rate": "deltad"}
+"""A template's signals and the states they are."""
+
+
+@dataclass(frozen=True)
+class Experiment:
+    """One kind of new decay.
+
+    Attributes
+    ----------
+    speed : float
+        [m/s]
+    law : str
+        Name of the control law acting (a key of :attr:`NextExperiment.laws`).
+    signal : str
+        The signal the eigenvalue is fitted to (``eigenvalue`` for tables: the data say none).
+    push : float
+        The push relative to the data's (records only).
+    """
+
+    speed: float
+    law: str
+    signal: str = "eigenvalue"
+    push: float = 1.0
+
+    kind = "decay"
+
+    def describe(self, repeats: int | None = None) -> str:
+        what = "decays" if repeats is None else (f"{repeats} decay" + ("s" if repeats != 1 else ""))
+        out = f"{what} at {self.speed:.2f} m/s under {self.law}"
+        if self.signal != "eigenvalue":
+            out += f", eigenvalue from the {self.signal.replace('_', ' ')}"
+        if self.push != 1.0:
+            out += f", pushes x{self.push:g} the data's"
+        return out
+
+
+def template_records(
+    nominal: EffectModel,
+    used: list[Record],
+    experiments: list[Experiment],
+    laws: dict[str, ControlLaw],
+    noise: dict[str, float],
+) -> tuple[list[Record], list[dict[str, np.ndarray]]]:
+    """Each experiment's template decay as a record (the nominal model's response with the signals' noise)
+    and its noise-free signals.
+
+    One window for every template (the records' median length and sampling step) and one noise pattern
+    (:data:`NOISE_SEED`: the same samples scaled by each signal's noise), the push the data's as a
+    continuous function of speed (:func:`push_curve`): a template, its fit and every prediction from it
+    move continuously with the speed, the law and the push.
+    """
+    dt = float(np.median([r.time[1] - r.time[0] for r in used]))
+    t = np.arange(int(np.median([r.time.size for r in used]))) * dt
+    pattern = np.random.default_rng(NOISE_SEED).standard_normal((len(TEMPLATE_STATES), t.size))
+    push = push_curve(used)
+    speed_sigma = float(np.median([r.speed_sigma for r in used]))
+    measured = any(r.speed_measured for r in used)
+    records: list[Record] = []
+    clean: list[dict[str, np.ndarray]] = []
+    for e in experiments:
+        law = laws[e.law]
+        initial = {k: e.push * v for k, v in push(e.speed).items()}
+        out = nominal.simulate(e.speed, t, initial=initial, gains=law(e.speed))
+        clean.append({name: out[state] for name, state in TEMPLATE_STATES.items()})
+        signals = {name: clean[-1][name] + noise[name] * pattern[j] for j, name in enumerate(TEMPLATE_STATES)}
+        records.append(
+            Record(
+                f"next {e.describe()}",
+                "plan",
+                t,
+                signals,
+                e.speed,
+                speed_sigma,
+                "next",
+                law,
+                e.speed,
+                None,
+                None,
+                (e.signal,),
+                measured,
+            )
+        )
+    return records, clean
+
+
+def fit_templates(nominal: EffectModel, records: list[Record]) -> list[RecordFit]:
+    """Fit every template as a record is fitted, batched: the record fit's two-mode function, started
+    from the nominal model's weave and slow eigenvalues, judged by the record fit's acceptance rules
+    (:func:`bikerider.gap.measured.extraction._accept_two_mode`: a significant oscillation, half a cycle and
+    more with a clear decay, the slow mode in range)."""
+    groups: dict[int, list[int]] = {}
+    for k, r in enumerate(records):
+        groups.setdefault(r.time.size, []).append(k)
+    fitted: dict[int, RecordFit] = {}
+    for size, index in groups.items():
+        tau = records[index[0]].time - records[index[0]].time[0]
+        starts, ys = [], []
+        for k in index:
+            r = records[k]
+            ev = nominal.eigenvalues([r.speed], r.gains[None, :])[0]
+            weave = ev[np.argmax(ev.imag)]
+            real = ev[np.abs(ev.imag) < 1e-9 * np.maximum(1.0, np.abs(ev))].real
+            slow = float(real.max()) if real.size else -1.0
+            lam = float(np.clip(slow, LAMBDA_BOUNDS[0], LAMBDA_BOUNDS[1]))
+            starts.append([abs(weave.imag), -weave.real, 0.0, 0.0, 0.0, 0.0, lam])
+            ys.append(r.signals[r.fit_signals[0]])
+        Y = np.array(ys)
+        with np.errstate(all="ignore"):
+            beta, cost = levenberg_marquardt("two-mode", np.array(starts), Y, np.ones(Y.shape, bool), tau)
+        for j, k in enumerate(index):
+            r, name = records[k], records[k].fit_signals[0]
+            if not np.all(np.isfinite(beta[j])):
+                fitted[k] = RecordFit(r, None, reason=f"{name}: no weave the record fit finds (less than half a cycle)")
+                continue
+            fun = _two_mode(beta[j], tau) - Y[j]
+            res = SimpleNamespace(x=beta[j], cost=0.5 * float(cost[j]), jac=_two_mode_jacobian(beta[j], tau), fun=fun)
+            total = float(np.sum((Y[j] - Y[j].mean()) ** 2))
+            with np.errstate(all="ignore"):
+                two, why = _accept_two_mode(res, size, tau, total, MIN_CYCLES)
+            if two is None:
+                fitted[k] = RecordFit(r, None, reason=f"{name}: {why}")
+            elif not two[0].r2 >= MIN_R2:
+                fitted[k] = RecordFit(r, None, reason=f"{name}: poor fit (r^2 = {two[0].r2:.2f})")
+            else:
+                estimate = two[0]
+                fitted[k] = RecordFit(r, estimate, {name: estimate})
+    return [fitted[k] for k in range(len(records))]
+
+
+def push_curve(records: list[Record]):
+    """The data's push as a function of speed: every record's initial state (:func:`push_of`), turned so its
+    roll rate is positive, its median per speed group, linearly between the groups (:func:`over_speed`),
+    so the template's push moves continuously with the speed."""
+    pushes = []
+    for r in records:
+        x = push_of(r, 1.0)
+        sign = -1.0 if x.get("phid", 0.0) < 0 else 1.0
+        pushes.append({k: sign * v for k, v in x.items()})
+    speeds = np.array([r.speed for r in records])
+    names = [n for n in ("phi", "delta", "phid", "deltad") if any(n in x for x in pushes)]
+    curves = {}
+    for n in names:
+        have = [k for k, x in enumerate(pushes) if n in x]
+        curves[n] = over_speed(speeds[have], [pushes[k][n] for k in have])
+
+    def at(speed: float) -> dict[str, float]:
+        return {n: curve(speed) for n, curve in curves.items()}
+
+    return at
+
+
+def push_of(record: Record, factor: float) -> dict[str, float]:
+    """The initial state of a record (its first samples; steer rate from the steer angle where not
+    logged), times ``factor``."""
+    s = record.signals
+    dt = float(record.time[1] - record.time[0])
+    out = {"phid": float(np.mean(s["roll_rate"][:2])) if "roll_rate" in s else 0.5}
+    if "roll_angle" in s:
+        out["phi"] = float(s["roll_angle"][0])
+    if "steer_angle" in s:
+        out["delta"] = float(s["steer_angle"][0])
+    if "steer_rate" in s:
+        out["deltad"] = float(s["steer_rate"][0])
+    elif "steer_angle" in s and s["steer_angle"].size > 3:
+        out["deltad"] = float((s["steer_angle"][3] - s["steer_angle"][0]) / (3 * dt))
+    return {k: factor * v for k, v in out.items() if math.isfinite(v)}
