@@ -8,7 +8,7 @@ import pytest
 from gap_support import decay_record, nominal, riderless_model
 
 from bikerider.gap.candidates.effect_model import EffectModel
-from bikerider.gap.diagnosis.result import Diagnosis
+from bikerider.gap.diagnosis.result import diagnose
 from bikerider.gap.measured.records import fit_records
 from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
 from bikerider.gap.plan.ranking import over_speed, plan_next, speed_groups
@@ -32,7 +32,7 @@ def fine_plan():
                     model, v, f"{v} m/s", TRUTH, seed=10 * j + k, duration=duration, steer_noise=2e-4, initial=initial
                 )
             )
-    d = Diagnosis(
+    d = diagnose(
         model, EigenvalueData.empty(), CanonicalData.empty(), effects=tuple(RIVALS), records=fit_records(records)
     )
     return model, plan_next(d, rivals=RIVALS, speeds=SPEEDS, signals=["roll_rate"], sweeps=False)
