@@ -236,8 +236,6 @@ class Diagnosis:
         self.gap_map = self._gap_map()
         self.gap_test = self._gap_test()
         self.full_fits: dict[tuple[str, ...], EffectFit] = {}
-        self.parameter_fit = self.fit_of(("parameters",)) if "parameters" in self.candidates else None
-        self.verdict = self._verdict()
         self.ranking: list[dict] = []
         self.cv: dict[tuple[str, ...], CrossValidation] = {}
         self.selected: list[str] = []
@@ -245,7 +243,10 @@ class Diagnosis:
         self.best_implausible: dict | None = None
         self.best_single_implausible: dict | None = None
         if len(self.folds) >= 2:
-            self._rank()
+            self._rank()  # before the verdict: the parameter fit it needs is made there, on a worker
+        self.parameter_fit = self.fit_of(("parameters",)) if "parameters" in self.candidates else None
+        self.verdict = self._verdict()
+        if len(self.folds) >= 2:
             self._search_pairs()
         for e in self.candidates:
             self.fit_of((e,))
