@@ -39,7 +39,6 @@ import numpy as np
 from bikerider.errors import FitError
 from bikerider.gap.measured.extraction import EXTRA_MODE_RANGE, MIN_CYCLES
 from bikerider.gap.measured.records import RecordFit
-from bikerider.gap.parallel import map_forked, workers
 
 OBSERVED = {"roll_angle": 0, "steer_angle": 1, "roll_rate": 2, "steer_rate": 3}
 """Record signals and the index of their state among ``(phi, delta, phid, deltad)``."""
@@ -50,10 +49,6 @@ MAX_ELEMENTS = 3_000_000
 MAX_RELATIVE_BIAS = 0.2
 """Largest extraction bias under the nominal model, as a fraction of its weave eigenvalue, for which a
 record's eigenvalue is compared with models at all (:func:`comparable`)."""
-PARALLEL_MODELS = 16
-"""From this many models at once, :meth:`RecordSimulator.apparent` shares them among worker processes
-(:func:`bikerider.gap.parallel.map_forked`; a call takes about half a second there, starting the
-workers a tenth)."""
 LM_ITERATIONS = 60
 """Most Levenberg-Marquardt iterations of the batched extraction."""
 LM_TOLERANCE = 1e-10
@@ -417,20 +412,9 @@ class RecordSimulator:
             A, outputs = self.closed_loop(values, config, scale, batch.index)
             R, N, S, n = batch.index.size, batch.N, len(batch.signals), A.shape[-1]
             chunk = max(1, MAX_ELEMENTS // max(R * N * S * (n + S), 1))
-            spread = P >= PARALLEL_MODELS  # many models (the parameters' secants): shared among the cores
-            if spread:
-                chunk = min(chunk, -(-P // workers()))
-            spans = [(lo, min(P, lo + chunk)) for lo in range(0, P, chunk)]
-
-            def part(span, batch=batch, A=A, outputs=outputs):
-                lo, hi = span
-                return extract(batch, _linear_response(batch, A[lo:hi], outputs))[0]
-
-            # each model's refits are its own (no step of one depends on another's): the same numbers
-            # whichever models share a call, in one process or on workers
-            parts = map_forked(part, spans) if spread else [part(span) for span in spans]
-            for (lo, hi), eig in zip(spans, parts):
-                out[lo:hi, batch.index] = eig
+            for lo in range(0, P, chunk):
+                hi = min(P, lo + chunk)
+                out[lo:hi, batch.index] = extract(batch, _linear_response(batch, A[lo:hi], outputs))[0]
         return out
 
     def apparent_time_domain(self, layout, theta) -> np.ndarray:
