@@ -38,8 +38,6 @@ from bikerider.io.experiment import (
 from bikerider.io.gap_model import load_model
 from bikerider.io.gap_report import REPORT_NAME, check_report_folder, is_input, linked_figures, refuse_inputs
 from bikerider.io.multisine import read_multisines
-from bikerider.plotting.gap import figures, pyplot
-from bikerider.plotting.gap_plan import plot_next
 
 LOG = logging.getLogger(__name__)
 
@@ -197,6 +195,10 @@ def write_report(
         A file the report would write or remove is one of ``inputs``
         (:func:`bikerider.io.gap_report.check_report_folder`).
     """
+    # matplotlib (about 0.3 s to import) only where figures are drawn: the command without --report draws none
+    from bikerider.plotting.gap import figures, pyplot
+    from bikerider.plotting.gap_plan import plot_next
+
     folder = Path(folder)
     check_report_folder(folder, inputs)
     folder.mkdir(parents=True, exist_ok=True)

@@ -259,10 +259,8 @@ def _fft_frequency(t: np.ndarray, y: np.ndarray) -> float:
 
 def _decay_guess(t: np.ndarray, y: np.ndarray, omega: float) -> float:
     """Decay rate from a line through the log of the Hilbert envelope (0 when unclear)."""
-    from scipy.signal import hilbert
-
     centred = y - np.mean(y)
-    envelope = np.abs(hilbert(centred))
+    envelope = np.abs(_analytic(centred))
     # drop a quarter cycle at each end, where the envelope of a finite record is unreliable
     edge = np.searchsorted(t - t[0], 0.25 * 2 * math.pi / omega)
     core = slice(edge, max(edge + 2, t.size - edge))
@@ -272,6 +270,25 @@ def _decay_guess(t: np.ndarray, y: np.ndarray, omega: float) -> float:
         return 0.0
     slope = np.polyfit(tt[keep], np.log(env[keep]), 1)[0]
     return float(-slope) if math.isfinite(slope) else 0.0
+
+
+def _analytic(x: np.ndarray) -> np.ndarray:
+    """The analytic signal of ``x`` (its Hilbert transform as the imaginary part), computed as
+    ``scipy.signal.hilbert`` computes it (the same numbers), without importing ``scipy.signal``: that
+    import (``scipy.stats`` with it) takes about half a second, in every worker process that fits records."""
+    # here, not at the top: the module loads without SciPy (scipy.fft, not numpy.fft: the transform
+    # scipy.signal.hilbert uses)
+    from scipy import fft
+
+    n = x.size
+    spectrum = fft.fft(x, n)
+    if n % 2 == 0:
+        spectrum[1 : n // 2] *= 2.0
+        spectrum[n // 2 + 1 : n] = 0.0
+    else:
+        spectrum[1 : (n + 1) // 2] *= 2.0
+        spectrum[(n + 1) // 2 : n] = 0.0
+    return fft.ifft(spectrum)
 
 
 def _linear_start(t: np.ndarray, y: np.ndarray, omega: float, sigma: float, drift: bool) -> np.ndarray:

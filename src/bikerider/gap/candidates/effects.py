@@ -15,7 +15,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.stats import norm
+from scipy.special import ndtri  # the normal quantile (scipy.stats.norm.ppf's own function, without its import)
 
 from bikerider.errors import InputError
 from bikerider.generated.manifest import TYRE_ARGS
@@ -87,11 +87,11 @@ class Prior:
         """The central (half-Cauchy: lower) interval holding probability ``p``."""
 
         if self.kind == "normal":
-            z = float(norm.ppf(0.5 + p / 2))
+            z = float(ndtri(0.5 + p / 2))
             return self.centre - z * self.spread, self.centre + z * self.spread
         if self.kind == "halfcauchy":
             return 0.0, self.spread * math.tan(math.pi * p / 2)
-        z = float(norm.ppf(0.5 + p / 2))
+        z = float(ndtri(0.5 + p / 2))
         return self.centre / self.spread**z, self.centre * self.spread**z
 
     def sample(self, rng: np.random.Generator, p: float = 0.95) -> float:

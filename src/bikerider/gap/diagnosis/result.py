@@ -218,7 +218,8 @@ def diagnose(
     multisines: list[MultisineFit] | None = None,
 ) -> Diagnosis:
     """Run the diagnosis of one bicycle's data (the module docstring): where, whether, which, priors,
-    selection, in that order.
+    selection, in that order (the candidates' cross-validation, the first part of "which", runs before
+    the verdict, because the parameter fit the verdict needs is made with them on the worker processes).
 
     Parameters
     ----------
@@ -260,13 +261,14 @@ def diagnose(
     fits = Fits(problem, compared.records, compared.record_rows, held, compared.multisines)
     # where
     where_map, test = gap_map(problem), gap_test(problem)
+    # which (the ranking first: the parameter fit the verdict needs is made there, on a worker; the
+    # ranking needs nothing from the verdict)
+    ranking, pairs = (rank(fits, candidates) if len(held) >= 2 else []), []
     # whether
     parameter_fit = fits.fit_of((PARAMETERS,)) if PARAMETERS in candidates else None
     verdict = whether(test, parameter_fit, problem)
-    # which
-    ranking, pairs = [], []
+    # which: the pairs
     if len(held) >= 2:
-        ranking = rank(fits, candidates)
         pairs = search_pairs(fits, candidates)
     for e in candidates:
         fits.fit_of((e,))
