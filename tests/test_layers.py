@@ -117,14 +117,6 @@ GAP_WING = (
     "io/multisine.py",
 )
 """Files of the gap wing, whose imports inside functions must each say why (a comment)."""
-WAITING_FOR_GAPSPEED = {
-    "gap/inference/indirect.py": 3,
-    "gap/inference/predict.py": 2,
-    "gap/inference/problem.py": 1,
-}
-"""Imports inside functions still without a reason in the files other branches are editing (issue 22
-moved them whole; the branches editing gap/inference and gap/plan): exactly these many, lowered as they
-move to the top (a count below its allowance fails too, so the allowance never outlives them)."""
 KNOWN_FILE_CYCLES = {frozenset({"io/benchmark_file.py", "io/bicycleparameters.py"})}
 """File-level cycles older than this test (each side imports the other inside a function)."""
 
@@ -282,7 +274,4 @@ def test_imports_inside_the_gap_wings_functions_say_why():
     for path, line, reason in _all_imports_inside_functions():
         if path.startswith(GAP_WING) and not reason:
             counts[path] = counts.get(path, 0) + 1
-    over = {p: n for p, n in counts.items() if n > WAITING_FOR_GAPSPEED.get(p, 0)}
-    assert not over, f"imports inside functions without a comment giving the reason (move them to the top): {over}"
-    stale = {p: counts.get(p, 0) for p, n in WAITING_FOR_GAPSPEED.items() if counts.get(p, 0) < n}
-    assert not stale, f"fewer imports inside functions than allowed: lower WAITING_FOR_GAPSPEED to {stale}"
+    assert not counts, f"imports inside functions without a comment giving the reason (move them to the top): {counts}"

@@ -137,7 +137,7 @@ def run_diagnosis(
     multisines = []
     for path, (settings, windows) in zip(experiment, windows_of):
         records += load_records(settings, windows)
-        multisines += read_multisines(path, settings)  # steer-torque multisine runs (multisine25)
+        multisines += read_multisines(path, settings)  # steer-torque multisine runs
     check_record_count(len(records) + len(multisines), where)  # detected decays, multisine runs
     candidates = EFFECT_NAMES
     if effects:

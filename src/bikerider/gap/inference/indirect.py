@@ -36,7 +36,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from bikerider.benchmark.simulation import expm
 from bikerider.errors import FitError
+from bikerider.gap.candidates.effect_model import EffectModel
+from bikerider.gap.inference.timedomain import Batch, friction_states, systems
 from bikerider.gap.measured.extraction import EXTRA_MODE_RANGE, MIN_CYCLES
 from bikerider.gap.measured.records import RecordFit
 
@@ -371,7 +374,6 @@ class RecordSimulator:
         speed of the records a sensor read) or ``(P, R_all)`` (every record's own, e.g. for the
         speed's uncertainty).  The control gains stay those of the recorded speed.
         """
-        from bikerider.gap.candidates.effect_model import EffectModel
 
         P = _batch_size(values, config, scale)
         R = index.size
@@ -424,7 +426,6 @@ class RecordSimulator:
         initial state refitted under the nonlinear model), the extraction is :func:`extract`, as for
         every linear model.
         """
-        from bikerider.gap.inference.timedomain import Batch, friction_states, systems
 
         theta = np.atleast_2d(np.asarray(theta, dtype=float))
         out = np.full((theta.shape[0], len(self.fits)), np.nan + 1j * np.nan)
@@ -461,7 +462,6 @@ def _linear_response(batch: RecordBatch, A: np.ndarray, outputs: tuple) -> np.nd
     linear least squares on the record's state signals, each weighted by its scatter
     (:func:`_initial_states`).
     """
-    from bikerider.benchmark.simulation import expm
 
     P, R, n = A.shape[0], A.shape[1], A.shape[-1]
     rows = [outputs[OBSERVED[s]] for s in batch.signals]

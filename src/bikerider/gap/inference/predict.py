@@ -26,10 +26,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from bikerider.benchmark.model import label_modes
-from bikerider.gap.candidates.effect_model import EffectModel, RiderGeometry
-from bikerider.gap.inference.frequency_response import predict_frf  # multisine records (multisine25)
+from bikerider.gap.candidates.effect_model import BENCH_ARGS, EffectModel, RiderGeometry
+from bikerider.gap.inference.frequency_response import predict_frf  # multisine records
 from bikerider.gap.measured.multisine import FrequencyResponseData
 from bikerider.gap.measured.tables import CANONICAL_ENTRIES, CanonicalData, EigenvalueData
+from bikerider.generated import benchmark_model as bm
 
 N_SPEEDS = 5
 """Speeds spanning each identified subset's range."""
@@ -128,7 +129,7 @@ class Predictor:
             kind.append("canonical"), mode.append("canonical"), quantity.append(c.entry[k])
             speed.append(0.5 * (lo + hi)), group.append(c.group[k]), value.append(c.value[k])
             sigma.append(c.sigma[k]), source.append(c.source[k])
-        f = self.frf  # multisine records: real and imaginary part of each line's response (multisine25)
+        f = self.frf  # multisine records: real and imaginary part of each line's response
         for k in range(len(f)):
             for q, val in (("real", f.value[k].real), ("imag", f.value[k].imag)):
                 kind.append("frf"), mode.append(f"frf_{f.signal[k]}"), quantity.append(q)
@@ -200,7 +201,7 @@ class Predictor:
             parts.append(self._predict_eigen(model, speed_scale))
         if len(self.canonical):
             parts.append(self._predict_canonical(model))
-        if len(self.frf):  # multisine records (multisine25); the speed scale of eigenvalue rows is not theirs
+        if len(self.frf):  # multisine records; the speed scale of eigenvalue rows is not theirs
             parts.append(predict_frf(model, self.frf))
         if len(parts) > 1:
             lead = np.broadcast_shapes(*(p.shape[:-1] for p in parts))
@@ -290,8 +291,6 @@ class Predictor:
 
 
 def _nominal_entries(nominal: dict[str, float], entries: list[str]) -> np.ndarray:
-    from bikerider.gap.candidates.effect_model import BENCH_ARGS
-    from bikerider.generated import benchmark_model as bm
 
     M, C1, K0, K2 = bm.canonical_matrices(**{k: nominal[k] for k in BENCH_ARGS})
     mats = {"M": M, "C1": C1, "K0": K0, "K2": K2}

@@ -53,13 +53,14 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
+from scipy.optimize import least_squares
 
 from bikerider.engine import DifferencedStage
 from bikerider.errors import InputError
 from bikerider.gap.candidates.effect_model import BENCH_ARGS, STRUCTURAL_KEYS, EffectModel
 from bikerider.gap.candidates.effects import EFFECTS, OBSERVATION_EFFECTS, PARAMETERS, SPEED_SENSOR
 from bikerider.gap.candidates.nominal import GapModelInput
-from bikerider.gap.inference.frequency_response import predict_frf_scaled  # multisine records (multisine25)
+from bikerider.gap.inference.frequency_response import predict_frf_scaled  # multisine records
 from bikerider.gap.inference.predict import Predictor
 from bikerider.gap.measured.multisine import FrequencyResponseData
 from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
@@ -200,7 +201,7 @@ class GapProblem:
         )
         self.shift_upper = np.full(len(self.free), MAX_SHIFT)
         self.eigen = eigen
-        self.predictor = Predictor(eigen, canonical, self.nominal, self.geometry, frf)  # frf: multisine25
+        self.predictor = Predictor(eigen, canonical, self.nominal, self.geometry, frf)  # frf: the multisine records
         self.obs = self.predictor.observations
         self.y = self.obs.value
         self.records = records
@@ -484,7 +485,7 @@ class GapProblem:
                             EffectModel(flat_values, self.geometry, flat_config), np.asarray(scale, dtype=float)
                         )
                         if n_rows
-                        else np.zeros((P, 0))  # multisine runs only (multisine25)
+                        else np.zeros((P, 0))  # multisine runs only
                     )
                     if len(self.predictor.canonical) or len(self.predictor.frf):  # the rest: canonical, multisines
                         rest = self.predictor.predict(EffectModel(values, self.geometry, config))[
@@ -670,7 +671,6 @@ class GapProblem:
         The result keeps the weighted Jacobian at the solution (``_jacobian``) and the weights
         (``_weight``), for the iterated bias correction.
         """
-        from scipy.optimize import least_squares
 
         mask = np.ones(len(self.obs), bool) if mask is None else np.asarray(mask, bool)
         lay = self.layout(tuple(effects))
