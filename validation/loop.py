@@ -354,7 +354,7 @@ def _even_order(plan: NextExperiment, n: int) -> list[int]:
         law = laws[k % len(laws)]
         idx = sorted((i for i, e in enumerate(plan.points) if e.law == law), key=lambda i: plan.points[i].speed)
         j = k // len(laws)
-        frac = 0.5 if j == 0 else _van_der_corput(j)
+        frac = _van_der_corput(j + 1)  # 1/2, 1/4, 3/4, 1/8, ...: every new run between those before
         order.append(idx[min(int(frac * len(idx)), len(idx) - 1)])
     return order
 
