@@ -42,7 +42,9 @@ CRITERIA = ("hunter_reiner", "box_hill", "buzzi_ferraris", "jensen_renyi")
 def _check(means: np.ndarray, own: np.ndarray | None, noise: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     means = np.asarray(means, dtype=float)
     if means.ndim != 3 or means.shape[0] < 2:
-        raise ValueError(f"means: expected an array (rivals >= 2, experiments, observed numbers), got shape {means.shape}")
+        raise ValueError(
+            f"means: expected an array (rivals >= 2, experiments, observed numbers), got shape {means.shape}"
+        )
     R, n, m = means.shape
     noise = np.asarray(noise, dtype=float)
     if noise.shape != (n, m, m):
@@ -139,9 +141,7 @@ def buzzi_ferraris(means, own=None, noise=None, weights=None) -> np.ndarray:
         ``(n,)``.
     """
     means, own, noise = _check(means, own, noise)
-    return sum(
-        _quadratic(means[i] - means[j], 2 * noise + own[i] + own[j]) for i, j in _pairs(len(means))
-    )
+    return sum(_quadratic(means[i] - means[j], 2 * noise + own[i] + own[j]) for i, j in _pairs(len(means)))
 
 
 def buzzi_ferraris_ratio(means, own=None, noise=None, weights=None) -> np.ndarray:
@@ -180,9 +180,9 @@ def jensen_renyi(means, own=None, noise=None, weights=None) -> np.ndarray:
     S = own + noise[None]
     logs = np.array(
         [
-            math.log(w[i] * w[j]) + _log_gauss_overlap(means[i], S[i], means[j], S[j]) if w[i] * w[j] > 0 else np.full(
-                means.shape[1], -np.inf
-            )
+            math.log(w[i] * w[j]) + _log_gauss_overlap(means[i], S[i], means[j], S[j])
+            if w[i] * w[j] > 0
+            else np.full(means.shape[1], -np.inf)
             for i in range(R)
             for j in range(R)
         ]
