@@ -12,14 +12,14 @@ attributes only) plans once, which gives the experiments (decays at speeds under
 steer-torque multisines), each rival's predictions and the noise of one run; and the loop runs.
 
 The inner loop must be cheap, so each rival is *linearised* at its fit to the tie's data: its
-predictions of every experiment, and their slopes in its fitted values and in the nominal parameters
-(in units of their stated uncertainty), by secants through the same public model code the diagnosis
+predictions of every experiment and their slopes in its fitted values, by secants through the same public model code the diagnosis
 uses (:class:`bikerider.gap.inference.predict.Predictor` for decays,
 :meth:`bikerider.gap.candidates.effect_model.EffectModel.state_space` for multisines).  The rival's
-values then have a Gaussian prior (its fit's covariance; the nominal parameters' shifts standard
-normal), every new run updates it exactly as a refit of the linearised model would (a Kalman step), and
-the rival's log evidence grows by the predictive density of the run.  Posterior model probabilities
-start even at the tie.  A strategy stops when the hidden effect's probability reaches
+values then have a Gaussian prior (its fit's covariance, each value's spread capped at that of a value
+anywhere in its search range), every new run updates it exactly as a refit of the linearised model would (a Kalman step), and
+the rival's log evidence grows by the predictive density of the run (a run every rival misses beyond its
+noise is down-weighted first, :func:`lack_of_fit`).  The nominal parameters' uncertainty is counted per
+run, as the plan and the diagnosis count it.  Posterior model probabilities start even at the tie.  A strategy stops when the hidden effect's probability reaches
 :data:`DECIDED` (*resolved*), when the rival's does (*wrong*), when it has spent :data:`N_MAX` runs
 (*undecided*), or, for the plan, when it declares the tie unbreakable (no experiment repeated for
 the runs left promises a resolution with probability :data:`HOPELESS` or more).
@@ -174,9 +174,8 @@ def multisine_run(simulator: TruthSimulator, speed: float, gains, sweep, rng: np
 
 # -- the rivals, linearised -------------------------------------------------------------------------------
 class LinearRival:
-    """A rival's predictions of every experiment, linear in its values ``z`` (fitted values, then the
-    nominal parameters' shifts in units of their uncertainty), with a Gaussian prior on ``z`` that the
-    runs update, and the log evidence of the runs so far."""
+    """A rival's predictions of every experiment, linear in its fitted values ``z``, with a Gaussian prior on
+    ``z`` that the runs update, and the log evidence of the runs so far."""
 
     def __init__(self, mean: list[np.ndarray], jac: list[np.ndarray], prior: np.ndarray):
         self.mean, self.jac = mean, jac

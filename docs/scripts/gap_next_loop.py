@@ -321,6 +321,28 @@ def report(args) -> int:
             + (": " + ", ".join(f"{c['scenario']} seed {c['seed']}" for c in broken_by_even) if broken_by_even else "")
             + (" (**met**)." if not broken_by_even else " (**not met**)."),
         ]
+    if best:
+        picked = [e for c in ties for e in c["strategies"][best]["chosen"]]
+        sweeps = sum(e >= c["experiments"]["decays"] for c in ties for e in c["strategies"][best]["chosen"])
+        lines.append(
+            f"* The runs {best} chose: {len(picked) - sweeps} decays and {sweeps} multisines "
+            f"({sweeps / max(len(picked), 1):.0%})."
+        )
+    nobody = [c for c in ties if not any(s["status"] == "resolved" for s in c["strategies"].values())]
+    all_wrong = [c for c in ties if all(s["status"] == "wrong" for s in c["strategies"].values())]
+    lines.append(
+        f"* {len(nobody)} ties no strategy resolved within {n_max} runs; in {len(all_wrong)} of them every strategy "
+        "decided for the rival (the data favour it: the truth is neither rival exactly, and the rival describes it "
+        "better there): "
+        + (
+            "; ".join(
+                f"{c['scenario']} seed {c['seed']} ({', '.join(f'{k} {v:.3g}' for k, v in c['sizes'].items())})"
+                for c in all_wrong
+            )
+            or "none"
+        )
+        + "."
+    )
     lines += ["", "Ties per pair (resolved by the best criterion / by the even spread):", ""]
     lines += ["| pair | cases | ties | plan resolved | even resolved |", "|---|---|---|---|---|"]
     for label, cs in by_scenario.items():
