@@ -179,6 +179,14 @@ def report(args) -> int:
             **{k: statuses.count(k) for k in ("resolved", "wrong", "undecided", "unbreakable")},
             "lost": sum(c["strategies"][n]["lost"] for c in ties if n in c["strategies"]),
             "spent": sum(c["strategies"][n]["runs"] for c in ties if n in c["strategies"]),
+            # to any decision, right or wrong: how fast the strategy makes the data speak
+            "decided": L.figure_of_merit(
+                [
+                    c["strategies"][n]["runs"] if c["strategies"][n]["status"] in ("resolved", "wrong") else None
+                    for c in ties
+                    if n in c["strategies"]
+                ]
+            ),
         }
     plans = [n for n in names if n.startswith("plan:")]
 
@@ -298,15 +306,18 @@ def report(args) -> int:
         + (f" (goal: 100; **only {len(ties)} finished** in the time)" if len(ties) < 100 else "")
         + ".",
         "",
-        "| strategy | ties | resolved | wrong | undecided | unbreakable | runs needed: median | 90th percentile | runs spent | lost |",
-        "|---|---|---|---|---|---|---|---|---|---|",
+        "| strategy | ties | resolved | wrong | undecided | unbreakable | runs needed: median | 90th percentile "
+        "| runs to any decision: median | 90th percentile | right of decided | runs spent | lost |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for n in names:
         m = merit[n]
         med, p90 = m["median_p90"]
         lines.append(
             f"| {'**' + n + '**' if n == best else n} | {m['n']} | {m['resolved']} | {m['wrong']} | {m['undecided']} | "
-            f"{m['unbreakable']} | {_fmt(med, n_max)} | {_fmt(p90, n_max)} | {m['spent']} | {m['lost']} |"
+            f"{m['unbreakable']} | {_fmt(med, n_max)} | {_fmt(p90, n_max)} | {_fmt(m['decided'][0], n_max)} | "
+            f"{_fmt(m['decided'][1], n_max)} | {m['resolved'] / max(m['resolved'] + m['wrong'], 1):.0%} | "
+            f"{m['spent']} | {m['lost']} |"
         )
     if best:
         bm, em = merit[best]["median_p90"], merit["even"]["median_p90"]
@@ -343,13 +354,21 @@ def report(args) -> int:
         )
         + "."
     )
-    lines += ["", "Ties per pair (resolved by the best criterion / by the even spread):", ""]
-    lines += ["| pair | cases | ties | plan resolved | even resolved |", "|---|---|---|---|---|"]
+    lines += ["", "Ties per pair, the best criterion against the even spread:", ""]
+    lines += [
+        "| pair | cases | ties | plan resolved | plan wrong | even resolved | even wrong |",
+        "|---|---|---|---|---|---|---|",
+    ]
     for label, cs in by_scenario.items():
         t = [c for c in cs if c.get("strategies")]
-        pr = sum(c["strategies"][best]["status"] == "resolved" for c in t) if best else 0
-        er = sum(c["strategies"]["even"]["status"] == "resolved" for c in t)
-        lines.append(f"| {label} | {len(cs)} | {len(t)} | {pr} | {er} |")
+
+        def count(name, status, t=t):
+            return sum(c["strategies"][name]["status"] == status for c in t) if name else 0
+
+        lines.append(
+            f"| {label} | {len(cs)} | {len(t)} | {count(best, 'resolved')} | {count(best, 'wrong')} | "
+            f"{count('even', 'resolved')} | {count('even', 'wrong')} |"
+        )
     lines += ["", "### Honest odds: the plan's resolution probability against the loop", ""]
     for kind, title in (("decay", "decays"), ("sweep", "multisines")):
         pairs, rows = rel[kind]
