@@ -379,10 +379,39 @@ def report(args) -> int:
         )
         lines += ["", "| predicted | points (ties) | mean predicted | fraction resolved |", "|---|---|---|---|"]
         lines += [f"| {lo:.2f}-{hi:.2f} | {n} ({nc}) | {mp:.2f} | {fr:.2f} |" for lo, hi, n, nc, mp, fr in rows]
+        at10 = [(p, r) for p, r, _ in pairs[9::n_max]]
+        if at10:
+            lines += [
+                "",
+                f"At the plan's default of 10 runs ({len(at10)} ties, one point each): predicted probabilities add up to "
+                f"{sum(p for p, _ in at10):.1f}, {sum(r for _, r in at10)} were resolved.",
+            ]
         lines.append("")
+    lines += [f"![runs to a decision and reliability](figures/{FIGURE.name})", ""]
+    if best:
+        decided_plan, decided_even = merit[best]["decided"], merit["even"]["decided"]
+        unbreakable = [c for c in ties if c["strategies"][best]["status"] == "unbreakable"]
+        lines += [
+            "### Reading the results",
+            "",
+            f"* Speed of a decision: {best} reaches one (right or wrong) in a median of {_fmt(decided_plan[0], n_max)} "
+            f"runs, the even spread in {_fmt(decided_even[0], n_max)}"
+            + ("." if decided_plan[0] != decided_even[0] else " (the same).")
+            + f" Fastest to a decision of all strategies: {min(names, key=lambda n: merit[n]['decided'])}.",
+            f"* Right decisions: {merit[best]['resolved']} of {merit[best]['resolved'] + merit[best]['wrong']} for "
+            f"{best}, {merit['even']['resolved']} of {merit['even']['resolved'] + merit['even']['wrong']} for the even "
+            "spread. A wrong decision is the loop's posterior reaching 0.95 for the rival: the truth is neither rival "
+            "(parameter error within the stated uncertainty, a rider whose geometry differs from the diagnosis's "
+            "default, Coulomb friction where a rival is viscous), and the rival with more freedom (passive arms: a "
+            "mass, a spring and a damper at the grips) describes such a truth better at the experiments that tell "
+            "the rivals apart. Two linearised rivals' posterior odds are then overconfident, whichever runs are taken.",
+            f"* {len(unbreakable)} ties declared unbreakable by {best}; the even spread resolved "
+            f"{len(broken_by_even)} of them.",
+            "* The plan's resolution probabilities assume one rival is the truth; the reliability diagrams show how far "
+            "they hold when it is not.",
+            "",
+        ]
     lines += [
-        f"![runs to a decision and reliability](figures/{FIGURE.name})",
-        "",
         "### Cost",
         "",
         f"* {len(stored)} cases in {sum(seconds):.0f} s of worker time ({sum(seconds) / max(len(stored), 1):.1f} s a case,"
