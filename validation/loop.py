@@ -300,6 +300,7 @@ class TruthRuns:
     def __init__(self, simulator: TruthSimulator, plan: NextExperiment, seed: int):
         self.simulator, self.plan, self.seed = simulator, plan, seed
         self.cache: dict[tuple[int, int], tuple[np.ndarray, np.ndarray] | None] = {}
+        self.rows: dict[tuple[int, int], EigenvalueData] = {}  # the decays as the diagnosis reads them
         self.seconds = {"decay": 0.0, "sweep": 0.0}
         self.count = {"decay": 0, "sweep": 0}
         nominal = EffectModel(plan.problem.nominal, plan.problem.geometry)
@@ -318,6 +319,7 @@ class TruthRuns:
                 data, _ = measure(self.simulator, protocol, rng)
                 out = None
                 if len(data):
+                    self.rows[key] = data
                     y = np.array([data.value[0].real, abs(data.value[0].imag)])
                     out = (y, np.diag([data.real_sigma[0] ** 2, data.imag_sigma[0] ** 2]) + plan.model_cov[e])
                 kind = "decay"
@@ -477,8 +479,8 @@ def run_strategy(name: str, plan, rivals_at_tie, runs: TruthRuns, truth_index: i
     return {"status": status, "runs": len(chosen), "chosen": chosen, "truth_probability": trajectory, "lost": lost}
 
 
-def run_loop_case(models: dict, scenario: Scenario, seed: int, strategies=STRATEGIES) -> dict:
-    """One case (module docstring), JSON-ready."""
+def run_loop_case(models: dict, scenario: Scenario, seed: int, strategies=STRATEGIES, keep: bool = False) -> dict:
+    """One case (module docstring), JSON-ready (with ``keep``, also the objects under ``_objects``)."""
     start = time.perf_counter()
     rng = np.random.default_rng(seed)
     model = models["rider" if scenario.rider else "riderless"]
@@ -562,7 +564,38 @@ def run_loop_case(models: dict, scenario: Scenario, seed: int, strategies=STRATE
     out["truth_runs"] = {"count": runs.count, "seconds": {k: round(v, 3) for k, v in runs.seconds.items()}}
     out["seconds_setup"] = {"diagnosis": round(t_diag - start, 3), "plan": round(t_plan - t_diag, 3)}
     out["seconds"] = time.perf_counter() - start
+    if keep:
+        out["_objects"] = {"model": model, "data": data, "runs": runs, "rivals": rivals}
     return out
+
+
+def diagnosis_check(models: dict, scenario: Scenario, seed: int, strategy: str = "even") -> dict:
+    """The case again (the same runs), and the diagnosis itself on the tie's data plus the decays the
+    strategy took: does the diagnosis (its priors, its held-out tie rule) decide as the loop did?
+    Multisines the strategy took are left out (the diagnosis reads no frequency responses)."""
+    out = run_loop_case(models, scenario, seed, strategies=(strategy,), keep=True)
+    if "_objects" not in out:
+        return {"scenario": scenario.label, "seed": seed, "status": out["status"]}
+    o = out.pop("_objects")
+    s = out["strategies"][strategy]
+    seen: dict[int, int] = {}
+    rows = []
+    for e in s["chosen"]:
+        k = seen.get(e, 0)
+        seen[e] = k + 1
+        if (e, k) in o["runs"].rows:
+            rows.append(o["runs"].rows[(e, k)])
+    check = {"scenario": scenario.label, "seed": seed, "strategy": strategy, "loop": s["status"], "runs": s["runs"]}
+    check["decays_used"] = len(rows)
+    if not rows:
+        return check
+    data = EigenvalueData.concatenate([o["data"], *rows])
+    d = Diagnosis(o["model"], data, CanonicalData.empty(), effects=o["rivals"])
+    first = d.ranking[0] if d.ranking else None
+    check["diagnosis_first"] = first["effect"] if first else None
+    check["diagnosis_tied"] = list(first["tied_with"]) if first else []
+    check["hidden"] = scenario.effect.candidate
+    return check
 
 
 def figure_of_merit(runs: list[int | None]) -> tuple[float, float]:
