@@ -4,6 +4,8 @@ Two steps, so that a stopped study keeps what it did::
 
     # run cases until enough ties (or the deadline), appending one JSON line per case
     nice -n 10 .venv/bin/python docs/scripts/gap_next_loop.py run --ties 100 --workers 2 --until 15:30
+    # judge the loop's wrong or undecided ties by the diagnosis itself (optional, about a minute a tie)
+    nice -n 10 .venv/bin/python docs/scripts/gap_next_loop.py check --max 10
     # write part 5 of docs/gap_validation.md and docs/figures/gap_next_loop.png from the stored cases
     .venv/bin/python docs/scripts/gap_next_loop.py report
 
@@ -111,6 +113,31 @@ def run(args) -> int:
                 LOG.info("stopping: %d ties", ties)
                 pool.terminate()
                 break
+    return 0
+
+
+def check(args) -> int:
+    """Ties where the even spread (else the plan's best decay repeated) went wrong or stayed undecided, run
+    again and judged by the diagnosis itself, appended to :data:`CHECKS`."""
+    from validation import loop as L
+
+    labels = {s.label: s for s in L.SCENARIOS}
+    done = set()
+    if CHECKS.exists():
+        done = {(c["scenario"], c["seed"]) for c in map(json.loads, CHECKS.read_text(encoding="utf-8").splitlines())}
+    todo = []
+    for c in _stored():
+        if not c.get("strategies") or (c["scenario"], c["seed"]) in done:
+            continue
+        for name in ("even", "repeat:decay"):
+            if c["strategies"].get(name, {}).get("status") in ("wrong", "undecided"):
+                todo.append((c["scenario"], c["seed"], name))
+                break
+    for label, seed, name in todo[: args.max]:
+        result = L.diagnosis_check(_models(), labels[label], seed, name)
+        with CHECKS.open("a", encoding="utf-8") as out:
+            out.write(json.dumps(result) + "\n")
+        LOG.info("%s", result)
     return 0
 
 
@@ -484,9 +511,11 @@ def main() -> int:
     r.add_argument("--attempts", type=int, default=400, help="cases to try at most (scenarios in turn)")
     r.add_argument("--workers", type=int, default=2)
     r.add_argument("--until", help="stop at this UTC time, HH:MM")
+    c = sub.add_parser("check", help="judge the loop's wrong or undecided ties by the diagnosis itself")
+    c.add_argument("--max", type=int, default=10, help="ties to check at most")
     sub.add_parser("report", help="write part 5 of docs/gap_validation.md and the figure")
     args = parser.parse_args()
-    return run(args) if args.command == "run" else report(args)
+    return {"run": run, "check": check, "report": report}[args.command](args)
 
 
 if __name__ == "__main__":
