@@ -177,14 +177,21 @@ class LinearRival:
     """A rival's predictions of every experiment, linear in its fitted values ``z``, with a Gaussian prior on
     ``z`` that the runs update, and the log evidence of the runs so far."""
 
-    def __init__(self, mean: list[np.ndarray], jac: list[np.ndarray], prior: np.ndarray):
+    def __init__(self, mean: list[np.ndarray], jac: list[np.ndarray], prior: np.ndarray, own: int | None = None):
         self.mean, self.jac = mean, jac
         self.a = np.zeros(prior.shape[0])
         self.P = prior.copy()
         self.log_evidence = 0.0
+        self.own = prior.shape[0] if own is None else own
+        """How many of ``z`` are the rival's own fitted values (the rest: shared nominal-parameter shifts)."""
 
-    def predict(self, e: int) -> tuple[np.ndarray, np.ndarray]:
+    def predict(self, e: int, own_only: bool = False) -> tuple[np.ndarray, np.ndarray]:
+        """Mean and covariance of the rival's prediction of experiment ``e`` (``own_only``: the covariance from
+        its own values alone, which the runs shrink; the shared shifts' part they do not)."""
         J = self.jac[e]
+        if own_only:
+            k = self.own
+            return self.mean[e] + J @ self.a, J[:, :k] @ self.P[:k, :k] @ J[:, :k].T
         return self.mean[e] + J @ self.a, J @ self.P @ J.T
 
     def update(self, e: int, y: np.ndarray, R: np.ndarray) -> None:
@@ -220,10 +227,11 @@ def _rows(plan: NextExperiment) -> EigenvalueData:
     )
 
 
-def _predictions(plan: NextExperiment, effects: tuple[str, ...], X: np.ndarray) -> np.ndarray:
-    """Every experiment's prediction ``(P, n_points * 2 + n_sweeps * 2K)`` for values ``X (P, p + q)``."""
+def _predictions(plan: NextExperiment, effects: tuple[str, ...], X: np.ndarray, shared: bool = False) -> np.ndarray:
+    """Every experiment's prediction ``(P, n_points * 2 + n_sweeps * 2K)`` for values ``X (P, p + q)`` (with
+    ``shared``, the last ``q`` the nominal parameters' shifts in units of their uncertainty)."""
     p = plan.problem
-    values, config, _ = p.configure(p.layout(tuple(effects)), X)
+    values, config, _ = p.configure(p.layout(tuple(effects) + (("parameters",) if shared else ())), X)
     model = EffectModel(values, p.geometry, config)
     P = X.shape[0]
     parts = []
@@ -257,10 +265,12 @@ def _unpack(plan: NextExperiment, flat: np.ndarray) -> list[np.ndarray]:
     return out
 
 
-def linearise(plan: NextExperiment, rival) -> LinearRival:
-    """A rival of the plan, linearised at its fit (module docstring)."""
+def linearise(plan: NextExperiment, rival, shared: bool = False) -> LinearRival:
+    """A rival of the plan, linearised at its fit (module docstring); with ``shared``, also in the nominal
+    parameters' shifts (standard normal prior, one set for all runs: the truth's parameter error is the same
+    in every run) instead of counting their uncertainty per run."""
     fit = rival.fit
-    q = 0  # the nominal parameters' uncertainty is counted per run, as the plan and the diagnosis count it
+    q = len(plan.problem.free) if shared else 0
     k = fit.values.size
     span = (np.asarray(fit.upper) - np.asarray(fit.lower)) / math.sqrt(12)
     cov = fit.covariance if fit.covariance is not None and np.all(np.isfinite(fit.covariance)) else None
@@ -283,22 +293,22 @@ def linearise(plan: NextExperiment, rival) -> LinearRival:
             up[j], down[j] = 1.0, -1.0
         X += [up, down]
     X = np.array(X)
-    pred = _predictions(plan, rival.effects, X)
+    pred = _predictions(plan, rival.effects, X, shared)
     width = X[1::2] - X[2::2]
     width = np.diagonal(width)
     slopes = ((pred[1::2] - pred[2::2]) / np.where(width > 0, width, np.inf)[:, None]).T  # (total, k + q)
     prior = np.zeros((k + q, k + q))
     prior[:k, :k] = cov
     prior[k:, k:] = np.eye(q)
-    return LinearRival(_unpack(plan, pred[0]), [J.T for J in _unpack(plan, slopes.T)], prior)
+    return LinearRival(_unpack(plan, pred[0]), [J.T for J in _unpack(plan, slopes.T)], prior, own=k)
 
 
 # -- the loop ---------------------------------------------------------------------------------------
 class TruthRuns:
     """The truth's runs, the k-th run of an experiment the same for every strategy."""
 
-    def __init__(self, simulator: TruthSimulator, plan: NextExperiment, seed: int):
-        self.simulator, self.plan, self.seed = simulator, plan, seed
+    def __init__(self, simulator: TruthSimulator, plan: NextExperiment, seed: int, shared: bool = False):
+        self.simulator, self.plan, self.seed, self.shared = simulator, plan, seed, shared
         self.cache: dict[tuple[int, int], tuple[np.ndarray, np.ndarray] | None] = {}
         self.rows: dict[tuple[int, int], EigenvalueData] = {}  # the decays as the diagnosis reads them
         self.seconds = {"decay": 0.0, "sweep": 0.0}
@@ -321,7 +331,8 @@ class TruthRuns:
                 if len(data):
                     self.rows[key] = data
                     y = np.array([data.value[0].real, abs(data.value[0].imag)])
-                    out = (y, np.diag([data.real_sigma[0] ** 2, data.imag_sigma[0] ** 2]) + plan.model_cov[e])
+                    R = np.diag([data.real_sigma[0] ** 2, data.imag_sigma[0] ** 2])
+                    out = (y, R if self.shared else R + plan.model_cov[e])
                 kind = "decay"
             else:
                 m = e - len(plan.points)
@@ -331,7 +342,8 @@ class TruthRuns:
                 slowest = max(float(np.max(ev.real)), -10.0)
                 settle = min(20.0, max(5.0, 3.0 / max(-slowest, 1e-3)))  # three time constants of the slowest mode
                 H = multisine_run(self.simulator, s.speed, gains, s, rng, settle)
-                out = None if H is None else (split(H), plan.sweep_data[m] + plan.sweep_model[m])
+                R = plan.sweep_data[m] if self.shared else plan.sweep_data[m] + plan.sweep_model[m]
+                out = None if H is None else (split(H), R)
                 kind = "sweep"
             self.cache[key] = out
             self.seconds[kind] += time.perf_counter() - start
@@ -360,11 +372,12 @@ def _even_order(plan: NextExperiment, n: int) -> list[int]:
     return order
 
 
-def _noise(plan: NextExperiment, e: int) -> np.ndarray:
+def _noise(plan: NextExperiment, e: int, shared: bool = False) -> np.ndarray:
+    """One run's noise the plan expects (with the nominal parameters' uncertainty unless it is ``shared``)."""
     if e < len(plan.points):
-        return plan.data_cov[e] + plan.model_cov[e]
+        return plan.data_cov[e] + (0 if shared else plan.model_cov[e])
     m = e - len(plan.points)
-    return plan.sweep_data[m] + plan.sweep_model[m]
+    return plan.sweep_data[m] + (0 if shared else plan.sweep_model[m])
 
 
 def _groups(plan: NextExperiment) -> list[list[int]]:
@@ -380,23 +393,24 @@ def _posterior(rivals: list[LinearRival]) -> np.ndarray:
     return w / w.sum()
 
 
-def _scores(plan, rivals, weights, criterion, groups) -> np.ndarray:
+def _scores(plan, rivals, weights, criterion, groups, shared=False) -> np.ndarray:
     out = np.full(len(plan.points) + len(plan.sweeps), -np.inf)
     for g in groups:
         preds = [[r.predict(e) for e in g] for r in rivals]
         means = np.array([[m for m, _ in row] for row in preds])
         own = np.array([[W for _, W in row] for row in preds])
-        noise = np.array([_noise(plan, e) for e in g])
+        noise = np.array([_noise(plan, e, shared) for e in g])
         out[g] = C.score(criterion, means, own, noise, weights)
     return out
 
 
-def best_chance(plan, rivals, weights, runs_left: int, groups) -> float:
+def best_chance(plan, rivals, weights, runs_left: int, groups, shared=False) -> float:
     """The plan's resolution probability of the best experiment repeated ``runs_left`` times, from the
-    rivals as the loop has updated them (the odds needed from the current ones)."""
+    rivals as the loop has updated them (the odds needed from the current ones); the shared shifts'
+    uncertainty, common to both rivals' predictions, is left out, as the plan counts it per run."""
     best = 0.0
     for g in groups:
-        preds = [[r.predict(e) for e in g] for r in rivals]
+        preds = [[r.predict(e, own_only=True) for e in g] for r in rivals]
         noise = np.array([_noise(plan, e) for e in g])
         delta = np.array([m for m, _ in preds[0]]) - np.array([m for m, _ in preds[1]])
         chance = np.zeros(len(g))
@@ -427,7 +441,8 @@ def lack_of_fit(rivals: list[LinearRival], e: int, y: np.ndarray, R: np.ndarray)
 
 def run_strategy(name: str, plan, rivals_at_tie, runs: TruthRuns, truth_index: int, seed: int, repeat=None) -> dict:
     """One strategy's loop (module docstring): its runs, the hidden effect's probability after each."""
-    rivals = [LinearRival(r.mean, r.jac, r.P) for r in rivals_at_tie]
+    rivals = [LinearRival(r.mean, r.jac, r.P, r.own) for r in rivals_at_tie]
+    shared = runs.shared
     groups = _groups(plan)
     n_exp = len(plan.points) + len(plan.sweeps)
     rng = np.random.default_rng([seed, 991])
@@ -440,10 +455,10 @@ def run_strategy(name: str, plan, rivals_at_tie, runs: TruthRuns, truth_index: i
     for step in range(N_MAX):
         weights = _posterior(rivals)
         if name.startswith("plan:"):
-            if best_chance(plan, rivals, weights, N_MAX - step, groups) < HOPELESS:
+            if best_chance(plan, rivals, weights, N_MAX - step, groups, shared) < HOPELESS:
                 status = "unbreakable"
                 break
-            scores = _scores(plan, rivals, weights, name.split(":", 1)[1], groups)
+            scores = _scores(plan, rivals, weights, name.split(":", 1)[1], groups, shared)
             scores[list(failed)] = -np.inf
             e = int(np.argmax(scores))
         elif name == "even":
@@ -479,8 +494,11 @@ def run_strategy(name: str, plan, rivals_at_tie, runs: TruthRuns, truth_index: i
     return {"status": status, "runs": len(chosen), "chosen": chosen, "truth_probability": trajectory, "lost": lost}
 
 
-def run_loop_case(models: dict, scenario: Scenario, seed: int, strategies=STRATEGIES, keep: bool = False) -> dict:
-    """One case (module docstring), JSON-ready (with ``keep``, also the objects under ``_objects``)."""
+def run_loop_case(
+    models: dict, scenario: Scenario, seed: int, strategies=STRATEGIES, keep: bool = False, shared: bool = False
+) -> dict:
+    """One case (module docstring), JSON-ready (with ``keep``, also the objects under ``_objects``; ``shared``:
+    the nominal parameters' uncertainty shared by all runs, :func:`linearise`)."""
     start = time.perf_counter()
     rng = np.random.default_rng(seed)
     model = models["rider" if scenario.rider else "riderless"]
@@ -488,6 +506,7 @@ def run_loop_case(models: dict, scenario: Scenario, seed: int, strategies=STRATE
     simulator = TruthSimulator(model, truth, rng)
     data, _ = measure(simulator, NARROW["rider" if scenario.rider else "riderless"], rng)
     out = {
+        "shared": shared,
         "scenario": scenario.label,
         "truth": scenario.effect.name,
         "candidate": scenario.effect.candidate,
@@ -517,7 +536,7 @@ def run_loop_case(models: dict, scenario: Scenario, seed: int, strategies=STRATE
     except (NoExperiment, InputError, FitError) as exc:
         return {**out, "status": f"no plan: {exc}", "seconds": time.perf_counter() - start}
     t_plan = time.perf_counter()
-    lin = [linearise(plan, r) for r in plan.rivals]
+    lin = [linearise(plan, r, shared) for r in plan.rivals]
     names = [r.name for r in plan.rivals]
     truth_index = names.index(scenario.effect.candidate)
     # the linearised rivals reproduce the plan's own predictions at the fit
@@ -550,7 +569,7 @@ def run_loop_case(models: dict, scenario: Scenario, seed: int, strategies=STRATE
         linearisation_error=max(check) if check else None,
         truth_index=truth_index,
     )
-    runs = TruthRuns(simulator, plan, seed)
+    runs = TruthRuns(simulator, plan, seed, shared)
     results = {}
     for name in strategies:
         if name.startswith("repeat:"):

@@ -35,6 +35,8 @@ if str(ROOT) not in sys.path:  # validation/ (the gap's blind-check harnesses) l
 BP = ROOT / "src" / "bikerider" / "data" / "bicycleparameters"
 RESULTS = Path(__file__).with_name("gap_next_loop.jsonl")
 CHECKS = Path(__file__).with_name("gap_next_loop_checks.jsonl")
+SHARED = Path(__file__).with_name("gap_next_loop_shared.jsonl")
+"""The main study's ties again, the nominal parameters' uncertainty shared by all runs (``run --shared``)."""
 """Ties run again and judged by the diagnosis itself (:func:`validation.loop.diagnosis_check`)."""
 DOC = ROOT / "docs" / "gap_validation.md"
 FIGURE = ROOT / "docs" / "figures" / "gap_next_loop.png"
@@ -61,18 +63,18 @@ def _models():
 def _one(job):
     from validation import loop as L
 
-    k, seed = job
+    k, seed, shared = job
     logging.getLogger("bikerider").setLevel(logging.ERROR)
     try:
-        return L.run_loop_case(_models(), L.SCENARIOS[k], seed)
+        return L.run_loop_case(_models(), L.SCENARIOS[k], seed, shared=shared)
     except Exception as exc:  # a case that breaks the harness is stored with its error, not lost silently
         return {"scenario": L.SCENARIOS[k].label, "seed": seed, "tie": False, "status": f"error: {exc!r}"}
 
 
-def _stored() -> list[dict]:
-    if not RESULTS.exists():
+def _stored(path: Path = RESULTS) -> list[dict]:
+    if not path.exists():
         return []
-    return [json.loads(line) for line in RESULTS.read_text(encoding="utf-8").splitlines() if line.strip()]
+    return [json.loads(line) for line in path.read_text(encoding="utf-8").splitlines() if line.strip()]
 
 
 def run(args) -> int:
@@ -80,14 +82,21 @@ def run(args) -> int:
 
     from validation import loop as L
 
-    done = {(c["scenario"], c["seed"]) for c in _stored()}
-    ties = sum(bool(c.get("strategies")) for c in _stored())
+    path = SHARED if args.shared else RESULTS
+    done = {(c["scenario"], c["seed"]) for c in _stored(path)}
+    ties = sum(bool(c.get("strategies")) for c in _stored(path))
     jobs = []
-    for i in range(args.attempts):
-        k = i % len(L.SCENARIOS)
-        seed = FIRST_SEED + i
-        if (L.SCENARIOS[k].label, seed) not in done:
-            jobs.append((k, seed))
+    if args.shared:  # the ties of the main study, again with the nominal uncertainty shared by the runs
+        index = {s.label: k for k, s in enumerate(L.SCENARIOS)}
+        for c in _stored():
+            if c.get("strategies") and (c["scenario"], c["seed"]) not in done:
+                jobs.append((index[c["scenario"]], c["seed"], True))
+    else:
+        for i in range(args.attempts):
+            k = i % len(L.SCENARIOS)
+            seed = FIRST_SEED + i
+            if (L.SCENARIOS[k].label, seed) not in done:
+                jobs.append((k, seed, False))
     deadline = None
     if args.until:
         hh, mm = (int(x) for x in args.until.split(":"))
@@ -95,7 +104,7 @@ def run(args) -> int:
         deadline = now.replace(hour=hh, minute=mm, second=0, microsecond=0)
     LOG.info("%d ties stored, %d cases to try", ties, len(jobs))
     start = time.perf_counter()
-    with get_context("fork").Pool(args.workers) as pool, RESULTS.open("a", encoding="utf-8") as out:
+    with get_context("fork").Pool(args.workers) as pool, path.open("a", encoding="utf-8") as out:
         for result in pool.imap_unordered(_one, jobs):
             out.write(json.dumps(result) + "\n")
             out.flush()
@@ -511,6 +520,11 @@ def main() -> int:
     r.add_argument("--attempts", type=int, default=400, help="cases to try at most (scenarios in turn)")
     r.add_argument("--workers", type=int, default=2)
     r.add_argument("--until", help="stop at this UTC time, HH:MM")
+    r.add_argument(
+        "--shared",
+        action="store_true",
+        help="the stored ties again, the nominal parameters' uncertainty shared by the runs",
+    )
     c = sub.add_parser("check", help="judge the loop's wrong or undecided ties by the diagnosis itself")
     c.add_argument("--max", type=int, default=10, help="ties to check at most")
     sub.add_parser("report", help="write part 5 of docs/gap_validation.md and the figure")
