@@ -317,7 +317,8 @@ def report(args) -> int:
         "  from the noisy roll rate). The diagnosis is given the hidden effect's candidate and a rival that often",
         "  stands in for it; a case counts when it **ties** them. Pairs: "
         + "; ".join(f"{s.label}" for s in L.SCENARIOS)
-        + ".",
+        + ". `steer_friction` (viscous and Coulomb) and `steer_coulomb` (Coulomb alone) are truths the candidate",
+        "  `steer_damping` stands for.",
         "* **Plan**: `bikerider gap --next` (`NextExperiment`, 10 runs, decays and multisines) plans once on the tie;",
         "  its experiments (decays at 12 speeds under the data's control law, the law's gains halved or times 1.5,",
         "  or no control; steer-torque multisines of 0.5 N m, 10 s, roll rate or steer angle, at the same speeds",
@@ -334,8 +335,11 @@ def report(args) -> int:
         "  (lack of fit). Runs: a **decay** is the truth's kicked 6-s run fitted as in part 1; a **multisine** is the",
         f"  truth driven by the Schroeder multisine plus its control law, the motor's total torque saturating at {L.MOTOR_LIMIT:g} N m,",
         "  the truth's own friction, a settling time of three time constants of its slowest mode (5-20 s), one",
-        "  period recorded at 100 Hz with sensor noise and read as the frequency response at the lines (not the",
-        "  plan's noise model). A run where the bicycle falls or no weave is fitted is spent and teaches nothing.",
+        "  period recorded at 100 Hz with sensor noise and read as the frequency response at the lines (the run is",
+        "  simulated, not drawn from the plan's noise model; the loop weighs it with that model). The diagnosis",
+        "  reads no multisine records yet (a record kind for them was being added at the same time), so the loop",
+        "  reads multisines at the frequency-response level. A run where the bicycle falls or no weave is fitted",
+        "  is spent and teaches nothing.",
         "  The same experiment's k-th run is the same simulated run for every strategy.",
         f"* **Strategies** (at most {n_max} runs each): `plan:<criterion>` takes the next run where the criterion",
         "  (`bikerider.gap.plan.criteria`: Hunter-Reiner 1965, Box-Hill 1967, Buzzi-Ferraris-Forzatti 1984,",
