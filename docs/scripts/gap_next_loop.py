@@ -524,6 +524,25 @@ def report(args) -> int:
             f"{len(broken_by_even)} of them.",
             "* The plan's resolution probabilities assume one rival is the truth; the reliability diagrams show how far "
             "they hold when it is not.",
+        ]
+        if broken_by_even:
+            lines.append(
+                "* The unbreakable rule (the plan's own measure) judges one experiment repeated, with the rivals' own "
+                "uncertainty as it stands; where runs at several speeds would first pin a rival's values and then part "
+                "the rivals, it declares unbreakable a tie an even spread breaks ("
+                + ", ".join(sorted({c["scenario"] for c in broken_by_even}))
+                + ")."
+            )
+        if "repeat:sweep" in merit:
+            m = merit["repeat:sweep"]
+            lines.append(
+                f"* The plan's best multisine repeated lost {m['lost']} of its {m['spent']} runs: the truth fell (past "
+                "0.5 rad of roll) during the settling time or the recording, under a torque the plan judged safe (it "
+                "accepts a capsize slower than one e-fold per run as held by the rider or a catch, and this truth has "
+                "neither) or with a lightly damped weave driven at resonance; a lost run teaches nothing, which the "
+                "plan's probability does not foresee."
+            )
+        lines += [
             "",
         ]
     lines += [
