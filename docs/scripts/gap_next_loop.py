@@ -394,8 +394,7 @@ def report(args) -> int:
     all_wrong = [c for c in ties if all(s["status"] == "wrong" for s in c["strategies"].values())]
     lines.append(
         f"* {len(nobody)} ties no strategy resolved within {n_max} runs; in {len(all_wrong)} of them every strategy "
-        "decided for the rival (the data favour it: the truth is neither rival exactly, and the rival describes it "
-        "better there): "
+        "decided for the rival (by the loop's posterior; the diagnosis's own judgement of such ties is below): "
         + (
             "; ".join(
                 f"{c['scenario']} seed {c['seed']} ({', '.join(f'{k} {v:.3g}' for k, v in c['sizes'].items())})"
@@ -511,9 +510,10 @@ def report(args) -> int:
             f"{best}, {merit['even']['resolved']} of {merit['even']['resolved'] + merit['even']['wrong']} for the even "
             "spread. A wrong decision is the loop's posterior reaching 0.95 for the rival: the truth is neither rival "
             "(parameter error within the stated uncertainty, a rider whose geometry differs from the diagnosis's "
-            "default, Coulomb friction where a rival is viscous), and the rival with more freedom (passive arms: a "
-            "mass, a spring and a damper at the grips) describes such a truth better at the experiments that tell "
-            "the rivals apart. Two linearised rivals' posterior odds are then overconfident, whichever runs are taken.",
+            "default, Coulomb friction where a rival is viscous), the runs that part the rivals also show what neither "
+            "describes, and the rival with more freedom (passive arms: a mass, a spring and a damper at the grips) "
+            "absorbs more of it. Two linearised rivals' posterior odds are then overconfident, whichever runs are "
+            "taken.",
             f"* For comparison, the diagnosis itself (its candidates' priors, its held-out tie rule) ranked the hidden "
             f"effect first, untied, in {sum(c.get('first') == c.get('candidate') for c in untied)} of {len(untied)} "
             "cases it did not tie on the six runs: the loop's decision rule (the rivals' evidence from their fits' "
