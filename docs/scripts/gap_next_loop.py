@@ -379,6 +379,23 @@ def report(args) -> int:
             f"* Goal 1, the plan needs at most half the runs of an even spread: median {_fmt(bm[0], n_max)} against "
             f"{_fmt(em[0], n_max)}, 90th percentile {_fmt(bm[1], n_max)} against {_fmt(em[1], n_max)}: "
             + ("**met**." if half else "**not met**."),
+            "* On the ties both resolved, paired: "
+            + "; ".join(
+                f"{n} {len(both)} ties, median {np.median([x for x, _ in both]):g} runs against the even spread's "
+                f"{np.median([y for _, y in both]):g} (90th percentile {np.quantile([x for x, _ in both], 0.9):.0f} "
+                f"against {np.quantile([y for _, y in both], 0.9):.0f})"
+                for n in plans + ["random"]
+                for both in [
+                    [
+                        (c["strategies"][n]["runs"], c["strategies"]["even"]["runs"])
+                        for c in ties
+                        if c["strategies"][n]["status"] == "resolved"
+                        and c["strategies"]["even"]["status"] == "resolved"
+                    ]
+                ]
+                if both
+            )
+            + ".",
             f"* Goal 2, no tie declared unbreakable that the even spread breaks: {len(broken_by_even)} such ties"
             + (": " + ", ".join(f"{c['scenario']} seed {c['seed']}" for c in broken_by_even) if broken_by_even else "")
             + (" (**met**)." if not broken_by_even else " (**not met**)."),
