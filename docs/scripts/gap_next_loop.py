@@ -481,15 +481,31 @@ def report(args) -> int:
                 f"{_fmt(v['median_p90'][1], n_max)} | {a['resolved'] / max(a['resolved'] + a['wrong'], 1):.0%} / "
                 f"{v['resolved'] / max(v['resolved'] + v['wrong'], 1):.0%} |"
             )
+        if best:
+            lines += [
+                "",
+                f"Shared, the wrong decisions fall ({best}: {main[best]['wrong']} -> {variant[best]['wrong']}; even "
+                f"spread: {main['even']['wrong']} -> {variant['even']['wrong']}), the resolved ties barely move "
+                f"({main[best]['resolved']} -> {variant[best]['resolved']}; {main['even']['resolved']} -> "
+                f"{variant['even']['resolved']}) and the plan declares more ties unbreakable "
+                f"({main[best]['unbreakable']} -> {variant[best]['unbreakable']}).",
+            ]
         lines.append("")
     checks = (
         [json.loads(x) for x in CHECKS.read_text(encoding="utf-8").splitlines() if x.strip()] if CHECKS.exists() else []
     )
     checks = [c for c in checks if "diagnosis_first" in c]
     if checks:
-        agree = sum(
-            (c["loop"] == "wrong") == (c["diagnosis_first"] != c["hidden"] and not c["diagnosis_tied"]) for c in checks
-        )
+
+        def verdict(c):
+            if c["diagnosis_tied"]:
+                return "tied"
+            return "hidden" if c["diagnosis_first"] == c["hidden"] else "rival"
+
+        tally = {
+            loop: {v: sum(verdict(c) == v for c in checks if c["loop"] == loop) for v in ("rival", "tied", "hidden")}
+            for loop in ("wrong", "undecided")
+        }
         lines += [
             "### The loop's decisions judged by the diagnosis itself",
             "",
@@ -509,8 +525,11 @@ def report(args) -> int:
             )
         lines += [
             "",
-            f"The diagnosis agrees with the loop (picks the rival, untied, exactly where the loop went wrong) in "
-            f"{agree} of {len(checks)}.",
+            "Where the loop decided for the rival, the diagnosis picks the rival in "
+            f"{tally['wrong']['rival']}, keeps the tie in {tally['wrong']['tied']} and picks the hidden effect in "
+            f"{tally['wrong']['hidden']}; where the loop stayed undecided, it keeps the tie in "
+            f"{tally['undecided']['tied']}, picks the hidden effect in {tally['undecided']['hidden']} and the rival in "
+            f"{tally['undecided']['rival']}.",
             "",
         ]
     if best:
