@@ -264,12 +264,15 @@ def main() -> int:
 
 
 def _calibration_block() -> str:
-    """Part 4 as it stands in the document (written by gap_calibration.py), kept when parts 1-3 are rewritten."""
-    begin, end = "<!-- calibration:begin -->", "<!-- calibration:end -->"
+    """Parts 4 and 5 as they stand in the document (written by gap_calibration.py and gap_next_loop.py), kept
+    when parts 1-3 are rewritten."""
     text = OUT.read_text(encoding="utf-8") if OUT.exists() else ""
-    if begin not in text or end not in text:
-        return "\n"
-    return "\n\n" + begin + text.split(begin, 1)[1].split(end, 1)[0] + end + "\n"
+    out = ""
+    for name in ("calibration", "loop"):
+        begin, end = f"<!-- {name}:begin -->", f"<!-- {name}:end -->"
+        if begin in text and end in text:
+            out += "\n\n" + begin + text.split(begin, 1)[1].split(end, 1)[0] + end
+    return out + "\n"
 
 
 def _record_cases() -> list[str]:

@@ -1,0 +1,626 @@
+"""The closed measure-diagnose-plan loop against a hidden truth (issue 25): does following the plan
+need fewer runs than spreading them evenly?
+
+One *case*: a hidden effect with sizes drawn over its prior (:func:`validation.cases.draw_truth`), on the
+bicycle with or without rider, measured by a narrow protocol (:data:`NARROW`: six runs near one speed in
+two sessions, one under a stabilising control) and simulated by the independent truth
+(:class:`validation.cases.TruthSimulator`: Meijaard's Appendix A typed in by hand, nonlinear effects,
+Coulomb friction in time, LSODA, noise, the weave fitted from the noisy roll rate).  The diagnosis is
+given the hidden effect's candidate and a rival that often stands in for it (:data:`SCENARIOS`); a case
+counts when the diagnosis ties them.  Then ``bikerider gap --next`` (:class:`NextExperiment`, public
+attributes only) plans once, which gives the experiments (decays at speeds under control laws, and
+steer-torque multisines), each rival's predictions and the noise of one run; and the loop runs.
+
+The inner loop must be cheap, so each rival is *linearised* at its fit to the tie's data: its
+predictions of every experiment and their slopes in its fitted values, by secants through the same public model code the diagnosis
+uses (:class:`bikerider.gap.inference.predict.Predictor` for decays,
+:meth:`bikerider.gap.candidates.effect_model.EffectModel.state_space` for multisines).  The rival's
+values then have a Gaussian prior (its fit's covariance, each value's spread capped at that of a value
+anywhere in its search range), every new run updates it exactly as a refit of the linearised model would (a Kalman step), and
+the rival's log evidence grows by the predictive density of the run (a run every rival misses beyond its
+noise is down-weighted first, :func:`lack_of_fit`).  The nominal parameters' uncertainty is counted per
+run, as the plan and the diagnosis count it.  Posterior model probabilities start even at the tie.  A strategy stops when the hidden effect's probability reaches
+:data:`DECIDED` (*resolved*), when the rival's does (*wrong*), when it has spent :data:`N_MAX` runs
+(*undecided*), or, for the plan, when it declares the tie unbreakable (no experiment repeated for
+the runs left promises a resolution with probability :data:`HOPELESS` or more).
+
+One new run per step is simulated by the truth: a decay (a random kick, 6 s, the weave fitted from the
+noisy roll rate) or a multisine (:func:`multisine_run`: a Schroeder multisine of steer torque added to
+the control law, the motor's total torque saturating at :data:`MOTOR_LIMIT`, the truth's own Coulomb
+friction, a settling time, then one period of roll rate or steer angle with sensor noise, read as the
+frequency response at the lines).  The same experiment's k-th run is the same simulated run for every
+strategy (common random numbers).
+
+Strategies: ``plan:<criterion>`` (the next run where the criterion of
+:mod:`bikerider.gap.plan.criteria` is largest, with the rivals' predictions and probabilities as the loop
+has updated them), ``even`` (decays under the laws in turn at speeds spread evenly over the feasible
+range, a van der Corput order), ``random`` (any feasible experiment), ``repeat:decay`` and
+``repeat:sweep`` (the plan's best decay, or best multisine, repeated: what ``--next`` recommends,
+whose predicted resolution probability after ``k`` runs is stored for the reliability diagrams).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.integrate import solve_ivp
+from scipy.special import ndtr
+
+from bikerider.errors import FitError, InputError
+from bikerider.gap.candidates.effect_model import EffectModel
+from bikerider.gap.diagnosis.result import Diagnosis
+from bikerider.gap.inference.predict import Predictor
+from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
+from bikerider.gap.plan import criteria as C
+from bikerider.gap.plan.ranking import ASSUMED_NOISE, NextExperiment, NoExperiment
+from bikerider.gap.plan.sweeps import line_amplitude, response, split
+from validation.cases import CONTROL, CalibrationEffect, Protocol, Session, TruthSimulator, draw_truth, measure
+
+N_MAX = 20
+"""Runs a strategy may spend after the tie."""
+DECIDED = 0.95
+"""Posterior probability of one rival that decides the tie."""
+HOPELESS = 0.05
+"""The plan declares a tie unbreakable when no experiment, repeated for the runs left, resolves it with
+at least this probability (the plan's own measure, ``Phi(d / 2 - ln(odds) / d)``)."""
+MOTOR_LIMIT = 2.0
+"""Largest steer torque the steer motor gives (control plus multisine) [N m]."""
+GYRO_NOISE = 0.01
+"""Roll-rate noise of a multisine run [rad/s] (as the decays')."""
+STEER_NOISE = ASSUMED_NOISE["steer_angle"]
+"""Steer-angle noise of a multisine run [rad] (a 13-bit encoder's quantisation)."""
+RATE = 100.0
+"""Sampling rate of a multisine run [Hz]."""
+
+NARROW = {
+    "rider": Protocol((Session("day1", (6.0, 6.5, 7.0)), Session("day2-controlled", (6.0, 6.5, 7.0), CONTROL))),
+    "riderless": Protocol((Session("day1", (5.0, 5.5, 6.0)), Session("day2-controlled", (4.5, 5.0, 5.5), CONTROL))),
+}
+"""The tie's data: six runs near one speed in two sessions, one under a stabilising control."""
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A hidden effect (sizes over its prior), the candidate standing for it, its rival, the bicycle."""
+
+    effect: CalibrationEffect
+    rival: str
+    rider: bool
+
+    @property
+    def label(self) -> str:
+        return f"{self.effect.name} vs {self.rival} ({'rider' if self.rider else 'riderless'})"
+
+
+def _effect(name: str, candidate: str, sizes: tuple[str, ...], fixed: dict | None = None) -> CalibrationEffect:
+    return CalibrationEffect(name, candidate, sizes, fixed or {})
+
+
+LEAN = _effect("rider_lean", "rider_lean", ("k_lean", "c_lean"))
+TYRES = _effect("tyre_slip", "tyre_slip", ("c_alpha", "sigma_t", "t_p"), {"c_gamma": 0.8, "mu": 1.0})
+INERTIA = _effect("steer_inertia", "steer_inertia", ("I_steer",))
+ARMS = _effect("passive_arms", "passive_arms", ("m_arm", "k_arm", "c_arm"))
+DAMPING = _effect("steer_damping", "steer_damping", ("c_steer",))
+FRICTION = _effect("steer_friction", "steer_damping", ("c_steer", "T_coulomb"))
+COULOMB = _effect("steer_coulomb", "steer_damping", ("T_coulomb",))
+STIFFNESS = _effect("steer_stiffness", "steer_stiffness", ("k_steer",))
+
+SCENARIOS: tuple[Scenario, ...] = (
+    Scenario(LEAN, "tyre_slip", True),
+    Scenario(TYRES, "rider_lean", True),
+    Scenario(INERTIA, "passive_arms", True),
+    Scenario(ARMS, "steer_inertia", True),
+    Scenario(TYRES, "passive_arms", True),
+    Scenario(FRICTION, "passive_arms", True),
+    Scenario(DAMPING, "steer_inertia", False),
+    Scenario(INERTIA, "steer_damping", False),
+    Scenario(COULOMB, "steer_inertia", False),
+    Scenario(TYRES, "steer_inertia", False),
+    Scenario(STIFFNESS, "steer_inertia", False),
+    Scenario(FRICTION, "tyre_slip", False),
+)
+"""Hidden effect and the rival that often ties with it (the ties of part 3 and the usual confusions)."""
+
+STRATEGIES = tuple(f"plan:{c}" for c in C.CRITERIA) + ("even", "random", "repeat:decay", "repeat:sweep")
+
+
+# -- the truth's multisine run --------------------------------------------------------------------------
+def multisine_run(simulator: TruthSimulator, speed: float, gains, sweep, rng: np.random.Generator, settle: float):
+    """One steer-torque multisine run of the truth: the frequency response at the sweep's lines
+    (``(K,)`` complex), or ``None`` when the bicycle falls.
+
+    The torque ``sum_k a cos(w_k t + phi_k)`` (Schroeder phases, peak ``sweep.torque``) adds to the control
+    law's; the motor saturates their sum at :data:`MOTOR_LIMIT`.  The truth's passive torques (its Coulomb
+    friction too) act as in its decays.  After ``settle`` seconds one period (``sweep.run_time``) is
+    recorded at :data:`RATE` with sensor noise; the response is the DFT at the lines over the torque's.
+    """
+    zero = np.zeros(4)
+    f0, n, idx = simulator.rhs(speed, zero)
+    f1, _, _ = simulator.rhs(speed, np.array([1.0, 0.0, 0.0, 0.0]))
+    x = np.zeros(n)
+    x[idx[0]] = 1.0
+    b = f1(0.0, x) - f0(0.0, x)  # what one newton metre of steer torque does (the torque enters linearly)
+    gains = np.asarray(gains, float)
+    lines = np.asarray(sweep.lines, float)
+    K = lines.size
+    omegas = 2 * math.pi * lines
+    phases = -math.pi * np.arange(1, K + 1) * np.arange(K) / K
+    a = line_amplitude(lines, sweep.torque, sweep.run_time)
+
+    def f(t, s):
+        u = a * float(np.sum(np.cos(omegas * t + phases)))
+        control = gains @ np.array([s[idx[0]], s[idx[2]], s[idx[1]], s[idx[3]]])
+        return f0(t, s) + b * min(max(control + u, -MOTOR_LIMIT), MOTOR_LIMIT)
+
+    def fall(_, s):
+        return abs(s[idx[0]]) - 0.5
+
+    fall.terminal = True
+    end = settle + sweep.run_time
+    times = settle + np.arange(int(round(sweep.run_time * RATE))) / RATE
+    sol = solve_ivp(f, (0.0, end), np.zeros(n), t_eval=times, method="LSODA", rtol=1e-6, atol=1e-8, events=fall)
+    if sol.status != 0 or sol.t.size != times.size:
+        return None
+    if sweep.output == "roll_rate":
+        y = sol.y[idx[2]] + GYRO_NOISE * rng.standard_normal(times.size)
+    else:
+        y = sol.y[idx[1]] + STEER_NOISE * rng.standard_normal(times.size)
+    Y = 2.0 / times.size * np.exp(-1j * np.outer(omegas, times)) @ y
+    return Y / (a * np.exp(1j * phases))
+
+
+# -- the rivals, linearised -------------------------------------------------------------------------------
+class LinearRival:
+    """A rival's predictions of every experiment, linear in its fitted values ``z``, with a Gaussian prior on
+    ``z`` that the runs update, and the log evidence of the runs so far."""
+
+    def __init__(self, mean: list[np.ndarray], jac: list[np.ndarray], prior: np.ndarray, own: int | None = None):
+        self.mean, self.jac = mean, jac
+        self.a = np.zeros(prior.shape[0])
+        self.P = prior.copy()
+        self.log_evidence = 0.0
+        self.own = prior.shape[0] if own is None else own
+        """How many of ``z`` are the rival's own fitted values (the rest: shared nominal-parameter shifts)."""
+
+    def predict(self, e: int, own_only: bool = False) -> tuple[np.ndarray, np.ndarray]:
+        """Mean and covariance of the rival's prediction of experiment ``e`` (``own_only``: the covariance from
+        its own values alone, which the runs shrink; the shared shifts' part they do not)."""
+        J = self.jac[e]
+        if own_only:
+            k = self.own
+            return self.mean[e] + J @ self.a, J[:, :k] @ self.P[:k, :k] @ J[:, :k].T
+        return self.mean[e] + J @ self.a, J @ self.P @ J.T
+
+    def update(self, e: int, y: np.ndarray, R: np.ndarray) -> None:
+        mu, W = self.predict(e)
+        S = W + R
+        r = y - mu
+        sol = np.linalg.solve(S, r)
+        _, logdet = np.linalg.slogdet(S)
+        self.log_evidence += -0.5 * (r @ sol + logdet + r.size * math.log(2 * math.pi))
+        J = self.jac[e]
+        gain = np.linalg.solve(S, J @ self.P).T  # P J^T S^-1
+        self.a = self.a + gain @ r
+        self.P = self.P - gain @ J @ self.P
+        self.P = (self.P + self.P.T) / 2
+
+
+def _rows(plan: NextExperiment) -> EigenvalueData:
+    points = plan.points
+    n = len(points)
+    gains = np.array([plan.laws[e.law](e.speed) for e in points]).reshape(n, 4)
+    return EigenvalueData(
+        np.array([e.speed for e in points]),
+        np.zeros(n, complex),
+        np.ones(n),
+        np.ones(n),
+        np.zeros(n),
+        ["weave"] * n,
+        ["next"] * n,
+        gains,
+        [e.describe() for e in points],
+        [e.law for e in points],
+        {e.law: plan.laws[e.law] for e in points},
+    )
+
+
+def _predictions(plan: NextExperiment, effects: tuple[str, ...], X: np.ndarray, shared: bool = False) -> np.ndarray:
+    """Every experiment's prediction ``(P, n_points * 2 + n_sweeps * 2K)`` for values ``X (P, p + q)`` (with
+    ``shared``, the last ``q`` the nominal parameters' shifts in units of their uncertainty)."""
+    p = plan.problem
+    values, config, _ = p.configure(p.layout(tuple(effects) + (("parameters",) if shared else ())), X)
+    model = EffectModel(values, p.geometry, config)
+    P = X.shape[0]
+    parts = []
+    if plan.points:
+        ev = Predictor(_rows(plan), CanonicalData.empty(), p.nominal, p.geometry).eigenvalues(model)
+        ev = np.broadcast_to(ev, (P, len(plan.points)))
+        parts.append(np.stack([ev.real, np.abs(ev.imag)], axis=-1).reshape(P, -1))
+    if plan.sweeps:
+        speeds = np.array([s.speed for s in plan.sweeps])
+        gains = np.array([plan.laws[s.law](s.speed) for s in plan.sweeps]).reshape(len(speeds), 4)
+        ss = model.state_space(speeds)
+        A = np.broadcast_to(ss.closed_loop(gains), (P, len(speeds)) + ss.A.shape[-2:])
+        b = np.broadcast_to(ss.B[..., :, 1], (P, len(speeds), ss.A.shape[-1]))
+        omegas = np.array([s.omegas for s in plan.sweeps])
+        roll = response(A, b, ss.outputs[2], omegas[None])
+        steer = response(A, b, ss.outputs[1], omegas[None])
+        is_roll = np.array([s.output == "roll_rate" for s in plan.sweeps])
+        H = np.where(is_roll[None, :, None], roll, steer)
+        parts.append(split(H).reshape(P, -1))
+    return np.concatenate(parts, axis=-1)
+
+
+def _unpack(plan: NextExperiment, flat: np.ndarray) -> list[np.ndarray]:
+    """A flat prediction ``(..., total)`` per experiment: decays ``(..., 2)``, sweeps ``(..., 2K)``."""
+    out = [flat[..., 2 * m : 2 * m + 2] for m in range(len(plan.points))]
+    start = 2 * len(plan.points)
+    for m, s in enumerate(plan.sweeps):
+        K = len(s.lines)
+        block = flat[..., start + 2 * K * m : start + 2 * K * (m + 1)]
+        out.append(block)
+    return out
+
+
+def linearise(plan: NextExperiment, rival, shared: bool = False) -> LinearRival:
+    """A rival of the plan, linearised at its fit (module docstring); with ``shared``, also in the nominal
+    parameters' shifts (standard normal prior, one set for all runs: the truth's parameter error is the same
+    in every run) instead of counting their uncertainty per run."""
+    fit = rival.fit
+    q = len(plan.problem.free) if shared else 0
+    k = fit.values.size
+    span = (np.asarray(fit.upper) - np.asarray(fit.lower)) / math.sqrt(12)
+    cov = fit.covariance if fit.covariance is not None and np.all(np.isfinite(fit.covariance)) else None
+    if cov is None or cov.shape != (k, k):
+        stderr = np.where(np.isfinite(fit.stderr), fit.stderr, span)
+        cov = np.diag(stderr**2)
+    sd = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    cap = np.where(sd > span, span / np.where(sd > 0, sd, 1.0), 1.0)
+    cov = cov * cap[:, None] * cap[None, :]
+    sd = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    h = np.where(sd > 0, sd, 1e-6 * np.maximum(span, 1.0))
+    z0 = np.concatenate([fit.values, np.zeros(q)])
+    X = [z0]
+    for j in range(k + q):
+        up, down = z0.copy(), z0.copy()
+        if j < k:
+            up[j] = min(z0[j] + h[j], fit.upper[j])
+            down[j] = max(z0[j] - h[j], fit.lower[j])
+        else:
+            up[j], down[j] = 1.0, -1.0
+        X += [up, down]
+    X = np.array(X)
+    pred = _predictions(plan, rival.effects, X, shared)
+    width = X[1::2] - X[2::2]
+    width = np.diagonal(width)
+    slopes = ((pred[1::2] - pred[2::2]) / np.where(width > 0, width, np.inf)[:, None]).T  # (total, k + q)
+    prior = np.zeros((k + q, k + q))
+    prior[:k, :k] = cov
+    prior[k:, k:] = np.eye(q)
+    return LinearRival(_unpack(plan, pred[0]), [J.T for J in _unpack(plan, slopes.T)], prior, own=k)
+
+
+# -- the loop ---------------------------------------------------------------------------------------
+class TruthRuns:
+    """The truth's runs, the k-th run of an experiment the same for every strategy."""
+
+    def __init__(self, simulator: TruthSimulator, plan: NextExperiment, seed: int, shared: bool = False):
+        self.simulator, self.plan, self.seed, self.shared = simulator, plan, seed, shared
+        self.cache: dict[tuple[int, int], tuple[np.ndarray, np.ndarray] | None] = {}
+        self.rows: dict[tuple[int, int], EigenvalueData] = {}  # the decays as the diagnosis reads them
+        self.seconds = {"decay": 0.0, "sweep": 0.0}
+        self.count = {"decay": 0, "sweep": 0}
+        nominal = EffectModel(plan.problem.nominal, plan.problem.geometry)
+        self._nominal = nominal
+
+    def get(self, e: int, k: int):
+        key = (e, k)
+        if key not in self.cache:
+            rng = np.random.default_rng([self.seed, e, k, 77])
+            start = time.perf_counter()
+            plan = self.plan
+            if e < len(plan.points):
+                x = plan.points[e]
+                gains = tuple(float(g) for g in plan.laws[x.law](x.speed))
+                protocol = Protocol((Session("loop", (x.speed,), gains),), speed_jitter=0.0)
+                data, _ = measure(self.simulator, protocol, rng)
+                out = None
+                if len(data):
+                    self.rows[key] = data
+                    y = np.array([data.value[0].real, abs(data.value[0].imag)])
+                    R = np.diag([data.real_sigma[0] ** 2, data.imag_sigma[0] ** 2])
+                    out = (y, R if self.shared else R + plan.model_cov[e])
+                kind = "decay"
+            else:
+                m = e - len(plan.points)
+                s = plan.sweeps[m]
+                gains = plan.laws[s.law](s.speed)
+                ev = self._nominal.eigenvalues([s.speed], np.asarray(gains)[None, :])[0]
+                slowest = max(float(np.max(ev.real)), -10.0)
+                settle = min(20.0, max(5.0, 3.0 / max(-slowest, 1e-3)))  # three time constants of the slowest mode
+                H = multisine_run(self.simulator, s.speed, gains, s, rng, settle)
+                R = plan.sweep_data[m] if self.shared else plan.sweep_data[m] + plan.sweep_model[m]
+                out = None if H is None else (split(H), R)
+                kind = "sweep"
+            self.cache[key] = out
+            self.seconds[kind] += time.perf_counter() - start
+            self.count[kind] += 1
+        return self.cache[key]
+
+
+def _van_der_corput(k: int) -> float:
+    x, denom = 0.0, 1.0
+    while k:
+        denom *= 2
+        x += (k % 2) / denom
+        k //= 2
+    return x
+
+
+def _even_order(plan: NextExperiment, n: int) -> list[int]:
+    laws = list(dict.fromkeys(e.law for e in plan.points))
+    order = []
+    for k in range(n):
+        law = laws[k % len(laws)]
+        idx = sorted((i for i, e in enumerate(plan.points) if e.law == law), key=lambda i: plan.points[i].speed)
+        j = k // len(laws)
+        frac = _van_der_corput(j + 1)  # 1/2, 1/4, 3/4, 1/8, ...: every new run between those before
+        order.append(idx[min(int(frac * len(idx)), len(idx) - 1)])
+    return order
+
+
+def _noise(plan: NextExperiment, e: int, shared: bool = False) -> np.ndarray:
+    """One run's noise the plan expects (with the nominal parameters' uncertainty unless it is ``shared``)."""
+    if e < len(plan.points):
+        return plan.data_cov[e] + (0 if shared else plan.model_cov[e])
+    m = e - len(plan.points)
+    return plan.sweep_data[m] + (0 if shared else plan.sweep_model[m])
+
+
+def _groups(plan: NextExperiment) -> list[list[int]]:
+    """Experiments with observations of the same size (decays; multisines), to score together."""
+    decays = list(range(len(plan.points)))
+    sweeps = list(range(len(plan.points), len(plan.points) + len(plan.sweeps)))
+    return [g for g in (decays, sweeps) if g]
+
+
+def _posterior(rivals: list[LinearRival]) -> np.ndarray:
+    le = np.array([r.log_evidence for r in rivals])
+    w = np.exp(le - le.max())
+    return w / w.sum()
+
+
+def _scores(plan, rivals, weights, criterion, groups, shared=False) -> np.ndarray:
+    out = np.full(len(plan.points) + len(plan.sweeps), -np.inf)
+    for g in groups:
+        preds = [[r.predict(e) for e in g] for r in rivals]
+        means = np.array([[m for m, _ in row] for row in preds])
+        own = np.array([[W for _, W in row] for row in preds])
+        noise = np.array([_noise(plan, e, shared) for e in g])
+        out[g] = C.score(criterion, means, own, noise, weights)
+    return out
+
+
+def best_chance(plan, rivals, weights, runs_left: int, groups, shared=False) -> float:
+    """The plan's resolution probability of the best experiment repeated ``runs_left`` times, from the
+    rivals as the loop has updated them (the odds needed from the current ones); the shared shifts'
+    uncertainty, common to both rivals' predictions, is left out, as the plan counts it per run."""
+    best = 0.0
+    for g in groups:
+        preds = [[r.predict(e, own_only=True) for e in g] for r in rivals]
+        noise = np.array([_noise(plan, e) for e in g])
+        delta = np.array([m for m, _ in preds[0]]) - np.array([m for m, _ in preds[1]])
+        chance = np.zeros(len(g))
+        for t in (0, 1):
+            W = np.array([W for _, W in preds[t]])
+            S = W + noise / runs_left
+            S = S + 1e-12 * np.trace(S, axis1=-2, axis2=-1)[:, None, None] * np.eye(S.shape[-1])
+            d = np.sqrt(np.maximum(np.sum(delta * np.linalg.solve(S, delta[..., None])[..., 0], axis=-1), 1e-300))
+            need = math.log(DECIDED / (1 - DECIDED)) + math.log(max(weights[1 - t], 1e-300) / max(weights[t], 1e-300))
+            chance += weights[t] * ndtr(d / 2 - need / d)
+        best = max(best, float(chance.max()))
+    return best
+
+
+def lack_of_fit(rivals: list[LinearRival], e: int, y: np.ndarray, R: np.ndarray) -> float:
+    """How far the best rival misses a run beyond its noise and its own uncertainty, chi-square per
+    observed number, at least 1 (a Birge ratio): a run that every rival misses alike (the truth is none of
+    them there: parameter error, a rider's geometry, friction) is down-weighted by it, as the diagnosis
+    scales its errors by the lack of fit, instead of handing the tie to the rival whose own uncertainty
+    happens to be wider."""
+    chi2 = []
+    for r in rivals:
+        mu, W = r.predict(e)
+        res = y - mu
+        chi2.append(float(res @ np.linalg.solve(W + R, res)))
+    return max(1.0, min(chi2) / y.size)
+
+
+def run_strategy(name: str, plan, rivals_at_tie, runs: TruthRuns, truth_index: int, seed: int, repeat=None) -> dict:
+    """One strategy's loop (module docstring): its runs, the hidden effect's probability after each."""
+    rivals = [LinearRival(r.mean, r.jac, r.P, r.own) for r in rivals_at_tie]
+    shared = runs.shared
+    groups = _groups(plan)
+    n_exp = len(plan.points) + len(plan.sweeps)
+    rng = np.random.default_rng([seed, 991])
+    even = _even_order(plan, 4 * N_MAX) if name == "even" else None
+    used: dict[int, int] = {}
+    failed: set[int] = set()  # experiments whose run fell or gave no weave: not tried again (but by repeat:)
+    chosen, trajectory = [], []
+    cursor = 0
+    status, lost = "undecided", 0
+    for step in range(N_MAX):
+        weights = _posterior(rivals)
+        if name.startswith("plan:"):
+            if best_chance(plan, rivals, weights, N_MAX - step, groups, shared) < HOPELESS:
+                status = "unbreakable"
+                break
+            scores = _scores(plan, rivals, weights, name.split(":", 1)[1], groups, shared)
+            scores[list(failed)] = -np.inf
+            e = int(np.argmax(scores))
+        elif name == "even":
+            while even[cursor % len(even)] in failed and len(failed) < len(plan.points):
+                cursor += 1
+            e = even[cursor % len(even)]
+            cursor += 1
+        elif name == "random":
+            left = [i for i in range(n_exp) if i not in failed]
+            e = int(left[rng.integers(len(left))])
+        else:
+            e = repeat
+        k = used.get(e, 0)
+        used[e] = k + 1
+        obs = runs.get(e, k)
+        chosen.append(e)
+        if obs is None:  # the bicycle fell or no weave was fitted: a run spent, nothing learnt
+            lost += 1
+            failed.add(e)
+        else:
+            y, R = obs
+            R = R * lack_of_fit(rivals, e, y, R)
+            for r in rivals:
+                r.update(e, y, R)
+        pi = _posterior(rivals)
+        trajectory.append(round(float(pi[truth_index]), 5))
+        if pi[truth_index] >= DECIDED:
+            status = "resolved"
+            break
+        if pi[1 - truth_index] >= DECIDED:
+            status = "wrong"
+            break
+    return {"status": status, "runs": len(chosen), "chosen": chosen, "truth_probability": trajectory, "lost": lost}
+
+
+def run_loop_case(
+    models: dict, scenario: Scenario, seed: int, strategies=STRATEGIES, keep: bool = False, shared: bool = False
+) -> dict:
+    """One case (module docstring), JSON-ready (with ``keep``, also the objects under ``_objects``; ``shared``:
+    the nominal parameters' uncertainty shared by all runs, :func:`linearise`)."""
+    start = time.perf_counter()
+    rng = np.random.default_rng(seed)
+    model = models["rider" if scenario.rider else "riderless"]
+    truth = draw_truth(scenario.effect, rng)
+    simulator = TruthSimulator(model, truth, rng)
+    data, _ = measure(simulator, NARROW["rider" if scenario.rider else "riderless"], rng)
+    out = {
+        "shared": shared,
+        "scenario": scenario.label,
+        "truth": scenario.effect.name,
+        "candidate": scenario.effect.candidate,
+        "rival": scenario.rival,
+        "rider": scenario.rider,
+        "seed": seed,
+        "sizes": {k: float(v) for k, v in truth.values.items()},
+        "n_data": len(data),
+    }
+    if len(data) < 4:
+        return {**out, "tie": False, "status": "too few runs", "seconds": time.perf_counter() - start}
+    rivals = (scenario.effect.candidate, scenario.rival)
+    try:
+        diagnosis = Diagnosis(model, data, CanonicalData.empty(), effects=rivals)
+    except (FitError, InputError) as exc:
+        return {**out, "tie": False, "status": f"diagnosis failed: {exc}", "seconds": time.perf_counter() - start}
+    first = diagnosis.ranking[0] if diagnosis.ranking else None
+    out["first"] = first["effect"] if first else None
+    out["tie"] = bool(first and first["tied_with"])
+    if not out["tie"]:
+        out["status"] = "no tie"
+        out["seconds"] = time.perf_counter() - start
+        return out
+    t_diag = time.perf_counter()
+    try:
+        plan = NextExperiment(diagnosis, rivals=list(rivals), repeats=10, sweeps=True)
+    except (NoExperiment, InputError, FitError) as exc:
+        return {**out, "status": f"no plan: {exc}", "seconds": time.perf_counter() - start}
+    t_plan = time.perf_counter()
+    lin = [linearise(plan, r, shared) for r in plan.rivals]
+    names = [r.name for r in plan.rivals]
+    truth_index = names.index(scenario.effect.candidate)
+    # the linearised rivals reproduce the plan's own predictions at the fit
+    check = []
+    for k, r in enumerate(lin):
+        if plan.points:
+            mine = np.array([r.mean[m] for m in range(len(plan.points))])
+            theirs = np.stack([plan.mean[k].real, np.abs(plan.mean[k].imag)], axis=-1)
+            check.append(float(np.max(np.abs(mine - theirs))))
+        if plan.sweeps:
+            mine = np.array([r.mean[len(plan.points) + m] for m in range(len(plan.sweeps))])
+            check.append(float(np.max(np.abs(mine - split(plan.sweep_mean[k])))))
+    n_points = len(plan.points)
+    best = {"decay": None, "sweep": None}
+    for item in plan.plan:
+        kind = item["experiment"].kind
+        if best[kind] is None:
+            best[kind] = plan.experiments.index(item["experiment"])
+    predicted = {}
+    for kind, m in best.items():
+        if m is not None:
+            predicted[kind] = [round(float(plan.probability(float(k)).min(axis=0)[m]), 5) for k in range(1, N_MAX + 1)]
+    out.update(
+        status="loop",
+        experiments={"decays": n_points, "sweeps": len(plan.sweeps)},
+        plan_top=plan.plan[0]["text"],
+        plan_top_probability=plan.plan[0]["resolution_probability"],
+        best={k: (None if m is None else plan.experiments[m].describe()) for k, m in best.items()},
+        predicted=predicted,
+        linearisation_error=max(check) if check else None,
+        truth_index=truth_index,
+    )
+    runs = TruthRuns(simulator, plan, seed, shared)
+    results = {}
+    for name in strategies:
+        if name.startswith("repeat:"):
+            m = best[name.split(":", 1)[1]]
+            if m is None:
+                continue
+            results[name] = run_strategy(name, plan, lin, runs, truth_index, seed, repeat=m)
+        else:
+            results[name] = run_strategy(name, plan, lin, runs, truth_index, seed)
+    out["strategies"] = results
+    out["truth_runs"] = {"count": runs.count, "seconds": {k: round(v, 3) for k, v in runs.seconds.items()}}
+    out["seconds_setup"] = {"diagnosis": round(t_diag - start, 3), "plan": round(t_plan - t_diag, 3)}
+    out["seconds"] = time.perf_counter() - start
+    if keep:
+        out["_objects"] = {"model": model, "data": data, "runs": runs, "rivals": rivals}
+    return out
+
+
+def diagnosis_check(models: dict, scenario: Scenario, seed: int, strategy: str = "even") -> dict:
+    """The case again (the same runs), and the diagnosis itself on the tie's data plus the decays the
+    strategy took: does the diagnosis (its priors, its held-out tie rule) decide as the loop did?
+    Multisines the strategy took are left out (the diagnosis reads no frequency responses)."""
+    out = run_loop_case(models, scenario, seed, strategies=(strategy,), keep=True)
+    if "_objects" not in out:
+        return {"scenario": scenario.label, "seed": seed, "status": out["status"]}
+    o = out.pop("_objects")
+    s = out["strategies"][strategy]
+    seen: dict[int, int] = {}
+    rows = []
+    for e in s["chosen"]:
+        k = seen.get(e, 0)
+        seen[e] = k + 1
+        if (e, k) in o["runs"].rows:
+            rows.append(o["runs"].rows[(e, k)])
+    check = {"scenario": scenario.label, "seed": seed, "strategy": strategy, "loop": s["status"], "runs": s["runs"]}
+    check["decays_used"] = len(rows)
+    if not rows:
+        return check
+    data = EigenvalueData.concatenate([o["data"], *rows])
+    d = Diagnosis(o["model"], data, CanonicalData.empty(), effects=o["rivals"])
+    first = d.ranking[0] if d.ranking else None
+    check["diagnosis_first"] = first["effect"] if first else None
+    check["diagnosis_tied"] = list(first["tied_with"]) if first else []
+    check["hidden"] = scenario.effect.candidate
+    return check
+
+
+def figure_of_merit(runs: list[int | None]) -> tuple[float, float]:
+    """Median and 90th percentile of the runs needed (``None``: not resolved within :data:`N_MAX`,
+    counted as more than it)."""
+    x = np.array([math.inf if r is None else r for r in runs], float)
+    if not x.size:
+        return math.nan, math.nan
+    return float(np.quantile(x, 0.5, method="inverted_cdf")), float(np.quantile(x, 0.9, method="inverted_cdf"))
