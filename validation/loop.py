@@ -51,11 +51,11 @@ from scipy.special import ndtr
 
 from bikerider.errors import FitError, InputError
 from bikerider.gap.candidates.effect_model import EffectModel
-from bikerider.gap.diagnosis.result import Diagnosis
+from bikerider.gap.diagnosis.result import diagnose
 from bikerider.gap.inference.predict import Predictor
 from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
 from bikerider.gap.plan import criteria as C
-from bikerider.gap.plan.ranking import ASSUMED_NOISE, NextExperiment, NoExperiment
+from bikerider.gap.plan.ranking import ASSUMED_NOISE, NextExperiment, NoExperiment, plan_next
 from bikerider.gap.plan.sweeps import line_amplitude, response, split
 from validation.cases import CONTROL, CalibrationEffect, Protocol, Session, TruthSimulator, draw_truth, measure
 
@@ -246,8 +246,8 @@ def _predictions(plan: NextExperiment, effects: tuple[str, ...], X: np.ndarray, 
         A = np.broadcast_to(ss.closed_loop(gains), (P, len(speeds)) + ss.A.shape[-2:])
         b = np.broadcast_to(ss.B[..., :, 1], (P, len(speeds), ss.A.shape[-1]))
         omegas = np.array([s.omegas for s in plan.sweeps])
-        roll = response(A, b, ss.outputs[2], omegas[None])
-        steer = response(A, b, ss.outputs[1], omegas[None])
+        roll = response(A, b, ss.output_states[2], omegas[None])
+        steer = response(A, b, ss.output_states[1], omegas[None])
         is_roll = np.array([s.output == "roll_rate" for s in plan.sweeps])
         H = np.where(is_roll[None, :, None], roll, steer)
         parts.append(split(H).reshape(P, -1))
@@ -520,7 +520,7 @@ def run_loop_case(
         return {**out, "tie": False, "status": "too few runs", "seconds": time.perf_counter() - start}
     rivals = (scenario.effect.candidate, scenario.rival)
     try:
-        diagnosis = Diagnosis(model, data, CanonicalData.empty(), effects=rivals)
+        diagnosis = diagnose(model, data, CanonicalData.empty(), effects=rivals)
     except (FitError, InputError) as exc:
         return {**out, "tie": False, "status": f"diagnosis failed: {exc}", "seconds": time.perf_counter() - start}
     first = diagnosis.ranking[0] if diagnosis.ranking else None
@@ -532,7 +532,7 @@ def run_loop_case(
         return out
     t_diag = time.perf_counter()
     try:
-        plan = NextExperiment(diagnosis, rivals=list(rivals), repeats=10, sweeps=True)
+        plan = plan_next(diagnosis, rivals=list(rivals), repeats=10, sweeps=True)
     except (NoExperiment, InputError, FitError) as exc:
         return {**out, "status": f"no plan: {exc}", "seconds": time.perf_counter() - start}
     t_plan = time.perf_counter()
@@ -609,7 +609,7 @@ def diagnosis_check(models: dict, scenario: Scenario, seed: int, strategy: str =
     if not rows:
         return check
     data = EigenvalueData.concatenate([o["data"], *rows])
-    d = Diagnosis(o["model"], data, CanonicalData.empty(), effects=o["rivals"])
+    d = diagnose(o["model"], data, CanonicalData.empty(), effects=o["rivals"])
     first = d.ranking[0] if d.ranking else None
     check["diagnosis_first"] = first["effect"] if first else None
     check["diagnosis_tied"] = list(first["tied_with"]) if first else []

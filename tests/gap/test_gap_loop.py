@@ -82,7 +82,7 @@ def test_truth_multisine_reads_the_frequency_response(monkeypatch):
     A, b = ss.closed_loop(gains[None, :])[0], ss.B[0, :, 1]
     weave = np.linalg.eigvals(A)
     hz = float(weave.imag.max()) / (2 * np.pi)
-    for output, index in (("roll_rate", ss.outputs[2]), ("steer_angle", ss.outputs[1])):
+    for output, index in (("roll_rate", ss.output_states[2]), ("steer_angle", ss.output_states[1])):
         sweep = Sweep(speed, "control", output, 0.5, 10.0, lines_for(hz, 10.0))
         H = L.multisine_run(simulator, speed, gains, sweep, rng, settle=60.0)
         expected = response(A, b, index, sweep.omegas)
