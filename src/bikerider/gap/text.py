@@ -305,7 +305,7 @@ def next_text(result: dict, rows: int = 8) -> str:
         lines.append(
             "Misfit: "
             + ", ".join(f"{' + '.join(r['effects'])} misses held-out data by {r['heldout_error']:.2f}" for r in missing)
-            + " (RMS over the uncertainties, 1 the noise floor); the plan counts the misfit as a systematic error of "
+            + " (RMS over the uncertainties; noise alone gives about 1); the plan counts the misfit as a systematic error of "
             "each rival's prediction, so two rivals that both miss the data by more than they differ are not told apart."
         )
     lines += [

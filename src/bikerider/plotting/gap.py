@@ -461,6 +461,7 @@ def plot_ranking(result: dict):
     if not entries:
         return None
     first = result["ranking"][0]
+    floor = result.get("noise_floor_rms") or 1.0  # results stored before the floor was written: its mean
     panels = [("combined uncertainty", 1, first["heldout_error_before"])]
     if all(e[2] is not None for e in entries) and first.get("data_error_before") is not None:
         panels.append(("the data's uncertainty alone", 2, first["data_error_before"]))
@@ -476,12 +477,12 @@ def plot_ranking(result: dict):
         ax.hlines(rows, before, values, colors=colours, lw=2.5)
         ax.scatter(values, rows, c=colours, s=28, zorder=3)
         ax.axvline(before, color="k", ls="--", label=f"nominal model ({before:.2f})")
-        ax.axvline(1.0, color="0.5", ls=":", label="noise floor (1)")
+        ax.axvline(floor, color="0.5", ls=":", label=f"noise floor ({floor:.2f}: chi-square 95 %)")
         ax.set_yticks(
             range(len(entries)), [e[0] for e in entries] if ax is axes[0][0] else [""] * len(entries), fontsize=7
         )
         ax.invert_yaxis()
-        _decade_axis(ax, [*values[np.isfinite(values)], before, 1.0])
+        _decade_axis(ax, [*values[np.isfinite(values)], before, floor])
         ax.set_xlabel(f"held-out error: RMS residual over {what}", fontsize=8)
         ax.legend(fontsize=7)
     fig.suptitle(

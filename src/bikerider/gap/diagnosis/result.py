@@ -75,7 +75,7 @@ from bikerider.gap.diagnosis.fits import CrossValidation, Fits, obs_rows
 from bikerider.gap.diagnosis.folds import folds
 from bikerider.gap.diagnosis.priors import Priors, steer_rate_amplitudes
 from bikerider.gap.diagnosis.select import select
-from bikerider.gap.diagnosis.statistics import _named_values
+from bikerider.gap.diagnosis.statistics import _named_values, noise_floor_rms
 from bikerider.gap.diagnosis.where import gap_map, gap_test, whether
 from bikerider.gap.diagnosis.which import rank, search_pairs
 from bikerider.gap.inference.problem import EffectFit, GapProblem
@@ -381,6 +381,7 @@ def as_dict(d: Diagnosis) -> dict:
         "not_applicable": d.not_applicable,
         "folds": [name for name, _ in d.folds],
         "n_observations": len(p.obs),
+        "noise_floor_rms": noise_floor_rms(len(p.obs)) if len(d.folds) >= 2 else None,
         "records": _records_summary(d),
         "noise": p.noise,
         "uncertainty": _uncertainty_summary(p),

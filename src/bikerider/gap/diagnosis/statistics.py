@@ -36,13 +36,19 @@ NOISE_FLOOR_LEVEL = 0.05
 at least this probability (:func:`at_noise_floor`)."""
 
 
+def noise_floor_rms(n: int) -> float:
+    """The largest RMS of ``n`` normalised residuals that noise alone reaches with probability
+    ``1 - NOISE_FLOOR_LEVEL``: ``sqrt(chi2_95(n) / n)`` (1.17 for 50 points, 1.05 for 500)."""
+    return math.sqrt(chi2.ppf(1.0 - NOISE_FLOOR_LEVEL, n) / n) if n > 0 else math.nan
+
+
 def at_noise_floor(rms_error: float, n: int) -> bool:
     """Whether ``n`` held-out residuals of RMS ``rms_error`` (in units of their noise) are consistent
     with the noise alone: ``n rms^2`` within the chi-square's upper 95 % point with ``n`` degrees of
     freedom.  A bare ``rms <= 1`` would call pure noise "above the floor" half the time."""
     if not (n > 0 and math.isfinite(rms_error)):
         return False
-    return bool(n * rms_error**2 <= chi2.ppf(1.0 - NOISE_FLOOR_LEVEL, n))
+    return bool(rms_error <= noise_floor_rms(n))
 
 
 def rms(z: np.ndarray) -> float:
