@@ -39,7 +39,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from bikerider.gap.measured.control import ControlLaw
-from bikerider.gap.measured.records import SIGNAL_UNITS, SIGNALS
+from bikerider.gap.measured.records import SIGNAL_UNITS, SIGNALS, record_summary
 from bikerider.gap.measured.repair import Repair, _clipped, _clock, _monotonic
 
 LOG = logging.getLogger(__name__)
@@ -173,20 +173,7 @@ class MultisineFit:
     def summary(self) -> dict:
         """Plain values for reports and JSON."""
         r = self.record
-        out = {
-            "record": r.name,
-            "kind": "multisine",
-            "source": r.source,
-            "group": r.group,
-            "law": r.law.name,
-            "speed": r.speed,
-            "speed_sigma": r.speed_sigma,
-            "controller_speed": r.controller_speed,
-            "duration": r.duration,
-            "used": self.used,
-            "reason": self.reason,
-            "repairs": list(r.repairs),
-        }
+        out = {**record_summary(r, self.used, self.reason), "kind": "multisine"}
         if self.used:
             out["lines"] = [float(x) for x in self.lines]
             out["signals"] = list(self.response)

@@ -110,6 +110,24 @@ class Record:
         return float(self.time[-1] - self.time[0]) if self.time.size else 0.0
 
 
+def record_summary(r, used: bool, reason: str | None) -> dict:
+    """What every record's summary starts with (a decay's :class:`Record` or a multisine run's): its
+    name, source, group, law, speeds, duration, whether it was used (or why not) and its repairs."""
+    return {
+        "record": r.name,
+        "source": r.source,
+        "group": r.group,
+        "law": r.law.name,
+        "speed": r.speed,
+        "speed_sigma": r.speed_sigma,
+        "controller_speed": r.controller_speed,
+        "duration": r.duration,
+        "used": used,
+        "reason": reason,
+        "repairs": list(r.repairs),
+    }
+
+
 @dataclass
 class RecordFit:
     """A record and what its fit gave.
@@ -138,20 +156,7 @@ class RecordFit:
 
     def summary(self) -> dict:
         """Plain values for reports and JSON."""
-        r = self.record
-        out = {
-            "record": r.name,
-            "source": r.source,
-            "group": r.group,
-            "law": r.law.name,
-            "speed": r.speed,
-            "speed_sigma": r.speed_sigma,
-            "controller_speed": r.controller_speed,
-            "duration": r.duration,
-            "used": self.used,
-            "reason": self.reason,
-            "repairs": list(r.repairs),
-        }
+        out = record_summary(self.record, self.used, self.reason)
         if self.estimate is not None:
             e = self.estimate
             out.update(
