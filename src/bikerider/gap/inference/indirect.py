@@ -88,13 +88,24 @@ def _project(kind: str, theta: np.ndarray, y: np.ndarray, w: np.ndarray, tau: np
     ``jacobian`` the last item is what :func:`_kaufman` needs to form it for some of the rows later
     (a trial step that is rejected needs none).
     """
-    omega, sigma = theta[:, 0, None], theta[:, 1, None]
-    decay = np.exp(-sigma * tau)
-    es, ec = decay * np.sin(omega * tau), decay * np.cos(omega * tau)
-    B, N = es.shape
+    B, N = theta.shape[0], tau.size
+    dt = _uniform_step(tau)
+    if dt is not None:
+        # e^{(-sigma + i omega) k dt} as powers of its first step, a running product (relative error
+        # about k times the rounding, 1e-14 at 400 samples, far below the fit's tolerance) at a fifth
+        # of the cost of an exp, a sin and a cos at every sample
+        z = _powers(np.exp((-theta[:, 1] + 1j * theta[:, 0]) * dt), N)
+        es, ec = z.imag, z.real
+    else:
+        omega, sigma = theta[:, 0, None], theta[:, 1, None]
+        decay = np.exp(-sigma * tau)
+        es, ec = decay * np.sin(omega * tau), decay * np.cos(omega * tau)
     phi = np.empty((B, N, 4))
     phi[..., 0], phi[..., 1], phi[..., 2] = es, ec, 1.0
-    grow = np.exp(theta[:, 2, None] * tau) if kind == "two-mode" else None
+    grow = None
+    if kind == "two-mode":
+        lam = theta[:, 2]
+        grow = _powers(np.exp(lam * dt), N) if dt is not None else np.exp(lam[:, None] * tau)
     phi[..., 3] = grow if grow is not None else tau
     phi_w = phi * w[..., None]
     phi_wT = np.swapaxes(phi_w, 1, 2)
@@ -106,6 +117,22 @@ def _project(kind: str, theta: np.ndarray, y: np.ndarray, w: np.ndarray, tau: np
     if not jacobian:
         return coef, r, np.sum(r * r, axis=1), parts
     return coef, r, np.sum(r * r, axis=1), _kaufman(coef, w, tau, parts)
+
+
+def _uniform_step(tau: np.ndarray) -> float | None:
+    """The step of ``tau`` when it is ``k dt`` (``k = 0, 1, ...``, as :func:`extract` makes it), else ``None``."""
+    if tau.size < 2 or tau[0] != 0.0:
+        return None
+    dt = float(tau[1])
+    return dt if np.array_equal(tau, np.arange(tau.size) * dt) else None
+
+
+def _powers(step: np.ndarray, n: int) -> np.ndarray:
+    """``step[:, None] ** arange(n)`` as a running product, ``(B, n)``."""
+    out = np.empty((step.size, n), step.dtype)
+    out[:, :1] = 1.0
+    out[:, 1:] = step[:, None]
+    return np.cumprod(out, axis=1, out=out)
 
 
 def _kaufman(coef: np.ndarray, w: np.ndarray, tau: np.ndarray, parts: tuple) -> np.ndarray:
