@@ -140,10 +140,12 @@ def _kaufman(coef: np.ndarray, w: np.ndarray, tau: np.ndarray, parts: tuple) -> 
     coefficients and the basis of :func:`_project` (each row on its own)."""
     es, ec, grow, phi_w, gram = parts
     a, b = coef[:, 0, None], coef[:, 1, None]
-    columns = [tau * (a * ec - b * es), -tau * (a * es + b * ec)]  # d/d omega, sigma
+    J = np.empty(es.shape + (2 if grow is None else 3,))  # the columns written in place (no stacking)
+    J[..., 0] = tau * (a * ec - b * es)  # d/d omega
+    J[..., 1] = -tau * (a * es + b * ec)  # d/d sigma
     if grow is not None:
-        columns.append(coef[:, 3, None] * tau * grow)  # d/d lambda
-    J = np.stack(columns, axis=-1) * w[..., None]
+        J[..., 2] = coef[:, 3, None] * tau * grow  # d/d lambda
+    J *= w[..., None]
     # Kaufman: the part of J the linear coefficients cannot follow
     phi_wT = np.swapaxes(phi_w, 1, 2)
     return J - phi_w @ np.linalg.solve(gram, phi_wT @ J)
