@@ -80,16 +80,20 @@ LINEAR = {"two-mode": (2, 3, 4, 5), "plain": (3, 4, 2, 5)}
 """Positions of the coefficients of :func:`_basis`'s four functions in each model's parameter vector."""
 
 
-def _project(kind: str, theta: np.ndarray, y: np.ndarray, w: np.ndarray, tau: np.ndarray, jacobian: bool = True):
+def _project(
+    kind: str, theta: np.ndarray, y: np.ndarray, w: np.ndarray, tau: np.ndarray, jacobian: bool = True, dt=...
+):
     """Linear coefficients, weighted residuals, cost and Kaufman's Jacobian at ``theta``.
 
     Two-mode: ``theta = (omega, sigma, lambda)``, basis ``e sin, e cos, 1, exp(lambda t)`` with
     ``e = exp(-sigma t)``; plain: ``theta = (omega, sigma)``, basis ``e sin, e cos, 1, t``.  Without
     ``jacobian`` the last item is what :func:`_kaufman` needs to form it for some of the rows later
-    (a trial step that is rejected needs none).
+    (a trial step that is rejected needs none).  ``dt``: :func:`_uniform_step` of ``tau`` when the
+    caller has it.
     """
     B, N = theta.shape[0], tau.size
-    dt = _uniform_step(tau)
+    if dt is ...:
+        dt = _uniform_step(tau)
     if dt is not None:
         # e^{(-sigma + i omega) k dt} as powers of its first step, a running product (relative error
         # about k times the rounding, 1e-14 at 400 samples, far below the fit's tolerance) at a fifth
@@ -172,7 +176,8 @@ def levenberg_marquardt(
     scale = np.maximum(np.sum((y * w) ** 2, axis=1), 1e-300)
     span = tau[np.maximum(np.sum(mask, axis=1) - 1, 0)]
     with np.errstate(all="ignore"):
-        coef, r, cost, J = _project(kind, theta, y, w, tau)
+        dt = _uniform_step(tau)
+        coef, r, cost, J = _project(kind, theta, y, w, tau, dt=dt)
         cost = np.where(np.isfinite(cost), cost, np.inf)
         mu = np.full(theta.shape[0], 1e-3)
         active = np.isfinite(cost)
@@ -200,7 +205,7 @@ def levenberg_marquardt(
             trial = theta[idx] + step
             if kind == "two-mode":  # the extra mode stays where the record fit accepts it
                 trial[:, 2] = np.clip(trial[:, 2], *LAMBDA_BOUNDS)
-            coef2, r2, cost2, parts = _project(kind, trial, y[idx], w[idx], tau, jacobian=False)
+            coef2, r2, cost2, parts = _project(kind, trial, y[idx], w[idx], tau, jacobian=False, dt=dt)
             better = np.isfinite(cost2) & (cost2 <= cost[idx])
             predicted = -(2 * np.sum(g * step, axis=1) + np.einsum("bk,bkl,bl->b", step, H, step))
             gain = np.where(better, cost[idx] - cost2, predicted)
