@@ -111,12 +111,16 @@ def _project(
         lam = theta[:, 2]
         grow = _powers(np.exp(lam * dt), N) if dt is not None else np.exp(lam[:, None] * tau)
     phi[..., 3] = grow if grow is not None else tau
-    phi_w = phi * w[..., None]
+    # the weights are 0 or 1 (a mask): weighting the basis in place and the residuals as
+    # phi_w coef - y w is the same arithmetic as (phi coef - y) w, one array fewer
+    phi *= w[..., None]
+    phi_w = phi
     phi_wT = np.swapaxes(phi_w, 1, 2)
     gram = phi_wT @ phi_w
     gram = gram + 1e-12 * np.maximum(np.trace(gram, axis1=1, axis2=2), 1e-300)[:, None, None] * np.eye(4)
-    coef = np.linalg.solve(gram, phi_wT @ (y * w)[..., None])[..., 0]  # (B, 4)
-    r = ((phi @ coef[..., None])[..., 0] - y) * w
+    yw = y * w
+    coef = np.linalg.solve(gram, phi_wT @ yw[..., None])[..., 0]  # (B, 4)
+    r = (phi_w @ coef[..., None])[..., 0] - yw
     parts = (es, ec, grow, phi_w, gram)
     if not jacobian:
         return coef, r, np.sum(r * r, axis=1), parts
