@@ -75,7 +75,7 @@ from bikerider.gap.diagnosis.fits import CrossValidation, Fits, obs_rows
 from bikerider.gap.diagnosis.folds import folds
 from bikerider.gap.diagnosis.priors import Priors, steer_rate_amplitudes
 from bikerider.gap.diagnosis.select import select
-from bikerider.gap.diagnosis.statistics import _named_values, noise_floor_rms
+from bikerider.gap.diagnosis.statistics import _named_values, by_error, noise_floor_rms
 from bikerider.gap.diagnosis.where import gap_map, gap_test, whether
 from bikerider.gap.diagnosis.which import rank, search_pairs
 from bikerider.gap.inference.problem import EffectFit, GapProblem
@@ -347,7 +347,7 @@ def as_dict(d: Diagnosis) -> dict:
             }
         )
     pairs = []
-    for r in sorted(d.pairs, key=lambda r: r.error_after):
+    for r in by_error(d.pairs, p):
         entry = {
             "effects": list(r.effects),
             "heldout_error_before": r.error_before,

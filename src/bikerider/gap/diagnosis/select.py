@@ -12,7 +12,7 @@ import numpy as np
 from bikerider.gap.candidates.effects import PARAMETERS, STEER_FRICTION
 from bikerider.gap.diagnosis.fits import CrossValidation, Fits
 from bikerider.gap.diagnosis.priors import Priors, implausible_reasons
-from bikerider.gap.diagnosis.statistics import at_noise_floor, significantly_better
+from bikerider.gap.diagnosis.statistics import at_noise_floor, by_error, significantly_better
 
 MAX_SELECTED = 2
 """Most effects selected together (pairs are searched on the held-out folds)."""
@@ -143,7 +143,7 @@ def select(
     )
     floor_reached = left is not None and at_noise_floor(left, best_single.z_after.size)
     floor_score = judged[best_single.effects]["score"] if best_single is not None else nominal_score
-    for r in sorted([] if floor_reached else pairs, key=lambda r: r.error_after):
+    for r in by_error([] if floor_reached else pairs, p):
         j = judge(r, reference, "beats_single" if best_single is not None else "beats_nominal")
         if j["eligible"] and j["score"] > floor_score and chosen is best_single:
             chosen = r
@@ -193,7 +193,7 @@ def _unusual_best(
 ) -> dict | None:
     """The best held-out fit of ``pool`` when it is not the one chosen and its values are unusual: what
     it needs (``why``), its log odds against the selection and its place in the ranking; else ``None``."""
-    best = min(pool, key=lambda r: r.error_after) if pool else None
+    best = by_error(pool, fits.problem)[0] if pool else None
     if best is None or (chosen is not None and best.effects == chosen.effects):
         return None
     ok, checks = priors.plausibility(fits.fit_of(best.effects))

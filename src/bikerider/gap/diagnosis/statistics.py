@@ -11,7 +11,7 @@ import math
 import numpy as np
 from scipy.special import stdtrit  # Student's t quantile (scipy.stats.t.ppf's own function, without its import)
 
-from bikerider.gap.candidates.effects import EFFECTS, PARAMETERS
+from bikerider.gap.candidates.effects import EFFECT_NAMES, EFFECTS, PARAMETERS
 from bikerider.gap.distributions import chi2
 from bikerider.gap.inference.problem import EffectFit, GapProblem
 
@@ -20,6 +20,12 @@ ALPHA = 0.01
 
 TIE_RELATIVE = 0.05
 """Held-out errors closer than this fraction of the better one are a tie."""
+
+SAME_ERROR = 1e-9
+"""Held-out errors that agree within this fraction are the same number to the fits' tolerance (their
+least-squares refits stop at a relative 1e-10 of the cost, :data:`bikerider.gap.inference.indirect.LM_TOLERANCE`):
+:func:`by_error` orders them by rule, not by their last digits, so a change of rounding does not reorder
+the ranking (SBW: steer_stiffness and steer_inertia agree to 1e-11)."""
 
 TIE_P = 0.05
 """One-sided p-value a better held-out error must reach to break a tie."""
@@ -85,6 +91,25 @@ def significantly_better(z_better: np.ndarray, z_worse: np.ndarray) -> tuple[boo
         not_better += int(np.sum(a[index].sum(axis=1) >= b[index].sum(axis=1)))
     p = not_better / N_BOOTSTRAP
     return p < TIE_P and rms(z_better) < (1 - TIE_RELATIVE) * rms(z_worse), p
+
+
+def by_error(results: list, problem: GapProblem) -> list:
+    """Cross-validations sorted by held-out error, deterministically where errors agree within
+    :data:`SAME_ERROR` (relative, chained between neighbours): fewer fitted parameters first, then the
+    registry's order of the effects (:data:`bikerider.gap.candidates.effects.EFFECT_NAMES`)."""
+    ordered = sorted(results, key=lambda r: r.error_after)
+    out: list = []
+    group: list = []
+    for r in ordered:
+        if group and not abs(r.error_after - group[-1].error_after) <= SAME_ERROR * abs(group[-1].error_after):
+            out += sorted(group, key=lambda g: _rule(problem, g.effects))
+            group = []
+        group.append(r)
+    return out + sorted(group, key=lambda g: _rule(problem, g.effects))
+
+
+def _rule(problem: GapProblem, effects: tuple[str, ...]) -> tuple:
+    return (_n_params(problem, effects), [EFFECT_NAMES.index(e) for e in effects])
 
 
 def _n_params(problem: GapProblem, effects: tuple[str, ...]) -> int:

@@ -8,7 +8,7 @@ import itertools
 from bikerider import progress
 from bikerider.gap.candidates.effects import EFFECT_NAMES, EFFECTS, PARAMETERS, TIME_DOMAIN_EFFECTS
 from bikerider.gap.diagnosis.fits import CrossValidation, Fits
-from bikerider.gap.diagnosis.statistics import _n_params, significantly_better
+from bikerider.gap.diagnosis.statistics import _n_params, by_error, significantly_better
 from bikerider.gap.inference.problem import GapProblem
 from bikerider.gap.parallel import cross_validate_all
 
@@ -20,8 +20,9 @@ changes nothing and pairs nothing)."""
 
 def order(results: list[CrossValidation], problem: GapProblem) -> list[tuple[CrossValidation, list[str]]]:
     """Sort by held-out error; ties (see the module docstring of :mod:`~bikerider.gap.diagnosis.result`)
-    go to the simpler candidate.  Each with the candidates it is tied with."""
-    results = sorted(results, key=lambda r: r.error_after)
+    go to the simpler candidate; errors equal to the fits' tolerance in a fixed order
+    (:func:`~bikerider.gap.diagnosis.statistics.by_error`).  Each with the candidates it is tied with."""
+    results = by_error(results, problem)
     ordered: list[CrossValidation] = list(results)
     ties: dict[tuple, list[str]] = {r.effects: [] for r in results}
     for i, a in enumerate(results):

@@ -80,32 +80,67 @@ LINEAR = {"two-mode": (2, 3, 4, 5), "plain": (3, 4, 2, 5)}
 """Positions of the coefficients of :func:`_basis`'s four functions in each model's parameter vector."""
 
 
-def _project(kind: str, theta: np.ndarray, y: np.ndarray, w: np.ndarray, tau: np.ndarray, jacobian: bool = True):
+def _project(
+    kind: str, theta: np.ndarray, y: np.ndarray, w: np.ndarray, tau: np.ndarray, jacobian: bool = True, dt=...
+):
     """Linear coefficients, weighted residuals, cost and Kaufman's Jacobian at ``theta``.
 
     Two-mode: ``theta = (omega, sigma, lambda)``, basis ``e sin, e cos, 1, exp(lambda t)`` with
     ``e = exp(-sigma t)``; plain: ``theta = (omega, sigma)``, basis ``e sin, e cos, 1, t``.  Without
     ``jacobian`` the last item is what :func:`_kaufman` needs to form it for some of the rows later
-    (a trial step that is rejected needs none).
+    (a trial step that is rejected needs none).  ``dt``: :func:`_uniform_step` of ``tau`` when the
+    caller has it.
     """
-    omega, sigma = theta[:, 0, None], theta[:, 1, None]
-    decay = np.exp(-sigma * tau)
-    es, ec = decay * np.sin(omega * tau), decay * np.cos(omega * tau)
-    B, N = es.shape
+    B, N = theta.shape[0], tau.size
+    if dt is ...:
+        dt = _uniform_step(tau)
+    if dt is not None:
+        # e^{(-sigma + i omega) k dt} as powers of its first step, a running product (relative error
+        # about k times the rounding, 1e-14 at 400 samples, far below the fit's tolerance) at a fifth
+        # of the cost of an exp, a sin and a cos at every sample
+        z = _powers(np.exp((-theta[:, 1] + 1j * theta[:, 0]) * dt), N)
+        es, ec = z.imag, z.real
+    else:
+        omega, sigma = theta[:, 0, None], theta[:, 1, None]
+        decay = np.exp(-sigma * tau)
+        es, ec = decay * np.sin(omega * tau), decay * np.cos(omega * tau)
     phi = np.empty((B, N, 4))
     phi[..., 0], phi[..., 1], phi[..., 2] = es, ec, 1.0
-    grow = np.exp(theta[:, 2, None] * tau) if kind == "two-mode" else None
+    grow = None
+    if kind == "two-mode":
+        lam = theta[:, 2]
+        grow = _powers(np.exp(lam * dt), N) if dt is not None else np.exp(lam[:, None] * tau)
     phi[..., 3] = grow if grow is not None else tau
-    phi_w = phi * w[..., None]
+    # the weights are 0 or 1 (a mask): weighting the basis in place and the residuals as
+    # phi_w coef - y w is the same arithmetic as (phi coef - y) w, one array fewer
+    phi *= w[..., None]
+    phi_w = phi
     phi_wT = np.swapaxes(phi_w, 1, 2)
     gram = phi_wT @ phi_w
     gram = gram + 1e-12 * np.maximum(np.trace(gram, axis1=1, axis2=2), 1e-300)[:, None, None] * np.eye(4)
-    coef = np.linalg.solve(gram, phi_wT @ (y * w)[..., None])[..., 0]  # (B, 4)
-    r = ((phi @ coef[..., None])[..., 0] - y) * w
+    yw = y * w
+    coef = np.linalg.solve(gram, phi_wT @ yw[..., None])[..., 0]  # (B, 4)
+    r = (phi_w @ coef[..., None])[..., 0] - yw
     parts = (es, ec, grow, phi_w, gram)
     if not jacobian:
         return coef, r, np.sum(r * r, axis=1), parts
     return coef, r, np.sum(r * r, axis=1), _kaufman(coef, w, tau, parts)
+
+
+def _uniform_step(tau: np.ndarray) -> float | None:
+    """The step of ``tau`` when it is ``k dt`` (``k = 0, 1, ...``, as :func:`extract` makes it), else ``None``."""
+    if tau.size < 2 or tau[0] != 0.0:
+        return None
+    dt = float(tau[1])
+    return dt if np.array_equal(tau, np.arange(tau.size) * dt) else None
+
+
+def _powers(step: np.ndarray, n: int) -> np.ndarray:
+    """``step[:, None] ** arange(n)`` as a running product, ``(B, n)``."""
+    out = np.empty((step.size, n), step.dtype)
+    out[:, :1] = 1.0
+    out[:, 1:] = step[:, None]
+    return np.cumprod(out, axis=1, out=out)
 
 
 def _kaufman(coef: np.ndarray, w: np.ndarray, tau: np.ndarray, parts: tuple) -> np.ndarray:
@@ -113,10 +148,12 @@ def _kaufman(coef: np.ndarray, w: np.ndarray, tau: np.ndarray, parts: tuple) -> 
     coefficients and the basis of :func:`_project` (each row on its own)."""
     es, ec, grow, phi_w, gram = parts
     a, b = coef[:, 0, None], coef[:, 1, None]
-    columns = [tau * (a * ec - b * es), -tau * (a * es + b * ec)]  # d/d omega, sigma
+    J = np.empty(es.shape + (2 if grow is None else 3,))  # the columns written in place (no stacking)
+    J[..., 0] = tau * (a * ec - b * es)  # d/d omega
+    J[..., 1] = -tau * (a * es + b * ec)  # d/d sigma
     if grow is not None:
-        columns.append(coef[:, 3, None] * tau * grow)  # d/d lambda
-    J = np.stack(columns, axis=-1) * w[..., None]
+        J[..., 2] = coef[:, 3, None] * tau * grow  # d/d lambda
+    J *= w[..., None]
     # Kaufman: the part of J the linear coefficients cannot follow
     phi_wT = np.swapaxes(phi_w, 1, 2)
     return J - phi_w @ np.linalg.solve(gram, phi_wT @ J)
@@ -143,7 +180,8 @@ def levenberg_marquardt(
     scale = np.maximum(np.sum((y * w) ** 2, axis=1), 1e-300)
     span = tau[np.maximum(np.sum(mask, axis=1) - 1, 0)]
     with np.errstate(all="ignore"):
-        coef, r, cost, J = _project(kind, theta, y, w, tau)
+        dt = _uniform_step(tau)
+        coef, r, cost, J = _project(kind, theta, y, w, tau, dt=dt)
         cost = np.where(np.isfinite(cost), cost, np.inf)
         mu = np.full(theta.shape[0], 1e-3)
         active = np.isfinite(cost)
@@ -171,7 +209,7 @@ def levenberg_marquardt(
             trial = theta[idx] + step
             if kind == "two-mode":  # the extra mode stays where the record fit accepts it
                 trial[:, 2] = np.clip(trial[:, 2], *LAMBDA_BOUNDS)
-            coef2, r2, cost2, parts = _project(kind, trial, y[idx], w[idx], tau, jacobian=False)
+            coef2, r2, cost2, parts = _project(kind, trial, y[idx], w[idx], tau, jacobian=False, dt=dt)
             better = np.isfinite(cost2) & (cost2 <= cost[idx])
             predicted = -(2 * np.sum(g * step, axis=1) + np.einsum("bk,bkl,bl->b", step, H, step))
             gain = np.where(better, cost[idx] - cost2, predicted)
@@ -476,7 +514,10 @@ def _linear_response(batch: RecordBatch, A: np.ndarray, outputs: tuple) -> np.nd
         if known < batch.N:
             power = power @ power
     basis = resolved_basis(A, batch.dt)  # (P, R, n, n)
-    O = O @ basis[:, :, None]
+    # only where a fast mode is left out: elsewhere the basis is the identity (the product the same)
+    changed = ~np.all(basis == np.eye(n), axis=(-2, -1))
+    if np.any(changed):
+        O[changed] = O[changed] @ basis[changed][:, None]
     z = _initial_states(batch, O)
     return (O.reshape(P, R, -1, n) @ z[..., None]).reshape(P, R, batch.N, len(rows))
 
