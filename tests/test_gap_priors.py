@@ -255,3 +255,45 @@ def test_the_noise_floor_is_consistency_with_noise_not_an_rms_below_one():
         z = rng.standard_normal((4000, n))
         share = np.mean([at_noise_floor(float(np.sqrt(np.mean(row**2))), n) for row in z])
         assert 0.94 <= share <= 0.96, (n, share)
+
+
+def test_calibration_records_and_tables_of_one_seed_hold_the_same_runs_and_fits():
+    # the record method gives the diagnosis what a lab keeps (the noisy runs); the table method the
+    # eigenvalues fitted from the very same runs, so the before/after comparison is on identical data
+    from bikerider.gap.measured.records import fit_records
+    from validation import cases as V
+
+    model = load_model(BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt")
+    truth = V.Truth("viscous", ("steer_damping",), {"c_steer": 0.4}, "viscous 0.4 N m s/rad")
+    rng = np.random.default_rng(2)
+    records: list = []
+    data, _ = V.measure(V.TruthSimulator(model, truth, rng), V.CALIBRATION_RIDERLESS, rng, None, records)
+    used = [f for f in records if f.used]
+    assert len(records) == 9 and len(used) == len(data) >= 4
+    np.testing.assert_array_equal(data.value.real, [f.estimate.eigenvalue.real for f in used])
+    assert [f.record.group for f in used] == list(data.group)
+    np.testing.assert_array_equal([f.record.speed for f in used], data.speed)
+    # the fits measure() made are those a lab's fit_records makes of the same records
+    again = fit_records([f.record for f in records])
+    assert [f.used for f in again] == [f.used for f in records]
+    for a, b in zip(again, records):
+        if a.used:
+            assert a.estimate.eigenvalue == b.estimate.eigenvalue and a.estimate.real_sigma == b.estimate.real_sigma
+    assert used[0].record.law.is_zero and not used[-1].record.law.is_zero  # the controlled session's law
+
+
+def test_calibration_jobs_go_round_the_effects_and_resume(tmp_path):
+    from validation import cases as V
+
+    sys.path.insert(0, str(ROOT / "docs" / "scripts"))
+    try:
+        from gap_calibration import jobs
+    finally:
+        sys.path.pop(0)
+    order = jobs(3, 1, 1, 1000)
+    n = len(V.CALIBRATION_EFFECTS)
+    assert order[: n + 1] == [(e.name, 1000, "records") for e in V.CALIBRATION_EFFECTS] + [
+        (V.CALIBRATION_FRICTION.name, 1000, "records")
+    ]
+    assert order[n + 1 : 2 * n + 1] == [(e.name, 1000, "tables") for e in V.CALIBRATION_EFFECTS]
+    assert len(order) == 3 * (n + 1) + n and len(set(order)) == len(order)
