@@ -175,6 +175,7 @@ def test_decays_of_many_amplitudes_carry_the_split():
 
 
 # -- the calibration study -----------------------------------------------------------------------------
+@pytest.mark.slow
 def test_a_few_calibration_trials_and_their_report(tmp_path):
     import json
 
@@ -182,13 +183,19 @@ def test_a_few_calibration_trials_and_their_report(tmp_path):
 
     models = {"riderless": load_model(BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt")}
     effect = next(e for e in V.CALIBRATION_EFFECTS if e.name == "steer_coulomb")
-    trial = V.run_trial(models, effect, 0)  # even seed: riderless
-    assert not trial.rider and 0 < trial.truth["T_coulomb"] <= Prior("halfcauchy", 0, 0.1, "").interval(0.8)[1]
+    trial = V.run_trial(models, effect, 0)  # even seed: riderless; the diagnosis gets the records
+    assert trial.method == "records" and not trial.rider
+    assert 0 < trial.truth["T_coulomb"] <= Prior("halfcauchy", 0, 0.1, "").interval(0.8)[1]
     c_eq = trial.reference["c_steer"]
     assert c_eq == pytest.approx(4 * trial.truth["T_coulomb"] / (math.pi * trial.amplitude))
-    assert trial.first == "steer_damping" and "c_steer" in trial.fitted
+    assert "c_steer" in trial.fitted
+    # from records Coulomb friction has its own candidate, scored against the truth's level
+    assert trial.reference["T_coulomb"] == trial.truth["T_coulomb"] and "T_coulomb" in trial.fitted
+    before = V.run_trial(models, effect, 0, "tables")  # the same runs as a table of eigenvalues
+    assert before.method == "tables" and before.truth == trial.truth and before.amplitude == trial.amplitude
+    assert before.first == "steer_damping" and "T_coulomb" not in before.fitted
     results = tmp_path / "trials.jsonl"
-    results.write_text(json.dumps(trial.as_dict()) + "\n")
+    results.write_text(json.dumps(trial.as_dict()) + "\n" + json.dumps(before.as_dict()) + "\n")
     doc = tmp_path / "doc.md"
     doc.write_text("# head\n")
     sys.path.insert(0, str(ROOT / "docs" / "scripts"))
@@ -200,6 +207,7 @@ def test_a_few_calibration_trials_and_their_report(tmp_path):
     text = doc.read_text()
     assert text.startswith("# head") and "## 4. Calibration" in text
     assert "Fewer than the 200 trials per effect" in text and "| steer_coulomb | c_steer | 1 |" in text
+    assert "Records against tables, on the same 1 trials" in text and "| steer_coulomb | T_coulomb | 1 |" in text
     write_report(results, doc, 200)  # rewritten in place, not appended
     assert doc.read_text().count("## 4. Calibration") == 1
 

@@ -2,14 +2,19 @@
 docs/gap_validation.md.
 
 Every trial draws a hidden effect's sizes over its prior and the bicycle's parameters from their stated
-uncertainties, simulates short noisy runs with the independent truth of
-:mod:`validation.cases` (Coulomb friction nonlinear in time), diagnoses them blind and scores the
-ranking, the selection, the candidate's fitted sizes and their 95 % intervals, and the predicted against
-the achieved shrinkage.  Trials go round the effects in turn (a run stopped early stays balanced) and are
-appended to a JSON-lines file as they finish; the report is written from that file.  Run from the project
-root::
+uncertainties, simulates short noisy runs with the independent truth of :mod:`validation.cases` (Coulomb
+friction nonlinear in time), gives the diagnosis the runs as records (each predicted by indirect inference)
+and scores the ranking, the selection, the candidate's fitted sizes and their 95 % intervals, and the
+predicted against the achieved shrinkage.  In the first ``--compare-rounds`` rounds each trial is also run
+with the method before (a table of the eigenvalues fitted from the same runs), for the comparison.
 
-    .venv/bin/python docs/scripts/gap_calibration.py --trials 200 --max-minutes 25
+Trials go round the effects in turn (a run stopped early stays balanced), two at a time in worker
+processes (one BLAS thread each); this process appends each finished trial to a JSON-lines file, and a
+second start resumes where the file ends (trials already in it are not run again).  SIGTERM or Ctrl-C
+stops it keeping every finished trial; the report is written from the file.  Run from the project root::
+
+    nohup nice -n 10 .venv/bin/python docs/scripts/gap_calibration.py --trials 200 --compare-rounds 10 \
+        --max-minutes 0 > calibration_run.log 2>&1 &
     .venv/bin/python docs/scripts/gap_calibration.py --report-only   # the doc from the stored trials
 """
 
