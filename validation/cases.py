@@ -25,7 +25,9 @@ the selected effects achieve on a fresh data set from the same truth (new kicks,
 
 The calibration study (:func:`run_trial`, :func:`run_friction_trial`; ``docs/scripts/gap_calibration.py``)
 repeats short trials per candidate effect with the sizes drawn over the candidate's prior
-(:data:`CALIBRATION_EFFECTS`) and scores identification, the fitted sizes' 95 % intervals and bias.
+(:data:`CALIBRATION_EFFECTS`), gives the diagnosis the noisy runs as records (or, for the comparison, the
+eigenvalues fitted from them: :data:`CALIBRATION_METHODS`) and scores identification, the fitted sizes'
+95 % intervals and bias.
 """
 
 from __future__ import annotations
