@@ -1115,6 +1115,10 @@ def run_trial(models: dict[str, GapModelInput], effect: CalibrationEffect, seed:
             fitted[name] = {"value": float(friction.values[k]), "ci95": value}
         reference["T_coulomb"] = truth.values["T_coulomb"]
         reference["c_viscous"] = 0.0
+        equivalent = _friction_equivalent(diagnosis, friction, amplitude)
+        if equivalent is not None:
+            fitted["c_equivalent"] = equivalent
+            reference["c_equivalent"] = reference["c_steer"]
     predicted = achieved = None
     if diagnosis.selected and result["how_far"] is not None:
         predicted = result["how_far"]["shrink"]
@@ -1146,6 +1150,24 @@ def run_trial(models: dict[str, GapModelInput], effect: CalibrationEffect, seed:
         amplitude,
         method,
     )
+
+
+def _friction_equivalent(diagnosis, fit, amplitude: float | None) -> dict | None:
+    """The steer-friction fit as the viscous damping it equals at the runs' median steer-rate amplitude
+    ``c_viscous + 4 T_coulomb / (pi A)`` with its 95 % interval, as
+    :meth:`bikerider.gap.diagnosis.result.Diagnosis.friction_equivalent` reports it for records with a steer
+    signal (these hold the roll rate only, so the amplitude is the truth's, the one the reference uses)."""
+    from bikerider.gap.diagnosis.statistics import jackknife_quantile
+
+    if not amplitude or fit.covariance is None or not np.all(np.isfinite(fit.covariance)):
+        return None
+    gradient = np.zeros(len(fit.names))
+    gradient[fit.names.index("T_coulomb")] = 4 / (math.pi * amplitude)
+    gradient[fit.names.index("c_viscous")] = 1.0
+    value = float(gradient @ fit.values)
+    stderr = math.sqrt(max(float(gradient @ fit.covariance @ gradient), 0.0))
+    quantile = jackknife_quantile(len(diagnosis.folds))
+    return {"value": value, "ci95": [max(value - quantile * stderr, 0.0), value + quantile * stderr]}
 
 
 def _achieved_on_records(model: GapModelInput, diagnosis, records: list) -> float | None:
