@@ -192,9 +192,12 @@ def section(trials: list[dict], goal: int) -> list[str]:
         "",
         "* **steer_coulomb** is pure Coulomb steer friction, simulated **nonlinearly in time**",
         "  (`T tanh(deltad / 0.02)` in the truth's equations, which share no code with the candidates). Its",
-        "  `steer_damping` fit is scored against the describing-function equivalent `c_eq = 4 T / (pi A)` at",
-        "  the runs' median steer-rate amplitude `A` (`sqrt(2)` times the RMS steer rate over the fitted",
-        "  window), and, from records, its `steer_friction` fit against the truth (`T_coulomb`; `c_viscous` = 0).",
+        "  `steer_damping` fit (the damping it acts as) is scored against the describing-function equivalent",
+        "  `c_eq = 4 T / (pi A)` at the runs' median steer-rate amplitude `A` (`sqrt(2)` times the RMS steer",
+        "  rate over the fitted window). From records Coulomb friction has a candidate of its own,",
+        "  `steer_friction` (fitted in the time domain): its equivalent `c_viscous + 4 T_coulomb / (pi A)` at the",
+        "  same `A` (the records hold the roll rate only, so `A` is the truth's) is scored against the same",
+        "  `c_eq` (`c_equivalent`), and its split against the truth (`T_coulomb`; `c_viscous` = 0).",
         f"* **{V.CALIBRATION_FRICTION.name}**: pure Coulomb friction again, diagnosed from raw records",
         "  (riderless, the SBW control `sil`, three speeds of three records of 1.2-2.5 s, 0.015 rad/s gyro noise,",
         "  a 13-bit steer encoder) with `steer_friction` fitted in the time domain; scored on its split",
@@ -410,9 +413,17 @@ def _comparison(table: list[dict], old: list[dict]) -> list[str]:
         f"coverage {_pct(k_old, n_old)} from tables, {_pct(k_new, n_new)} from records, over every size but the",
         "arms' mass.",
     ]
+    own_old, own_new = (
+        [old_rows[k] for k in keys if _own(old_rows[k])],
+        [new_rows[k] for k in keys if _own(new_rows[k])],
+    )
+    out[-1] += (
+        f" The linear candidates on their own truths (without steer_coulomb): {_pct(*_covered(own_old))} ->"
+        f" {_pct(*_covered(own_new))}."
+    )
     for rider in (False, True):
-        o = _covered(coverage_rows([t for t in before if t["rider"] == rider]))
-        n = _covered(coverage_rows([t for t in new if t["rider"] == rider]))
+        o = _covered([r for r in coverage_rows([t for t in before if t["rider"] == rider]) if (r[0], r[1]) in keys])
+        n = _covered([r for r in coverage_rows([t for t in new if t["rider"] == rider]) if (r[0], r[1]) in keys])
         out[-1] += f" {'With the rider' if rider else 'Riderless'}: {_pct(*o)} -> {_pct(*n)}."
     out += [
         "",
@@ -434,14 +445,18 @@ def _interval_fix(trials: list[dict], before: list[dict]) -> list[str]:
     if not before:
         return []
     after = _with_arm_inertia([now[(t["effect"], t["seed"])] for t in before])
-    rows_before, rows_after = coverage_rows(before), coverage_rows(after)
+    common = {(r[0], r[1]) for r in coverage_rows(before)} & {(r[0], r[1]) for r in coverage_rows(after)}
+    rows_before = [r for r in coverage_rows(before) if (r[0], r[1]) in common]
+    rows_after = [r for r in coverage_rows(after) if (r[0], r[1]) in common]
     return [
         "",
         f"**The records' intervals before their fix**, on the same {len(before)} trials",
         "(`docs/scripts/gap_calibration_weave_slopes.jsonl`): the sandwich took the weave eigenvalues' slopes for",
         "the apparent eigenvalues' (a short record's fitted decay rate moves about five times less with steer",
         "damping than the weave's, so the records carry less about it than those slopes said): coverage"
-        f" {_pct(*_covered(rows_before))} then, {_pct(*_covered(rows_after))} now, over every size but the arms' mass.",
+        f" {_pct(*_covered(rows_before))} then, {_pct(*_covered(rows_after))} now, over every size but the arms'"
+        f" mass; the linear candidates on their own truths {_pct(*_covered([r for r in rows_before if _own(r)]))}"
+        f" then, {_pct(*_covered([r for r in rows_after if _own(r)]))} now.",
     ]
 
 
@@ -458,23 +473,39 @@ def _misses(trials: list[dict], name: str) -> tuple[int, int, int]:
     return out[0], out[1], out[2]
 
 
+def _own(r: tuple) -> bool:
+    """A coverage row of a linear candidate on its own truth (not Coulomb friction, not the arms' mass)."""
+    return r[0] not in ("steer_coulomb", "steer_friction_records") and r[1] != "m_arm"
+
+
 def _reading(table, old, friction, pairs, rows) -> list[str]:
     """What the numbers say (the numbers computed here; the reasons from looking at the trials)."""
-    cover = [r for r in rows if r[0] != "steer_friction_records" and r[1] != "m_arm"]
+    cover = [r for r in rows if _own(r)]
     k, n = _covered(cover)
     low = [f"{r[0]} {r[1]} {_pct(r[3], r[2])}" for r in cover if r[2] and r[3] / r[2] < 0.9]
     split = {}
     for rider in (False, True):
-        sub = [r for r in coverage_rows([t for t in table if t["rider"] == rider]) if r[1] != "m_arm"]
+        sub = [r for r in coverage_rows([t for t in table if t["rider"] == rider]) if _own(r)]
         split[rider] = (*_covered(sub), [r for r in sub if r[2] and r[3] / r[2] < 0.9])
+    stand_in = [r for r in rows if r[0] == "steer_coulomb" and r[1] == "c_steer"]
+    equivalent = [r for r in rows if r[1] == "c_equivalent"]
     out = [
         "",
         "### Reading the results",
         "",
-        f"* Coverage over every size of the trials from records (the arms by their inertia, not their mass):"
-        f" {_pct(k, n)} (goal 90-97 %)" + (f"; below 90 %: {'; '.join(low)}." if low else "."),
+        "* **Coverage of the linear candidates' sizes on their own truths** (every size of steer_damping,",
+        "  steer_inertia, steer_stiffness, passive_arms (the arms by their inertia about the steer axis, not",
+        f"  their mass), rider_lean and tyre_slip), from records: {_pct(k, n)} (goal 90-97 %)"
+        + (f"; below 90 %: {'; '.join(low)}." if low else "."),
         f"  Riderless {_pct(*split[False][:2])}, with the rider {_pct(*split[True][:2])}.",
     ]
+    if stand_in:
+        k2, n2 = _covered(cover + stand_in)
+        out.append(
+            f"  With steer_coulomb's `steer_damping` stand-in beside them: {_pct(k2, n2)}. Coulomb friction's own"
+            f" size, the equivalent damping of the `steer_friction` fit: {_pct(*_covered(equivalent))} (both kinds"
+            " of friction trial)."
+        )
     by_effect = defaultdict(list)
     for t in table:
         by_effect[t["effect"]].append(t)
@@ -517,7 +548,52 @@ def _reading(table, old, friction, pairs, rows) -> list[str]:
 
 
 READING = [
-    "* (reading written from the trials: see below)",
+    "* **What the misses were, and what changed** (each taken apart on trials of the study before this one,",
+    "  which gave the diagnosis tables, and on the trials above):",
+    "  1. *A fit that could not leave zero.* Most sizes' first starting value is 0, their lower bound, and",
+    "     SciPy's `trf` scales every step by the distance to the bound (Coleman-Li), so a fit started there",
+    "     stays there. Five of the nine steer-stiffness misses before were fitted as 2e-10 N m/rad; on seed",
+    "     1017 (hidden 1.47) the fit stopped at 0 with chi-square 166 where 1.48 gives 9.6, and a start at",
+    "     0.01 finds 1.48. Starts on a bound now move 1e-4 of the search range inside",
+    "     (`gap/inference/problem.py`, `START_MARGIN`), for tables and records alike.",
+    "  2. *The fit's bias on short runs* (tyre_slip `c_alpha`, and with the rider generally). A weave fitted",
+    "     from a 3-s roll-rate run is off by more than its standard error, the same way for runs alike: on seed",
+    "     1001 (with the rider) the nominal model's own response, fitted the same way, lies 0.1-0.3 1/s from its",
+    "     weave eigenvalue in the real part, several of the rows' standard errors. A table row carries nothing",
+    "     of that; from records every candidate is predicted by the same fit applied to its own response, so",
+    "     the bias is on both sides. The tyre trials with the rider showed it most: every cornering-stiffness",
+    "     miss from tables lay low (4.8 and 5.0 1/rad for 15.1 and 16.3 on seeds 1017 and 1023), and on four",
+    "     such seeds (a run before the fixes 1. and 3.) the records moved the fitted value up by 1.2-2.1 1/rad,",
+    "     three of the four into their interval.",
+    "  3. *Intervals from records too narrow.* A short record's fitted decay rate moves far less with a",
+    "     candidate's size than the weave's (steer damping on seed 1001: 0.03-0.10 against 0.13-0.35 (1/s)",
+    "     per N m s/rad), and the fit's estimating equation weighs the records by the weave's slopes; the",
+    "     sandwich now takes the apparent eigenvalues' slopes for its bread (`Diagnosis._with_parameter_uncertainty`;",
+    "     the paragraph *The records' intervals before their fix* above).",
+    "  4. *The rider's geometry.* The truth's rider differs from the diagnosis's default (upper body 45 % of",
+    "     the rider's mass instead of 50 %, hip axis 5 cm lower, grips 8 cm higher and 2 cm wider), as a real",
+    "     rider differs from any default, and the intervals carry the benchmark parameters' uncertainty, not",
+    "     the geometry's. The arms' mass is fitted at the default grips: every one of its misses before lay",
+    "     high, by the ratio of the grips' squared distances from the steer axis; their inertia about the",
+    "     axis (`I_arm_steer`), which is what the data carry, is the size scored. The lean damping's misses",
+    "     before all lay low (five of five), as a geometry error that moves every trial alike would; that it",
+    "     is the geometry and not the tables' row bias (2.) was not taken apart.",
+    "* **steer_coulomb**: as the viscous damping it acts as, Coulomb friction is sized against a describing",
+    "  function of a sustained oscillation, which a decay is not (its amplitude falls within each run): the",
+    "  stand-in's bias says how far that equivalent stretches. From records the `steer_friction` candidate",
+    "  models it as what it is (on seed 1001: equivalent 1.55 [1.14, 1.97] N m s/rad for `c_eq` 1.57, where",
+    "  the viscous stand-in gives 0.90), but its intervals come from a jackknife over three groups and are",
+    "  often too narrow (seed 1004: `c_viscous` 0.0527 [0.0522, 0.0532] N m s/rad for a truth of 0); the",
+    "  fits of the held-out folds each start at the fit to all the data, and where they barely move from it",
+    "  the jackknife sees no spread (suspected, not taken apart). That, and the Coulomb level fitted low",
+    "  (median above), are not fixed here. Records of one amplitude cannot tell",
+    "  Coulomb from viscous friction: the split's coverage is shown, but what they carry is the equivalent.",
+    "* Still open: from records the fit solves its iterated bias correction, not the least squares of the",
+    "  apparent eigenvalues (seed 1001: chi-square 17.6 at the fitted 0.73 N m s/rad, 16.4 at 0.78, hidden",
+    "  0.84); consistent, but it wastes information, which the intervals now account for rather than recover.",
+    "* Small effects hide: the smallest third of the drawn sizes is ranked first less often, as the",
+    "  parameters' uncertainty alone bends the weave as much (verdict `parameters` or `none`): the diagnosis",
+    "  is right about what the data carry.",
 ]
 """The reasons behind the numbers, from looking at the trials (the numbers themselves are computed above)."""
 
