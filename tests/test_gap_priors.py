@@ -305,3 +305,39 @@ def test_calibration_jobs_go_round_the_effects_and_resume(tmp_path):
     ]
     assert order[n + 1 : 2 * n + 1] == [(e.name, 1000, "tables") for e in V.CALIBRATION_EFFECTS]
     assert len(order) == 3 * (n + 1) + n and len(set(order)) == len(order)
+
+
+def _sandwich_diagnosis(direct_slope: float, apparent_slope: float, records: bool) -> Diagnosis:
+    """A diagnosis whose problem predicts 4 observations linearly in one size: the weave eigenvalues with
+    ``direct_slope``, the records' apparent eigenvalues (indirect inference) with ``apparent_slope``."""
+
+    def predict_batch(lay, X, indirect=True):
+        slope = apparent_slope if (indirect and records) else direct_slope
+        return slope * np.asarray(X, float)[:, :1] * np.ones((1, 4))
+
+    d = Diagnosis.__new__(Diagnosis)
+    d.problem = SimpleNamespace(
+        free=["w"],
+        obs=[0, 1, 2, 3],
+        layout=lambda effects: None,
+        predict_batch=predict_batch,
+        var_total=np.full(4, 0.04),
+        var_data=np.full(4, 0.04),
+        jacobian=np.zeros((4, 1)),
+        records=SimpleNamespace() if records else None,
+        record_obs=np.array([[0, 1], [2, 3]]) if records else np.zeros((0, 2), int),
+    )
+    return d
+
+
+def test_intervals_from_records_use_the_apparent_eigenvalues_slopes():
+    # the fit weighs the records' residuals by the weave's slopes; where a short record's fitted eigenvalue
+    # moves less with the size than the weave does, the records carry less about it: a wider interval
+    fit = _fit([5.0], [4.9], [5.1])
+    tables = _sandwich_diagnosis(0.4, 0.1, records=False)._with_parameter_uncertainty(fit)
+    same = _sandwich_diagnosis(0.4, 0.4, records=True)._with_parameter_uncertainty(fit)
+    flat = _sandwich_diagnosis(0.4, 0.1, records=True)._with_parameter_uncertainty(fit)
+    expected = 0.2 / (0.4 * math.sqrt(4))  # one size, four rows of standard error 0.2, slope 0.4
+    assert tables.stderr[0] == pytest.approx(expected) and same.stderr[0] == pytest.approx(expected)
+    assert flat.stderr[0] == pytest.approx(4 * expected)  # the bread (A^T A_i)^-1 with A_i a quarter of A
+    assert flat.ci_high[0] - flat.ci_low[0] == pytest.approx(2 * 1.96 * 4 * expected)
