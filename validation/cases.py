@@ -39,7 +39,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from bikerider.errors import FitError
+from bikerider.errors import FitError, InputError
 from bikerider.gap.candidates.effect_model import BENCH_ARGS
 from bikerider.gap.candidates.nominal import GapModelInput
 from bikerider.gap.inference.problem import POSITIVE
@@ -1095,7 +1095,28 @@ def run_trial(models: dict[str, GapModelInput], effect: CalibrationEffect, seed:
             method,
         )
     if method == "records":
-        diagnosis = Diagnosis(model, EigenvalueData.empty(), empty, records=records)
+        try:
+            diagnosis = Diagnosis(model, EigenvalueData.empty(), empty, records=records)
+        except InputError:  # every record left out: the model predicts no weave the fit finds in any
+            return Trial(
+                effect.name,
+                effect.candidate,
+                seed,
+                rider,
+                truth.values,
+                "no record used",
+                None,
+                [],
+                [],
+                {},
+                reference,
+                None,
+                None,
+                0,
+                time.perf_counter() - start,
+                amplitude,
+                method,
+            )
         n_measured = len(diagnosis.record_rows)
     else:
         diagnosis = Diagnosis(model, data, empty)

@@ -89,17 +89,21 @@ def _start_worker() -> None:
 
 
 def _run_job(job: tuple[str, int, str]) -> dict:
-    """One trial (in a worker process)."""
+    """One trial (in a worker process); a failure comes back as ``{"error": text}`` (an exception of the
+    project's would not survive the way back: its class takes more than a message)."""
     from validation import cases as V
 
     global _MODELS
-    if _MODELS is None:
-        _MODELS = _models()
-    effect, seed, method = job
-    if effect == V.CALIBRATION_FRICTION.name:
-        trial = V.run_friction_trial(_MODELS["riderless"], seed)
-    else:
-        trial = V.run_trial(_MODELS, next(e for e in V.CALIBRATION_EFFECTS if e.name == effect), seed, method)
+    try:
+        if _MODELS is None:
+            _MODELS = _models()
+        effect, seed, method = job
+        if effect == V.CALIBRATION_FRICTION.name:
+            trial = V.run_friction_trial(_MODELS["riderless"], seed)
+        else:
+            trial = V.run_trial(_MODELS, next(e for e in V.CALIBRATION_EFFECTS if e.name == effect), seed, method)
+    except Exception as exc:  # reported by the parent and left out, never stopping the study
+        return {"error": f"{type(exc).__name__}: {exc}"}
     return trial.as_dict()
 
 
@@ -150,10 +154,9 @@ def run(
                     continue
                 for job, result in finished:
                     pending.remove((job, result))
-                    try:
-                        trial = result.get()
-                    except Exception as exc:  # a failed trial is reported and left out, never stops the study
-                        print(f"{job}: failed ({type(exc).__name__}: {exc})", file=sys.stderr, flush=True)
+                    trial = result.get()
+                    if "error" in trial:  # a failed trial is reported and left out, never stops the study
+                        print(f"{job}: failed ({trial['error']})", file=sys.stderr, flush=True)
                         continue
                     sink.write(json.dumps(trial) + "\n")
                     sink.flush()
