@@ -25,7 +25,9 @@ the selected effects achieve on a fresh data set from the same truth (new kicks,
 
 The calibration study (:func:`run_trial`, :func:`run_friction_trial`; ``docs/scripts/gap_calibration.py``)
 repeats short trials per candidate effect with the sizes drawn over the candidate's prior
-(:data:`CALIBRATION_EFFECTS`) and scores identification, the fitted sizes' 95 % intervals and bias.
+(:data:`CALIBRATION_EFFECTS`), gives the diagnosis the noisy runs as records (or, for the comparison, the
+eigenvalues fitted from them: :data:`CALIBRATION_METHODS`) and scores identification, the fitted sizes'
+95 % intervals and bias.
 """
 
 from __future__ import annotations
@@ -37,7 +39,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from bikerider.errors import FitError
+from bikerider.errors import FitError, InputError
 from bikerider.gap.candidates.effect_model import BENCH_ARGS
 from bikerider.gap.candidates.nominal import GapModelInput
 from bikerider.gap.inference.problem import POSITIVE
@@ -450,18 +452,31 @@ def _move_arms(v: dict[str, float], m_arm: float, grips: dict[str, float]) -> di
 # Measuring, diagnosing, scoring
 # ---------------------------------------------------------------------------------------------
 def measure(
-    simulator: TruthSimulator, protocol: Protocol, rng: np.random.Generator, amplitudes: list[float] | None = None
+    simulator: TruthSimulator,
+    protocol: Protocol,
+    rng: np.random.Generator,
+    amplitudes: list[float] | None = None,
+    records: list | None = None,
 ) -> tuple[EigenvalueData, list[str]]:
     """Run every session of the protocol and extract the weave eigenvalues as from real runs.
 
     ``amplitudes``, when given, receives each fitted run's steer-rate amplitude (``sqrt(2)`` times its
     RMS over the fitted window, as :func:`bikerider.gap.diagnosis.priors.steer_rate_amplitudes`).
+    ``records``, when given, receives every run as the record a lab keeps, fitted
+    (:class:`bikerider.gap.measured.records.RecordFit` from :func:`bikerider.gap.measured.records.fit_record`:
+    the noisy roll rate over the fitted window, the speed reading, the session as its group, the session's
+    control law), and the table's rows are those records' fits, so tables and records of one seed hold the
+    same runs and the same fits (each run fitted once); the random draws are the same with or without it.
     """
+    from dataclasses import replace
+
     from bikerider.gap.measured.extraction import weave_eigenvalue
+    from bikerider.gap.measured.records import Record, fit_record
 
     rows = {k: [] for k in ("speed", "value", "rs", "is", "group", "gains")}
     notes = []
     for session in protocol.sessions:
+        law = ControlLaw.constant(session.gains)
         for nominal_speed in session.speeds:
             speed = nominal_speed + protocol.speed_jitter * float(rng.uniform(-1, 1))
             kick = (float(rng.choice([-1, 1]) * rng.uniform(0.2, 0.4)), float(rng.uniform(-0.8, 0.8)))
@@ -471,14 +486,39 @@ def measure(
             roll_rate = states["phid"]
             y = roll_rate + protocol.gyro_noise * rng.standard_normal(roll_rate.size)
             keep = t >= protocol.start
-            try:
-                est = weave_eigenvalue(t[keep], y[keep])
-            except FitError as exc:
-                notes.append(f"{session.group} {speed:.2f} m/s: no weave fitted ({exc})")
-                continue
+            if records is not None:
+                # the speed reading is drawn below, for fitted runs only (the same draws as without records)
+                record = Record(
+                    f"{session.group} run {len(records) + 1}",
+                    "simulated",
+                    t[keep] - t[keep][0],
+                    {"roll_rate": y[keep]},
+                    speed,
+                    protocol.speed_noise,
+                    session.group,
+                    law,
+                    speed,
+                )
+                fit = fit_record(record)
+                records.append(fit)
+                if not fit.used:
+                    notes.append(f"{session.group} {speed:.2f} m/s: no weave fitted ({fit.reason})")
+                    continue
+                est = fit.estimate
+            else:
+                try:
+                    est = weave_eigenvalue(t[keep], y[keep])
+                except FitError as exc:
+                    notes.append(f"{session.group} {speed:.2f} m/s: no weave fitted ({exc})")
+                    continue
             if amplitudes is not None:
                 amplitudes.append(math.sqrt(2) * float(np.std(states["deltad"][keep])))
-            rows["speed"].append(speed + protocol.speed_noise * float(rng.standard_normal()))
+            reading = speed + protocol.speed_noise * float(rng.standard_normal())
+            if records is not None:
+                records[-1] = replace(
+                    records[-1], record=replace(records[-1].record, speed=reading, controller_speed=reading)
+                )
+            rows["speed"].append(reading)
             rows["value"].append(complex(est.eigenvalue.real, abs(est.eigenvalue.imag)))
             rows["rs"].append(est.real_sigma)
             rows["is"].append(est.imag_sigma)
@@ -991,21 +1031,34 @@ class Trial:
     n_measured: int
     seconds: float
     amplitude: float | None = None
+    method: str = "tables"
+    """How the runs reached the diagnosis (:data:`CALIBRATION_METHODS`; record trials: ``records``)."""
 
     def as_dict(self) -> dict:
         return dict(self.__dict__)
 
 
-def run_trial(models: dict[str, GapModelInput], effect: CalibrationEffect, seed: int) -> Trial:
+CALIBRATION_METHODS = ("records", "tables")
+"""How a trial's runs reach the diagnosis.  ``records``: the noisy roll-rate records themselves, each predicted
+by every model through the same fit applied to its own simulated response (indirect inference,
+:mod:`bikerider.gap.inference.indirect`), so the fit's bias on short runs is the same on both sides;
+``tables``: the weave eigenvalues fitted from the runs, compared with each model's weave eigenvalue (the
+method before issue 21, kept for the before/after comparison on the same seeds)."""
+
+
+def run_trial(models: dict[str, GapModelInput], effect: CalibrationEffect, seed: int, method: str = "records") -> Trial:
     """One trial: draw the sizes and the bicycle, measure short noisy runs, diagnose blind, score.
 
     ``models`` holds ``"riderless"`` and ``"rider"`` nominal models; with ``effect.rider == "both"`` even
-    seeds are riderless.
+    seeds are riderless.  ``method`` (:data:`CALIBRATION_METHODS`) says whether the diagnosis gets the
+    records or a table of the eigenvalues fitted from them; the runs of one seed are the same either way.
     """
     from bikerider.gap.diagnosis.result import diagnose
     from bikerider.gap.diagnosis.statistics import gap_shrink
     from bikerider.gap.inference.problem import GapProblem
 
+    if method not in CALIBRATION_METHODS:
+        raise ValueError(f"calibration method {method!r}: expected one of {', '.join(CALIBRATION_METHODS)}")
     start = time.perf_counter()
     rng = np.random.default_rng(seed)
     rider = effect.rider == "rider" or (effect.rider == "both" and seed % 2 == 1)
@@ -1014,7 +1067,8 @@ def run_trial(models: dict[str, GapModelInput], effect: CalibrationEffect, seed:
     truth = draw_truth(effect, rng)
     simulator = TruthSimulator(model, truth, rng)
     amplitudes: list[float] = []
-    data, _ = measure(simulator, protocol, rng, amplitudes)
+    records: list = []
+    data, _ = measure(simulator, protocol, rng, amplitudes, records)
     empty = CanonicalData.empty()
     amplitude = float(np.median(amplitudes)) if amplitudes else None
     reference = {k: truth.values[k] for k in effect.sizes}
@@ -1038,19 +1092,62 @@ def run_trial(models: dict[str, GapModelInput], effect: CalibrationEffect, seed:
             len(data),
             time.perf_counter() - start,
             amplitude,
+            method,
         )
-    diagnosis = diagnose(model, data, empty)
+    if method == "records":
+        try:
+            diagnosis = diagnose(model, EigenvalueData.empty(), empty, records=records)
+        except InputError:  # every record left out: the model predicts no weave the fit finds in any
+            return Trial(
+                effect.name,
+                effect.candidate,
+                seed,
+                rider,
+                truth.values,
+                "no record used",
+                None,
+                [],
+                [],
+                {},
+                reference,
+                None,
+                None,
+                0,
+                time.perf_counter() - start,
+                amplitude,
+                method,
+            )
+        n_measured = len(diagnosis.record_rows)
+    else:
+        diagnosis = diagnose(model, data, empty)
+        n_measured = len(data)
     result = diagnosis.as_dict()
     fit = diagnosis.fit_of((effect.candidate,)) if effect.candidate in diagnosis.candidates else None
     fitted = {}
     if fit is not None:
         for k, name in enumerate(fit.names):
             fitted[name] = {"value": float(fit.values[k]), "ci95": [float(fit.ci_low[k]), float(fit.ci_high[k])]}
+    if effect.name == "steer_coulomb" and "steer_friction" in diagnosis.candidates:
+        # from records, Coulomb friction also has a candidate of its own (fitted in the time domain): its
+        # Coulomb level is scored against the truth's, the viscous part it adds against 0
+        friction = diagnosis.fit_of(("steer_friction",))
+        for k, name in enumerate(friction.names):
+            value = [float(friction.ci_low[k]), float(friction.ci_high[k])]
+            fitted[name] = {"value": float(friction.values[k]), "ci95": value}
+        reference["T_coulomb"] = truth.values["T_coulomb"]
+        reference["c_viscous"] = 0.0
+        equivalent = _friction_equivalent(diagnosis, friction, amplitude)
+        if equivalent is not None:
+            fitted["c_equivalent"] = equivalent
+            reference["c_equivalent"] = reference["c_steer"]
     predicted = achieved = None
     if diagnosis.selected and result["how_far"] is not None:
         predicted = result["how_far"]["shrink"]
-        fresh, _ = measure(simulator, protocol, np.random.default_rng(seed + 1_000_000))
-        if len(fresh):
+        fresh_records: list = []
+        fresh, _ = measure(simulator, protocol, np.random.default_rng(seed + 1_000_000), None, fresh_records)
+        if len(fresh) and method == "records":
+            achieved = _achieved_on_records(model, diagnosis, fresh_records)
+        elif len(fresh):
             test = GapProblem(model, fresh, empty)
             fitted_model = diagnosis.problem.fitted_model(diagnosis.selected_fit)
             achieved = gap_shrink(test.z(test.baseline), test.z(test.predictor.predict(fitted_model)))
@@ -1069,10 +1166,53 @@ def run_trial(models: dict[str, GapModelInput], effect: CalibrationEffect, seed:
         reference,
         predicted,
         achieved,
-        len(data),
+        n_measured,
         time.perf_counter() - start,
         amplitude,
+        method,
     )
+
+
+def _friction_equivalent(diagnosis, fit, amplitude: float | None) -> dict | None:
+    """The steer-friction fit as the viscous damping it equals at the runs' median steer-rate amplitude
+    ``c_viscous + 4 T_coulomb / (pi A)`` with its 95 % interval, as
+    :meth:`bikerider.gap.diagnosis.priors.Priors.friction_equivalent` reports it for records with a steer
+    signal (these hold the roll rate only, so the amplitude is the truth's, the one the reference uses)."""
+    from bikerider.gap.diagnosis.statistics import jackknife_quantile
+
+    if not amplitude or fit.covariance is None or not np.all(np.isfinite(fit.covariance)):
+        return None
+    gradient = np.zeros(len(fit.names))
+    gradient[fit.names.index("T_coulomb")] = 4 / (math.pi * amplitude)
+    gradient[fit.names.index("c_viscous")] = 1.0
+    value = float(gradient @ fit.values)
+    stderr = math.sqrt(max(float(gradient @ fit.covariance @ gradient), 0.0))
+    quantile = jackknife_quantile(len(diagnosis.folds))
+    return {"value": value, "ci95": [max(value - quantile * stderr, 0.0), value + quantile * stderr]}
+
+
+def _achieved_on_records(model: GapModelInput, diagnosis, records: list) -> float | None:
+    """The shrinkage the selection achieves on fresh records (fitted, as :func:`measure` gives them): each predicted by indirect inference (or in the
+    time domain for steer friction), against the nominal model, residuals over the data and parameters'
+    standard uncertainty as in the held-out shrinkage it is compared with."""
+    from bikerider.gap.diagnosis.compare import time_domain_ready
+    from bikerider.gap.diagnosis.result import diagnose
+    from bikerider.gap.diagnosis.statistics import gap_shrink
+
+    try:
+        check = diagnose(model, EigenvalueData.empty(), CanonicalData.empty(), effects=(), records=records)
+    except InputError:
+        return None
+    p = check.problem
+    if "steer_friction" in diagnosis.selected:
+        if not time_domain_ready(check, p):  # the diagnosis holds the records and their rows as compared
+            return None
+        after = check.fits.time_domain_predict(diagnosis.selected_fit, np.ones(len(p.obs), bool))
+    else:
+        after = p.predict_batch(p.layout(diagnosis.selected_fit.effects), diagnosis.selected_fit.values[None, :])[0]
+    if not np.all(np.isfinite(after)):
+        return None
+    return gap_shrink(p.z(p.baseline), p.z(after))
 
 
 CALIBRATION_FRICTION = CalibrationEffect("steer_friction_records", "steer_friction", ("T_coulomb",), rider="riderless")
@@ -1136,4 +1276,5 @@ def run_friction_trial(model: GapModelInput, seed: int, protocol: RecordProtocol
         len(diagnosis.record_rows),
         time.perf_counter() - start,
         amplitude,
+        "records",
     )

@@ -13,6 +13,7 @@ import pytest
 from gap_support import BP, DATA
 
 from bikerider.gap.candidates.effects import EFFECTS, Prior, prior_from_range
+from bikerider.gap.diagnosis.fits import with_parameter_uncertainty
 from bikerider.gap.diagnosis.priors import Priors, steer_rate_amplitudes
 from bikerider.gap.diagnosis.result import diagnose
 from bikerider.gap.inference.problem import EffectFit
@@ -172,6 +173,7 @@ def test_decays_of_many_amplitudes_carry_the_split():
 
 
 # -- the calibration study -----------------------------------------------------------------------------
+@pytest.mark.slow
 def test_a_few_calibration_trials_and_their_report(tmp_path):
     import json
 
@@ -179,13 +181,19 @@ def test_a_few_calibration_trials_and_their_report(tmp_path):
 
     models = {"riderless": load_model(BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt")}
     effect = next(e for e in V.CALIBRATION_EFFECTS if e.name == "steer_coulomb")
-    trial = V.run_trial(models, effect, 0)  # even seed: riderless
-    assert not trial.rider and 0 < trial.truth["T_coulomb"] <= Prior("halfcauchy", 0, 0.1, "").interval(0.8)[1]
+    trial = V.run_trial(models, effect, 0)  # even seed: riderless; the diagnosis gets the records
+    assert trial.method == "records" and not trial.rider
+    assert 0 < trial.truth["T_coulomb"] <= Prior("halfcauchy", 0, 0.1, "").interval(0.8)[1]
     c_eq = trial.reference["c_steer"]
     assert c_eq == pytest.approx(4 * trial.truth["T_coulomb"] / (math.pi * trial.amplitude))
-    assert trial.first == "steer_damping" and "c_steer" in trial.fitted
+    assert "c_steer" in trial.fitted
+    # from records Coulomb friction has its own candidate, scored against the truth's level
+    assert trial.reference["T_coulomb"] == trial.truth["T_coulomb"] and "T_coulomb" in trial.fitted
+    before = V.run_trial(models, effect, 0, "tables")  # the same runs as a table of eigenvalues
+    assert before.method == "tables" and before.truth == trial.truth and before.amplitude == trial.amplitude
+    assert before.first == "steer_damping" and "T_coulomb" not in before.fitted
     results = tmp_path / "trials.jsonl"
-    results.write_text(json.dumps(trial.as_dict()) + "\n")
+    results.write_text(json.dumps(trial.as_dict()) + "\n" + json.dumps(before.as_dict()) + "\n")
     doc = tmp_path / "doc.md"
     doc.write_text("# head\n")
     sys.path.insert(0, str(ROOT / "docs" / "scripts"))
@@ -197,6 +205,7 @@ def test_a_few_calibration_trials_and_their_report(tmp_path):
     text = doc.read_text()
     assert text.startswith("# head") and "## 4. Calibration" in text
     assert "Fewer than the 200 trials per effect" in text and "| steer_coulomb | c_steer | 1 |" in text
+    assert "Records against tables, on the same 1 trials" in text and "| steer_coulomb | T_coulomb | 1 |" in text
     write_report(results, doc, 200)  # rewritten in place, not appended
     assert doc.read_text().count("## 4. Calibration") == 1
 
@@ -252,3 +261,79 @@ def test_the_noise_floor_is_consistency_with_noise_not_an_rms_below_one():
         z = rng.standard_normal((4000, n))
         share = np.mean([at_noise_floor(float(np.sqrt(np.mean(row**2))), n) for row in z])
         assert 0.94 <= share <= 0.96, (n, share)
+
+
+def test_calibration_records_and_tables_of_one_seed_hold_the_same_runs_and_fits():
+    # the record method gives the diagnosis what a lab keeps (the noisy runs); the table method the
+    # eigenvalues fitted from the very same runs, so the before/after comparison is on identical data
+    from bikerider.gap.measured.records import fit_records
+    from validation import cases as V
+
+    model = load_model(BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt")
+    truth = V.Truth("viscous", ("steer_damping",), {"c_steer": 0.4}, "viscous 0.4 N m s/rad")
+    rng = np.random.default_rng(2)
+    records: list = []
+    data, _ = V.measure(V.TruthSimulator(model, truth, rng), V.CALIBRATION_RIDERLESS, rng, None, records)
+    used = [f for f in records if f.used]
+    assert len(records) == 9 and len(used) == len(data) >= 4
+    np.testing.assert_array_equal(data.value.real, [f.estimate.eigenvalue.real for f in used])
+    assert [f.record.group for f in used] == list(data.group)
+    np.testing.assert_array_equal([f.record.speed for f in used], data.speed)
+    # the fits measure() made are those a lab's fit_records makes of the same records
+    again = fit_records([f.record for f in records])
+    assert [f.used for f in again] == [f.used for f in records]
+    for a, b in zip(again, records):
+        if a.used:
+            assert a.estimate.eigenvalue == b.estimate.eigenvalue and a.estimate.real_sigma == b.estimate.real_sigma
+    assert used[0].record.law.is_zero and not used[-1].record.law.is_zero  # the controlled session's law
+
+
+def test_calibration_jobs_go_round_the_effects_and_resume(tmp_path):
+    from validation import cases as V
+
+    sys.path.insert(0, str(ROOT / "docs" / "scripts"))
+    try:
+        from gap_calibration import jobs
+    finally:
+        sys.path.pop(0)
+    order = jobs(3, 1, 1, 1000)
+    n = len(V.CALIBRATION_EFFECTS)
+    assert order[: n + 1] == [(e.name, 1000, "records") for e in V.CALIBRATION_EFFECTS] + [
+        (V.CALIBRATION_FRICTION.name, 1000, "records")
+    ]
+    assert order[n + 1 : 2 * n + 1] == [(e.name, 1000, "tables") for e in V.CALIBRATION_EFFECTS]
+    assert len(order) == 3 * (n + 1) + n and len(set(order)) == len(order)
+
+
+def _sandwich_problem(direct_slope: float, apparent_slope: float, records: bool) -> SimpleNamespace:
+    """A problem that predicts 4 observations linearly in one size: the weave eigenvalues with
+    ``direct_slope``, the records' apparent eigenvalues (indirect inference) with ``apparent_slope``."""
+
+    def predict_batch(lay, X, indirect=True):
+        slope = apparent_slope if (indirect and records) else direct_slope
+        return slope * np.asarray(X, float)[:, :1] * np.ones((1, 4))
+
+    return SimpleNamespace(
+        free=["w"],
+        obs=[0, 1, 2, 3],
+        layout=lambda effects: None,
+        predict_batch=predict_batch,
+        var_total=np.full(4, 0.04),
+        var_data=np.full(4, 0.04),
+        jacobian=np.zeros((4, 1)),
+        records=SimpleNamespace() if records else None,
+        record_obs=np.array([[0, 1], [2, 3]]) if records else np.zeros((0, 2), int),
+    )
+
+
+def test_intervals_from_records_use_the_apparent_eigenvalues_slopes():
+    # the fit weighs the records' residuals by the weave's slopes; where a short record's fitted eigenvalue
+    # moves less with the size than the weave does, the records carry less about it: a wider interval
+    fit = _fit([5.0], [4.9], [5.1])
+    tables = with_parameter_uncertainty(_sandwich_problem(0.4, 0.1, records=False), fit)
+    same = with_parameter_uncertainty(_sandwich_problem(0.4, 0.4, records=True), fit)
+    flat = with_parameter_uncertainty(_sandwich_problem(0.4, 0.1, records=True), fit)
+    expected = 0.2 / (0.4 * math.sqrt(4))  # one size, four rows of standard error 0.2, slope 0.4
+    assert tables.stderr[0] == pytest.approx(expected) and same.stderr[0] == pytest.approx(expected)
+    assert flat.stderr[0] == pytest.approx(4 * expected)  # the bread (A^T A_i)^-1 with A_i a quarter of A
+    assert flat.ci_high[0] - flat.ci_low[0] == pytest.approx(2 * 1.96 * 4 * expected)

@@ -315,6 +315,11 @@ def with_parameter_uncertainty(p: GapProblem, fit: EffectFit) -> EffectFit:
     (A^T A)^-1``, ``C`` the weighted covariance of the observations: the data's variance plus
     ``J_p J_p^T`` of the parameters' slopes per sigma), times the reduced chi-square when above one
     (lack of fit).  Fits holding ``parameters`` fit the shifts themselves and keep their own.
+
+    With rows from records the fit's estimating equation weighs the residuals of the apparent
+    eigenvalues (indirect inference) by the weave eigenvalues' slopes ``A`` (the iterated bias
+    correction of :meth:`GapProblem.fit`), so the bread of the sandwich is ``(A^T A_i)^-1`` with the
+    apparent eigenvalues' slopes ``A_i``: ``B A^T C A B^T``.  Without records ``A_i = A``.
     """
     if PARAMETERS in fit.effects or not p.free or not fit.names or not len(p.obs):
         return fit
@@ -329,17 +334,26 @@ def with_parameter_uncertainty(p: GapProblem, fit: EffectFit) -> EffectFit:
         up[k] = min(x[k] + h[k], upper[k])
         down[k] = max(x[k] - h[k], lower[k])
         X += [up, down]
-    pred = p.predict_batch(lay, np.array(X), indirect=False)
     steps = np.array([X[1 + 2 * k][k] - X[2 + 2 * k][k] for k in range(x.size)])
-    jac = np.stack([(pred[1 + 2 * k] - pred[2 + 2 * k]) / steps[k] for k in range(x.size)], axis=1)
+
+    def slopes(indirect: bool) -> np.ndarray:
+        pred = p.predict_batch(lay, np.array(X), indirect=indirect)
+        return np.stack([(pred[1 + 2 * k] - pred[2 + 2 * k]) / steps[k] for k in range(x.size)], axis=1)
+
     w = np.sqrt(p.var_total)
-    A = jac / w[:, None]
-    if not np.all(np.isfinite(A)):
+    A = slopes(False) / w[:, None]
+    # rows from records are predicted by indirect inference; the fit solves A^T (apparent - y) = 0 (its
+    # iterated bias correction weighs the residuals by the weave eigenvalues' slopes), so its covariance
+    # is the sandwich of that estimating equation: bread (A^T A_i)^-1 with the apparent eigenvalues'
+    # slopes A_i, which a short record's fit can make several times flatter than the weave's
+    records = p.records is not None and len(p.record_obs)
+    A_i = slopes(True) / w[:, None] if records else A
+    if not (np.all(np.isfinite(A)) and np.all(np.isfinite(A_i))):
         return fit
-    B = np.linalg.pinv(A.T @ A)
+    B = np.linalg.pinv(A.T @ A_i)
     Jp = p.jacobian / w[:, None]
     AC = A.T * (p.var_data / p.var_total)
-    cov = B @ (AC @ A + (A.T @ Jp) @ (Jp.T @ A)) @ B
+    cov = B @ (AC @ A + (A.T @ Jp) @ (Jp.T @ A)) @ B.T
     dof = max(fit.n - x.size, 1)
     cov *= max(1.0, fit.chi2 / dof)
     stderr = np.sqrt(np.clip(np.diag(cov), 0, None))
