@@ -439,47 +439,23 @@ class RecordSimulator:
         n = A.shape[-1]
         return A.reshape(P, R, n, n), ss.output_states
 
-    def apparent(
-        self, values: dict | None = None, config: dict | None = None, scale=None, starts: list | None = None
-    ) -> np.ndarray:
+    def apparent(self, values: dict | None = None, config: dict | None = None, scale=None) -> np.ndarray:
         """Apparent eigenvalue of every record, ``(P, R)`` complex, for batched linear models.
 
-        Arguments as :meth:`closed_loop` (the nominal model when all are left out).  ``starts``: the
-        refits' starting parameters, as :meth:`apparent_fits` returns them for one model (a model
-        close to the one they were fitted for is refitted in fewer steps); by default every refit
-        starts from the nominal model's (:meth:`settle`).
-        """
-        return self.apparent_fits(values, config, scale, starts)[0]
-
-    def apparent_fits(
-        self, values: dict | None = None, config: dict | None = None, scale=None, starts: list | None = None
-    ) -> tuple[np.ndarray, list]:
-        """:meth:`apparent` and the refits' parameters: one list per batch of ``(P, k)`` arrays, one per item.
-
-        The parameters of a model's refits can start the refits of another model near it (``starts``,
-        with ``P = 1``; an item whose refit found no weave starts from the nominal model's).
+        Arguments as :meth:`closed_loop` (the nominal model when all are left out).
         """
         values = self.values if values is None else values
         config = config or {}
         P = _batch_size(values, config, scale)
-        if starts is not None and P != 1:
-            raise ValueError(f"refits started from given parameters need one model, not {P}")
         out = np.full((P, len(self.fits)), np.nan + 1j * np.nan)
-        fits: list = []
-        for b, batch in enumerate(self.batches):
+        for batch in self.batches:
             A, outputs = self.closed_loop(values, config, scale, batch.index)
             R, N, S, n = batch.index.size, batch.N, len(batch.signals), A.shape[-1]
             chunk = max(1, MAX_ELEMENTS // max(R * N * S * (n + S), 1))
-            parts = []
             for lo in range(0, P, chunk):
                 hi = min(P, lo + chunk)
-                eig, betas = extract(
-                    batch, _linear_response(batch, A[lo:hi], outputs), True, None if starts is None else starts[b]
-                )
-                out[lo:hi, batch.index] = eig
-                parts.append(betas)
-            fits.append([np.concatenate([p[j] for p in parts]) for j in range(len(batch.items))])
-        return out, fits
+                out[lo:hi, batch.index] = extract(batch, _linear_response(batch, A[lo:hi], outputs))[0]
+        return out
 
     def apparent_time_domain(self, layout, theta) -> np.ndarray:
         """Apparent eigenvalue of every record ``(P, R)`` under a time-domain candidate (steer friction).
@@ -596,13 +572,12 @@ def _initial_states(batch: RecordBatch, O: np.ndarray) -> np.ndarray:
     return np.linalg.solve(gram, rhs[..., None])[..., :n, 0]
 
 
-def extract(batch: RecordBatch, sim: np.ndarray, keep: bool = False, starts: list | None = None):
+def extract(batch: RecordBatch, sim: np.ndarray, keep: bool = False):
     """The record fit applied to simulated signals ``sim (P, R, N, S)`` of a batch: ``(P, R)`` complex.
 
     Every fitted signal of every record is refitted with the model of the record's own fit (two-mode
-    or plain) from the batch's starting parameters, by :func:`levenberg_marquardt`, or from
-    ``starts`` (one ``(k,)`` or ``(P, k)`` array per item; where not finite, the batch's); the
-    signals' eigenvalues are combined with the record's weights (:func:`fit_weights`).  Returns the
+    or plain) from the batch's starting parameters, by :func:`levenberg_marquardt`; the signals'
+    eigenvalues are combined with the record's weights (:func:`fit_weights`).  Returns the
     eigenvalues and, with ``keep``, the fitted parameters ``(P, k)`` of every item (else ``None``).
     """
     P, R = sim.shape[:2]
@@ -619,11 +594,6 @@ def extract(batch: RecordBatch, sim: np.ndarray, keep: bool = False, starts: lis
         y = np.moveaxis(sim[:, rec, :, sig], 0, 1).reshape(P * len(items), batch.N)  # (P * I, N)
         mask = np.tile(batch.mask[rec], (P, 1))
         start = np.tile(np.array([it.start for it in items]), (P, 1))
-        if starts is not None:  # (P * I, k) in the order of y's rows: model-major
-            given = np.stack([np.broadcast_to(starts[j], (P, start.shape[1])) for j in chosen], axis=1)
-            given = given.reshape(P * len(items), -1)
-            usable = np.all(np.isfinite(given), axis=1)
-            start[usable] = given[usable]
         beta, _ = levenberg_marquardt(kind, start, y, mask, tau)
         eig = eigenvalue_of(beta).reshape(P, len(items))
         weight = np.array([it.weight for it in items])

@@ -608,10 +608,8 @@ class GapProblem:
         x = fit.values.copy()
         J, weight = fit._jacobian, fit._weight
         lower, upper = self.bounds(lay)
-        refits = None
         for iteration in range(1, MAX_BIAS_ITERATIONS + 1):
-            # each iteration's refits start where the previous iteration's ended (the model moved little)
-            own, refits = self.own_bias_refits(lay, x, refits)
+            own = self.own_bias(lay, x)
             change = np.abs(own[rec] - offset[rec]) / sigma
             finite = change[np.isfinite(change)]
             settled = not finite.size or float(np.sqrt(np.mean(finite**2))) <= BIAS_TOLERANCE
@@ -641,32 +639,8 @@ class GapProblem:
     def own_bias(self, lay: _Layout, x: np.ndarray) -> np.ndarray:
         """A fitted model's own extraction bias at every observation: its apparent eigenvalue (indirect
         inference) minus its weave eigenvalue on the rows fitted from records, 0 elsewhere."""
-        return self.own_bias_refits(lay, x)[0]
-
-    def own_bias_refits(
-        self, lay: _Layout, x: np.ndarray, starts: list | None = None
-    ) -> tuple[np.ndarray, list | None]:
-        """:meth:`own_bias` and the parameters of the records' refits behind it
-        (:meth:`bikerider.gap.inference.indirect.RecordSimulator.apparent_fits`), which ``starts`` the
-        refits of a model near this one; ``None`` where no record is simulated.
-
-        Computed afresh, not kept with the predictions of :meth:`predict_batch`: a refit started
-        elsewhere ends within its tolerance of, not at, the refit from the nominal model's starts.
-        """
         X = np.atleast_2d(np.asarray(x, dtype=float)) if np.size(x) else np.zeros((1, 0))
-        base = self.predict_batch(lay, X, indirect=False)[0]
-        if self.records is None or not len(self.record_obs):
-            return base - base, None
-        values, config, scale = self.configure(lay, X)
-        try:
-            with np.errstate(all="ignore"):
-                apparent, refits = self.records.simulator.apparent_fits(values, config, scale, starts)
-        except np.linalg.LinAlgError:
-            return np.full(len(self.obs), np.nan), None
-        out = base.copy()
-        out[self.record_obs[:, 0]] = apparent[0].real
-        out[self.record_obs[:, 1]] = apparent[0].imag
-        return out - base, refits
+        return self.predict_batch(lay, X, indirect=True)[0] - self.predict_batch(lay, X, indirect=False)[0]
 
     def _weights(self, lay: _Layout, mask: np.ndarray) -> np.ndarray:
         """The residuals' scale: data uncertainty with ``parameters`` (it moves them), else combined."""
