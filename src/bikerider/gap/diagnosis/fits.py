@@ -260,13 +260,15 @@ class Fits:
             full = self.time_domain_fit(effects, None, start=start, jackknife=False)
         else:
             full = self.fit_of(effects)
-        for name, held in self.folds:  # every fold starts from the fit to all the data
+        # every fold starts from the fit to all the data; the folds' bias corrections advance together
+        together = None if timed else p.fit_many(effects, [~held for _, held in self.folds], full.values, full.bias)
+        for k, (name, held) in enumerate(self.folds):
             progress.advance()
             if timed:
                 fit = self.time_domain_fit(effects, ~held, start=full.values)
                 pred = self.time_domain_predict(fit, held)
             else:
-                fit = p.fit(effects, ~held, start=full.values, bias=full.bias)
+                fit = together[k]
                 pred = p.predict_fit(fit)
             fits.append(fit)
             z_fold = p.z(pred)[held]

@@ -597,52 +597,91 @@ class GapProblem:
         (module docstring): ``bias`` (one value per observation) is the first correction, by default
         the nominal model's extraction bias.
         """
+        return self.fit_many(effects, [mask], start, bias)[0]
+
+    def fit_many(
+        self,
+        effects: tuple[str, ...],
+        masks: list,
+        start: np.ndarray | None = None,
+        bias: np.ndarray | None = None,
+    ) -> list[EffectFit]:
+        """:meth:`fit` for each of ``masks`` (e.g. the folds of a cross-validation), the same ``start``
+        and ``bias`` for all: the same fits, their bias corrections advanced together.
+
+        Each bias iteration evaluates the own extraction bias of every fit not yet settled in one
+        batched simulation (:meth:`own_bias` of several parameter vectors: one refit call for all of
+        their records, the refits' fixed cost per step shared); each record's refit is computed as
+        alone, so every fit is the one :meth:`fit` makes.
+        """
         if self.records is None or not len(self.record_obs):
-            return self._fit(tuple(effects), mask, start, None)
+            return [self._fit(tuple(effects), mask, start, None) for mask in masks]
         lay = self.layout(tuple(effects))
-        mask = np.ones(len(self.obs), bool) if mask is None else np.asarray(mask, bool)
-        rec = self.record_obs.ravel()
-        rec = rec[mask[rec]]
-        sigma = np.sqrt(self.var_data[rec])
-        offset = np.array(self.nominal_bias if bias is None else bias, dtype=float)
-        fit = self._fit(tuple(effects), mask, start, offset)
-        covariance = fit.covariance
-        x = fit.values.copy()
-        J, weight = fit._jacobian, fit._weight
         lower, upper = self.bounds(lay)
+        runs = []
+        for mask in masks:
+            mask = np.ones(len(self.obs), bool) if mask is None else np.asarray(mask, bool)
+            rec = self.record_obs.ravel()
+            rec = rec[mask[rec]]
+            offset = np.array(self.nominal_bias if bias is None else bias, dtype=float)
+            fit = self._fit(tuple(effects), mask, start, offset)
+            runs.append({"mask": mask, "rec": rec, "sigma": np.sqrt(self.var_data[rec]), "offset": offset, "fit": fit})
+            runs[-1].update(x=fit.values.copy(), iteration=0, done=False)
         for iteration in range(1, MAX_BIAS_ITERATIONS + 1):
-            own = self.own_bias(lay, x)
-            change = np.abs(own[rec] - offset[rec]) / sigma
-            finite = change[np.isfinite(change)]
-            settled = not finite.size or float(np.sqrt(np.mean(finite**2))) <= BIAS_TOLERANCE
-            # a model whose response over a record shows no weave the record fit finds (NaN) cannot
-            # predict that record; where that holds for most of the records fitted, the fit has left
-            # the models that predict records at all and no bias correction brings it back
-            lost = np.count_nonzero(~np.isfinite(own[rec])) > rec.size / 2
-            if settled or lost or x.size == 0 or iteration == MAX_BIAS_ITERATIONS:
-                offset = own
+            todo = [run for run in runs if not run["done"]]
+            if not todo:
                 break
-            # the fit's residuals move by the change of the bias (records without a weave keep their
-            # last one): a Gauss-Newton step follows them, shortened where it would move a value by more
-            # than a fifth of its search range (a direction the data hardly determine)
-            own = np.where(np.isfinite(own), own, offset)
-            delta = np.zeros(J.shape[0])
-            delta[: int(mask.sum())] = (own - offset)[mask] / weight
-            step = -np.linalg.lstsq(J, delta, rcond=1e-6)[0]
-            step *= min(1.0, float(np.min(MAX_BIAS_STEP * (upper - lower) / np.maximum(np.abs(step), 1e-300))))
-            x = np.clip(x + step, lower, upper)
-            offset = own
-        # the residuals, chi-square and values reported: those of the fitted model's own bias
-        r = self._residuals(lay, mask, x, offset)
-        fit = self._result(lay, x, fit.stderr, r, int(mask.sum()), fit.success, fit.message)
-        fit.bias, fit.bias_iterations, fit.covariance = offset, iteration, covariance
-        return fit
+            owns = self.own_bias(lay, np.array([run["x"] for run in todo]))
+            for run, own in zip(todo, owns):
+                run["iteration"] = iteration
+                self._bias_step(run, own, iteration, lower, upper)
+        out = []
+        for run in runs:
+            lay_fit, mask, x, offset = run["fit"], run["mask"], run["x"], run["offset"]
+            # the residuals, chi-square and values reported: those of the fitted model's own bias
+            r = self._residuals(lay, mask, x, offset)
+            fit = self._result(lay, x, lay_fit.stderr, r, int(mask.sum()), lay_fit.success, lay_fit.message)
+            fit.bias, fit.bias_iterations, fit.covariance = offset, run["iteration"], lay_fit.covariance
+            out.append(fit)
+        return out
+
+    @staticmethod
+    def _bias_step(run: dict, own: np.ndarray, iteration: int, lower: np.ndarray, upper: np.ndarray) -> None:
+        """One iteration of :meth:`fit`'s bias correction of one fit (``run``, updated in place) given
+        its model's own bias ``own`` at its current values."""
+        rec, offset, x = run["rec"], run["offset"], run["x"]
+        change = np.abs(own[rec] - offset[rec]) / run["sigma"]
+        finite = change[np.isfinite(change)]
+        settled = not finite.size or float(np.sqrt(np.mean(finite**2))) <= BIAS_TOLERANCE
+        # a model whose response over a record shows no weave the record fit finds (NaN) cannot
+        # predict that record; where that holds for most of the records fitted, the fit has left
+        # the models that predict records at all and no bias correction brings it back
+        lost = np.count_nonzero(~np.isfinite(own[rec])) > rec.size / 2
+        if settled or lost or x.size == 0 or iteration == MAX_BIAS_ITERATIONS:
+            run["offset"], run["done"] = own, True
+            return
+        # the fit's residuals move by the change of the bias (records without a weave keep their
+        # last one): a Gauss-Newton step follows them, shortened where it would move a value by more
+        # than a fifth of its search range (a direction the data hardly determine)
+        mask, J, weight = run["mask"], run["fit"]._jacobian, run["fit"]._weight
+        own = np.where(np.isfinite(own), own, offset)
+        delta = np.zeros(J.shape[0])
+        delta[: int(mask.sum())] = (own - offset)[mask] / weight
+        step = -np.linalg.lstsq(J, delta, rcond=1e-6)[0]
+        step *= min(1.0, float(np.min(MAX_BIAS_STEP * (upper - lower) / np.maximum(np.abs(step), 1e-300))))
+        run["x"] = np.clip(x + step, lower, upper)
+        run["offset"] = own
 
     def own_bias(self, lay: _Layout, x: np.ndarray) -> np.ndarray:
         """A fitted model's own extraction bias at every observation: its apparent eigenvalue (indirect
-        inference) minus its weave eigenvalue on the rows fitted from records, 0 elsewhere."""
-        X = np.atleast_2d(np.asarray(x, dtype=float)) if np.size(x) else np.zeros((1, 0))
-        return self.predict_batch(lay, X, indirect=True)[0] - self.predict_batch(lay, X, indirect=False)[0]
+        inference) minus its weave eigenvalue on the rows fitted from records, 0 elsewhere.
+
+        ``x`` one parameter vector ``(p,)`` (returns ``(n_obs,)``) or several ``(P, p)`` (returns
+        ``(P, n_obs)``, their records simulated and refitted in one batch)."""
+        x = np.asarray(x, dtype=float)
+        X = np.atleast_2d(x) if np.size(x) else np.zeros((max(x.shape[0], 1) if x.ndim == 2 else 1, 0))
+        own = self.predict_batch(lay, X, indirect=True) - self.predict_batch(lay, X, indirect=False)
+        return own if x.ndim == 2 else own[0]
 
     def _weights(self, lay: _Layout, mask: np.ndarray) -> np.ndarray:
         """The residuals' scale: data uncertainty with ``parameters`` (it moves them), else combined."""
