@@ -37,6 +37,11 @@ RESULTS = Path(__file__).with_name("gap_next_loop.jsonl")
 CHECKS = Path(__file__).with_name("gap_next_loop_checks.jsonl")
 SHARED = Path(__file__).with_name("gap_next_loop_shared.jsonl")
 """The main study's ties again, the nominal parameters' uncertainty shared by all runs (``run --shared``)."""
+RERUN = Path(__file__).with_name("gap_next_loop_rerun.jsonl")
+RERUN_ALL = Path(__file__).with_name("gap_next_loop_rerun_all.jsonl")
+"""Every stored tie's plan strategies again under the new rule (``rerun --all``), to see what else it changes."""
+"""The ties the plan declared unbreakable and the even spread broke, run again with the plan strategies under
+the unbreakable rule of runs combined over experiments (``rerun``)."""
 """Ties run again and judged by the diagnosis itself (:func:`validation.loop.diagnosis_check`)."""
 DOC = ROOT / "docs" / "gap_validation.md"
 FIGURE = ROOT / "docs" / "figures" / "gap_next_loop.png"
@@ -122,6 +127,57 @@ def run(args) -> int:
                 LOG.info("stopping: %d ties", ties)
                 pool.terminate()
                 break
+    return 0
+
+
+def _rerun_one(job):
+    from validation import loop as L
+
+    k, seed = job
+    logging.getLogger("bikerider").setLevel(logging.ERROR)
+    names = tuple(n for n in L.STRATEGIES if n.startswith("plan:"))
+    try:
+        return L.run_loop_case(_models(), L.SCENARIOS[k], seed, strategies=names)
+    except Exception as exc:  # stored with its error, not lost silently
+        return {"scenario": L.SCENARIOS[k].label, "seed": seed, "tie": False, "status": f"error: {exc!r}"}
+
+
+def _rerun_targets() -> list[tuple[str, int]]:
+    """The stored ties the best criterion declared unbreakable and the even spread resolved."""
+    out = []
+    for c in _stored():
+        s = c.get("strategies") or {}
+        if s.get("plan:jensen_renyi", {}).get("status") == "unbreakable" and s.get("even", {}).get("status") == (
+            "resolved"
+        ):
+            out.append((c["scenario"], c["seed"]))
+    return out
+
+
+def rerun(args) -> int:
+    """The ties of :func:`_rerun_targets` again, the plan strategies only (the others' runs do not depend on
+    the unbreakable rule), appended to :data:`RERUN`; the main study's stored cases are left as they are."""
+    from multiprocessing import get_context
+
+    from validation import loop as L
+
+    index = {s.label: k for k, s in enumerate(L.SCENARIOS)}
+    path = RERUN_ALL if args.all else RERUN
+    done = {(c["scenario"], c["seed"]) for c in _stored(path)}
+    targets = [(c["scenario"], c["seed"]) for c in _stored() if c.get("strategies")] if args.all else _rerun_targets()
+    jobs = [(index[label], seed) for label, seed in targets if (label, seed) not in done]
+    LOG.info("%d ties to run again", len(jobs))
+    with get_context("fork").Pool(args.workers) as pool, path.open("a", encoding="utf-8") as out:
+        for result in pool.imap_unordered(_rerun_one, jobs):
+            out.write(json.dumps(result) + "\n")
+            out.flush()
+            LOG.info(
+                "%s seed %s: %s (%.1f s)",
+                result.get("scenario"),
+                result.get("seed"),
+                {k: (v["status"], v["runs"]) for k, v in (result.get("strategies") or {}).items()},
+                result.get("seconds", math.nan),
+            )
     return 0
 
 
@@ -621,9 +677,14 @@ def main() -> int:
     )
     c = sub.add_parser("check", help="judge the loop's wrong or undecided ties by the diagnosis itself")
     c.add_argument("--max", type=int, default=10, help="ties to check at most")
+    rr = sub.add_parser(
+        "rerun", help="the ties declared unbreakable that the even spread broke, again under the combined-runs rule"
+    )
+    rr.add_argument("--workers", type=int, default=1)
+    rr.add_argument("--all", action="store_true", help="every stored tie (to a file of its own)")
     sub.add_parser("report", help="write part 5 of docs/gap_validation.md and the figure")
     args = parser.parse_args()
-    return {"run": run, "check": check, "report": report}[args.command](args)
+    return {"run": run, "check": check, "rerun": rerun, "report": report}[args.command](args)
 
 
 if __name__ == "__main__":
