@@ -48,7 +48,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.integrate import solve_ivp
-from scipy.special import ndtr
 
 from bikerider.errors import FitError, InputError
 from bikerider.gap.candidates.effect_model import EffectModel
@@ -431,7 +430,7 @@ def best_chance(plan, rivals, weights, runs_left: int, groups, shared=False) -> 
             noise = np.array([_noise(plan, e) for e in g])
             h.groups.append((delta, factors[t][j], factors[1 - t][j], noise, np.zeros_like(noise)))
         hypotheses.append(h)
-    return A.allocate(hypotheses, runs_left, HOPELESS).probability
+    return A.allocate(hypotheses, runs_left, HOPELESS, draws=400).probability
 
 
 def lack_of_fit(rivals: list[LinearRival], e: int, y: np.ndarray, R: np.ndarray) -> float:
