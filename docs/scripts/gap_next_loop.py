@@ -274,6 +274,102 @@ def _merit(ties: list[dict], names: list[str]) -> dict:
     return merit
 
 
+def _rerun_lines(ties: list[dict], best: str | None, n_max: int) -> list[str]:
+    """The section on the re-run ties (:data:`RERUN`, :data:`RERUN_ALL`), from their own files: the study's
+    stored results above are not rewritten."""
+    from validation import loop as L
+
+    again = {(c["scenario"], c["seed"]): c for c in _stored(RERUN) if c.get("strategies")}
+    every = [c for c in _stored(RERUN_ALL) if c.get("strategies")]
+    if not again and not every:
+        return []
+    plans = [n for n in L.STRATEGIES if n.startswith("plan:")]
+    out = [
+        "### Re-run under the combined-runs rule",
+        "",
+        "The plan's unbreakable rule above looked at one experiment repeated, with the rivals' means as they stand.",
+        "Two rivals fitted to the same tie often predict the same at every experiment (steer stiffness and steer",
+        "inertia both fitted at the nominal model), so no experiment repeated parts their means; what tells them",
+        "apart is that their own uncertainty moves their predictions differently across speeds. The rule is now",
+        "(`bikerider.gap.plan.allocation`, used by `--next` and by `validation.loop.best_chance`): the expected log",
+        "Bayes factor of runs spread over the experiments (the Kullback-Leibler divergence between the rivals'",
+        "predictive distributions of the runs' means, each rival's fitted values integrated over their uncertainty,",
+        "one set for all experiments; the experiments' contributions add), allocated greedily one run at a time, and",
+        "the resolution probability, where its Gaussian approximation reaches the target, checked by simulating",
+        "the runs. A tie is unbreakable only when no allocation of the runs left found so reaches the odds with",
+        f"probability {L.HOPELESS:g} or more. These results come from `rerun` (the plan strategies only; the other",
+        "strategies' runs do not depend on the rule and the same experiment's k-th run is the same simulated run),",
+        "stored in files of their own; the results above are the study's as it was run.",
+        "",
+    ]
+    if again:
+        rows = []
+        for (label, seed), c in sorted(again.items(), key=lambda kv: kv[0][1]):
+            old = next((t for t in ties if (t["scenario"], t["seed"]) == (label, seed)), None)
+            even = old["strategies"]["even"] if old else None
+            cells = [f"{c['strategies'][n]['status']} ({c['strategies'][n]['runs']})" for n in plans]
+            rows.append(
+                f"| {label} | {seed} | "
+                + " | ".join(cells)
+                + (f" | {even['status']} ({even['runs']}) |" if even else " | - |")
+            )
+        runs = {
+            n: [c["strategies"][n]["runs"] for c in again.values() if c["strategies"][n]["status"] == "resolved"]
+            for n in plans
+        }
+        even_runs = [t["strategies"]["even"]["runs"] for t in ties if (t["scenario"], t["seed"]) in again]
+        out += [
+            f"The {len(again)} ties the plan ({best}) declared unbreakable and the even spread broke, again (status and runs):",
+            "",
+            "| pair | seed | " + " | ".join(plans) + " | even (stored) |",
+            "|---|---|" + "---|" * (len(plans) + 1),
+            *rows,
+            "",
+            *[
+                f"* {n}: {len(runs[n])} of {len(again)} resolved, in {sum(runs[n])} runs "
+                f"(median {np.median(runs[n]) if runs[n] else float('nan'):g}, at most {max(runs[n]) if runs[n] else 0})."
+                for n in plans
+            ],
+            f"* The even spread (stored) resolved them in {sum(even_runs)} runs (median {np.median(even_runs):g}).",
+            "",
+        ]
+    if every:
+        keys = {(c["scenario"], c["seed"]) for c in every}
+        same = [t for t in ties if (t["scenario"], t["seed"]) in keys]
+        new, old = _merit(every, plans), _merit(same, plans)
+        broken = [
+            c
+            for c in every
+            if best
+            and c["strategies"][best]["status"] == "unbreakable"
+            and next(t for t in same if (t["scenario"], t["seed"]) == (c["scenario"], c["seed"]))["strategies"]["even"][
+                "status"
+            ]
+            == "resolved"
+        ]
+        out += [
+            f"Every stored tie's plan strategies again under the new rule ({len(every)} of {len(ties)} ties; old / new):",
+            "",
+            "| strategy | resolved | wrong | undecided | unbreakable | runs needed: median | 90th percentile |",
+            "|---|---|---|---|---|---|---|",
+        ]
+        for n in plans:
+            a, v = old[n], new[n]
+            out.append(
+                f"| {n} | {a['resolved']} / {v['resolved']} | {a['wrong']} / {v['wrong']} | {a['undecided']} / "
+                f"{v['undecided']} | {a['unbreakable']} / {v['unbreakable']} | {_fmt(a['median_p90'][0], n_max)} / "
+                f"{_fmt(v['median_p90'][0], n_max)} | {_fmt(a['median_p90'][1], n_max)} / {_fmt(v['median_p90'][1], n_max)} |"
+            )
+        out += [
+            "",
+            f"* Goal 2 under the new rule ({best}): {len(broken)} ties declared unbreakable that the even spread breaks"
+            + (": " + ", ".join(f"{c['scenario']} seed {c['seed']}" for c in broken) if broken else "")
+            + ".",
+            "",
+        ]
+    return out
+
+
 def report(args) -> int:
     import matplotlib
 
@@ -400,7 +496,9 @@ def report(args) -> int:
         f"* **Strategies** (at most {n_max} runs each): `plan:<criterion>` takes the next run where the criterion",
         "  (`bikerider.gap.plan.criteria`: Hunter-Reiner 1965, Box-Hill 1967, Buzzi-Ferraris-Forzatti 1984,",
         "  Jensen-Renyi) is largest, from the rivals and probabilities as updated, and declares the tie",
-        f"  **unbreakable** when no experiment repeated for the runs left resolves it with probability {L.HOPELESS:g} or more;",
+        f"  **unbreakable** when no experiment repeated for the runs left resolves it with probability {L.HOPELESS:g} or more",
+        "  (the rule of the stored study below; the rule now in `validation.loop`, runs combined over experiments, is",
+        "  judged in *Re-run under the combined-runs rule*);",
         "  `even` runs decays under the laws in turn at speeds spread evenly over the feasible range; `random`",
         "  runs any feasible experiment; `repeat:decay` and `repeat:sweep` repeat the plan's best decay or",
         "  multisine (what `--next` prints).",
@@ -511,6 +609,7 @@ def report(args) -> int:
             ]
         lines.append("")
     lines += [f"![runs to a decision and reliability](figures/{FIGURE.name})", ""]
+    lines += _rerun_lines(ties, best, n_max)
     shared = [c for c in _stored(SHARED) if c.get("strategies")]
     if shared:
         keys = {(c["scenario"], c["seed"]) for c in shared}
@@ -623,7 +722,7 @@ def report(args) -> int:
                 "uncertainty as it stands; where runs at several speeds would first pin a rival's values and then part "
                 "the rivals, it declares unbreakable a tie an even spread breaks ("
                 + ", ".join(sorted({c["scenario"] for c in broken_by_even}))
-                + ")."
+                + "). The rule now combines runs over experiments: see *Re-run under the combined-runs rule* above."
             )
         if "repeat:sweep" in merit:
             m = merit["repeat:sweep"]
