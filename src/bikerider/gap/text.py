@@ -368,9 +368,9 @@ def next_text(result: dict, rows: int = 8) -> str:
             )
         else:
             spread = (
-                f"; nor does any spread of {combined['budget']} runs over the experiments (the best found, "
-                f"{combined['runs']} runs, reaches {combined['probability']:.2f}): the tie is unbreakable by these "
-                "experiments"
+                f"; nor does the best spread of up to {combined['budget']} runs over up to {combined['distinct']} "
+                f"experiments found ({combined['text']}: {combined['probability']:.2f}): the tie is unbreakable by "
+                "these experiments"
                 if combined
                 else ""
             )

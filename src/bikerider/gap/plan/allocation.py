@@ -19,8 +19,9 @@ it is ``delta^T S^-1 delta``) in its resolution probability ``Phi(d / 2 - ln(odd
 
 More runs never lower the divergence (it is that of a function of more data), so a greedy allocation
 (one run at a time to the experiment that raises the worst pair's resolution probability most, its
-logarithm, so that the first runs are told apart too) is the allocation used; it stops at the target
-probability or at the budget.  Taking the log Bayes factor Gaussian with mean ``KL`` and variance ``2 KL``
+logarithm, so that the first runs are told apart too, over at most :data:`MAX_DISTINCT` experiments,
+a plan a researcher can follow) is the allocation used; it stops at the target probability or at the
+budget.  Taking the log Bayes factor Gaussian with mean ``KL`` and variance ``2 KL``
 is exact when the rivals differ in their means alone; where they differ in how their own uncertainty
 moves them, its tail is heavier (a true value that happens to sit where the rivals agree tells nothing),
 so once that approximation reaches the target the probability is checked by simulating the runs' means
@@ -37,6 +38,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.special import log_ndtr, logsumexp
 
+MAX_DISTINCT = 3
+"""Experiments a combination spreads its runs over, at most (a plan a researcher can follow)."""
 DRAWS = 2000
 """Simulated outcomes per rival taken true in :func:`simulated_probability` (standard error 0.005 at 0.95)."""
 
@@ -188,48 +191,61 @@ def simulated_probability(hypotheses: list[Hypothesis], counts, draws: int = DRA
     return float(chance.min())
 
 
-def allocate(hypotheses: list[Hypothesis], budget: int, target: float, allowed=None, draws: int = DRAWS) -> Allocation:
-    """The greedy allocation of at most ``budget`` runs (module docstring), stopping once the worst pair's
-    resolution probability reaches ``target``; ``allowed`` (boolean per experiment) excludes experiments.
-    Where the Gaussian approximation first reaches ``target``, and again at the budget's end, the
-    probability is simulated (``draws`` per rival taken true) and the allocation goes on while it falls short."""
+def _one(h: Hypothesis, e: int, count: float):
+    """``(a, b, G)`` of ``count`` runs of experiment ``e`` (global index) alone."""
+    start = 0
+    for group in h.groups:
+        n = len(group[0])
+        if e < start + n:
+            k = e - start
+            a, b, G = _contribution(tuple(x[k : k + 1] for x in group), np.array([float(count)]))
+            return a[0], b[0], G[0]
+        start += n
+    raise IndexError(e)
+
+
+def allocate(
+    hypotheses: list[Hypothesis],
+    budget: int,
+    target: float,
+    allowed=None,
+    draws: int = DRAWS,
+    distinct: int = MAX_DISTINCT,
+) -> Allocation:
+    """The greedy allocation of at most ``budget`` runs (module docstring) over at most ``distinct``
+    experiments (a plan a researcher can follow), stopping once the worst pair's resolution probability
+    reaches ``target``; ``allowed`` (boolean per experiment) excludes experiments.  Where the Gaussian
+    approximation first reaches ``target``, and again at the budget's end, the probability is simulated
+    (``draws`` per rival taken true) and the allocation goes on while it falls short."""
     n_exp = sum(len(g[0]) for g in hypotheses[0].groups)
     pairs = 1 + max(h.pair for h in hypotheses)
     counts = np.zeros(n_exp)
-    ok = np.ones(n_exp, bool) if allowed is None else np.asarray(allowed, bool)
+    ok = np.ones(n_exp, bool) if allowed is None else np.asarray(allowed, bool).copy()
     if not ok.any():
         return Allocation(counts, 0.0, ())
-    now = [list(_all(h, counts)) for h in hypotheses]
     q = [sum(_q(h)) for h in hypotheses]
     totals = [(0.0, np.zeros(k), np.zeros((k, k))) for k in q]
-    # without a systematic part, n runs contribute n times one run's: computed once
-    unit = [_all(h, np.ones(n_exp)) if not any(np.any(g[3]) for g in h.groups) else None for h in hypotheses]
+    now = [[np.zeros(n_exp), np.zeros((n_exp, k)), np.zeros((n_exp, k, k))] for k in q]
+    nxt = [list(_all(h, np.ones(n_exp))) for h in hypotheses]  # each experiment's contribution at one run more
     path: list[float] = []
     checked = False
     for _ in range(int(budget)):
         d2 = []
-        nxt = []
-        for h, u, (a0, g0, H0), cur in zip(hypotheses, unit, totals, now):
-            if u is None:
-                new = _all(h, counts + 1)
-            else:
-                c = counts + 1
-                new = (u[0] * c, u[1] * c[:, None], u[2] * c[:, None, None])
-            nxt.append(new)
-            a = a0 + new[0] - cur[0]
-            g = g0 + new[1] - cur[1]
-            H = H0 + new[2] - cur[2]
-            d2.append(divergence(a, g, H, _q(h)[0]))
-        score = _log_probability(hypotheses, d2, pairs)
-        score = np.where(ok, score, -np.inf)
+        for h, (a0, g0, H0), cur, new in zip(hypotheses, totals, now, nxt):
+            d2.append(divergence(a0 + new[0] - cur[0], g0 + new[1] - cur[1], H0 + new[2] - cur[2], _q(h)[0]))
+        score = np.where(ok, _log_probability(hypotheses, d2, pairs), -np.inf)
         e = int(np.argmax(score))
-        for i, (h, new) in enumerate(zip(hypotheses, nxt)):
+        counts[e] += 1
+        for i, h in enumerate(hypotheses):
             a0, g0, H0 = totals[i]
-            cur = now[i]
+            cur, new = now[i], nxt[i]
             totals[i] = (a0 + new[0][e] - cur[0][e], g0 + new[1][e] - cur[1][e], H0 + new[2][e] - cur[2][e])
             for j in range(3):
                 cur[j][e] = new[j][e]
-        counts[e] += 1
+            for j, x in enumerate(_one(h, e, counts[e] + 1)):
+                new[j][e] = x
+        if np.count_nonzero(counts) >= distinct:
+            ok &= counts > 0
         path.append(float(np.exp(score[e])))
         # the simulation where the approximation first reaches the target, then only at the budget's end
         if path[-1] >= target and (not checked or counts.sum() >= budget):

@@ -13,7 +13,7 @@ import numpy as np
 from scipy.special import ndtr
 
 from bikerider.gap.inference.problem import EffectFit
-from bikerider.gap.plan.allocation import Hypothesis, allocate
+from bikerider.gap.plan.allocation import MAX_DISTINCT, Hypothesis, allocate
 
 DEFAULT_REPEATS = 10
 MAX_REPEATS = 100
@@ -188,7 +188,8 @@ def combine(plan, budget: int = MAX_REPEATS, target: float = 0.95) -> dict | Non
     Returns
     -------
     dict or None
-        ``runs`` (the total), ``probability``, ``reached`` (``probability >= target``), ``budget``,
+        ``runs`` (the total), ``probability``, ``reached`` (``probability >= target``), ``budget``, ``distinct``
+        (the most experiments a combination spreads over),
         ``experiments`` (each with ``runs``, ``kind``, ``speed``, ``law``, ``signal``, ``text``) and ``text``
         (the combination in words, e.g. ``"5 decays at 3.00 m/s under none and 5 decays at 6.00 m/s under
         none"``).
@@ -231,6 +232,7 @@ def combine(plan, budget: int = MAX_REPEATS, target: float = 0.95) -> dict | Non
         "probability": found.probability,
         "reached": found.probability >= target,
         "budget": int(budget),
+        "distinct": MAX_DISTINCT,
         "experiments": [
             {
                 "runs": n,

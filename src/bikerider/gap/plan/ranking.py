@@ -1077,4 +1077,9 @@ def plan_next(
         own_factor=tuple(b.own_factor),
         sweep_factor=tuple(b.sweep_factor),
     )
-    return replace(unranked, plan=tuple(rank(unranked)), combined=combine(unranked))
+    try:
+        combined = combine(unranked)
+    except (np.linalg.LinAlgError, ValueError) as exc:  # the ranked plan stands without it
+        LOG.warning("runs combined over experiments not evaluated: %s", exc)
+        combined = None
+    return replace(unranked, plan=tuple(rank(unranked)), combined=combined)
