@@ -21,8 +21,9 @@ the rival's log evidence grows by the predictive density of the run (a run every
 noise is down-weighted first, :func:`lack_of_fit`).  The nominal parameters' uncertainty is counted per
 run, as the plan and the diagnosis count it.  Posterior model probabilities start even at the tie.  A strategy stops when the hidden effect's probability reaches
 :data:`DECIDED` (*resolved*), when the rival's does (*wrong*), when it has spent :data:`N_MAX` runs
-(*undecided*), or, for the plan, when it declares the tie unbreakable (no experiment repeated for
-the runs left promises a resolution with probability :data:`HOPELESS` or more).
+(*undecided*), or, for the plan, when it declares the tie unbreakable (no allocation of the runs
+left over the experiments, the evidence of their runs adding up, promises a resolution with probability
+:data:`HOPELESS` or more; :func:`best_chance`).
 
 One new run per step is simulated by the truth: a decay (a random kick, 6 s, the weave fitted from the
 noisy roll rate) or a multisine (:func:`multisine_run`: a Schroeder multisine of steer torque added to
@@ -47,13 +48,13 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.integrate import solve_ivp
-from scipy.special import ndtr
 
 from bikerider.errors import FitError, InputError
 from bikerider.gap.candidates.effect_model import EffectModel
 from bikerider.gap.diagnosis.result import diagnose
 from bikerider.gap.inference.predict import Predictor
 from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
+from bikerider.gap.plan import allocation as A
 from bikerider.gap.plan import criteria as C
 from bikerider.gap.plan.ranking import ASSUMED_NOISE, NextExperiment, NoExperiment, plan_next
 from bikerider.gap.plan.sweeps import line_amplitude, response, split
@@ -64,8 +65,9 @@ N_MAX = 20
 DECIDED = 0.95
 """Posterior probability of one rival that decides the tie."""
 HOPELESS = 0.05
-"""The plan declares a tie unbreakable when no experiment, repeated for the runs left, resolves it with
-at least this probability (the plan's own measure, ``Phi(d / 2 - ln(odds) / d)``)."""
+"""The plan declares a tie unbreakable when no allocation of the runs left over the experiments (greedy,
+:func:`bikerider.gap.plan.allocation.allocate`) resolves it with at least this probability (the plan's own
+measure, ``Phi(d / 2 - ln(odds) / d)``, with ``d`` of the runs combined)."""
 MOTOR_LIMIT = 2.0
 """Largest steer torque the steer motor gives (control plus multisine) [N m]."""
 GYRO_NOISE = 0.01
@@ -405,24 +407,30 @@ def _scores(plan, rivals, weights, criterion, groups, shared=False) -> np.ndarra
 
 
 def best_chance(plan, rivals, weights, runs_left: int, groups, shared=False) -> float:
-    """The plan's resolution probability of the best experiment repeated ``runs_left`` times, from the
-    rivals as the loop has updated them (the odds needed from the current ones); the shared shifts'
-    uncertainty, common to both rivals' predictions, is left out, as the plan counts it per run."""
-    best = 0.0
-    for g in groups:
-        preds = [[r.predict(e, own_only=True) for e in g] for r in rivals]
-        noise = np.array([_noise(plan, e) for e in g])
-        delta = np.array([m for m, _ in preds[0]]) - np.array([m for m, _ in preds[1]])
-        chance = np.zeros(len(g))
-        for t in (0, 1):
-            W = np.array([W for _, W in preds[t]])
-            S = W + noise / runs_left
-            S = S + 1e-12 * np.trace(S, axis1=-2, axis2=-1)[:, None, None] * np.eye(S.shape[-1])
-            d = np.sqrt(np.maximum(np.sum(delta * np.linalg.solve(S, delta[..., None])[..., 0], axis=-1), 1e-300))
-            need = math.log(DECIDED / (1 - DECIDED)) + math.log(max(weights[1 - t], 1e-300) / max(weights[t], 1e-300))
-            chance += weights[t] * ndtr(d / 2 - need / d)
-        best = max(best, float(chance.max()))
-    return best
+    """The plan's resolution probability of the runs left spread over the experiments (a greedy allocation,
+    :func:`bikerider.gap.plan.allocation.allocate`: the expected log Bayes factor of the runs combined, each
+    rival's own values integrated over their uncertainty as the loop's evidence does), from the rivals as the loop has
+    updated them (the odds needed from the current ones), stopping as soon as it reaches :data:`HOPELESS`;
+    the shared shifts' uncertainty, common to both rivals' predictions, is left out, as the plan counts it
+    per run.  Rivals fitted to the same predictions (both at the nominal model) differ in how their own
+    uncertainty moves their predictions across experiments, which the old rule (one experiment repeated,
+    the means' difference alone) could not see."""
+    factors = []
+    for r in rivals:
+        k = r.own
+        vals, vecs = np.linalg.eigh((r.P[:k, :k] + r.P[:k, :k].T) / 2)
+        L = vecs * np.sqrt(np.clip(vals, 0.0, None))
+        factors.append([np.array([r.jac[e][:, :k] @ L for e in g]) for g in groups])
+    hypotheses = []
+    for t in (0, 1):
+        need = math.log(DECIDED / (1 - DECIDED)) + math.log(max(weights[1 - t], 1e-300) / max(weights[t], 1e-300))
+        h = A.Hypothesis(0, float(weights[t]), need)
+        for j, g in enumerate(groups):
+            delta = np.array([rivals[t].predict(e)[0] - rivals[1 - t].predict(e)[0] for e in g])
+            noise = np.array([_noise(plan, e) for e in g])
+            h.groups.append((delta, factors[t][j], factors[1 - t][j], noise, np.zeros_like(noise)))
+        hypotheses.append(h)
+    return A.allocate(hypotheses, runs_left, HOPELESS, draws=400).probability
 
 
 def lack_of_fit(rivals: list[LinearRival], e: int, y: np.ndarray, R: np.ndarray) -> float:

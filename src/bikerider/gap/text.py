@@ -359,11 +359,25 @@ def next_text(result: dict, rows: int = 8) -> str:
         if best["decays_for_95"] is not None:
             verb = "tells" if best["decays_for_95"] == 1 else "tell"
             lines.append(f"Recommendation: {best['text_for_95']} {verb} the rivals apart with 95 % probability.")
+        elif (combined := result.get("combined")) and combined["reached"]:
+            lines.append(
+                f"Recommendation: no experiment repeated reaches 95 % within {result['max_repeats']} runs, but runs "
+                f"combined do: {combined['text']} ({combined['runs']} runs) tell the rivals apart with probability "
+                f"{combined['probability']:.2f} (the runs at one speed or law pin a rival's values, those at another "
+                "part the rivals; their evidence adds up)."
+            )
         else:
+            spread = (
+                f"; nor does the best spread of up to {combined['budget']} runs over up to {combined['distinct']} "
+                f"experiments found ({combined['text']}: {combined['probability']:.2f}): the tie is unbreakable by "
+                "these experiments"
+                if combined
+                else ""
+            )
             lines.append(
                 f"Recommendation: no experiment considered reaches 95 % within {result['max_repeats']} runs; the best, "
                 f"{best['text']}, reaches {best['resolution_probability']:.2f} (at most {best['limit']:.2f} with any "
-                "number of runs: the rivals' own uncertainty and their misfit on held-out data keep it there)."
+                f"number of runs: the rivals' own uncertainty and their misfit on held-out data keep it there){spread}."
             )
     if result["left_out"]:
         lines.append(

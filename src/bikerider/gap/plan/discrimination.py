@@ -13,6 +13,7 @@ import numpy as np
 from scipy.special import ndtr
 
 from bikerider.gap.inference.problem import EffectFit
+from bikerider.gap.plan.allocation import MAX_DISTINCT, Hypothesis, allocate
 
 DEFAULT_REPEATS = 10
 MAX_REPEATS = 100
@@ -172,6 +173,79 @@ def rank(plan) -> list[dict]:
             }
         )
     return ranked
+
+
+def combine(plan, budget: int = MAX_REPEATS, target: float = 0.95) -> dict | None:
+    """Runs spread over the experiments of ``plan`` (:mod:`bikerider.gap.plan.allocation`): the greedy
+    allocation of at most ``budget`` runs until the worst pair's resolution probability reaches ``target``.
+
+    Every pair, each of its rivals true with even odds, the odds :data:`ODDS`; per experiment the rivals'
+    difference of means, their own uncertainty's factors (one set of fitted values for every experiment),
+    one run's noise (data plus the nominal parameters') and, systematic, the true rival's misfit on held-out
+    data times that noise (and for a friction rival's multisines the friction law's form).  ``None`` when the
+    plan holds no factors (made otherwise than by :func:`~bikerider.gap.plan.ranking.plan_next`).
+
+    Returns
+    -------
+    dict or None
+        ``runs`` (the total), ``probability``, ``reached`` (``probability >= target``), ``budget``, ``distinct``
+        (the most experiments a combination spreads over),
+        ``experiments`` (each with ``runs``, ``kind``, ``speed``, ``law``, ``signal``, ``text``) and ``text``
+        (the combination in words, e.g. ``"5 decays at 3.00 m/s under none and 5 decays at 6.00 m/s under
+        none"``).
+    """
+    if plan.own_factor is None or plan.sweep_factor is None:
+        return None
+    hypotheses = []
+    for k, (i, j) in enumerate(plan.pairs):
+        for true, other in ((i, j), (j, i)):
+            misfit = plan.rivals[true].misfit
+            h = Hypothesis(k, 0.5, math.log(ODDS))
+            if len(plan.points):
+                noise = plan.data_cov + plan.model_cov
+                h.groups.append(
+                    (
+                        split_last(plan.mean[true] - plan.mean[other]),
+                        plan.own_factor[true],
+                        plan.own_factor[other],
+                        noise,
+                        misfit * noise,
+                    )
+                )
+            if len(plan.sweeps):
+                noise = plan.sweep_data + plan.sweep_model
+                h.groups.append(
+                    (
+                        split_last_k(plan.sweep_mean[true] - plan.sweep_mean[other]),
+                        plan.sweep_factor[true],
+                        plan.sweep_factor[other],
+                        noise,
+                        misfit * noise + plan.sweep_form[true],
+                    )
+                )
+            hypotheses.append(h)
+    found = allocate(hypotheses, budget, target)
+    experiments = plan.experiments
+    chosen = [(int(m), int(found.counts[m])) for m in np.argsort(-found.counts, kind="stable") if found.counts[m] > 0]
+    return {
+        "runs": found.runs,
+        "probability": found.probability,
+        "reached": found.probability >= target,
+        "budget": int(budget),
+        "distinct": MAX_DISTINCT,
+        "experiments": [
+            {
+                "runs": n,
+                "kind": experiments[m].kind,
+                "speed": experiments[m].speed,
+                "law": experiments[m].law,
+                "signal": experiments[m].signal,
+                "text": experiments[m].describe(n),
+            }
+            for m, n in chosen
+        ],
+        "text": " and ".join(experiments[m].describe(n) for m, n in chosen),
+    }
 
 
 def item_dict(item: dict) -> dict:

@@ -84,6 +84,7 @@ from bikerider.gap.plan.discrimination import (  # noqa: F401  (ODDS, MAX_REPEAT
     DEFAULT_REPEATS,
     MAX_REPEATS,
     ODDS,
+    combine,
     item_dict,
     rank,
     resolution_probability,
@@ -362,6 +363,7 @@ class _Planner(_Models):
         p = self.problem
         self.mean = np.zeros((len(self.rivals), n), complex)
         self.own_cov = np.zeros((len(self.rivals), n, 2, 2))
+        self.own_factor = [np.zeros((n, 2, 0)) for _ in self.rivals]
         base = self._reference_points()
         # independent pieces, one per core: each rival's prediction at its fit and at its secants' points
         # (a linear rival's points in chunks: each point's prediction is its own), and the nominal
@@ -404,6 +406,7 @@ class _Planner(_Models):
                 pred = np.concatenate([results[j] for j in range(start, len(jobs)) if jobs[j][0] == k])
                 J = secant_slopes(_split(pred), width).reshape(2, n, -1)  # per unit of each value
                 self.own_cov[k] = np.einsum("anj,jk,bnk->nab", J, cov, J)
+                self.own_factor[k] = np.einsum("anj,jk->nak", J, _root(cov))  # own_cov = F F^T, across experiments
         self.model_cov = np.zeros((n, 2, 2))
         if p.free:
             cov = results[-1]
@@ -446,6 +449,7 @@ class _Planner(_Models):
             )
         self.points = [self.points[m] for m in keep]
         self.mean, self.own_cov = self.mean[:, keep], self.own_cov[:, keep]
+        self.own_factor = [f[keep] for f in self.own_factor]
         self.model_cov, self.data_cov = self.model_cov[keep], self.data_cov[keep]
         if self.records:
             self.simulator = self.simulator.subset(keep)
@@ -610,6 +614,7 @@ class _Planner(_Models):
         if not self.sweeps:
             self.sweep_mean = np.zeros((R, 0, 0), complex)
             self.sweep_own = self.sweep_form = np.zeros((R, 0, 0, 0))
+            self.sweep_factor = [np.zeros((0, 0, 0)) for _ in range(R)]
             self.sweep_data = self.sweep_model = self.sweep_run = np.zeros((0, 0, 0))
             self.sweep_distortion, self.distortion_source = self._linear_misfit()
             return
@@ -618,6 +623,7 @@ class _Planner(_Models):
         self.sweep_mean = np.zeros((R, s, K), complex)
         self.sweep_own = np.zeros((R, s, 2 * K, 2 * K))
         self.sweep_form = np.zeros((R, s, 2 * K, 2 * K))
+        self.sweep_factor = [np.zeros((s, 2 * K, 0)) for _ in range(R)]
         unstable = np.zeros(s, bool)
         for k, rival in enumerate(self.rivals):
             fit = rival.fit
@@ -632,6 +638,7 @@ class _Planner(_Models):
                 J, cov = secants(fit, lambda X, rival=rival: split(self._sweep_rival(rival, X)).reshape(len(X), -1))
                 J = J.reshape(s, 2 * K, -1)
                 self.sweep_own[k] = np.einsum("naj,jk,nbk->nab", J, cov, J)
+                self.sweep_factor[k] = np.einsum("naj,jk->nak", J, _root(cov))
             if rival.nonlinear:
                 # the friction law's form: the fitted smoothed friction against the same friction sticking
                 # (Karnopp), a systematic difference more runs do not average away
@@ -702,6 +709,7 @@ class _Planner(_Models):
         self.sweeps = [self.sweeps[m] for m in keep]
         self.sweep_mean, self.sweep_own = self.sweep_mean[:, keep], self.sweep_own[:, keep]
         self.sweep_form = self.sweep_form[:, keep]
+        self.sweep_factor = [f[keep] for f in self.sweep_factor]
         self.sweep_data, self.sweep_model = self.sweep_data[keep], self.sweep_model[keep]
         self.sweep_run = self.sweep_run[keep]
 
@@ -778,6 +786,12 @@ class NextExperiment(_Models):
         Experiments left out, with the reason.
     plan : tuple of dict
         Every experiment, best first (:func:`~bikerider.gap.plan.discrimination.rank`).
+    own_factor, sweep_factor : tuple of ndarray, optional
+        Per rival ``(points, 2, q)`` and ``(sweeps, 2K, q)``: its own uncertainty's factor ``F`` (``own_cov = F F^T``;
+        one set of fitted values for every experiment, so the covariance across experiments too).
+    combined : dict, optional
+        Runs spread over several experiments (:func:`~bikerider.gap.plan.discrimination.combine`): the greedy
+        allocation of up to :data:`MAX_REPEATS` runs and its resolution probability; ``None`` without factors.
     """
 
     diagnosis: Diagnosis
@@ -814,6 +828,9 @@ class NextExperiment(_Models):
     distortion_source: str
     left_out: tuple[dict, ...]
     plan: tuple[dict, ...] = field(default=())
+    own_factor: tuple[np.ndarray, ...] | None = None
+    sweep_factor: tuple[np.ndarray, ...] | None = None
+    combined: dict | None = None
 
     @property
     def experiments(self) -> list[Experiment | Sweep]:
@@ -880,6 +897,7 @@ class NextExperiment(_Models):
                 ),
             },
             "plan": [item_dict(item) for item in self.plan[:top]],
+            "combined": self.combined,
             "best_per_signal": best_of("signal") if self.records or self.sweeps else None,
             "best_per_law": best_of("law"),
             "best_per_speed": {f"{k:g}": v for k, v in best_of("speed").items()},
@@ -963,6 +981,12 @@ def _split(z: np.ndarray) -> np.ndarray:
     """Complex ``(P, n)`` to real ``(P, 2 n)``: real parts, then imaginary parts."""
     z = np.asarray(z)
     return np.concatenate([z.real, z.imag], axis=-1)
+
+
+def _root(cov: np.ndarray) -> np.ndarray:
+    """``L`` with ``L L^T = cov`` (symmetric, positive semi-definite; the negative rounding clipped)."""
+    vals, vecs = np.linalg.eigh((cov + cov.T) / 2)
+    return vecs * np.sqrt(np.clip(vals, 0.0, None))
 
 
 def _no_canonical():
@@ -1050,5 +1074,12 @@ def plan_next(
         sweep_distortion=b.sweep_distortion,
         distortion_source=b.distortion_source,
         left_out=tuple(b.left_out),
+        own_factor=tuple(b.own_factor),
+        sweep_factor=tuple(b.sweep_factor),
     )
-    return replace(unranked, plan=tuple(rank(unranked)))
+    try:
+        combined = combine(unranked)
+    except (np.linalg.LinAlgError, ValueError) as exc:  # the ranked plan stands without it
+        LOG.warning("runs combined over experiments not evaluated: %s", exc)
+        combined = None
+    return replace(unranked, plan=tuple(rank(unranked)), combined=combined)
