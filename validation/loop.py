@@ -56,7 +56,7 @@ from bikerider.gap.inference.predict import Predictor
 from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
 from bikerider.gap.plan import allocation as A
 from bikerider.gap.plan import criteria as C
-from bikerider.gap.plan.ranking import ASSUMED_NOISE, NextExperiment, NoExperiment, plan_next
+from bikerider.gap.plan.ranking import ASSUMED_NOISE, NextExperiment, NoExperiment, plan_next, planned_rows
 from bikerider.gap.plan.sweeps import line_amplitude, response, split
 from validation.cases import CONTROL, CalibrationEffect, Protocol, Session, TruthSimulator, draw_truth, measure
 
@@ -211,22 +211,7 @@ class LinearRival:
 
 
 def _rows(plan: NextExperiment) -> EigenvalueData:
-    points = plan.points
-    n = len(points)
-    gains = np.array([plan.laws[e.law](e.speed) for e in points]).reshape(n, 4)
-    return EigenvalueData(
-        np.array([e.speed for e in points]),
-        np.zeros(n, complex),
-        np.ones(n),
-        np.ones(n),
-        np.zeros(n),
-        ["weave"] * n,
-        ["next"] * n,
-        gains,
-        [e.describe() for e in points],
-        [e.law for e in points],
-        {e.law: plan.laws[e.law] for e in points},
-    )
+    return planned_rows(plan.points, plan.laws)
 
 
 def _predictions(plan: NextExperiment, effects: tuple[str, ...], X: np.ndarray, shared: bool = False) -> np.ndarray:

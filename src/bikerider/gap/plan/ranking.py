@@ -495,24 +495,7 @@ class _Planner(_Models):
         return np.broadcast_to(out, (P, len(points))).copy()
 
     def _rows(self, points: list[Experiment]):
-
-        n = len(points)
-        speeds = np.array([e.speed for e in points])
-        gains = np.array([self.laws[e.law](e.speed) for e in points]).reshape(n, 4)
-        return EigenvalueData(
-            speeds,
-            np.zeros(n, complex),
-            np.ones(n),
-            np.ones(n),
-            np.zeros(n),
-            ["weave"] * n,
-            ["next"] * n,
-            gains,
-            [e.describe() for e in points],
-            [e.law for e in points],
-            {e.law: self.laws[e.law] for e in points},
-            speed_sensor=np.full(n, self._speed_measured()) if self.records else None,
-        )
+        return planned_rows(points, self.laws, self._speed_measured() if self.records else None)
 
     def _data_noise(self) -> np.ndarray:
         """Per decay ``(n_points, 2, 2)``: the data's noise (module docstring), continuous in speed (each
@@ -975,6 +958,28 @@ class NextExperiment(_Models):
             "run_to_run_sigma": sd(self.sweep_run[m]),
             "model_sigma": sd(self.sweep_model[m]),
         }
+
+
+def planned_rows(points, laws: dict[str, ControlLaw], speed_measured: bool | None = None) -> EigenvalueData:
+    """Eigenvalue rows (no measured values) at planned experiments ``points``, for the rivals to predict:
+    each point's speed and the gains of its law there; ``speed_measured``, when given, says whether a
+    speed sensor reads the runs' speed (as the data's)."""
+    n = len(points)
+    gains = np.array([laws[e.law](e.speed) for e in points]).reshape(n, 4)
+    return EigenvalueData(
+        np.array([e.speed for e in points]),
+        np.zeros(n, complex),
+        np.ones(n),
+        np.ones(n),
+        np.zeros(n),
+        ["weave"] * n,
+        ["next"] * n,
+        gains,
+        [e.describe() for e in points],
+        [e.law for e in points],
+        {e.law: laws[e.law] for e in points},
+        speed_sensor=None if speed_measured is None else np.full(n, speed_measured),
+    )
 
 
 def _split(z: np.ndarray) -> np.ndarray:
