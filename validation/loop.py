@@ -57,7 +57,7 @@ from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
 from bikerider.gap.plan import allocation as A
 from bikerider.gap.plan import criteria as C
 from bikerider.gap.plan.ranking import ASSUMED_NOISE, NextExperiment, NoExperiment, plan_next, planned_rows
-from bikerider.gap.plan.sweeps import line_amplitude, response, split
+from bikerider.gap.plan.sweeps import line_amplitude, response, settle_time, split
 from validation.cases import CONTROL, CalibrationEffect, Protocol, Session, TruthSimulator, draw_truth, measure
 
 N_MAX = 20
@@ -326,8 +326,7 @@ class TruthRuns:
                 s = plan.sweeps[m]
                 gains = plan.laws[s.law](s.speed)
                 ev = self._nominal.eigenvalues([s.speed], np.asarray(gains)[None, :])[0]
-                slowest = max(float(np.max(ev.real)), -10.0)
-                settle = min(20.0, max(5.0, 3.0 / max(-slowest, 1e-3)))  # three time constants of the slowest mode
+                settle = settle_time(ev)  # three time constants of the slowest mode, 5-20 s (as the plan's)
                 H = multisine_run(self.simulator, s.speed, gains, s, rng, settle)
                 R = plan.sweep_data[m] if self.shared else plan.sweep_data[m] + plan.sweep_model[m]
                 out = None if H is None else (split(H), R)
@@ -560,6 +559,7 @@ def run_loop_case(
         best={k: (None if m is None else plan.experiments[m].describe()) for k, m in best.items()},
         predicted=predicted,
         linearisation_error=max(check) if check else None,
+        sweeps_left_out_lean=sum("would likely be lost" in x["reason"] for x in plan.left_out),
         truth_index=truth_index,
     )
     runs = TruthRuns(simulator, plan, seed, shared)

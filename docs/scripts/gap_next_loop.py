@@ -133,9 +133,9 @@ def run(args) -> int:
 def _rerun_one(job):
     from validation import loop as L
 
-    k, seed = job
+    k, seed, only = job
     logging.getLogger("bikerider").setLevel(logging.ERROR)
-    names = tuple(n for n in L.STRATEGIES if n.startswith("plan:"))
+    names = (only,) if only else tuple(n for n in L.STRATEGIES if n.startswith("plan:"))
     try:
         return L.run_loop_case(_models(), L.SCENARIOS[k], seed, strategies=names)
     except Exception as exc:  # stored with its error, not lost silently
@@ -162,10 +162,16 @@ def rerun(args) -> int:
     from validation import loop as L
 
     index = {s.label: k for k, s in enumerate(L.SCENARIOS)}
-    path = RERUN_ALL if args.all else RERUN
+    if args.strategy:  # one strategy, every stored tie, to a file of its own
+        if args.strategy not in L.STRATEGIES:
+            raise SystemExit(f"--strategy {args.strategy!r}: expected one of {', '.join(L.STRATEGIES)}")
+        path = ROOT / "docs" / "scripts" / f"gap_next_loop_{args.strategy.replace(':', '_')}.jsonl"
+    else:
+        path = RERUN_ALL if args.all else RERUN
     done = {(c["scenario"], c["seed"]) for c in _stored(path)}
-    targets = [(c["scenario"], c["seed"]) for c in _stored() if c.get("strategies")] if args.all else _rerun_targets()
-    jobs = [(index[label], seed) for label, seed in targets if (label, seed) not in done]
+    every = args.all or args.strategy
+    targets = [(c["scenario"], c["seed"]) for c in _stored() if c.get("strategies")] if every else _rerun_targets()
+    jobs = [(index[label], seed, args.strategy) for label, seed in targets if (label, seed) not in done]
     LOG.info("%d ties to run again", len(jobs))
     with get_context("fork").Pool(args.workers) as pool, path.open("a", encoding="utf-8") as out:
         for result in pool.imap_unordered(_rerun_one, jobs):
@@ -782,6 +788,10 @@ def main() -> int:
     )
     rr.add_argument("--workers", type=int, default=1)
     rr.add_argument("--all", action="store_true", help="every stored tie (to a file of its own)")
+    rr.add_argument(
+        "--strategy",
+        help="this strategy only (e.g. repeat:sweep), on every stored tie, to gap_next_loop_<strategy>.jsonl",
+    )
     sub.add_parser("report", help="write part 5 of docs/gap_validation.md and the figure")
     args = parser.parse_args()
     return {"run": run, "check": check, "rerun": rerun, "report": report}[args.command](args)

@@ -115,11 +115,14 @@ from bikerider.gap.plan.sweeps import (
     RUN_TIME_RANGE,
     Sweep,
     line_amplitude,
+    MAX_ROLL,
     linearised_friction,
     lines_for,
     noise_covariance,
+    peak_roll,
     response,
     run_stand_in,
+    settle_time,
     simulated_response,
     split,
     weave_shift,
@@ -599,6 +602,7 @@ class _Planner(_Models):
             self.sweep_own = self.sweep_form = np.zeros((R, 0, 0, 0))
             self.sweep_factor = [np.zeros((0, 0, 0)) for _ in range(R)]
             self.sweep_data = self.sweep_model = self.sweep_run = np.zeros((0, 0, 0))
+            self.sweep_settle, self.sweep_roll = np.zeros(0), np.zeros((R, 0))
             self.sweep_distortion, self.distortion_source = self._linear_misfit()
             return
         K = len(self.sweeps[0].lines)
@@ -608,12 +612,19 @@ class _Planner(_Models):
         self.sweep_form = np.zeros((R, s, 2 * K, 2 * K))
         self.sweep_factor = [np.zeros((s, 2 * K, 0)) for _ in range(R)]
         unstable = np.zeros(s, bool)
+        # each run's settling time, from the nominal closed loop's slowest mode (sweeps.settle_time)
+        with np.errstate(all="ignore"):
+            nominal_ev = np.linalg.eigvals(self._sweep_systems((), np.zeros((1, 0)))[0][0])
+        self.sweep_settle = np.array([settle_time(ev) for ev in nominal_ev])
+        self.sweep_roll = np.zeros((R, s))
         for k, rival in enumerate(self.rivals):
             fit = rival.fit
             loop = self._sweep_systems(rival.effects, fit.values[None, :], nonlinear=rival.nonlinear)
             with np.errstate(all="ignore"):
                 # a mode that grows e-fold within the run (a slow capsize a rider or a catch holds is allowed)
                 unstable |= np.linalg.eigvals(loop[0][0]).real.max(axis=-1) >= 1.0 / self.run_time
+                # how far the run leans: a run whose lean passes MAX_ROLL is likely lost (it falls or is caught)
+                self.sweep_roll[k] = peak_roll(loop[0], loop[1], loop[2][0], self.sweeps, self.sweep_settle)[0]
             # a nonlinear rival's response from its runs simulated in time (its describing function only
             # judges whether the loop is stable)
             self.sweep_mean[k] = self._sweep_rival(rival, fit.values[None, :])[0]
@@ -676,19 +687,30 @@ class _Planner(_Models):
             )
             J = (stage.jacobian({k: p.nominal[k] for k in p.free}) * p.free_sigma).reshape(s, 2 * K, -1)
             self.sweep_model = np.einsum("naj,nbj->nab", J, J)
-        bad = unstable | ~np.all(np.isfinite(self.sweep_mean), axis=(0, 2))
+        leans = ~(np.max(self.sweep_roll, axis=0) <= MAX_ROLL)  # NaN too
+        bad = unstable | leans | ~np.all(np.isfinite(self.sweep_mean), axis=(0, 2))
         bad |= ~np.all(np.isfinite(self.sweep_own), axis=(0, 2, 3)) | ~np.all(
             np.isfinite(self.sweep_model), axis=(1, 2)
         )
         for m in np.flatnonzero(bad):
-            why = (
-                "a rival's closed loop is unstable there (a mode grows e-fold within the run): no steady response to "
-                "measure"
-                if unstable[m]
-                else "an uncertainty cannot be evaluated there"
-            )
+            if unstable[m]:
+                why = (
+                    "a rival's closed loop is unstable there (a mode grows e-fold within the run): no steady response "
+                    "to measure"
+                )
+            elif leans[m]:
+                k = int(np.argmax(np.nan_to_num(self.sweep_roll[:, m], nan=np.inf)))
+                why = (
+                    f"the run would likely be lost: {self.rivals[k].name} predicts a lean of "
+                    f"{self.sweep_roll[k, m]:.2g} rad during its {self.sweep_settle[m]:.0f} s settling time and the "
+                    f"recorded period (more than {MAX_ROLL:g} rad: the bicycle falls or is caught, and the run "
+                    "teaches nothing); a smaller torque (--next-torque) leans less"
+                )
+            else:
+                why = "an uncertainty cannot be evaluated there"
             self.left_out.append({"experiment": self.sweeps[m].describe(), "reason": why})
         keep = np.flatnonzero(~bad)
+        self.sweep_settle, self.sweep_roll = self.sweep_settle[keep], self.sweep_roll[:, keep]
         self.sweeps = [self.sweeps[m] for m in keep]
         self.sweep_mean, self.sweep_own = self.sweep_mean[:, keep], self.sweep_own[:, keep]
         self.sweep_form = self.sweep_form[:, keep]
@@ -811,6 +833,8 @@ class NextExperiment(_Models):
     distortion_source: str
     left_out: tuple[dict, ...]
     plan: tuple[dict, ...] = field(default=())
+    sweep_settle: np.ndarray | None = None
+    sweep_roll: np.ndarray | None = None
     own_factor: tuple[np.ndarray, ...] | None = None
     sweep_factor: tuple[np.ndarray, ...] | None = None
     combined: dict | None = None
@@ -954,6 +978,10 @@ class NextExperiment(_Models):
                 }
                 for k, r in enumerate(self.rivals)
             },
+            "settle": float(self.sweep_settle[m]) if self.sweep_settle is not None else None,
+            "peak_roll": {r.name: float(self.sweep_roll[k, m]) for k, r in enumerate(self.rivals)}
+            if self.sweep_roll is not None
+            else None,
             "data_sigma": sd(self.sweep_data[m]),
             "run_to_run_sigma": sd(self.sweep_run[m]),
             "model_sigma": sd(self.sweep_model[m]),
@@ -1081,6 +1109,8 @@ def plan_next(
         left_out=tuple(b.left_out),
         own_factor=tuple(b.own_factor),
         sweep_factor=tuple(b.sweep_factor),
+        sweep_settle=b.sweep_settle,
+        sweep_roll=b.sweep_roll,
     )
     try:
         combined = combine(unranked)

@@ -51,7 +51,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from bikerider.benchmark.simulation import discretise
+from bikerider.benchmark.simulation import discretise, expm
 from bikerider.gap.inference.timedomain import SMOOTHING
 
 N_LINES = 9
@@ -78,6 +78,13 @@ STICK_STEP = 1e-3
 """Longest step [s] of a run simulated with stick-slip friction."""
 STICK_RATE = 1e-3
 """Steer rate [rad/s] below which the stick-slip rule may hold the steer still."""
+MAX_ROLL = 0.2
+"""Largest lean [rad] a planned multisine run may reach under any rival (:func:`peak_roll`, about 11 degrees):
+the linear models hold there (``sin phi`` within 0.7 % of ``phi``), with room below a fall (a closed-loop
+check's truth fell at 0.5 rad) for the rivals' error, friction and a motor's torque limit.  A run predicted to
+lean further is likely lost and is left out of the plan."""
+SETTLE_RANGE = (5.0, 20.0)
+"""Shortest and longest settling time [s] of a planned run before its recorded period (:func:`settle_time`)."""
 SETTLE_PERIODS = 1
 """Periods of the multisine a simulated run settles for before the one read."""
 RECORD = (
@@ -220,6 +227,55 @@ def weave_shift(A: np.ndarray, b: np.ndarray, index: int, omegas: np.ndarray) ->
     d_real = g + g_conj  # delta = 1
     d_imag = 1j * g - 1j * g_conj  # delta = i
     return np.stack([split(d_real), split(d_imag)], axis=-1)
+
+
+def settle_time(eigenvalues) -> float:
+    """Settling time [s] before a run's recorded period: three time constants of the slowest mode of the closed
+    loop with ``eigenvalues`` (its decay rate counted as at least 1e-3 1/s, and at most 10 1/s), from
+    :data:`SETTLE_RANGE` ``[0]`` to ``[1]`` seconds (a growing mode gets the longest)."""
+    slowest = max(float(np.max(np.real(eigenvalues))), -10.0)
+    lo, hi = SETTLE_RANGE
+    return min(hi, max(lo, 3.0 / max(-slowest, 1e-3)))
+
+
+def peak_roll(A: np.ndarray, b: np.ndarray, roll_index: int, sweeps, settle) -> np.ndarray:
+    """The largest roll angle ``|phi|`` [rad] of each run, ``(..., s)``: the linear closed loop ``x' = A x + b T``
+    (``A (..., s, n, n)``, ``b (..., s, n)``) from rest, driven by each sweep's multisine (Schroeder phases, its
+    peak torque) over its settling time ``settle (s,)`` and its recorded period.
+
+    Exact for the linear loop: ``x(t) = x_p(t) - e^(A t) x_p(0)`` with ``x_p`` the periodic response
+    (``(i w_k I - A)^-1 b`` at every line), read on a grid of at least ten points per period of the highest
+    line.  A mode that grows (a capsize slower than the run) makes the second term grow over the whole run.
+    """
+    A, b = np.asarray(A, float), np.asarray(b, float)
+    batch, n = A.shape[:-2], A.shape[-1]
+    s = len(sweeps)
+    run_time = float(sweeps[0].run_time)
+    top = max(max(x.lines) for x in sweeps)
+    steps = int(math.ceil(run_time * 10.0 * top))  # per period
+    h = run_time / steps
+    settle = np.asarray(settle, float).reshape(s)
+    horizon = settle + run_time
+    K = len(sweeps[0].lines)
+    phases = -math.pi * np.arange(1, K + 1) * np.arange(K) / K
+    omegas = np.array([x.omegas for x in sweeps])  # (s, K)
+    amplitude = np.array([line_amplitude(x.lines, x.torque, x.run_time) for x in sweeps])
+    # the periodic response's lines, complex state amplitudes (..., s, K, n)
+    M = 1j * omegas[..., None, None] * np.eye(n) - A[..., None, :, :]
+    rhs = np.broadcast_to(b[..., None, :, None], M.shape[:-1] + (1,)).astype(complex)
+    X = np.linalg.solve(M, rhs)[..., 0] * (amplitude[:, None] * np.exp(1j * phases))[:, :, None]
+    t = np.arange(steps) * h
+    periodic = np.einsum("...sk,skt->...st", X[..., roll_index], np.exp(1j * omegas[:, :, None] * t)).real
+    start = X.sum(axis=-2).real  # x_p(0), (..., s, n)
+    E = expm(A * h)
+    x = start.copy()
+    peak = np.zeros(batch)
+    for j in range(int(math.ceil(float(horizon.max()) / h)) + 1):
+        inside = j * h <= horizon
+        roll = np.abs(periodic[..., j % steps] - x[..., roll_index])
+        peak = np.maximum(peak, np.where(inside, roll, 0.0))
+        x = np.einsum("...ij,...j->...i", E, x)
+    return peak
 
 
 def noise_covariance(sweep: Sweep, sigma_y: float, sample_rate: float) -> np.ndarray:
