@@ -379,6 +379,15 @@ def next_text(result: dict, rows: int = 8) -> str:
                 f"{best['text']}, reaches {best['resolution_probability']:.2f} (at most {best['limit']:.2f} with any "
                 f"number of runs: the rivals' own uncertainty and their misfit on held-out data keep it there){spread}."
             )
+    if nxt := result.get("next_run"):
+        where = f"ranked {nxt['rank']} of {result.get('experiments')} by the measure" if nxt.get("rank") else "in the plan"
+        lines.append(
+            f"Next run, one at a time: {nxt['text']} ({where}; one run resolves the tie with probability "
+            f"{nxt['resolution_probability']:.2f}): where the rivals' predictions of one run overlap least "
+            f"(Jensen-Renyi divergence {nxt['divergence']:.3g} of at most {nxt['bound']:.3g} nats, the rivals "
+            "weighted evenly), the criterion that needed the fewest runs in the closed-loop check "
+            f"(docs/gap_validation.md, part 5). Then {nxt['instruction']}."
+        )
     if result["left_out"]:
         lines.append(
             f"  {len(result['left_out'])} experiments left out (e.g. {result['left_out'][0]['experiment']}: "

@@ -84,10 +84,14 @@ def plot_next(plan, result: dict | None = None):
     _probability_panel(axes[2], decays, plan, colours, "decays")
     if sweeps:
         _sweep_row(grid[1], plan, sweeps, colours)
-    fig.suptitle(
-        "Where the rivals disagree: " + ", ".join(r.name for r in plan.rivals) + f" (best: {plan.plan[0]['text']})",
-        fontsize=10,
-    )
+    nxt = plan.next_run
+    if nxt is not None and nxt["kind"] == "decay":
+        _mark_next(axes[2], plan, decays, lambda item: item["resolution_probability"])
+        axes[2].legend(fontsize=7)
+    title = "Where the rivals disagree: " + ", ".join(r.name for r in plan.rivals) + f" (best: {plan.plan[0]['text']})"
+    if nxt is not None:
+        title += f"\nnext run, one at a time (Jensen-Renyi, star): {nxt['text']}"
+    fig.suptitle(title, fontsize=10)
     fig.tight_layout()
     return fig
 
@@ -177,6 +181,8 @@ def _separation_panel(ax, items, plan, colours):
         if pts:
             s, d = zip(*pts)
             ax.plot(s, d, "-o", ms=3, color=colours[k % len(colours)], label=law)
+    if plan.next_run is not None and plan.next_run["kind"] == "sweep":
+        _mark_next(ax, plan, items, lambda item: float(worst[index[id(item["experiment"])]]))
     ax.axhline(D_95, color="0.4", ls="--", lw=1, label=f"d for 95 % from one run ({D_95:.1f})")
     ax.set_yscale("log")
     ax.yaxis.set_major_formatter(ScalarFormatter())
@@ -186,6 +192,25 @@ def _separation_panel(ax, items, plan, colours):
     ax.set_title("multisines: one run's separation, smallest over the pairs", fontsize=9)
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=7)
+
+
+def _mark_next(ax, plan, items, value) -> None:
+    """A star at the next single run (:attr:`NextExperiment.next_run`) on a panel against speed, at ``value`` of
+    its plan item."""
+    e = plan.experiments[plan.next_run["index"]]
+    item = next((x for x in items if x["experiment"] == e), None)
+    if item is None:
+        return
+    ax.plot(
+        [e.speed],
+        [value(item)],
+        "*",
+        ms=14,
+        mfc="gold",
+        mec="k",
+        zorder=5,
+        label=f"next run ({e.law}, {e.signal.replace('_', ' ')})",
+    )
 
 
 def _d_for(probability: float) -> float:

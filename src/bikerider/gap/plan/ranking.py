@@ -79,6 +79,7 @@ from bikerider.gap.measured.control import NO_CONTROL, ControlLaw
 from bikerider.gap.measured.records import SIGNALS, RecordFit, eigenvalues_of
 from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
 from bikerider.gap.parallel import map_forked, workers
+from bikerider.gap.plan import sequential
 from bikerider.gap.plan.decays import Experiment, fit_templates, template_records
 from bikerider.gap.plan.discrimination import (  # noqa: F401  (ODDS, MAX_REPEATS, resolution_probability: the plan's face)
     DEFAULT_REPEATS,
@@ -794,6 +795,12 @@ class NextExperiment(_Models):
     own_factor, sweep_factor : tuple of ndarray, optional
         Per rival ``(points, 2, q)`` and ``(sweeps, 2K, q)``: its own uncertainty's factor ``F`` (``own_cov = F F^T``;
         one set of fitted values for every experiment, so the covariance across experiments too).
+    next_run : dict, optional
+        The next single run (:func:`~bikerider.gap.plan.sequential.next_run`): where the Jensen-Renyi divergence
+        of the rivals' predictive distributions of one run is largest, the closed loop's best criterion.
+    sweep_settle, sweep_roll : ndarray, optional
+        ``(sweeps,)`` each multisine run's settling time [s] (:func:`~bikerider.gap.plan.sweeps.settle_time`) and
+        ``(rivals, sweeps)`` the largest lean each rival predicts for it [rad] (:func:`~bikerider.gap.plan.sweeps.peak_roll`).
     combined : dict, optional
         Runs spread over several experiments (:func:`~bikerider.gap.plan.discrimination.combine`): the greedy
         allocation of up to :data:`MAX_REPEATS` runs and its resolution probability; ``None`` without factors.
@@ -835,6 +842,7 @@ class NextExperiment(_Models):
     plan: tuple[dict, ...] = field(default=())
     sweep_settle: np.ndarray | None = None
     sweep_roll: np.ndarray | None = None
+    next_run: dict | None = None
     own_factor: tuple[np.ndarray, ...] | None = None
     sweep_factor: tuple[np.ndarray, ...] | None = None
     combined: dict | None = None
@@ -893,6 +901,7 @@ class NextExperiment(_Models):
             ),
             "pairs": [[self.rivals[i].name, self.rivals[j].name] for i, j in self.pairs],
             "repeats": self.repeats,
+            "experiments": len(self.plan),
             "max_repeats": MAX_REPEATS,
             "noise": {
                 "signals": {s: {"value": v, "source": self.noise_source[s]} for s, v in self.sample_noise.items()},
@@ -905,6 +914,7 @@ class NextExperiment(_Models):
             },
             "plan": [item_dict(item) for item in self.plan[:top]],
             "combined": self.combined,
+            "next_run": self.next_run,
             "best_per_signal": best_of("signal") if self.records or self.sweeps else None,
             "best_per_law": best_of("law"),
             "best_per_speed": {f"{k:g}": v for k, v in best_of("speed").items()},
@@ -1117,4 +1127,5 @@ def plan_next(
     except (np.linalg.LinAlgError, ValueError) as exc:  # the ranked plan stands without it
         LOG.warning("runs combined over experiments not evaluated: %s", exc)
         combined = None
-    return replace(unranked, plan=tuple(rank(unranked)), combined=combined)
+    ranked = replace(unranked, plan=tuple(rank(unranked)), combined=combined)
+    return replace(ranked, next_run=sequential.next_run(ranked))

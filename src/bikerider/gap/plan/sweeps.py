@@ -45,13 +45,14 @@ the settling period and the recorded one; the speed; the control law and its gai
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from types import SimpleNamespace
 
 import numpy as np
 
-from bikerider.benchmark.simulation import discretise, expm
+from bikerider.benchmark.simulation import discretise
 from bikerider.gap.inference.timedomain import SMOOTHING
 
 N_LINES = 9
@@ -159,6 +160,12 @@ def lines_for(weave_hz: float, run_time: float) -> tuple[float, ...]:
 def line_amplitude(lines, peak: float, run_time: float) -> float:
     """Amplitude ``a`` of each line of a Schroeder-phased multisine over ``lines`` [Hz] (multiples of
     ``1 / run_time``) whose peak over its period ``run_time`` is ``peak``."""
+    return _line_amplitude(tuple(float(x) for x in np.ravel(lines)), float(peak), float(run_time))
+
+
+@functools.lru_cache(maxsize=4096)
+def _line_amplitude(lines: tuple[float, ...], peak: float, run_time: float) -> float:
+    """:func:`line_amplitude`, kept per multisine (a plan asks for the same ones many times)."""
     lines = np.asarray(lines, float)
     K = lines.size
     phases = -math.pi * np.arange(1, K + 1) * np.arange(K) / K
@@ -267,14 +274,20 @@ def peak_roll(A: np.ndarray, b: np.ndarray, roll_index: int, sweeps, settle) -> 
     t = np.arange(steps) * h
     periodic = np.einsum("...sk,skt->...st", X[..., roll_index], np.exp(1j * omegas[:, :, None] * t)).real
     start = X.sum(axis=-2).real  # x_p(0), (..., s, n)
-    E = expm(A * h)
-    x = start.copy()
+    # e^(A t) x_p(0) on the roll angle, by the modes of A: sum_j V_roll,j c_j e^(lambda_j t), c = V^-1 x_p(0)
+    lam, V = np.linalg.eig(A)
+    c = np.linalg.solve(V, start.astype(complex)[..., None])[..., 0]
+    weight = V[..., roll_index, :] * c  # (..., s, n)
     peak = np.zeros(batch)
-    for j in range(int(math.ceil(float(horizon.max()) / h)) + 1):
-        inside = j * h <= horizon
-        roll = np.abs(periodic[..., j % steps] - x[..., roll_index])
-        peak = np.maximum(peak, np.where(inside, roll, 0.0))
-        x = np.einsum("...ij,...j->...i", E, x)
+    total = int(math.ceil(float(horizon.max()) / h)) + 1
+    chunk = steps
+    with np.errstate(over="ignore", invalid="ignore"):
+        for first in range(0, total, chunk):
+            j = np.arange(first, min(first + chunk, total))
+            free = np.einsum("...sn,...snt->...st", weight, np.exp(lam[..., None] * (j * h))).real
+            roll = np.abs(periodic[..., j % steps] - free)
+            roll = np.where(j * h <= horizon[:, None], roll, 0.0)
+            peak = np.maximum(peak, np.max(roll, axis=-1))
     return peak
 
 
