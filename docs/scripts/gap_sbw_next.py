@@ -21,6 +21,7 @@ FIGURE = ROOT / "docs" / "gap_sbw_next.png"
 def _sbw_next(diagnosis):
     """What to measure next on the steer-by-wire bicycle (``bikerider gap --next``)."""
     from bikerider.gap.plan.ranking import plan_next
+    from bikerider.gap.plan.sweeps import MAX_ROLL
 
     plan = plan_next(diagnosis)
     out = plan.as_dict(top=len(plan.plan))
@@ -30,6 +31,7 @@ def _sbw_next(diagnosis):
     best = decays[0]
     by_signal = out["best_per_signal"] or {}
     considered = len(plan.points) + len(plan.sweeps) + len(out["left_out"])
+    lean = sum("would likely be lost" in x["reason"] for x in out["left_out"])
     lines = [
         "# What to measure next on the steer-by-wire bicycle",
         "",
@@ -44,7 +46,8 @@ def _sbw_next(diagnosis):
         f"({considered} experiments considered over {plan.speeds.min():.1f}-{plan.speeds.max():.1f} m/s: the `sil` law,",
         "the same controller at half and 1.5 times its gain, and no control; free decays with four signals and three",
         "push sizes, and steer-torque multisines read at the roll rate or the steer angle;",
-        f"{len(out['left_out'])} left out, where a mode grows or a decay holds no weave the record fit accepts).",
+        f"{len(out['left_out'])} left out, where a mode grows, a decay holds no weave the record fit accepts, or a"
+        f" multisine would lean past {MAX_ROLL:g} rad: {lean} of them).",
         "The best multisines, the best decays, and the best decay of each logged signal and with the data's push:",
         "",
         "| experiment | resolution probability, 10 runs | runs for 95 % | d (friction true / other true) |",
@@ -93,6 +96,16 @@ def _sbw_next(diagnosis):
             "not cover them; the torque must be what the motor delivers (its bandwidth is not modelled).",
             "",
         ]
+    nxt = out["next_run"]
+    if nxt:
+        lines += [
+            f"**The next run, one at a time**: {nxt['text']} (ranked {nxt['rank']} of {len(out['plan'])} by the resolution",
+            f"probability; one run of it resolves with probability {nxt['resolution_probability']:.2f}). It is where the",
+            f"Jensen-Renyi divergence of the three candidates' predictions of one run is largest ({nxt['divergence']:.2f} of",
+            f"at most ln 3 = {nxt['bound']:.2f} nats), the criterion that needed the fewest runs in the closed loop",
+            "(docs/gap_validation.md, part 5). Record it, add it to the experiment's manifest, run `--next` again.",
+            "",
+        ]
     lines += [
         "Each signal's noise comes from the logs: the larger of its sample-to-sample scatter and the residual its",
         f"records' own fits leave (roll rate {noise['roll_rate']['value']:.2g} rad/s, roll angle "
@@ -110,7 +123,7 @@ def _sbw_next(diagnosis):
         "record's weave eigenvalue with its standard error), the planned speeds, and the resolution probability",
         "against speed per law; its second row, the best multisine's frequency response per candidate (magnitude",
         "and phase, bands of ten runs' mean) and the multisines' separation d of one run against speed (log",
-        "scale, with the d one run needs for 95 %).",
+        "scale, with the d one run needs for 95 %); the star marks the next run.",
         "",
     ]
     return lines, plan, out

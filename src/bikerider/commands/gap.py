@@ -100,7 +100,8 @@ def add_parser(subparsers) -> None:
         help="plan the next experiment: new free decays (speed, control law, signal, push) or steer-torque "
         "multisines (speed, control law, the response read), ranked by the probability that the new runs tell "
         "apart the candidates the diagnosis left tied (or the first and the runners-up), favouring the true one "
-        "19 to 1 (docs/gap.md)",
+        "19 to 1; and the next single run to record before planning again (where the candidates' predictions of "
+        "one run overlap least: Jensen-Renyi, the closed loop's best criterion) (docs/gap.md)",
     )
     p.add_argument(
         "--next-between",
@@ -132,7 +133,8 @@ def add_parser(subparsers) -> None:
         metavar="NM",
         type=float,
         default=None,
-        help="with --next: peak steer torque of a planned multisine run [N m] (default 0.5)",
+        help="with --next: peak steer torque of a planned multisine run [N m] (default 0.5; runs a candidate "
+        "predicts to lean past 0.2 rad are left out as likely lost)",
     )
     p.add_argument(
         "--next-run-time",

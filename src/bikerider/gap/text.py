@@ -380,7 +380,9 @@ def next_text(result: dict, rows: int = 8) -> str:
                 f"number of runs: the rivals' own uncertainty and their misfit on held-out data keep it there){spread}."
             )
     if nxt := result.get("next_run"):
-        where = f"ranked {nxt['rank']} of {result.get('experiments')} by the measure" if nxt.get("rank") else "in the plan"
+        where = (
+            f"ranked {nxt['rank']} of {result.get('experiments')} by the measure" if nxt.get("rank") else "in the plan"
+        )
         lines.append(
             f"Next run, one at a time: {nxt['text']} ({where}; one run resolves the tie with probability "
             f"{nxt['resolution_probability']:.2f}): where the rivals' predictions of one run overlap least "

@@ -9,12 +9,9 @@ import math
 
 import numpy as np
 import pytest
-from gap_support import BP, riderless_model
+from gap_support import BP
 from scipy.integrate import solve_ivp
-from test_gap_next import RIVALS, TRUTH, _table  # noqa: F401
 
-from bikerider.gap.diagnosis.result import diagnose
-from bikerider.gap.measured.tables import CanonicalData
 from bikerider.gap.plan import criteria as C
 from bikerider.gap.plan import sequential
 from bikerider.gap.plan.ranking import plan_next
