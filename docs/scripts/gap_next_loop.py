@@ -22,6 +22,7 @@ import math
 import os
 import sys
 import time
+from collections import Counter
 from pathlib import Path
 
 os.environ.setdefault("OMP_NUM_THREADS", "1")  # one BLAS thread per worker: the workers are the parallelism
@@ -455,6 +456,12 @@ def _lean_lines(ties: list[dict], n_max: int) -> list[str]:
         for lo, hi, n, nc, mp, fr in _bins(_reliability(w, "sweep", n_max))
     ]
     n_off, p_off, r_off, _ = rows["off"][1:]
+    high10 = [c["strategies"]["repeat:sweep"]["status"] for c in w if c["predicted"]["sweep"][9] >= 0.8]
+    lost_all = sum(
+        c["strategies"]["repeat:sweep"]["lost"] == c["strategies"]["repeat:sweep"]["runs"]
+        for c in w
+        if c["predicted"]["sweep"][9] >= 0.8
+    )
     high = [(n, mp, fr) for lo, _, n, _, mp, fr in _bins(_reliability(w, "sweep", n_max)) if lo >= 0.8]
     top = None
     if high:
@@ -476,6 +483,13 @@ def _lean_lines(ties: list[dict], n_max: int) -> list[str]:
         + (
             f" By bins the top is still optimistic: predicted {top[4]:.2f} on average above 0.8, {top[5]:.2f} resolved."
             if top
+            else ""
+        )
+        + (
+            f" At 10 runs, {len(high10)} ties were predicted 0.8 or more: "
+            + ", ".join(f"{n} {status}" for status, n in Counter(high10).most_common())
+            + f" ({lost_all} of them lost every run)."
+            if high10
             else ""
         )
         + " The runs still lost: "
