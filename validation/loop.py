@@ -34,7 +34,8 @@ strategy (common random numbers).
 
 Strategies: ``plan:<criterion>`` (the next run where the criterion of
 :mod:`bikerider.gap.plan.criteria` is largest, with the rivals' predictions and probabilities as the loop
-has updated them), ``even`` (decays under the laws in turn at speeds spread evenly over the feasible
+has updated them; ``plan:jensen_renyi``'s first run is the next run ``--next`` names,
+:mod:`bikerider.gap.plan.sequential`), ``even`` (decays under the laws in turn at speeds spread evenly over the feasible
 range, a van der Corput order), ``random`` (any feasible experiment), ``repeat:decay`` and
 ``repeat:sweep`` (the plan's best decay, or best multisine, repeated: what ``--next`` recommends,
 whose predicted resolution probability after ``k`` runs is stored for the reliability diagrams).

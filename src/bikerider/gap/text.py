@@ -384,7 +384,7 @@ def next_text(result: dict, rows: int = 8) -> str:
             f"ranked {nxt['rank']} of {result.get('experiments')} by the measure" if nxt.get("rank") else "in the plan"
         )
         lines.append(
-            f"Next run, one at a time: {nxt['text']} ({where}; one run resolves the tie with probability "
+            f"Next run, one at a time: {nxt['text']} ({where}; one run tells the rivals apart with probability "
             f"{nxt['resolution_probability']:.2f}): where the rivals' predictions of one run overlap least "
             f"(Jensen-Renyi divergence {nxt['divergence']:.3g} of at most {nxt['bound']:.3g} nats, the rivals "
             "weighted evenly), the criterion that needed the fewest runs in the closed-loop check "
