@@ -49,6 +49,11 @@ SWEEP_RULE = Path(__file__).with_name("gap_next_loop_repeat_sweep.jsonl")
 (``rerun --strategy repeat:sweep``)."""
 SWEEP_NO_RULE = Path(__file__).with_name("gap_next_loop_repeat_sweep_max_roll_inf.jsonl")
 """The same on the same code with the lean rule off (``rerun --strategy repeat:sweep --max-roll inf``)."""
+JR_RULE = Path(__file__).with_name("gap_next_loop_plan_jensen_renyi.jsonl")
+JR_NO_RULE = Path(__file__).with_name("gap_next_loop_plan_jensen_renyi_max_roll_inf.jsonl")
+EVEN_NOW = Path(__file__).with_name("gap_next_loop_even.jsonl")
+"""``plan:jensen_renyi`` on every stored tie with the lean rule and without it, and ``even`` (which takes decays
+only, so the rule does not touch it), all on the same code (``rerun --strategy ...``)."""
 DOC = ROOT / "docs" / "gap_validation.md"
 FIGURE = ROOT / "docs" / "figures" / "gap_next_loop.png"
 BEGIN, END = "<!-- loop:begin -->", "<!-- loop:end -->"
@@ -509,6 +514,61 @@ def _lean_lines(ties: list[dict], n_max: int) -> list[str]:
     return out
 
 
+def _now_lines(n_max: int) -> list[str]:
+    """The next run's strategy (``plan:jensen_renyi``) with and without the lean rule, beside the even spread, on
+    today's code (:data:`JR_RULE`, :data:`JR_NO_RULE`, :data:`EVEN_NOW`)."""
+    from validation import loop as L
+
+    files = (("plan:jensen_renyi, lean rule off", JR_NO_RULE), ("plan:jensen_renyi, lean rule", JR_RULE))
+    files += (("even", EVEN_NOW),)
+    got = {label: [c for c in _stored(path) if c.get("strategies")] for label, path in files}
+    if not all(got.values()):
+        return []
+    keys = set.intersection(*({(c["scenario"], c["seed"]) for c in cs} for cs in got.values()))
+    out = [
+        "### The next run `--next` names, with the lean rule, on today's code",
+        "",
+        f"`plan:jensen_renyi` (the next run of `--next`) with the lean rule and without, and the even spread, on the "
+        f"{len(keys)} stored ties that still tie on today's code (`rerun --strategy plan:jensen_renyi [--max-roll inf]`, "
+        "`rerun --strategy even`; the unbreakable rule of runs combined):",
+        "",
+        "| strategy | resolved | wrong | undecided | unbreakable | runs needed: median | 90th percentile | runs lost / spent |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    merit = {}
+    for label, cases in got.items():
+        name = "even" if label == "even" else "plan:jensen_renyi"
+        st = [c["strategies"][name] for c in cases if (c["scenario"], c["seed"]) in keys]
+        med, p90 = L.figure_of_merit([x["runs"] if x["status"] == "resolved" else None for x in st])
+        merit[label] = (st, med, p90)
+        counts = {k: sum(x["status"] == k for x in st) for k in ("resolved", "wrong", "undecided", "unbreakable")}
+        out.append(
+            f"| {label} | {counts['resolved']} | {counts['wrong']} | {counts['undecided']} | {counts['unbreakable']} | "
+            f"{_fmt(med, n_max)} | {_fmt(p90, n_max)} | {sum(x['lost'] for x in st)} / {sum(x['runs'] for x in st)} |"
+        )
+    jr = {(c["scenario"], c["seed"]): c["strategies"]["plan:jensen_renyi"] for c in got[files[1][0]]}
+    even = {(c["scenario"], c["seed"]): c["strategies"]["even"] for c in got["even"]}
+    broken = sorted(k for k in keys if jr[k]["status"] == "unbreakable" and even[k]["status"] == "resolved")
+    (off, m_off, _), (on, m_on, _), (ev, m_ev, _) = (merit[label] for label, _ in files)
+
+    def resolved(st):
+        return sum(x["status"] == "resolved" for x in st)
+
+    out += [
+        "",
+        f"* With the rule the next run resolves {resolved(on)} ties against {resolved(off)} without it, losing "
+        f"{sum(x['lost'] for x in on)} runs instead of {sum(x['lost'] for x in off)}; the even spread resolves "
+        f"{resolved(ev)}. Goal 1 (the plan's median at most half the even spread's): {_fmt(m_on, n_max)} against "
+        f"{_fmt(m_ev, n_max)}, "
+        + ("**met**." if math.isfinite(m_on) and (not math.isfinite(m_ev) or m_on <= m_ev / 2) else "**not met**."),
+        f"* Goal 2 with the lean rule: {len(broken)} ties declared unbreakable that the even spread breaks"
+        + (": " + ", ".join(f"{a} seed {b}" for a, b in broken) if broken else "")
+        + ".",
+        "",
+    ]
+    return out
+
+
 def report(args) -> int:
     import matplotlib
 
@@ -758,6 +818,7 @@ def report(args) -> int:
     lines += [f"![runs to a decision and reliability](figures/{FIGURE.name})", ""]
     lines += _rerun_lines(ties, best, n_max)
     lines += _lean_lines(ties, n_max)
+    lines += _now_lines(n_max)
     shared = [c for c in _stored(SHARED) if c.get("strategies")]
     if shared:
         keys = {(c["scenario"], c["seed"]) for c in shared}
