@@ -500,7 +500,7 @@ def _lean_lines(ties: list[dict], n_max: int) -> list[str]:
         + " The runs still lost: "
         + "; ".join(
             f"{c['scenario']} seed {c['seed']} ({c['strategies']['repeat:sweep']['lost']} of "
-            f"{c['strategies']['repeat:sweep']['runs']}, {c['best']['sweep'].split(', ', 2)[2].split(',')[0]})"
+            f"{c['strategies']['repeat:sweep']['runs']}: {c['best']['sweep']})"
             for c in w
             if c["strategies"]["repeat:sweep"]["lost"]
         )
