@@ -91,6 +91,25 @@ def test_the_model_that_made_a_record_predicts_what_its_fit_found(riderless, dam
     assert np.max(np.abs(weave - measured) / sigma) > 5
 
 
+def test_a_model_of_benchmark_values_is_simulated_once_and_alike_from_any_batch(riderless, damped_records):
+    # the comparison of the records and the problem's parameter uncertainty simulate the same secants:
+    # a simulator keeps each model's apparent eigenvalues, which must be those of the model simulated alone
+    base = _nominal(riderless)
+    values = {k: np.array([v, v * 1.01, v * 0.99]) if k == "IBzz" else v for k, v in base.items()}
+    sim = RecordSimulator(damped_records, base, riderless.geometry)
+    batch = sim.apparent(values)
+    assert len(sim.known) == 3
+    alone = RecordSimulator(damped_records, base, riderless.geometry).apparent({**base, "IBzz": base["IBzz"] * 0.99})
+    np.testing.assert_array_equal(batch[2], alone[0])  # bit for bit: each model's refits as alone
+    sub = sim.subset([1, 3])
+    again = sub.apparent({**base, "IBzz": np.array([[base["IBzz"] * 1.01]])})  # known: not simulated
+    np.testing.assert_array_equal(again[0], batch[1, [1, 3]])
+    # a model with an effect or a speed scale is not looked up, and new starts forget what was known
+    assert sim.apparent(base, {"steer_damping": {"c_steer": np.array([0.4])}}).shape == (1, len(damped_records))
+    sim.settle()
+    assert not sim.known
+
+
 def test_every_candidate_is_judged_by_its_own_bias(riderless, damped_records):
     # the diagnosis's fit of steer damping to these records finds the true damping: compared with its own
     # apparent eigenvalues (not with the nominal model's extraction bias), its residuals are the records'
