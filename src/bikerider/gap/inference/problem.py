@@ -479,9 +479,10 @@ class GapProblem:
                     P = np.asarray(scale).size
 
                     def flat(v):
-                        return np.repeat(
-                            np.broadcast_to(np.asarray(v, dtype=float).reshape(-1, 1)[:, :1], (P, 1))[:, 0], n_rows
-                        )
+                        a = np.asarray(v, dtype=float)
+                        if a.size == 1:  # one value for every model: it broadcasts as it is
+                            return float(a.reshape(-1)[0])
+                        return np.repeat(np.broadcast_to(a.reshape(-1, 1)[:, :1], (P, 1))[:, 0], n_rows)
 
                     flat_values = {n: flat(v) for n, v in values.items()}
                     flat_config = {e: {n: flat(v) for n, v in p.items()} for e, p in config.items()}
