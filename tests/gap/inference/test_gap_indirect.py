@@ -91,6 +91,25 @@ def test_the_model_that_made_a_record_predicts_what_its_fit_found(riderless, dam
     assert np.max(np.abs(weave - measured) / sigma) > 5
 
 
+def test_a_model_of_benchmark_values_is_simulated_once_and_alike_from_any_batch(riderless, damped_records):
+    # the comparison of the records and the problem's parameter uncertainty simulate the same secants:
+    # a simulator keeps each model's apparent eigenvalues, which must be those of the model simulated alone
+    base = _nominal(riderless)
+    values = {k: np.array([v, v * 1.01, v * 0.99]) if k == "IBzz" else v for k, v in base.items()}
+    sim = RecordSimulator(damped_records, base, riderless.geometry)
+    batch = sim.apparent(values)
+    assert len(sim.known) == 3
+    alone = RecordSimulator(damped_records, base, riderless.geometry).apparent({**base, "IBzz": base["IBzz"] * 0.99})
+    np.testing.assert_array_equal(batch[2], alone[0])  # bit for bit: each model's refits as alone
+    sub = sim.subset([1, 3])
+    again = sub.apparent({**base, "IBzz": np.array([[base["IBzz"] * 1.01]])})  # known: not simulated
+    np.testing.assert_array_equal(again[0], batch[1, [1, 3]])
+    # a model with an effect or a speed scale is not looked up, and new starts forget what was known
+    assert sim.apparent(base, {"steer_damping": {"c_steer": np.array([0.4])}}).shape == (1, len(damped_records))
+    sim.settle()
+    assert not sim.known
+
+
 def test_every_candidate_is_judged_by_its_own_bias(riderless, damped_records):
     # the diagnosis's fit of steer damping to these records finds the true damping: compared with its own
     # apparent eigenvalues (not with the nominal model's extraction bias), its residuals are the records'
@@ -118,3 +137,50 @@ def test_every_candidate_is_judged_by_its_own_bias(riderless, damped_records):
     # the iterated correction leaves out the bias's own slope from the search direction: its value
     # differs from the full least squares by a small part of the standard error
     assert fit.values[0] == pytest.approx(full.x, abs=0.25 * fit.stderr[0])
+
+
+def test_fits_run_together_are_the_fits_run_alone(riderless, damped_records, monkeypatch):
+    # the folds' fits run side by side with their model evaluations joined (GapProblem._fit_together):
+    # each must be, bit for bit, the fit made alone; and where a joint call meets a singular model
+    # (NaN for a whole call), each fit's vectors are evaluated on their own, as without company
+    d = diagnose(riderless, EigenvalueData.empty(), CanonicalData.empty(), effects=(), records=damped_records)
+    p = d.problem
+    masks = [np.arange(len(p.obs)) % 3 != k for k in range(3)]
+    offsets = [p.nominal_bias.copy() for _ in masks]
+    effects = ("steer_damping", "steer_inertia")
+    alone = [p._fit(effects, m, None, o) for m, o in zip(masks, offsets)]
+    p._memo.clear()
+    together = p._fit_together(effects, masks, None, offsets)
+    for a, b in zip(alone, together):
+        np.testing.assert_array_equal(a.values, b.values)
+        np.testing.assert_array_equal(a._jacobian, b._jacobian)
+        assert a.chi2 == b.chi2
+    p._memo.clear()
+    original = p.predict_models
+    joint = []
+
+    def singular_when_joined(values, config, scale=None, row_scale=None, indirect=True, strict=False):
+        if strict:
+            joint.append(1)
+            raise np.linalg.LinAlgError("singular")
+        return original(values, config, scale, row_scale, indirect, strict)
+
+    monkeypatch.setattr(p, "predict_models", singular_when_joined)
+    apart = p._fit_together(effects, masks, None, offsets)
+    assert joint
+    for a, b in zip(alone, apart):
+        np.testing.assert_array_equal(a.values, b.values)
+
+
+def test_an_error_in_fits_run_together_reaches_the_caller(riderless, damped_records, monkeypatch):
+    d = diagnose(riderless, EigenvalueData.empty(), CanonicalData.empty(), effects=(), records=damped_records)
+    p = d.problem
+    p._memo.clear()
+
+    def broken(*args, **kwargs):
+        raise ValueError("broken model")
+
+    monkeypatch.setattr(p, "predict_models", broken)
+    masks = [np.arange(len(p.obs)) % 2 != k for k in range(2)]
+    with pytest.raises(ValueError, match="broken model"):
+        p._fit_together(("steer_damping",), masks, None, [p.nominal_bias.copy()] * 2)

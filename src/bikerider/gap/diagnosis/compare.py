@@ -102,11 +102,13 @@ def compare_records(model: GapModelInput, eigen: EigenvalueData, records: list[R
     sigmas = model.parameters.sigmas
     free = [k for k in BENCH_ARGS if sigmas.get(k, 0.0) > 0]
     if free:  # the parameters' uncertainty enters through secants over +-1 sigma: those must exist too
-        values = {k: np.full(2 * len(free), v) for k, v in nominal.items()}
+        # the nominal model first, then up and down per parameter: the points (and their arithmetic) of
+        # the problem's parameter uncertainty, whose simulation is then this one (RecordSimulator.known)
+        values = {k: np.full(2 * len(free) + 1, v) for k, v in nominal.items()}
         for j, k in enumerate(free):
-            values[k][2 * j] += sigmas[k]
-            values[k][2 * j + 1] -= sigmas[k]
-        shifted = simulator.apparent(values)
+            values[k][2 * j + 1] += sigmas[k]
+            values[k][2 * j + 2] -= sigmas[k]
+        shifted = simulator.apparent(values)[1:]
         for j in range(len(used)):
             gone = sorted({free[m // 2] for m in np.flatnonzero(~np.isfinite(shifted[:, j]))})
             if reasons[j] is None and gone:

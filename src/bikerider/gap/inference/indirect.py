@@ -52,6 +52,8 @@ MAX_ELEMENTS = 3_000_000
 MAX_RELATIVE_BIAS = 0.2
 """Largest extraction bias under the nominal model, as a fraction of its weave eigenvalue, for which a
 record's eigenvalue is compared with models at all (:func:`comparable`)."""
+MAX_KNOWN = 4096
+"""Most models whose apparent eigenvalues a :class:`RecordSimulator` keeps (the oldest dropped first)."""
 LM_ITERATIONS = 60
 """Most Levenberg-Marquardt iterations of the batched extraction."""
 LM_TOLERANCE = 1e-10
@@ -327,7 +329,14 @@ class RecordSimulator:
         For a record that is not uniformly sampled.
     """
 
-    def __init__(self, fits: list[RecordFit], values: dict, geometry, starts: list[dict] | None = None):
+    def __init__(
+        self,
+        fits: list[RecordFit],
+        values: dict,
+        geometry,
+        starts: list[dict] | None = None,
+        known: dict[bytes, np.ndarray] | None = None,
+    ):
         self.fits = list(fits)
         self.values = dict(values)
         self.geometry = geometry
@@ -341,6 +350,10 @@ class RecordSimulator:
             else [{s: np.asarray(e.params, float) for s, e in f.fits.items()} for f in self.fits]
         )
         self.batches = self._batches()
+        self.known: dict[bytes, np.ndarray] = dict(known or {})
+        """Apparent eigenvalues ``(R,)`` of models of benchmark values alone already simulated from these
+        starts, by :func:`_values_key` (:meth:`apparent` computes each such model once: the comparison
+        of the records and the problem's parameter uncertainty simulate the same secants)."""
 
     def __len__(self) -> int:
         return len(self.fits)
@@ -349,7 +362,11 @@ class RecordSimulator:
         """The simulator of some of the records (their starts kept)."""
         positions = [int(k) for k in positions]
         return RecordSimulator(
-            [self.fits[k] for k in positions], self.values, self.geometry, [self.starts[k] for k in positions]
+            [self.fits[k] for k in positions],
+            self.values,
+            self.geometry,
+            [self.starts[k] for k in positions],
+            {key: value[positions] for key, value in self.known.items()},
         )
 
     def settle(self) -> np.ndarray:
@@ -366,6 +383,7 @@ class RecordSimulator:
                 if np.all(np.isfinite(beta[0])):
                     self.starts[batch.index[it.record]][batch.signals[it.signal]] = beta[0]
         self.batches = self._batches()
+        self.known.clear()  # simulated from the old starts
         return out
 
     def _batches(self) -> list[RecordBatch]:
@@ -447,6 +465,17 @@ class RecordSimulator:
         values = self.values if values is None else values
         config = config or {}
         P = _batch_size(values, config, scale)
+        keys = [_values_key(values, p) for p in range(P)] if not config and scale is None else []
+        if keys and all(key in self.known for key in keys):
+            return np.array([self.known[key] for key in keys])
+        out = self._apparent(values, config, scale, P)
+        for key, row in zip(keys, out):  # each model's rows are computed as alone: the same from any batch
+            self.known[key] = row.copy()
+        while len(self.known) > MAX_KNOWN:
+            del self.known[next(iter(self.known))]
+        return out
+
+    def _apparent(self, values: dict, config: dict, scale, P: int) -> np.ndarray:
         out = np.full((P, len(self.fits)), np.nan + 1j * np.nan)
         for batch in self.batches:
             A, outputs = self.closed_loop(values, config, scale, batch.index)
@@ -477,6 +506,16 @@ class RecordSimulator:
             sim = states[..., [outputs[OBSERVED[s]] for s in batch.signals]]
             out[:, batch.index] = extract(batch, sim)[0]
         return out
+
+
+def _values_key(values: dict, p: int) -> bytes:
+    """The benchmark values of model ``p`` of a batch (each value a number or an array of the batch's
+    size, shape ``(P,)`` or ``(P, 1)``), as bytes."""
+    parts = []
+    for name in sorted(values):
+        a = np.asarray(values[name], dtype=float).reshape(-1)
+        parts.append(name.encode() + a[p if a.size > 1 else 0].tobytes())
+    return b"".join(parts)
 
 
 def _batch_size(values: dict, config: dict, scale) -> int:

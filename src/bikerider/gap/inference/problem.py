@@ -45,9 +45,11 @@ inertia (:data:`POSITIVE`).  The ``speed_sensor`` candidate scales the speed the
 
 from __future__ import annotations
 
+import contextvars
 import itertools
 import logging
 import math
+import threading
 from collections import OrderedDict
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
@@ -454,9 +456,10 @@ class GapProblem:
         return np.array([[first[row], first[row] + 1] for row in self.records.rows], int).reshape(-1, 2)
 
     def predict_models(
-        self, values: dict, config: dict, scale=None, row_scale=None, indirect: bool = True
+        self, values: dict, config: dict, scale=None, row_scale=None, indirect: bool = True, strict: bool = False
     ) -> np.ndarray:
-        """Predictions ``(P, n_obs)`` of batched models; NaN rows when singular.
+        """Predictions ``(P, n_obs)`` of batched models; NaN rows when singular (``strict``: the
+        ``LinAlgError`` raised instead).
 
         ``values`` and ``config`` as :class:`EffectModel` takes them (arrays of a leading size ``P``);
         ``scale`` a speed scale per model for the rows a sensor read (``speed_sensor``); ``row_scale`` a
@@ -476,9 +479,10 @@ class GapProblem:
                     P = np.asarray(scale).size
 
                     def flat(v):
-                        return np.repeat(
-                            np.broadcast_to(np.asarray(v, dtype=float).reshape(-1, 1)[:, :1], (P, 1))[:, 0], n_rows
-                        )
+                        a = np.asarray(v, dtype=float)
+                        if a.size == 1:  # one value for every model: it broadcasts as it is
+                            return float(a.reshape(-1)[0])
+                        return np.repeat(np.broadcast_to(a.reshape(-1, 1)[:, :1], (P, 1))[:, 0], n_rows)
 
                     flat_values = {n: flat(v) for n, v in values.items()}
                     flat_config = {e: {n: flat(v) for n, v in p.items()} for e, p in config.items()}
@@ -509,10 +513,12 @@ class GapProblem:
                     out[:, self.record_obs[:, 0]] = apparent.real
                     out[:, self.record_obs[:, 1]] = apparent.imag
         except np.linalg.LinAlgError:
+            if strict:
+                raise
             return np.full((1, len(self.obs)), np.nan)
         return out
 
-    def predict_batch(self, lay: _Layout, x: np.ndarray, indirect: bool = True) -> np.ndarray:
+    def predict_batch(self, lay: _Layout, x: np.ndarray, indirect: bool = True, strict: bool = False) -> np.ndarray:
         """Predictions ``(P, n_obs)`` for parameter vectors ``x`` ``(P, p)`` (see :meth:`predict_models`).
 
         Each parameter vector's predictions are kept (:data:`MEMO_ELEMENTS` numbers at most, the most
@@ -523,7 +529,7 @@ class GapProblem:
         """
         x = np.atleast_2d(np.asarray(x, dtype=float))
         if not indirect or self.records is None or not len(self.record_obs):
-            return self._memo_rows(lay, x, False, lambda X: self._predict_rows(lay, X, False))
+            return self._memo_rows(lay, x, False, lambda X: self._predict_rows(lay, X, False, strict))
 
         def simulate(X: np.ndarray) -> np.ndarray:
             base = self._memo_rows(lay, X, False, lambda Y: self._predict_rows(lay, Y, False))
@@ -540,9 +546,9 @@ class GapProblem:
 
         return self._memo_rows(lay, x, True, simulate)
 
-    def _predict_rows(self, lay: _Layout, X: np.ndarray, indirect: bool) -> np.ndarray:
+    def _predict_rows(self, lay: _Layout, X: np.ndarray, indirect: bool, strict: bool = False) -> np.ndarray:
         values, config, scale = self.configure(lay, X)
-        out = self.predict_models(values, config, scale, indirect=indirect)
+        out = self.predict_models(values, config, scale, indirect=indirect, strict=strict)
         return np.broadcast_to(out, (X.shape[0], out.shape[-1]))
 
     def _memo_rows(self, lay: _Layout, X: np.ndarray, indirect: bool, compute) -> np.ndarray:
@@ -615,16 +621,15 @@ class GapProblem:
         alone, so every fit is the one :meth:`fit` makes.
         """
         if self.records is None or not len(self.record_obs):
-            return [self._fit(tuple(effects), mask, start, None) for mask in masks]
+            return self._fit_together(tuple(effects), masks, start, [None] * len(masks))
         lay = self.layout(tuple(effects))
         lower, upper = self.bounds(lay)
         runs = []
-        for mask in masks:
+        offsets = [np.array(self.nominal_bias if bias is None else bias, dtype=float) for _ in masks]
+        for mask, offset, fit in zip(masks, offsets, self._fit_together(tuple(effects), masks, start, offsets)):
             mask = np.ones(len(self.obs), bool) if mask is None else np.asarray(mask, bool)
             rec = self.record_obs.ravel()
             rec = rec[mask[rec]]
-            offset = np.array(self.nominal_bias if bias is None else bias, dtype=float)
-            fit = self._fit(tuple(effects), mask, start, offset)
             runs.append({"mask": mask, "rec": rec, "sigma": np.sqrt(self.var_data[rec]), "offset": offset, "fit": fit})
             runs[-1].update(x=fit.values.copy(), iteration=0, done=False)
         for iteration in range(1, MAX_BIAS_ITERATIONS + 1):
@@ -688,10 +693,13 @@ class GapProblem:
         weight = np.sqrt(self.var_data if lay.n_shift else self.var_total)
         return np.where(weight > 0, weight, np.sqrt(self.var_total))[mask]
 
-    def _residuals_batch(self, lay: _Layout, mask: np.ndarray, X: np.ndarray, offset: np.ndarray | None) -> np.ndarray:
+    def _residuals_batch(
+        self, lay: _Layout, mask: np.ndarray, X: np.ndarray, offset: np.ndarray | None, predict=None
+    ) -> np.ndarray:
         """Weighted residuals ``(P, m)`` of parameter vectors ``X``: weave eigenvalues plus ``offset``
-        against the observations in ``mask``, then the prior residuals of any parameter shifts."""
-        pred = self.predict_batch(lay, X, indirect=False)[:, mask]
+        against the observations in ``mask``, then the prior residuals of any parameter shifts.
+        ``predict(X)``: the predictions (default ``predict_batch(lay, X, indirect=False)``)."""
+        pred = (self.predict_batch(lay, X, indirect=False) if predict is None else predict(X))[:, mask]
         if offset is not None:
             pred = pred + np.asarray(offset, dtype=float)[mask]
         r = (pred - self.y[mask]) / self._weights(lay, mask)
@@ -704,13 +712,52 @@ class GapProblem:
         X = np.atleast_2d(np.asarray(x, dtype=float)) if np.size(x) else np.zeros((1, 0))
         return self._residuals_batch(lay, mask, X, offset)[0]
 
+    def _fit_together(
+        self, effects: tuple[str, ...], masks: list, start: np.ndarray | None, offsets: list
+    ) -> list[EffectFit]:
+        """``[_fit(effects, mask, start, offset) ...]``, the fits run side by side (one thread each, in
+        lockstep), their model evaluations made together (:class:`_Together`): the same fits, far
+        fewer batched model calls (whose cost is mostly fixed per call)."""
+        if len(masks) < 2:
+            return [self._fit(effects, mask, start, offset) for mask, offset in zip(masks, offsets)]
+        together = _Together(self, self.layout(effects), len(masks))
+        out: list = [None] * len(masks)
+        errors: list = [None] * len(masks)
+
+        def run(k: int) -> None:
+            try:
+                out[k] = self._fit(effects, masks[k], start, offsets[k], lambda X: together.predict(k, X))
+            except BaseException as exc:  # handed to the caller below
+                errors[k] = exc
+            finally:
+                together.finished()
+
+        # each thread in a copy of this one's context (NumPy's error state included)
+        threads = [
+            threading.Thread(target=contextvars.copy_context().run, args=(run, k), daemon=True)
+            for k in range(len(masks))
+        ]
+        for thread in threads:
+            thread.start()
+        for thread in threads:
+            thread.join()
+        for exc in errors:
+            if exc is not None:
+                raise exc
+        return out
+
     def _fit(
-        self, effects: tuple[str, ...], mask: np.ndarray | None, start: np.ndarray | None, offset: np.ndarray | None
+        self,
+        effects: tuple[str, ...],
+        mask: np.ndarray | None,
+        start: np.ndarray | None,
+        offset: np.ndarray | None,
+        predict=None,
     ) -> EffectFit:
         """One least-squares fit; each model's predictions are its weave eigenvalues plus ``offset``.
 
         The result keeps the weighted Jacobian at the solution (``_jacobian``) and the weights
-        (``_weight``), for the iterated bias correction.
+        (``_weight``), for the iterated bias correction.  ``predict``: as for :meth:`_residuals_batch`.
         """
 
         mask = np.ones(len(self.obs), bool) if mask is None else np.asarray(mask, bool)
@@ -719,7 +766,7 @@ class GapProblem:
         p = n_struct + lay.n_shift
 
         def residuals_batch(X: np.ndarray) -> np.ndarray:
-            return self._residuals_batch(lay, mask, X, offset)
+            return self._residuals_batch(lay, mask, X, offset, predict)
 
         if p == 0:
             r = residuals_batch(np.zeros((1, 0)))[0]
@@ -836,6 +883,61 @@ class GapProblem:
         for name, delta in fit.shift.items():
             values[name] = self.nominal[name] + delta
         return EffectModel(values, self.geometry, {e: p for e, p in fit.config.items() if e not in OBSERVATION_EFFECTS})
+
+
+class _Together:
+    """The model evaluations of several fits running in threads (:meth:`GapProblem._fit_together`), made
+    together: a fit asking for predictions waits until every fit still running has asked, then the
+    last to ask evaluates all of their parameter vectors in one :meth:`GapProblem.predict_batch` call.
+
+    Each vector's predictions are computed as alone (the batched arithmetic is per vector), so every
+    fit gets what it would get alone; where the joint call meets a singular model, each fit's vectors
+    are evaluated on their own instead (a singular model makes NaN of its whole call).
+    """
+
+    def __init__(self, problem: GapProblem, lay: _Layout, count: int):
+        self.problem, self.lay, self.running = problem, lay, count
+        self.condition = threading.Condition()
+        self.pending: dict[int, np.ndarray] = {}
+        self.results: dict[int, np.ndarray | BaseException] = {}
+
+    def predict(self, k: int, X: np.ndarray) -> np.ndarray:
+        """Predictions ``(P, n_obs)`` of fit ``k``'s parameter vectors ``X``."""
+        with self.condition:
+            self.pending[k] = np.atleast_2d(np.asarray(X, dtype=float))
+            self._evaluate()
+            while k not in self.results:
+                self.condition.wait()
+            out = self.results.pop(k)
+        if isinstance(out, BaseException):
+            raise out
+        return out
+
+    def finished(self) -> None:
+        """A fit is done (or failed): the others no longer wait for it."""
+        with self.condition:
+            self.running -= 1
+            self._evaluate()
+
+    def _evaluate(self) -> None:
+        if not self.pending or len(self.pending) < self.running:
+            return
+        order = sorted(self.pending)
+        p, lay = self.problem, self.lay
+        try:
+            try:
+                rows = p.predict_batch(lay, np.concatenate([self.pending[k] for k in order]), False, strict=True)
+                ends = np.cumsum([len(self.pending[k]) for k in order])
+                for k, part in zip(order, np.split(rows, ends[:-1])):
+                    self.results[k] = part
+            except np.linalg.LinAlgError:  # a singular model: each fit's vectors alone, as without company
+                for k in order:
+                    self.results[k] = p.predict_batch(lay, self.pending[k], False)
+        except BaseException as exc:  # every waiting fit gets it
+            for k in order:
+                self.results.setdefault(k, exc)
+        self.pending.clear()
+        self.condition.notify_all()
 
 
 def structural_parameter_names(effect: str) -> tuple[str, ...]:

@@ -35,6 +35,11 @@ from bikerider.gap.candidates.effect_model import EffectModel
 from bikerider.gap.candidates.effects import EFFECTS, SPEED_SENSOR, STEER_DAMPING, STEER_FRICTION
 from bikerider.gap.measured.records import Record
 
+try:  # numpy.einsum's kernel without its Python wrapper, which costs as much as a product on these sizes
+    from numpy._core._multiarray_umath import c_einsum
+except ImportError:  # another NumPy layout: the public function (the same kernel)
+    c_einsum = np.einsum
+
 OBSERVED = {"roll_angle": 0, "steer_angle": 1, "roll_rate": 2, "steer_rate": 3}
 """Record signals and the index of their state among ``(phi, delta, phid, deltad)``."""
 TIME_DOMAIN_SIGNALS = ("roll_rate", "steer_angle")
@@ -284,15 +289,22 @@ def simulate_friction(
     out = np.empty((N, n, count))
     u = np.empty(count)
     push = np.empty((n, count))
-    for k in range(N):
-        out[k] = x
-        for _ in range(substeps):
+    spare = (np.empty((n, count)), np.empty((n, count)))
+    if N:
+        out[0] = x
+    # each step written in place (the sample's row of ``out``, or a spare between substeps); the state
+    # after the last sample is not computed (nothing uses it)
+    for k in range(N - 1):
+        x = out[k]
+        for j in range(substeps):
+            target = out[k + 1] if j == substeps - 1 else spare[j % 2]
             np.divide(x[rate_index], SMOOTHING, out=u)
             np.tanh(u, out=u)
             np.multiply(torque, u, out=u)
             np.multiply(gamma, u, out=push)
-            x = np.einsum("ijb,jb->ib", phi, x)
-            x += push
+            c_einsum("ijb,jb->ib", phi, x, out=target)
+            target += push
+            x = target
     return np.moveaxis(out, -1, 0).reshape(lead + (N, n))
 
 

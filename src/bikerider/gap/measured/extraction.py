@@ -222,6 +222,42 @@ def _two_mode_jacobian(p: np.ndarray, tau: np.ndarray) -> np.ndarray:
     )
 
 
+def _two_mode_problem(tau: np.ndarray, y: np.ndarray):
+    """``(residuals, jacobian)`` of the two-mode model against ``y`` for :func:`least_squares`: the same
+    values as :func:`_two_mode` ``- y`` and :func:`_two_mode_jacobian`, the exponentials, sine and
+    cosine worked out once per parameter vector (the optimiser asks for the Jacobian at the point
+    whose residuals it has just evaluated)."""
+    last: dict = {}
+
+    def terms(p: np.ndarray) -> tuple:
+        key = p.tobytes()
+        if last.get("key") != key:
+            omega, sigma, lam = p[0], p[1], p[6]
+            decay = np.exp(-sigma * tau)
+            last["key"], last["terms"] = key, (decay, np.sin(omega * tau), np.cos(omega * tau), np.exp(lam * tau))
+        return last["terms"]
+
+    def residuals(p: np.ndarray) -> np.ndarray:
+        _, _, a, b, offset, c, _ = p
+        decay, s, co, grow = terms(p)
+        return offset + decay * (a * s + b * co) + c * grow - y
+
+    def jacobian(p: np.ndarray) -> np.ndarray:
+        _, _, a, b, _, c, _ = p
+        decay, s, co, grow = terms(p)
+        J = np.empty((tau.size, 7))
+        J[:, 0] = decay * tau * (a * co - b * s)
+        J[:, 1] = -tau * decay * (a * s + b * co)
+        J[:, 2] = decay * s
+        J[:, 3] = decay * co
+        J[:, 4] = 1.0
+        J[:, 5] = grow
+        J[:, 6] = c * tau * grow
+        return J
+
+    return residuals, jacobian
+
+
 MIN_CYCLES = 0.5
 """Fewest weave cycles a record must span: half a cycle, when the decay is clear (see
 :data:`CLEAR_DECAY`); a record of a full cycle or more needs no clear decay."""
@@ -288,13 +324,14 @@ def _weave_eigenvalue(time, signal, min_cycles: float) -> WeaveEstimate:
         ]
     total = float(np.sum((y - np.mean(y)) ** 2))
     best = None
+    residuals, jacobian = _two_mode_problem(tau, y)
     for p0 in starts:
         try:
             with np.errstate(all="ignore"):
                 res = least_squares(
-                    lambda p: _two_mode(p, tau) - y,
+                    residuals,
                     p0,
-                    jac=lambda p: _two_mode_jacobian(p, tau),
+                    jac=jacobian,
                     method="lm",
                     max_nfev=200,
                 )
@@ -355,12 +392,13 @@ def _bounded(x0: np.ndarray, tau: np.ndarray, y: np.ndarray):
     lower[6], upper[6] = EXTRA_MODE_RANGE[0] + margin, EXTRA_MODE_RANGE[1] - margin
     start = np.array(x0, dtype=float)
     start[6] = min(max(start[6], lower[6] + margin), upper[6] - margin)
+    residuals, jacobian = _two_mode_problem(tau, y)
     try:
         with np.errstate(all="ignore"):
             res = least_squares(
-                lambda p: _two_mode(p, tau) - y,
+                residuals,
                 start,
-                jac=lambda p: _two_mode_jacobian(p, tau),
+                jac=jacobian,
                 bounds=(lower, upper),
                 method="trf",
                 max_nfev=200,
