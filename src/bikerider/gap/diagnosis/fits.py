@@ -22,10 +22,10 @@ import numpy as np
 
 from bikerider import progress
 from bikerider.gap.candidates.effects import EFFECTS, PARAMETERS, STEER_FRICTION, TIME_DOMAIN_EFFECTS
-from bikerider.gap.diagnosis.statistics import _named_values, gap_shrink, jackknife_quantile, rms
+from bikerider.gap.diagnosis.statistics import _named_values, gap_shrink, interval_quantile, rms
 from bikerider.gap.inference.frequency_response import predict_frf_friction
 from bikerider.gap.inference.problem import EffectFit, GapProblem
-from bikerider.gap.inference.timedomain import Layout, fit_time_domain
+from bikerider.gap.inference.timedomain import Layout, fit_time_domain, parameter_sensitivity
 from bikerider.gap.measured.multisine import MultisineFit
 from bikerider.gap.measured.records import RecordFit
 
@@ -145,9 +145,12 @@ class Fits:
         """A time-domain candidate (steer friction, alone or with one linear effect) fitted to the records
         in ``mask`` (:func:`bikerider.gap.inference.timedomain.fit_time_domain`).
 
-        The fit to all the data gets standard errors by the jackknife over the held-out folds' fits
-        (leave one group out), when there are three folds or more, and 95 % intervals from Student's t
-        with one degree of freedom fewer than the folds (:func:`jackknife_quantile`).
+        The fit to all the data gets its covariance, when there are three folds or more, from the
+        jackknife over the held-out folds' fits (leave one group out: the data's share) plus the
+        benchmark parameters' share (:meth:`parameter_covariance`: their error is common to every
+        fold, so the jackknife cannot see it), and 95 % intervals from Student's t with the
+        Welch-Satterthwaite degrees of freedom of that sum (:func:`interval_quantile`: one fewer than
+        the folds for the jackknife's share, the parameters' share known).
         """
 
         cached = self.time_domain_full.get(effects) if mask is None else None
@@ -164,16 +167,18 @@ class Fits:
             )
             values, cost, n, success = fit.values, fit.cost, fit.n_samples, fit.success
         stderr = np.full(values.size, np.inf)
-        covariance = None
+        covariance = spread = None
+        quantile = np.full(values.size, 1.96)
         if mask is None and jackknife and len(self.folds) >= 3:  # jackknife over the held-out folds' fits
             folds = np.array([f.values for f in self.cross_validate(effects).fits])
             g = len(folds)
             centred = folds - folds.mean(axis=0)
-            covariance = (g - 1) / g * centred.T @ centred
+            spread = (g - 1) / g * centred.T @ centred
+            # the benchmark parameters' error is common to every fold, so the folds' spread cannot show
+            # it: it is counted apart, as the fit's response to one standard uncertainty of each
+            covariance = spread + self.parameter_covariance(layout, values)
             stderr = np.sqrt(np.diag(covariance))
-            quantile = jackknife_quantile(g)
-        else:
-            quantile = 1.96
+            quantile = np.array([interval_quantile(row, covariance, spread, g) for row in np.eye(values.size)])
         ci_low = np.clip(values - quantile * stderr, lower, upper)
         ci_high = np.clip(values + quantile * stderr, lower, upper)
         config: dict[str, dict[str, float]] = {}
@@ -198,10 +203,23 @@ class Fits:
             lower=lower,
             upper=upper,
             covariance=covariance,
+            jackknife_covariance=spread,
         )
         if mask is None:
             self.time_domain_full[effects] = out
         return out
+
+    def parameter_covariance(self, layout: Layout, values: np.ndarray) -> np.ndarray:
+        """Covariance of a time-domain fit's values from the benchmark parameters' uncertainty, ``G G^T``
+        with ``G`` the fit's response to one standard uncertainty of each parameter
+        (:func:`bikerider.gap.inference.timedomain.parameter_sensitivity`); zero without free parameters."""
+        p = self.problem
+        if not p.free:
+            return np.zeros((values.size, values.size))
+        records = [self.records[k].record for k in self.record_indices(None)]
+        sigmas = dict(zip(p.free, (float(s) for s in p.free_sigma)))
+        G = parameter_sensitivity(records, p.nominal, p.geometry, layout, values, sigmas)
+        return G @ G.T if np.all(np.isfinite(G)) else np.zeros((values.size, values.size))
 
     def time_domain_predict(self, fit: EffectFit, mask: np.ndarray) -> np.ndarray:
         """Predicted observations of the records in ``mask`` under a time-domain fit: what the record fit

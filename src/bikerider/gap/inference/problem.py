@@ -143,6 +143,9 @@ class EffectFit:
     bias_iterations: int = 0
     covariance: np.ndarray | None = None
     """Covariance of the fitted values (their standard errors are its diagonal's roots), where known."""
+    jackknife_covariance: np.ndarray | None = None
+    """The share of ``covariance`` estimated from the spread of the held-out folds' fits (a jackknife, few
+    degrees of freedom: :func:`bikerider.gap.diagnosis.statistics.interval_quantile`), where there is one."""
 
     def at_bound(self) -> list[str]:
         """Names of the fitted values pinned at a bound of the search."""

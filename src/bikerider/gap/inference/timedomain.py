@@ -51,6 +51,8 @@ FIT_STEP = 0.02
 """Sampling step of the time-domain fits [s]: records sampled faster are compared at every k-th sample."""
 GN_STEPS = 1
 """Gauss-Newton steps refining each record's initial state under friction."""
+THETA_STEP = 2e-3
+"""Finite-difference step of the fitted values' slopes (N m, N m s/rad and the partner's units)."""
 
 
 @dataclass
@@ -367,6 +369,55 @@ class TimeDomainFit:
     success: bool
 
 
+def _weighted_residuals(
+    batches, values: dict, geometry, layout: Layout, thetas: np.ndarray, rows: dict[str, np.ndarray] | None = None
+) -> np.ndarray:
+    """Weighted residuals ``(P, M)`` of every record for parameter vectors ``thetas (P, k)``, in one
+    batched simulation per sampling step (each record's initial state refitted).  ``rows`` gives
+    benchmark parameters a value per parameter vector (name to ``(P,)``)."""
+    parts = []
+    for _, batch in batches:
+        R = len(batch.records)
+        per_row = {k: np.repeat(np.asarray(v, float), R) for k, v in (rows or {}).items()}
+        A, b, outputs, T = systems({**values, **per_row}, geometry, batch.records, layout, thetas)
+        _, res = friction_states(batch, A, b, outputs, T)
+        parts.append(res.reshape(thetas.shape[0], -1))
+    return np.concatenate(parts, axis=1)
+
+
+def parameter_sensitivity(
+    records: list[Record],
+    values: dict,
+    geometry,
+    layout: Layout,
+    theta: np.ndarray,
+    sigmas: dict[str, float],
+) -> np.ndarray:
+    """How far a time-domain fit moves per standard uncertainty of each benchmark parameter, ``(k, p)``.
+
+    The fit minimises ``|r(theta, q)|^2`` at the nominal parameters ``q``; a parameter error ``dq`` moves
+    the minimum by ``dtheta = -(J^T J)^-1 J^T J_q dq`` (Gauss-Newton, ``J`` and ``J_q`` the residuals'
+    slopes in the fitted values and in the parameters).  The columns are ``dtheta`` for one
+    standard uncertainty of each parameter in ``sigmas`` (one-sided differences of that size: the
+    parameters' error is a standard uncertainty, and the fit's response over it is what counts).  The
+    error is common to every record, so no spread among the records or folds shows it; a fit's
+    covariance counts it as ``G G^T`` (:meth:`bikerider.gap.diagnosis.fits.Fits.time_domain_fit`).
+    """
+    batches = make_batches(records, min_step=FIT_STEP)
+    theta = np.asarray(theta, dtype=float)
+    upper = np.asarray(layout.upper, float)
+    h = np.full(theta.size, THETA_STEP) * np.where(theta + THETA_STEP <= upper, 1.0, -1.0)
+    R = _weighted_residuals(batches, values, geometry, layout, np.vstack([theta, theta + np.diag(h)]))
+    J = ((R[1:] - R[0]) / h[:, None]).T
+    # one batched simulation: row j moves parameter j by its standard uncertainty
+    names = list(sigmas)
+    shifted = np.diag([sigmas[n] for n in names])
+    rows = {n: values[n] + shifted[:, j] for j, n in enumerate(names)}
+    thetas = np.repeat(theta[None, :], len(names), axis=0)
+    Jq = (_weighted_residuals(batches, values, geometry, layout, thetas, rows) - R[0]).T
+    return -np.linalg.pinv(J.T @ J) @ (J.T @ Jq)
+
+
 def fit_time_domain(records: list[Record], values: dict, geometry, layout: Layout, start=None) -> TimeDomainFit:
     """Fit a time-domain candidate (``layout``) to records (module docstring).
 
@@ -378,15 +429,9 @@ def fit_time_domain(records: list[Record], values: dict, geometry, layout: Layou
     lower, upper = np.asarray(layout.lower, float), np.asarray(layout.upper, float)
 
     def costs(thetas: np.ndarray) -> np.ndarray:
-        """Weighted residuals ``(P, M)`` for parameter vectors ``(P, k)``, in one batched simulation."""
-        parts = []
-        for _, batch in batches:
-            A, b, outputs, T = systems(values, geometry, batch.records, layout, thetas)
-            _, res = friction_states(batch, A, b, outputs, T)
-            parts.append(res.reshape(thetas.shape[0], -1))
-        return np.concatenate(parts, axis=1)
+        return _weighted_residuals(batches, values, geometry, layout, thetas)
 
-    steps = np.full(len(layout.names), 2e-3)
+    steps = np.full(len(layout.names), THETA_STEP)
 
     def fun(theta: np.ndarray) -> np.ndarray:
         return costs(theta[None, :])[0]
