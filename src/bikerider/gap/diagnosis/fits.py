@@ -131,7 +131,9 @@ class Fits:
             if time_domain(effects):
                 self.full[effects] = self.time_domain_fit(effects, None)
             else:
-                self.full[effects] = with_parameter_uncertainty(self.problem, self.problem.fit(effects))
+                # records: the bias-corrected fit polished to the least squares of the apparent eigenvalues
+                fit = self.problem.fit_apparent(self.problem.fit(effects))
+                self.full[effects] = with_parameter_uncertainty(self.problem, fit)
         return self.full[effects]
 
     def record_indices(self, mask: np.ndarray | None) -> list[int]:
@@ -336,10 +338,9 @@ def with_parameter_uncertainty(p: GapProblem, fit: EffectFit) -> EffectFit:
     ``J_p J_p^T`` of the parameters' slopes per sigma), times the reduced chi-square when above one
     (lack of fit).  Fits holding ``parameters`` fit the shifts themselves and keep their own.
 
-    With rows from records the fit's estimating equation weighs the residuals of the apparent
-    eigenvalues (indirect inference) by the weave eigenvalues' slopes ``A`` (the iterated bias
-    correction of :meth:`GapProblem.fit`), so the bread of the sandwich is ``(A^T A_i)^-1`` with the
-    apparent eigenvalues' slopes ``A_i``: ``B A^T C A B^T``.  Without records ``A_i = A``.
+    With rows from records the fit to all the data is the least squares of the apparent eigenvalues
+    (indirect inference, :meth:`GapProblem.fit_apparent`), so ``A`` holds the apparent eigenvalues'
+    slopes, not the weave eigenvalues'.
     """
     if PARAMETERS in fit.effects or not p.free or not fit.names or not len(p.obs):
         return fit
@@ -361,16 +362,15 @@ def with_parameter_uncertainty(p: GapProblem, fit: EffectFit) -> EffectFit:
         return np.stack([(pred[1 + 2 * k] - pred[2 + 2 * k]) / steps[k] for k in range(x.size)], axis=1)
 
     w = np.sqrt(p.var_total)
-    A = slopes(False) / w[:, None]
-    # rows from records are predicted by indirect inference; the fit solves A^T (apparent - y) = 0 (its
-    # iterated bias correction weighs the residuals by the weave eigenvalues' slopes), so its covariance
-    # is the sandwich of that estimating equation: bread (A^T A_i)^-1 with the apparent eigenvalues'
-    # slopes A_i, which a short record's fit can make several times flatter than the weave's
+    # rows from records are predicted by indirect inference, and the fit to all the data is the least
+    # squares of the apparent eigenvalues (GapProblem.fit_apparent): it solves A_i^T (apparent - y) = 0
+    # with the apparent eigenvalues' slopes A_i, which a short record's fit can make several times
+    # flatter than the weave eigenvalues'; the sandwich's bread is (A_i^T A_i)^-1
     records = p.records is not None and len(p.record_obs)
-    A_i = slopes(True) / w[:, None] if records else A
-    if not (np.all(np.isfinite(A)) and np.all(np.isfinite(A_i))):
+    A = slopes(bool(records)) / w[:, None]
+    if not np.all(np.isfinite(A)):
         return fit
-    B = np.linalg.pinv(A.T @ A_i)
+    B = np.linalg.pinv(A.T @ A)
     Jp = p.jacobian / w[:, None]
     AC = A.T * (p.var_data / p.var_total)
     cov = B @ (AC @ A + (A.T @ Jp) @ (Jp.T @ A)) @ B.T
