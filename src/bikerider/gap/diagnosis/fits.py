@@ -119,6 +119,10 @@ class Fits:
         """Fits to all the data, by set of effects (time-domain ones with their jackknife errors)."""
         self.time_domain_full: dict[tuple[str, ...], EffectFit] = {}
         """Time-domain fits to all the data, with or without their jackknife errors yet."""
+        self.bias_corrected: dict[tuple[str, ...], EffectFit] = {}
+        """Linear fits to all the data by the iterated bias correction alone (before the polish of
+        :meth:`GapProblem.fit_apparent`): the held-out folds' fits start from them, as they are fitted
+        the same way."""
         self.cv: dict[tuple[str, ...], CrossValidation] = {}
         """Cross-validations, by set of effects."""
         self._predictions: dict[tuple[str, ...], np.ndarray] = {}
@@ -132,8 +136,9 @@ class Fits:
                 self.full[effects] = self.time_domain_fit(effects, None)
             else:
                 # records: the bias-corrected fit polished to the least squares of the apparent eigenvalues
-                fit = self.problem.fit_apparent(self.problem.fit(effects))
-                self.full[effects] = with_parameter_uncertainty(self.problem, fit)
+                corrected = self.problem.fit(effects)
+                self.bias_corrected[effects] = corrected
+                self.full[effects] = with_parameter_uncertainty(self.problem, self.problem.fit_apparent(corrected))
         return self.full[effects]
 
     def record_indices(self, mask: np.ndarray | None) -> list[int]:
@@ -280,8 +285,10 @@ class Fits:
             full = self.time_domain_fit(effects, None, start=start, jackknife=False)
         else:
             full = self.fit_of(effects)
-        # every fold starts from the fit to all the data; the folds' bias corrections advance together
-        together = None if timed else p.fit_many(effects, [~held for _, held in self.folds], full.values, full.bias)
+        # every fold starts from the fit to all the data by the same iterated bias correction; the folds'
+        # bias corrections advance together
+        start = full if timed else self.bias_corrected.get(effects, full)
+        together = None if timed else p.fit_many(effects, [~held for _, held in self.folds], start.values, start.bias)
         for k, (name, held) in enumerate(self.folds):
             progress.advance()
             if timed:
