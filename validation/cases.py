@@ -1178,7 +1178,7 @@ def _friction_equivalent(diagnosis, fit, amplitude: float | None) -> dict | None
     ``c_viscous + 4 T_coulomb / (pi A)`` with its 95 % interval, as
     :meth:`bikerider.gap.diagnosis.priors.Priors.friction_equivalent` reports it for records with a steer
     signal (these hold the roll rate only, so the amplitude is the truth's, the one the reference uses)."""
-    from bikerider.gap.diagnosis.statistics import jackknife_quantile
+    from bikerider.gap.diagnosis.statistics import interval_quantile
 
     if not amplitude or fit.covariance is None or not np.all(np.isfinite(fit.covariance)):
         return None
@@ -1187,7 +1187,7 @@ def _friction_equivalent(diagnosis, fit, amplitude: float | None) -> dict | None
     gradient[fit.names.index("c_viscous")] = 1.0
     value = float(gradient @ fit.values)
     stderr = math.sqrt(max(float(gradient @ fit.covariance @ gradient), 0.0))
-    quantile = jackknife_quantile(len(diagnosis.folds))
+    quantile = interval_quantile(gradient, fit.covariance, fit.jackknife_covariance, len(diagnosis.folds))
     return {"value": value, "ci95": [max(value - quantile * stderr, 0.0), value + quantile * stderr]}
 
 

@@ -560,8 +560,14 @@ def _sbw_section() -> list[str]:
         f"| smoothed Coulomb friction, about 0.02 N m | {friction['T_coulomb']['value']:.2f} "
         f"[{friction['T_coulomb']['ci95'][0]:.2f}, {friction['T_coulomb']['ci95'][1]:.2f}] N m, fitted in the time "
         f"domain: {friction['T_coulomb']['value'] / 0.02:.0f} times the hypothesis, above the bearings' 0.02-0.15 N m "
-        "of the literature (its interval reaches it); plausible for a geared steer motor, which a bench test of the "
-        "fork's friction could confirm |",
+        "of the literature ("
+        + (
+            "its interval, which counts the bicycle's stated parameter uncertainties (the steer assembly's mass "
+            "known to 100 %, the rear frame's inertia to 30-70 %), reaches down to the hypothesis"
+            if friction["T_coulomb"]["ci95"][0] <= 0.02
+            else "its interval reaches it"
+        )
+        + "); plausible for a geared steer motor, which a bench test of the fork's friction could confirm |",
         f"| speed-sensor error | a speed scale alone would have to be {speed['value']:.2f} "
         f"[{speed['ci95'][0]:.2f}, {speed['ci95'][1]:.2f}], far beyond the encoder's calibration (recorded over "
         f"treadmill speed {min(ratios):.3f}-{max(ratios):.3f}): implausible; with friction it adds nothing"

@@ -22,10 +22,10 @@ import numpy as np
 
 from bikerider import progress
 from bikerider.gap.candidates.effects import EFFECTS, PARAMETERS, STEER_FRICTION, TIME_DOMAIN_EFFECTS
-from bikerider.gap.diagnosis.statistics import _named_values, gap_shrink, jackknife_quantile, rms
+from bikerider.gap.diagnosis.statistics import _named_values, gap_shrink, interval_quantile, rms
 from bikerider.gap.inference.frequency_response import predict_frf_friction
 from bikerider.gap.inference.problem import EffectFit, GapProblem
-from bikerider.gap.inference.timedomain import Layout, fit_time_domain
+from bikerider.gap.inference.timedomain import Layout, fit_time_domain, parameter_sensitivity
 from bikerider.gap.measured.multisine import MultisineFit
 from bikerider.gap.measured.records import RecordFit
 
@@ -119,6 +119,10 @@ class Fits:
         """Fits to all the data, by set of effects (time-domain ones with their jackknife errors)."""
         self.time_domain_full: dict[tuple[str, ...], EffectFit] = {}
         """Time-domain fits to all the data, with or without their jackknife errors yet."""
+        self.bias_corrected: dict[tuple[str, ...], EffectFit] = {}
+        """Linear fits to all the data by the iterated bias correction alone (before the polish of
+        :meth:`GapProblem.fit_apparent`): the held-out folds' fits start from them, as they are fitted
+        the same way."""
         self.cv: dict[tuple[str, ...], CrossValidation] = {}
         """Cross-validations, by set of effects."""
         self._predictions: dict[tuple[str, ...], np.ndarray] = {}
@@ -131,7 +135,10 @@ class Fits:
             if time_domain(effects):
                 self.full[effects] = self.time_domain_fit(effects, None)
             else:
-                self.full[effects] = with_parameter_uncertainty(self.problem, self.problem.fit(effects))
+                # records: the bias-corrected fit polished to the least squares of the apparent eigenvalues
+                corrected = self.problem.fit(effects)
+                self.bias_corrected[effects] = corrected
+                self.full[effects] = with_parameter_uncertainty(self.problem, self.problem.fit_apparent(corrected))
         return self.full[effects]
 
     def record_indices(self, mask: np.ndarray | None) -> list[int]:
@@ -145,9 +152,12 @@ class Fits:
         """A time-domain candidate (steer friction, alone or with one linear effect) fitted to the records
         in ``mask`` (:func:`bikerider.gap.inference.timedomain.fit_time_domain`).
 
-        The fit to all the data gets standard errors by the jackknife over the held-out folds' fits
-        (leave one group out), when there are three folds or more, and 95 % intervals from Student's t
-        with one degree of freedom fewer than the folds (:func:`jackknife_quantile`).
+        The fit to all the data gets its covariance, when there are three folds or more, from the
+        jackknife over the held-out folds' fits (leave one group out: the data's share) plus the
+        benchmark parameters' share (:meth:`parameter_covariance`: their error is common to every
+        fold, so the jackknife cannot see it), and 95 % intervals from Student's t with the
+        Welch-Satterthwaite degrees of freedom of that sum (:func:`interval_quantile`: one fewer than
+        the folds for the jackknife's share, the parameters' share known).
         """
 
         cached = self.time_domain_full.get(effects) if mask is None else None
@@ -164,16 +174,18 @@ class Fits:
             )
             values, cost, n, success = fit.values, fit.cost, fit.n_samples, fit.success
         stderr = np.full(values.size, np.inf)
-        covariance = None
+        covariance = spread = None
+        quantile = np.full(values.size, 1.96)
         if mask is None and jackknife and len(self.folds) >= 3:  # jackknife over the held-out folds' fits
             folds = np.array([f.values for f in self.cross_validate(effects).fits])
             g = len(folds)
             centred = folds - folds.mean(axis=0)
-            covariance = (g - 1) / g * centred.T @ centred
+            spread = (g - 1) / g * centred.T @ centred
+            # the benchmark parameters' error is common to every fold, so the folds' spread cannot show
+            # it: it is counted apart, as the fit's response to one standard uncertainty of each
+            covariance = spread + self.parameter_covariance(layout, values)
             stderr = np.sqrt(np.diag(covariance))
-            quantile = jackknife_quantile(g)
-        else:
-            quantile = 1.96
+            quantile = np.array([interval_quantile(row, covariance, spread, g) for row in np.eye(values.size)])
         ci_low = np.clip(values - quantile * stderr, lower, upper)
         ci_high = np.clip(values + quantile * stderr, lower, upper)
         config: dict[str, dict[str, float]] = {}
@@ -198,10 +210,23 @@ class Fits:
             lower=lower,
             upper=upper,
             covariance=covariance,
+            jackknife_covariance=spread,
         )
         if mask is None:
             self.time_domain_full[effects] = out
         return out
+
+    def parameter_covariance(self, layout: Layout, values: np.ndarray) -> np.ndarray:
+        """Covariance of a time-domain fit's values from the benchmark parameters' uncertainty, ``G G^T``
+        with ``G`` the fit's response to one standard uncertainty of each parameter
+        (:func:`bikerider.gap.inference.timedomain.parameter_sensitivity`); zero without free parameters."""
+        p = self.problem
+        if not p.free:
+            return np.zeros((values.size, values.size))
+        records = [self.records[k].record for k in self.record_indices(None)]
+        sigmas = dict(zip(p.free, (float(s) for s in p.free_sigma)))
+        G = parameter_sensitivity(records, p.nominal, p.geometry, layout, values, sigmas)
+        return G @ G.T if np.all(np.isfinite(G)) else np.zeros((values.size, values.size))
 
     def time_domain_predict(self, fit: EffectFit, mask: np.ndarray) -> np.ndarray:
         """Predicted observations of the records in ``mask`` under a time-domain fit: what the record fit
@@ -260,8 +285,10 @@ class Fits:
             full = self.time_domain_fit(effects, None, start=start, jackknife=False)
         else:
             full = self.fit_of(effects)
-        # every fold starts from the fit to all the data; the folds' bias corrections advance together
-        together = None if timed else p.fit_many(effects, [~held for _, held in self.folds], full.values, full.bias)
+        # every fold starts from the fit to all the data by the same iterated bias correction; the folds'
+        # bias corrections advance together
+        start = full if timed else self.bias_corrected.get(effects, full)
+        together = None if timed else p.fit_many(effects, [~held for _, held in self.folds], start.values, start.bias)
         for k, (name, held) in enumerate(self.folds):
             progress.advance()
             if timed:
@@ -318,10 +345,9 @@ def with_parameter_uncertainty(p: GapProblem, fit: EffectFit) -> EffectFit:
     ``J_p J_p^T`` of the parameters' slopes per sigma), times the reduced chi-square when above one
     (lack of fit).  Fits holding ``parameters`` fit the shifts themselves and keep their own.
 
-    With rows from records the fit's estimating equation weighs the residuals of the apparent
-    eigenvalues (indirect inference) by the weave eigenvalues' slopes ``A`` (the iterated bias
-    correction of :meth:`GapProblem.fit`), so the bread of the sandwich is ``(A^T A_i)^-1`` with the
-    apparent eigenvalues' slopes ``A_i``: ``B A^T C A B^T``.  Without records ``A_i = A``.
+    With rows from records the fit to all the data is the least squares of the apparent eigenvalues
+    (indirect inference, :meth:`GapProblem.fit_apparent`), so ``A`` holds the apparent eigenvalues'
+    slopes, not the weave eigenvalues'.
     """
     if PARAMETERS in fit.effects or not p.free or not fit.names or not len(p.obs):
         return fit
@@ -343,16 +369,15 @@ def with_parameter_uncertainty(p: GapProblem, fit: EffectFit) -> EffectFit:
         return np.stack([(pred[1 + 2 * k] - pred[2 + 2 * k]) / steps[k] for k in range(x.size)], axis=1)
 
     w = np.sqrt(p.var_total)
-    A = slopes(False) / w[:, None]
-    # rows from records are predicted by indirect inference; the fit solves A^T (apparent - y) = 0 (its
-    # iterated bias correction weighs the residuals by the weave eigenvalues' slopes), so its covariance
-    # is the sandwich of that estimating equation: bread (A^T A_i)^-1 with the apparent eigenvalues'
-    # slopes A_i, which a short record's fit can make several times flatter than the weave's
+    # rows from records are predicted by indirect inference, and the fit to all the data is the least
+    # squares of the apparent eigenvalues (GapProblem.fit_apparent): it solves A_i^T (apparent - y) = 0
+    # with the apparent eigenvalues' slopes A_i, which a short record's fit can make several times
+    # flatter than the weave eigenvalues'; the sandwich's bread is (A_i^T A_i)^-1
     records = p.records is not None and len(p.record_obs)
-    A_i = slopes(True) / w[:, None] if records else A
-    if not (np.all(np.isfinite(A)) and np.all(np.isfinite(A_i))):
+    A = slopes(bool(records)) / w[:, None]
+    if not np.all(np.isfinite(A)):
         return fit
-    B = np.linalg.pinv(A.T @ A_i)
+    B = np.linalg.pinv(A.T @ A)
     Jp = p.jacobian / w[:, None]
     AC = A.T * (p.var_data / p.var_total)
     cov = B @ (AC @ A + (A.T @ Jp) @ (Jp.T @ A)) @ B.T

@@ -20,7 +20,7 @@ from bikerider.gap.candidates.effects import (
     prior_from_range,
 )
 from bikerider.gap.diagnosis.fits import time_domain
-from bikerider.gap.diagnosis.statistics import ALPHA, jackknife_quantile
+from bikerider.gap.diagnosis.statistics import ALPHA, interval_quantile
 from bikerider.gap.distributions import chi2
 from bikerider.gap.inference.problem import EffectFit, GapProblem
 from bikerider.gap.measured.records import RecordFit
@@ -126,7 +126,9 @@ class Priors:
             stderr = float(math.hypot(gradient[i] * fit.stderr[i], fit.stderr[j]))
         separable = spread >= AMPLITUDE_SPREAD
         timed = time_domain(fit.effects) and fit.covariance is not None and self.n_folds >= 3
-        quantile = jackknife_quantile(self.n_folds) if timed else 1.96
+        quantile = (
+            interval_quantile(gradient, fit.covariance, fit.jackknife_covariance, self.n_folds) if timed else 1.96
+        )
         low, high = max(value - quantile * stderr, 0.0), value + quantile * stderr
         return {
             "c_equivalent": value,
