@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import logging
 import math
+from importlib import resources
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -300,3 +302,16 @@ def test_iyy_breaking_the_triangle_inequality_is_left_out(caplog):
     assert "IBfyy" not in reduction.bodies.values
     assert reduction.extras["IBfyy"].value == pytest.approx(1.3, rel=1e-9)
     assert any("IBfyy" in note and "triangle inequality" in note for note in reduction.notes)
+
+
+def test_a_zero_length_that_leaves_no_frame_is_named_not_a_lapack_failure(tmp_path):
+    # found by tests/test_fuzz_cli.py (Rigid's d = 0): the heights-and-diameters rows divide by d, so the
+    # least-squares stage met a matrix with entries that are not finite, and LAPACK's SVD raised
+    # "SVD did not converge" from deep inside NumPy; the stage now passes NaN on and its checks name d
+    original = Path(str(resources.files("bikerider") / "data" / "bicycleparameters"))
+    text = (original / "bicycles" / "Rigid" / "RawData" / "RigidMeasured.txt").read_text()
+    lines = [("d = 0+/-0.00008" if line.startswith("d = ") else line) for line in text.splitlines()]
+    path = tmp_path / "RigidMeasured.txt"
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(InputError, match=r"d = 0: .*no steer axis tilt"):
+        read_measured_file(path)

@@ -115,7 +115,7 @@ class LeastSquaresStage(Stage):
 
     def _solve(self, A: np.ndarray, b: np.ndarray) -> np.ndarray:
         if self.method == "least_squares":
-            return (np.linalg.pinv(A) @ b[..., None])[..., 0]
+            return (_pinv(A) @ b[..., None])[..., 0]
         points = [_pair_solution(A, b, i, j)[0] for i, j in itertools.combinations(range(A.shape[-2]), 2)]
         return np.mean(points, axis=0)
 
@@ -124,7 +124,7 @@ class LeastSquaresStage(Stage):
         with np.errstate(divide="ignore", invalid="ignore"):
             x = self._solve(A, b)
             miss = (A @ x[..., None])[..., 0] - b
-            singular = np.linalg.svd(A, compute_uv=False)
+            singular = _singular_values(A)
         if A.shape[-1] == 2:
             N = np.swapaxes(A, -1, -2) @ A
             conditioning = conditioning_2x2(
@@ -160,9 +160,34 @@ def _plain(x: np.ndarray):
     return float(x) if np.ndim(x) == 0 else x
 
 
+def _finite(A: np.ndarray) -> np.ndarray:
+    """Whether each matrix of the stack ``A`` (``(..., m, k)``) has only finite entries."""
+    return np.isfinite(A).all(axis=(-2, -1))
+
+
+def _pinv(A: np.ndarray) -> np.ndarray:
+    """The pseudo-inverse of each matrix of ``A``; NaN for a matrix with an entry that is not finite (a
+    measurement the rows cannot use, e.g. a zero length they divide by), which LAPACK's SVD refuses with
+    "SVD did not converge" and which the stage's checks then report by its name."""
+    ok = _finite(A)
+    if ok.all():
+        return np.linalg.pinv(A)
+    P = np.linalg.pinv(np.where(ok[..., None, None], A, 0.0))
+    return np.where(ok[..., None, None], P, np.nan)
+
+
+def _singular_values(A: np.ndarray) -> np.ndarray:
+    """The singular values of each matrix of ``A``, largest first; NaN as in :func:`_pinv`."""
+    ok = _finite(A)
+    if ok.all():
+        return np.linalg.svd(A, compute_uv=False)
+    s = np.linalg.svd(np.where(ok[..., None, None], A, 0.0), compute_uv=False)
+    return np.where(ok[..., None], s, np.nan)
+
+
 def _least_squares_derivative(A, b, dA, db) -> np.ndarray:
     """``d x / d(row i, local a)``, shape ``(..., k, m, local)``, for ``x = A^+ b``."""
-    P = np.linalg.pinv(A)  # (..., k, m)
+    P = _pinv(A)  # (..., k, m)
     x = (P @ b[..., None])[..., 0]  # (..., k)
     r = b - (A @ x[..., None])[..., 0]  # (..., m)
     inverse = P @ np.swapaxes(P, -1, -2)  # (A^T A)^-1, (..., k, k)
