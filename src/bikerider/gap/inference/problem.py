@@ -62,6 +62,7 @@ from bikerider.errors import InputError
 from bikerider.gap.candidates.effect_model import BENCH_ARGS, STRUCTURAL_KEYS, EffectModel
 from bikerider.gap.candidates.effects import EFFECTS, OBSERVATION_EFFECTS, PARAMETERS, SPEED_SENSOR
 from bikerider.gap.candidates.nominal import GapModelInput
+from bikerider.gap.inference.differences import forward_jacobian
 from bikerider.gap.inference.frequency_response import predict_frf_scaled  # multisine records
 from bikerider.gap.inference.predict import Predictor
 from bikerider.gap.measured.multisine import FrequencyResponseData
@@ -799,10 +800,7 @@ class GapProblem:
         steps = np.concatenate([1e-5 * np.minimum(scale[:n_struct], 10.0), np.full(lay.n_shift, 1e-3)])
 
         def jac(x: np.ndarray) -> np.ndarray:
-            h = steps * np.where(x + steps <= upper, 1.0, -1.0)
-            X = np.vstack([x, x + np.diag(h)])
-            R = residuals_batch(X)
-            return ((R[1:] - R[0]) / h[:, None]).T
+            return forward_jacobian(residuals_batch, x, steps, upper)
 
         def fun(x: np.ndarray) -> np.ndarray:
             return residuals_batch(x[None, :])[0]
@@ -908,9 +906,7 @@ class GapProblem:
             return residuals_batch(x[None, :])[0]
 
         def jac(x: np.ndarray) -> np.ndarray:
-            h = steps * np.where(x + steps <= upper, 1.0, -1.0)
-            R = residuals_batch(np.vstack([x, x + np.diag(h)]))
-            return ((R[1:] - R[0]) / h[:, None]).T
+            return forward_jacobian(residuals_batch, x, steps, upper)
 
         # Gauss-Newton steps (clipped to the bounds, halved while they do not lower the chi-square), each
         # one batched simulation for the slopes and one for the step; stop when a step gains little

@@ -33,6 +33,7 @@ from bikerider.benchmark.simulation import discretise, expm
 from bikerider.errors import FitError
 from bikerider.gap.candidates.effect_model import EffectModel
 from bikerider.gap.candidates.effects import EFFECTS, SPEED_SENSOR, STEER_DAMPING, STEER_FRICTION
+from bikerider.gap.inference.differences import forward_jacobian
 from bikerider.gap.measured.records import Record
 
 try:  # numpy.einsum's kernel without its Python wrapper, which costs as much as a product on these sizes
@@ -421,7 +422,7 @@ def parameter_sensitivity(
     upper = np.asarray(layout.upper, float)
     h = np.full(theta.size, THETA_STEP) * np.where(theta + THETA_STEP <= upper, 1.0, -1.0)
     R = _weighted_residuals(batches, values, geometry, layout, np.vstack([theta, theta + np.diag(h)]))
-    J = ((R[1:] - R[0]) / h[:, None]).T
+    J = ((R[1:] - R[0]) / h[:, None]).T  # as forward_jacobian, keeping the residuals at theta (R[0]) for Jq
     # one batched simulation: row j moves parameter j by its standard uncertainty
     names = list(sigmas)
     shifted = np.diag([sigmas[n] for n in names])
@@ -450,9 +451,7 @@ def fit_time_domain(records: list[Record], values: dict, geometry, layout: Layou
         return costs(theta[None, :])[0]
 
     def jac(theta: np.ndarray) -> np.ndarray:
-        h = steps * np.where(theta + steps <= upper, 1.0, -1.0)
-        R = costs(np.vstack([theta, theta + np.diag(h)]))
-        return ((R[1:] - R[0]) / h[:, None]).T
+        return forward_jacobian(costs, theta, steps, upper)
 
     if start is not None:
         x0 = np.clip(np.asarray(start, dtype=float), lower, upper)
