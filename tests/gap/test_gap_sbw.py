@@ -54,6 +54,8 @@ def test_the_records_point_to_steer_friction(sbw):
     checks = {c["name"]: c for c in friction["plausibility"]}
     assert checks["T_coulomb"]["usable"] and checks["c_viscous"]["usable"]
     assert (checks["T_coulomb"]["flag"] is not None) == (T["value"] > 0.15)
+    if checks["T_coulomb"]["flag"]:  # a wide interval that reaches the usual range is said to
+        assert ("which reaches the usual range" in checks["T_coulomb"]["flag"]) == (T["ci95"][0] <= 0.15)
     assert friction["parameters"]["c_viscous"]["value"] < 0.2
     assert result["how_far"]["data_shrink"] > 0.8  # held-out speeds, against the data's noise
 

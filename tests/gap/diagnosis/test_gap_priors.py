@@ -72,6 +72,7 @@ def test_a_precise_value_above_the_usual_range_is_selected_and_flagged(table_dia
     assert d.selected == ["steer_damping"]
     (flag,) = d.selection["flags"]
     assert "above the usual 0.05-0.5 N m s/rad" in flag and "the data determine it" in flag and ": check " in flag
+    assert "reaches the usual range" not in flag  # its interval [0.88, 1.27] lies above 0.5 too
     assert d.selection["log_prior"] < 0 and d.selection["log_odds_vs_nominal"] > 0
     from bikerider.gap.text import summary_text
 

@@ -209,8 +209,11 @@ class Priors:
             if not usual:
                 side = "above" if value > hi else "below"
                 precise = " (the data determine it: 95 % interval " if determined else " (95 % interval "
+                # the value is judged, not its interval; where the interval reaches the usual range, say so
+                reaches = ci[0] <= hi if side == "above" else ci[1] >= lo
+                within = ", which reaches the usual range" if reaches else ""
                 flag = (
-                    f"{shown} = {value:.3g} {unit}{precise}[{ci[0]:.3g}, {ci[1]:.3g}]) is {side} the usual "
+                    f"{shown} = {value:.3g} {unit}{precise}[{ci[0]:.3g}, {ci[1]:.3g}]{within}) is {side} the usual "
                     f"{lo:g}-{hi:.3g} {unit} from {source}"
                     + (f": check {param.check}" if side == "above" and param.check else "")
                 )
