@@ -1074,14 +1074,16 @@ def run_trial(models: dict[str, GapModelInput], effect: CalibrationEffect, seed:
     reference = {k: truth.values[k] for k in effect.sizes}
     if effect.name == "steer_coulomb":
         reference = {"c_steer": 4 * truth.values["T_coulomb"] / (math.pi * amplitude) if amplitude else math.nan}
-    if len(data) < 4:
+
+    def undiagnosed(verdict: str, n_measured: int) -> Trial:
+        """The trial when no diagnosis could be made (``verdict`` says why)."""
         return Trial(
             effect.name,
             effect.candidate,
             seed,
             rider,
             truth.values,
-            "too few runs",
+            verdict,
             None,
             [],
             [],
@@ -1089,34 +1091,19 @@ def run_trial(models: dict[str, GapModelInput], effect: CalibrationEffect, seed:
             reference,
             None,
             None,
-            len(data),
+            n_measured,
             time.perf_counter() - start,
             amplitude,
             method,
         )
+
+    if len(data) < 4:
+        return undiagnosed("too few runs", len(data))
     if method == "records":
         try:
             diagnosis = diagnose(model, EigenvalueData.empty(), empty, records=records)
         except InputError:  # every record left out: the model predicts no weave the fit finds in any
-            return Trial(
-                effect.name,
-                effect.candidate,
-                seed,
-                rider,
-                truth.values,
-                "no record used",
-                None,
-                [],
-                [],
-                {},
-                reference,
-                None,
-                None,
-                0,
-                time.perf_counter() - start,
-                amplitude,
-                method,
-            )
+            return undiagnosed("no record used", 0)
         n_measured = len(diagnosis.record_rows)
     else:
         diagnosis = diagnose(model, data, empty)

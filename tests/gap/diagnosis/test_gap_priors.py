@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 from gap_support import BP, DATA
 
+from bikerider.errors import InputError
 from bikerider.gap.candidates.effects import EFFECTS, Prior, prior_from_range
 from bikerider.gap.diagnosis.fits import with_parameter_uncertainty
 from bikerider.gap.diagnosis.priors import Priors, steer_rate_amplitudes
@@ -338,3 +339,18 @@ def test_intervals_from_records_use_the_apparent_eigenvalues_slopes():
     assert tables.stderr[0] == pytest.approx(expected) and same.stderr[0] == pytest.approx(expected)
     assert flat.stderr[0] == pytest.approx(4 * expected)  # the bread (A^T A_i)^-1 with A_i a quarter of A
     assert flat.ci_high[0] - flat.ci_low[0] == pytest.approx(2 * 1.96 * 4 * expected)
+
+
+@pytest.mark.slow
+def test_a_calibration_trial_whose_records_are_all_left_out_is_scored_not_lost(monkeypatch):
+    from validation import cases as V
+
+    def no_record_used(*args, **kwargs):
+        raise InputError("records", "0 of 9 used", "at least one record whose weave the fit finds")
+
+    monkeypatch.setattr("bikerider.gap.diagnosis.result.diagnose", no_record_used)  # run_trial imports it late
+    models = {"riderless": load_model(BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt")}
+    effect = next(e for e in V.CALIBRATION_EFFECTS if e.name == "steer_damping")
+    trial = V.run_trial(models, effect, 0)
+    assert trial.verdict == "no record used" and trial.n_measured == 0 and trial.method == "records"
+    assert trial.reference == {k: trial.truth[k] for k in effect.sizes} and not trial.fitted
