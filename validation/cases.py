@@ -1033,6 +1033,16 @@ class Trial:
     amplitude: float | None = None
     method: str = "tables"
     """How the runs reached the diagnosis (:data:`CALIBRATION_METHODS`; record trials: ``records``)."""
+    fit_chi2: float | None = None
+    """The candidate's fit to all the data: its chi-square, over ``fit_n`` observations."""
+    fit_n: int | None = None
+    minima: int | None = None
+    """Local minima of that fit's chi-square found (the fit's own counted; see
+    :meth:`bikerider.gap.inference.problem.GapProblem.fit_apparent`), ``minima_within`` of the others within
+    the 95 % profile-likelihood threshold (held by the intervals), each of the others in ``other_minima``
+    (``{values: {name: value}, chi2}``)."""
+    minima_within: int | None = None
+    other_minima: list[dict] = field(default_factory=list)
 
     def as_dict(self) -> dict:
         return dict(self.__dict__)
@@ -1139,7 +1149,7 @@ def run_trial(models: dict[str, GapModelInput], effect: CalibrationEffect, seed:
             fitted_model = diagnosis.problem.fitted_model(diagnosis.selected_fit)
             achieved = gap_shrink(test.z(test.baseline), test.z(test.predictor.predict(fitted_model)))
     ranking = result["ranking"]
-    return Trial(
+    trial = Trial(
         effect.name,
         effect.candidate,
         seed,
@@ -1158,6 +1168,13 @@ def run_trial(models: dict[str, GapModelInput], effect: CalibrationEffect, seed:
         amplitude,
         method,
     )
+    if fit is not None:
+        trial.fit_chi2, trial.fit_n = float(fit.chi2), int(fit.n)
+        trial.minima, trial.minima_within = 1 + len(fit.minima), int(fit.minima_within)
+        trial.other_minima = [
+            {"values": dict(zip(fit.names, map(float, values))), "chi2": float(chi2)} for values, chi2 in fit.minima
+        ]
+    return trial
 
 
 def _friction_equivalent(diagnosis, fit, amplitude: float | None) -> dict | None:

@@ -24,7 +24,7 @@ from bikerider import progress
 from bikerider.gap.candidates.effects import EFFECTS, PARAMETERS, STEER_FRICTION, TIME_DOMAIN_EFFECTS
 from bikerider.gap.diagnosis.statistics import _named_values, gap_shrink, interval_quantile, rms
 from bikerider.gap.inference.frequency_response import predict_frf_friction
-from bikerider.gap.inference.problem import EffectFit, GapProblem
+from bikerider.gap.inference.problem import EffectFit, GapProblem, scale_and_quantile
 from bikerider.gap.inference.timedomain import Layout, fit_time_domain, parameter_sensitivity
 from bikerider.gap.measured.multisine import MultisineFit
 from bikerider.gap.measured.records import RecordFit
@@ -335,15 +335,33 @@ class Fits:
 
 def with_parameter_uncertainty(p: GapProblem, fit: EffectFit) -> EffectFit:
     """A linear fit's covariance and 95 % intervals with the benchmark parameters' uncertainty as the
-    systematic error it is.
+    systematic error it is, holding every local minimum the data cannot tell from the fit.
 
     The fit weighs each residual by the combined variance of data and parameters, as if the
     parameters' share were independent from row to row; but one parameter error moves every row at
     once, and does not average out over the rows.  The covariance of the fitted values is the sandwich
     ``B A^T C A B`` (``A`` the weighted Jacobian of the predictions in the fitted values, ``B =
     (A^T A)^-1``, ``C`` the weighted covariance of the observations: the data's variance plus
-    ``J_p J_p^T`` of the parameters' slopes per sigma), times the reduced chi-square when above one
-    (lack of fit).  Fits holding ``parameters`` fit the shifts themselves and keep their own.
+    ``J_p J_p^T`` of the parameters' slopes per sigma), times the reduced chi-square ``s^2`` when above
+    one (lack of fit).  Fits holding ``parameters`` fit the shifts themselves and keep their own.
+
+    The quantile.  Scaled by ``s^2``, the covariance rests on a scale estimated from the ``n - p``
+    residuals, so the 95 % interval is ``+- t_{n-p}(0.975)`` standard errors (Student's t), not
+    ``+- 1.96``, which holds only for a scale known in advance
+    (:func:`bikerider.gap.inference.problem.scale_and_quantile`; a record set of six weave records fitted
+    with three sizes has 9 degrees of freedom: 2.26).
+
+    Other minima.  An interval linearised about one minimum cannot hold another of nearly the same
+    depth (:meth:`GapProblem.fit_apparent` finds them).  A minimum whose chi-square lies within the 95 %
+    profile-likelihood threshold of the fit's, ``chi2 - chi2_fit <= q^2 max(1, s^2)`` (``q`` the quantile
+    above: 3.84 for a known scale; the F(1, n - p) point with an estimated one), cannot be rejected
+    by the data, so each size's 95 % interval is the hull of the fit's and of every such minimum's
+    own linearised interval (its sandwich at its values, scaled by the fit's ``s^2``), an approximation
+    of the profile-likelihood interval whose region holds both.  ``EffectFit.minima_within`` counts them.
+    The same holds for any point whose chi-square lies within the threshold (the profile at each of its
+    sizes is at most that chi-square), so the interval also holds every point the search for minima
+    stepped to within it (``EffectFit.visited``): where the chi-square is a long curved valley, more of
+    the valley than the fit's linearisation reaches.
 
     With rows from records the fit to all the data is the least squares of the apparent eigenvalues
     (indirect inference, :meth:`GapProblem.fit_apparent`), so ``A`` holds the apparent eigenvalues'
@@ -354,6 +372,37 @@ def with_parameter_uncertainty(p: GapProblem, fit: EffectFit) -> EffectFit:
     lay = p.layout(fit.effects)
     x = np.asarray(fit.values, float)
     lower, upper = np.asarray(fit.lower, float), np.asarray(fit.upper, float)
+    cov = _sandwich(p, lay, x, lower, upper)
+    if cov is None:
+        return fit
+    factor, quantile = scale_and_quantile(fit.chi2, fit.n, x.size)
+    cov = cov * factor
+    known = np.isfinite(fit.stderr)  # a value the data do not move stays so
+    stderr = np.where(known, np.sqrt(np.clip(np.diag(cov), 0, None)), np.inf)
+    low = np.clip(x - quantile * stderr, lower, upper)
+    high = np.clip(x + quantile * stderr, lower, upper)
+    threshold = quantile**2 * factor
+    within = [(values, chi2) for values, chi2 in fit.minima if chi2 - fit.chi2 <= threshold]
+    for values, _chi2 in within:
+        other = _sandwich(p, lay, values, lower, upper)
+        spread = np.sqrt(np.clip(np.diag(other), 0, None) * factor) if other is not None else np.zeros(x.size)
+        spread = np.where(known, spread, np.inf)
+        low = np.minimum(low, np.clip(values - quantile * spread, lower, upper))
+        high = np.maximum(high, np.clip(values + quantile * spread, lower, upper))
+    # every point the search visited within the threshold lies in each size's profile-likelihood interval
+    # (the profile at its value is at most its chi-square): the interval holds it
+    near = [values for values, chi2 in fit.visited if chi2 - fit.chi2 <= threshold]
+    if near:
+        low, high = np.minimum(low, np.min(near, axis=0)), np.maximum(high, np.max(near, axis=0))
+    minima = within + [m for m in fit.minima if all(m is not w for w in within)]
+    return replace(
+        fit, stderr=stderr, ci_low=low, ci_high=high, covariance=cov, minima=minima, minima_within=len(within)
+    )
+
+
+def _sandwich(p: GapProblem, lay, x: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray | None:
+    """The sandwich covariance of :func:`with_parameter_uncertainty` at values ``x``, before the reduced
+    chi-square's scale (``None`` where a slope cannot be evaluated)."""
     span = np.maximum(upper - lower, 1e-9)
     h = 1e-5 * np.minimum(span, 10.0)
     X = [x]
@@ -376,19 +425,8 @@ def with_parameter_uncertainty(p: GapProblem, fit: EffectFit) -> EffectFit:
     records = p.records is not None and len(p.record_obs)
     A = slopes(bool(records)) / w[:, None]
     if not np.all(np.isfinite(A)):
-        return fit
+        return None
     B = np.linalg.pinv(A.T @ A)
     Jp = p.jacobian / w[:, None]
     AC = A.T * (p.var_data / p.var_total)
-    cov = B @ (AC @ A + (A.T @ Jp) @ (Jp.T @ A)) @ B.T
-    dof = max(fit.n - x.size, 1)
-    cov *= max(1.0, fit.chi2 / dof)
-    stderr = np.sqrt(np.clip(np.diag(cov), 0, None))
-    stderr = np.where(np.isfinite(fit.stderr), stderr, np.inf)  # a value the data do not move stays so
-    return replace(
-        fit,
-        stderr=stderr,
-        ci_low=np.clip(x - 1.96 * stderr, lower, upper),
-        ci_high=np.clip(x + 1.96 * stderr, lower, upper),
-        covariance=cov,
-    )
+    return B @ (AC @ A + (A.T @ Jp) @ (Jp.T @ A)) @ B.T

@@ -51,11 +51,12 @@ import logging
 import math
 import threading
 from collections import OrderedDict
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.optimize import least_squares
+from scipy.special import stdtrit  # Student's t quantile (scipy.stats.t.ppf's own function, without its import)
 
 from bikerider.engine import DifferencedStage
 from bikerider.errors import InputError
@@ -98,6 +99,15 @@ APPARENT_ITERATIONS = 6
 APPARENT_TOLERANCE = 0.05
 """The polish stops when a step lowers the chi-square by less than this (a twentieth of what one
 standard error's move of a fitted value changes it by)."""
+MINIMUM_STARTS = 3
+"""Further starts of the search for other local minima of the apparent eigenvalues' least squares
+(:meth:`GapProblem.fit_apparent`): the grid starts with the lowest chi-square of the weave eigenvalues
+plus the nominal model's extraction bias (the cheap cost the first fit ranks its starts by)."""
+MINIMUM_ITERATIONS = 10
+"""Most Gauss-Newton steps from each further start of that search."""
+MINIMUM_DECREMENT = 0.5
+"""A search from a further start counts as having found a local minimum when the Gauss-Newton step at
+its last point (clipped to the bounds) would lower the chi-square by less than this."""
 MAX_BIAS_STEP = 0.2
 """Largest move of a fitted value in one step of the iterated bias correction, as a fraction of its
 search range (a longer Gauss-Newton step is shortened to it)."""
@@ -155,6 +165,16 @@ class EffectFit:
     jackknife_covariance: np.ndarray | None = None
     """The share of ``covariance`` estimated from the spread of the held-out folds' fits (a jackknife, few
     degrees of freedom: :func:`bikerider.gap.diagnosis.statistics.interval_quantile`), where there is one."""
+    minima: list[tuple[np.ndarray, float]] = field(default_factory=list)
+    """Other local minima of the fit's chi-square that a search from further starts found (values,
+    chi-square), distinct from this one, which is the lowest found (:meth:`GapProblem.fit_apparent`)."""
+    visited: list[tuple[np.ndarray, float]] = field(default_factory=list)
+    """Every point those searches stepped to (values, chi-square): each with a chi-square within the 95 %
+    profile-likelihood threshold of the fit's lies in every size's profile-likelihood interval."""
+    minima_within: int = 0
+    """How many of ``minima`` lie within the 95 % profile-likelihood threshold of the best, and so are held by
+    every size's 95 % interval (:func:`bikerider.gap.diagnosis.fits.with_parameter_uncertainty`); they come
+    first in ``minima``."""
 
     def at_bound(self) -> list[str]:
         """Names of the fitted values pinned at a bound of the search."""
@@ -164,6 +184,27 @@ class EffectFit:
             if min(abs(self.values[k] - self.lower[k]), abs(self.upper[k] - self.values[k])) <= 1e-4 * span:
                 out.append(name)
         return out
+
+
+def scale_and_quantile(chi2: float, n: int, p: int) -> tuple[float, float]:
+    """The factor a fit's covariance is scaled by and the 97.5 % point its 95 % intervals use.
+
+    The covariance from the stated uncertainties assumes they are the data's scale; when the fit's
+    reduced chi-square ``s^2 = chi2 / (n - p)`` exceeds one, the data scatter more than stated and the
+    covariance is scaled by ``s^2``: the scale is then *estimated* from the ``n - p`` residuals, and
+    ``(value - truth) / stderr`` follows Student's t with ``n - p`` degrees of freedom, not the normal
+    (exactly so for a linear model with Gaussian errors of one unknown common scale; the regression
+    textbooks' interval), so the quantile is ``t_{n-p}(0.975)`` (2.78 for 4 degrees of freedom, 2.07 for
+    24, 1.96 as they grow).  With ``s^2 <= 1`` the stated scale stands and the normal 1.96 is used.
+    Returns ``(max(1, s^2), quantile)``.
+    """
+    dof = max(int(n) - int(p), 1)
+    reduced = float(chi2) / dof if np.isfinite(chi2) else math.inf
+    if not reduced > 1.0:
+        return 1.0, 1.96
+    if not math.isfinite(reduced):
+        return reduced, 1.96
+    return reduced, float(stdtrit(dof, 0.975))
 
 
 @dataclass
@@ -655,7 +696,9 @@ class GapProblem:
             lay_fit, mask, x, offset = run["fit"], run["mask"], run["x"], run["offset"]
             # the residuals, chi-square and values reported: those of the fitted model's own bias
             r = self._residuals(lay, mask, x, offset)
-            fit = self._result(lay, x, lay_fit.stderr, r, int(mask.sum()), lay_fit.success, lay_fit.message)
+            fit = self._result(
+                lay, x, lay_fit.stderr, r, int(mask.sum()), lay_fit.success, lay_fit.message, lay_fit._quantile
+            )
             fit.bias, fit.bias_iterations, fit.covariance = offset, run["iteration"], lay_fit.covariance
             out.append(fit)
         return out
@@ -781,7 +824,7 @@ class GapProblem:
         if p == 0:
             r = residuals_batch(np.zeros((1, 0)))[0]
             out = self._result(lay, np.zeros(0), np.zeros(0), r, int(mask.sum()), True, "nothing to fit")
-            out._jacobian, out._weight = np.zeros((r.size, 0)), self._weights(lay, mask)
+            out._jacobian, out._weight, out._quantile = np.zeros((r.size, 0)), self._weights(lay, mask), 1.96
             return out
         lower, upper = self.bounds(lay)
         if start is not None and np.size(start) == p:
@@ -818,23 +861,34 @@ class GapProblem:
             gtol=1e-8,
         )
         J = jac(result.x)
-        dof = max(result.fun.size - p, 1)
-        reduced = float(np.sum(result.fun**2)) / dof
+        factor, quantile = scale_and_quantile(float(np.sum(result.fun**2)), result.fun.size, p)
         cov = None
         try:
-            cov = np.linalg.pinv(J.T @ J) * max(1.0, reduced)
+            cov = np.linalg.pinv(J.T @ J) * factor
             stderr = np.sqrt(np.clip(np.diag(cov), 0, None))
             insensitive = ~np.any(J != 0, axis=0)
             stderr = np.where(insensitive, np.inf, stderr)
         except np.linalg.LinAlgError:
             stderr = np.full(p, np.inf)
-        out = self._result(lay, result.x, stderr, result.fun, int(mask.sum()), bool(result.success), result.message)
-        out._jacobian, out._weight, out.covariance = J, self._weights(lay, mask), cov
+        out = self._result(
+            lay, result.x, stderr, result.fun, int(mask.sum()), bool(result.success), result.message, quantile
+        )
+        out._jacobian, out._weight, out.covariance, out._quantile = J, self._weights(lay, mask), cov, quantile
         return out
 
     def _result(
-        self, lay: _Layout, x: np.ndarray, stderr: np.ndarray, r: np.ndarray, n: int, ok: bool, message: str
+        self,
+        lay: _Layout,
+        x: np.ndarray,
+        stderr: np.ndarray,
+        r: np.ndarray,
+        n: int,
+        ok: bool,
+        message: str,
+        quantile: float = 1.96,
     ) -> EffectFit:
+        """The :class:`EffectFit` of values ``x`` with residuals ``r``; 95 % intervals ``x +- quantile
+        stderr`` (:func:`scale_and_quantile`), clipped to the bounds."""
         n_struct = len(lay.structural)
         names = [f"{param}" for _, param in lay.structural] + [f"parameters.{k}" for k in self.free][: lay.n_shift]
         units = list(lay.units) + ["sigma"] * lay.n_shift
@@ -849,8 +903,8 @@ class GapProblem:
             for j, name in enumerate(self.free):
                 shift[name] = float(x[n_struct + j] * self.free_sigma[j])
         lo, hi = self.bounds(lay)
-        ci_low = np.clip(x - 1.96 * stderr, lo, hi) if x.size else x
-        ci_high = np.clip(x + 1.96 * stderr, lo, hi) if x.size else x
+        ci_low = np.clip(x - quantile * stderr, lo, hi) if x.size else x
+        ci_high = np.clip(x + quantile * stderr, lo, hi) if x.size else x
         data_r = r[:n]
         prior = r[n:] if lay.n_shift else np.zeros(0)
         return EffectFit(
@@ -872,9 +926,11 @@ class GapProblem:
             upper=hi,
         )
 
-    def fit_apparent(self, fit: EffectFit, max_iterations: int = APPARENT_ITERATIONS) -> EffectFit:
+    def fit_apparent(
+        self, fit: EffectFit, max_iterations: int = APPARENT_ITERATIONS, starts: int = MINIMUM_STARTS
+    ) -> EffectFit:
         """The least squares of the apparent eigenvalues (indirect inference), polishing a fit of
-        :meth:`fit` to all the observations.
+        :meth:`fit` to all the observations, and its other local minima.
 
         The iterated bias correction of :meth:`fit` solves ``A^T W (apparent(x) - y) = 0`` with the weave
         eigenvalues' slopes ``A`` (the bias's own change left out), in at most
@@ -885,7 +941,29 @@ class GapProblem:
         chi-square 8.3 at c_alpha 6.7, 2.6 at the least squares' 8.8, hidden 10.6).  This makes
         Gauss-Newton steps on the apparent eigenvalues themselves (their slopes by a batched forward
         difference; a step clipped to the bounds and halved while it does not lower the chi-square), from
-        the bias-corrected values, and keeps the result where its chi-square is lower.  Without records, or with nothing fitted, the fit is returned unchanged.
+        the bias-corrected values, at most ``max_iterations`` of them.
+
+        Other minima.  The apparent eigenvalues' chi-square can have two minima of nearly equal depth
+        (tyre slip on a 3-s record set with the rider: 3.85 at c_alpha 7.6 /rad, sigma_t 0.41 m and 4.10
+        at 12.2, 0.108, hidden 13.5, 0.097), and an interval linearised about one cannot hold the other.
+        So the same steps run, side by side in the same batched model calls, from ``starts`` further
+        points (at most :data:`MINIMUM_ITERATIONS` steps each): the grid starts of :meth:`fit` with the
+        lowest cheap chi-square (weave eigenvalues plus the nominal model's extraction bias).  A search
+        that stops because a step gains less than :data:`APPARENT_TOLERANCE`, or because the Gauss-Newton
+        step at its point would gain less than :data:`MINIMUM_DECREMENT`, has found a local minimum.
+        The lowest point found is the fit; another minimum is kept (``EffectFit.minima``) when it is
+        distinct from the fit: its linearised chi-square distance from the fit exceeds one and the
+        chi-square halfway between them rises above both (a ridge between two valleys, not two points of
+        one valley; a Gauss-Newton search creeping along a long curved valley stops where a step gains
+        little, which is not a minimum: on the set above the searches stopped at chi-square 3.85, 4.10,
+        3.41 and 3.19, all in one valley).  Every point the searches stepped to is kept as well
+        (``EffectFit.visited``).  :func:`bikerider.gap.diagnosis.fits.with_parameter_uncertainty` makes
+        each size's 95 % interval hold every kept minimum and every point visited within the 95 %
+        profile-likelihood threshold.
+
+        Without records, or with nothing fitted, or for sets holding ``parameters`` (20-odd shifts), the
+        fit is returned unchanged; with the polish gaining nothing and no lower minimum, the values are
+        the bias-corrected ones.
         """
         if self.records is None or not len(self.record_obs) or not np.size(fit.values) or PARAMETERS in fit.effects:
             return fit
@@ -893,6 +971,7 @@ class GapProblem:
         mask = np.ones(len(self.obs), bool)
         weight = self._weights(lay, mask)
         n_struct = len(lay.structural)
+        p = n_struct + lay.n_shift
         lower, upper = self.bounds(lay)
         scale = np.array([max(hi - lo, 1e-6) for lo, hi in zip(lay.lower, lay.upper)] + [1.0] * lay.n_shift)
         steps = np.concatenate([1e-5 * np.minimum(scale[:n_struct], 10.0), np.full(lay.n_shift, 1e-3)])
@@ -902,42 +981,117 @@ class GapProblem:
             r = np.where(np.isfinite(r), r, _BAD)
             return np.concatenate([r, X[:, n_struct:]], axis=1) if lay.n_shift else r
 
-        def fun(x: np.ndarray) -> np.ndarray:
-            return residuals_batch(x[None, :])[0]
-
-        def jac(x: np.ndarray) -> np.ndarray:
-            return forward_jacobian(residuals_batch, x, steps, upper)
-
-        # Gauss-Newton steps (clipped to the bounds, halved while they do not lower the chi-square), each
-        # one batched simulation for the slopes and one for the step; stop when a step gains little
-        x = np.asarray(fit.values, float)
-        r = fun(x)
-        cost = start_cost = float(r @ r)
-        for _ in range(max_iterations):
-            J = jac(x)
-            step = -np.linalg.lstsq(J, r, rcond=1e-10)[0]
+        X = np.array([np.asarray(fit.values, float)] + self._further_starts(lay, fit.values, starts))
+        limit = np.array([max_iterations] + [max(MINIMUM_ITERATIONS, max_iterations)] * (len(X) - 1))
+        R = residuals_batch(X)
+        cost = np.sum(R**2, axis=1)
+        start_cost = float(cost[0])
+        J = np.zeros((len(X), R.shape[1], p))
+        active = np.ones(len(X), bool)
+        converged = np.zeros(len(X), bool)
+        done = np.zeros(len(X), int)
+        visited = [(x.copy(), float(c)) for x, c in zip(X, cost)]
+        while active.any():
+            idx = np.flatnonzero(active)
+            # every active search's slopes in one batched call (forward differences, backwards at the upper
+            # bound), then its Gauss-Newton step
+            H = [steps * np.where(X[s] + steps <= upper, 1.0, -1.0) for s in idx]
+            stack = residuals_batch(np.vstack([np.vstack([X[s], X[s] + np.diag(h)]) for s, h in zip(idx, H)]))
+            step = {}
+            for k, (s, h) in enumerate(zip(idx, H)):
+                block = stack[k * (p + 1) : (k + 1) * (p + 1)]
+                J[s] = ((block[1:] - block[0]) / h[:, None]).T
+                step[s] = -np.linalg.lstsq(J[s], R[s], rcond=1e-10)[0]
+            # halved while it does not lower the chi-square, the trial points of every search in one call
+            pending, accepted = list(idx), {}
             for _halving in range(3):
-                trial = np.clip(x + step, lower, upper)
-                r_trial = fun(trial)
-                new = float(r_trial @ r_trial)
-                if new < cost:
+                if not pending:
                     break
-                step = step / 2
-            else:
-                break
-            gain = cost - new
-            x, r, cost = trial, r_trial, new
-            if gain < APPARENT_TOLERANCE:
-                break
-        if not cost < start_cost:
-            return fit
+                T = np.array([np.clip(X[s] + step[s], lower, upper) for s in pending])
+                RT = residuals_batch(T)
+                still = []
+                for s, t, rt in zip(pending, T, RT):
+                    if float(rt @ rt) < cost[s]:
+                        accepted[s] = (t, rt)
+                    else:
+                        step[s] = step[s] / 2
+                        still.append(s)
+                pending = still
+            for s in idx:
+                done[s] += 1
+                if s not in accepted:
+                    # no step gains: a minimum when the full Gauss-Newton step (clipped) would gain little
+                    move = np.clip(X[s] - np.linalg.lstsq(J[s], R[s], rcond=1e-10)[0], lower, upper) - X[s]
+                    predicted = R[s] + J[s] @ move
+                    converged[s] = cost[s] - float(predicted @ predicted) < MINIMUM_DECREMENT
+                    active[s] = False
+                    continue
+                t, rt = accepted[s]
+                gain = cost[s] - float(rt @ rt)
+                visited.append((t.copy(), float(rt @ rt)))
+                X[s], R[s], cost[s] = t, rt, float(rt @ rt)
+                if gain < APPARENT_TOLERANCE:
+                    converged[s], active[s] = True, False
+                elif done[s] >= limit[s]:
+                    active[s] = False
+        best = int(np.argmin(cost))
+        LOG.debug(
+            "%s: searches from %d starts end at %s (chi-square %s, converged %s)",
+            "+".join(fit.effects),
+            len(X),
+            np.array2string(X, precision=4),
+            np.array2string(cost, precision=3),
+            converged,
+        )
+        minima = self._distinct_minima(residuals_batch, X, cost, J, converged, best)
+        if best == 0 and not cost[0] < start_cost:
+            return replace(fit, minima=minima, visited=visited)
+        x = X[best]
         own = self.own_bias(lay, x)
         r = self._residuals(lay, mask, x, own)
-        out = self._result(
-            lay, x, fit.stderr, r, int(mask.sum()), fit.success, "least squares of the apparent eigenvalues"
-        )
-        out.bias, out.bias_iterations = own, fit.bias_iterations
+        message = "least squares of the apparent eigenvalues" + ("" if best == 0 else " (from a further start)")
+        out = self._result(lay, x, fit.stderr, r, int(mask.sum()), fit.success, message)
+        out.bias, out.bias_iterations, out.minima, out.visited = own, fit.bias_iterations, minima, visited
         return out
+
+    def _further_starts(self, lay: _Layout, x: np.ndarray, count: int) -> list[np.ndarray]:
+        """The ``count`` grid starts of :meth:`fit` (moved inside the bounds as there) with the lowest chi-square
+        of the weave eigenvalues plus the nominal model's extraction bias, other than ``x``."""
+        if count <= 0 or lay.n_shift or not lay.starts or len(lay.starts[0]) != len(lay.structural):
+            return []
+        lower, upper = self.bounds(lay)
+        span = upper - lower
+        margin = np.where(np.isfinite(span), START_MARGIN * span, 0.0)
+        grid = np.clip(np.array([list(s) for s in lay.starts], dtype=float), lower + margin, upper - margin)
+        mask = np.ones(len(self.obs), bool)
+        cheap = np.sum(self._residuals_batch(lay, mask, grid, self.nominal_bias) ** 2, axis=1)
+        out: list[np.ndarray] = []
+        for i in np.argsort(cheap, kind="stable"):
+            if len(out) >= count:
+                break
+            if not np.allclose(grid[i], x, rtol=1e-9, atol=0.0):
+                out.append(grid[i])
+        return out
+
+    @staticmethod
+    def _distinct_minima(
+        residuals_batch, X: np.ndarray, cost: np.ndarray, J: np.ndarray, converged: np.ndarray, best: int
+    ) -> list[tuple[np.ndarray, float]]:
+        """The local minima found besides the best (``X[best]``), each once, lowest chi-square first.
+
+        A converged search's point is another minimum when its linearised chi-square distance from the
+        best (``|J_best dx|^2``, the best's slopes) and from every minimum kept exceeds one, and the
+        chi-square halfway to the best rises above both ends (a ridge between them)."""
+        others = [s for s in np.argsort(cost, kind="stable") if s != best and converged[s]]
+        kept: list[int] = []
+        for s in others:
+            if all(float(np.sum((J[best] @ (X[s] - X[k])) ** 2)) > 1.0 for k in [best, *kept]):
+                kept.append(s)
+        if not kept:
+            return []
+        halfway = residuals_batch(np.array([(X[s] + X[best]) / 2 for s in kept]))
+        ridge = np.sum(halfway**2, axis=1)
+        return [(X[s].copy(), float(cost[s])) for s, c in zip(kept, ridge) if c > max(cost[s], cost[best])]
 
     def predict_fit(self, fit: EffectFit) -> np.ndarray:
         """Predictions of every observation with a fitted set of effects.
