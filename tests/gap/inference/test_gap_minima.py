@@ -63,7 +63,7 @@ def test_a_second_minimum_within_the_threshold_is_found_and_held_by_the_interval
     fit = problem.fit_apparent(_start(problem, 3.2))
     assert fit.values[0] == pytest.approx(3.0, abs=0.05)  # the deeper minimum
     assert len(fit.minima) == 1
-    (other, chi2), = fit.minima
+    ((other, chi2),) = fit.minima
     assert other[0] == pytest.approx(7.0, abs=0.05) and chi2 - fit.chi2 == pytest.approx(0.08, abs=0.02)
     out = with_parameter_uncertainty(problem, fit)
     assert out.minima_within == 1
