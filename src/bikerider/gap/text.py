@@ -57,6 +57,17 @@ def _values(params: dict) -> str:
     )
 
 
+def _minima_text(minima: list[dict], indent: str) -> list[str]:
+    """A line for each other minimum of a fit's chi-square the intervals hold (the data cannot reject it)."""
+    return [
+        f"{indent}another minimum of nearly equal depth: "
+        + ", ".join(f"{k} = {_fmt(v)}" for k, v in m["values"].items() if not k.startswith("parameters."))
+        + f" (chi-square {m['chi2']:.3g} against the fit's {m['chi2_fit']:.3g}); the 95 % intervals hold both"
+        for m in minima
+        if m.get("within")
+    ]
+
+
 def _law_text(name: str, text: str) -> str:
     """``Control law NAME: GAINS``, or ``Control law: GAINS`` when the name is the gains themselves
     (an unnamed ``[control]`` table)."""
@@ -158,6 +169,7 @@ def summary_text(result: dict) -> str:
                 f"{_num(r['shrink']):>8}{_num(r.get('data_error_after')):>12}{_num(r.get('data_shrink')):>8}"
                 f"  {'yes' if r['plausible'] else 'no':<9}  {params}{ties}"
             )
+            lines += _minima_text(r.get("other_minima", []), " " * 7)
         if result.get("pairs"):
             lines.append("  pairs (fitted jointly), best first:")
             for p in result["pairs"][:5]:
@@ -167,6 +179,7 @@ def summary_text(result: dict) -> str:
                     f"{_num(p.get('data_error_after')):>12}{_num(p.get('data_shrink')):>8}  {plaus:<9}  "
                     f"{_values(p.get('parameters', {}))}"
                 )
+                lines += _minima_text(p.get("other_minima", []), " " * 9)
     else:
         lines.append("Which: no ranking (" + "; ".join(result["notes"][-1:]) + ")")
     for name, why in result.get("not_applicable", {}).items():

@@ -11,6 +11,7 @@ import pytest
 from scipy.special import stdtrit
 
 from bikerider.gap.diagnosis.fits import with_parameter_uncertainty
+from bikerider.gap.diagnosis.statistics import _minima
 from bikerider.gap.inference.problem import EffectFit, GapProblem, _Layout, scale_and_quantile
 
 
@@ -145,3 +146,12 @@ def test_scale_and_quantile():
     factor, quantile = scale_and_quantile(16.0, 10, 2)
     assert factor == pytest.approx(2.0) and quantile == pytest.approx(2.306, abs=1e-3)  # t_8(0.975)
     assert scale_and_quantile(1e4, 1000, 1)[1] == pytest.approx(1.962, abs=1e-3)
+
+
+def test_each_minimum_is_reported_once():
+    problem = _TwoMinima()
+    out = with_parameter_uncertainty(problem, problem.fit_apparent(_start(problem, 3.2)))
+    assert len(out.minima) == 1 and out.minima_within == 1
+    (entry,) = _minima(out)
+    assert entry["within"] and entry["values"]["c_steer"] == pytest.approx(7.0, abs=0.05)
+    assert entry["chi2_fit"] == pytest.approx(out.chi2)

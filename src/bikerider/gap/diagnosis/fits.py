@@ -382,7 +382,8 @@ def with_parameter_uncertainty(p: GapProblem, fit: EffectFit) -> EffectFit:
     low = np.clip(x - quantile * stderr, lower, upper)
     high = np.clip(x + quantile * stderr, lower, upper)
     threshold = quantile**2 * factor
-    within = [(values, chi2) for values, chi2 in fit.minima if chi2 - fit.chi2 <= threshold]
+    held = [chi2 - fit.chi2 <= threshold for _values, chi2 in fit.minima]
+    within = [m for m, ok in zip(fit.minima, held) if ok]
     for values, _chi2 in within:
         other = _sandwich(p, lay, values, lower, upper)
         spread = np.sqrt(np.clip(np.diag(other), 0, None) * factor) if other is not None else np.zeros(x.size)
@@ -394,7 +395,7 @@ def with_parameter_uncertainty(p: GapProblem, fit: EffectFit) -> EffectFit:
     near = [values for values, chi2 in fit.visited if chi2 - fit.chi2 <= threshold]
     if near:
         low, high = np.minimum(low, np.min(near, axis=0)), np.maximum(high, np.max(near, axis=0))
-    minima = within + [m for m in fit.minima if all(m is not w for w in within)]
+    minima = within + [m for m, ok in zip(fit.minima, held) if not ok]
     return replace(
         fit, stderr=stderr, ci_low=low, ci_high=high, covariance=cov, minima=minima, minima_within=len(within)
     )

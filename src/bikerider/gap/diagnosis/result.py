@@ -75,7 +75,7 @@ from bikerider.gap.diagnosis.fits import CrossValidation, Fits, obs_rows
 from bikerider.gap.diagnosis.folds import folds
 from bikerider.gap.diagnosis.priors import Priors, steer_rate_amplitudes
 from bikerider.gap.diagnosis.select import select
-from bikerider.gap.diagnosis.statistics import _named_values, by_error, noise_floor_rms
+from bikerider.gap.diagnosis.statistics import _minima, _named_values, by_error, noise_floor_rms
 from bikerider.gap.diagnosis.where import gap_map, gap_test, whether
 from bikerider.gap.diagnosis.which import rank, search_pairs
 from bikerider.gap.inference.problem import EffectFit, GapProblem
@@ -332,6 +332,7 @@ def as_dict(d: Diagnosis) -> dict:
             {
                 **{k: entry[k] for k in ("rank", "effect")},
                 "parameters": _named_values(fit),
+                "other_minima": _minima(fit),
                 "heldout_error_before": entry["heldout_error_before"],
                 "heldout_error_after": entry["heldout_error_after"],
                 "shrink": entry["shrink"],
@@ -362,6 +363,7 @@ def as_dict(d: Diagnosis) -> dict:
             {
                 "plausible": ok,
                 "parameters": _named_values(fit),
+                "other_minima": _minima(fit),
                 "plausibility": checks,
                 "equivalent": judge.friction_equivalent(fit),
             }
@@ -414,6 +416,7 @@ def as_dict(d: Diagnosis) -> dict:
             "data_error_after": cv.data_after,
             "data_shrink": cv.data_shrink,
             "parameters": _named_values(fit) if fit else {},
+            "other_minima": _minima(fit),
             "equivalent": judge.friction_equivalent(fit) if fit else None,
         }
     return out

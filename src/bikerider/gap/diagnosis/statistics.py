@@ -128,6 +128,24 @@ def _named_values(fit: EffectFit | None) -> dict:
     }
 
 
+def _minima(fit: EffectFit | None) -> list[dict]:
+    """The other local minima of a fit's chi-square found (:meth:`GapProblem.fit_apparent`), lowest first:
+    ``{values: {name: value}, chi2, chi2_fit, within}``, ``within`` when it lies within the 95 %
+    profile-likelihood threshold of the fit's chi-square (the 95 % intervals then hold it)."""
+    if fit is None:
+        return []
+    within = fit.minima[: fit.minima_within]
+    return [
+        {
+            "values": {name: float(v) for name, v in zip(fit.names, values)},
+            "chi2": float(chi2),
+            "chi2_fit": float(fit.chi2),
+            "within": any(values is w for w, _ in within),
+        }
+        for values, chi2 in fit.minima
+    ]
+
+
 def jackknife_quantile(folds: int) -> float:
     """The 97.5 % point of Student's t with ``folds - 1`` degrees of freedom: a jackknife over ``folds``
     fits estimates a standard error with that many, so the normal 1.96 would make its 95 % intervals too

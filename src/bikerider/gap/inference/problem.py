@@ -50,6 +50,7 @@ import itertools
 import logging
 import math
 import threading
+import time
 from collections import OrderedDict
 from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING
@@ -981,7 +982,8 @@ class GapProblem:
             r = np.where(np.isfinite(r), r, _BAD)
             return np.concatenate([r, X[:, n_struct:]], axis=1) if lay.n_shift else r
 
-        X = np.array([np.asarray(fit.values, float)] + self._further_starts(lay, fit.values, starts))
+        began = time.perf_counter()
+        X = np.array([np.asarray(fit.values, float)] + self._further_starts(lay, fit, starts))
         limit = np.array([max_iterations] + [max(MINIMUM_ITERATIONS, max_iterations)] * (len(X) - 1))
         R = residuals_batch(X)
         cost = np.sum(R**2, axis=1)
@@ -1036,9 +1038,11 @@ class GapProblem:
                     active[s] = False
         best = int(np.argmin(cost))
         LOG.debug(
-            "%s: searches from %d starts end at %s (chi-square %s, converged %s)",
+            "%s: searches from %d starts (%d steps, %.2f s) end at %s (chi-square %s, converged %s)",
             "+".join(fit.effects),
             len(X),
+            int(done.sum()),
+            time.perf_counter() - began,
             np.array2string(X, precision=4),
             np.array2string(cost, precision=3),
             converged,
@@ -1054,9 +1058,16 @@ class GapProblem:
         out.bias, out.bias_iterations, out.minima, out.visited = own, fit.bias_iterations, minima, visited
         return out
 
-    def _further_starts(self, lay: _Layout, x: np.ndarray, count: int) -> list[np.ndarray]:
-        """The ``count`` grid starts of :meth:`fit` (moved inside the bounds as there) with the lowest chi-square
-        of the weave eigenvalues plus the nominal model's extraction bias, other than ``x``."""
+    def _further_starts(self, lay: _Layout, fit: EffectFit, count: int) -> list[np.ndarray]:
+        """Starts of :meth:`fit_apparent`'s search for other minima, found cheaply.
+
+        From each of the ``count`` grid starts of :meth:`fit` (moved inside the bounds as there) with the
+        lowest cheap chi-square, a least squares of the cheap model: the weave eigenvalues plus the fit's
+        own extraction bias held (the model the iterated bias correction fits; no record is simulated).
+        Its minima distinct from the fit's values and from one another (linearised chi-square distance
+        above one, in the cheap model's slopes at the fit) are the starts; the search on the apparent
+        eigenvalues themselves then runs only from these (where every grid start leads back to the fit,
+        from none)."""
         if count <= 0 or lay.n_shift or not lay.starts or len(lay.starts[0]) != len(lay.structural):
             return []
         lower, upper = self.bounds(lay)
@@ -1064,14 +1075,35 @@ class GapProblem:
         margin = np.where(np.isfinite(span), START_MARGIN * span, 0.0)
         grid = np.clip(np.array([list(s) for s in lay.starts], dtype=float), lower + margin, upper - margin)
         mask = np.ones(len(self.obs), bool)
-        cheap = np.sum(self._residuals_batch(lay, mask, grid, self.nominal_bias) ** 2, axis=1)
-        out: list[np.ndarray] = []
-        for i in np.argsort(cheap, kind="stable"):
-            if len(out) >= count:
-                break
-            if not np.allclose(grid[i], x, rtol=1e-9, atol=0.0):
-                out.append(grid[i])
-        return out
+        offset = self.nominal_bias if fit.bias is None else fit.bias
+
+        def residuals_batch(X: np.ndarray) -> np.ndarray:
+            return self._residuals_batch(lay, mask, X, offset)
+
+        scale = np.array([max(hi - lo, 1e-6) for lo, hi in zip(lay.lower, lay.upper)])
+        steps = 1e-5 * np.minimum(scale, 10.0)
+
+        def jac(x: np.ndarray) -> np.ndarray:
+            return forward_jacobian(residuals_batch, x, steps, upper)
+
+        x0 = np.asarray(fit.values, float)
+        J0 = jac(x0)
+        found = [x0]
+        for i in np.argsort(np.sum(residuals_batch(grid) ** 2, axis=1), kind="stable")[:count]:
+            result = least_squares(
+                lambda x: residuals_batch(x[None, :])[0],
+                grid[i],
+                jac=jac,
+                bounds=(lower, upper),
+                x_scale=scale * 0.1,
+                method="trf",
+                max_nfev=20 * x0.size,
+                ftol=1e-6,
+                xtol=1e-6,
+            )
+            if all(float(np.sum((J0 @ (result.x - f)) ** 2)) > 1.0 for f in found):
+                found.append(result.x)
+        return found[1:]
 
     @staticmethod
     def _distinct_minima(
