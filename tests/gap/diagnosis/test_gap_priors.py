@@ -189,11 +189,16 @@ def test_a_few_calibration_trials_and_their_report(tmp_path):
     c_eq = trial.reference["c_steer"]
     assert c_eq == pytest.approx(4 * trial.truth["T_coulomb"] / (math.pi * trial.amplitude))
     assert "c_steer" in trial.fitted
+    # the candidate's fit to all the data, for analysis offline: its chi-square over its observations and
+    # the local minima its search found (from records)
+    assert trial.fit_chi2 >= 0 and trial.fit_n >= trial.n_measured > 0
+    assert trial.minima == 1 + len(trial.other_minima) and 0 <= trial.minima_within <= len(trial.other_minima)
     # from records Coulomb friction has its own candidate, scored against the truth's level
     assert trial.reference["T_coulomb"] == trial.truth["T_coulomb"] and "T_coulomb" in trial.fitted
     before = V.run_trial(models, effect, 0, "tables")  # the same runs as a table of eigenvalues
     assert before.method == "tables" and before.truth == trial.truth and before.amplitude == trial.amplitude
     assert before.first == "steer_damping" and "T_coulomb" not in before.fitted
+    assert before.minima == 1 and not before.other_minima  # a table's fit is not searched for other minima
     results = tmp_path / "trials.jsonl"
     results.write_text(json.dumps(trial.as_dict()) + "\n" + json.dumps(before.as_dict()) + "\n")
     doc = tmp_path / "doc.md"

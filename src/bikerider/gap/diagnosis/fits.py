@@ -24,7 +24,7 @@ from bikerider import progress
 from bikerider.gap.candidates.effects import EFFECTS, PARAMETERS, STEER_FRICTION, TIME_DOMAIN_EFFECTS
 from bikerider.gap.diagnosis.statistics import _named_values, gap_shrink, interval_quantile, rms
 from bikerider.gap.inference.frequency_response import predict_frf_friction
-from bikerider.gap.inference.problem import EffectFit, GapProblem, scale_and_quantile
+from bikerider.gap.inference.problem import MINIMUM_STARTS, EffectFit, GapProblem, scale_and_quantile
 from bikerider.gap.inference.timedomain import Layout, fit_time_domain, parameter_sensitivity
 from bikerider.gap.measured.multisine import MultisineFit
 from bikerider.gap.measured.records import RecordFit
@@ -138,7 +138,12 @@ class Fits:
                 # records: the bias-corrected fit polished to the least squares of the apparent eigenvalues
                 corrected = self.problem.fit(effects)
                 self.bias_corrected[effects] = corrected
-                self.full[effects] = with_parameter_uncertainty(self.problem, self.problem.fit_apparent(corrected))
+                # a single candidate's fit also searches for other minima of its chi-square; a pair's does not
+                # (the pairs' fits would double its cost on the steer-by-wire records: their intervals stay
+                # linearised about the polished fit)
+                starts = MINIMUM_STARTS if len(effects) == 1 else 0
+                polished = self.problem.fit_apparent(corrected, starts=starts)
+                self.full[effects] = with_parameter_uncertainty(self.problem, polished)
         return self.full[effects]
 
     def record_indices(self, mask: np.ndarray | None) -> list[int]:

@@ -37,7 +37,8 @@ data variance alone.  Starts are the best of a grid over each fitted parameter's
 :data:`MAX_STARTS` points);
 the Jacobian is a forward difference evaluated for all parameters in one batched model call.
 Standard errors come from ``(J^T J)^-1``, scaled by the reduced chi-square when that exceeds one;
-95 % intervals are +-1.96 standard errors, clipped to the bounds.  Benchmark parameters move at most
+95 % intervals are +-1.96 standard errors, or +-``t_{n-p}(0.975)`` when so scaled (the scale is then
+estimated: :func:`scale_and_quantile`), clipped to the bounds.  Benchmark parameters move at most
 five standard deviations, and never to a non-positive mass, length, wheel radius or moment of
 inertia (:data:`POSITIVE`).  The ``speed_sensor`` candidate scales the speed the bicycle ran at
 (the control gains stay those of the recorded speed, which the controller used).
@@ -101,10 +102,10 @@ APPARENT_TOLERANCE = 0.05
 """The polish stops when a step lowers the chi-square by less than this (a twentieth of what one
 standard error's move of a fitted value changes it by)."""
 MINIMUM_STARTS = 3
-"""Further starts of the search for other local minima of the apparent eigenvalues' least squares
-(:meth:`GapProblem.fit_apparent`): the grid starts with the lowest chi-square of the weave eigenvalues
-plus the nominal model's extraction bias (the cheap cost the first fit ranks its starts by)."""
-MINIMUM_ITERATIONS = 10
+"""Grid starts from which the search for other local minima of the apparent eigenvalues' least squares
+(:meth:`GapProblem.fit_apparent`) fits the cheap model (:meth:`GapProblem._further_starts`): those with
+the lowest chi-square of the weave eigenvalues plus the nominal model's extraction bias."""
+MINIMUM_ITERATIONS = 8
 """Most Gauss-Newton steps from each further start of that search."""
 MINIMUM_DECREMENT = 0.5
 """A search from a further start counts as having found a local minimum when the Gauss-Newton step at
@@ -947,9 +948,10 @@ class GapProblem:
         Other minima.  The apparent eigenvalues' chi-square can have two minima of nearly equal depth
         (tyre slip on a 3-s record set with the rider: 3.85 at c_alpha 7.6 /rad, sigma_t 0.41 m and 4.10
         at 12.2, 0.108, hidden 13.5, 0.097), and an interval linearised about one cannot hold the other.
-        So the same steps run, side by side in the same batched model calls, from ``starts`` further
-        points (at most :data:`MINIMUM_ITERATIONS` steps each): the grid starts of :meth:`fit` with the
-        lowest cheap chi-square (weave eigenvalues plus the nominal model's extraction bias).  A search
+        So the same steps run, side by side in the same batched model calls, from further points (at most
+        :data:`MINIMUM_ITERATIONS` steps each; :meth:`_further_starts`, from ``starts`` grid starts; none
+        with ``starts = 0``); a further search that comes within the linearised reach of a lower one
+        (``|J dx|^2 < 1``) stops and follows it.  A search
         that stops because a step gains less than :data:`APPARENT_TOLERANCE`, or because the Gauss-Newton
         step at its point would gain less than :data:`MINIMUM_DECREMENT`, has found a local minimum.
         The lowest point found is the fit; another minimum is kept (``EffectFit.minima``) when it is
@@ -1021,6 +1023,11 @@ class GapProblem:
                 pending = still
             for s in idx:
                 done[s] += 1
+                # a further search that has come within the linearised reach of a lower one follows it
+                near = [k for k in range(len(X)) if k != s and cost[k] <= cost[s] and k in step]
+                if s and any(float(np.sum((J[k] @ (X[s] - X[k])) ** 2)) < 1.0 for k in near):
+                    active[s] = False
+                    continue
                 if s not in accepted:
                     # no step gains: a minimum when the full Gauss-Newton step (clipped) would gain little
                     move = np.clip(X[s] - np.linalg.lstsq(J[s], R[s], rcond=1e-10)[0], lower, upper) - X[s]
@@ -1065,9 +1072,11 @@ class GapProblem:
         lowest cheap chi-square, a least squares of the cheap model: the weave eigenvalues plus the fit's
         own extraction bias held (the model the iterated bias correction fits; no record is simulated).
         Its minima distinct from the fit's values and from one another (linearised chi-square distance
-        above one, in the cheap model's slopes at the fit) are the starts; the search on the apparent
-        eigenvalues themselves then runs only from these (where every grid start leads back to the fit,
-        from none)."""
+        above one, in the cheap model's slopes at the fit) are the starts, and the grid start with the
+        lowest cheap chi-square itself when distinct as well (the cheap model is the apparent eigenvalues'
+        only near the fit: on tyre-slip record sets its minima all lay in the fit's valley, and the
+        searches from grid starts found the lower points).  The search on the apparent eigenvalues
+        themselves runs only from these."""
         if count <= 0 or lay.n_shift or not lay.starts or len(lay.starts[0]) != len(lay.structural):
             return []
         lower, upper = self.bounds(lay)
@@ -1103,6 +1112,11 @@ class GapProblem:
             )
             if all(float(np.sum((J0 @ (result.x - f)) ** 2)) > 1.0 for f in found):
                 found.append(result.x)
+        # and the grid start the cheap model likes best itself: the cheap model is the apparent eigenvalues'
+        # only near the fit, and a minimum it does not have can be reached from there
+        best = grid[int(np.argmin(np.sum(residuals_batch(grid) ** 2, axis=1)))]
+        if all(float(np.sum((J0 @ (best - f)) ** 2)) > 1.0 for f in found):
+            found.append(best)
         return found[1:]
 
     @staticmethod
