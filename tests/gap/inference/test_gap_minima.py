@@ -13,6 +13,7 @@ from scipy.special import stdtrit
 from bikerider.gap.diagnosis.fits import with_parameter_uncertainty
 from bikerider.gap.diagnosis.statistics import _minima
 from bikerider.gap.inference.problem import EffectFit, GapProblem, _Layout, scale_and_quantile
+from bikerider.gap.text import _minima_text
 
 
 class _TwoMinima(GapProblem):
@@ -155,3 +156,14 @@ def test_each_minimum_is_reported_once():
     (entry,) = _minima(out)
     assert entry["within"] and entry["values"]["c_steer"] == pytest.approx(7.0, abs=0.05)
     assert entry["chi2_fit"] == pytest.approx(out.chi2)
+
+
+def test_the_text_names_a_second_minimum_the_intervals_hold():
+    problem = _TwoMinima()
+    out = with_parameter_uncertainty(problem, problem.fit_apparent(_start(problem, 3.2)))
+    (line,) = _minima_text(_minima(out), "  ")
+    assert line.startswith("  another minimum of nearly equal depth: c_steer = 6.99 (chi-square 0.0898")
+    assert f"against the fit's {out.chi2:.3g}" in line
+    rejected = _TwoMinima(tilt=1.0, depth=2.0)
+    far = with_parameter_uncertainty(rejected, rejected.fit_apparent(_start(rejected, 3.2)))
+    assert _minima(far) and not _minima_text(_minima(far), "  ")  # in the JSON, not called equal depth
