@@ -54,6 +54,9 @@ JR_NO_RULE = Path(__file__).with_name("gap_next_loop_plan_jensen_renyi_max_roll_
 EVEN_NOW = Path(__file__).with_name("gap_next_loop_even.jsonl")
 """``plan:jensen_renyi`` on every stored tie with the lean rule and without it, and ``even`` (which takes decays
 only, so the rule does not touch it), all on the same code (``rerun --strategy ...``)."""
+RECORDS = Path(__file__).with_name("gap_next_loop_records.jsonl")
+"""The records mode (``records``): the friction pairs, the tie's data records, pushes among the experiments."""
+FIRST_RECORD_SEED = 9000
 DOC = ROOT / "docs" / "gap_validation.md"
 FIGURE = ROOT / "docs" / "figures" / "gap_next_loop.png"
 BEGIN, END = "<!-- loop:begin -->", "<!-- loop:end -->"
@@ -85,6 +88,59 @@ def _one(job):
         return L.run_loop_case(_models(), L.SCENARIOS[k], seed, shared=shared)
     except Exception as exc:  # a case that breaks the harness is stored with its error, not lost silently
         return {"scenario": L.SCENARIOS[k].label, "seed": seed, "tie": False, "status": f"error: {exc!r}"}
+
+
+def _one_record(job):
+    from validation import loop as L
+
+    k, seed = job
+    logging.getLogger("bikerider").setLevel(logging.ERROR)
+    try:
+        return L.run_loop_case(_models(), L.RECORD_SCENARIOS[k], seed, records=True)
+    except Exception as exc:  # a case that breaks the harness is stored with its error, not lost silently
+        return {"scenario": L.RECORD_SCENARIOS[k].label, "seed": seed, "tie": False, "status": f"error: {exc!r}"}
+
+
+def records(args) -> int:
+    """The records mode (:data:`RECORDS`): the friction pairs in turn from seed :data:`FIRST_RECORD_SEED`, until
+    ``--ties`` ties or ``--until``; resumes where it stopped."""
+    from multiprocessing import get_context
+
+    from validation import loop as L
+
+    done = {(c["scenario"], c["seed"]) for c in _stored(RECORDS)}
+    ties = sum(bool(c.get("strategies")) for c in _stored(RECORDS))
+    jobs = []
+    for i in range(args.attempts):
+        k = i % len(L.RECORD_SCENARIOS)
+        if (L.RECORD_SCENARIOS[k].label, FIRST_RECORD_SEED + i) not in done:
+            jobs.append((k, FIRST_RECORD_SEED + i))
+    deadline = None
+    if args.until:
+        hh, mm = (int(x) for x in args.until.split(":"))
+        deadline = dt.datetime.now(dt.UTC).replace(hour=hh, minute=mm, second=0, microsecond=0)
+    LOG.info("%d ties stored, %d cases to try", ties, len(jobs))
+    start = time.perf_counter()
+    with get_context("fork").Pool(args.workers) as pool, RECORDS.open("a", encoding="utf-8") as out:
+        for result in pool.imap_unordered(_one_record, jobs):
+            out.write(json.dumps(result) + "\n")
+            out.flush()
+            ties += bool(result.get("strategies"))
+            LOG.info(
+                "%s seed %s: %s (%.1f s); %d ties, %.0f s",
+                result.get("scenario"),
+                result.get("seed"),
+                {k: (v["status"], v["runs"]) for k, v in (result.get("strategies") or {}).items()}
+                or result.get("status"),
+                result.get("seconds", math.nan),
+                ties,
+                time.perf_counter() - start,
+            )
+            if ties >= args.ties or (deadline and dt.datetime.now(dt.UTC) >= deadline):
+                LOG.info("stopping: %d ties", ties)
+                pool.terminate()
+                break
+    return 0
 
 
 def _stored(path: Path = RESULTS) -> list[dict]:
@@ -1000,9 +1056,15 @@ def main() -> int:
         type=float,
         help="with --strategy: the plan's largest lean of a multisine run [rad] (inf: the rule off), to its own file",
     )
+    rc = sub.add_parser("records", help="the records mode on the friction pairs (pushes among the experiments)")
+    rc.add_argument("--ties", type=int, default=40, help="stop after this many ties stored")
+    rc.add_argument("--attempts", type=int, default=300, help="cases to try at most (the friction pairs in turn)")
+    rc.add_argument("--workers", type=int, default=1)
+    rc.add_argument("--until", help="stop at this UTC time, HH:MM")
     sub.add_parser("report", help="write part 5 of docs/gap_validation.md and the figure")
     args = parser.parse_args()
-    return {"run": run, "check": check, "rerun": rerun, "report": report}[args.command](args)
+    commands = {"run": run, "check": check, "rerun": rerun, "records": records, "report": report}
+    return commands[args.command](args)
 
 
 if __name__ == "__main__":
