@@ -59,6 +59,7 @@ RECORDS = Path(__file__).with_name("gap_next_loop_records.jsonl")
 FIRST_RECORD_SEED = 9000
 DOC = ROOT / "docs" / "gap_validation.md"
 FIGURE = ROOT / "docs" / "figures" / "gap_next_loop.png"
+RECORDS_FIGURE = ROOT / "docs" / "figures" / "gap_next_loop_records.png"
 BEGIN, END = "<!-- loop:begin -->", "<!-- loop:end -->"
 FIRST_SEED = 7000
 LOG = logging.getLogger("gap_next_loop")
@@ -625,6 +626,168 @@ def _now_lines(n_max: int) -> list[str]:
     return out
 
 
+def _same_first(a: dict | None, b: dict | None) -> bool:
+    """Whether two next runs (``validation.loop._first``) are the same experiment: kind, speed, law and push."""
+    if a is None or b is None:
+        return False
+    return (a["kind"], round(a["speed"], 2), a["law"], a.get("push") or 1.0) == (
+        b["kind"],
+        round(b["speed"], 2),
+        b["law"],
+        b.get("push") or 1.0,
+    )
+
+
+def _push_of(c: dict, e: int) -> float | None:
+    """The push of experiment ``e`` of a records case (``None``: a multisine)."""
+    return c["pushes"][e] if e < len(c["pushes"]) else None
+
+
+def _records_lines(n_max: int) -> list[str]:
+    """The records mode's subsection, from :data:`RECORDS` (and its figure, :data:`RECORDS_FIGURE`)."""
+    import matplotlib.pyplot as plt
+
+    from bikerider.gap.plan.ranking import PUSHES
+    from validation import loop as L
+
+    stored = _stored(RECORDS)
+    ties = [c for c in stored if c.get("strategies")]
+    if not ties:
+        return []
+    names = [n for n in L.RECORD_STRATEGIES if all(n in c["strategies"] for c in ties)]
+    merit = _merit(ties, names)
+    plan = "plan:jensen_renyi"
+    chosen = [(c, e) for c in ties for e in c["strategies"][plan]["chosen"]]
+    pushes = Counter(_push_of(c, e) for c, e in chosen)
+    other = sum(n for push, n in pushes.items() if push is not None and push != 1.0)
+    decays = sum(n for push, n in pushes.items() if push is not None)
+    with_other = sum(any((_push_of(c, e) or 1.0) != 1.0 for e in c["strategies"][plan]["chosen"]) for c in ties)
+    first_other = sum(c["first"] is not None and c["first"]["push"] not in (None, 1.0) for c in ties)
+    compared = [c for c in ties if c.get("first") and c.get("table_first")]
+    same = [c for c in compared if _same_first(c["first"], c["table_first"])]
+    kind = sum(c["first"]["kind"] != c["table_first"]["kind"] for c in compared)
+    law = sum(
+        c["first"]["kind"] == c["table_first"]["kind"] and c["first"]["law"] != c["table_first"]["law"]
+        for c in compared
+    )
+    by_push = sum(
+        c["first"]["kind"] == "decay" == c["table_first"]["kind"]
+        and (c["first"]["law"], round(c["first"]["speed"], 2))
+        == (c["table_first"]["law"], round(c["table_first"]["speed"], 2))
+        and c["first"]["push"] != 1.0
+        for c in compared
+    )
+    matches = [c.get("first_is_next_run") for c in ties if c.get("first_is_next_run") is not None]
+    by_scenario: dict[str, list] = {}
+    for c in stored:
+        by_scenario.setdefault(c["scenario"], []).append(c)
+    errors = [c for c in stored if str(c.get("status", "")).startswith("error")]
+
+    # figure: runs to a decision, and the pushes the plan chose
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
+    k = np.arange(0, n_max + 1)
+    for n in names:
+        got = [c["strategies"][n] for c in ties]
+        for status, style in (("resolved", "-"), ("wrong", ":")):
+            frac = [np.mean([s["status"] == status and s["runs"] <= j for s in got]) for j in k]
+            axes[0].step(k, frac, where="post", ls=style, color="C0" if n == plan else "C1", label=f"{n}, {status}")
+    axes[0].set_xlabel("runs after the tie")
+    axes[0].set_ylabel("fraction of ties decided")
+    axes[0].set_title(f"Records mode, friction pairs: {len(ties)} ties")
+    axes[0].set_ylim(0, 1)
+    axes[0].grid(alpha=0.3)
+    axes[0].legend(fontsize=8)
+    labels = ["decay x0.5", "decay x1", "decay x2", "multisine"]
+    counts = [pushes.get(0.5, 0), pushes.get(1.0, 0), pushes.get(2.0, 0), pushes.get(None, 0)]
+    axes[1].bar(labels, counts, color=["C2", "C0", "C3", "0.6"])
+    for x, n in enumerate(counts):
+        axes[1].annotate(str(n), (x, n), ha="center", va="bottom", fontsize=9)
+    axes[1].set_ylabel("runs")
+    axes[1].set_title(f"The runs {plan} chose ({len(chosen)} in all)")
+    fig.tight_layout()
+    fig.savefig(RECORDS_FIGURE, dpi=110)
+    plt.close(fig)
+
+    def cell(n):
+        m = merit[n]
+        med, p90 = m["median_p90"]
+        dmed, dp90 = m["decided"]
+        return (
+            f"| {n} | {m['n']} | {m['resolved']} | {m['wrong']} | {m['undecided']} | {m['unbreakable']} | "
+            f"{_fmt(med, n_max)} | {_fmt(p90, n_max)} | {_fmt(dmed, n_max)} | {_fmt(dp90, n_max)} | "
+            f"{m['lost']} / {m['spent']} |"
+        )
+
+    out = [
+        "### Records: pushes among the experiments",
+        "",
+        "The loop's records mode (`validation.loop.run_loop_case(..., records=True)`, `gap_next_loop.py records`):",
+        "the tie's data are **records**, the truth's noisy roll rate of each kicked run as part 4's trials make them",
+        "(`validation.cases.measure` with records; Coulomb friction simulated in time by the truth's own simulator,",
+        "nine runs near one speed in three sessions, `RECORD_NARROW`: the steer friction fitted in time has",
+        "standard errors only from the jackknife over three or more sessions, and with the two sessions of the",
+        "table study the plan takes its values' spread as their whole search range). The friction truths' candidate",
+        "is `steer_friction` (viscous and Coulomb, fitted in time), nonlinear, so the plan (`NextExperiment`,",
+        "roll-rate decays) plans each decay at "
+        + ", ".join(f"{x:g}" for x in PUSHES)
+        + " times the data's push, besides the multisines.",
+        "The rivals' predictions are the plan's own (indirect inference over each experiment's template at its",
+        "push; the friction rival's response simulated in time), linear in their fitted values through the plan's",
+        "secants (`validation.loop.from_plan`; they give back the plan's covariances to "
+        f"{max(c.get('own_cov_error') or 0.0 for c in ties):.0e}, relative). A push run is the truth's",
+        "kick (as the data's, drawn the same way) times the push, 6 s, read by the diagnosis's own record fit",
+        "(`fit_record`); its weight is its fit's standard errors plus the nominal parameters' uncertainty. The",
+        "even spread takes decays at the data's push (a researcher without a plan pushes as before); multisines",
+        f"are as in the table study. Pairs: {'; '.join(s.label for s in L.RECORD_SCENARIOS)}; seeds from "
+        f"{FIRST_RECORD_SEED}, the pairs in turn.",
+        "",
+        f"* **{len(ties)} ties** out of {len(stored)} cases tried"
+        + (f" ({len(errors)} failed with an error)" if errors else "")
+        + ".",
+        "",
+        "| strategy | ties | resolved | wrong | undecided | unbreakable | runs needed: median | 90th percentile | "
+        "runs to any decision: median | 90th percentile | runs lost / spent |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
+        *[cell(n) for n in names],
+        "",
+        f"* The runs {plan} chose: {decays} decays, {other} of them at a push other than the data's "
+        f"({pushes.get(0.5, 0)} at 0.5 times, {pushes.get(2.0, 0)} at 2 times; in {with_other} of {len(ties)} ties), "
+        f"and {pushes.get(None, 0)} multisines. Its first run was a push other than the data's in {first_other} ties.",
+        f"* The first run ({plan}, the next run `--next` names; the loop's first choice was that run in "
+        f"{sum(matches)} of {len(matches)} ties) against the table loop's on the same runs (their fitted weave "
+        "eigenvalues as a table, the table study's candidate `steer_damping` for the friction and the same rival, "
+        f"planned as the table study plans): the same experiment in {len(same)} of {len(compared)} ties, "
+        f"different in {len(compared) - len(same)} ({kind} a different kind, decay or multisine; {law} a different "
+        f"law; {by_push} the same speed and law at another push).",
+        "",
+        "| pair | cases | ties | plan resolved | plan wrong | even resolved | even wrong | first run differs from the table loop's |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for label, cs in by_scenario.items():
+        t = [c for c in cs if c.get("strategies")]
+
+        def count(name, status, t=t):
+            return sum(c["strategies"][name]["status"] == status for c in t)
+
+        differ = sum(
+            not _same_first(c["first"], c["table_first"]) for c in t if c.get("first") and c.get("table_first")
+        )
+        out.append(
+            f"| {label} | {len(cs)} | {len(t)} | {count(plan, 'resolved')} | {count(plan, 'wrong')} | "
+            f"{count('even', 'resolved')} | {count('even', 'wrong')} | {differ} |"
+        )
+    seconds = sum(c.get("seconds", 0.0) for c in stored)
+    out += [
+        "",
+        f"![records mode: runs to a decision and the pushes chosen](figures/{RECORDS_FIGURE.name})",
+        "",
+        f"* Cost: {len(stored)} cases in {seconds:.0f} s of one worker ({seconds / max(len(ties), 1):.1f} s a tie, "
+        "non-ties included).",
+        "",
+    ]
+    return out
+
+
 def report(args) -> int:
     import matplotlib
 
@@ -720,7 +883,8 @@ def report(args) -> int:
         "## 5. The closed loop: runs to a decision, following the plan against an even spread",
         "",
         "Produced by `docs/scripts/gap_next_loop.py` (`run` stores the cases in `gap_next_loop.jsonl` beside it,",
-        "`report` writes this part from them); the cases are `validation.loop`.",
+        "`records` the records mode's in `gap_next_loop_records.jsonl`, `report` writes this part from them); the",
+        "cases are `validation.loop`.",
         "",
         "### Set-up",
         "",
@@ -737,7 +901,9 @@ def report(args) -> int:
         "  its experiments (decays at 12 speeds under the data's control law, the law's gains halved or times 1.5,",
         "  or no control; steer-torque multisines of 0.5 N m, 10 s, roll rate or steer angle, at the same speeds",
         "  and laws), each rival's predictions and one run's noise and nominal-parameter uncertainty are the loop's.",
-        "  Pushes are not an experiment here: the diagnosis reads eigenvalue tables, whose decays carry no push size.",
+        "  Pushes are not an experiment in this study: its diagnosis reads eigenvalue tables, whose decays carry no",
+        "  push size. With records and a nonlinear rival the plan also plans pushes; the loop's records mode runs",
+        "  them (*Records: pushes among the experiments*, below).",
         "* **Loop** (cheap by design): each rival is linearised at its fit to the tie's data (its predictions of every",
         "  experiment and their secant slopes in its fitted values, through the same public model code the diagnosis",
         "  uses; they reproduce the plan's own predictions to "
@@ -875,6 +1041,7 @@ def report(args) -> int:
     lines += _rerun_lines(ties, best, n_max)
     lines += _lean_lines(ties, n_max)
     lines += _now_lines(n_max)
+    lines += _records_lines(n_max)
     shared = [c for c in _stored(SHARED) if c.get("strategies")]
     if shared:
         keys = {(c["scenario"], c["seed"]) for c in shared}
