@@ -39,6 +39,16 @@ has updated them; ``plan:jensen_renyi``'s first run is the next run ``--next`` n
 range, a van der Corput order), ``random`` (any feasible experiment), ``repeat:decay`` and
 ``repeat:sweep`` (the plan's best decay, or best multisine, repeated: what ``--next`` recommends,
 whose predicted resolution probability after ``k`` runs is stored for the reliability diagrams).
+
+The records mode (``run_loop_case(..., records=True)``, :data:`RECORD_SCENARIOS`: the friction pairs): the
+tie's data are records (:data:`RECORD_NARROW`, the truth's noisy roll rate of each kicked run, fitted by the
+record fit), the friction truths' candidate is the steer friction fitted in time (:data:`RECORD_CANDIDATES`),
+nonlinear, so the plan also plans each decay at other pushes (:data:`bikerider.gap.plan.ranking.PUSHES`).  The
+rivals' predictions are the plan's own (templates at each push, indirect inference, the friction simulated in
+time), linear through the plan's secants (:func:`from_plan`); a decay run is the truth's kick, drawn as the
+data's, times the experiment's push, read by the record fit (:func:`validation.cases.measure` with records,
+``Protocol.push``).  The even spread decays at the data's push.  Beside the loop each case stores the next run
+``--next`` names and the one the table loop's plan names on the same runs (their fits as a table).
 """
 
 from __future__ import annotations

@@ -643,6 +643,26 @@ def _push_of(c: dict, e: int) -> float | None:
     return c["pushes"][e] if e < len(c["pushes"]) else None
 
 
+def _by_first(ties: list[dict], plan: str) -> str:
+    """The plan's outcomes grouped by what its first run was (a decay at the data's push, at another, a multisine)."""
+    groups: dict[str, list[str]] = {}
+    for c in ties:
+        s = c["strategies"][plan]
+        if not s["chosen"]:
+            continue
+        push = _push_of(c, s["chosen"][0])
+        what = (
+            "a multisine"
+            if push is None
+            else ("a decay at the data's push" if push == 1.0 else f"a decay at {push:g} times")
+        )
+        groups.setdefault(what, []).append(s["status"])
+    return "; ".join(
+        f"{what}, {len(st)} ties: " + ", ".join(f"{n} {status}" for status, n in Counter(st).most_common())
+        for what, st in sorted(groups.items())
+    )
+
+
 def _records_lines(n_max: int) -> list[str]:
     """The records mode's subsection, from :data:`RECORDS` (and its figure, :data:`RECORDS_FIGURE`)."""
     import matplotlib.pyplot as plt
@@ -678,6 +698,11 @@ def _records_lines(n_max: int) -> list[str]:
         for c in compared
     )
     matches = [c.get("first_is_next_run") for c in ties if c.get("first_is_next_run") is not None]
+    both = [
+        (c["strategies"][plan]["runs"], c["strategies"]["even"]["runs"])
+        for c in ties
+        if c["strategies"][plan]["status"] == "resolved" == c["strategies"]["even"]["status"]
+    ]
     by_scenario: dict[str, list] = {}
     for c in stored:
         by_scenario.setdefault(c["scenario"], []).append(c)
@@ -759,6 +784,11 @@ def _records_lines(n_max: int) -> list[str]:
         f"planned as the table study plans): the same experiment in {len(same)} of {len(compared)} ties, "
         f"different in {len(compared) - len(same)} ({kind} a different kind, decay or multisine; {law} a different "
         f"law; {by_push} the same speed and law at another push).",
+        f"* By the plan's first run: {_by_first(ties, plan)}.",
+        f"* On the {len(both)} ties both resolved: {plan} {sum(a for a, _ in both)} runs in all (mean "
+        f"{np.mean([a for a, _ in both]) if both else math.nan:.2f}), the even spread {sum(b for _, b in both)} (mean "
+        f"{np.mean([b for _, b in both]) if both else math.nan:.2f}); fewer runs for the plan in "
+        f"{sum(a < b for a, b in both)}, more in {sum(a > b for a, b in both)}.",
         "",
         "| pair | cases | ties | plan resolved | plan wrong | even resolved | even wrong | first run differs from the table loop's |",
         "|---|---|---|---|---|---|---|---|",
