@@ -396,6 +396,10 @@ class TruthRuns:
         key = (e, k)
         if key not in self.cache:
             rng = np.random.default_rng([self.seed, e, k, 77])
+            if self.records and e < len(self.plan.points):  # the pushes of one speed and law share their draws
+                x = self.plan.points[e]
+                law = list(self.plan.laws).index(x.law)
+                rng = np.random.default_rng([self.seed, int(round(x.speed * 100)), law, k, 78])
             start = time.perf_counter()
             plan = self.plan
             if e < len(plan.points):
@@ -414,6 +418,12 @@ class TruthRuns:
                         self.record_fits[key] = fits[0]
                     y = np.array([data.value[0].real, abs(data.value[0].imag)])
                     R = np.diag([data.real_sigma[0] ** 2, data.imag_sigma[0] ** 2])
+                    if self.records:  # the plan's one-run noise with this run's own standard errors in place of
+                        # the template's: the data's scatter from run to run beyond their fits' (as the diagnosis
+                        # weighs a record by its cell's replicate scatter; Coulomb friction makes each kick decay
+                        # its own way)
+                        t = plan.templates[x].estimate
+                        R = R + plan.data_cov[e] - np.diag([t.real_sigma**2, t.imag_sigma**2])
                     out = (y, R if self.shared else R + plan.model_cov[e])
                 kind = "decay"
             else:
@@ -782,3 +792,43 @@ def figure_of_merit(runs: list[int | None]) -> tuple[float, float]:
     if not x.size:
         return math.nan, math.nan
     return float(np.quantile(x, 0.5, method="inverted_cdf")), float(np.quantile(x, 0.9, method="inverted_cdf"))
+
+
+def push_check(models: dict, scenario: Scenario, seed: int, groups: int = 4) -> dict:
+    """A records case again (the same runs) and, at up to ``groups`` speeds and laws where the plan holds a decay
+    at every push, the truth's first run at each push against the rivals' predictions of it: does the plan
+    foresee how the truth's decay moves with the push?  JSON-ready: per run the push, the truth's observation,
+    its weight and each rival's predictive mean and standard deviations (real part, frequency)."""
+    case = run_loop_case(models, scenario, seed, strategies=(), keep=True, records=True)
+    out = {"scenario": scenario.label, "seed": seed, "status": case["status"], "sizes": case["sizes"]}
+    if "_objects" not in case:
+        return out
+    o = case.pop("_objects")
+    plan, lin, runs = o["plan"], o["linear"], o["runs"]
+    names = [r.name for r in plan.rivals]
+    by_group: dict[tuple[float, str], dict[float, int]] = {}
+    for m, x in enumerate(plan.points):
+        by_group.setdefault((x.speed, x.law), {})[x.push] = m
+    full = [g for g, d in by_group.items() if len(d) == len({e.push for e in plan.points})]
+    pick = (
+        [full[int(j)] for j in np.unique(np.linspace(0, len(full) - 1, min(groups, len(full))).round())] if full else []
+    )
+    rows = []
+    for speed, law in pick:
+        for push, m in sorted(by_group[(speed, law)].items()):
+            obs = runs.get(m, 0)
+            row = {"speed": speed, "law": law, "push": push, "lost": obs is None}
+            if obs is not None:
+                y, R = obs
+                row["y"] = [float(v) for v in y]
+                row["sd"] = [float(v) for v in np.sqrt(np.diag(R))]
+                row["rivals"] = {}
+                for name, r in zip(names, lin):
+                    mu, W = r.predict(m)
+                    row["rivals"][name] = {
+                        "mean": [float(v) for v in mu],
+                        "sd": [float(v) for v in np.sqrt(np.diag(W))],
+                    }
+            rows.append(row)
+    out.update(candidate=case["candidate"], rivals=names, runs=rows)
+    return out

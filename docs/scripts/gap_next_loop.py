@@ -56,6 +56,8 @@ EVEN_NOW = Path(__file__).with_name("gap_next_loop_even.jsonl")
 only, so the rule does not touch it), all on the same code (``rerun --strategy ...``)."""
 RECORDS = Path(__file__).with_name("gap_next_loop_records.jsonl")
 """The records mode (``records``): the friction pairs, the tie's data records, pushes among the experiments."""
+RECORDS_PUSH = Path(__file__).with_name("gap_next_loop_records_push.jsonl")
+"""The records mode's ties again, the truth's runs at every push against the rivals' predictions (``push-check``)."""
 FIRST_RECORD_SEED = 9000
 DOC = ROOT / "docs" / "gap_validation.md"
 FIGURE = ROOT / "docs" / "figures" / "gap_next_loop.png"
@@ -141,6 +143,29 @@ def records(args) -> int:
                 LOG.info("stopping: %d ties", ties)
                 pool.terminate()
                 break
+    return 0
+
+
+def push_check(args) -> int:
+    """The stored records ties again (:func:`validation.loop.push_check`), appended to :data:`RECORDS_PUSH`."""
+    from validation import loop as L
+
+    index = {s.label: k for k, s in enumerate(L.RECORD_SCENARIOS)}
+    done = {(c["scenario"], c["seed"]) for c in _stored(RECORDS_PUSH)}
+    todo = [(c["scenario"], c["seed"]) for c in _stored(RECORDS) if c.get("strategies")]
+    todo = [t for t in todo if t not in done][: args.max]
+    deadline = None
+    if args.until:
+        hh, mm = (int(x) for x in args.until.split(":"))
+        deadline = dt.datetime.now(dt.UTC).replace(hour=hh, minute=mm, second=0, microsecond=0)
+    logging.getLogger("bikerider").setLevel(logging.ERROR)
+    for label, seed in todo:
+        result = L.push_check(_models(), L.RECORD_SCENARIOS[index[label]], seed)
+        with RECORDS_PUSH.open("a", encoding="utf-8") as out:
+            out.write(json.dumps(result) + "\n")
+        LOG.info("%s seed %s: %s, %d runs", label, seed, result["status"], len(result.get("runs", [])))
+        if deadline and dt.datetime.now(dt.UTC) >= deadline:
+            break
     return 0
 
 
@@ -663,6 +688,73 @@ def _by_first(ties: list[dict], plan: str) -> str:
     )
 
 
+def _push_lines() -> list[str]:
+    """How the truth's decay moves with the push against how the rivals predict it (:data:`RECORDS_PUSH`)."""
+    checked = [c for c in _stored(RECORDS_PUSH) if c.get("runs")]
+    if not checked:
+        return []
+    rows = []  # (push, candidate's z real, z freq, other's z real, z freq)
+    moves = {}  # push -> list of (truth's move, candidate's predicted move, other's predicted move) in real, freq
+    for c in checked:
+        cand = c["candidate"]
+        other = next(n for n in c["rivals"] if n != cand)
+        groups: dict[tuple, dict] = {}
+        for r in c["runs"]:
+            if r["lost"]:
+                continue
+            groups.setdefault((r["speed"], r["law"]), {})[r["push"]] = r
+            z = []
+            for name in (cand, other):
+                mu, sd = np.array(r["rivals"][name]["mean"]), np.array(r["rivals"][name]["sd"])
+                z += list((np.array(r["y"]) - mu) / np.hypot(sd, np.array(r["sd"])))
+            rows.append((r["push"], *z))
+        for g in groups.values():
+            if 1.0 not in g:
+                continue
+            base = g[1.0]
+            for push, r in g.items():
+                if push == 1.0:
+                    continue
+                truth = np.array(r["y"]) - np.array(base["y"])
+                pred = [np.array(r["rivals"][n]["mean"]) - np.array(base["rivals"][n]["mean"]) for n in (cand, other)]
+                moves.setdefault(push, []).append((truth, *pred, np.hypot(r["sd"], base["sd"])))
+    out = [
+        f"How the truth's decay moves with the push ({len(checked)} of the ties again, `push-check`: at up to four "
+        "speeds and laws where the plan holds a decay at every push, the truth's first run at each push, as the "
+        "loop runs it, against the rivals' predictions; the friction truths' candidate `steer_friction` first):",
+        "",
+        "| push | runs | candidate: z of the decay rate, mean (RMS) | z of the frequency | rival: z of the decay rate | "
+        "z of the frequency |",
+        "|---|---|---|---|---|---|",
+    ]
+    for push in sorted({r[0] for r in rows}):
+        z = np.array([r[1:] for r in rows if r[0] == push])
+        cells = [f"{np.mean(z[:, j]):+.2f} ({np.sqrt(np.mean(z[:, j] ** 2)):.2f})" for j in range(4)]
+        out.append(f"| {push:g} | {len(z)} | " + " | ".join(cells) + " |")
+    out += [
+        "",
+        "The move from the data's push (z: the truth's run minus the rival's prediction over their standard deviations "
+        "combined; a rival that foresees the truth has z of mean 0 and RMS about 1):",
+        "",
+        "| push | pairs of runs | truth's move of the frequency: median abs [rad/s] | candidate's predicted move | "
+        "same sign | truth's move of the decay rate: median abs [1/s] | candidate's predicted move | "
+        "truth's moves beyond twice the runs' noise |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for push, m in sorted(moves.items()):
+        truth = np.array([x[0] for x in m])
+        cand = np.array([x[1] for x in m])
+        noise = np.array([x[3] for x in m])
+        same = np.mean(np.sign(truth[:, 1]) == np.sign(cand[:, 1]))
+        beyond = np.mean(np.any(np.abs(truth) > 2 * noise, axis=1))
+        out.append(
+            f"| {push:g} | {len(m)} | {np.median(np.abs(truth[:, 1])):.3f} | {np.median(np.abs(cand[:, 1])):.3f} | "
+            f"{same:.0%} | {np.median(np.abs(truth[:, 0])):.3f} | {np.median(np.abs(cand[:, 0])):.3f} | {beyond:.0%} |"
+        )
+    out.append("")
+    return out
+
+
 def _records_lines(n_max: int) -> list[str]:
     """The records mode's subsection, from :data:`RECORDS` (and its figure, :data:`RECORDS_FIGURE`)."""
     import matplotlib.pyplot as plt
@@ -760,8 +852,11 @@ def _records_lines(n_max: int) -> list[str]:
         "push; the friction rival's response simulated in time), linear in their fitted values through the plan's",
         "secants (`validation.loop.from_plan`; they give back the plan's covariances to "
         f"{max(c.get('own_cov_error') or 0.0 for c in ties):.0e}, relative). A push run is the truth's",
-        "kick (as the data's, drawn the same way) times the push, 6 s, read by the diagnosis's own record fit",
-        "(`fit_record`); its weight is its fit's standard errors plus the nominal parameters' uncertainty. The",
+        "kick (as the data's, drawn the same way; the runs at the pushes of one speed and law share their draws)",
+        "times the push, 6 s, read by the diagnosis's own record fit (`fit_record`); its weight is the plan's noise",
+        "of one run (the data's scatter from run to run beyond their fits' standard errors, as the diagnosis weighs",
+        "a record by its replicates' scatter) with the run's own standard errors in place of the template's, plus",
+        "the nominal parameters' uncertainty. The",
         "even spread takes decays at the data's push (a researcher without a plan pushes as before); multisines",
         f"are as in the table study. Pairs: {'; '.join(s.label for s in L.RECORD_SCENARIOS)}; seeds from "
         f"{FIRST_RECORD_SEED}, the pairs in turn.",
@@ -811,6 +906,7 @@ def _records_lines(n_max: int) -> list[str]:
         "",
         f"![records mode: runs to a decision and the pushes chosen](figures/{RECORDS_FIGURE.name})",
         "",
+        *_push_lines(),
         f"* Cost: {len(stored)} cases in {seconds:.0f} s of one worker ({seconds / max(len(ties), 1):.1f} s a tie, "
         "non-ties included).",
         "",
@@ -1258,9 +1354,13 @@ def main() -> int:
     rc.add_argument("--attempts", type=int, default=300, help="cases to try at most (the friction pairs in turn)")
     rc.add_argument("--workers", type=int, default=1)
     rc.add_argument("--until", help="stop at this UTC time, HH:MM")
+    pc = sub.add_parser("push-check", help="the records ties again: the truth's runs at every push against the rivals'")
+    pc.add_argument("--max", type=int, default=200, help="ties to check at most")
+    pc.add_argument("--until", help="stop at this UTC time, HH:MM")
     sub.add_parser("report", help="write part 5 of docs/gap_validation.md and the figure")
     args = parser.parse_args()
-    commands = {"run": run, "check": check, "rerun": rerun, "records": records, "report": report}
+    commands = {"run": run, "check": check, "rerun": rerun, "records": records, "push-check": push_check}
+    commands["report"] = report
     return commands[args.command](args)
 
 

@@ -183,4 +183,13 @@ def test_records_mode_plans_pushes_and_the_loop_runs_them():
     y, R = obs
     fit = runs.record_fits[(e, 0)].estimate
     assert y == pytest.approx([fit.eigenvalue.real, abs(fit.eigenvalue.imag)])
-    assert R == pytest.approx(np.diag([fit.real_sigma**2, fit.imag_sigma**2]) + plan.model_cov[e])
+    # the pushes of one speed and law share their draws: the same kick, scaled
+    x = plan.points[e]
+    once = [m for m, z in enumerate(plan.points) if (z.speed, z.law, z.push) == (x.speed, x.law, 1.0)]
+    if once and runs.get(once[0], 0) is not None:
+        big, small = (runs.record_fits[(m, 0)].record.signals["roll_rate"] for m in (e, once[0]))
+        assert np.max(np.abs(big)) / np.max(np.abs(small)) == pytest.approx(2.0, rel=0.25)
+    template = plan.templates[plan.points[e]].estimate
+    scatter = plan.data_cov[e] - np.diag([template.real_sigma**2, template.imag_sigma**2])  # the data's, per run
+    assert np.all(np.diag(scatter) >= 0)
+    assert R == pytest.approx(np.diag([fit.real_sigma**2, fit.imag_sigma**2]) + scatter + plan.model_cov[e])
