@@ -246,7 +246,7 @@ class LinearRival:
         fixed = 0.0 if self.extra is None or self.extra[e] is None else self.extra[e]
         if own_only:
             k = self.own
-            return self.mean[e] + J @ self.a, J[:, :k] @ self.P[:k, :k] @ J[:, :k].T + fixed
+            return self.mean[e] + J @ self.a, J[:, :k] @ self.P[:k, :k] @ J[:, :k].T
         return self.mean[e] + J @ self.a, J @ self.P @ J.T + fixed
 
     def update(self, e: int, y: np.ndarray, R: np.ndarray) -> None:
@@ -352,7 +352,7 @@ def from_plan(plan: NextExperiment, k: int) -> LinearRival:
     (``sweep_form``, part of the plan's ``sweep_own``) as a covariance no run shrinks, added to every run's.
 
     The predictions are the plan's own, not recomputed: the records' templates and indirect inference live
-    in the plan (:meth:`bikerider.gap.plan.ranking.NextExperiment`), as the table loop's eigenvalues live in the
+    in the plan (:class:`bikerider.gap.plan.ranking.NextExperiment`), as the table loop's eigenvalues live in the
     public :class:`~bikerider.gap.inference.predict.Predictor` it linearises through (:func:`linearise`).
     """
     q = plan.own_factor[k].shape[-1] if plan.points else plan.sweep_factor[k].shape[-1]
