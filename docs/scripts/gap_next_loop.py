@@ -831,9 +831,12 @@ def _records_lines(n_max: int) -> list[str]:
         dmed, dp90 = m["decided"]
         return (
             f"| {n} | {m['n']} | {m['resolved']} | {m['wrong']} | {m['undecided']} | {m['unbreakable']} | "
-            f"{_fmt(med, n_max)} | {_fmt(p90, n_max)} | {_fmt(dmed, n_max)} | {_fmt(dp90, n_max)} | "
-            f"{m['lost']} / {m['spent']} |"
+            f"{_fmt(med, n_max)} | {_fmt(p90, n_max)} | {within(n, 2)} | {within(n, 5)} | {_fmt(dmed, n_max)} | "
+            f"{_fmt(dp90, n_max)} | {m['lost']} / {m['spent']} |"
         )
+
+    def within(n, k):
+        return sum(c["strategies"][n]["status"] == "resolved" and c["strategies"][n]["runs"] <= k for c in ties)
 
     out = [
         "### Records: pushes among the experiments",
@@ -866,8 +869,8 @@ def _records_lines(n_max: int) -> list[str]:
         + ".",
         "",
         "| strategy | ties | resolved | wrong | undecided | unbreakable | runs needed: median | 90th percentile | "
-        "runs to any decision: median | 90th percentile | runs lost / spent |",
-        "|---|---|---|---|---|---|---|---|---|---|---|",
+        "resolved within 2 runs | within 5 | runs to any decision: median | 90th percentile | runs lost / spent |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
         *[cell(n) for n in names],
         "",
         f"* The runs {plan} chose: {decays} decays, {other} of them at a push other than the data's "
