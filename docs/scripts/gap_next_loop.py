@@ -721,7 +721,9 @@ def _push_lines() -> list[str]:
     out = [
         f"How the truth's decay moves with the push ({len(checked)} of the ties again, `push-check`: at up to four "
         "speeds and laws where the plan holds a decay at every push, the truth's first run at each push, as the "
-        "loop runs it, against the rivals' predictions; the friction truths' candidate `steer_friction` first):",
+        "loop runs it, against the rivals' predictions; the friction truths' candidate `steer_friction` first). z: the "
+        "truth's run minus the rival's prediction over their standard deviations combined (a rival that foresees the "
+        "truth has z of mean 0 and RMS about 1):",
         "",
         "| push | runs | candidate: z of the decay rate, mean (RMS) | z of the frequency | rival: z of the decay rate | "
         "z of the frequency |",
@@ -733,8 +735,8 @@ def _push_lines() -> list[str]:
         out.append(f"| {push:g} | {len(z)} | " + " | ".join(cells) + " |")
     out += [
         "",
-        "The move from the data's push (z: the truth's run minus the rival's prediction over their standard deviations "
-        "combined; a rival that foresees the truth has z of mean 0 and RMS about 1):",
+        "The move from the data's push: the truth's run at the push minus its run at the data's push (the same "
+        "draws, the kick scaled), against the move the candidate predicts:",
         "",
         "| push | pairs of runs | truth's move of the frequency: median abs [rad/s] | candidate's predicted move | "
         "same sign | truth's move of the decay rate: median abs [1/s] | candidate's predicted move | "
@@ -751,6 +753,27 @@ def _push_lines() -> list[str]:
             f"| {push:g} | {len(m)} | {np.median(np.abs(truth[:, 1])):.3f} | {np.median(np.abs(cand[:, 1])):.3f} | "
             f"{same:.0%} | {np.median(np.abs(truth[:, 0])):.3f} | {np.median(np.abs(cand[:, 0])):.3f} | {beyond:.0%} |"
         )
+    every = [x for m in moves.values() for x in m]
+    if every:
+        truth = np.array([x[0] for x in every])
+        cand = np.array([x[1] for x in every])
+        ratio = np.median(np.abs(truth[:, 1])) / max(np.median(np.abs(cand[:, 1])), 1e-12)
+        out += [
+            "",
+            f"* The truth's weave frequency moves with the push about {ratio:.0f} times as far as the friction candidate "
+            f"predicts (median over {len(every)} pairs of runs), in the direction it predicts in "
+            f"{np.mean(np.sign(truth[:, 1]) == np.sign(cand[:, 1])):.0%}: the plan sees which way a push moves the "
+            "decay, not how far, so a run at another push also shows what neither rival foresees.",
+            "* Checked for seed 9311 (steer_friction vs tyre_slip, riderless; the truth's `T_coulomb` 0.157 N m, "
+            "`c_steer` 0.90 N m s/rad), decided wrong by the plan's first run: a decay at 4.92 m/s under the halved "
+            "control at twice the data's push (the only push the plan kept there: its templates at half and at the "
+            "data's push fit poorly, r^2 0.10 and 0.29). The friction candidate (fitted `T_coulomb` 0.204 +- 0.129, `c_viscous` 0.77 +- 1.29) "
+            "predicts a weave frequency of 1.84 +- 0.33 rad/s, tyre slip 5.01 +- 0.52, the truth's run gives 3.99 +- "
+            "0.12. The truth's own runs there (`fit_record`, 0.01 rad/s noise) give 1.8-3.1 rad/s from a roll-rate "
+            "kick of 0.3 rad/s and 3.1-3.7 rad/s from 0.6 rad/s, by the kick's steer rate (-1.6 to 1.6 rad/s) alone: "
+            "with Coulomb friction the decay depends on how the steer moves at the start, which the plan's template, "
+            "started from the data's roll rate alone (these records log no steer), does not carry.",
+        ]
     out.append("")
     return out
 
