@@ -813,6 +813,13 @@ def _records_lines(n_max: int) -> list[str]:
         for c in compared
     )
     matches = [c.get("first_is_next_run") for c in ties if c.get("first_is_next_run") is not None]
+    m_plan, m_even = merit[plan]["median_p90"][0], merit["even"]["median_p90"][0]
+    goal1 = math.isfinite(m_plan) and (not math.isfinite(m_even) or m_plan <= m_even / 2)
+    broken = [
+        c
+        for c in ties
+        if c["strategies"][plan]["status"] == "unbreakable" and c["strategies"]["even"]["status"] == "resolved"
+    ]
     both = [
         (c["strategies"][plan]["runs"], c["strategies"]["even"]["runs"])
         for c in ties
@@ -896,6 +903,13 @@ def _records_lines(n_max: int) -> list[str]:
         "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
         *[cell(n) for n in names],
         "",
+        f"* Goal 1 (the plan's median at most half the even spread's): {_fmt(merit[plan]['median_p90'][0], n_max)} "
+        f"against {_fmt(merit['even']['median_p90'][0], n_max)}, "
+        + ("**met**" if goal1 else "**not met**")
+        + f"; the plan spends {merit[plan]['spent']} runs in all, the even spread {merit['even']['spent']}. Goal 2: "
+        f"{len(broken)} ties declared unbreakable that the even spread breaks"
+        + (": " + ", ".join(f"{c['scenario']} seed {c['seed']}" for c in broken) if broken else "")
+        + ".",
         f"* The runs {plan} chose: {decays} decays, {other} of them at a push other than the data's "
         f"({pushes.get(0.5, 0)} at 0.5 times, {pushes.get(2.0, 0)} at 2 times; in {with_other} of {len(ties)} ties), "
         f"and {pushes.get(None, 0)} multisines. Its first run was a push other than the data's in {first_other} ties.",
