@@ -152,6 +152,8 @@ class Protocol:
     gyro_noise: float = 0.01
     speed_noise: float = 0.03
     speed_jitter: float = 0.1
+    push: float = 1.0
+    """The kicks' size relative to the usual (a push experiment of the closed loop, :mod:`validation.loop`)."""
 
 
 CONTROL = (0.0, 5.0, -2.0, -0.5)
@@ -480,6 +482,7 @@ def measure(
         for nominal_speed in session.speeds:
             speed = nominal_speed + protocol.speed_jitter * float(rng.uniform(-1, 1))
             kick = (float(rng.choice([-1, 1]) * rng.uniform(0.2, 0.4)), float(rng.uniform(-0.8, 0.8)))
+            kick = (protocol.push * kick[0], protocol.push * kick[1])  # the same draws at any push
             t, states = simulator.states(
                 speed, session.gains, {"phid": kick[0], "deltad": kick[1]}, protocol.duration, protocol.rate
             )

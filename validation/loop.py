@@ -39,6 +39,16 @@ has updated them; ``plan:jensen_renyi``'s first run is the next run ``--next`` n
 range, a van der Corput order), ``random`` (any feasible experiment), ``repeat:decay`` and
 ``repeat:sweep`` (the plan's best decay, or best multisine, repeated: what ``--next`` recommends,
 whose predicted resolution probability after ``k`` runs is stored for the reliability diagrams).
+
+The records mode (``run_loop_case(..., records=True)``, :data:`RECORD_SCENARIOS`: the friction pairs): the
+tie's data are records (:data:`RECORD_NARROW`, the truth's noisy roll rate of each kicked run, fitted by the
+record fit), the friction truths' candidate is the steer friction fitted in time (:data:`RECORD_CANDIDATES`),
+nonlinear, so the plan also plans each decay at other pushes (:data:`bikerider.gap.plan.ranking.PUSHES`).  The
+rivals' predictions are the plan's own (templates at each push, indirect inference, the friction simulated in
+time), linear through the plan's secants (:func:`from_plan`); a decay run is the truth's kick, drawn as the
+data's, times the experiment's push, read by the record fit (:func:`validation.cases.measure` with records,
+``Protocol.push``).  The even spread decays at the data's push.  Beside the loop each case stores the next run
+``--next`` names and the one the table loop's plan names on the same runs (their fits as a table).
 """
 
 from __future__ import annotations
@@ -84,6 +94,27 @@ NARROW = {
 }
 """The tie's data: six runs near one speed in two sessions, one under a stabilising control."""
 
+RECORD_NARROW = {
+    "rider": Protocol(
+        (
+            Session("day1", (6.0, 6.5, 7.0)),
+            Session("day2", (6.0, 6.5, 7.0)),
+            Session("day3-controlled", (6.0, 6.5, 7.0), CONTROL),
+        )
+    ),
+    "riderless": Protocol(
+        (
+            Session("day1", (5.0, 5.5, 6.0)),
+            Session("day2", (5.0, 5.5, 6.0)),
+            Session("day3-controlled", (4.5, 5.0, 5.5), CONTROL),
+        )
+    ),
+}
+"""The records mode's tie data: nine runs near one speed in three sessions (one under the stabilising control), as
+part 4's trials have three sessions: the steer friction fitted in time gets its covariance from the jackknife
+over the held-out sessions, which needs three or more (with two, as :data:`NARROW`, it has no standard errors and
+the plan takes each value's spread as its whole search range)."""
+
 
 @dataclass(frozen=True)
 class Scenario:
@@ -128,6 +159,16 @@ SCENARIOS: tuple[Scenario, ...] = (
 """Hidden effect and the rival that often ties with it (the ties of part 3 and the usual confusions)."""
 
 STRATEGIES = tuple(f"plan:{c}" for c in C.CRITERIA) + ("even", "random", "repeat:decay", "repeat:sweep")
+
+RECORD_CANDIDATES = {"steer_friction": "steer_friction", "steer_coulomb": "steer_friction"}
+"""The records mode: the candidate standing for a friction truth, the steer friction fitted in time (viscous and
+Coulomb; nonlinear, so the plan plans pushes for it), where tables have only the viscous ``steer_damping``."""
+RECORD_SCENARIOS: tuple[Scenario, ...] = tuple(s for s in SCENARIOS if s.effect.name in RECORD_CANDIDATES)
+"""The friction pairs the records mode runs (Coulomb friction makes a decay depend on its push)."""
+RECORD_SIGNALS = ("roll_rate",)
+"""The signal the records mode's decays are fitted from (the tie's records log the roll rate only)."""
+RECORD_STRATEGIES = ("plan:jensen_renyi", "even")
+"""The records mode's strategies: the next run ``--next`` names, and the even spread (at the data's push)."""
 
 
 # -- the truth's multisine run --------------------------------------------------------------------------
@@ -180,8 +221,18 @@ class LinearRival:
     """A rival's predictions of every experiment, linear in its fitted values ``z``, with a Gaussian prior on
     ``z`` that the runs update, and the log evidence of the runs so far."""
 
-    def __init__(self, mean: list[np.ndarray], jac: list[np.ndarray], prior: np.ndarray, own: int | None = None):
+    def __init__(
+        self,
+        mean: list[np.ndarray],
+        jac: list[np.ndarray],
+        prior: np.ndarray,
+        own: int | None = None,
+        extra: list[np.ndarray | None] | None = None,
+    ):
         self.mean, self.jac = mean, jac
+        self.extra = extra
+        """Per experiment, a covariance added to the prediction's that no run shrinks (``None``: none): the
+        friction law's form of a nonlinear rival's multisine, as the plan counts it (:func:`from_plan`)."""
         self.a = np.zeros(prior.shape[0])
         self.P = prior.copy()
         self.log_evidence = 0.0
@@ -192,10 +243,11 @@ class LinearRival:
         """Mean and covariance of the rival's prediction of experiment ``e`` (``own_only``: the covariance from
         its own values alone, which the runs shrink; the shared shifts' part they do not)."""
         J = self.jac[e]
+        fixed = 0.0 if self.extra is None or self.extra[e] is None else self.extra[e]
         if own_only:
             k = self.own
             return self.mean[e] + J @ self.a, J[:, :k] @ self.P[:k, :k] @ J[:, :k].T
-        return self.mean[e] + J @ self.a, J @ self.P @ J.T
+        return self.mean[e] + J @ self.a, J @ self.P @ J.T + fixed
 
     def update(self, e: int, y: np.ndarray, R: np.ndarray) -> None:
         mu, W = self.predict(e)
@@ -291,14 +343,50 @@ def linearise(plan: NextExperiment, rival, shared: bool = False) -> LinearRival:
     return LinearRival(_unpack(plan, pred[0]), [J.T for J in _unpack(plan, slopes.T)], prior, own=k)
 
 
+def from_plan(plan: NextExperiment, k: int) -> LinearRival:
+    """Rival ``k`` of a plan as the plan predicts it (the records mode): its predicted decays (the eigenvalue the
+    record fit finds in its response over each experiment's template, at the experiment's push, by indirect
+    inference; a nonlinear rival's response simulated in time with its friction) and multisines, linear in its
+    fitted values through the plan's own secants: ``z ~ N(0, I)`` whitened by the fit's covariance, the plan's
+    factor ``F`` (``own_cov = F F^T``) the slopes.  A nonlinear rival's multisines carry the friction law's form
+    (``sweep_form``, part of the plan's ``sweep_own``) as a covariance no run shrinks, added to every run's.
+
+    The predictions are the plan's own, not recomputed: the records' templates and indirect inference live
+    in the plan (:class:`bikerider.gap.plan.ranking.NextExperiment`), as the table loop's eigenvalues live in the
+    public :class:`~bikerider.gap.inference.predict.Predictor` it linearises through (:func:`linearise`).
+    """
+    q = plan.own_factor[k].shape[-1] if plan.points else plan.sweep_factor[k].shape[-1]
+    mean: list[np.ndarray] = []
+    jac: list[np.ndarray] = []
+    extra: list[np.ndarray | None] = []
+    for m in range(len(plan.points)):
+        z = complex(plan.mean[k, m])
+        F = np.array(plan.own_factor[k][m], float).reshape(2, q)
+        if z.imag < 0:  # the loop reads the frequency as |imag| (as the table loop)
+            F[1] = -F[1]
+        mean.append(np.array([z.real, abs(z.imag)]))
+        jac.append(F)
+        extra.append(None)
+    for m in range(len(plan.sweeps)):
+        mean.append(split(plan.sweep_mean[k, m]))
+        jac.append(np.array(plan.sweep_factor[k][m], float).reshape(-1, q))
+        extra.append(np.array(plan.sweep_form[k, m], float))
+    return LinearRival(mean, jac, np.eye(q), extra=extra)
+
+
 # -- the loop ---------------------------------------------------------------------------------------
 class TruthRuns:
     """The truth's runs, the k-th run of an experiment the same for every strategy."""
 
-    def __init__(self, simulator: TruthSimulator, plan: NextExperiment, seed: int, shared: bool = False):
+    def __init__(
+        self, simulator: TruthSimulator, plan: NextExperiment, seed: int, shared: bool = False, records: bool = False
+    ):
         self.simulator, self.plan, self.seed, self.shared = simulator, plan, seed, shared
+        self.records = records
+        """Decays are records: the truth's kicks scaled by the experiment's push, read by the record fit."""
         self.cache: dict[tuple[int, int], tuple[np.ndarray, np.ndarray] | None] = {}
         self.rows: dict[tuple[int, int], EigenvalueData] = {}  # the decays as the diagnosis reads them
+        self.record_fits: dict[tuple[int, int], object] = {}  # with records, each decay's RecordFit
         self.seconds = {"decay": 0.0, "sweep": 0.0}
         self.count = {"decay": 0, "sweep": 0}
         nominal = EffectModel(plan.problem.nominal, plan.problem.geometry)
@@ -308,18 +396,34 @@ class TruthRuns:
         key = (e, k)
         if key not in self.cache:
             rng = np.random.default_rng([self.seed, e, k, 77])
+            if self.records and e < len(self.plan.points):  # the pushes of one speed and law share their draws
+                x = self.plan.points[e]
+                law = list(self.plan.laws).index(x.law)
+                rng = np.random.default_rng([self.seed, int(round(x.speed * 100)), law, k, 78])
             start = time.perf_counter()
             plan = self.plan
             if e < len(plan.points):
                 x = plan.points[e]
                 gains = tuple(float(g) for g in plan.laws[x.law](x.speed))
-                protocol = Protocol((Session("loop", (x.speed,), gains),), speed_jitter=0.0)
-                data, _ = measure(self.simulator, protocol, rng)
+                # with records, the truth's kick scaled by the experiment's push and the run read by the
+                # diagnosis's own record fit (measure's records path, fit_record); a table's decay has no push
+                push = x.push if self.records else 1.0
+                protocol = Protocol((Session("loop", (x.speed,), gains),), speed_jitter=0.0, push=push)
+                fits: list | None = [] if self.records else None
+                data, _ = measure(self.simulator, protocol, rng, None, fits)
                 out = None
                 if len(data):
                     self.rows[key] = data
+                    if fits:
+                        self.record_fits[key] = fits[0]
                     y = np.array([data.value[0].real, abs(data.value[0].imag)])
                     R = np.diag([data.real_sigma[0] ** 2, data.imag_sigma[0] ** 2])
+                    if self.records:  # the plan's one-run noise with this run's own standard errors in place of
+                        # the template's: the data's scatter from run to run beyond their fits' (as the diagnosis
+                        # weighs a record by its cell's replicate scatter; Coulomb friction makes each kick decay
+                        # its own way)
+                        t = plan.templates[x].estimate
+                        R = R + plan.data_cov[e] - np.diag([t.real_sigma**2, t.imag_sigma**2])
                     out = (y, R if self.shared else R + plan.model_cov[e])
                 kind = "decay"
             else:
@@ -348,11 +452,14 @@ def _van_der_corput(k: int) -> float:
 
 
 def _even_order(plan: NextExperiment, n: int) -> list[int]:
-    laws = list(dict.fromkeys(e.law for e in plan.points))
+    """Decays under the laws in turn at speeds spread evenly; with pushes planned (records), at the data's push
+    (the researcher without a plan pushes as before)."""
+    standard = [i for i, e in enumerate(plan.points) if getattr(e, "push", 1.0) == 1.0] or list(range(len(plan.points)))
+    laws = list(dict.fromkeys(plan.points[i].law for i in standard))
     order = []
     for k in range(n):
         law = laws[k % len(laws)]
-        idx = sorted((i for i, e in enumerate(plan.points) if e.law == law), key=lambda i: plan.points[i].speed)
+        idx = sorted((i for i in standard if plan.points[i].law == law), key=lambda i: plan.points[i].speed)
         j = k // len(laws)
         frac = _van_der_corput(j + 1)  # 1/2, 1/4, 3/4, 1/8, ...: every new run between those before
         order.append(idx[min(int(frac * len(idx)), len(idx) - 1)])
@@ -434,7 +541,7 @@ def lack_of_fit(rivals: list[LinearRival], e: int, y: np.ndarray, R: np.ndarray)
 
 def run_strategy(name: str, plan, rivals_at_tie, runs: TruthRuns, truth_index: int, seed: int, repeat=None) -> dict:
     """One strategy's loop (module docstring): its runs, the hidden effect's probability after each."""
-    rivals = [LinearRival(r.mean, r.jac, r.P, r.own) for r in rivals_at_tie]
+    rivals = [LinearRival(r.mean, r.jac, r.P, r.own, r.extra) for r in rivals_at_tie]
     shared = runs.shared
     groups = _groups(plan)
     n_exp = len(plan.points) + len(plan.sweeps)
@@ -488,21 +595,38 @@ def run_strategy(name: str, plan, rivals_at_tie, runs: TruthRuns, truth_index: i
 
 
 def run_loop_case(
-    models: dict, scenario: Scenario, seed: int, strategies=STRATEGIES, keep: bool = False, shared: bool = False
+    models: dict,
+    scenario: Scenario,
+    seed: int,
+    strategies=None,
+    keep: bool = False,
+    shared: bool = False,
+    records: bool = False,
 ) -> dict:
     """One case (module docstring), JSON-ready (with ``keep``, also the objects under ``_objects``; ``shared``:
-    the nominal parameters' uncertainty shared by all runs, :func:`linearise`)."""
+    the nominal parameters' uncertainty shared by all runs, :func:`linearise`; ``records``: the records mode,
+    :data:`RECORD_SCENARIOS`).  ``strategies`` default to :data:`STRATEGIES` (:data:`RECORD_STRATEGIES` with
+    records)."""
+    if records and shared:
+        raise ValueError("the records mode counts the nominal parameters' uncertainty per run (shared=False)")
+    if strategies is None:
+        strategies = RECORD_STRATEGIES if records else STRATEGIES
     start = time.perf_counter()
     rng = np.random.default_rng(seed)
     model = models["rider" if scenario.rider else "riderless"]
     truth = draw_truth(scenario.effect, rng)
     simulator = TruthSimulator(model, truth, rng)
-    data, _ = measure(simulator, NARROW["rider" if scenario.rider else "riderless"], rng)
+    fits: list | None = [] if records else None  # the same runs either way (measure's draws do not depend on it)
+    protocols = RECORD_NARROW if records else NARROW
+    data, _ = measure(simulator, protocols["rider" if scenario.rider else "riderless"], rng, None, fits)
+    candidate = RECORD_CANDIDATES.get(scenario.effect.name, scenario.effect.candidate) if records else None
+    candidate = candidate or scenario.effect.candidate
     out = {
         "shared": shared,
+        "data": "records" if records else "tables",
         "scenario": scenario.label,
         "truth": scenario.effect.name,
-        "candidate": scenario.effect.candidate,
+        "candidate": candidate,
         "rival": scenario.rival,
         "rider": scenario.rider,
         "seed": seed,
@@ -511,9 +635,12 @@ def run_loop_case(
     }
     if len(data) < 4:
         return {**out, "tie": False, "status": "too few runs", "seconds": time.perf_counter() - start}
-    rivals = (scenario.effect.candidate, scenario.rival)
+    rivals = (candidate, scenario.rival)
     try:
-        diagnosis = diagnose(model, data, CanonicalData.empty(), effects=rivals)
+        if records:
+            diagnosis = diagnose(model, EigenvalueData.empty(), CanonicalData.empty(), records=fits, effects=rivals)
+        else:
+            diagnosis = diagnose(model, data, CanonicalData.empty(), effects=rivals)
     except (FitError, InputError) as exc:
         return {**out, "tie": False, "status": f"diagnosis failed: {exc}", "seconds": time.perf_counter() - start}
     first = diagnosis.ranking[0] if diagnosis.ranking else None
@@ -525,13 +652,19 @@ def run_loop_case(
         return out
     t_diag = time.perf_counter()
     try:
-        plan = plan_next(diagnosis, rivals=list(rivals), repeats=10, sweeps=True)
+        signals = RECORD_SIGNALS if records else None
+        plan = plan_next(diagnosis, rivals=list(rivals), repeats=10, sweeps=True, signals=signals)
     except (NoExperiment, InputError, FitError) as exc:
         return {**out, "status": f"no plan: {exc}", "seconds": time.perf_counter() - start}
     t_plan = time.perf_counter()
-    lin = [linearise(plan, r, shared) for r in plan.rivals]
+    if records:
+        lin = [from_plan(plan, k) for k in range(len(plan.rivals))]
+    else:
+        lin = [linearise(plan, r, shared) for r in plan.rivals]
     names = [r.name for r in plan.rivals]
-    truth_index = names.index(scenario.effect.candidate)
+    truth_index = names.index(candidate)
+    if records:
+        out.update(_record_extras(models, scenario, plan, data, lin))
     # the linearised rivals reproduce the plan's own predictions at the fit
     check = []
     for k, r in enumerate(lin):
@@ -563,7 +696,7 @@ def run_loop_case(
         sweeps_left_out_lean=sum("would likely be lost" in x["reason"] for x in plan.left_out),
         truth_index=truth_index,
     )
-    runs = TruthRuns(simulator, plan, seed, shared)
+    runs = TruthRuns(simulator, plan, seed, shared, records)
     results = {}
     for name in strategies:
         if name.startswith("repeat:"):
@@ -574,11 +707,52 @@ def run_loop_case(
         else:
             results[name] = run_strategy(name, plan, lin, runs, truth_index, seed)
     out["strategies"] = results
+    jr = results.get("plan:jensen_renyi")
+    if jr and jr["chosen"] and plan.next_run is not None:  # the loop's first choice is the next run --next names
+        out["first_is_next_run"] = jr["chosen"][0] == plan.next_run["index"]
     out["truth_runs"] = {"count": runs.count, "seconds": {k: round(v, 3) for k, v in runs.seconds.items()}}
     out["seconds_setup"] = {"diagnosis": round(t_diag - start, 3), "plan": round(t_plan - t_diag, 3)}
     out["seconds"] = time.perf_counter() - start
     if keep:
-        out["_objects"] = {"model": model, "data": data, "runs": runs, "rivals": rivals}
+        out["_objects"] = {"model": model, "data": data, "runs": runs, "rivals": rivals, "plan": plan, "linear": lin}
+    return out
+
+
+def _first(plan: NextExperiment) -> dict | None:
+    """The next run ``--next`` names for ``plan`` (its kind, speed, law and push), JSON-ready."""
+    x = plan.next_run
+    if x is None:
+        return None
+    return {"kind": x["kind"], "speed": x["speed"], "law": x["law"], "push": x["push"], "text": x["text"]}
+
+
+def _record_extras(models: dict, scenario: Scenario, plan: NextExperiment, data: EigenvalueData, lin) -> dict:
+    """What the records mode stores beside the loop: each planned decay's push, the plan's covariances as the
+    linearised rivals give them back (``own_cov_error``, relative), the next run ``--next`` names and the one
+    the table loop's plan names on the same runs (their fitted eigenvalues as a table, the table loop's
+    candidate and rival: :func:`run_loop_case` without records)."""
+    worst = 0.0
+    for k, r in enumerate(lin):
+        for m in range(len(plan.points)):
+            mine = r.predict(m)[1]
+            theirs = np.array(plan.own_cov[k, m])
+            if plan.mean[k, m].imag < 0:
+                theirs = theirs * np.array([[1, -1], [-1, 1]])
+            worst = max(worst, float(np.max(np.abs(mine - theirs)) / max(np.max(np.abs(theirs)), 1e-300)))
+        for m in range(len(plan.sweeps)):
+            mine = r.predict(len(plan.points) + m)[1]
+            theirs = np.array(plan.sweep_own[k, m])
+            worst = max(worst, float(np.max(np.abs(mine - theirs)) / max(np.max(np.abs(theirs)), 1e-300)))
+    out = {"pushes": [float(e.push) for e in plan.points], "own_cov_error": worst, "first": _first(plan)}
+    model = models["rider" if scenario.rider else "riderless"]
+    try:
+        table = diagnose(model, data, CanonicalData.empty(), effects=(scenario.effect.candidate, scenario.rival))
+        other = plan_next(table, rivals=[scenario.effect.candidate, scenario.rival], repeats=10, sweeps=True)
+        out["table_first"] = _first(other)
+        out["table_tie"] = bool(table.ranking and table.ranking[0]["tied_with"])
+    except (NoExperiment, InputError, FitError) as exc:
+        out["table_first"] = None
+        out["table_error"] = str(exc)
     return out
 
 
@@ -618,3 +792,43 @@ def figure_of_merit(runs: list[int | None]) -> tuple[float, float]:
     if not x.size:
         return math.nan, math.nan
     return float(np.quantile(x, 0.5, method="inverted_cdf")), float(np.quantile(x, 0.9, method="inverted_cdf"))
+
+
+def push_check(models: dict, scenario: Scenario, seed: int, groups: int = 4) -> dict:
+    """A records case again (the same runs) and, at up to ``groups`` speeds and laws where the plan holds a decay
+    at every push, the truth's first run at each push against the rivals' predictions of it: does the plan
+    foresee how the truth's decay moves with the push?  JSON-ready: per run the push, the truth's observation,
+    its weight and each rival's predictive mean and standard deviations (real part, frequency)."""
+    case = run_loop_case(models, scenario, seed, strategies=(), keep=True, records=True)
+    out = {"scenario": scenario.label, "seed": seed, "status": case["status"], "sizes": case["sizes"]}
+    if "_objects" not in case:
+        return out
+    o = case.pop("_objects")
+    plan, lin, runs = o["plan"], o["linear"], o["runs"]
+    names = [r.name for r in plan.rivals]
+    by_group: dict[tuple[float, str], dict[float, int]] = {}
+    for m, x in enumerate(plan.points):
+        by_group.setdefault((x.speed, x.law), {})[x.push] = m
+    full = [g for g, d in by_group.items() if len(d) == len({e.push for e in plan.points})]
+    pick = (
+        [full[int(j)] for j in np.unique(np.linspace(0, len(full) - 1, min(groups, len(full))).round())] if full else []
+    )
+    rows = []
+    for speed, law in pick:
+        for push, m in sorted(by_group[(speed, law)].items()):
+            obs = runs.get(m, 0)
+            row = {"speed": speed, "law": law, "push": push, "lost": obs is None}
+            if obs is not None:
+                y, R = obs
+                row["y"] = [float(v) for v in y]
+                row["sd"] = [float(v) for v in np.sqrt(np.diag(R))]
+                row["rivals"] = {}
+                for name, r in zip(names, lin):
+                    mu, W = r.predict(m)
+                    row["rivals"][name] = {
+                        "mean": [float(v) for v in mu],
+                        "sd": [float(v) for v in np.sqrt(np.diag(W))],
+                    }
+            rows.append(row)
+    out.update(candidate=case["candidate"], rivals=names, runs=rows)
+    return out

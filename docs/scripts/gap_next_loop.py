@@ -54,8 +54,14 @@ JR_NO_RULE = Path(__file__).with_name("gap_next_loop_plan_jensen_renyi_max_roll_
 EVEN_NOW = Path(__file__).with_name("gap_next_loop_even.jsonl")
 """``plan:jensen_renyi`` on every stored tie with the lean rule and without it, and ``even`` (which takes decays
 only, so the rule does not touch it), all on the same code (``rerun --strategy ...``)."""
+RECORDS = Path(__file__).with_name("gap_next_loop_records.jsonl")
+"""The records mode (``records``): the friction pairs, the tie's data records, pushes among the experiments."""
+RECORDS_PUSH = Path(__file__).with_name("gap_next_loop_records_push.jsonl")
+"""The records mode's ties again, the truth's runs at every push against the rivals' predictions (``push-check``)."""
+FIRST_RECORD_SEED = 9000
 DOC = ROOT / "docs" / "gap_validation.md"
 FIGURE = ROOT / "docs" / "figures" / "gap_next_loop.png"
+RECORDS_FIGURE = ROOT / "docs" / "figures" / "gap_next_loop_records.png"
 BEGIN, END = "<!-- loop:begin -->", "<!-- loop:end -->"
 FIRST_SEED = 7000
 LOG = logging.getLogger("gap_next_loop")
@@ -85,6 +91,82 @@ def _one(job):
         return L.run_loop_case(_models(), L.SCENARIOS[k], seed, shared=shared)
     except Exception as exc:  # a case that breaks the harness is stored with its error, not lost silently
         return {"scenario": L.SCENARIOS[k].label, "seed": seed, "tie": False, "status": f"error: {exc!r}"}
+
+
+def _one_record(job):
+    from validation import loop as L
+
+    k, seed = job
+    logging.getLogger("bikerider").setLevel(logging.ERROR)
+    try:
+        return L.run_loop_case(_models(), L.RECORD_SCENARIOS[k], seed, records=True)
+    except Exception as exc:  # a case that breaks the harness is stored with its error, not lost silently
+        return {"scenario": L.RECORD_SCENARIOS[k].label, "seed": seed, "tie": False, "status": f"error: {exc!r}"}
+
+
+def records(args) -> int:
+    """The records mode (:data:`RECORDS`): the friction pairs in turn from seed :data:`FIRST_RECORD_SEED`, until
+    ``--ties`` ties or ``--until``; resumes where it stopped."""
+    from multiprocessing import get_context
+
+    from validation import loop as L
+
+    done = {(c["scenario"], c["seed"]) for c in _stored(RECORDS)}
+    ties = sum(bool(c.get("strategies")) for c in _stored(RECORDS))
+    jobs = []
+    for i in range(args.attempts):
+        k = i % len(L.RECORD_SCENARIOS)
+        if (L.RECORD_SCENARIOS[k].label, FIRST_RECORD_SEED + i) not in done:
+            jobs.append((k, FIRST_RECORD_SEED + i))
+    deadline = None
+    if args.until:
+        hh, mm = (int(x) for x in args.until.split(":"))
+        deadline = dt.datetime.now(dt.UTC).replace(hour=hh, minute=mm, second=0, microsecond=0)
+    LOG.info("%d ties stored, %d cases to try", ties, len(jobs))
+    start = time.perf_counter()
+    with get_context("fork").Pool(args.workers) as pool, RECORDS.open("a", encoding="utf-8") as out:
+        for result in pool.imap_unordered(_one_record, jobs):
+            out.write(json.dumps(result) + "\n")
+            out.flush()
+            ties += bool(result.get("strategies"))
+            LOG.info(
+                "%s seed %s: %s (%.1f s); %d ties, %.0f s",
+                result.get("scenario"),
+                result.get("seed"),
+                {k: (v["status"], v["runs"]) for k, v in (result.get("strategies") or {}).items()}
+                or result.get("status"),
+                result.get("seconds", math.nan),
+                ties,
+                time.perf_counter() - start,
+            )
+            if ties >= args.ties or (deadline and dt.datetime.now(dt.UTC) >= deadline):
+                LOG.info("stopping: %d ties", ties)
+                pool.terminate()
+                break
+    return 0
+
+
+def push_check(args) -> int:
+    """The stored records ties again (:func:`validation.loop.push_check`), appended to :data:`RECORDS_PUSH`."""
+    from validation import loop as L
+
+    index = {s.label: k for k, s in enumerate(L.RECORD_SCENARIOS)}
+    done = {(c["scenario"], c["seed"]) for c in _stored(RECORDS_PUSH)}
+    todo = [(c["scenario"], c["seed"]) for c in _stored(RECORDS) if c.get("strategies")]
+    todo = [t for t in todo if t not in done][: args.max]
+    deadline = None
+    if args.until:
+        hh, mm = (int(x) for x in args.until.split(":"))
+        deadline = dt.datetime.now(dt.UTC).replace(hour=hh, minute=mm, second=0, microsecond=0)
+    logging.getLogger("bikerider").setLevel(logging.ERROR)
+    for label, seed in todo:
+        result = L.push_check(_models(), L.RECORD_SCENARIOS[index[label]], seed)
+        with RECORDS_PUSH.open("a", encoding="utf-8") as out:
+            out.write(json.dumps(result) + "\n")
+        LOG.info("%s seed %s: %s, %d runs", label, seed, result["status"], len(result.get("runs", [])))
+        if deadline and dt.datetime.now(dt.UTC) >= deadline:
+            break
+    return 0
 
 
 def _stored(path: Path = RESULTS) -> list[dict]:
@@ -569,6 +651,309 @@ def _now_lines(n_max: int) -> list[str]:
     return out
 
 
+def _same_first(a: dict | None, b: dict | None) -> bool:
+    """Whether two next runs (``validation.loop._first``) are the same experiment: kind, speed, law and push."""
+    if a is None or b is None:
+        return False
+    return (a["kind"], round(a["speed"], 2), a["law"], a.get("push") or 1.0) == (
+        b["kind"],
+        round(b["speed"], 2),
+        b["law"],
+        b.get("push") or 1.0,
+    )
+
+
+def _push_of(c: dict, e: int) -> float | None:
+    """The push of experiment ``e`` of a records case (``None``: a multisine)."""
+    return c["pushes"][e] if e < len(c["pushes"]) else None
+
+
+def _by_first(ties: list[dict], plan: str) -> str:
+    """The plan's outcomes grouped by what its first run was (a decay at the data's push, at another, a multisine)."""
+    groups: dict[str, list[str]] = {}
+    for c in ties:
+        s = c["strategies"][plan]
+        if not s["chosen"]:
+            continue
+        push = _push_of(c, s["chosen"][0])
+        what = (
+            "a multisine"
+            if push is None
+            else ("a decay at the data's push" if push == 1.0 else f"a decay at {push:g} times")
+        )
+        groups.setdefault(what, []).append(s["status"])
+    return "; ".join(
+        f"{what}, {len(st)} ties: " + ", ".join(f"{n} {status}" for status, n in Counter(st).most_common())
+        for what, st in sorted(groups.items())
+    )
+
+
+def _push_lines() -> list[str]:
+    """How the truth's decay moves with the push against how the rivals predict it (:data:`RECORDS_PUSH`)."""
+    checked = [c for c in _stored(RECORDS_PUSH) if c.get("runs")]
+    if not checked:
+        return []
+    rows = []  # (push, candidate's z real, z freq, other's z real, z freq)
+    moves = {}  # push -> list of (truth's move, candidate's predicted move, other's predicted move) in real, freq
+    for c in checked:
+        cand = c["candidate"]
+        other = next(n for n in c["rivals"] if n != cand)
+        groups: dict[tuple, dict] = {}
+        for r in c["runs"]:
+            if r["lost"]:
+                continue
+            groups.setdefault((r["speed"], r["law"]), {})[r["push"]] = r
+            z = []
+            for name in (cand, other):
+                mu, sd = np.array(r["rivals"][name]["mean"]), np.array(r["rivals"][name]["sd"])
+                z += list((np.array(r["y"]) - mu) / np.hypot(sd, np.array(r["sd"])))
+            rows.append((r["push"], *z))
+        for g in groups.values():
+            if 1.0 not in g:
+                continue
+            base = g[1.0]
+            for push, r in g.items():
+                if push == 1.0:
+                    continue
+                truth = np.array(r["y"]) - np.array(base["y"])
+                pred = [np.array(r["rivals"][n]["mean"]) - np.array(base["rivals"][n]["mean"]) for n in (cand, other)]
+                moves.setdefault(push, []).append((truth, *pred, np.hypot(r["sd"], base["sd"])))
+    out = [
+        f"How the truth's decay moves with the push ({len(checked)} of the ties again, `push-check`: at up to four "
+        "speeds and laws where the plan holds a decay at every push, the truth's first run at each push, as the "
+        "loop runs it, against the rivals' predictions; the friction truths' candidate `steer_friction` first). z: the "
+        "truth's run minus the rival's prediction over their standard deviations combined (a rival that foresees the "
+        "truth has z of mean 0 and RMS about 1):",
+        "",
+        "| push | runs | candidate: z of the decay rate, mean (RMS) | z of the frequency | rival: z of the decay rate | "
+        "z of the frequency |",
+        "|---|---|---|---|---|---|",
+    ]
+    for push in sorted({r[0] for r in rows}):
+        z = np.array([r[1:] for r in rows if r[0] == push])
+        cells = [f"{np.mean(z[:, j]):+.2f} ({np.sqrt(np.mean(z[:, j] ** 2)):.2f})" for j in range(4)]
+        out.append(f"| {push:g} | {len(z)} | " + " | ".join(cells) + " |")
+    out += [
+        "",
+        "The move from the data's push: the truth's run at the push minus its run at the data's push (the same "
+        "draws, the kick scaled), against the move the candidate predicts:",
+        "",
+        "| push | pairs of runs | truth's move of the frequency: median abs [rad/s] | candidate's predicted move | "
+        "same sign | truth's move of the decay rate: median abs [1/s] | candidate's predicted move | "
+        "truth's moves beyond twice the runs' noise |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for push, m in sorted(moves.items()):
+        truth = np.array([x[0] for x in m])
+        cand = np.array([x[1] for x in m])
+        noise = np.array([x[3] for x in m])
+        same = np.mean(np.sign(truth[:, 1]) == np.sign(cand[:, 1]))
+        beyond = np.mean(np.any(np.abs(truth) > 2 * noise, axis=1))
+        out.append(
+            f"| {push:g} | {len(m)} | {np.median(np.abs(truth[:, 1])):.3f} | {np.median(np.abs(cand[:, 1])):.3f} | "
+            f"{same:.0%} | {np.median(np.abs(truth[:, 0])):.3f} | {np.median(np.abs(cand[:, 0])):.3f} | {beyond:.0%} |"
+        )
+    every = [x for m in moves.values() for x in m]
+    if every:
+        truth = np.array([x[0] for x in every])
+        cand = np.array([x[1] for x in every])
+        ratio = np.median(np.abs(truth[:, 1])) / max(np.median(np.abs(cand[:, 1])), 1e-12)
+        out += [
+            "",
+            f"* The truth's weave frequency moves with the push about {ratio:.0f} times as far as the friction candidate "
+            f"predicts (median over {len(every)} pairs of runs), in the direction it predicts in "
+            f"{np.mean(np.sign(truth[:, 1]) == np.sign(cand[:, 1])):.0%}: the plan sees which way a push moves the "
+            "decay, not how far, so a run at another push also shows what neither rival foresees.",
+            "* Checked for seed 9311 (steer_friction vs tyre_slip, riderless; the truth's `T_coulomb` 0.157 N m, "
+            "`c_steer` 0.90 N m s/rad), decided wrong by the plan's first run: a decay at 4.92 m/s under the halved "
+            "control at twice the data's push (the only push the plan kept there: its templates at half and at the "
+            "data's push fit poorly, r^2 0.10 and 0.29). The friction candidate (fitted `T_coulomb` 0.204 +- 0.129, `c_viscous` 0.77 +- 1.29) "
+            "predicts a weave frequency of 1.84 +- 0.33 rad/s, tyre slip 5.01 +- 0.52, the truth's run gives 3.99 +- "
+            "0.12. The truth's own runs there (`fit_record`, 0.01 rad/s noise) give 1.8-3.1 rad/s from a roll-rate "
+            "kick of 0.3 rad/s and 3.1-3.7 rad/s from 0.6 rad/s, by the kick's steer rate (-1.6 to 1.6 rad/s) alone: "
+            "with Coulomb friction the decay depends on how the steer moves at the start, which the plan's template, "
+            "started from the data's roll rate alone (these records log no steer), does not carry.",
+        ]
+    out.append("")
+    return out
+
+
+def _records_lines(n_max: int) -> list[str]:
+    """The records mode's subsection, from :data:`RECORDS` (and its figure, :data:`RECORDS_FIGURE`)."""
+    import matplotlib.pyplot as plt
+
+    from bikerider.gap.plan.ranking import PUSHES
+    from validation import loop as L
+
+    stored = _stored(RECORDS)
+    ties = [c for c in stored if c.get("strategies")]
+    if not ties:
+        return []
+    names = [n for n in L.RECORD_STRATEGIES if all(n in c["strategies"] for c in ties)]
+    merit = _merit(ties, names)
+    plan = "plan:jensen_renyi"
+    chosen = [(c, e) for c in ties for e in c["strategies"][plan]["chosen"]]
+    pushes = Counter(_push_of(c, e) for c, e in chosen)
+    other = sum(n for push, n in pushes.items() if push is not None and push != 1.0)
+    decays = sum(n for push, n in pushes.items() if push is not None)
+    with_other = sum(any((_push_of(c, e) or 1.0) != 1.0 for e in c["strategies"][plan]["chosen"]) for c in ties)
+    first_other = sum(c["first"] is not None and c["first"]["push"] not in (None, 1.0) for c in ties)
+    compared = [c for c in ties if c.get("first") and c.get("table_first")]
+    same = [c for c in compared if _same_first(c["first"], c["table_first"])]
+    kind = sum(c["first"]["kind"] != c["table_first"]["kind"] for c in compared)
+    law = sum(
+        c["first"]["kind"] == c["table_first"]["kind"] and c["first"]["law"] != c["table_first"]["law"]
+        for c in compared
+    )
+    by_push = sum(
+        c["first"]["kind"] == "decay" == c["table_first"]["kind"]
+        and (c["first"]["law"], round(c["first"]["speed"], 2))
+        == (c["table_first"]["law"], round(c["table_first"]["speed"], 2))
+        and c["first"]["push"] != 1.0
+        for c in compared
+    )
+    matches = [c.get("first_is_next_run") for c in ties if c.get("first_is_next_run") is not None]
+    m_plan, m_even = merit[plan]["median_p90"][0], merit["even"]["median_p90"][0]
+    goal1 = math.isfinite(m_plan) and (not math.isfinite(m_even) or m_plan <= m_even / 2)
+    broken = [
+        c
+        for c in ties
+        if c["strategies"][plan]["status"] == "unbreakable" and c["strategies"]["even"]["status"] == "resolved"
+    ]
+    both = [
+        (c["strategies"][plan]["runs"], c["strategies"]["even"]["runs"])
+        for c in ties
+        if c["strategies"][plan]["status"] == "resolved" == c["strategies"]["even"]["status"]
+    ]
+    by_scenario: dict[str, list] = {}
+    for c in stored:
+        by_scenario.setdefault(c["scenario"], []).append(c)
+    errors = [c for c in stored if str(c.get("status", "")).startswith("error")]
+
+    # figure: runs to a decision, and the pushes the plan chose
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
+    k = np.arange(0, n_max + 1)
+    for n in names:
+        got = [c["strategies"][n] for c in ties]
+        for status, style in (("resolved", "-"), ("wrong", ":")):
+            frac = [np.mean([s["status"] == status and s["runs"] <= j for s in got]) for j in k]
+            axes[0].step(k, frac, where="post", ls=style, color="C0" if n == plan else "C1", label=f"{n}, {status}")
+    axes[0].set_xlabel("runs after the tie")
+    axes[0].set_ylabel("fraction of ties decided")
+    axes[0].set_title(f"Records mode, friction pairs: {len(ties)} ties")
+    axes[0].set_ylim(0, 1)
+    axes[0].grid(alpha=0.3)
+    axes[0].legend(fontsize=8)
+    labels = ["decay x0.5", "decay x1", "decay x2", "multisine"]
+    counts = [pushes.get(0.5, 0), pushes.get(1.0, 0), pushes.get(2.0, 0), pushes.get(None, 0)]
+    axes[1].bar(labels, counts, color=["C2", "C0", "C3", "0.6"])
+    for x, n in enumerate(counts):
+        axes[1].annotate(str(n), (x, n), ha="center", va="bottom", fontsize=9)
+    axes[1].set_ylabel("runs")
+    axes[1].set_title(f"The runs {plan} chose ({len(chosen)} in all)")
+    fig.tight_layout()
+    fig.savefig(RECORDS_FIGURE, dpi=110)
+    plt.close(fig)
+
+    def cell(n):
+        m = merit[n]
+        med, p90 = m["median_p90"]
+        dmed, dp90 = m["decided"]
+        return (
+            f"| {n} | {m['n']} | {m['resolved']} | {m['wrong']} | {m['undecided']} | {m['unbreakable']} | "
+            f"{_fmt(med, n_max)} | {_fmt(p90, n_max)} | {within(n, 2)} | {within(n, 5)} | {_fmt(dmed, n_max)} | "
+            f"{_fmt(dp90, n_max)} | {m['lost']} / {m['spent']} |"
+        )
+
+    def within(n, k):
+        return sum(c["strategies"][n]["status"] == "resolved" and c["strategies"][n]["runs"] <= k for c in ties)
+
+    out = [
+        "### Records: pushes among the experiments",
+        "",
+        "The loop's records mode (`validation.loop.run_loop_case(..., records=True)`, `gap_next_loop.py records`):",
+        "the tie's data are **records**, the truth's noisy roll rate of each kicked run as part 4's trials make them",
+        "(`validation.cases.measure` with records; Coulomb friction simulated in time by the truth's own simulator,",
+        "nine runs near one speed in three sessions, `RECORD_NARROW`: the steer friction fitted in time has",
+        "standard errors only from the jackknife over three or more sessions, and with the two sessions of the",
+        "table study the plan takes its values' spread as their whole search range). The friction truths' candidate",
+        "is `steer_friction` (viscous and Coulomb, fitted in time), nonlinear, so the plan (`NextExperiment`,",
+        "roll-rate decays) plans each decay at "
+        + ", ".join(f"{x:g}" for x in PUSHES)
+        + " times the data's push, besides the multisines.",
+        "The rivals' predictions are the plan's own (indirect inference over each experiment's template at its",
+        "push; the friction rival's response simulated in time), linear in their fitted values through the plan's",
+        "secants (`validation.loop.from_plan`; they give back the plan's covariances to "
+        f"{max(c.get('own_cov_error') or 0.0 for c in ties):.0e}, relative). A push run is the truth's",
+        "kick (as the data's, drawn the same way; the runs at the pushes of one speed and law share their draws)",
+        "times the push, 6 s, read by the diagnosis's own record fit (`fit_record`); its weight is the plan's noise",
+        "of one run (the data's scatter from run to run beyond their fits' standard errors, as the diagnosis weighs",
+        "a record by its replicates' scatter) with the run's own standard errors in place of the template's, plus",
+        "the nominal parameters' uncertainty. The",
+        "even spread takes decays at the data's push (a researcher without a plan pushes as before); multisines",
+        f"are as in the table study. Pairs: {'; '.join(s.label for s in L.RECORD_SCENARIOS)}; seeds from "
+        f"{FIRST_RECORD_SEED}, the pairs in turn.",
+        "",
+        f"* **{len(ties)} ties** out of {len(stored)} cases tried"
+        + (f" ({len(errors)} failed with an error)" if errors else "")
+        + ".",
+        "",
+        "| strategy | ties | resolved | wrong | undecided | unbreakable | runs needed: median | 90th percentile | "
+        "resolved within 2 runs | within 5 | runs to any decision: median | 90th percentile | runs lost / spent |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+        *[cell(n) for n in names],
+        "",
+        f"* Goal 1 (the plan's median at most half the even spread's): {_fmt(merit[plan]['median_p90'][0], n_max)} "
+        f"against {_fmt(merit['even']['median_p90'][0], n_max)}, "
+        + ("**met**" if goal1 else "**not met**")
+        + f"; the plan spends {merit[plan]['spent']} runs in all, the even spread {merit['even']['spent']}. Goal 2: "
+        f"{len(broken)} ties declared unbreakable that the even spread breaks"
+        + (": " + ", ".join(f"{c['scenario']} seed {c['seed']}" for c in broken) if broken else "")
+        + ".",
+        f"* The runs {plan} chose: {decays} decays, {other} of them at a push other than the data's "
+        f"({pushes.get(0.5, 0)} at 0.5 times, {pushes.get(2.0, 0)} at 2 times; in {with_other} of {len(ties)} ties), "
+        f"and {pushes.get(None, 0)} multisines. Its first run was a push other than the data's in {first_other} ties.",
+        f"* The first run ({plan}, the next run `--next` names; the loop's first choice was that run in "
+        f"{sum(matches)} of {len(matches)} ties) against the table loop's on the same runs (their fitted weave "
+        "eigenvalues as a table, the table study's candidate `steer_damping` for the friction and the same rival, "
+        f"planned as the table study plans): the same experiment in {len(same)} of {len(compared)} ties, "
+        f"different in {len(compared) - len(same)} ({kind} a different kind, decay or multisine; {law} a different "
+        f"law; {by_push} the same speed and law at another push).",
+        f"* By the plan's first run: {_by_first(ties, plan)}.",
+        f"* On the {len(both)} ties both resolved: {plan} {sum(a for a, _ in both)} runs in all (mean "
+        f"{np.mean([a for a, _ in both]) if both else math.nan:.2f}), the even spread {sum(b for _, b in both)} (mean "
+        f"{np.mean([b for _, b in both]) if both else math.nan:.2f}); fewer runs for the plan in "
+        f"{sum(a < b for a, b in both)}, more in {sum(a > b for a, b in both)}.",
+        "",
+        "| pair | cases | ties | plan resolved | plan wrong | even resolved | even wrong | first run differs from the table loop's |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for label, cs in by_scenario.items():
+        t = [c for c in cs if c.get("strategies")]
+
+        def count(name, status, t=t):
+            return sum(c["strategies"][name]["status"] == status for c in t)
+
+        differ = sum(
+            not _same_first(c["first"], c["table_first"]) for c in t if c.get("first") and c.get("table_first")
+        )
+        out.append(
+            f"| {label} | {len(cs)} | {len(t)} | {count(plan, 'resolved')} | {count(plan, 'wrong')} | "
+            f"{count('even', 'resolved')} | {count('even', 'wrong')} | {differ} |"
+        )
+    seconds = sum(c.get("seconds", 0.0) for c in stored)
+    out += [
+        "",
+        f"![records mode: runs to a decision and the pushes chosen](figures/{RECORDS_FIGURE.name})",
+        "",
+        *_push_lines(),
+        f"* Cost: {len(stored)} cases in {seconds:.0f} s of one worker ({seconds / max(len(ties), 1):.1f} s a tie, "
+        "non-ties included).",
+        "",
+    ]
+    return out
+
+
 def report(args) -> int:
     import matplotlib
 
@@ -664,7 +1049,8 @@ def report(args) -> int:
         "## 5. The closed loop: runs to a decision, following the plan against an even spread",
         "",
         "Produced by `docs/scripts/gap_next_loop.py` (`run` stores the cases in `gap_next_loop.jsonl` beside it,",
-        "`report` writes this part from them); the cases are `validation.loop`.",
+        "`records` the records mode's in `gap_next_loop_records.jsonl`, `report` writes this part from them); the",
+        "cases are `validation.loop`.",
         "",
         "### Set-up",
         "",
@@ -681,7 +1067,9 @@ def report(args) -> int:
         "  its experiments (decays at 12 speeds under the data's control law, the law's gains halved or times 1.5,",
         "  or no control; steer-torque multisines of 0.5 N m, 10 s, roll rate or steer angle, at the same speeds",
         "  and laws), each rival's predictions and one run's noise and nominal-parameter uncertainty are the loop's.",
-        "  Pushes are not an experiment here: the diagnosis reads eigenvalue tables, whose decays carry no push size.",
+        "  Pushes are not an experiment in this study: its diagnosis reads eigenvalue tables, whose decays carry no",
+        "  push size. With records and a nonlinear rival the plan also plans pushes; the loop's records mode runs",
+        "  them (*Records: pushes among the experiments*, below).",
         "* **Loop** (cheap by design): each rival is linearised at its fit to the tie's data (its predictions of every",
         "  experiment and their secant slopes in its fitted values, through the same public model code the diagnosis",
         "  uses; they reproduce the plan's own predictions to "
@@ -819,6 +1207,7 @@ def report(args) -> int:
     lines += _rerun_lines(ties, best, n_max)
     lines += _lean_lines(ties, n_max)
     lines += _now_lines(n_max)
+    lines += _records_lines(n_max)
     shared = [c for c in _stored(SHARED) if c.get("strategies")]
     if shared:
         keys = {(c["scenario"], c["seed"]) for c in shared}
@@ -1000,9 +1389,19 @@ def main() -> int:
         type=float,
         help="with --strategy: the plan's largest lean of a multisine run [rad] (inf: the rule off), to its own file",
     )
+    rc = sub.add_parser("records", help="the records mode on the friction pairs (pushes among the experiments)")
+    rc.add_argument("--ties", type=int, default=40, help="stop after this many ties stored")
+    rc.add_argument("--attempts", type=int, default=300, help="cases to try at most (the friction pairs in turn)")
+    rc.add_argument("--workers", type=int, default=1)
+    rc.add_argument("--until", help="stop at this UTC time, HH:MM")
+    pc = sub.add_parser("push-check", help="the records ties again: the truth's runs at every push against the rivals'")
+    pc.add_argument("--max", type=int, default=200, help="ties to check at most")
+    pc.add_argument("--until", help="stop at this UTC time, HH:MM")
     sub.add_parser("report", help="write part 5 of docs/gap_validation.md and the figure")
     args = parser.parse_args()
-    return {"run": run, "check": check, "rerun": rerun, "report": report}[args.command](args)
+    commands = {"run": run, "check": check, "rerun": rerun, "records": records, "push-check": push_check}
+    commands["report"] = report
+    return commands[args.command](args)
 
 
 if __name__ == "__main__":

@@ -87,3 +87,109 @@ def test_truth_multisine_reads_the_frequency_response(monkeypatch):
         H = L.multisine_run(simulator, speed, gains, sweep, rng, settle=60.0)
         expected = response(A, b, index, sweep.omegas)
         assert np.max(np.abs(H - expected)) < 0.02 * np.max(np.abs(expected)), (output, H, expected)
+
+
+# -- the records mode -----------------------------------------------------------------------------------
+def _push_runs(truth, pushes, seed=11, speed=5.5):
+    """One uncontrolled riderless decay of ``truth`` per push, the same draws, read by the record fit."""
+    model = load_model(BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt")
+    out = []
+    for push in pushes:
+        rng = np.random.default_rng(seed)
+        simulator = V.TruthSimulator(model, truth, rng)
+        fits = []
+        protocol = V.Protocol((V.Session("loop", (speed,)),), speed_jitter=0.0, push=push)
+        data, _ = V.measure(simulator, protocol, rng, None, fits)
+        assert len(data) == 1 and fits[0].used, (push, fits[0].reason)
+        out.append((fits[0], data))
+    return out
+
+
+def test_a_push_scales_the_truths_kick_and_coulomb_friction_makes_the_decay_depend_on_it():
+    """A push run is the same kick scaled: without friction the record fit finds the same weave at any push
+    (within its standard errors); with the truth's Coulomb steer friction (simulated in time) the weave it
+    finds depends on the push (here the half push nearly sticks the steer and decays slower), which is what a
+    push experiment is for."""
+    (small, _), (large, _) = _push_runs(V.TRUTHS["null"], (0.5, 2.0), speed=6.5)
+    ratio = np.max(np.abs(large.record.signals["roll_rate"])) / np.max(np.abs(small.record.signals["roll_rate"]))
+    assert 3.0 < ratio < 5.0  # the kick four times larger; the noise and the first samples' timing aside
+    a, b = small.estimate, large.estimate
+    assert abs(a.eigenvalue.real - b.eigenvalue.real) < 3 * np.hypot(a.real_sigma, b.real_sigma)
+    coulomb = V.Truth("coulomb", ("steer_friction",), {"T_coulomb": 0.2}, "Coulomb steer friction 0.2 N m")
+    (small, _), (large, _) = _push_runs(coulomb, (0.5, 1.0), speed=6.5)
+    a, b = small.estimate, large.estimate
+    assert a.eigenvalue.real > b.eigenvalue.real + 3 * np.hypot(a.real_sigma, b.real_sigma), (a, b)
+
+
+def test_even_order_keeps_to_the_datas_push():
+    points = [
+        SimpleNamespace(law=law, speed=v, push=p)
+        for law in ("a", "b")
+        for v in np.linspace(3, 9, 6)
+        for p in (0.5, 1, 2)
+    ]
+    order = L._even_order(SimpleNamespace(points=points), 8)
+    assert all(points[e].push == 1 for e in order)
+    assert [points[e].law for e in order] == ["a", "b"] * 4
+
+
+def test_a_fixed_extra_covariance_widens_every_run_and_is_not_learnt():
+    """``extra`` (the friction law's form of a multisine) is added to each run's predictive covariance; the
+    runs update the rival's values only."""
+    rng = np.random.default_rng(2)
+    mean, jac = [rng.standard_normal(2)], [rng.standard_normal((2, 1))]
+    extra = [np.diag([0.3, 0.2])]
+    plain = L.LinearRival(mean, jac, np.eye(1))
+    wide = L.LinearRival(mean, jac, np.eye(1), extra=extra)
+    assert wide.predict(0)[1] == pytest.approx(plain.predict(0)[1] + extra[0])
+    R = np.eye(2) * 0.01
+    y = mean[0] + 0.1
+    wide.update(0, y, R)
+    S = jac[0] @ jac[0].T + extra[0] + R
+    r = y - mean[0]
+    expected = -0.5 * (r @ np.linalg.solve(S, r) + np.linalg.slogdet(S)[1] + 2 * np.log(2 * np.pi))
+    assert wide.log_evidence == pytest.approx(expected, rel=1e-12)
+    assert wide.predict(0)[1] - extra[0] == pytest.approx(wide.jac[0] @ wide.P @ wide.jac[0].T)
+
+
+@pytest.mark.slow
+def test_records_mode_plans_pushes_and_the_loop_runs_them():
+    """A records tie of a friction pair (riderless, steer friction against tyre slip): the plan considers
+    decays at several pushes, the linearised rivals give the plan's own predictions back, the loop's first
+    choice is the next run ``--next`` names, and a push run is the truth's record read by the record fit."""
+    models = {"riderless": load_model(BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt")}
+    scenario = next(s for s in L.RECORD_SCENARIOS if s.label == "steer_friction vs tyre_slip (riderless)")
+    for seed in (9005, 9038):
+        case = L.run_loop_case(models, scenario, seed, records=True, keep=True, strategies=("plan:jensen_renyi",))
+        if case["status"] == "loop":
+            break
+    else:
+        raise AssertionError("none of the seeds gave a tie")
+    o = case["_objects"]
+    plan, lin, runs = o["plan"], o["linear"], o["runs"]
+    assert case["data"] == "records" and case["candidate"] == "steer_friction"
+    assert {e.push for e in plan.points} == {0.5, 1.0, 2.0}
+    assert case["own_cov_error"] < 1e-9
+    for k, r in enumerate(lin):
+        means = np.array([r.predict(m)[0] for m in range(len(plan.points))])
+        assert means == pytest.approx(np.stack([plan.mean[k].real, np.abs(plan.mean[k].imag)], axis=-1))
+    assert case["first_is_next_run"] is True
+    assert case["first"]["text"] == plan.next_run["text"]
+    assert case["table_first"] is not None and case["table_first"]["push"] in (None, 1.0)  # tables: no push
+    # a push other than the data's, run by the truth and read by the record fit
+    e = next(m for m, x in enumerate(plan.points) if x.push == 2.0)
+    obs = runs.get(e, 0)
+    assert obs is not None and runs.record_fits[(e, 0)].used
+    y, R = obs
+    fit = runs.record_fits[(e, 0)].estimate
+    assert y == pytest.approx([fit.eigenvalue.real, abs(fit.eigenvalue.imag)])
+    # the pushes of one speed and law share their draws: the same kick, scaled
+    x = plan.points[e]
+    once = [m for m, z in enumerate(plan.points) if (z.speed, z.law, z.push) == (x.speed, x.law, 1.0)]
+    if once and runs.get(once[0], 0) is not None:
+        big, small = (runs.record_fits[(m, 0)].record.signals["roll_rate"] for m in (e, once[0]))
+        assert np.max(np.abs(big)) / np.max(np.abs(small)) == pytest.approx(2.0, rel=0.25)
+    template = plan.templates[plan.points[e]].estimate
+    scatter = plan.data_cov[e] - np.diag([template.real_sigma**2, template.imag_sigma**2])  # the data's, per run
+    assert np.all(np.diag(scatter) >= 0)
+    assert R == pytest.approx(np.diag([fit.real_sigma**2, fit.imag_sigma**2]) + scatter + plan.model_cov[e])
