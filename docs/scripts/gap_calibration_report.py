@@ -22,6 +22,9 @@ BEFORE_ITEM4 = Path(__file__).with_name("gap_calibration_before_item4.jsonl")
 """Trials of the study before issue 21 item 4's fixes of the sizes and intervals (the friction's interval
 without the parameters' share, its initial states by one Gauss-Newton step, the linear fits from records by
 the iterated bias correction alone), on the seeds of this study (the same truths, bicycles and runs)."""
+BEFORE_MINIMA = Path(__file__).with_name("gap_calibration_before_minima.jsonl")
+"""Trials of the study before the linear fits from records searched for other minima of their chi-square and
+used Student's t for a scale estimated from the residuals (after issue 21 item 4's fixes), on the same seeds."""
 WORKERS = 2
 """Worker processes the study runs (``gap_calibration.py --workers``): the time the full study needs."""
 
@@ -359,7 +362,20 @@ def section(trials: list[dict], goal: int) -> list[str]:
         )
     lines += _comparison(table, old)
     lines += _interval_fix(table + friction, load(WEAVE_SLOPES))
-    lines += _item4_fix(table + friction, load(BEFORE_ITEM4))
+    lines += _before_table(
+        table + friction,
+        load(BEFORE_ITEM4),
+        "**Before issue 21 item 4's fixes**",
+        BEFORE_ITEM4,
+        "the study before them on these seeds",
+    )
+    lines += _before_table(
+        table + friction,
+        load(BEFORE_MINIMA),
+        "**Before the search for other minima and Student's t**",
+        BEFORE_MINIMA,
+        "the study before them, after item 4's fixes",
+    )
     if friction:
         sep = [t for t in friction if "c_equivalent" in t["fitted"]]
         k = sum(bool(t["fitted"]["c_equivalent"].get("separable")) for t in sep)
@@ -492,8 +508,8 @@ ITEM4_SIZES = (
 """The sizes whose coverage issue 21 item 4 took apart, and a few it moves beside them."""
 
 
-def _item4_fix(trials: list[dict], before: list[dict]) -> list[str]:
-    """Coverage per size before and after issue 21 item 4's fixes, on the same seeds."""
+def _before_table(trials: list[dict], before: list[dict], title: str, path: Path, what: str) -> list[str]:
+    """Coverage per size of a stored earlier study (``path``) against this one, on the same seeds."""
     now = {(t["effect"], t["seed"]): t for t in trials}
     before = _with_arm_inertia([t for t in before if (t["effect"], t["seed"]) in now])
     if not before:
@@ -504,9 +520,8 @@ def _item4_fix(trials: list[dict], before: list[dict]) -> list[str]:
     own = [k for k in rows_before if k in rows_after and _own(rows_before[k])]
     out = [
         "",
-        f"**Before issue 21 item 4's fixes**, on the same {len(before)} trials (`docs/scripts/"
-        "gap_calibration_before_item4.jsonl`, the study before them on these seeds: the same truths, bicycles and",
-        "runs): the linear candidates on their own truths "
+        f"{title}, on the same {len(before)} trials (`docs/scripts/{path.name}`, {what}: the same truths,",
+        "bicycles and runs): the linear candidates on their own truths "
         f"{_pct(*_covered([rows_before[k] for k in own]))} then, {_pct(*_covered([rows_after[k] for k in own]))} now.",
         "",
         "| effect | size | trials | coverage before | coverage now | median error before | median error now |",
