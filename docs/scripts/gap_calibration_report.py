@@ -604,6 +604,7 @@ def _reading(table, old, friction, pairs, rows) -> list[str]:
             detail.append(f"{effect} {name}: {m} missed, {below} of them fitted below the truth, {at_bound} at zero")
     if detail:
         out.append("* The misses, by size: " + "; ".join(detail) + ".")
+    out += _minima_reading(table)
     out += READING
     if friction:
         t_rows = [r for r in rows if r[0] == "steer_friction_records" and r[1] == "T_coulomb"]
@@ -624,6 +625,29 @@ def _reading(table, old, friction, pairs, rows) -> list[str]:
             "  fresh records as much as from the prediction.",
         ]
     return out
+
+
+def _minima_reading(table: list[dict]) -> list[str]:
+    """How often the fit to all the data found another minimum, and how often its scale was estimated (Student's
+    t): from the trials' ``minima``, ``minima_within``, ``fit_chi2`` and ``fit_n`` (absent in older studies)."""
+    linear = [t for t in table if t.get("minima") is not None and t["candidate"] == t["effect"]]
+    if not linear:
+        return []
+    other = [t for t in linear if t["minima"] > 1]
+    within = [t for t in other if t.get("minima_within")]
+    scaled = [
+        t for t in linear if t.get("fit_chi2") is not None and t["fit_chi2"] > max(t["fit_n"] - len(t["truth"]), 1)
+    ]
+    by_effect = {}
+    for t in within:
+        by_effect[t["effect"]] = by_effect.get(t["effect"], 0) + 1
+    return [
+        f"* The fit to all the data of a linear candidate on its own truth ({len(linear)} trials) found another local"
+        f" minimum of its chi-square in {len(other)}, within the 95 % profile-likelihood threshold (so held by the"
+        f" intervals) in {len(within)}"
+        + (" (" + ", ".join(f"{e} {k}" for e, k in sorted(by_effect.items())) + ")" if by_effect else "")
+        + f"; its reduced chi-square exceeded one, so the scale was estimated and Student's t used, in {len(scaled)}.",
+    ]
 
 
 READING = [
