@@ -13,9 +13,15 @@ import pytest
 from gap_support import SIL, nominal, riderless_model
 
 from bikerider.gap.candidates.effect_model import EffectModel
-from bikerider.gap.diagnosis.result import diagnose
+from bikerider.gap.diagnosis.result import FEW_FOLDS_FRICTION, as_dict, diagnose
 from bikerider.gap.diagnosis.statistics import interval_quantile, jackknife_quantile
-from bikerider.gap.inference.timedomain import Layout, fit_time_domain, parameter_sensitivity, simulate_friction
+from bikerider.gap.inference.timedomain import (
+    Layout,
+    fit_covariance,
+    fit_time_domain,
+    parameter_sensitivity,
+    simulate_friction,
+)
 from bikerider.gap.measured.records import Record, fit_records
 from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
 
@@ -108,3 +114,70 @@ def test_the_quantile_of_a_sum_of_a_jackknife_and_a_known_variance():
     mixed = interval_quantile(g, [[4.0]], [[1.0]], 3)  # dof 2 * 16 = 32
     assert 1.96 < mixed < jackknife_quantile(3)
     assert mixed == pytest.approx(2.037, abs=2e-3)
+
+
+def _diagnosis(model, values, speeds):
+    records = fit_records(
+        [_friction_record(values, model.geometry, v, f"{v} m/s", seed=k) for v in speeds for k in range(2)]
+    )
+    return diagnose(model, EigenvalueData.empty(), CanonicalData.empty(), effects=("steer_friction",), records=records)
+
+
+def test_two_sessions_get_the_fits_own_covariance(riderless):
+    # issue 25's closed loop: with two sessions there is no jackknife, and the standard errors were
+    # infinite, the interval the whole search range; the fit's own Gauss-Newton covariance sizes it
+    values = nominal(riderless)
+    d = _diagnosis(riderless, values, (2.5, 4.5))
+    assert len(d.folds) == 2
+    full = d.fits.fit_of(("steer_friction",))
+    assert np.all(np.isfinite(full.stderr)) and full.jackknife_covariance is None
+    span = np.asarray(full.upper) - np.asarray(full.lower)
+    assert np.all(full.ci_high - full.ci_low < 0.05 * span)
+    assert full.ci_low[0] <= T_TRUE <= full.ci_high[0]
+    assert full.ci_low[1] <= C_TRUE <= full.ci_high[1]
+    # the data's share is s^2 (J^T J)^-1, the parameters' share added as with a jackknife
+    records = [r.record for r in d.fits.records]
+    own = fit_covariance(records, values, riderless.geometry, FRICTION, full.values)
+    assert own.reduced_chi2 < 1  # the weights are the signals' scatter, not their noise: scaled down
+    assert full.covariance - own.covariance == pytest.approx(d.fits.parameter_covariance(FRICTION, full.values))
+    quantile = (full.ci_high[0] - full.values[0]) / full.stderr[0]
+    # Welch-Satterthwaite with hundreds of degrees of freedom for the data's share: about the normal 1.96
+    assert 1.959 < quantile < 1.97
+    # the interval does not see the scatter from session to session: the output says so
+    assert FEW_FOLDS_FRICTION in as_dict(d)["notes"]
+
+
+def test_the_fits_own_covariance_is_the_scatter_of_its_values(riderless):
+    # two-session sets of simulated decays with white noise (nominal parameters): the fits' error over
+    # their own standard error has unit scatter (0.93 and 1.01 over 12 sets; 6 here, for time)
+    values = nominal(riderless)
+    z = []
+    for s in range(6):
+        records = [
+            _friction_record(values, riderless.geometry, v, f"{v} m/s", seed=k)
+            for v in (2.5, 4.5)
+            for k in (2 * s, 2 * s + 1)
+        ]
+        fit = fit_time_domain(records, values, riderless.geometry, FRICTION)
+        own = fit_covariance(records, values, riderless.geometry, FRICTION, fit.values)
+        z.append((fit.values - [T_TRUE, C_TRUE]) / np.sqrt(np.diag(own.covariance)))
+    rms_z = np.sqrt(np.mean(np.square(z), axis=0))
+    assert np.all((rms_z > 0.5) & (rms_z < 1.6))  # not the unscaled (J^T J)^-1: that gives about 0.03
+
+
+def test_three_sessions_keep_the_jackknife(riderless):
+    # a calibration study runs on this path: three sessions or more keep the jackknife over the folds
+    # plus the parameters' share, and the numbers of main at b2e4f82 (before the two-session fallback)
+    values = nominal(riderless)
+    d = _diagnosis(riderless, values, (2.5, 3.5, 4.5))
+    assert len(d.folds) == 3
+    full = d.fits.fit_of(("steer_friction",))
+    folds = np.array([f.values for f in d.fits.cross_validate(("steer_friction",)).fits])
+    centred = folds - folds.mean(axis=0)
+    spread = 2 / 3 * centred.T @ centred
+    assert full.jackknife_covariance == pytest.approx(spread, rel=1e-12)
+    assert full.covariance == pytest.approx(spread + d.fits.parameter_covariance(FRICTION, full.values), rel=1e-12)
+    assert full.stderr == pytest.approx([0.00881267818094598, 0.007508347336191], rel=1e-4)
+    assert full.ci_low == pytest.approx([0.06075667223138319, 0.08746963596775062], rel=1e-4)
+    assert full.ci_high == pytest.approx([0.09530441233623273, 0.11690488187039419], rel=1e-4)
+    assert FEW_FOLDS_FRICTION not in as_dict(d)["notes"]

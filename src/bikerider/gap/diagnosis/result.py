@@ -320,6 +320,16 @@ def _no_data(records: list) -> None:
     )
 
 
+FEW_FOLDS_FRICTION = (
+    "steer friction fitted to fewer than three groups: its intervals hold the records' own scatter and the "
+    "parameters' uncertainty, not the scatter from session to session (three groups or more give a jackknife "
+    "that sees it; on the steer-by-wire records it was about 30 times the fit's own): record a third session "
+    "before trusting its size"
+)
+"""The note of a diagnosis whose steer friction got its data's share of the covariance from the fit itself
+(:meth:`bikerider.gap.diagnosis.fits.Fits.time_domain_fit`), not from a jackknife over the folds."""
+
+
 def as_dict(d: Diagnosis) -> dict:
     """A diagnosis as plain JSON-ready values."""
     p = d.problem
@@ -389,7 +399,8 @@ def as_dict(d: Diagnosis) -> dict:
         "uncertainty": _uncertainty_summary(p),
         "laws": {name: law.describe() for name, law in p.eigen.laws.items()},
         "notes": list(p.notes)
-        + ([] if len(d.folds) >= 2 else ["fewer than two folds (groups or speeds): no held-out ranking"]),
+        + ([] if len(d.folds) >= 2 else ["fewer than two folds (groups or speeds): no held-out ranking"])
+        + ([FEW_FOLDS_FRICTION] if d.fits.time_domain_full and len(d.folds) < 3 else []),
         "model": {"source": p.model_input.source, "geometry": p.geometry.notes, "uncertain_parameters": p.free},
         "elapsed_s": d.elapsed,
     }

@@ -399,6 +399,64 @@ def _weighted_residuals(
     return np.concatenate(parts, axis=1)
 
 
+def _slopes(batches, values: dict, geometry, layout: Layout, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The weighted residuals' slopes in the fitted values ``J (M, k)`` (forward differences of
+    :data:`THETA_STEP`, backward at an upper bound; each record's initial state refitted, so ``J`` is the
+    slope of the residuals with the initial states profiled out) and the residuals at ``theta`` ``(M,)``."""
+    upper = np.asarray(layout.upper, float)
+    h = np.full(theta.size, THETA_STEP) * np.where(theta + THETA_STEP <= upper, 1.0, -1.0)
+    R = _weighted_residuals(batches, values, geometry, layout, np.vstack([theta, theta + np.diag(h)]))
+    return ((R[1:] - R[0]) / h[:, None]).T, R[0]
+
+
+@dataclass
+class FitCovariance:
+    """The Gauss-Newton covariance of a time-domain fit from its own residuals (:func:`fit_covariance`).
+
+    Attributes
+    ----------
+    covariance : ndarray
+        ``s^2 (J^T J)^-1`` ``(k, k)``.
+    reduced_chi2 : float
+        ``s^2``: the sum of squared weighted residuals over the degrees of freedom.
+    dof : int
+        Residuals compared less the fitted values and each record's initial state and offsets.
+    """
+
+    covariance: np.ndarray
+    reduced_chi2: float
+    dof: int
+
+
+def fit_covariance(records: list[Record], values: dict, geometry, layout: Layout, theta: np.ndarray) -> FitCovariance:
+    """The data's share of a time-domain fit's covariance from the fit itself: ``s^2 (J^T J)^-1``.
+
+    ``J`` is the slope of the weighted residuals in the fitted values (the initial states profiled out:
+    each is refitted for every trial value), ``s^2 = |r|^2 / (M - k - m)`` the reduced chi-square over
+    the ``M`` residuals compared, the ``k`` fitted values and the ``m`` initial-state components and
+    per-signal offsets fitted to each record.  The residuals are weighted by each signal's scatter over
+    its record, not by its noise, so the weights fix only the signals' relative scale: the scale of the
+    residuals is always estimated from them (``s^2`` is far below one on a good fit), and
+    ``(value - truth) / stderr`` follows Student's t with ``M - k - m`` degrees of freedom.  Treating the
+    samples as independent, this is optimistic where the residuals are correlated in time (model error,
+    not white noise), which the jackknife over sessions is not; it is the fallback where there are too few
+    sessions for one (:meth:`bikerider.gap.diagnosis.fits.Fits.time_domain_fit`).
+    """
+    batches = make_batches(records, min_step=FIT_STEP)
+    theta = np.asarray(theta, dtype=float)
+    J, r = _slopes(batches, values, geometry, layout, theta)
+    states = systems(values, geometry, batches[0][1].records[:1], layout, theta)[0].shape[-1]
+    rows = nuisance = 0
+    for _, batch in batches:
+        for j in range(len(batch.records)):
+            signals = sum(1 for w in batch.weight.values() if w[j] > 0)
+            rows += int(batch.length[j]) * signals
+            nuisance += states + signals
+    dof = max(rows - theta.size - nuisance, 1)
+    reduced = float(r @ r) / dof
+    return FitCovariance(reduced * np.linalg.pinv(J.T @ J), reduced, dof)
+
+
 def parameter_sensitivity(
     records: list[Record],
     values: dict,
@@ -419,16 +477,13 @@ def parameter_sensitivity(
     """
     batches = make_batches(records, min_step=FIT_STEP)
     theta = np.asarray(theta, dtype=float)
-    upper = np.asarray(layout.upper, float)
-    h = np.full(theta.size, THETA_STEP) * np.where(theta + THETA_STEP <= upper, 1.0, -1.0)
-    R = _weighted_residuals(batches, values, geometry, layout, np.vstack([theta, theta + np.diag(h)]))
-    J = ((R[1:] - R[0]) / h[:, None]).T  # as forward_jacobian, keeping the residuals at theta (R[0]) for Jq
+    J, r = _slopes(batches, values, geometry, layout, theta)
     # one batched simulation: row j moves parameter j by its standard uncertainty
     names = list(sigmas)
     shifted = np.diag([sigmas[n] for n in names])
     rows = {n: values[n] + shifted[:, j] for j, n in enumerate(names)}
     thetas = np.repeat(theta[None, :], len(names), axis=0)
-    Jq = (_weighted_residuals(batches, values, geometry, layout, thetas, rows) - R[0]).T
+    Jq = (_weighted_residuals(batches, values, geometry, layout, thetas, rows) - r).T
     return -np.linalg.pinv(J.T @ J) @ (J.T @ Jq)
 
 
