@@ -107,7 +107,6 @@ def _one_record(job):
 def records(args) -> int:
     """The records mode (:data:`RECORDS`): the friction pairs in turn from seed :data:`FIRST_RECORD_SEED`, until
     ``--ties`` ties or ``--until``; resumes where it stopped."""
-    from multiprocessing import get_context
 
     from validation import loop as L
 
@@ -118,32 +117,14 @@ def records(args) -> int:
         k = i % len(L.RECORD_SCENARIOS)
         if (L.RECORD_SCENARIOS[k].label, FIRST_RECORD_SEED + i) not in done:
             jobs.append((k, FIRST_RECORD_SEED + i))
-    deadline = None
-    if args.until:
-        hh, mm = (int(x) for x in args.until.split(":"))
-        deadline = dt.datetime.now(dt.UTC).replace(hour=hh, minute=mm, second=0, microsecond=0)
-    LOG.info("%d ties stored, %d cases to try", ties, len(jobs))
-    start = time.perf_counter()
-    with get_context("fork").Pool(args.workers) as pool, RECORDS.open("a", encoding="utf-8") as out:
-        for result in pool.imap_unordered(_one_record, jobs):
-            out.write(json.dumps(result) + "\n")
-            out.flush()
-            ties += bool(result.get("strategies"))
-            LOG.info(
-                "%s seed %s: %s (%.1f s); %d ties, %.0f s",
-                result.get("scenario"),
-                result.get("seed"),
-                {k: (v["status"], v["runs"]) for k, v in (result.get("strategies") or {}).items()}
-                or result.get("status"),
-                result.get("seconds", math.nan),
-                ties,
-                time.perf_counter() - start,
-            )
-            if ties >= args.ties or (deadline and dt.datetime.now(dt.UTC) >= deadline):
-                LOG.info("stopping: %d ties", ties)
-                pool.terminate()
-                break
-    return 0
+    return _run_pool(
+        _one_record,
+        jobs,
+        RECORDS,
+        args,
+        ties,
+        lambda r: {k: (v["status"], v["runs"]) for k, v in (r.get("strategies") or {}).items()} or r.get("status"),
+    )
 
 
 def push_check(args) -> int:
@@ -154,10 +135,7 @@ def push_check(args) -> int:
     done = {(c["scenario"], c["seed"]) for c in _stored(RECORDS_PUSH)}
     todo = [(c["scenario"], c["seed"]) for c in _stored(RECORDS) if c.get("strategies")]
     todo = [t for t in todo if t not in done][: args.max]
-    deadline = None
-    if args.until:
-        hh, mm = (int(x) for x in args.until.split(":"))
-        deadline = dt.datetime.now(dt.UTC).replace(hour=hh, minute=mm, second=0, microsecond=0)
+    deadline = _deadline(args.until)
     logging.getLogger("bikerider").setLevel(logging.ERROR)
     for label, seed in todo:
         result = L.push_check(_models(), L.RECORD_SCENARIOS[index[label]], seed)
@@ -169,6 +147,43 @@ def push_check(args) -> int:
     return 0
 
 
+def _deadline(until: str | None) -> dt.datetime | None:
+    """``--until HH:MM`` (UTC, today) as a time, or ``None``."""
+    if not until:
+        return None
+    hh, mm = (int(x) for x in until.split(":"))
+    return dt.datetime.now(dt.UTC).replace(hour=hh, minute=mm, second=0, microsecond=0)
+
+
+def _run_pool(worker, jobs: list, path: Path, args, ties: int, status) -> int:
+    """Run ``jobs`` through ``worker`` on ``args.workers`` processes, appending each case to ``path`` as it
+    ends, until ``args.ties`` ties or ``args.until``; ``status(result)`` is what the log line says of it."""
+    from multiprocessing import get_context
+
+    deadline = _deadline(args.until)
+    LOG.info("%d ties stored, %d cases to try", ties, len(jobs))
+    start = time.perf_counter()
+    with get_context("fork").Pool(args.workers) as pool, path.open("a", encoding="utf-8") as out:
+        for result in pool.imap_unordered(worker, jobs):
+            out.write(json.dumps(result) + "\n")
+            out.flush()
+            ties += bool(result.get("strategies"))
+            LOG.info(
+                "%s seed %s: %s (%.1f s); %d ties, %.0f s",
+                result.get("scenario"),
+                result.get("seed"),
+                status(result),
+                result.get("seconds", math.nan),
+                ties,
+                time.perf_counter() - start,
+            )
+            if ties >= args.ties or (deadline and dt.datetime.now(dt.UTC) >= deadline):
+                LOG.info("stopping: %d ties", ties)
+                pool.terminate()
+                break
+    return 0
+
+
 def _stored(path: Path = RESULTS) -> list[dict]:
     if not path.exists():
         return []
@@ -176,7 +191,6 @@ def _stored(path: Path = RESULTS) -> list[dict]:
 
 
 def run(args) -> int:
-    from multiprocessing import get_context
 
     from validation import loop as L
 
@@ -195,32 +209,7 @@ def run(args) -> int:
             seed = FIRST_SEED + i
             if (L.SCENARIOS[k].label, seed) not in done:
                 jobs.append((k, seed, False))
-    deadline = None
-    if args.until:
-        hh, mm = (int(x) for x in args.until.split(":"))
-        now = dt.datetime.now(dt.UTC)
-        deadline = now.replace(hour=hh, minute=mm, second=0, microsecond=0)
-    LOG.info("%d ties stored, %d cases to try", ties, len(jobs))
-    start = time.perf_counter()
-    with get_context("fork").Pool(args.workers) as pool, path.open("a", encoding="utf-8") as out:
-        for result in pool.imap_unordered(_one, jobs):
-            out.write(json.dumps(result) + "\n")
-            out.flush()
-            ties += bool(result.get("strategies"))
-            LOG.info(
-                "%s seed %s: %s (%.1f s); %d ties, %.0f s",
-                result.get("scenario"),
-                result.get("seed"),
-                result.get("status"),
-                result.get("seconds", math.nan),
-                ties,
-                time.perf_counter() - start,
-            )
-            if ties >= args.ties or (deadline and dt.datetime.now(dt.UTC) >= deadline):
-                LOG.info("stopping: %d ties", ties)
-                pool.terminate()
-                break
-    return 0
+    return _run_pool(_one, jobs, path, args, ties, lambda r: r.get("status"))
 
 
 def _rerun_one(job):
