@@ -112,8 +112,9 @@ RECORD_NARROW = {
 }
 """The records mode's tie data: nine runs near one speed in three sessions (one under the stabilising control), as
 part 4's trials have three sessions: the steer friction fitted in time gets its covariance from the jackknife
-over the held-out sessions, which needs three or more (with two, as :data:`NARROW`, it has no standard errors and
-the plan takes each value's spread as its whole search range)."""
+over the held-out sessions, which needs three or more and sees the scatter between sessions (with two, as
+:data:`NARROW`, it had no standard errors when this study was run, and the plan took each value's spread as its whole
+search range; the fallback since, the fit's own covariance, does not see that scatter)."""
 
 
 @dataclass(frozen=True)

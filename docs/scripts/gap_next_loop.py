@@ -864,8 +864,9 @@ def _records_lines(n_max: int) -> list[str]:
         "the tie's data are **records**, the truth's noisy roll rate of each kicked run as part 4's trials make them",
         "(`validation.cases.measure` with records; Coulomb friction simulated in time by the truth's own simulator,",
         "nine runs near one speed in three sessions, `RECORD_NARROW`: the steer friction fitted in time has",
-        "standard errors only from the jackknife over three or more sessions, and with the two sessions of the",
-        "table study the plan takes its values' spread as their whole search range). The friction truths' candidate",
+        "standard errors from the jackknife over three or more sessions, which sees the scatter between sessions;",
+        "this study was run when two sessions gave it none, and the fallback for fewer than three, the fit's own",
+        "covariance, does not see that scatter). The friction truths' candidate",
         "is `steer_friction` (viscous and Coulomb, fitted in time), nonlinear, so the plan (`NextExperiment`,",
         "roll-rate decays) plans each decay at "
         + ", ".join(f"{x:g}" for x in PUSHES)
