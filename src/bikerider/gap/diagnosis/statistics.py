@@ -134,15 +134,14 @@ def _minima(fit: EffectFit | None) -> list[dict]:
     profile-likelihood threshold of the fit's chi-square (the 95 % intervals then hold it)."""
     if fit is None:
         return []
-    within = fit.minima[: fit.minima_within]
     return [
         {
             "values": {name: float(v) for name, v in zip(fit.names, values)},
             "chi2": float(chi2),
             "chi2_fit": float(fit.chi2),
-            "within": any(values is w for w, _ in within),
+            "within": k < fit.minima_within,  # those within the threshold come first
         }
-        for values, chi2 in fit.minima
+        for k, (values, chi2) in enumerate(fit.minima)
     ]
 
 
