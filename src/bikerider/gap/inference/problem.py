@@ -1098,7 +1098,8 @@ class GapProblem:
         x0 = np.asarray(fit.values, float)
         J0 = jac(x0)
         found = [x0]
-        for i in np.argsort(np.sum(residuals_batch(grid) ** 2, axis=1), kind="stable")[:count]:
+        grid_cost = np.sum(residuals_batch(grid) ** 2, axis=1)  # the cheap chi-square of every grid start
+        for i in np.argsort(grid_cost, kind="stable")[:count]:
             result = least_squares(
                 lambda x: residuals_batch(x[None, :])[0],
                 grid[i],
@@ -1114,7 +1115,7 @@ class GapProblem:
                 found.append(result.x)
         # and the grid start the cheap model likes best itself: the cheap model is the apparent eigenvalues'
         # only near the fit, and a minimum it does not have can be reached from there
-        best = grid[int(np.argmin(np.sum(residuals_batch(grid) ** 2, axis=1)))]
+        best = grid[int(np.argmin(grid_cost))]
         if all(float(np.sum((J0 @ (best - f)) ** 2)) > 1.0 for f in found):
             found.append(best)
         return found[1:]
