@@ -95,7 +95,9 @@ class RiderGeometry:
                         f"uncertainty of {name}", key, "a key of " + ", ".join(GRIP_KEYS + tuple(UPPER_BODY_KEYS))
                     )
                 if not math.isfinite(value):
-                    raise InputError(f"uncertainty of {name} ({key})", value, "a finite shift per standard uncertainty")
+                    raise InputError(
+                        f"uncertainty of {name}", f"{key}: {value}", "a finite shift per standard uncertainty"
+                    )
 
     def sources(self, keys) -> list[str]:
         """The sources of :attr:`uncertainty` that move any of ``keys`` (and a value this geometry has)."""
