@@ -175,3 +175,16 @@ def test_records_are_predicted_with_the_shifted_geometry_by_indirect_inference(d
     # the apparent eigenvalues' secant differs from the weave eigenvalues' (a short record's fit)
     weave = p.geometry_jacobian(lay, x, indirect=False)
     assert not np.allclose(Jg[rows], weave[rows])
+
+
+def test_a_step_to_an_impossible_geometry_takes_the_one_sided_secant(davis):
+    # one sigma of the upper body's mass below would leave it negative: the secant from the fit's own geometry
+    m_u = davis.geometry.upper_body["m_u"]
+    wide = replace(davis, geometry=replace(davis.geometry, uncertainty={"mass": {"m_u": 2 * m_u}}))
+    p = GapProblem(wide, _weaves(davis, {"rider_lean": {"k_lean": 120.0, "c_lean": 30.0}}), EMPTY)
+    lay = p.layout(("rider_lean",))
+    x = np.array([120.0, 30.0])
+    J = p.geometry_jacobian(lay, x)[:, 0]
+    up = p.with_geometry(p.geometry.shifted("mass", 1.0)).predict_batch(lay, x[None])[0]
+    np.testing.assert_allclose(J, up - p.predict_batch(lay, x[None])[0])
+    assert np.max(np.abs(J)) > 0
