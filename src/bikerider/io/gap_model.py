@@ -79,16 +79,20 @@ def load_model(
         )
     geometry = GapModelInput.default_geometry(parameters, rider)
     if "upper_body" in tables:
+        upper = _table_quantities(tables["upper_body"], "upper_body", UPPER_BODY_KEYS, source)
         geometry = RiderGeometry(
-            _table_numbers(tables["upper_body"], "upper_body", UPPER_BODY_KEYS, source),
+            {k: q.value for k, q in upper.items()},
             geometry.grips,
             geometry.notes + "; upper body from the model file",
+            _given_uncertainty(geometry.uncertainty, "upper_body", upper),
         )
     if "grips" in tables:
+        grips = _table_quantities(tables["grips"], "grips", GRIP_KEYS, source)
         geometry = RiderGeometry(
             geometry.upper_body,
-            _table_numbers(tables["grips"], "grips", GRIP_KEYS, source),
+            {k: q.value for k, q in grips.items()},
             geometry.notes + "; grips from the model file",
+            _given_uncertainty(geometry.uncertainty, "grips", grips),
         )
     plausible = _plausible(tables["plausible"], source) if "plausible" in tables else {}
     return GapModelInput(
@@ -166,7 +170,23 @@ def _merge_rider(
     return merge_rider(parameters, lumped), rider
 
 
+def _given_uncertainty(
+    default: dict[str, dict[str, float]], table: str, given: dict[str, Quantity]
+) -> dict[str, dict[str, float]]:
+    """The geometry's sources of uncertainty once a model file gives table ``[table]``: the default's
+    sources that move its values are dropped, and each value the file gives as ``"value +/- sigma"`` is
+    a source of its own (``"upper_body.z_lean"``); a plain number is taken as known."""
+    out = {name: shift for name, shift in default.items() if not set(shift) & set(given)}
+    out.update({f"{table}.{key}": {key: q.sigma} for key, q in given.items() if q.sigma > 0})
+    return out
+
+
 def _table_numbers(table: object, name: str, keys: tuple[str, ...], source: str) -> dict[str, float]:
+    """The numbers of a model file's table ``[name]`` (their values; see :func:`_table_quantities`)."""
+    return {key: q.value for key, q in _table_quantities(table, name, keys, source).items()}
+
+
+def _table_quantities(table: object, name: str, keys: tuple[str, ...], source: str) -> dict[str, Quantity]:
     """The numbers of a model file's table ``[name]``: exactly ``keys``, each a number or ``"v +/- sigma"``."""
     if not isinstance(table, dict):
         raise InputError(name, table, "a table", source)
@@ -177,5 +197,5 @@ def _table_numbers(table: object, name: str, keys: tuple[str, ...], source: str)
     for key in keys:
         if key not in table:
             raise InputError(f"{name}.{key}", "missing", "a value", source)
-        out[key] = parse_quantity(table[key], f"{name}.{key}", source).value
+        out[key] = parse_quantity(table[key], f"{name}.{key}", source)
     return out

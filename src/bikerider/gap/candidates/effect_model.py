@@ -61,11 +61,18 @@ class RiderGeometry:
         ``x_grip, z_grip, b_grip`` [m].
     notes : str
         How the values were obtained.
+    uncertainty : dict
+        The geometry's independent sources of uncertainty: a name (e.g. ``"hip axis height"`` or
+        ``"grips.z_grip"``) to the shift of each value it moves by one standard uncertainty,
+        ``{key: shift}`` (keys of :data:`UPPER_BODY_KEYS` and :data:`GRIP_KEYS`, SI).  Empty: the
+        geometry is taken as known.  :mod:`bikerider.gap.candidates.nominal` states the default
+        geometry's; a model file's ``"value +/- sigma"`` gives one source per value.
     """
 
     upper_body: dict[str, float] | None
     grips: dict[str, float]
     notes: str = ""
+    uncertainty: dict[str, dict[str, float]] = field(default_factory=dict)
 
     def __post_init__(self):
         for key in GRIP_KEYS:
@@ -81,6 +88,46 @@ class RiderGeometry:
                     raise InputError(f"upper_body.{key}", value, "a finite number")
             if self.upper_body["m_u"] <= 0 or self.upper_body["IUxx"] <= 0 or self.upper_body["IUzz"] <= 0:
                 raise InputError("upper_body", self.upper_body, "a positive mass and positive moments of inertia")
+        for name, shift in self.uncertainty.items():
+            for key, value in shift.items():
+                if key not in GRIP_KEYS + tuple(UPPER_BODY_KEYS):
+                    raise InputError(
+                        f"uncertainty of {name}", key, "a key of " + ", ".join(GRIP_KEYS + tuple(UPPER_BODY_KEYS))
+                    )
+                if not math.isfinite(value):
+                    raise InputError(
+                        f"uncertainty of {name}", f"{key}: {value}", "a finite shift per standard uncertainty"
+                    )
+
+    def sources(self, keys) -> list[str]:
+        """The sources of :attr:`uncertainty` that move any of ``keys`` (and a value this geometry has)."""
+        have = set(self.grips) | set(self.upper_body or {})
+        return [
+            name
+            for name, shift in self.uncertainty.items()
+            if any(key in keys and key in have and value != 0 for key, value in shift.items())
+        ]
+
+    def shifted(self, name: str, factor: float) -> RiderGeometry:
+        """This geometry with source ``name`` of :attr:`uncertainty` moved by ``factor`` standard
+        uncertainties (an ``InputError`` where that leaves an impossible geometry, e.g. a negative mass)."""
+        shift = self.uncertainty[name]
+        grips = {k: v + factor * shift.get(k, 0.0) for k, v in self.grips.items()}
+        upper = None
+        if self.upper_body is not None:
+            upper = {k: v + factor * shift.get(k, 0.0) for k, v in self.upper_body.items()}
+        return RiderGeometry(upper, grips, f"{self.notes}; {name} moved by {factor:+g} sigma", self.uncertainty)
+
+
+def geometry_keys(effects) -> tuple[str, ...]:
+    """The rider geometry's values the predictions of a set of effects depend on: the grips with the
+    passive arms, the upper body with the rider's lean (none for the other effects)."""
+    keys: tuple[str, ...] = ()
+    if any("m_arm" in STRUCTURAL_KEYS.get(e, ()) for e in effects):
+        keys += GRIP_KEYS
+    if any(e in EFFECTS and EFFECTS[e].adds_lean for e in effects):
+        keys += tuple(UPPER_BODY_KEYS)
+    return keys
 
 
 def _as_float(value) -> np.ndarray:

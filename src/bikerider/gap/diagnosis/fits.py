@@ -17,11 +17,13 @@ order, so the results do not depend on which worker process computed what
 
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from bikerider import progress
+from bikerider.gap.candidates.effect_model import geometry_keys
 from bikerider.gap.candidates.effects import EFFECTS, PARAMETERS, STEER_FRICTION, TIME_DOMAIN_EFFECTS
 from bikerider.gap.diagnosis.statistics import _named_values, gap_shrink, interval_quantile, rms
 from bikerider.gap.inference.frequency_response import predict_frf_friction
@@ -29,6 +31,8 @@ from bikerider.gap.inference.problem import MINIMUM_STARTS, EffectFit, GapProble
 from bikerider.gap.inference.timedomain import Layout, fit_covariance, fit_time_domain, parameter_sensitivity
 from bikerider.gap.measured.multisine import MultisineFit
 from bikerider.gap.measured.records import RecordFit
+
+logger = logging.getLogger(__name__)
 
 UNPREDICTED_Z = 1e3
 """Normalised residual given to a held-out point the fitted model cannot predict (singular model)."""
@@ -390,16 +394,27 @@ def with_parameter_uncertainty(p: GapProblem, fit: EffectFit) -> EffectFit:
     stepped to within it (``EffectFit.visited``): where the chi-square is a long curved valley, more of
     the valley than the fit's linearisation reaches.
 
+    The rider's geometry.  Where the effects use it (the passive arms the grips, the rider's lean the
+    upper body: :func:`bikerider.gap.candidates.effect_model.geometry_keys`), its stated uncertainty
+    (:attr:`bikerider.gap.candidates.effect_model.RiderGeometry.uncertainty`) is a systematic error
+    like the parameters', one more term ``(A^T J_g)(J_g^T A)`` in the sandwich's middle, ``J_g`` the
+    predictions' secants per sigma of each source at the fitted values
+    (:meth:`GapProblem.geometry_jacobian`; at the nominal model, without the rider's effects, the
+    geometry moves nothing).  The fit's own weights do not hold it (it would be zero there).
+
     With rows from records the fit to all the data is the least squares of the apparent eigenvalues
     (indirect inference, :meth:`GapProblem.fit_apparent`), so ``A`` holds the apparent eigenvalues'
     slopes, not the weave eigenvalues'.
     """
-    if PARAMETERS in fit.effects or not p.free or not fit.names or not len(p.obs):
+    if PARAMETERS in fit.effects or not fit.names or not len(p.obs):
         return fit
     lay = p.layout(fit.effects)
+    geometric = bool(geometry_keys(fit.effects)) and bool(p.geometry_sources(lay))
+    if not p.free and not geometric:
+        return fit
     x = np.asarray(fit.values, float)
     lower, upper = np.asarray(fit.lower, float), np.asarray(fit.upper, float)
-    cov = _sandwich(p, lay, x, lower, upper)
+    cov = _sandwich(p, lay, x, lower, upper, geometric)
     if cov is None:
         return fit
     factor, quantile = scale_and_quantile(fit.chi2, fit.n, x.size)
@@ -412,7 +427,7 @@ def with_parameter_uncertainty(p: GapProblem, fit: EffectFit) -> EffectFit:
     held = [chi2 - fit.chi2 <= threshold for _values, chi2 in fit.minima]
     within = [m for m, ok in zip(fit.minima, held) if ok]
     for values, _chi2 in within:
-        other = _sandwich(p, lay, values, lower, upper)
+        other = _sandwich(p, lay, values, lower, upper, geometric)
         spread = np.sqrt(np.clip(np.diag(other), 0, None) * factor) if other is not None else np.zeros(x.size)
         spread = np.where(known, spread, np.inf)
         low = np.minimum(low, np.clip(values - quantile * spread, lower, upper))
@@ -428,9 +443,12 @@ def with_parameter_uncertainty(p: GapProblem, fit: EffectFit) -> EffectFit:
     )
 
 
-def _sandwich(p: GapProblem, lay, x: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray | None:
+def _sandwich(
+    p: GapProblem, lay, x: np.ndarray, lower: np.ndarray, upper: np.ndarray, geometric: bool = False
+) -> np.ndarray | None:
     """The sandwich covariance of :func:`with_parameter_uncertainty` at values ``x``, before the reduced
-    chi-square's scale (``None`` where a slope cannot be evaluated)."""
+    chi-square's scale (``None`` where a slope cannot be evaluated); with ``geometric``, the rider
+    geometry's share included."""
     span = np.maximum(upper - lower, 1e-9)
     h = 1e-5 * np.minimum(span, 10.0)
     X = [x]
@@ -457,4 +475,13 @@ def _sandwich(p: GapProblem, lay, x: np.ndarray, lower: np.ndarray, upper: np.nd
     B = np.linalg.pinv(A.T @ A)
     Jp = p.jacobian / w[:, None]
     AC = A.T * (p.var_data / p.var_total)
-    return B @ (AC @ A + (A.T @ Jp) @ (Jp.T @ A)) @ B.T
+    meat = AC @ A + (A.T @ Jp) @ (Jp.T @ A)
+    if geometric:  # the rider geometry's uncertainty: its slopes at these values, per sigma
+        Jg = p.geometry_jacobian(lay, x, indirect=bool(records)) / w[:, None]
+        bad = ~np.all(np.isfinite(Jg), axis=0)
+        if np.any(bad):  # a shifted geometry whose model cannot be evaluated: that source left out, said
+            names = [n for n, b in zip(p.geometry_sources(lay), bad) if b]
+            logger.warning("%s: no slope in the rider geometry's %s; left out of the interval", lay.effects, names)
+            Jg = Jg[:, ~bad]
+        meat = meat + (A.T @ Jg) @ (Jg.T @ A)
+    return B @ meat @ B.T

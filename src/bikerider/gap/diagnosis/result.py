@@ -401,7 +401,13 @@ def as_dict(d: Diagnosis) -> dict:
         "notes": list(p.notes)
         + ([] if len(d.folds) >= 2 else ["fewer than two folds (groups or speeds): no held-out ranking"])
         + ([FEW_FOLDS_FRICTION] if d.fits.time_domain_full and len(d.folds) < 3 else []),
-        "model": {"source": p.model_input.source, "geometry": p.geometry.notes, "uncertain_parameters": p.free},
+        "model": {
+            "source": p.model_input.source,
+            "geometry": p.geometry.notes,
+            "uncertain_parameters": p.free,
+            # the rider geometry's sources of uncertainty: name -> shift of each value per sigma (SI)
+            "geometry_uncertainty": {name: dict(shift) for name, shift in p.geometry.uncertainty.items()},
+        },
         "elapsed_s": d.elapsed,
     }
     if d.parameter_fit is not None:

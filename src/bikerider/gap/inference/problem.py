@@ -47,6 +47,7 @@ inertia (:data:`POSITIVE`).  The ``speed_sensor`` candidate scales the speed the
 from __future__ import annotations
 
 import contextvars
+import copy
 import itertools
 import logging
 import math
@@ -62,7 +63,7 @@ from scipy.special import stdtrit  # Student's t quantile (scipy.stats.t.ppf's o
 
 from bikerider.engine import DifferencedStage
 from bikerider.errors import InputError
-from bikerider.gap.candidates.effect_model import BENCH_ARGS, STRUCTURAL_KEYS, EffectModel
+from bikerider.gap.candidates.effect_model import BENCH_ARGS, STRUCTURAL_KEYS, EffectModel, RiderGeometry, geometry_keys
 from bikerider.gap.candidates.effects import EFFECTS, OBSERVATION_EFFECTS, PARAMETERS, SPEED_SENSOR
 from bikerider.gap.candidates.nominal import GapModelInput
 from bikerider.gap.inference.differences import forward_jacobian
@@ -306,6 +307,54 @@ class GapProblem:
             extra_dims=1,
         )
         return stage.jacobian({k: self.nominal[k] for k in self.free}) * self.free_sigma
+
+    def with_geometry(self, geometry: RiderGeometry) -> GapProblem:
+        """This problem with another rider geometry, for predictions only: the data, the nominal
+        model's uncertainties and the records' starts shared, the predictions' store its own (its keys
+        do not hold the geometry), nothing of this problem changed."""
+        other = copy.copy(self)
+        other.geometry = geometry
+        other.model_input = replace(self.model_input, geometry=geometry)
+        other.predictor = copy.copy(self.predictor)
+        other.predictor.geometry = geometry
+        if self.records is not None:
+            simulator = copy.copy(self.records.simulator)
+            simulator.geometry = geometry
+            simulator.known = {}  # models of benchmark values alone, simulated with this problem's geometry
+            other.records = replace(self.records, simulator=simulator)
+        other._memo = OrderedDict()
+        return other
+
+    def geometry_sources(self, lay: _Layout) -> list[str]:
+        """The sources of the rider geometry's uncertainty (:attr:`RiderGeometry.uncertainty`) that move
+        the predictions of a layout's effects (none for effects that do not use the geometry)."""
+        return self.geometry.sources(geometry_keys(lay.effects))
+
+    def geometry_jacobian(self, lay: _Layout, x: np.ndarray, indirect: bool = True) -> np.ndarray:
+        """Slopes ``(n_obs, n_sources)`` of the predictions at fitted values ``x`` per standard
+        uncertainty of each of :meth:`geometry_sources`.
+
+        The geometry moves the predictions only through the rider's effects, so the slopes are taken
+        at the fit, not at the nominal model: a secant over +-1 sigma of each source (as
+        :meth:`_parameter_jacobian`), one-sided where a step leaves an impossible geometry (a negative
+        mass), the same prediction path as the fit's (``indirect``: the rows from records by indirect
+        inference).  NaN where a shifted model cannot be evaluated.
+        """
+        sources = self.geometry_sources(lay)
+        x = np.atleast_2d(np.asarray(x, dtype=float))
+        out = np.zeros((len(self.obs), len(sources)))
+        for j, name in enumerate(sources):
+            ends = []
+            for factor in (1.0, -1.0):
+                try:
+                    shifted = self.geometry.shifted(name, factor)
+                except InputError:  # an impossible geometry one sigma away: the secant from the fit's own
+                    ends.append((0.0, self.predict_batch(lay, x, indirect=indirect)[0]))
+                    continue
+                ends.append((factor, self.with_geometry(shifted).predict_batch(lay, x, indirect=indirect)[0]))
+            (f_up, up), (f_down, down) = ends
+            out[:, j] = (up - down) / (f_up - f_down) if f_up != f_down else np.nan
+        return out
 
     def _values_batch(self, shifts: np.ndarray) -> dict[str, object]:
         """Benchmark values with shifts ``(P, n_free)`` (SI) applied, shaped ``(P, 1)``."""
