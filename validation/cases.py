@@ -129,7 +129,14 @@ TRUTHS: dict[str, Truth] = {
 }
 
 TRUTH_GEOMETRY = {"upper_mass_fraction": 0.45, "hip_shift": 0.05, "grip_rise": 0.08, "grip_widen": 0.02}
-"""How the truth's rider differs from the diagnosis's default geometry (see the module docstring)."""
+"""How the truth's rider differs from the diagnosis's default geometry (see the module docstring): one
+fixed rider for parts 1-3 and the loop.  The calibration draws a rider per trial instead
+(:data:`GEOMETRY_DRAW_LIMIT`)."""
+GEOMETRY_DRAW_LIMIT = 2.5
+"""The calibration's riders: the default geometry moved by a standard normal draw of each of its stated
+sources of uncertainty (``RiderGeometry.uncertainty``, as the benchmark parameters are drawn from theirs),
+each draw truncated at this many sigmas so that every rider is possible (the inertia's share moves
+30 % a sigma)."""
 
 
 @dataclass(frozen=True)
@@ -191,9 +198,18 @@ class TruthSimulator:
     truth : Truth
     rng : numpy.random.Generator
         Draws the parameter error.
+    geometry_rng : numpy.random.Generator, optional
+        Draws the rider's geometry from its stated uncertainty (:func:`_drawn_geometry`); without it the
+        rider is the fixed one of :data:`TRUTH_GEOMETRY`.
     """
 
-    def __init__(self, model: GapModelInput, truth: Truth, rng: np.random.Generator):
+    def __init__(
+        self,
+        model: GapModelInput,
+        truth: Truth,
+        rng: np.random.Generator,
+        geometry_rng: np.random.Generator | None = None,
+    ):
         self.truth = truth
         values, sigmas = model.parameters.values, model.parameters.sigmas
         self.values = {k: float(values[k]) for k in BENCH_ARGS + ("g",)}  # type: ignore[arg-type]
@@ -203,7 +219,7 @@ class TruthSimulator:
                 self.values[k] += sigmas[k] * float(rng.standard_normal())
                 if k in POSITIVE and nominal > 0:  # a mass or inertia stays physical (at least 10 % of nominal)
                     self.values[k] = max(self.values[k], 0.1 * nominal)
-        self.geometry = _truth_geometry(model)
+        self.geometry = _truth_geometry(model) if geometry_rng is None else _drawn_geometry(model, geometry_rng)
         self.g = self.values["g"]
 
     # -- ingredients ---------------------------------------------------------------------------
@@ -423,6 +439,22 @@ def _truth_geometry(model: GapModelInput) -> dict:
             for key in ("m_u", "IUxx", "IUxz", "IUzz"):
                 upper[key] *= scale
         upper["z_lean"] += TRUTH_GEOMETRY["hip_shift"]
+    return {"grips": grips, "upper": upper}
+
+
+def _drawn_geometry(model: GapModelInput, rng: np.random.Generator) -> dict:
+    """A rider drawn from the geometry's stated uncertainty (:data:`GEOMETRY_DRAW_LIMIT`): each source of
+    ``model.geometry.uncertainty``, in its stated order, moves the values it names by a truncated standard
+    normal draw times their shift per sigma."""
+    grips = dict(model.geometry.grips)
+    upper = dict(model.geometry.upper_body) if model.geometry.upper_body is not None else None
+    for shift in model.geometry.uncertainty.values():
+        z = float(np.clip(rng.standard_normal(), -GEOMETRY_DRAW_LIMIT, GEOMETRY_DRAW_LIMIT))
+        for key, per_sigma in shift.items():
+            if key in grips:
+                grips[key] += z * per_sigma
+            elif upper is not None and key in upper:
+                upper[key] += z * per_sigma
     return {"grips": grips, "upper": upper}
 
 
@@ -1046,6 +1078,8 @@ class Trial:
     (``{values: {name: value}, chi2}``)."""
     minima_within: int | None = None
     other_minima: list[dict] = field(default_factory=list)
+    truth_geometry: dict | None = None
+    """The truth's rider geometry (``{grips, upper}``, benchmark frame) where it was drawn."""
 
     def as_dict(self) -> dict:
         return dict(self.__dict__)
@@ -1078,7 +1112,9 @@ def run_trial(models: dict[str, GapModelInput], effect: CalibrationEffect, seed:
     model = models["rider" if rider else "riderless"]
     protocol = CALIBRATION_RIDER if rider else CALIBRATION_RIDERLESS
     truth = draw_truth(effect, rng)
-    simulator = TruthSimulator(model, truth, rng)
+    # the rider drawn from a stream of its own, so the sizes, bicycle and runs of a seed stay those of the
+    # studies before the geometry was drawn (their stored trials compare on the same seeds)
+    simulator = TruthSimulator(model, truth, rng, geometry_rng=np.random.default_rng((seed, 21)))
     amplitudes: list[float] = []
     records: list = []
     data, _ = measure(simulator, protocol, rng, amplitudes, records)
@@ -1171,6 +1207,11 @@ def run_trial(models: dict[str, GapModelInput], effect: CalibrationEffect, seed:
         amplitude,
         method,
     )
+    if rider:
+        trial.truth_geometry = {
+            part: None if values is None else {k: float(v) for k, v in values.items()}
+            for part, values in simulator.geometry.items()
+        }
     if fit is not None:
         trial.fit_chi2, trial.fit_n = float(fit.chi2), int(fit.n)
         trial.minima, trial.minima_within = 1 + len(fit.minima), int(fit.minima_within)

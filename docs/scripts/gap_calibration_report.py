@@ -25,6 +25,11 @@ the iterated bias correction alone), on the seeds of this study (the same truths
 BEFORE_MINIMA = Path(__file__).with_name("gap_calibration_before_minima.jsonl")
 """Trials of the study before the linear fits from records searched for other minima of their chi-square and
 used Student's t for a scale estimated from the residuals (after issue 21 item 4's fixes), on the same seeds."""
+BEFORE_GEOMETRY = Path(__file__).with_name("gap_calibration_before_geometry.jsonl")
+"""Trials of the study before the rider geometry's uncertainty (carried by the rider effects' intervals, and
+each trial's rider drawn from it) and before the friction fit's chord steps on the records' initial states
+were safeguarded (kept only where they lower the residual, up to four), on the same seeds: the same sizes,
+bicycles and runs, the riders then the one fixed rider of ``TRUTH_GEOMETRY``."""
 WORKERS = 2
 """Worker processes the study runs (``gap_calibration.py --workers``): the time the full study needs."""
 
@@ -93,12 +98,13 @@ def coverage_rows(trials: list[dict]) -> list[tuple]:
     return rows
 
 
-def _arm_inertia_factors() -> tuple[float, float]:
-    """Squared distance of the grips from the steer axis [m^2]: the diagnosis's default grips, the truth's.
+def _arm_inertia_factors():
+    """Squared distance of the grips from the steer axis [m^2]: the diagnosis's default grips, and a function
+    of the truth's grips (a trial's drawn grips, ``truth_geometry``; before the riders were drawn, the fixed
+    rider of ``validation.cases.TRUTH_GEOMETRY``).
 
-    The arms' mass the diagnosis fits sits at its default grips; the truth's at grips 8 cm higher and 2 cm
-    wider (``validation.cases.TRUTH_GEOMETRY``): what the records carry is the arms' inertia about
-    the steer axis, ``m d^2``, which is scored beside the mass.
+    The arms' mass the diagnosis fits sits at its default grips, the truth's at its own: what the records
+    carry is the arms' inertia about the steer axis, ``m d^2``, which is scored beside the mass.
     """
     from bikerider.io.gap_model import load_model
     from validation import cases as V
@@ -116,7 +122,13 @@ def _arm_inertia_factors() -> tuple[float, float]:
         perp = rel - (rel @ axis) * axis
         return float(perp @ perp)
 
-    return d2(model.geometry.grips), d2(V._truth_geometry(model)["grips"])
+    fixed = d2(V._truth_geometry(model)["grips"])
+
+    def truth_d2(trial: dict) -> float:
+        drawn = trial.get("truth_geometry")
+        return d2(drawn["grips"]) if drawn else fixed
+
+    return d2(model.geometry.grips), truth_d2
 
 
 def _with_arm_inertia(trials: list[dict]) -> list[dict]:
@@ -130,7 +142,7 @@ def _with_arm_inertia(trials: list[dict]) -> list[dict]:
             t = json.loads(json.dumps(t))
             f = t["fitted"]["m_arm"]
             t["fitted"]["I_arm_steer"] = {"value": f["value"] * fitted_d2, "ci95": [x * fitted_d2 for x in f["ci95"]]}
-            t["reference"]["I_arm_steer"] = t["truth"]["m_arm"] * truth_d2
+            t["reference"]["I_arm_steer"] = t["truth"]["m_arm"] * truth_d2(t)
         out.append(t)
     return out
 
@@ -176,8 +188,11 @@ def section(trials: list[dict], goal: int) -> list[str]:
         "`docs/gap.md`, section Priors; a lognormal or normal prior within its central 95 %, a half-Cauchy",
         "within its 80 %), on a bicycle whose benchmark parameters are **drawn from their stated",
         "uncertainties** (the Davis bicycle `RigidBenchmark.txt`; with the lumped rider",
-        "`JasonRigidBenchmark.txt` on odd seeds, and for the rider's own effects always), and simulates **short",
-        "noisy runs** with the independent truth of part 1 (`TruthSimulator`: Meijaard's Appendix A typed in",
+        "`JasonRigidBenchmark.txt` on odd seeds, and for the rider's own effects always, the rider's geometry,",
+        "upper body, hip axis and grips, **drawn from its stated uncertainty** (`docs/gap.md`, *The rider",
+        "geometry's uncertainty*: each source a standard normal draw, truncated at 2.5 sigma,",
+        "`validation.cases._drawn_geometry`; the studies before had one fixed rider, `TRUTH_GEOMETRY`), and",
+        "simulates **short noisy runs** with the independent truth of part 1 (`TruthSimulator`: Meijaard's Appendix A typed in",
         "by hand, the effects added by hand, LSODA): three sessions of three 3-s runs, one session under the",
         "known control `T = 5 phid - 2 delta - 0.5 deltad`, 0.01 rad/s gyro noise on the roll rate; with the",
         "rider 4.5-9 m/s, riderless 2.5-6.5 m/s.",
@@ -377,6 +392,14 @@ def section(trials: list[dict], goal: int) -> list[str]:
         BEFORE_MINIMA,
         "the study before them, after item 4's fixes",
     )
+    lines += _before_table(
+        table + friction,
+        load(BEFORE_GEOMETRY),
+        "**Before the rider geometry's uncertainty and the friction fit's safeguarded chord steps**",
+        BEFORE_GEOMETRY,
+        "the study before them, after the search for other minima",
+        "the same sizes, bicycles and runs; the riders then one fixed rider, now drawn",
+    )
     if friction:
         sep = [t for t in friction if "c_equivalent" in t["fitted"]]
         k = sum(bool(t["fitted"]["c_equivalent"].get("separable")) for t in sep)
@@ -509,8 +532,16 @@ ITEM4_SIZES = (
 """The sizes whose coverage issue 21 item 4 took apart, and a few it moves beside them."""
 
 
-def _before_table(trials: list[dict], before: list[dict], title: str, path: Path, what: str) -> list[str]:
-    """Coverage per size of a stored earlier study (``path``) against this one, on the same seeds."""
+def _before_table(
+    trials: list[dict],
+    before: list[dict],
+    title: str,
+    path: Path,
+    what: str,
+    same: str = "the same truths, bicycles and runs",
+) -> list[str]:
+    """Coverage per size of a stored earlier study (``path``) against this one, on the same seeds (``same``
+    says what the seeds hold alike)."""
     now = {(t["effect"], t["seed"]): t for t in trials}
     before = _with_arm_inertia([t for t in before if (t["effect"], t["seed"]) in now])
     if not before:
@@ -521,8 +552,8 @@ def _before_table(trials: list[dict], before: list[dict], title: str, path: Path
     own = [k for k in rows_before if k in rows_after and _own(rows_before[k])]
     out = [
         "",
-        f"{title}, on the same {len(before)} trials (`docs/scripts/{path.name}`, {what}: the same truths,",
-        "bicycles and runs): the linear candidates on their own truths "
+        f"{title}, on the same {len(before)} trials (`docs/scripts/{path.name}`, {what}: {same}):",
+        "the linear candidates on their own truths "
         f"{_pct(*_covered([rows_before[k] for k in own]))} then, {_pct(*_covered([rows_after[k] for k in own]))} now.",
         "",
         "| effect | size | trials | coverage before | coverage now | median error before | median error now |",
@@ -673,25 +704,22 @@ READING = [
     "     sandwich then took the apparent eigenvalues' slopes for its bread (`with_parameter_uncertainty` of",
     "     `bikerider.gap.diagnosis.fits`; the paragraph *The records' intervals before their fix* above), and",
     "     since 5. for its meat as well.",
-    "  4. *The rider's geometry.* The truth's rider differs from the diagnosis's default (upper body 45 % of",
-    "     the rider's mass instead of 50 %, hip axis 5 cm lower, grips 8 cm higher and 2 cm wider), as a real",
-    "     rider differs from any default. Before issue 21 item 4 the intervals carried the benchmark",
-    "     parameters' uncertainty, not the geometry's; since then the default geometry states its own",
+    "  4. *The rider's geometry.* A real rider differs from any default geometry. Before issue 21 item 4 the",
+    "     intervals carried the benchmark parameters' uncertainty, not the geometry's, and the truth was one",
+    "     fixed rider (upper body 45 % of the rider's mass instead of 50 %, hip axis 5 cm lower, grips 8 cm",
+    "     higher and 2 cm wider, `TRUTH_GEOMETRY`). Now the default geometry states its own uncertainty",
     "     (`bikerider.gap.candidates.nominal`, docs/gap.md *The rider geometry's uncertainty*: upper-body",
-    "     share 0.04 of the rider's mass, hip axis and upper-body centre 0.05 m, grips 0.10 m in height and",
-    "     0.05 m in reach and half-width, chosen from the spread between people and handlebars, not from",
-    "     this study), and the intervals of `m_arm`, `k_arm`, `c_arm`, `k_lean` and `c_lean` carry it. The",
-    "     truth's offset is 1.25, 1.0, 0.8 and 0.4 of those sigmas in the four quantities it moves and zero in",
-    "     the other four (the reaches, the upper body's height and radii), and it is one offset, the same in",
-    "     every trial: the rider effects' coverage here tests the stated sigmas against this one rider, not",
-    "     against riders in general, and intervals that also carry the unmoved sources are wider than this",
-    "     truth needs. The arms' mass is fitted at the default grips: its misses before lay high, by the",
-    "     ratio of the grips' squared distances from the steer axis; their inertia about the axis",
-    "     (`I_arm_steer`), which is what the data carry, is scored too, its interval the mass's scaled by the",
-    "     default grips' squared distance, so it holds the grips' share, which moves the mass more than the",
-    "     inertia (wider than the inertia's own). The lean damping's misses before all lay low (five of",
-    "     five), as a geometry error that moves every trial alike would (not taken apart from the row",
-    "     bias of 2.).",
+    "     share 0.04 of the rider's mass, its radii of gyration 15 %, hip axis and upper-body centre 0.05 m,",
+    "     grips 0.10 m in height and 0.05 m in reach and half-width, chosen from the spread between people and",
+    "     handlebars, not from this study), the intervals of `m_arm`, `k_arm`, `c_arm`, `k_lean` and `c_lean`",
+    "     carry it, and each trial's rider is drawn from it, as its bicycle is from the benchmark parameters'",
+    "     uncertainty: the rider effects' coverage tests the stated sigmas as the model's own. The fixed",
+    "     rider of the studies before was 1.25, 1.0, 0.8 and 0.4 of those sigmas off in the four quantities it",
+    "     moved. The arms' mass is fitted at the default grips: its misses before lay high, by the ratio of the",
+    "     grips' squared distances from the steer axis; their inertia about the axis (`I_arm_steer`), which is",
+    "     what the data carry, is scored too (the truth's at each trial's own grips), its interval the mass's",
+    "     scaled by the default grips' squared distance, so it holds the grips' share, which moves the mass",
+    "     more than the inertia (wider than the inertia's own).",
     "  5. *A fit from records that stopped short of its minimum* (issue 21 item 4). The iterated bias",
     "     correction solves an equation weighted by the weave eigenvalues' slopes, in at most four steps of at",
     "     most a fifth of a range; where the apparent eigenvalues' slopes point elsewhere (the tyres' cornering",
@@ -765,10 +793,10 @@ READING = [
     "  response would carry it (Student's t, 8., now reaches seed 1002's truth; the cause stands).",
     "  (b) The rider's geometry (4.): the rider's own effects (`k_lean`, `c_lean`, `c_arm`) lost coverage",
     "  with 5. while their intervals carried no geometry uncertainty; they now carry the default's stated",
-    "  one (4.), and the tables above show where that puts them. Its sigmas are a statement about riders",
-    "  and handlebars, not fitted here: coverage above 97 % for these sizes would say they are generous",
-    "  for this study's one rider (not that they are wrong for riders in general), below 90 % that",
-    "  something other than the geometry is missing.",
+    "  one (4.), and each trial's rider is drawn from it, and the tables above show where that puts them.",
+    "  Its sigmas are a statement about riders and handlebars, not fitted here; with the riders drawn from",
+    "  them, coverage below 90 % for these sizes would say that something other than the geometry is",
+    "  missing, above 97 % that the linearised share overstates what a sigma of geometry does to the fit.",
     "  (c) steer_coulomb's `steer_damping` stand-in: a describing function, not the decay's own damping",
     "  (below), now with narrower intervals. Neither is fixed here; an interval was not widened to hide them.",
     "* The tyres' relaxation length with the rider (4.5-9 m/s) lay high before 8. (0.3-0.9 m for a hidden",
