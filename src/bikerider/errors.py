@@ -38,6 +38,11 @@ class InputError(BikeriderError, ValueError):
         where = f"{source}: " if source else ""
         super().__init__(f"{where}{name} = {_show(value)}: expected {expected}")
 
+    def __reduce__(self):
+        # rebuilt from its fields, not from ``args`` (the message alone): an error raised in a worker
+        # process must reach the parent whole (pickling it by message failed there and stopped the pool)
+        return type(self), (self.name, self.value, self.expected, self.source)
+
 
 class InputErrors(InputError):
     """Several input errors found together: every error of a file, reported at once.
@@ -57,6 +62,9 @@ class InputErrors(InputError):
         first = flat[0]
         self.name, self.value, self.expected, self.source = first.name, first.value, first.expected, first.source
         BikeriderError.__init__(self, f"{len(flat)} input errors:\n" + listing(flat))
+
+    def __reduce__(self):
+        return type(self), (self.errors,)
 
 
 MAX_LISTED = 20
@@ -148,6 +156,10 @@ class FileFormatError(BikeriderError):
         self.path, self.line = str(path), line
         where = f"{path}:{line}" if line is not None else f"{path}"
         super().__init__(f"{where}: {message}")
+        self.message = message
+
+    def __reduce__(self):
+        return type(self), (self.path, self.message, self.line)
 
 
 class FitError(BikeriderError):

@@ -167,3 +167,23 @@ def test_the_text_names_a_second_minimum_the_intervals_hold():
     rejected = _TwoMinima(tilt=1.0, depth=2.0)
     far = with_parameter_uncertainty(rejected, rejected.fit_apparent(_start(rejected, 3.2)))
     assert _minima(far) and not _minima_text(_minima(far), "  ")  # in the JSON, not called equal depth
+
+
+def test_a_bias_step_over_a_record_without_a_first_bias_stays_finite():
+    # a record whose weave the nominal model's response did not show has no first bias (NaN); its
+    # change of bias is unknown, not NaN: the step (SBW logs, roll rate and steer angle fitted together,
+    # with the speed sensor in a pair) once became NaN there and stopped the diagnosis
+    n = 4
+    J = np.array([[1.0], [0.5], [0.2], [1.0]])
+    run = {
+        "rec": np.arange(n),
+        "offset": np.array([0.1, np.nan, 0.2, 0.0]),
+        "x": np.array([1.0]),
+        "sigma": np.full(n, 0.1),
+        "mask": np.ones(n, bool),
+        "fit": SimpleNamespace(_jacobian=J, _weight=np.ones(n)),
+    }
+    own = np.array([0.3, 0.4, 0.2, 0.0])
+    GapProblem._bias_step(run, own, 1, np.array([0.0]), np.array([10.0]))
+    assert np.all(np.isfinite(run["x"]))
+    assert run["x"][0] != 1.0  # the records with a known change still move it

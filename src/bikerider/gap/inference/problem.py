@@ -774,9 +774,15 @@ class GapProblem:
         # than a fifth of its search range (a direction the data hardly determine)
         mask, J, weight = run["mask"], run["fit"]._jacobian, run["fit"]._weight
         own = np.where(np.isfinite(own), own, offset)
+        # a change is known only where both biases are (a record whose weave the nominal model's response
+        # did not show has no first bias: its residual gets no push from this step)
+        change = np.where(np.isfinite(own) & np.isfinite(offset), own - offset, 0.0)
         delta = np.zeros(J.shape[0])
-        delta[: int(mask.sum())] = (own - offset)[mask] / weight
+        delta[: int(mask.sum())] = change[mask] / weight
         step = -np.linalg.lstsq(J, delta, rcond=1e-6)[0]
+        if not np.all(np.isfinite(step)):  # no step to take: the fit stays where it is
+            run["offset"], run["done"] = own, True
+            return
         step *= min(1.0, float(np.min(MAX_BIAS_STEP * (upper - lower) / np.maximum(np.abs(step), 1e-300))))
         run["x"] = np.clip(x + step, lower, upper)
         run["offset"] = own
