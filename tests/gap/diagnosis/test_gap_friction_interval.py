@@ -167,7 +167,9 @@ def test_the_fits_own_covariance_is_the_scatter_of_its_values(riderless):
 
 def test_three_sessions_keep_the_jackknife(riderless):
     # a calibration study runs on this path: three sessions or more keep the jackknife over the folds
-    # plus the parameters' share, and the numbers of main at b2e4f82 (before the two-session fallback)
+    # plus the parameters' share, and the numbers of main at b2e4f82 (before the two-session fallback), as
+    # moved since by the safeguarded chord steps on the records' initial states (timedomain.STATE_STEPS:
+    # standard errors 0.00881, 0.00751 before; the fitted values' own move is within 1 %)
     values = nominal(riderless)
     d = _diagnosis(riderless, values, (2.5, 3.5, 4.5))
     assert len(d.folds) == 3
@@ -177,7 +179,7 @@ def test_three_sessions_keep_the_jackknife(riderless):
     spread = 2 / 3 * centred.T @ centred
     assert full.jackknife_covariance == pytest.approx(spread, rel=1e-12)
     assert full.covariance == pytest.approx(spread + d.fits.parameter_covariance(FRICTION, full.values), rel=1e-12)
-    assert full.stderr == pytest.approx([0.00881267818094598, 0.007508347336191], rel=1e-4)
-    assert full.ci_low == pytest.approx([0.06075667223138319, 0.08746963596775062], rel=1e-4)
-    assert full.ci_high == pytest.approx([0.09530441233623273, 0.11690488187039419], rel=1e-4)
+    assert full.stderr == pytest.approx([0.008979380751773956, 0.007491565904946665], rel=1e-4)
+    assert full.ci_low == pytest.approx([0.060560102467065835, 0.08737991698726355], rel=1e-4)
+    assert full.ci_high == pytest.approx([0.09576068854971032, 0.11674808452840804], rel=1e-4)
     assert FEW_FOLDS_FRICTION not in as_dict(d)["notes"]

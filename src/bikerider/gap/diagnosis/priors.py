@@ -191,7 +191,10 @@ class Priors:
             param = parameter(name)
             prior = self.prior_of(name)
             unit = fit.units[k]
-            at_bound = name in pinned
+            # zero where the prior makes it the most probable size (a half-Cauchy: none of the effect, e.g.
+            # no viscous part beside Coulomb friction) is a value, not the edge of the search
+            at_zero = fit.lower[k] == 0 and fit.values[k] <= 1e-4 * max(fit.upper[k] - fit.lower[k], 1e-12)
+            at_bound = name in pinned and not (at_zero and prior.kind == "halfcauchy")
             ci = (float(fit.ci_low[k]), float(fit.ci_high[k]))
             if name == "m_arm":
                 # judge the arms by their inertia about the steer axis

@@ -767,7 +767,11 @@ class GapProblem:
         # the models that predict records at all and no bias correction brings it back
         lost = np.count_nonzero(~np.isfinite(own[rec])) > rec.size / 2
         if settled or lost or x.size == 0 or iteration == MAX_BIAS_ITERATIONS:
-            run["offset"], run["done"] = own, True
+            # a record over which the fitted model's response shows no weave the record fit finds keeps
+            # its last bias (its prediction the model's weave eigenvalue plus that bias, as the fit itself
+            # used it), not NaN, which counted as a point no model predicts (SBW logs with
+            # SbwBenchmark.txt: four such records put every candidate's held-out error in the hundreds)
+            run["offset"], run["done"] = np.where(np.isfinite(own), own, offset), True
             return
         # the fit's residuals move by the change of the bias (records without a weave keep their
         # last one): a Gauss-Newton step follows them, shortened where it would move a value by more
