@@ -23,13 +23,6 @@ BP = DATA / "bicycleparameters"
 EMPTY = CanonicalData([], np.empty(0), np.empty(0), [], {}, [])
 
 
-@pytest.fixture(scope="module")
-def davis():
-    return load_model(
-        BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt", BP / "riders/Jason/Parameters/JasonRigidBenchmark.txt"
-    )
-
-
 def _nominal(model):
     return {k: float(model.parameters.values[k]) for k in BENCH_ARGS + ("g",)}
 

@@ -24,13 +24,6 @@ BP = DATA / "bicycleparameters"
 EMPTY = CanonicalData([], np.empty(0), np.empty(0), [], {}, [])
 
 
-@pytest.fixture(scope="module")
-def davis():
-    return load_model(
-        BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt", BP / "riders/Jason/Parameters/JasonRigidBenchmark.txt"
-    )
-
-
 def _weaves(model, effects, sigma=0.03, seed=3) -> EigenvalueData:
     """Noisy weave eigenvalues of a truth with ``effects`` (two uncontrolled groups, one controlled)."""
     rng = np.random.default_rng(seed)

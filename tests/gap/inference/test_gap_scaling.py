@@ -18,15 +18,6 @@ from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
 BP = bikerider.__path__[0] + "/data/bicycleparameters"
 
 
-@pytest.fixture(scope="module")
-def davis():
-    from bikerider.io.gap_model import load_model
-
-    return load_model(
-        f"{BP}/bicycles/Rigid/Parameters/RigidBenchmark.txt", f"{BP}/riders/Jason/Parameters/JasonRigidBenchmark.txt"
-    )
-
-
 def _table(speeds, groups, sigma=np.nan, seed=1) -> EigenvalueData:
     rng = np.random.default_rng(seed)
     n = len(speeds)
