@@ -10,12 +10,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-import bikerider
 from bikerider.gap.inference.low_rank import low_rank_chi2
 from bikerider.gap.measured.control import ControlLaw
 from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
-
-BP = bikerider.__path__[0] + "/data/bicycleparameters"
 
 
 def _table(speeds, groups, sigma=np.nan, seed=1) -> EigenvalueData:
