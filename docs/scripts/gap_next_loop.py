@@ -58,6 +58,10 @@ RECORDS = Path(__file__).with_name("gap_next_loop_records.jsonl")
 """The records mode (``records``): the friction pairs, the tie's data records, pushes among the experiments."""
 RECORDS_PUSH = Path(__file__).with_name("gap_next_loop_records_push.jsonl")
 """The records mode's ties again, the truth's runs at every push against the rivals' predictions (``push-check``)."""
+RECORDS_BEFORE = Path(__file__).with_name("gap_next_loop_records_before_kick.jsonl")
+"""The records mode as it was run before the plan spanned the kick's initial steer rate."""
+RECORDS_PUSH_BEFORE = Path(__file__).with_name("gap_next_loop_records_push_before_kick.jsonl")
+"""The push check of those ties."""
 FIRST_RECORD_SEED = 9000
 DOC = ROOT / "docs" / "gap_validation.md"
 FIGURE = ROOT / "docs" / "figures" / "gap_next_loop.png"
@@ -148,11 +152,13 @@ def push_check(args) -> int:
 
 
 def _deadline(until: str | None) -> dt.datetime | None:
-    """``--until HH:MM`` (UTC, today) as a time, or ``None``."""
+    """``--until HH:MM`` (UTC, the next such time: tomorrow's when today's has passed) as a time, or ``None``."""
     if not until:
         return None
     hh, mm = (int(x) for x in until.split(":"))
-    return dt.datetime.now(dt.UTC).replace(hour=hh, minute=mm, second=0, microsecond=0)
+    now = dt.datetime.now(dt.UTC)
+    at = now.replace(hour=hh, minute=mm, second=0, microsecond=0)
+    return at if at > now else at + dt.timedelta(days=1)
 
 
 def _run_pool(worker, jobs: list, path: Path, args, ties: int, status) -> int:
@@ -677,13 +683,12 @@ def _by_first(ties: list[dict], plan: str) -> str:
     )
 
 
-def _push_lines() -> list[str]:
-    """How the truth's decay moves with the push against how the rivals predict it (:data:`RECORDS_PUSH`)."""
-    checked = [c for c in _stored(RECORDS_PUSH) if c.get("runs")]
-    if not checked:
-        return []
-    rows = []  # (push, candidate's z real, z freq, other's z real, z freq)
-    moves = {}  # push -> list of (truth's move, candidate's predicted move, other's predicted move) in real, freq
+def _push_stats(path: Path) -> tuple[int, list, dict, list]:
+    """From a push-check file: the ties checked, ``rows`` (push, candidate's z real, z freq, other's z real, z
+    freq), ``moves`` (push -> (truth's move, candidate's predicted move, other's, the runs' noise)) and
+    ``odds`` (push, the plan's probability that the run favours the candidate by 19 to 1, whether it did)."""
+    checked = [c for c in _stored(path) if c.get("runs")]
+    rows, moves, odds = [], {}, []
     for c in checked:
         cand = c["candidate"]
         other = next(n for n in c["rivals"] if n != cand)
@@ -693,10 +698,14 @@ def _push_lines() -> list[str]:
                 continue
             groups.setdefault((r["speed"], r["law"]), {})[r["push"]] = r
             z = []
+            y, noise = np.array(r["y"]), np.array(r["sd"])
+            pred = {}
             for name in (cand, other):
                 mu, sd = np.array(r["rivals"][name]["mean"]), np.array(r["rivals"][name]["sd"])
-                z += list((np.array(r["y"]) - mu) / np.hypot(sd, np.array(r["sd"])))
+                z += list((y - mu) / np.hypot(sd, noise))
+                pred[name] = (mu, sd**2 + noise**2)
             rows.append((r["push"], *z))
+            odds.append((r["push"], *_one_run_odds(y, pred[cand], pred[other])))
         for g in groups.values():
             if 1.0 not in g:
                 continue
@@ -707,64 +716,178 @@ def _push_lines() -> list[str]:
                 truth = np.array(r["y"]) - np.array(base["y"])
                 pred = [np.array(r["rivals"][n]["mean"]) - np.array(base["rivals"][n]["mean"]) for n in (cand, other)]
                 moves.setdefault(push, []).append((truth, *pred, np.hypot(r["sd"], base["sd"])))
+    return len(checked), rows, moves, odds
+
+
+def _one_run_odds(y: np.ndarray, true: tuple, other: tuple) -> tuple[float, bool]:
+    """One run ``y`` against two rivals' predictive distributions ``(mean, variances)`` (diagonal, as stored):
+    the plan's probability that it favours the first by 19 to 1 (``Phi(d / 2 - ln 19 / d)``, ``d`` weighted by
+    the first's variances) and whether its likelihood ratio did."""
+    from scipy.special import ndtr
+
+    delta = true[0] - other[0]
+    d = math.sqrt(float(np.sum(delta**2 / true[1])))
+    p = float(ndtr(d / 2 - math.log(19) / d)) if d > 0 else 0.0
+
+    def log_density(mu, var):
+        return float(-0.5 * np.sum((y - mu) ** 2 / var + np.log(2 * math.pi * var)))
+
+    return p, log_density(*true) - log_density(*other) >= math.log(19)
+
+
+def _z_cells(rows: list, push: float) -> list[str]:
+    z = np.array([r[1:] for r in rows if r[0] == push])
+    if not len(z):
+        return ["-"] * 4
+    return [f"{np.mean(z[:, j]):+.2f} ({np.sqrt(np.mean(z[:, j] ** 2)):.2f})" for j in range(4)]
+
+
+def _push_lines() -> list[str]:
+    """How the truth's decay moves with the push against how the rivals predict it (:data:`RECORDS_PUSH`), and
+    against the plan before it spanned the kick's steer rate (:data:`RECORDS_PUSH_BEFORE`)."""
+    n_checked, rows, moves, odds = _push_stats(RECORDS_PUSH)
+    if not n_checked:
+        return []
+    n_before, rows_before, moves_before, odds_before = _push_stats(RECORDS_PUSH_BEFORE)
+    pushes = sorted({r[0] for r in rows} | {r[0] for r in rows_before})
     out = [
-        f"How the truth's decay moves with the push ({len(checked)} of the ties again, `push-check`: at up to four "
+        f"How the truth's decay moves with the push ({n_checked} of the ties again, `push-check`: at up to four "
         "speeds and laws where the plan holds a decay at every push, the truth's first run at each push, as the "
-        "loop runs it, against the rivals' predictions; the friction truths' candidate `steer_friction` first). z: the "
-        "truth's run minus the rival's prediction over their standard deviations combined (a rival that foresees the "
-        "truth has z of mean 0 and RMS about 1):",
+        "loop runs it, against the rivals' predictions, each with its spread over the kick's initial steer rate; "
+        "the friction truths' candidate `steer_friction` first). z: the truth's run minus the rival's prediction "
+        "over their standard deviations combined (a rival that foresees the truth has z of mean 0 and RMS about 1); "
+        f"before: the same check of the plan before it spanned the kick's steer rate ({n_before} ties, "
+        f"`{RECORDS_PUSH_BEFORE.name}`):",
         "",
-        "| push | runs | candidate: z of the decay rate, mean (RMS) | z of the frequency | rival: z of the decay rate | "
-        "z of the frequency |",
-        "|---|---|---|---|---|---|",
+        "| push | runs (before) | candidate: z of the decay rate, mean (RMS) | before | z of the frequency | before | "
+        "rival: z of the decay rate | before | z of the frequency | before |",
+        "|---|---|---|---|---|---|---|---|---|---|",
     ]
-    for push in sorted({r[0] for r in rows}):
-        z = np.array([r[1:] for r in rows if r[0] == push])
-        cells = [f"{np.mean(z[:, j]):+.2f} ({np.sqrt(np.mean(z[:, j] ** 2)):.2f})" for j in range(4)]
-        out.append(f"| {push:g} | {len(z)} | " + " | ".join(cells) + " |")
+    for push in pushes:
+        now, then = _z_cells(rows, push), _z_cells(rows_before, push)
+        n_now = sum(r[0] == push for r in rows)
+        n_then = sum(r[0] == push for r in rows_before)
+        cells = [x for pair in zip(now, then) for x in pair]
+        out.append(f"| {push:g} | {n_now} ({n_then}) | " + " | ".join(cells) + " |")
     out += [
         "",
         "The move from the data's push: the truth's run at the push minus its run at the data's push (the same "
-        "draws, the kick scaled), against the move the candidate predicts:",
+        "draws, the kick scaled), against the move the candidate predicts (before: the plan before it spanned the "
+        "kick's steer rate):",
         "",
         "| push | pairs of runs | truth's move of the frequency: median abs [rad/s] | candidate's predicted move | "
-        "same sign | truth's move of the decay rate: median abs [1/s] | candidate's predicted move | "
+        "before | same sign | truth's move of the decay rate: median abs [1/s] | candidate's predicted move | before | "
         "truth's moves beyond twice the runs' noise |",
-        "|---|---|---|---|---|---|---|---|",
+        "|---|---|---|---|---|---|---|---|---|---|",
     ]
+
+    def median_move(m, j, what=1):
+        return float(np.median(np.abs(np.array([x[what] for x in m])[:, j]))) if m else math.nan
+
     for push, m in sorted(moves.items()):
         truth = np.array([x[0] for x in m])
         cand = np.array([x[1] for x in m])
         noise = np.array([x[3] for x in m])
+        then = moves_before.get(push, [])
         same = np.mean(np.sign(truth[:, 1]) == np.sign(cand[:, 1]))
         beyond = np.mean(np.any(np.abs(truth) > 2 * noise, axis=1))
         out.append(
             f"| {push:g} | {len(m)} | {np.median(np.abs(truth[:, 1])):.3f} | {np.median(np.abs(cand[:, 1])):.3f} | "
-            f"{same:.0%} | {np.median(np.abs(truth[:, 0])):.3f} | {np.median(np.abs(cand[:, 0])):.3f} | {beyond:.0%} |"
+            f"{median_move(then, 1):.3f} | {same:.0%} | {np.median(np.abs(truth[:, 0])):.3f} | "
+            f"{np.median(np.abs(cand[:, 0])):.3f} | {median_move(then, 0):.3f} | {beyond:.0%} |"
         )
+    out += [
+        "",
+        "Honest odds of one run at a push: for every run above, the plan's probability that this one run favours "
+        "the hidden effect's candidate over the rival by 19 to 1 (`Phi(d / 2 - ln 19 / d)` from the two predictive "
+        "distributions as stored, variances only), binned, against the fraction of the truth's runs whose likelihood "
+        "ratio did; runs at a push other than the data's (0.5 and 2 times), then at the data's push:",
+        "",
+        "| pushes | predicted | runs | mean predicted | fraction that did | before: runs | mean predicted | "
+        "fraction that did |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    edges = (0.0, 0.05, 0.2, 0.4, 0.6, 0.8, 0.95, 1.0001)
+    for label, keep in (("0.5, 2", lambda x: x != 1.0), ("1", lambda x: x == 1.0)):
+        now = [(p, hit) for push, p, hit in odds if keep(push)]
+        then = [(p, hit) for push, p, hit in odds_before if keep(push)]
+        for lo, hi in zip(edges[:-1], edges[1:]):
+            a = [(p, h) for p, h in now if lo <= p < hi]
+            b = [(p, h) for p, h in then if lo <= p < hi]
+            if not a and not b:
+                continue
+
+            def cells(x):
+                if not x:
+                    return "0 | - | -"
+                return f"{len(x)} | {np.mean([p for p, _ in x]):.2f} | {np.mean([h for _, h in x]):.2f}"
+
+            out.append(f"| {label} | {lo:.2f}-{min(hi, 1.0):.2f} | {cells(a)} | {cells(b)} |")
+    for label, keep in (("a push other than the data's", lambda x: x != 1.0), ("the data's push", lambda x: x == 1.0)):
+        now = [(p, hit) for push, p, hit in odds if keep(push)]
+        then = [(p, hit) for push, p, hit in odds_before if keep(push)]
+        if now:
+            out.append("")
+            out.append(
+                f"* At {label}: predicted probabilities add up to {sum(p for p, _ in now):.1f} over {len(now)} runs, "
+                f"{sum(h for _, h in now)} runs did (before: {sum(p for p, _ in then):.1f} over {len(then)}, "
+                f"{sum(h for _, h in then)} did)."
+            )
     every = [x for m in moves.values() for x in m]
+    every_before = [x for m in moves_before.values() for x in m]
     if every:
         truth = np.array([x[0] for x in every])
         cand = np.array([x[1] for x in every])
         ratio = np.median(np.abs(truth[:, 1])) / max(np.median(np.abs(cand[:, 1])), 1e-12)
+        ratio_before = (
+            np.median(np.abs(np.array([x[0] for x in every_before])[:, 1]))
+            / max(np.median(np.abs(np.array([x[1] for x in every_before])[:, 1])), 1e-12)
+            if every_before
+            else math.nan
+        )
         out += [
             "",
             f"* The truth's weave frequency moves with the push about {ratio:.0f} times as far as the friction candidate "
-            f"predicts (median over {len(every)} pairs of runs), in the direction it predicts in "
-            f"{np.mean(np.sign(truth[:, 1]) == np.sign(cand[:, 1])):.0%}: the plan sees which way a push moves the "
-            "decay, not how far, so a run at another push also shows what neither rival foresees.",
-            "* Checked for seed 9311 (steer_friction vs tyre_slip, riderless; the truth's `T_coulomb` 0.157 N m, "
-            "`c_steer` 0.90 N m s/rad), decided wrong by the plan's first run: a decay at 4.92 m/s under the halved "
-            "control at twice the data's push (the only push the plan kept there: its templates at half and at the "
-            "data's push fit poorly, r^2 0.10 and 0.29). The friction candidate (fitted `T_coulomb` 0.204 +- 0.129, `c_viscous` 0.77 +- 1.29) "
-            "predicts a weave frequency of 1.84 +- 0.33 rad/s, tyre slip 5.01 +- 0.52, the truth's run gives 3.99 +- "
-            "0.12. The truth's own runs there (`fit_record`, 0.01 rad/s noise) give 1.8-3.1 rad/s from a roll-rate "
-            "kick of 0.3 rad/s and 3.1-3.7 rad/s from 0.6 rad/s, by the kick's steer rate (-1.6 to 1.6 rad/s) alone: "
-            "with Coulomb friction the decay depends on how the steer moves at the start, which the plan's template, "
-            "started from the data's roll rate alone (these records log no steer), does not carry.",
+            f"predicts (median over {len(every)} pairs of runs; {ratio_before:.0f} times before), in the direction it "
+            f"predicts in {np.mean(np.sign(truth[:, 1]) == np.sign(cand[:, 1])):.0%}. Spanning the kick's steer rate "
+            "widens the candidate's prediction of each run (its spread over the kick) but barely moves its mean: the "
+            "candidate's own friction, fitted to the data's roll rates, does not make the decay depend on the push "
+            "or on the kick as the truth's does, so a run at another push still shows what neither rival foresees.",
         ]
+    out += _seed_lines(9311)
     out.append("")
     return out
+
+
+def _seed_lines(seed: int) -> list[str]:
+    """The records case ``seed`` (the one decided wrong before the plan spanned the kick's steer rate), before
+    and now."""
+    plan = "plan:jensen_renyi"
+
+    def outcome(path):
+        c = next((c for c in _stored(path) if c["seed"] == seed and c.get("strategies")), None)
+        if c is None:
+            return None
+        s = c["strategies"][plan]
+        first = c["first"]["text"] if c.get("first") else "none"
+        return f"{s['status']} in {s['runs']} run{'s' if s['runs'] != 1 else ''} (first run: {first})"
+
+    before, now = outcome(RECORDS_BEFORE), outcome(RECORDS)
+    if before is None:
+        return []
+    return [
+        f"* Seed {seed} (steer_friction vs tyre_slip, riderless; the truth's `T_coulomb` 0.157 N m, `c_steer` 0.90 "
+        f"N m s/rad), before the plan spanned the kick's steer rate: {plan} {before}. The friction candidate "
+        "(fitted `T_coulomb` 0.204 +- 0.129, `c_viscous` 0.77 +- 1.29) predicted a weave frequency of 1.84 +- 0.33 "
+        "rad/s there, tyre slip 5.01 +- 0.52, the truth's run gave 3.99 +- 0.12; the truth's own runs there "
+        "(`fit_record`, 0.01 rad/s noise) give 1.8-3.1 rad/s from a roll-rate kick of 0.3 rad/s and 3.1-3.7 rad/s "
+        "from 0.6 rad/s, by the kick's steer rate (-1.6 to 1.6 rad/s) alone: with Coulomb friction the decay depends "
+        "on how the steer moves at the start, which the template, started from the data's roll rate alone (these "
+        "records log no steer), did not carry. Now: "
+        + (now if now is not None else "not among the ties stored")
+        + ". With the kick spanned the plan keeps fewer decays there (where the friction candidate's response "
+        "from one of the kick's steer rates shows no weave the record fit finds, the decay is left out).",
+    ]
 
 
 def _records_lines(n_max: int) -> list[str]:
@@ -879,7 +1002,10 @@ def _records_lines(n_max: int) -> list[str]:
         "times the push, 6 s, read by the diagnosis's own record fit (`fit_record`); its weight is the plan's noise",
         "of one run (the data's scatter from run to run beyond their fits' standard errors, as the diagnosis weighs",
         "a record by its replicates' scatter) with the run's own standard errors in place of the template's, plus",
-        "the nominal parameters' uncertainty. The",
+        "the nominal parameters' uncertainty. These records log no steer, and a kick's steer rate is drawn anew",
+        "for each run: the plan takes it as unknown, uniform within 2.5 times the roll rate either way",
+        "(`bikerider.gap.plan.decays.KICK_STEER_RATE`), predicts each decay as the mean over three templates",
+        "across that range and adds each rival's spread over them to one run's noise (the loop likewise). The",
         "even spread takes decays at the data's push (a researcher without a plan pushes as before); multisines",
         f"are as in the table study. Pairs: {'; '.join(s.label for s in L.RECORD_SCENARIOS)}; seeds from "
         f"{FIRST_RECORD_SEED}, the pairs in turn.",
