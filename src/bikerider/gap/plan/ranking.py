@@ -35,9 +35,13 @@ standard-push template of each speed and law), counted per decay as the diagnosi
 weights each row by data plus parameter variance and takes rows as independent); and each rival's
 own uncertainty ``C``: its fitted values' covariance (each value's spread capped at that of a value
 anywhere in its search range) through secants over one standard deviation inside the search bounds.
+With records that log no steer, the kick's unknown initial steer rate: each rival's prediction is its mean
+over templates from three steer rates (:func:`~bikerider.gap.plan.decays.kick_steer_rates`) and their spread
+``K_T`` a per-run variance of rival ``T``'s prediction (``kick_cov``), added to ``D + V`` wherever rival ``T``
+is true.
 A rival that misses held-out data by more than the uncertainties (held-out RMS error ``e`` above one)
 would miss new data alike: its misfit ``(e^2 - 1) (D + V)`` is added, systematic.  ``n`` decays' mean
-then has, with rival ``T`` true, the covariance ``S_T = C_T + (e_T^2 - 1)^+ (D + V) + (D + V) / n``.
+then has, with rival ``T`` true, the covariance ``S_T = C_T + (e_T^2 - 1)^+ (D + V) + (D + V + K_T) / n``.
 The plan assumes one of the rivals is the truth; the misfit term keeps it from promising a resolution
 between two rivals that both miss the data by more than they differ.
 
