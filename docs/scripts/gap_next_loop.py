@@ -683,11 +683,12 @@ def _by_first(ties: list[dict], plan: str) -> str:
     )
 
 
-def _push_stats(path: Path) -> tuple[int, list, dict, list]:
+def _push_stats(path: Path, only: set | None = None) -> tuple[int, list, dict, list]:
     """From a push-check file: the ties checked, ``rows`` (push, candidate's z real, z freq, other's z real, z
     freq), ``moves`` (push -> (truth's move, candidate's predicted move, other's, the runs' noise)) and
-    ``odds`` (push, the plan's probability that the run favours the candidate by 19 to 1, whether it did)."""
-    checked = [c for c in _stored(path) if c.get("runs")]
+    ``odds`` (push, the plan's probability that the run favours the candidate by 19 to 1, whether it did);
+    ``only``: those (scenario, seed) alone."""
+    checked = [c for c in _stored(path) if c.get("runs") and (only is None or (c["scenario"], c["seed"]) in only)]
     rows, moves, odds = [], {}, []
     for c in checked:
         cand = c["candidate"]
@@ -719,6 +720,18 @@ def _push_stats(path: Path) -> tuple[int, list, dict, list]:
     return len(checked), rows, moves, odds
 
 
+def _median_sd(path: Path, push: float, only: set) -> float:
+    """The friction candidate's predictive standard deviation of the frequency at ``push``, median over the runs."""
+    sd = [
+        r["rivals"][c["candidate"]]["sd"][1]
+        for c in _stored(path)
+        if c.get("runs") and (c["scenario"], c["seed"]) in only
+        for r in c["runs"]
+        if not r["lost"] and r["push"] == push
+    ]
+    return float(np.median(sd)) if sd else math.nan
+
+
 def _one_run_odds(y: np.ndarray, true: tuple, other: tuple) -> tuple[float, bool]:
     """One run ``y`` against two rivals' predictive distributions ``(mean, variances)`` (diagonal, as stored):
     the plan's probability that it favours the first by 19 to 1 (``Phi(d / 2 - ln 19 / d)``, ``d`` weighted by
@@ -748,7 +761,8 @@ def _push_lines() -> list[str]:
     n_checked, rows, moves, odds = _push_stats(RECORDS_PUSH)
     if not n_checked:
         return []
-    n_before, rows_before, moves_before, odds_before = _push_stats(RECORDS_PUSH_BEFORE)
+    checked = {(c["scenario"], c["seed"]) for c in _stored(RECORDS_PUSH) if c.get("runs")}
+    n_before, rows_before, moves_before, odds_before = _push_stats(RECORDS_PUSH_BEFORE, checked)
     pushes = sorted({r[0] for r in rows} | {r[0] for r in rows_before})
     out = [
         f"How the truth's decay moves with the push ({n_checked} of the ties again, `push-check`: at up to four "
@@ -756,8 +770,8 @@ def _push_lines() -> list[str]:
         "loop runs it, against the rivals' predictions, each with its spread over the kick's initial steer rate; "
         "the friction truths' candidate `steer_friction` first). z: the truth's run minus the rival's prediction "
         "over their standard deviations combined (a rival that foresees the truth has z of mean 0 and RMS about 1); "
-        f"before: the same check of the plan before it spanned the kick's steer rate ({n_before} ties, "
-        f"`{RECORDS_PUSH_BEFORE.name}`):",
+        f"before: the same check of the plan before it spanned the kick's steer rate, on the same ties where it "
+        f"checked them ({n_before} ties, `{RECORDS_PUSH_BEFORE.name}`):",
         "",
         "| push | runs (before) | candidate: z of the decay rate, mean (RMS) | before | z of the frequency | before | "
         "rival: z of the decay rate | before | z of the frequency | before |",
@@ -849,12 +863,46 @@ def _push_lines() -> list[str]:
             "",
             f"* The truth's weave frequency moves with the push about {ratio:.0f} times as far as the friction candidate "
             f"predicts (median over {len(every)} pairs of runs; {ratio_before:.0f} times before), in the direction it "
-            f"predicts in {np.mean(np.sign(truth[:, 1]) == np.sign(cand[:, 1])):.0%}. Spanning the kick's steer rate "
-            "widens the candidate's prediction of each run (its spread over the kick) but barely moves its mean: the "
-            "candidate's own friction, fitted to the data's roll rates, does not make the decay depend on the push "
-            "or on the kick as the truth's does, so a run at another push still shows what neither rival foresees.",
+            f"predicts in {np.mean(np.sign(truth[:, 1]) == np.sign(cand[:, 1])):.0%}.",
+            "* The candidate's predictive standard deviation of one run's frequency (its own uncertainty and, now, "
+            "its spread over the kick's steer rate; median), now / before: "
+            + "; ".join(
+                f"{push:g} times {_median_sd(RECORDS_PUSH, push, checked):.3f} / "
+                f"{_median_sd(RECORDS_PUSH_BEFORE, push, checked):.3f} rad/s"
+                for push in pushes
+            )
+            + ".",
         ]
     out += _seed_lines(9311)
+    out.append("")
+    return out
+
+
+def _before_lines(stored: list[dict], names: list[str], n_max: int) -> list[str]:
+    """The same seeds as the plan ran them before it spanned the kick's steer rate (:data:`RECORDS_BEFORE`)."""
+    seeds = {(c["scenario"], c["seed"]) for c in stored}
+    before = [c for c in _stored(RECORDS_BEFORE) if (c["scenario"], c["seed"]) in seeds]
+    ties_before = [c for c in before if c.get("strategies")]
+    ties_now = [c for c in stored if c.get("strategies")]
+    if not ties_before:
+        return []
+    now, then = _merit(ties_now, names), _merit(ties_before, names)
+    both = {(c["scenario"], c["seed"]) for c in ties_now} & {(c["scenario"], c["seed"]) for c in ties_before}
+    out = [
+        f"Before the plan spanned the kick's steer rate (`{RECORDS_BEFORE.name}`, the same {len(before)} cases: "
+        f"{len(ties_before)} ties then, {len(ties_now)} now, {len(both)} both; a tie is the diagnosis's, which "
+        "the change does not touch, so the ties differ only where a plan failed), now / before:",
+        "",
+        "| strategy | ties | resolved | wrong | undecided | unbreakable | runs needed: median | 90th percentile | "
+        "runs lost / spent |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    for n in names:
+        a, b = now[n], then[n]
+        cells = [f"{a[k]} / {b[k]}" for k in ("n", "resolved", "wrong", "undecided", "unbreakable")]
+        cells += [f"{_fmt(a['median_p90'][j], n_max)} / {_fmt(b['median_p90'][j], n_max)}" for j in (0, 1)]
+        cells.append(f"{a['lost']} / {a['spent']} ({b['lost']} / {b['spent']})")
+        out.append(f"| {n} | " + " | ".join(cells) + " |")
     out.append("")
     return out
 
@@ -870,7 +918,12 @@ def _seed_lines(seed: int) -> list[str]:
             return None
         s = c["strategies"][plan]
         first = c["first"]["text"] if c.get("first") else "none"
-        return f"{s['status']} in {s['runs']} run{'s' if s['runs'] != 1 else ''} (first run: {first})"
+        held = Counter(c.get("pushes", []))
+        pushes = ", ".join(f"{held[p]} at {p:g} times" for p in sorted(held))
+        return (
+            f"{s['status']} in {s['runs']} run{'s' if s['runs'] != 1 else ''} (first run: {first}; the plan held "
+            f"{sum(held.values())} decays, {pushes})"
+        )
 
     before, now = outcome(RECORDS_BEFORE), outcome(RECORDS)
     if before is None:
@@ -885,8 +938,8 @@ def _seed_lines(seed: int) -> list[str]:
         "on how the steer moves at the start, which the template, started from the data's roll rate alone (these "
         "records log no steer), did not carry. Now: "
         + (now if now is not None else "not among the ties stored")
-        + ". With the kick spanned the plan keeps fewer decays there (where the friction candidate's response "
-        "from one of the kick's steer rates shows no weave the record fit finds, the decay is left out).",
+        + " (a decay is left out where the friction candidate's response from one of the kick's steer rates shows "
+        "no weave the record fit finds).",
     ]
 
 
@@ -1041,6 +1094,7 @@ def _records_lines(n_max: int) -> list[str]:
         f"{np.mean([b for _, b in both]) if both else math.nan:.2f}); fewer runs for the plan in "
         f"{sum(a < b for a, b in both)}, more in {sum(a > b for a, b in both)}.",
         "",
+        *_before_lines(stored, names, n_max),
         "| pair | cases | ties | plan resolved | plan wrong | even resolved | even wrong | first run differs from the table loop's |",
         "|---|---|---|---|---|---|---|---|",
     ]
