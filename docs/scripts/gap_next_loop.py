@@ -62,6 +62,8 @@ RECORDS_BEFORE = Path(__file__).with_name("gap_next_loop_records_before_kick.jso
 """The records mode as it was run before the plan spanned the kick's initial steer rate."""
 RECORDS_PUSH_BEFORE = Path(__file__).with_name("gap_next_loop_records_push_before_kick.jsonl")
 """The push check of those ties."""
+RECORDS_PUSH_NO_KICK = Path(__file__).with_name("gap_next_loop_records_push_no_kick.jsonl")
+"""The push check on today's code with the kick's steer rate not spanned (``push-check --no-kick``)."""
 FIRST_RECORD_SEED = 9000
 DOC = ROOT / "docs" / "gap_validation.md"
 FIGURE = ROOT / "docs" / "figures" / "gap_next_loop.png"
@@ -132,18 +134,25 @@ def records(args) -> int:
 
 
 def push_check(args) -> int:
-    """The stored records ties again (:func:`validation.loop.push_check`), appended to :data:`RECORDS_PUSH`."""
+    """The stored records ties again (:func:`validation.loop.push_check`), appended to :data:`RECORDS_PUSH`
+    (``--no-kick``: with the plan's template started from the data's steer state alone, as before it spanned the
+    kick's steer rate, to :data:`RECORDS_PUSH_NO_KICK`: the control on today's code)."""
+    from bikerider.gap.plan import ranking
     from validation import loop as L
 
+    path = RECORDS_PUSH
+    if args.no_kick:
+        ranking.kick_steer_rates = lambda records: ((0.0,), (1.0,))
+        path = RECORDS_PUSH_NO_KICK
     index = {s.label: k for k, s in enumerate(L.RECORD_SCENARIOS)}
-    done = {(c["scenario"], c["seed"]) for c in _stored(RECORDS_PUSH)}
+    done = {(c["scenario"], c["seed"]) for c in _stored(path)}
     todo = [(c["scenario"], c["seed"]) for c in _stored(RECORDS) if c.get("strategies")]
     todo = [t for t in todo if t not in done][: args.max]
     deadline = _deadline(args.until)
     logging.getLogger("bikerider").setLevel(logging.ERROR)
     for label, seed in todo:
         result = L.push_check(_models(), L.RECORD_SCENARIOS[index[label]], seed)
-        with RECORDS_PUSH.open("a", encoding="utf-8") as out:
+        with path.open("a", encoding="utf-8") as out:
             out.write(json.dumps(result) + "\n")
         LOG.info("%s seed %s: %s, %d runs", label, seed, result["status"], len(result.get("runs", [])))
         if deadline and dt.datetime.now(dt.UTC) >= deadline:
@@ -720,6 +729,68 @@ def _push_stats(path: Path, only: set | None = None) -> tuple[int, list, dict, l
     return len(checked), rows, moves, odds
 
 
+def _control_lines() -> list[str]:
+    """Today's code with the kick spanned against the same code without (:data:`RECORDS_PUSH_NO_KICK`), on the
+    ties both checked: what the kick's span alone changes."""
+    control = {(c["scenario"], c["seed"]) for c in _stored(RECORDS_PUSH_NO_KICK) if c.get("runs")}
+    if not control:
+        return []
+    common = control & {(c["scenario"], c["seed"]) for c in _stored(RECORDS_PUSH) if c.get("runs")}
+    _, rows, moves, odds = _push_stats(RECORDS_PUSH, common)
+    _, rows_off, moves_off, odds_off = _push_stats(RECORDS_PUSH_NO_KICK, common)
+    out = [
+        "",
+        f"The kick's span alone: the same {len(common)} ties on today's code with the span off (`push-check "
+        f"--no-kick`, `{RECORDS_PUSH_NO_KICK.name}`: templates from the data's steer state, the steer rate 0), "
+        "z mean (RMS), spanned / off:",
+        "",
+        "| push | runs | candidate: z of the decay rate | z of the frequency | rival: z of the decay rate | "
+        "z of the frequency | candidate's sd of the frequency, median [rad/s] | its predicted move of the frequency |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for push in sorted({r[0] for r in rows}):
+        now, off = _z_cells(rows, push), _z_cells(rows_off, push)
+        n_now, n_off = sum(r[0] == push for r in rows), sum(r[0] == push for r in rows_off)
+        sd = f"{_median_sd(RECORDS_PUSH, push, common):.3f} / {_median_sd(RECORDS_PUSH_NO_KICK, push, common):.3f}"
+        move = "-"
+        if push in moves and push in moves_off:
+            move = (
+                f"{np.median(np.abs([x[1][1] for x in moves[push]])):.3f} / "
+                f"{np.median(np.abs([x[1][1] for x in moves_off[push]])):.3f}"
+            )
+        out.append(
+            f"| {push:g} | {n_now} / {n_off} | "
+            + " | ".join(f"{a} / {b}" for a, b in zip(now, off))
+            + f" | {sd} | {move} |"
+        )
+    rms = {}
+    for push in sorted({r[0] for r in rows} & {r[0] for r in rows_off}):
+        z_now = np.array([r[2] for r in rows if r[0] == push])
+        z_off = np.array([r[2] for r in rows_off if r[0] == push])
+        rms[push] = (float(np.sqrt(np.mean(z_now**2))), float(np.sqrt(np.mean(z_off**2))))
+    if rms:
+        out += [
+            "",
+            "* The candidate's z RMS of the frequency, spanned / off: "
+            + "; ".join(f"{p:g} times {a:.2f} / {b:.2f}" for p, (a, b) in rms.items())
+            + ". Where z RMS stays above 1 the truth's runs scatter and move with the push further than the "
+            "candidate's own friction law, kicked over the whole range, responds (below).",
+        ]
+    for label, keep in (("a push other than the data's", lambda x: x != 1.0), ("the data's push", lambda x: x == 1.0)):
+        a = [(p, h) for push, p, h in odds if keep(push)]
+        b = [(p, h) for push, p, h in odds_off if keep(push)]
+        top_a = [h for p, h in a if p >= 0.95]
+        top_b = [h for p, h in b if p >= 0.95]
+        out.append("")
+        out.append(
+            f"* One run at {label}, spanned / off: predicted probabilities add up to {sum(p for p, _ in a):.1f} / "
+            f"{sum(p for p, _ in b):.1f} over {len(a)} / {len(b)} runs, {sum(h for _, h in a)} / "
+            f"{sum(h for _, h in b)} did; of the runs predicted at 0.95 or more, {np.mean(top_a) if top_a else math.nan:.2f}"
+            f" / {np.mean(top_b) if top_b else math.nan:.2f} did."
+        )
+    return out
+
+
 def _median_sd(path: Path, push: float, only: set) -> float:
     """The friction candidate's predictive standard deviation of the frequency at ``push``, median over the runs."""
     sd = [
@@ -847,6 +918,7 @@ def _push_lines() -> list[str]:
                 f"{sum(h for _, h in now)} runs did (before: {sum(p for p, _ in then):.1f} over {len(then)}, "
                 f"{sum(h for _, h in then)} did)."
             )
+    out += _control_lines()
     every = [x for m in moves.values() for x in m]
     every_before = [x for m in moves_before.values() for x in m]
     if every:
@@ -1583,6 +1655,9 @@ def main() -> int:
     pc = sub.add_parser("push-check", help="the records ties again: the truth's runs at every push against the rivals'")
     pc.add_argument("--max", type=int, default=200, help="ties to check at most")
     pc.add_argument("--until", help="stop at this UTC time, HH:MM")
+    pc.add_argument(
+        "--no-kick", action="store_true", help="the control: templates from the data's steer state alone (own file)"
+    )
     sub.add_parser("report", help="write part 5 of docs/gap_validation.md and the figure")
     args = parser.parse_args()
     commands = {"run": run, "check": check, "rerun": rerun, "records": records, "push-check": push_check}
