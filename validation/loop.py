@@ -233,7 +233,8 @@ class LinearRival:
         self.mean, self.jac = mean, jac
         self.extra = extra
         """Per experiment, a covariance added to the prediction's that no run shrinks (``None``: none): the
-        friction law's form of a nonlinear rival's multisine, as the plan counts it (:func:`from_plan`)."""
+        friction law's form of a nonlinear rival's multisine, as the plan counts it, and a decay's spread over
+        the kick's unknown initial steer rate (:func:`from_plan`)."""
         self.a = np.zeros(prior.shape[0])
         self.P = prior.copy()
         self.log_evidence = 0.0
@@ -350,7 +351,9 @@ def from_plan(plan: NextExperiment, k: int) -> LinearRival:
     inference; a nonlinear rival's response simulated in time with its friction) and multisines, linear in its
     fitted values through the plan's own secants: ``z ~ N(0, I)`` whitened by the fit's covariance, the plan's
     factor ``F`` (``own_cov = F F^T``) the slopes.  A nonlinear rival's multisines carry the friction law's form
-    (``sweep_form``, part of the plan's ``sweep_own``) as a covariance no run shrinks, added to every run's.
+    (``sweep_form``, part of the plan's ``sweep_own``) as a covariance no run shrinks, added to every run's; its
+    decays the spread over the kick's unknown initial steer rate (``kick_cov``), added to every run's too (each
+    run has a kick of its own).
 
     The predictions are the plan's own, not recomputed: the records' templates and indirect inference live
     in the plan (:class:`bikerider.gap.plan.ranking.NextExperiment`), as the table loop's eigenvalues live in the
@@ -360,14 +363,17 @@ def from_plan(plan: NextExperiment, k: int) -> LinearRival:
     mean: list[np.ndarray] = []
     jac: list[np.ndarray] = []
     extra: list[np.ndarray | None] = []
+    flip = np.array([[1.0, -1.0], [-1.0, 1.0]])
     for m in range(len(plan.points)):
         z = complex(plan.mean[k, m])
         F = np.array(plan.own_factor[k][m], float).reshape(2, q)
+        kick = None if plan.kick_cov is None else np.array(plan.kick_cov[k, m], float)
         if z.imag < 0:  # the loop reads the frequency as |imag| (as the table loop)
             F[1] = -F[1]
+            kick = None if kick is None else kick * flip
         mean.append(np.array([z.real, abs(z.imag)]))
         jac.append(F)
-        extra.append(None)
+        extra.append(kick)
     for m in range(len(plan.sweeps)):
         mean.append(split(plan.sweep_mean[k, m]))
         jac.append(np.array(plan.sweep_factor[k][m], float).reshape(-1, q))
@@ -475,6 +481,13 @@ def _noise(plan: NextExperiment, e: int, shared: bool = False) -> np.ndarray:
     return plan.sweep_data[m] + (0 if shared else plan.sweep_model[m])
 
 
+def _kick(rival: LinearRival, plan: NextExperiment, e: int) -> np.ndarray | float:
+    """A decay's per-run spread over the kick's initial steer rate under ``rival`` (:func:`from_plan`), else 0."""
+    if e >= len(plan.points) or rival.extra is None or rival.extra[e] is None:
+        return 0.0
+    return rival.extra[e]
+
+
 def _groups(plan: NextExperiment) -> list[list[int]]:
     """Experiments with observations of the same size (decays; multisines), to score together."""
     decays = list(range(len(plan.points)))
@@ -520,7 +533,8 @@ def best_chance(plan, rivals, weights, runs_left: int, groups, shared=False) -> 
         h = A.Hypothesis(0, float(weights[t]), need)
         for j, g in enumerate(groups):
             delta = np.array([rivals[t].predict(e)[0] - rivals[1 - t].predict(e)[0] for e in g])
-            noise = np.array([_noise(plan, e) for e in g])
+            # a decay's spread over the kick's initial steer rate is per run, with the true rival's noise
+            noise = np.array([_noise(plan, e) + _kick(rivals[t], plan, e) for e in g])
             h.groups.append((delta, factors[t][j], factors[1 - t][j], noise, np.zeros_like(noise)))
         hypotheses.append(h)
     return A.allocate(hypotheses, runs_left, HOPELESS, draws=400).probability
@@ -736,7 +750,7 @@ def _record_extras(models: dict, scenario: Scenario, plan: NextExperiment, data:
     for k, r in enumerate(lin):
         for m in range(len(plan.points)):
             mine = r.predict(m)[1]
-            theirs = np.array(plan.own_cov[k, m])
+            theirs = np.array(plan.own_cov[k, m]) + (0.0 if plan.kick_cov is None else plan.kick_cov[k, m])
             if plan.mean[k, m].imag < 0:
                 theirs = theirs * np.array([[1, -1], [-1, 1]])
             worst = max(worst, float(np.max(np.abs(mine - theirs)) / max(np.max(np.abs(theirs)), 1e-300)))

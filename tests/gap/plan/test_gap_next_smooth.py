@@ -3,6 +3,8 @@ and no resolution probability jumps by more than the bicycle's own weave moves."
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 from gap_support import decay_record, nominal, riderless_model
@@ -18,10 +20,11 @@ RIVALS = ["steer_damping", "tyre_slip"]
 SPEEDS = np.linspace(2.8, 4.4, 200)
 
 
-@pytest.fixture(scope="module")
-def fine_plan():
+@pytest.fixture(scope="module", params=["steer logged", "roll rate only"])
+def fine_plan(request):
     # records of different lengths and pushes at three speeds (as a lab's windows are): the plan's template
-    # must not jump where the nearest record changes, half-way between their speeds
+    # must not jump where the nearest record changes, half-way between their speeds; with the roll rate only,
+    # the templates span the kick's unknown steer rate (three per experiment) and must not jump either
     model = riderless_model()
     records = []
     for j, (v, duration, push) in enumerate([(3.0, 1.6, 0.5), (3.5, 2.2, 1.0), (4.0, 1.8, 0.7)]):
@@ -32,10 +35,14 @@ def fine_plan():
                     model, v, f"{v} m/s", TRUTH, seed=10 * j + k, duration=duration, steer_noise=2e-4, initial=initial
                 )
             )
+    if request.param == "roll rate only":
+        records = [replace(r, signals={"roll_rate": r.signals["roll_rate"]}) for r in records]
     d = diagnose(
         model, EigenvalueData.empty(), CanonicalData.empty(), effects=tuple(RIVALS), records=fit_records(records)
     )
-    return model, plan_next(d, rivals=RIVALS, speeds=SPEEDS, signals=["roll_rate"], sweeps=False)
+    plan = plan_next(d, rivals=RIVALS, speeds=SPEEDS, signals=["roll_rate"], sweeps=False)
+    assert len(plan.kick_rates) == (3 if request.param == "roll rate only" else 1)
+    return model, plan
 
 
 def test_the_data_noise_is_interpolated_between_the_data_speeds():

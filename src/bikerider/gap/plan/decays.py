@@ -4,6 +4,15 @@ With records, a new decay is predicted from a *template*: a decay the nominal mo
 push, with each signal's noise, fitted as a record is fitted (:func:`fit_templates`); the rivals then
 predict what that fit finds in their own response over it (indirect inference, in
 :mod:`bikerider.gap.plan.ranking`).
+
+Records that log no steer do not say how the steer moved at the start of a kick, and a friction rival's
+decay depends on it (Coulomb friction acts on the steer rate's sign and size).  The plan then spans it
+(:func:`kick_steer_rates`): each experiment has templates started from steer rates spread over
+:data:`KICK_STEER_RATE` times the roll rate either way, each rival's prediction is the mean over them and
+their spread a per-run variance of its prediction.  A roll-rate record does not pin the initial steer
+rate itself: an initial state fitted to the roll rate alone under the nominal model (as indirect inference
+does) gives steer rates from -4300 to +180 rad/s on a withheld case of the closed loop (seed 9311; a fast
+castor mode takes it up), so the range is stated, not fitted.
 """
 
 from __future__ import annotations
@@ -25,6 +34,16 @@ NOISE_SEED = 2024
 """Seed of the noise added to templates (their fits' standard errors scale with it; the value does not)."""
 TEMPLATE_STATES = {"roll_rate": "phid", "roll_angle": "phi", "steer_angle": "delta", "steer_rate": "deltad"}
 """A template's signals and the states they are."""
+KICK_STEER_RATE = 2.5
+"""Records that log no steer: a kick's initial steer rate is taken as uniform between minus and plus this
+many times its initial roll rate (a hand push on the frame or the rider moves the steer as fast as the roll
+or faster; the closed loop's truths kick the steer rate up to 0.8 rad/s either way with roll rates of
+0.2-0.4 rad/s, ratios of 2-4, docs/gap_validation.md part 5)."""
+KICK_NODES = (0.0, -math.sqrt(0.6), math.sqrt(0.6))
+KICK_WEIGHTS = (4.0 / 9.0, 5.0 / 18.0, 5.0 / 18.0)
+"""Three-point Gauss-Legendre rule over the uniform range of :data:`KICK_STEER_RATE` (exact for a response
+quadratic in the steer rate; mean and variance of the uniform range exactly): the nodes as fractions of the
+range, their weights; the first node is the template of the data's own state."""
 
 
 @dataclass(frozen=True)
@@ -60,12 +79,30 @@ class Experiment:
         return out
 
 
+def steer_logged(records: list[Record]) -> bool:
+    """Whether any of the records logs the steer (its angle or rate): then :func:`push_of` reads the initial
+    steer state from them."""
+    return any("steer_angle" in r.signals or "steer_rate" in r.signals for r in records)
+
+
+def kick_steer_rates(records: list[Record]) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """The initial steer rates a template spans, as multiples of its initial roll rate, and their weights.
+
+    ``(0,), (1,)`` (the data's own state, :func:`push_curve`) when the records log the steer; else the
+    :data:`KICK_NODES` over :data:`KICK_STEER_RATE` with :data:`KICK_WEIGHTS` (module docstring).
+    """
+    if not records or steer_logged(records):
+        return (0.0,), (1.0,)
+    return tuple(KICK_STEER_RATE * x for x in KICK_NODES), KICK_WEIGHTS
+
+
 def template_records(
     nominal: EffectModel,
     used: list[Record],
     experiments: list[Experiment],
     laws: dict[str, ControlLaw],
     noise: dict[str, float],
+    steer_rates: list[float] | None = None,
 ) -> tuple[list[Record], list[dict[str, np.ndarray]]]:
     """Each experiment's template decay as a record (the nominal model's response with the signals' noise)
     and its noise-free signals.
@@ -73,7 +110,9 @@ def template_records(
     One window for every template (the records' median length and sampling step) and one noise pattern
     (:data:`NOISE_SEED`: the same samples scaled by each signal's noise), the push the data's as a
     continuous function of speed (:func:`push_curve`): a template, its fit and every prediction from it
-    move continuously with the speed, the law and the push.
+    move continuously with the speed, the law and the push.  ``steer_rates``: per experiment, an initial
+    steer rate added to the data's, as a multiple of the template's initial roll rate
+    (:func:`kick_steer_rates`; default none).
     """
     dt = float(np.median([r.time[1] - r.time[0] for r in used]))
     t = np.arange(int(np.median([r.time.size for r in used]))) * dt
@@ -83,12 +122,14 @@ def template_records(
     measured = any(r.speed_measured for r in used)
     records: list[Record] = []
     clean: list[dict[str, np.ndarray]] = []
-    for e in experiments:
+    for j, e in enumerate(experiments):
         law = laws[e.law]
         initial = {k: e.push * v for k, v in push(e.speed).items()}
+        if steer_rates is not None and steer_rates[j]:
+            initial["deltad"] = initial.get("deltad", 0.0) + steer_rates[j] * initial.get("phid", 0.0)
         out = nominal.simulate(e.speed, t, initial=initial, gains=law(e.speed))
         clean.append({name: out[state] for name, state in TEMPLATE_STATES.items()})
-        signals = {name: clean[-1][name] + noise[name] * pattern[j] for j, name in enumerate(TEMPLATE_STATES)}
+        signals = {name: clean[-1][name] + noise[name] * pattern[i] for i, name in enumerate(TEMPLATE_STATES)}
         records.append(
             Record(
                 f"next {e.describe()}",

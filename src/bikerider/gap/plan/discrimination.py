@@ -36,6 +36,7 @@ def separation(plan, repeats: float) -> np.ndarray:
                 plan.data_cov + plan.model_cov,
                 misfit,
                 repeats,
+                kick_noise(plan, true),
             )
             sweeps = distance(
                 split_last_k(plan.sweep_mean[i] - plan.sweep_mean[j]),
@@ -60,16 +61,24 @@ def split_last_k(z: np.ndarray) -> np.ndarray:
     return np.concatenate([z.real, z.imag], axis=-1)
 
 
-def distance(delta, own, noise, misfit: float, repeats: float) -> np.ndarray:
+def kick_noise(plan, true: int) -> np.ndarray | float:
+    """One decay's variance from the kick's unknown initial steer rate with rival ``true`` true, ``(n, 2, 2)``
+    (the plan's ``kick_cov``; 0 for a plan without it)."""
+    kick = getattr(plan, "kick_cov", None)
+    return 0.0 if kick is None else kick[true]
+
+
+def distance(delta, own, noise, misfit: float, repeats: float, kick=0.0) -> np.ndarray:
     """``d`` per experiment: ``delta (n, m)`` the rivals' difference, ``own (n, m, m)`` the true rival's own
-    covariance, ``noise (n, m, m)`` one run's (data plus parameters), ``misfit`` the true rival's."""
+    covariance, ``noise (n, m, m)`` one run's (data plus parameters), ``misfit`` the true rival's, ``kick``
+    one run's variance of the true rival's prediction from the kick (:func:`kick_noise`)."""
     if not len(delta):
         return np.zeros(0)
     # the true rival's own uncertainty, and its misfit on held-out data (systematic: more runs do not
-    # average it away), then the runs' noise and the parameters', per run
+    # average it away), then the runs' noise, the parameters' and the kick's, per run
     S = own + misfit * noise
     if math.isfinite(repeats):
-        S = S + noise / repeats
+        S = S + (noise + kick) / repeats
     # a difference no uncertainty covers (a rival of one fitted value, endless runs): resolved
     size = np.trace(S, axis1=-2, axis2=-1)[..., None, None]
     S = S + (1e-9 * size + 1e-30) * np.eye(S.shape[-1])
@@ -181,7 +190,8 @@ def combine(plan, budget: int = MAX_REPEATS, target: float = 0.95) -> dict | Non
 
     Every pair, each of its rivals true with even odds, the odds :data:`ODDS`; per experiment the rivals'
     difference of means, their own uncertainty's factors (one set of fitted values for every experiment),
-    one run's noise (data plus the nominal parameters') and, systematic, the true rival's misfit on held-out
+    one run's noise (data plus the nominal parameters', and the true rival's spread over the kick's unknown
+    initial steer rate) and, systematic, the true rival's misfit on held-out
     data times that noise (and for a friction rival's multisines the friction law's form).  ``None`` when the
     plan holds no factors (made otherwise than by :func:`~bikerider.gap.plan.ranking.plan_next`).
 
@@ -208,7 +218,7 @@ def combine(plan, budget: int = MAX_REPEATS, target: float = 0.95) -> dict | Non
                         split_last(plan.mean[true] - plan.mean[other]),
                         plan.own_factor[true],
                         plan.own_factor[other],
-                        noise,
+                        noise + kick_noise(plan, true),
                         misfit * noise,
                     )
                 )

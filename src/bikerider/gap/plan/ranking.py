@@ -35,9 +35,13 @@ standard-push template of each speed and law), counted per decay as the diagnosi
 weights each row by data plus parameter variance and takes rows as independent); and each rival's
 own uncertainty ``C``: its fitted values' covariance (each value's spread capped at that of a value
 anywhere in its search range) through secants over one standard deviation inside the search bounds.
+With records that log no steer, the kick's unknown initial steer rate: each rival's prediction is its mean
+over templates from three steer rates (:func:`~bikerider.gap.plan.decays.kick_steer_rates`) and their spread
+``K_T`` a per-run variance of rival ``T``'s prediction (``kick_cov``), added to ``D + V`` wherever rival ``T``
+is true.
 A rival that misses held-out data by more than the uncertainties (held-out RMS error ``e`` above one)
 would miss new data alike: its misfit ``(e^2 - 1) (D + V)`` is added, systematic.  ``n`` decays' mean
-then has, with rival ``T`` true, the covariance ``S_T = C_T + (e_T^2 - 1)^+ (D + V) + (D + V) / n``.
+then has, with rival ``T`` true, the covariance ``S_T = C_T + (e_T^2 - 1)^+ (D + V) + (D + V + K_T) / n``.
 The plan assumes one of the rivals is the truth; the misfit term keeps it from promising a resolution
 between two rivals that both miss the data by more than they differ.
 
@@ -80,7 +84,7 @@ from bikerider.gap.measured.records import SIGNALS, RecordFit, eigenvalues_of
 from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
 from bikerider.gap.parallel import map_forked, workers
 from bikerider.gap.plan import sequential
-from bikerider.gap.plan.decays import Experiment, fit_templates, template_records
+from bikerider.gap.plan.decays import KICK_NODES, Experiment, fit_templates, kick_steer_rates, template_records
 from bikerider.gap.plan.discrimination import (  # noqa: F401  (ODDS, MAX_REPEATS, resolution_probability: the plan's face)
     DEFAULT_REPEATS,
     MAX_REPEATS,
@@ -278,6 +282,8 @@ class _Planner(_Models):
         self.sample_noise, self.noise_source, self.signal_fits = sample_noise(d, noise)
         self.templates: dict[Experiment, RecordFit] = {}
         self.simulator: RecordSimulator | None = None
+        self.kick_rates: tuple[float, ...] = (0.0,)
+        self.kick_weights: tuple[float, ...] = (1.0,)
         self.points, self.left_out = self._experiments()
         if not self.points:
             raise NoExperiment("experiments", "none measurable", "speeds and laws at which a decay shows a weave")
@@ -331,11 +337,19 @@ class _Planner(_Models):
 
     # -- templates (records) ------------------------------------------------------------------------
     def _templates(self, experiments: list[Experiment]) -> tuple[dict[Experiment, RecordFit], list[dict]]:
-        """A fitted template decay per experiment (module docstring); those that fail, with the reason."""
+        """A fitted template decay per experiment (module docstring); those that fail, with the reason.
+
+        Records that log no steer: each experiment's noise-free templates from the initial steer rates of
+        :func:`~bikerider.gap.plan.decays.kick_steer_rates` (the simulator's records ``m K + k``, ``K`` of them
+        per experiment), the first the noisy template's own; an experiment is kept when that one is comparable
+        with models (a kick's steer rate bends the record fit more, in the truth's runs alike: the rivals predict
+        what the fit finds)."""
 
         d = self.diagnosis
         used = [d.records[k].record for k in d.record_rows]
         nominal = EffectModel(self.problem.nominal, self.problem.geometry)
+        self.kick_rates, self.kick_weights = kick_steer_rates(used)
+        K = len(self.kick_rates)
         records, clean = template_records(nominal, used, experiments, self.laws, self.sample_noise)
         fits = fit_templates(nominal, records)
         left = [{"experiment": e.describe(), "reason": f.reason} for e, f in zip(experiments, fits) if not f.used]
@@ -347,18 +361,43 @@ class _Planner(_Models):
         # the rivals predict the noise-free template (the noisy one's fit gives the acceptance and the
         # standard errors): a prediction is then a smooth function of the experiment, not of a noise draw
         smooth = [RecordFit(replace(f.record, signals=c), f.estimate, f.fits) for _, f, c in kept]
+        if K > 1:  # every experiment's templates from the other initial steer rates, after its own
+            _, others = template_records(
+                nominal,
+                used,
+                [e for e, _, _ in kept for _ in self.kick_rates[1:]],
+                self.laws,
+                self.sample_noise,
+                [r for _ in kept for r in self.kick_rates[1:]],
+            )
+            smooth = [
+                item
+                for j, (_, f, _) in enumerate(kept)
+                for item in [smooth[j]]
+                + [
+                    RecordFit(replace(f.record, signals=c), f.estimate, f.fits)
+                    for c in others[j * (K - 1) : (j + 1) * (K - 1)]
+                ]
+            ]
+            matched = np.repeat(matched, K)
         simulator = RecordSimulator(smooth, self.problem.nominal, self.problem.geometry)
         _, reasons = comparable(simulator.settle(), matched)
         out = {}
         keep = []
-        for j, ((e, f, _), why) in enumerate(zip(kept, reasons)):
+        for j, (e, f, _) in enumerate(kept):
+            why = reasons[j * K]  # the data's own state's template (the others bend as the truth's runs would)
             if why is None:
                 out[e] = f
                 keep.append(j)
             else:
                 left.append({"experiment": e.describe(), "reason": why})
-        self.simulator = simulator.subset(keep)
+        self.simulator = simulator.subset(self._rows_of(keep))
         return out, left
+
+    def _rows_of(self, points) -> list[int]:
+        """The simulator's templates of experiments ``points`` (each experiment's ``K``, in turn)."""
+        K = len(self.kick_rates)
+        return [m * K + k for m in points for k in range(K)]
 
     # -- predictions --------------------------------------------------------------------------------
     def _predict(self) -> None:
@@ -387,7 +426,7 @@ class _Planner(_Models):
         def task(job):
             k, X = job
             if k >= 0:
-                return self._predict_rival(self.rivals[k], X)
+                return self._predict_rival(self.rivals[k], X, nodes=True)
             stage = DifferencedStage(
                 "nominal parameters",
                 lambda v: _split(self._predict_linear((), np.zeros((np.size(next(iter(v.values()))), 0)), v, base)),
@@ -402,12 +441,18 @@ class _Planner(_Models):
         order = sorted(range(len(jobs)), key=lambda j: -(0 if jobs[j][1] is None else len(jobs[j][1])))
         done = dict(zip(order, map_forked(task, [jobs[j] for j in order])))
         results = [done[j] for j in range(len(jobs))]
+        w = np.asarray(self.kick_weights, float)
+        spread = np.zeros((len(self.rivals), n, 2, 2))
         for k, rival in enumerate(self.rivals):
             first = next(j for j, job in enumerate(jobs) if job[0] == k)
-            self.mean[k] = results[first][0]
+            nodes = results[first][0]  # (n, K): the prediction from each initial steer rate
+            self.mean[k] = nodes @ w
+            dev = nodes - self.mean[k][:, None]
+            dev = np.stack([dev.real, dev.imag])  # (2, n, K)
+            spread[k] = np.einsum("ank,k,bnk->nab", dev, w, dev)
             if k in secants:
                 width, cov, start = secants[k]
-                pred = np.concatenate([results[j] for j in range(start, len(jobs)) if jobs[j][0] == k])
+                pred = np.concatenate([results[j] for j in range(start, len(jobs)) if jobs[j][0] == k]) @ w
                 J = secant_slopes(_split(pred), width).reshape(2, n, -1)  # per unit of each value
                 self.own_cov[k] = np.einsum("anj,jk,bnk->nab", J, cov, J)
                 self.own_factor[k] = np.einsum("anj,jk->nak", J, _root(cov))  # own_cov = F F^T, across experiments
@@ -418,6 +463,7 @@ class _Planner(_Models):
             for m, e in enumerate(self.points):
                 self.model_cov[m] = cov[index[(e.speed, e.law)]]
         self.data_cov = self._data_noise()
+        self.kick_cov = spread
 
     def _drop_unpredicted(self) -> None:
         """Leave out experiments where a rival's response shows no weave the record fit finds."""
@@ -429,6 +475,8 @@ class _Planner(_Models):
             grows = [r.name for k, r in enumerate(self.rivals) if self.mean[k, m].real >= 0]
             if missing:
                 why = f"the response of {', '.join(missing)} shows no weave the record fit finds"
+                if len(self.kick_rates) > 1:
+                    why += " (from one of the kick's initial steer rates, or more)"
             elif grows:
                 why = (
                     f"the weave of {', '.join(grows)} grows there: no free decay to record (the bicycle falls "
@@ -455,8 +503,9 @@ class _Planner(_Models):
         self.mean, self.own_cov = self.mean[:, keep], self.own_cov[:, keep]
         self.own_factor = [f[keep] for f in self.own_factor]
         self.model_cov, self.data_cov = self.model_cov[keep], self.data_cov[keep]
+        self.kick_cov = self.kick_cov[:, keep]
         if self.records:
-            self.simulator = self.simulator.subset(keep)
+            self.simulator = self.simulator.subset(self._rows_of(keep))
 
     def _reference_points(self) -> list[Experiment]:
         """One experiment per speed and law (the roll-rate, standard-push one where there is one)."""
@@ -468,35 +517,42 @@ class _Planner(_Models):
                 out[key] = e
         return list(out.values())
 
-    def _predict_rival(self, rival: Rival, X: np.ndarray) -> np.ndarray:
-        """Predicted eigenvalue ``(P, n_points)`` of a rival for fitted-value vectors ``X (P, p)``."""
+    def _predict_rival(self, rival: Rival, X: np.ndarray, nodes: bool = False) -> np.ndarray:
+        """Predicted eigenvalue ``(P, n_points)`` of a rival for fitted-value vectors ``X (P, p)``; with ``nodes``,
+        ``(P, n_points, K)``: from each template's initial steer rate (:meth:`_templates`), not yet averaged."""
         if rival.nonlinear:
-            return self.simulator.apparent_time_domain(Layout.of(rival.effects), X)
-        return self._predict_linear(rival.effects, X, None, self.points)
+            res = self.simulator.apparent_time_domain(Layout.of(rival.effects), X)
+            res = res.reshape(res.shape[0], len(self.points), len(self.kick_rates))
+            return res if nodes else res @ np.asarray(self.kick_weights, float)
+        return self._predict_linear(rival.effects, X, None, self.points, nodes)
 
-    def _predict_linear(self, effects, X, values=None, points=None) -> np.ndarray:
+    def _predict_linear(self, effects, X, values=None, points=None, nodes: bool = False) -> np.ndarray:
         """Predicted eigenvalue ``(P, len(points))`` of linear effects at fitted values ``X``, or of the
         nominal model with benchmark values ``values`` (a batch); with records, what the record fit finds
-        in the model's response over each template."""
+        in the model's response over each template (the mean over its initial steer rates; with ``nodes``
+        each, ``(P, len(points), K)``)."""
         p = self.problem
         values, config, scale, P = self._configured(effects, X, values)
+        K = len(self.kick_rates)
         if self.records:
             # a linear model's response is proportional to its push, and the record fit finds the same
-            # eigenvalue in it at any size: one template per speed, law and signal
+            # eigenvalue in it at any size: one template per speed, law, signal and initial steer rate
             where = {e: m for m, e in enumerate(self.points)}
             keys = [(e.speed, e.law, e.signal) for e in points]
             unique = {key: where[e] for key, e in zip(keys, points)}
             index = list(unique.values())
-            sub = self.simulator.subset(index) if len(index) != len(self.points) else self.simulator
-            res = np.broadcast_to(sub.apparent(values, config, scale), (P, len(index)))
+            sub = self.simulator.subset(self._rows_of(index)) if len(index) != len(self.points) else self.simulator
+            res = np.broadcast_to(sub.apparent(values, config, scale), (P, len(index) * K)).reshape(P, len(index), K)
             column = {key: j for j, key in enumerate(unique)}
-            return res[:, [column[key] for key in keys]].copy()
+            res = res[:, [column[key] for key in keys]].copy()
+            return res if nodes else res @ np.asarray(self.kick_weights, float)
         rows = self._rows(points)
 
         predictor = Predictor(rows, _no_canonical(), p.nominal, p.geometry)
         with np.errstate(all="ignore"):
             out = predictor.eigenvalues(EffectModel(values, p.geometry, config))
-        return np.broadcast_to(out, (P, len(points))).copy()
+        out = np.broadcast_to(out, (P, len(points))).copy()
+        return out[..., None] if nodes else out
 
     def _rows(self, points: list[Experiment]):
         return planned_rows(points, self.laws, self._speed_measured() if self.records else None)
@@ -801,6 +857,12 @@ class NextExperiment(_Models):
     sweep_settle, sweep_roll : ndarray, optional
         ``(sweeps,)`` each multisine run's settling time [s] (:func:`~bikerider.gap.plan.sweeps.settle_time`) and
         ``(rivals, sweeps)`` the largest lean each rival predicts for it [rad] (:func:`~bikerider.gap.plan.sweeps.peak_roll`).
+    kick_cov : ndarray, optional
+        ``(rivals, points, 2, 2)``: per run, the spread of each rival's prediction over the kick's initial steer
+        rate where the records do not log it (``kick_rates``; zero otherwise), added to one run's noise.
+    kick_rates : tuple of float
+        The templates' initial steer rates as multiples of their roll rate
+        (:func:`~bikerider.gap.plan.decays.kick_steer_rates`).
     combined : dict, optional
         Runs spread over several experiments (:func:`~bikerider.gap.plan.discrimination.combine`): the greedy
         allocation of up to :data:`MAX_REPEATS` runs and its resolution probability; ``None`` without factors.
@@ -846,6 +908,8 @@ class NextExperiment(_Models):
     own_factor: tuple[np.ndarray, ...] | None = None
     sweep_factor: tuple[np.ndarray, ...] | None = None
     combined: dict | None = None
+    kick_cov: np.ndarray | None = None
+    kick_rates: tuple[float, ...] = (0.0,)
 
     @property
     def experiments(self) -> list[Experiment | Sweep]:
@@ -908,6 +972,12 @@ class NextExperiment(_Models):
                 "note": (
                     "per decay: the template fit's standard errors plus the data's run-to-run scatter (per speed of "
                     "the data, linear between them)"
+                    + (
+                        "; the records log no steer: each rival's spread over the kick's initial steer rate "
+                        f"(up to {max(self.kick_rates) / KICK_NODES[-1]:g} times the roll rate either way) per run"
+                        if len(self.kick_rates) > 1
+                        else ""
+                    )
                     if self.records
                     else "per decay: the data's standard uncertainty (per measured speed, linear between them)"
                 ),
@@ -936,6 +1006,12 @@ class NextExperiment(_Models):
                                 float(math.sqrt(self.own_cov[k, m, 0, 0])),
                                 float(math.sqrt(self.own_cov[k, m, 1, 1])),
                             ],
+                            "kick_sigma": [
+                                float(math.sqrt(self.kick_cov[k, m, 0, 0])),
+                                float(math.sqrt(self.kick_cov[k, m, 1, 1])),
+                            ]
+                            if self.kick_cov is not None
+                            else None,
                         }
                         for k, r in enumerate(self.rivals)
                     },
@@ -1121,6 +1197,8 @@ def plan_next(
         sweep_factor=tuple(b.sweep_factor),
         sweep_settle=b.sweep_settle,
         sweep_roll=b.sweep_roll,
+        kick_cov=b.kick_cov,
+        kick_rates=tuple(b.kick_rates),
     )
     try:
         combined = combine(unranked)

@@ -34,12 +34,15 @@ NEXT_CRITERION = "jensen_renyi"
 def observations(plan) -> list[tuple[list[int], np.ndarray, np.ndarray, np.ndarray]]:
     """The rivals' predictive distributions of one run, per group of experiments with observations of one
     size (the decays; the multisines): the experiments' indices in ``plan.experiments``, the means
-    ``(R, n, m)``, the rivals' own covariances ``(R, n, m, m)`` and one run's noise ``(n, m, m)``."""
+    ``(R, n, m)``, the rivals' own covariances ``(R, n, m, m)`` (a decay's with the rival's spread over the
+    kick's initial steer rate) and one run's noise ``(n, m, m)``."""
     out = []
     n_points = len(plan.points)
     if n_points:
         means = np.stack([plan.mean.real, np.abs(plan.mean.imag)], axis=-1)
-        out.append((list(range(n_points)), means, plan.own_cov, plan.data_cov + plan.model_cov))
+        # a rival's spread over the kick's unknown initial steer rate is its own, per run (kick_cov)
+        own = plan.own_cov if plan.kick_cov is None else plan.own_cov + plan.kick_cov
+        out.append((list(range(n_points)), means, own, plan.data_cov + plan.model_cov))
     if plan.sweeps:
         index = list(range(n_points, n_points + len(plan.sweeps)))
         out.append((index, split(plan.sweep_mean), plan.sweep_own, plan.sweep_data + plan.sweep_model))
