@@ -1130,7 +1130,10 @@ def _records_lines(n_max: int) -> list[str]:
         "nine runs near one speed in three sessions, `RECORD_NARROW`: the steer friction fitted in time has",
         "standard errors from the jackknife over three or more sessions, which sees the scatter between sessions;",
         "this study was run when two sessions gave it none, and the fallback for fewer than three, the fit's own",
-        "covariance, does not see that scatter). The friction truths' candidate",
+        "covariance, does not see that scatter). The study ran before the friction fit's chord steps on the",
+        "records' initial states were safeguarded (`gap.inference.timedomain.STATE_STEPS`, issue 21), when",
+        "the friction candidate's fits split Coulomb friction into too little Coulomb and some viscous part where",
+        "the friction holds the steer; it was not run again. The friction truths' candidate",
         "is `steer_friction` (viscous and Coulomb, fitted in time), nonlinear, so the plan (`NextExperiment`,",
         "roll-rate decays) plans each decay at "
         + ", ".join(f"{x:g}" for x in PUSHES)
