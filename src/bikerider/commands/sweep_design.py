@@ -210,7 +210,10 @@ def run_design(args: argparse.Namespace) -> int:
     if args.workers is not None and args.dask != "local":
         raise InputError("--workers", args.workers, "--dask without an address (a local cluster)")
     stages = Stages(args.quiet)
+    store = None
     try:
+        # the lock is kept until the store has been read back: a run started meanwhile with --restart would
+        # otherwise remove its files under the summary (CI: KeyError 'upper' in one of three runs at once)
         store = design.explore(
             space,
             args.store,
@@ -223,6 +226,7 @@ def run_design(args: argparse.Namespace) -> int:
             quiet=args.quiet,
             scheduler=args.dask,
             workers=args.workers,
+            keep_lock=True,
         )
         closest = None
         if args.target_weave_speed is not None:
@@ -240,24 +244,27 @@ def run_design(args: argparse.Namespace) -> int:
         distributions = speed_distributions(store) if sample else None  # a sample: the speeds' distribution
         if args.plot and distributions is not None:
             _distribution_plot(args, distributions, f"{name}: {space.size:,} designs", stages)
+        if args.store is None:
+            text = _rows_text(args, store, closest, distributions)
+        else:
+            if args.json:
+                out = {"store": str(args.store), "base": name, "kind": space.kind, **summary.as_dict()}
+                if distributions is not None:
+                    out["distribution"] = {k: d.as_dict() for k, d in distributions.items()}
+                if args.target_weave_speed is not None:
+                    out["closest_to_weave_speed"] = _closest_dict(closest, degree_names(args.vary))
+                out["notes"] = notes.shown_with()
+                text = json.dumps(out, indent=2, allow_nan=False) + "\n"
+            else:
+                text = _summary_text(store, summary, closest, args.target_weave_speed, degree_names(args.vary))
+                if distributions is not None:
+                    text += "\n" + "".join(d.text() + "\n" for d in distributions.values())
     except KeyboardInterrupt:
         stages.interrupted(args.store, space)
         raise
-    if args.store is None:
-        text = _rows_text(args, store, closest, distributions)
-    else:
-        if args.json:
-            out = {"store": str(args.store), "base": name, "kind": space.kind, **summary.as_dict()}
-            if distributions is not None:
-                out["distribution"] = {k: d.as_dict() for k, d in distributions.items()}
-            if args.target_weave_speed is not None:
-                out["closest_to_weave_speed"] = _closest_dict(closest, degree_names(args.vary))
-            out["notes"] = notes.shown_with()
-            text = json.dumps(out, indent=2, allow_nan=False) + "\n"
-        else:
-            text = _summary_text(store, summary, closest, args.target_weave_speed, degree_names(args.vary))
-            if distributions is not None:
-                text += "\n" + "".join(d.text() + "\n" for d in distributions.values())
+    finally:
+        if store is not None:
+            store.close()
     if args.out:
         atomic_write_text(args.out, text)
         stages.note(f"wrote {args.out}")

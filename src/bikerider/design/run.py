@@ -66,6 +66,7 @@ def explore(
     quiet: bool = True,
     scheduler=None,
     workers: int | None = None,
+    keep_lock: bool = False,
 ) -> DesignStore:
     """Evaluate every design of ``space`` into a store.
 
@@ -96,6 +97,9 @@ def explore(
         (``tcp://host:8786``) (:func:`bikerider.design.distributed.run_on_dask`).
     workers : int, optional
         Workers of the local cluster (default: one per core).
+    keep_lock : bool
+        Keep the store's lock after the run, for reading it back (a summary) before another run may open
+        it with ``--restart`` and remove its files; the caller then releases it (``DesignStore.close``).
 
     Returns
     -------
@@ -119,7 +123,8 @@ def explore(
     else:
         _run_local(result, pending, engine, threads, progress)
     progress.close()
-    result.close()  # the run is done: its lock goes (a failed run's goes with the store object)
+    if not keep_lock:
+        result.close()  # the run is done: its lock goes (a failed run's goes with the store object)
     return result
 
 
