@@ -987,12 +987,19 @@ def _before_lines(stored: list[dict], names: list[str], n_max: int) -> list[str]
     ]
     for n in names:
         a, b = now[n], then[n]
-        cells = [f"{a[k]} / {b[k]}" for k in ("n", "resolved", "wrong", "undecided", "unbreakable")]
-        cells += [f"{_fmt(a['median_p90'][j], n_max)} / {_fmt(b['median_p90'][j], n_max)}" for j in (0, 1)]
+        cells = _merit_pair_cells(a, b, ("n", "resolved", "wrong", "undecided", "unbreakable"), n_max)
         cells.append(f"{a['lost']} / {a['spent']} ({b['lost']} / {b['spent']})")
         out.append(f"| {n} | " + " | ".join(cells) + " |")
     out.append("")
     return out
+
+
+def _merit_pair_cells(a: dict, b: dict, keys: tuple[str, ...], n_max: int) -> list[str]:
+    """Table cells ``a / b`` of two figures of merit (:func:`_merit`): the counts ``keys``, then the runs
+    needed, median and 90th percentile."""
+    cells = [f"{a[k]} / {b[k]}" for k in keys]
+    cells += [f"{_fmt(a['median_p90'][j], n_max)} / {_fmt(b['median_p90'][j], n_max)}" for j in (0, 1)]
+    return cells
 
 
 def _seed_lines(seed: int) -> list[str]:
@@ -1488,13 +1495,12 @@ def report(args) -> int:
         ]
         for n in names:
             a, v = main[n], variant[n]
-            lines.append(
-                f"| {n} | {a['resolved']} / {v['resolved']} | {a['wrong']} / {v['wrong']} | {a['undecided']} / "
-                f"{v['undecided']} | {a['unbreakable']} / {v['unbreakable']} | {_fmt(a['median_p90'][0], n_max)} / "
-                f"{_fmt(v['median_p90'][0], n_max)} | {_fmt(a['median_p90'][1], n_max)} / "
-                f"{_fmt(v['median_p90'][1], n_max)} | {a['resolved'] / max(a['resolved'] + a['wrong'], 1):.0%} / "
-                f"{v['resolved'] / max(v['resolved'] + v['wrong'], 1):.0%} |"
+            cells = _merit_pair_cells(a, v, ("resolved", "wrong", "undecided", "unbreakable"), n_max)
+            cells.append(
+                f"{a['resolved'] / max(a['resolved'] + a['wrong'], 1):.0%} / "
+                f"{v['resolved'] / max(v['resolved'] + v['wrong'], 1):.0%}"
             )
+            lines.append(f"| {n} | " + " | ".join(cells) + " |")
         if best:
             lines += [
                 "",
