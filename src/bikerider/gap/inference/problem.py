@@ -356,6 +356,41 @@ class GapProblem:
             out[:, j] = (up - down) / (f_up - f_down) if f_up != f_down else np.nan
         return out
 
+    def parameter_jacobian_at(
+        self, lay: _Layout, x: np.ndarray, indirect: bool = True, columns: np.ndarray | None = None
+    ) -> np.ndarray:
+        """Slopes ``(n_obs, n_free)`` of the predictions at fitted values ``x`` per standard uncertainty
+        of each free benchmark parameter.
+
+        :attr:`jacobian` holds them at the nominal model, without any effect; an effect that moves the
+        bicycle far from it (a steer inertia of the steer assembly's own size) changes how each
+        parameter moves the predictions, and an interval taken with the nominal slopes then misses the
+        parameters' share.  A secant from the fit to one sigma above it (one-sided: half the simulations
+        of :meth:`_parameter_jacobian`'s secant over +-1 sigma), on the fit's own prediction path
+        (``indirect``).  Only the parameters ``columns`` (indices into
+        :attr:`free`; all when None) are taken at the fit, the others keep their nominal slopes; so does
+        a parameter whose shifted model cannot be evaluated (the record fit finds no weave in its
+        response).
+        """
+        out = np.array(self.jacobian, dtype=float)
+        cols = np.arange(len(self.free)) if columns is None else np.asarray(columns, dtype=int)
+        n = cols.size
+        if not n:
+            return out
+        full = self.layout(tuple(lay.effects) + (PARAMETERS,))
+        x = np.asarray(x, dtype=float).ravel()
+        rows = np.zeros((1 + n, x.size + len(self.free)))
+        rows[:, : x.size] = x
+        rows[1 + np.arange(n), x.size + cols] = 1.0
+        pred = self.predict_batch(full, rows, indirect=indirect)
+        slopes = (pred[1:] - pred[0]).T
+        good = np.all(np.isfinite(slopes), axis=0)
+        out[:, cols[good]] = slopes[:, good]
+        if not np.all(good):  # a shifted model the fit's path cannot evaluate: its nominal slopes, said
+            names = [self.free[k] for k in cols[~good]]
+            LOG.info("%s: no slope at the fit in %s; their nominal slopes taken", lay.effects, names)
+        return out
+
     def _values_batch(self, shifts: np.ndarray) -> dict[str, object]:
         """Benchmark values with shifts ``(P, n_free)`` (SI) applied, shaped ``(P, 1)``."""
         values: dict[str, object] = dict(self.nominal)
