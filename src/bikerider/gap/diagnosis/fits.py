@@ -208,7 +208,7 @@ class Fits:
             centred = folds - folds.mean(axis=0)
             spread = (g - 1) / g * centred.T @ centred
             # the benchmark parameters' error is common to every fold, so the folds' spread cannot show
-            # it: it is counted apart, as the fit's response to one standard uncertainty of each
+            # it: it is counted apart, as the fit's move over their error (its bounds respected)
             covariance = spread + self.parameter_covariance(layout, values)
             stderr = np.sqrt(np.diag(covariance))
             quantile = np.array([interval_quantile(row, covariance, spread, g) for row in np.eye(values.size)])

@@ -595,7 +595,8 @@ def parameter_share(
     it: calibration seed 1081 (Coulomb friction 0.199 N m, viscous 0, fitted 0.187 N m and 0), one
     standard uncertainty of the steer assembly's centre ``xH`` moves the refit ``T_coulomb`` by -0.0070
     N m, where the free ``G`` says -0.0007 N m and -0.0085 N m s/rad of viscous friction that the bound
-    forbids; over the calibration's 200 trials, mostly on that bound, the intervals held the truth in 78 %.
+    forbids.  Over the calibration's 200 friction trials (128 of them fitted on that bound) the intervals
+    held the truth in 157 with ``G G^T``, every miss low, and in 190 with this share (the same fits).
     The share is the mean square of ``d(z) - d(0)`` over :data:`PARAMETER_DRAWS` draws, computed as
     ``G G^T`` plus the draws' mean of ``(d - d0)(d - d0)^T - (G z)(G z)^T`` (zero where no draw meets a
     bound, so it is then exactly ``G G^T``).
