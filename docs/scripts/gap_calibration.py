@@ -16,6 +16,13 @@ stops it keeping every finished trial; the report is written from the file.  Run
     nohup nice -n 10 .venv/bin/python docs/scripts/gap_calibration.py --trials 200 --compare-rounds 10 \
         --max-minutes 0 > calibration_run.log 2>&1 &
     .venv/bin/python docs/scripts/gap_calibration.py --report-only   # the doc from the stored trials
+
+``--effects`` reruns some effects' trials alone (the same seeds as the whole study) into a separate file
+and prints their coverage instead of writing the document, e.g. the friction trials after a change to
+the friction fit::
+
+    nice -n 10 .venv/bin/python docs/scripts/gap_calibration.py --fresh --effects steer_friction_records \
+        --trials 200 --workers 1 --max-minutes 0 --results /tmp/friction.jsonl
 """
 
 from __future__ import annotations
@@ -52,13 +59,23 @@ def _models():
     }
 
 
-def jobs(trials: int, friction_every: int, compare_rounds: int, seed0: int) -> list[tuple[str, int, str]]:
+def effect_names() -> list[str]:
+    """Every effect of the study by the name its trials are stored under."""
+    from validation import cases as V
+
+    return [e.name for e in V.CALIBRATION_EFFECTS] + [V.CALIBRATION_FRICTION.name]
+
+
+def jobs(
+    trials: int, friction_every: int, compare_rounds: int, seed0: int, effects: list[str] | None = None
+) -> list[tuple[str, int, str]]:
     """Every trial of the study in the order it is run: ``(effect, seed, method)``.
 
     Rounds go round the effects in turn (a run stopped early stays balanced, within a round); a
     friction-from-records trial every ``friction_every`` rounds; in the first ``compare_rounds`` rounds each
     table effect also with the method before issue 21 (``tables``: the eigenvalues fitted from the same
-    runs), for the before/after comparison on the same seeds.
+    runs), for the before/after comparison on the same seeds.  ``effects`` keeps only those effects'
+    trials (the same seeds as in the whole study).
     """
     from validation import cases as V
 
@@ -70,7 +87,7 @@ def jobs(trials: int, friction_every: int, compare_rounds: int, seed0: int) -> l
             out.append((V.CALIBRATION_FRICTION.name, seed, "records"))
         if k < compare_rounds:
             out += [(e.name, seed, "tables") for e in V.CALIBRATION_EFFECTS]
-    return out
+    return out if effects is None else [j for j in out if j[0] in effects]
 
 
 _MODELS = None
@@ -119,6 +136,7 @@ def run(
     seed0: int,
     workers: int = 2,
     compare_rounds: int = 0,
+    effects: list[str] | None = None,
 ) -> int:
     """Run the study's trials not yet in ``out`` (resumable), ``workers`` at a time; each trial's result is
     appended to ``out`` by this process as soon as it finishes.  Stops starting trials after
@@ -126,7 +144,7 @@ def run(
     from gap_calibration_report import load  # the report beside this script
 
     done_keys = {_key(t) for t in load(out)}
-    todo = [j for j in jobs(trials, friction_every, compare_rounds, seed0) if j not in done_keys]
+    todo = [j for j in jobs(trials, friction_every, compare_rounds, seed0, effects) if j not in done_keys]
     total = len(todo)
     print(f"{total} trials to run ({len(done_keys)} already in {out.name}), {workers} at a time", file=sys.stderr)
     start = time.perf_counter()
@@ -201,9 +219,22 @@ def main(argv: list[str] | None = None) -> int:
         default=0,
         help="rounds whose table trials also run with the method before issue 21 (eigenvalue tables)",
     )
+    parser.add_argument(
+        "--effects",
+        help="run only these effects' trials (comma-separated names as stored, e.g. steer_friction_records; "
+        "the same seeds as the whole study) and print their coverage instead of writing the doc",
+    )
     parser.add_argument("--report-only", action="store_true", help="write the doc from the stored trials")
     parser.add_argument("--doc", type=Path, default=DOC, help="the document whose part 4 is written")
     args = parser.parse_args(argv)
+    effects = None
+    if args.effects:
+        effects = [e.strip() for e in args.effects.split(",") if e.strip()]
+        unknown = [e for e in effects if e not in effect_names()]
+        if unknown or not effects:
+            parser.error(f"--effects {args.effects!r}: unknown {unknown}; the study's effects are {effect_names()}")
+        if args.results == RESULTS:
+            parser.error("--effects writes a part of the study: give it its own --results file")
     if not args.report_only:
         if args.fresh and args.results.exists():
             args.results.unlink()
@@ -216,13 +247,46 @@ def main(argv: list[str] | None = None) -> int:
             args.seed,
             args.workers,
             args.compare_rounds,
+            effects,
         )
         minutes = (time.perf_counter() - start) / 60
         print(f"trials done in {minutes:.1f} min", file=sys.stderr)
     from gap_calibration_report import write_report  # the report beside this script
 
+    if effects is not None:
+        print_summary(args.results, effects)
+        return 0
     write_report(args.results, args.doc, args.trials)
     return 0
+
+
+def print_summary(results: Path, effects: list[str]) -> None:
+    """Each fitted size's coverage of its 95 % interval, its errors over their stated standard error
+    (``z = (fit - truth) / (half-width / 1.96)``) and its median relative error, for ``effects``' trials."""
+    import numpy as np
+    from gap_calibration_report import load
+
+    trials = [t for t in load(results) if t["effect"] in effects]
+    sizes = sorted({(t["effect"], n) for t in trials for n in t["fitted"] if n in t["reference"]})
+    print("effect size trials coverage z_mean z_rms low_misses high_misses median_error")
+    for effect, name in sizes:
+        rows = [
+            (t["reference"][name], t["fitted"][name])
+            for t in trials
+            if t["effect"] == effect and name in t["fitted"] and t["reference"].get(name) is not None
+        ]
+        truth = np.array([r[0] for r in rows])
+        value = np.array([r[1]["value"] for r in rows])
+        low, high = np.array([r[1]["ci95"] for r in rows]).T
+        inside = (low <= truth) & (truth <= high)
+        half = (high - low) / 2
+        z = np.where(half > 0, (value - truth) / np.where(half > 0, half / 1.96, 1.0), np.nan)
+        rel = np.where(truth != 0, (value - truth) / np.where(truth != 0, np.abs(truth), 1.0), np.nan)
+        print(
+            f"{effect} {name} {len(rows)} {inside.sum()}/{len(rows)} ({100 * inside.mean():.0f} %) "
+            f"{np.nanmean(z):+.2f} {np.sqrt(np.nanmean(z**2)):.2f} {int(np.sum(truth > high))} "
+            f"{int(np.sum(truth < low))} {np.nanmedian(rel) * 100 if np.isfinite(rel).any() else float('nan'):+.1f}%"
+        )
 
 
 if __name__ == "__main__":

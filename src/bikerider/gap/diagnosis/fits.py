@@ -28,7 +28,7 @@ from bikerider.gap.candidates.effects import EFFECTS, PARAMETERS, STEER_FRICTION
 from bikerider.gap.diagnosis.statistics import _named_values, gap_shrink, interval_quantile, rms
 from bikerider.gap.inference.frequency_response import predict_frf_friction
 from bikerider.gap.inference.problem import MINIMUM_STARTS, EffectFit, GapProblem, scale_and_quantile
-from bikerider.gap.inference.timedomain import Layout, fit_covariance, fit_time_domain, parameter_sensitivity
+from bikerider.gap.inference.timedomain import Layout, fit_covariance, fit_time_domain, parameter_share
 from bikerider.gap.measured.multisine import MultisineFit
 from bikerider.gap.measured.records import RecordFit
 
@@ -208,7 +208,7 @@ class Fits:
             centred = folds - folds.mean(axis=0)
             spread = (g - 1) / g * centred.T @ centred
             # the benchmark parameters' error is common to every fold, so the folds' spread cannot show
-            # it: it is counted apart, as the fit's response to one standard uncertainty of each
+            # it: it is counted apart, as the fit's move over their error (its bounds respected)
             covariance = spread + self.parameter_covariance(layout, values)
             stderr = np.sqrt(np.diag(covariance))
             quantile = np.array([interval_quantile(row, covariance, spread, g) for row in np.eye(values.size)])
@@ -253,16 +253,18 @@ class Fits:
         return out
 
     def parameter_covariance(self, layout: Layout, values: np.ndarray) -> np.ndarray:
-        """Covariance of a time-domain fit's values from the benchmark parameters' uncertainty, ``G G^T``
-        with ``G`` the fit's response to one standard uncertainty of each parameter
-        (:func:`bikerider.gap.inference.timedomain.parameter_sensitivity`); zero without free parameters."""
+        """Covariance of a time-domain fit's values from the benchmark parameters' uncertainty: the mean
+        square of the fit's move over their error, the fit's bounds respected (``G G^T`` where no bound is
+        met, ``G`` the fit's response to one standard uncertainty of each parameter;
+        :func:`bikerider.gap.inference.timedomain.parameter_share`); zero without free parameters."""
         p = self.problem
         if not p.free:
             return np.zeros((values.size, values.size))
         records = [self.records[k].record for k in self.record_indices(None)]
         sigmas = dict(zip(p.free, (float(s) for s in p.free_sigma)))
-        G = parameter_sensitivity(records, p.nominal, p.geometry, layout, values, sigmas)
-        return G @ G.T if np.all(np.isfinite(G)) else np.zeros((values.size, values.size))
+        share = parameter_share(records, p.nominal, p.geometry, layout, values, sigmas)
+        C = share.covariance
+        return C if np.all(np.isfinite(C)) else np.zeros((values.size, values.size))
 
     def time_domain_predict(self, fit: EffectFit, mask: np.ndarray) -> np.ndarray:
         """Predicted observations of the records in ``mask`` under a time-domain fit: what the record fit
