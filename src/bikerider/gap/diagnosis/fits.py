@@ -517,7 +517,8 @@ def _sandwich(
         order = np.argsort(-share, kind="stable")
         total = float(np.sum(share))
         count = int(np.searchsorted(np.cumsum(share[order]), (1 - PARAMETER_TAIL) * total)) + 1 if total > 0 else 0
-        Jp = p.parameter_jacobian_at(lay, x, indirect=bool(records), columns=np.sort(order[:count])) / w[:, None]
+        if count:
+            Jp = p.parameter_jacobian_at(lay, x, indirect=bool(records), columns=np.sort(order[:count])) / w[:, None]
     AC = A.T * (p.var_data / p.var_total)
     meat = AC @ A + (A.T @ Jp) @ (Jp.T @ A)
     if geometric:  # the rider geometry's uncertainty: its slopes at these values, per sigma
