@@ -471,9 +471,12 @@ class _Planner(_Models):
                 self.mean[k], self.form_cov[k] = self._over_corners(self.mean[k], others, corners[1])
             if k in secants:
                 width, cov, start = secants[k]
-                pred = np.concatenate(
-                    [results[j] for j in range(start, len(jobs)) if jobs[j][0] == k and jobs[j][2] is None]
-                ) @ w
+                pred = (
+                    np.concatenate(
+                        [results[j] for j in range(start, len(jobs)) if jobs[j][0] == k and jobs[j][2] is None]
+                    )
+                    @ w
+                )
                 J = secant_slopes(_split(pred), width).reshape(2, n, -1)  # per unit of each value
                 self.own_cov[k] = np.einsum("anj,jk,bnk->nab", J, cov, J)
                 self.own_factor[k] = np.einsum("anj,jk->nak", J, _root(cov))  # own_cov = F F^T, across experiments
