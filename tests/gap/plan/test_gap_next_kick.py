@@ -127,3 +127,37 @@ def test_a_friction_rivals_prediction_widens_with_the_unknown_kick_and_a_linear_
     own_new = spanned.own_cov[friction, m_new] + spanned.kick_cov[friction, m_new]
     own_old = known.own_cov[friction, m_old]
     assert np.median(own_new[:, 1, 1] / own_old[:, 1, 1]) > 1.0
+
+
+@pytest.mark.slow
+def test_a_friction_rivals_decays_carry_the_corner_of_its_friction_law_at_a_push(roll_rate_only, monkeypatch):
+    spanned = _plan(roll_rate_only)
+    with monkeypatch.context() as m:  # the same data, the friction law's corner taken as the fits' own
+        m.setattr(ranking, "smoothing_nodes", lambda: ((decays.SMOOTHING,), (1.0,)))
+        fixed = _plan(roll_rate_only)
+    assert np.all(fixed.form_cov == 0)
+    friction, slip = (spanned.rivals.index(next(r for r in spanned.rivals if r.name == n)) for n in RIVALS)
+    common = [e for e in spanned.points if e in fixed.points]
+    m_new = [spanned.points.index(e) for e in common]
+    m_old = [fixed.points.index(e) for e in common]
+    pushed = np.array([e.push != 1.0 for e in common])
+    form = spanned.form_cov[friction, m_new]
+    # the data's push: the fit meets the data at any corner, so no spread and the same prediction
+    assert np.all(np.abs(form[~pushed]) < 1e-20)  # rounding of the weighted mean
+    assert spanned.mean[friction, m_new][~pushed] == pytest.approx(fixed.mean[friction, m_old][~pushed], abs=1e-12)
+    # another push: the corner moves the decay, and the rival's own variance there grows by that spread
+    assert np.all(form[pushed][:, 1, 1] > 0) and np.median(np.sqrt(form[pushed][:, 1, 1])) > 0.01
+    own = spanned.own_cov[friction, m_new] - form
+    assert own == pytest.approx(fixed.own_cov[friction, m_old], rel=1e-6, abs=1e-12)
+    # a linear rival has no friction law
+    assert np.all(spanned.form_cov[slip] == 0)
+    # the prediction stays continuous in speed: the corners' spread moves little between the plan's two speeds
+    # against its own size (a jagged prediction would jump by more than the spread itself)
+    for e in common:
+        if e.push == 1.0 or e.speed != SPEEDS[0]:
+            continue
+        other = next((x for x in common if (x.law, x.push, x.signal) == (e.law, e.push, e.signal) and x != e), None)
+        if other is None:
+            continue
+        a, b = (np.sqrt(spanned.form_cov[friction, spanned.points.index(x), 1, 1]) for x in (e, other))
+        assert abs(a - b) < 2 * max(a, b) + 0.05
