@@ -98,9 +98,8 @@ def test_a_friction_rivals_prediction_widens_with_the_unknown_kick_and_a_linear_
     # the friction rival's variance of a run at half the push grows beyond its fitted values' own (by how much
     # depends on the fit: median 1.09 here, 1.3 before the friction fit's chord steps were safeguarded)
     half = [spanned.points.index(e) for e in common if e.push == 0.5]
-    grown = (spanned.own_cov[friction, half] + kick["steer_friction"][half])[:, 1, 1] / spanned.own_cov[
-        friction, half, 1, 1
-    ]
+    fitted = spanned.own_cov[friction, half] - spanned.form_cov[friction, half]  # its friction law's corner apart
+    grown = (fitted + kick["steer_friction"][half])[:, 1, 1] / fitted[:, 1, 1]
     assert np.all(grown >= 1) and np.median(grown) > 1.05
     # a linear rival's decay does not depend on the push (its response scales with it): its prediction and its
     # spread over the kick the same at every push of one speed and law
@@ -123,9 +122,10 @@ def test_a_friction_rivals_prediction_widens_with_the_unknown_kick_and_a_linear_
             spanned.kick_cov[true, m_new],
         )
         assert sep[0, side, m_new] == pytest.approx(with_kick, rel=1e-9)
-    # and the friction rival's variance at a push grows against the plan that took the steer rate as known
-    own_new = spanned.own_cov[friction, m_new] + spanned.kick_cov[friction, m_new]
-    own_old = known.own_cov[friction, m_old]
+    # and the friction rival's variance at a push grows against the plan that took the steer rate as known (the
+    # kick's part alone: each plan's spread over its friction law's corner, form_cov, left out of both)
+    own_new = spanned.own_cov[friction, m_new] - spanned.form_cov[friction, m_new] + spanned.kick_cov[friction, m_new]
+    own_old = known.own_cov[friction, m_old] - known.form_cov[friction, m_old]
     assert np.median(own_new[:, 1, 1] / own_old[:, 1, 1]) > 1.0
 
 
