@@ -131,10 +131,15 @@ def test_a_friction_rivals_prediction_widens_with_the_unknown_kick_and_a_linear_
 
 @pytest.mark.slow
 def test_a_friction_rivals_decays_carry_the_corner_of_its_friction_law_at_a_push(roll_rate_only, monkeypatch):
-    spanned = _plan(roll_rate_only)
+    grid = np.linspace(3.5, 4.5, 11)  # a fine grid: the spread must not jump from one speed to the next
+
+    def plan():
+        return ranking.plan_next(roll_rate_only, rivals=RIVALS, speeds=grid, signals=["roll_rate"], sweeps=False)
+
+    spanned = plan()
     with monkeypatch.context() as m:  # the same data, the friction law's corner taken as the fits' own
         m.setattr(ranking, "smoothing_nodes", lambda: ((decays.SMOOTHING,), (1.0,)))
-        fixed = _plan(roll_rate_only)
+        fixed = plan()
     assert np.all(fixed.form_cov == 0)
     friction, slip = (spanned.rivals.index(next(r for r in spanned.rivals if r.name == n)) for n in RIVALS)
     common = [e for e in spanned.points if e in fixed.points]
@@ -151,13 +156,17 @@ def test_a_friction_rivals_decays_carry_the_corner_of_its_friction_law_at_a_push
     assert own == pytest.approx(fixed.own_cov[friction, m_old], rel=1e-6, abs=1e-12)
     # a linear rival has no friction law
     assert np.all(spanned.form_cov[slip] == 0)
-    # the prediction stays continuous in speed: the corners' spread moves little between the plan's two speeds
-    # against its own size (a jagged prediction would jump by more than the spread itself)
-    for e in common:
-        if e.push == 1.0 or e.speed != SPEEDS[0]:
-            continue
-        other = next((x for x in common if (x.law, x.push, x.signal) == (e.law, e.push, e.signal) and x != e), None)
-        if other is None:
-            continue
-        a, b = (np.sqrt(spanned.form_cov[friction, spanned.points.index(x), 1, 1]) for x in (e, other))
-        assert abs(a - b) < 2 * max(a, b) + 0.05
+    # the spread is continuous in speed: between neighbouring speeds (0.1 m/s) it steps by less than 0.1 rad/s of
+    # the frequency (0.07 on a 0.05 m/s grid when this was written, against spreads up to 0.17 at half the push)
+    checked = 0
+    for law in spanned.laws:
+        for push in (0.5, 2.0):
+            m = [k for k, e in enumerate(spanned.points) if (e.law, e.push) == (law, push)]
+            v = np.array([spanned.points[k].speed for k in m])
+            if v.size < 5:
+                continue
+            sd = np.sqrt(spanned.form_cov[friction, m, 1, 1])
+            neighbours = np.diff(v) < 1.5 * (grid[1] - grid[0])
+            assert np.abs(np.diff(sd))[neighbours].max() < 0.1, (law, push, sd)
+            checked += 1
+    assert checked >= 4
