@@ -353,7 +353,8 @@ def from_plan(plan: NextExperiment, k: int) -> LinearRival:
     factor ``F`` (``own_cov = F F^T``) the slopes.  A nonlinear rival's multisines carry the friction law's form
     (``sweep_form``, part of the plan's ``sweep_own``) as a covariance no run shrinks, added to every run's; its
     decays the spread over the kick's unknown initial steer rate (``kick_cov``), added to every run's too (each
-    run has a kick of its own).
+    run has a kick of its own), and a friction rival's spread over the corner of its friction law (``form_cov``,
+    part of the plan's ``own_cov``), as the multisines' form.
 
     The predictions are the plan's own, not recomputed: the records' templates and indirect inference live
     in the plan (:class:`bikerider.gap.plan.ranking.NextExperiment`), as the table loop's eigenvalues live in the
@@ -368,6 +369,9 @@ def from_plan(plan: NextExperiment, k: int) -> LinearRival:
         z = complex(plan.mean[k, m])
         F = np.array(plan.own_factor[k][m], float).reshape(2, q)
         kick = None if plan.kick_cov is None else np.array(plan.kick_cov[k, m], float)
+        form = getattr(plan, "form_cov", None)
+        if form is not None:  # the friction law's corner: in own_cov, not in the secants' factor F
+            kick = np.array(form[k, m], float) if kick is None else kick + form[k, m]
         if z.imag < 0:  # the loop reads the frequency as |imag| (as the table loop)
             F[1] = -F[1]
             kick = None if kick is None else kick * flip

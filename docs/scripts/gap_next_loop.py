@@ -144,6 +144,8 @@ def push_check(args) -> int:
     if args.no_kick:
         ranking.kick_steer_rates = lambda records: ((0.0,), (1.0,))
         path = RECORDS_PUSH_NO_KICK
+    if args.out:
+        path = Path(args.out)
     index = {s.label: k for k, s in enumerate(L.RECORD_SCENARIOS)}
     done = {(c["scenario"], c["seed"]) for c in _stored(path)}
     todo = [(c["scenario"], c["seed"]) for c in _stored(RECORDS) if c.get("strategies")]
@@ -1667,6 +1669,7 @@ def main() -> int:
     pc.add_argument(
         "--no-kick", action="store_true", help="the control: templates from the data's steer state alone (own file)"
     )
+    pc.add_argument("--out", help="write to this JSON lines file instead of the stored one (a subset, a trial)")
     sub.add_parser("report", help="write part 5 of docs/gap_validation.md and the figure")
     args = parser.parse_args()
     commands = {"run": run, "check": check, "rerun": rerun, "records": records, "push-check": push_check}

@@ -180,9 +180,11 @@ def test_records_mode_plans_pushes_and_the_loop_runs_them():
     flip = np.array([[1.0, -1.0], [-1.0, 1.0]])
     for k, r in enumerate(lin):
         for m in range(len(plan.points)):
-            expected = plan.kick_cov[k, m] * (flip if plan.mean[k, m].imag < 0 else 1.0)
+            # and a friction rival's spread over its friction law's corner (form_cov, zero for the linear rival)
+            expected = (plan.kick_cov[k, m] + plan.form_cov[k, m]) * (flip if plan.mean[k, m].imag < 0 else 1.0)
             assert r.extra[m] == pytest.approx(expected, rel=1e-12, abs=1e-300)
     assert np.all(np.trace(plan.kick_cov, axis1=2, axis2=3) > 0)
+    assert np.all(plan.form_cov[[r.nonlinear for r in plan.rivals].index(False)] == 0)
     assert case["first_is_next_run"] is True
     assert case["first"]["text"] == plan.next_run["text"]
     assert case["table_first"] is not None and case["table_first"]["push"] in (None, 1.0)  # tables: no push

@@ -98,9 +98,8 @@ def test_a_friction_rivals_prediction_widens_with_the_unknown_kick_and_a_linear_
     # the friction rival's variance of a run at half the push grows beyond its fitted values' own (by how much
     # depends on the fit: median 1.09 here, 1.3 before the friction fit's chord steps were safeguarded)
     half = [spanned.points.index(e) for e in common if e.push == 0.5]
-    grown = (spanned.own_cov[friction, half] + kick["steer_friction"][half])[:, 1, 1] / spanned.own_cov[
-        friction, half, 1, 1
-    ]
+    fitted = spanned.own_cov[friction, half] - spanned.form_cov[friction, half]  # its friction law's corner apart
+    grown = (fitted + kick["steer_friction"][half])[:, 1, 1] / fitted[:, 1, 1]
     assert np.all(grown >= 1) and np.median(grown) > 1.05
     # a linear rival's decay does not depend on the push (its response scales with it): its prediction and its
     # spread over the kick the same at every push of one speed and law
@@ -123,7 +122,51 @@ def test_a_friction_rivals_prediction_widens_with_the_unknown_kick_and_a_linear_
             spanned.kick_cov[true, m_new],
         )
         assert sep[0, side, m_new] == pytest.approx(with_kick, rel=1e-9)
-    # and the friction rival's variance at a push grows against the plan that took the steer rate as known
-    own_new = spanned.own_cov[friction, m_new] + spanned.kick_cov[friction, m_new]
-    own_old = known.own_cov[friction, m_old]
+    # and the friction rival's variance at a push grows against the plan that took the steer rate as known (the
+    # kick's part alone: each plan's spread over its friction law's corner, form_cov, left out of both)
+    own_new = spanned.own_cov[friction, m_new] - spanned.form_cov[friction, m_new] + spanned.kick_cov[friction, m_new]
+    own_old = known.own_cov[friction, m_old] - known.form_cov[friction, m_old]
     assert np.median(own_new[:, 1, 1] / own_old[:, 1, 1]) > 1.0
+
+
+@pytest.mark.slow
+def test_a_friction_rivals_decays_carry_the_corner_of_its_friction_law_at_a_push(roll_rate_only, monkeypatch):
+    grid = np.linspace(3.5, 4.5, 11)  # a fine grid: the spread must not jump from one speed to the next
+
+    def plan():
+        return ranking.plan_next(roll_rate_only, rivals=RIVALS, speeds=grid, signals=["roll_rate"], sweeps=False)
+
+    spanned = plan()
+    with monkeypatch.context() as m:  # the same data, the friction law's corner taken as the fits' own
+        m.setattr(ranking, "smoothing_nodes", lambda: ((decays.SMOOTHING,), (1.0,)))
+        fixed = plan()
+    assert np.all(fixed.form_cov == 0)
+    friction, slip = (spanned.rivals.index(next(r for r in spanned.rivals if r.name == n)) for n in RIVALS)
+    common = [e for e in spanned.points if e in fixed.points]
+    m_new = [spanned.points.index(e) for e in common]
+    m_old = [fixed.points.index(e) for e in common]
+    pushed = np.array([e.push != 1.0 for e in common])
+    form = spanned.form_cov[friction, m_new]
+    # the data's push: the fit meets the data at any corner, so no spread and the same prediction
+    assert np.all(np.abs(form[~pushed]) < 1e-20)  # rounding of the weighted mean
+    assert spanned.mean[friction, m_new][~pushed] == pytest.approx(fixed.mean[friction, m_old][~pushed], abs=1e-12)
+    # another push: the corner moves the decay, and the rival's own variance there grows by that spread
+    assert np.all(form[pushed][:, 1, 1] > 0) and np.median(np.sqrt(form[pushed][:, 1, 1])) > 0.01
+    own = spanned.own_cov[friction, m_new] - form
+    assert own == pytest.approx(fixed.own_cov[friction, m_old], rel=1e-6, abs=1e-12)
+    # a linear rival has no friction law
+    assert np.all(spanned.form_cov[slip] == 0)
+    # the spread is continuous in speed: between neighbouring speeds (0.1 m/s) it steps by less than 0.1 rad/s of
+    # the frequency (0.07 on a 0.05 m/s grid when this was written, against spreads up to 0.17 at half the push)
+    checked = 0
+    for law in spanned.laws:
+        for push in (0.5, 2.0):
+            m = [k for k, e in enumerate(spanned.points) if (e.law, e.push) == (law, push)]
+            v = np.array([spanned.points[k].speed for k in m])
+            if v.size < 5:
+                continue
+            sd = np.sqrt(spanned.form_cov[friction, m, 1, 1])
+            neighbours = np.diff(v) < 1.5 * (grid[1] - grid[0])
+            assert np.abs(np.diff(sd))[neighbours].max() < 0.1, (law, push, sd)
+            checked += 1
+    assert checked >= 4

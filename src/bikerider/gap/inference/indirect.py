@@ -486,12 +486,13 @@ class RecordSimulator:
                 out[lo:hi, batch.index] = extract(batch, _linear_response(batch, A[lo:hi], outputs))[0]
         return out
 
-    def apparent_time_domain(self, layout, theta) -> np.ndarray:
+    def apparent_time_domain(self, layout, theta, smoothing: float | None = None) -> np.ndarray:
         """Apparent eigenvalue of every record ``(P, R)`` under a time-domain candidate (steer friction).
 
         The response comes from :func:`bikerider.gap.inference.timedomain.friction_states` (each record's
-        initial state refitted under the nonlinear model), the extraction is :func:`extract`, as for
-        every linear model.
+        initial state refitted under the nonlinear model; its friction smoothed by ``smoothing`` [rad/s],
+        the fits' own :data:`~bikerider.gap.inference.timedomain.SMOOTHING` when not given), the extraction is
+        :func:`extract`, as for every linear model.
         """
 
         theta = np.atleast_2d(np.asarray(theta, dtype=float))
@@ -502,7 +503,7 @@ class RecordSimulator:
             y = {batch.signals[m]: np.where(batch.mask, batch.y[..., m], np.nan) for m in state}
             weight = {batch.signals[m]: batch.weight[:, m] for m in state}
             A, b, outputs, T = systems(self.values, self.geometry, records, layout, theta)
-            states, _ = friction_states(Batch(records, batch.dt, batch.length, y, weight), A, b, outputs, T)
+            states, _ = friction_states(Batch(records, batch.dt, batch.length, y, weight), A, b, outputs, T, smoothing)
             sim = states[..., [outputs[OBSERVED[s]] for s in batch.signals]]
             out[:, batch.index] = extract(batch, sim)[0]
         return out

@@ -275,15 +275,26 @@ def simulate_linear(A: np.ndarray, x0: np.ndarray, dt: float, N: int) -> np.ndar
 
 
 def simulate_friction(
-    A: np.ndarray, b: np.ndarray, x0: np.ndarray, T_c, dt: float, N: int, rate_index: int
+    A: np.ndarray,
+    b: np.ndarray,
+    x0: np.ndarray,
+    T_c,
+    dt: float,
+    N: int,
+    rate_index: int,
+    smoothing: float | None = None,
 ) -> np.ndarray:
     """States ``(..., N, n)`` of ``x' = A x + b (-T_c tanh(x[rate] / eps))`` (exponential integrator).
 
-    ``A (..., n, n)``, ``b (..., n)``, ``x0 (..., n)`` and ``T_c`` broadcast together.
+    ``A (..., n, n)``, ``b (..., n)``, ``x0 (..., n)`` and ``T_c`` broadcast together; ``eps`` is
+    ``smoothing`` [rad/s], :data:`SMOOTHING` when not given.
     """
+    eps = SMOOTHING if smoothing is None else float(smoothing)
+    if not eps > 0:
+        raise ValueError(f"the friction's smoothing eps must be positive, got {smoothing!r} rad/s")
     n = A.shape[-1]
     T_max = float(np.max(T_c)) if np.size(T_c) else 0.0
-    stiffness = T_max / SMOOTHING * float(np.max(np.abs(b[..., rate_index]))) if T_max > 0 else 0.0
+    stiffness = T_max / eps * float(np.max(np.abs(b[..., rate_index]))) if T_max > 0 else 0.0
     substeps = max(1, math.ceil(dt / MAX_STEP - 1e-9), math.ceil(dt * stiffness))
     h = dt / substeps
     Phi, Gamma, _ = discretise(A, b[..., None], h, hold="zoh")  # the friction torque held over each step
@@ -312,7 +323,7 @@ def simulate_friction(
         x = out[k]
         for j in range(substeps):
             target = out[k + 1] if j == substeps - 1 else spare[j % 2]
-            np.divide(x[rate_index], SMOOTHING, out=u)
+            np.divide(x[rate_index], eps, out=u)
             np.tanh(u, out=u)
             np.multiply(torque, u, out=u)
             np.multiply(gamma, u, out=push)
@@ -338,9 +349,10 @@ def _residuals(batch: Batch, states: np.ndarray, outputs: tuple[int, ...]) -> tu
 
 
 def friction_states(
-    batch: Batch, A: np.ndarray, b: np.ndarray, outputs: tuple[int, ...], T_c
+    batch: Batch, A: np.ndarray, b: np.ndarray, outputs: tuple[int, ...], T_c, smoothing: float | None = None
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Each record's response to ``A (P, R, n, n)`` plus Coulomb friction ``T_c (P,)`` through ``b``.
+    """Each record's response to ``A (P, R, n, n)`` plus Coulomb friction ``T_c (P,)`` through ``b``
+    (smoothed by ``smoothing``, :data:`SMOOTHING` when not given: :func:`simulate_friction`).
 
     The initial states are fitted to the records: linear least squares for the linear part, then
     :data:`STATE_STEPS` chord steps on the nonlinear response, each kept only where it lowers the record's
@@ -361,7 +373,7 @@ def friction_states(
     # the friction holds the steer those slopes are far from the nonlinear response's and a full step can
     # overshoot (records of the SBW logs: the state moved by its own size at every step), so a step is kept
     # only where it lowers the record's residual, and halved for that record where it did not
-    states = simulate_friction(A, b, x0, T, batch.dt, batch.N, rate)
+    states = simulate_friction(A, b, x0, T, batch.dt, batch.N, rate, smoothing)
     res, _ = _residuals(batch, states, outputs)
     cost = np.sum(res**2, axis=(-2, -1))
     scale = np.ones_like(cost)
@@ -371,7 +383,7 @@ def friction_states(
         if not np.any((np.max(np.abs(step), axis=-1) / size > STATE_TOLERANCE) & (scale >= 1 / 16)):
             break
         trial = x0 + step
-        trial_states = simulate_friction(A, b, trial, T, batch.dt, batch.N, rate)
+        trial_states = simulate_friction(A, b, trial, T, batch.dt, batch.N, rate, smoothing)
         trial_res, _ = _residuals(batch, trial_states, outputs)
         trial_cost = np.sum(trial_res**2, axis=(-2, -1))
         better = trial_cost < cost

@@ -68,6 +68,13 @@ def kick_noise(plan, true: int) -> np.ndarray | float:
     return 0.0 if kick is None else kick[true]
 
 
+def form_noise(plan, true: int) -> np.ndarray | float:
+    """A friction rival's spread over the corner of its friction law with rival ``true`` true, ``(n, 2, 2)``
+    (the plan's ``form_cov``, part of its ``own_cov``; systematic; 0 for a plan without it)."""
+    form = getattr(plan, "form_cov", None)
+    return 0.0 if form is None else form[true]
+
+
 def distance(delta, own, noise, misfit: float, repeats: float, kick=0.0) -> np.ndarray:
     """``d`` per experiment: ``delta (n, m)`` the rivals' difference, ``own (n, m, m)`` the true rival's own
     covariance, ``noise (n, m, m)`` one run's (data plus parameters), ``misfit`` the true rival's, ``kick``
@@ -219,7 +226,7 @@ def combine(plan, budget: int = MAX_REPEATS, target: float = 0.95) -> dict | Non
                         plan.own_factor[true],
                         plan.own_factor[other],
                         noise + kick_noise(plan, true),
-                        misfit * noise,
+                        misfit * noise + form_noise(plan, true),
                     )
                 )
             if len(plan.sweeps):

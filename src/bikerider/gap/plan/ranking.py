@@ -39,6 +39,10 @@ With records that log no steer, the kick's unknown initial steer rate: each riva
 over templates from three steer rates (:func:`~bikerider.gap.plan.decays.kick_steer_rates`) and their spread
 ``K_T`` a per-run variance of rival ``T``'s prediction (``kick_cov``), added to ``D + V`` wherever rival ``T``
 is true.
+A friction rival's decays likewise over the corner of its friction law, which the data do not decide: the
+mean over its friction smoothed at three ``eps`` (:func:`~bikerider.gap.plan.decays.smoothing_nodes`), each
+taken as a move from the decay at the data's push, and their spread ``F_T`` (``form_cov``) part of its own
+uncertainty ``C_T`` (systematic: every run of one bicycle has the same friction law).
 A rival that misses held-out data by more than the uncertainties (held-out RMS error ``e`` above one)
 would miss new data alike: its misfit ``(e^2 - 1) (D + V)`` is added, systematic.  ``n`` decays' mean
 then has, with rival ``T`` true, the covariance ``S_T = C_T + (e_T^2 - 1)^+ (D + V) + (D + V + K_T) / n``.
@@ -78,13 +82,20 @@ from bikerider.gap.blas_threads import single_blas_thread
 from bikerider.gap.candidates.effect_model import EffectModel
 from bikerider.gap.inference.indirect import RecordSimulator, comparable
 from bikerider.gap.inference.predict import Predictor
-from bikerider.gap.inference.timedomain import Layout, systems
+from bikerider.gap.inference.timedomain import SMOOTHING, Layout, systems
 from bikerider.gap.measured.control import NO_CONTROL, ControlLaw
 from bikerider.gap.measured.records import SIGNALS, RecordFit, eigenvalues_of
 from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
 from bikerider.gap.parallel import map_forked, workers
 from bikerider.gap.plan import sequential
-from bikerider.gap.plan.decays import KICK_NODES, Experiment, fit_templates, kick_steer_rates, template_records
+from bikerider.gap.plan.decays import (
+    KICK_NODES,
+    Experiment,
+    fit_templates,
+    kick_steer_rates,
+    smoothing_nodes,
+    template_records,
+)
 from bikerider.gap.plan.discrimination import (  # noqa: F401  (ODDS, MAX_REPEATS, resolution_probability: the plan's face)
     DEFAULT_REPEATS,
     MAX_REPEATS,
@@ -411,22 +422,26 @@ class _Planner(_Models):
         # independent pieces, one per core: each rival's prediction at its fit and at its secants' points
         # (a linear rival's points in chunks: each point's prediction is its own), and the nominal
         # parameters' uncertainty as the diagnosis carries it
-        jobs: list[tuple[int, np.ndarray | None]] = []
+        # a friction rival's decays also at the other corners of its friction law (smoothing_nodes), at its fit
+        jobs: list[tuple[int, np.ndarray | None, float | None]] = []
         secants = {}
+        corners = self._corners()
         for k, rival in enumerate(self.rivals):
-            jobs.append((k, rival.fit.values[None, :]))
+            jobs.append((k, rival.fit.values[None, :], None))
             if rival.fit.names:
                 X, width, cov = secant_points(rival.fit)
                 secants[k] = (width, cov, len(jobs))
                 size = len(X) if rival.nonlinear else max(4, -(-len(X) // (2 * workers())))
-                jobs += [(k, X[lo : lo + size]) for lo in range(0, len(X), size)]
+                jobs += [(k, X[lo : lo + size], None) for lo in range(0, len(X), size)]
+            if rival.nonlinear and self.records:
+                jobs += [(k, rival.fit.values[None, :], eps) for eps in corners[0][1:]]
         if p.free:
-            jobs.append((-1, None))
+            jobs.append((-1, None, None))
 
         def task(job):
-            k, X = job
+            k, X, eps = job
             if k >= 0:
-                return self._predict_rival(self.rivals[k], X, nodes=True)
+                return self._predict_rival(self.rivals[k], X, nodes=True, smoothing=eps)
             stage = DifferencedStage(
                 "nominal parameters",
                 lambda v: _split(self._predict_linear((), np.zeros((np.size(next(iter(v.values()))), 0)), v, base)),
@@ -443,6 +458,7 @@ class _Planner(_Models):
         results = [done[j] for j in range(len(jobs))]
         w = np.asarray(self.kick_weights, float)
         spread = np.zeros((len(self.rivals), n, 2, 2))
+        self.form_cov = np.zeros((len(self.rivals), n, 2, 2))
         for k, rival in enumerate(self.rivals):
             first = next(j for j, job in enumerate(jobs) if job[0] == k)
             nodes = results[first][0]  # (n, K): the prediction from each initial steer rate
@@ -450,12 +466,22 @@ class _Planner(_Models):
             dev = nodes - self.mean[k][:, None]
             dev = np.stack([dev.real, dev.imag])  # (2, n, K)
             spread[k] = np.einsum("ank,k,bnk->nab", dev, w, dev)
+            others = [results[j][0] @ w for j, job in enumerate(jobs) if job[0] == k and job[2] is not None]
+            if others:
+                self.mean[k], self.form_cov[k] = self._over_corners(self.mean[k], others, corners[1])
             if k in secants:
                 width, cov, start = secants[k]
-                pred = np.concatenate([results[j] for j in range(start, len(jobs)) if jobs[j][0] == k]) @ w
+                pred = (
+                    np.concatenate(
+                        [results[j] for j in range(start, len(jobs)) if jobs[j][0] == k and jobs[j][2] is None]
+                    )
+                    @ w
+                )
                 J = secant_slopes(_split(pred), width).reshape(2, n, -1)  # per unit of each value
                 self.own_cov[k] = np.einsum("anj,jk,bnk->nab", J, cov, J)
                 self.own_factor[k] = np.einsum("anj,jk->nak", J, _root(cov))  # own_cov = F F^T, across experiments
+        # the friction law's corner, which no run of the same bicycle averages away: the rival's own uncertainty
+        self.own_cov += self.form_cov
         self.model_cov = np.zeros((n, 2, 2))
         if p.free:
             cov = results[-1]
@@ -464,6 +490,28 @@ class _Planner(_Models):
                 self.model_cov[m] = cov[index[(e.speed, e.law)]]
         self.data_cov = self._data_noise()
         self.kick_cov = spread
+
+    def _corners(self) -> tuple[tuple[float, ...], tuple[float, ...]]:
+        """The friction smoothings a friction rival's decays are predicted at, and their weights
+        (:func:`~bikerider.gap.plan.decays.smoothing_nodes`; the fits' own alone for tables)."""
+        return smoothing_nodes() if self.records else ((SMOOTHING,), (1.0,))
+
+    def _over_corners(self, own: np.ndarray, others: list[np.ndarray], weights) -> tuple[np.ndarray, np.ndarray]:
+        """A friction rival's decays ``(n,)`` over the corners of its friction law: ``own`` at the fits' smoothing,
+        ``others`` at the other :meth:`_corners`.  Each corner's prediction is taken as a move from the decay at
+        the data's push of the same speed, law and signal (where the plan holds one): the rival's values were
+        fitted at the data's push, where a fit at any corner meets the data alike, so the corner moves what a
+        push changes, not the level.  Returns the weighted mean and covariance ``(n, 2, 2)``."""
+        where = {(e.speed, e.law, e.signal): m for m, e in enumerate(self.points) if e.push == 1.0}
+        anchor = np.array([where.get((e.speed, e.law, e.signal), -1) for e in self.points])
+        have = anchor >= 0  # elsewhere the corner's own prediction
+        anchor = np.where(have, anchor, 0)
+        nodes = np.stack([own] + [np.where(have, o - o[anchor] + own[anchor], o) for o in others], axis=-1)  # (n, E)
+        w = np.asarray(weights, float)
+        mean = nodes @ w
+        dev = nodes - mean[:, None]
+        dev = np.stack([dev.real, dev.imag])  # (2, n, E)
+        return mean, np.einsum("ane,e,bne->nab", dev, w, dev)
 
     def _drop_unpredicted(self) -> None:
         """Leave out experiments where a rival's response shows no weave the record fit finds."""
@@ -477,6 +525,8 @@ class _Planner(_Models):
                 why = f"the response of {', '.join(missing)} shows no weave the record fit finds"
                 if len(self.kick_rates) > 1:
                     why += " (from one of the kick's initial steer rates, or more)"
+                elif self.records and any(self.rivals[k].nonlinear for k in range(len(self.rivals))):
+                    why += " (at the fits' friction law, or one of its other corners)"
             elif grows:
                 why = (
                     f"the weave of {', '.join(grows)} grows there: no free decay to record (the bicycle falls "
@@ -504,6 +554,7 @@ class _Planner(_Models):
         self.own_factor = [f[keep] for f in self.own_factor]
         self.model_cov, self.data_cov = self.model_cov[keep], self.data_cov[keep]
         self.kick_cov = self.kick_cov[:, keep]
+        self.form_cov = self.form_cov[:, keep]
         if self.records:
             self.simulator = self.simulator.subset(self._rows_of(keep))
 
@@ -517,11 +568,14 @@ class _Planner(_Models):
                 out[key] = e
         return list(out.values())
 
-    def _predict_rival(self, rival: Rival, X: np.ndarray, nodes: bool = False) -> np.ndarray:
+    def _predict_rival(
+        self, rival: Rival, X: np.ndarray, nodes: bool = False, smoothing: float | None = None
+    ) -> np.ndarray:
         """Predicted eigenvalue ``(P, n_points)`` of a rival for fitted-value vectors ``X (P, p)``; with ``nodes``,
-        ``(P, n_points, K)``: from each template's initial steer rate (:meth:`_templates`), not yet averaged."""
+        ``(P, n_points, K)``: from each template's initial steer rate (:meth:`_templates`), not yet averaged.
+        ``smoothing``: a friction rival's friction smoothed so (the fits' own when not given)."""
         if rival.nonlinear:
-            res = self.simulator.apparent_time_domain(Layout.of(rival.effects), X)
+            res = self.simulator.apparent_time_domain(Layout.of(rival.effects), X, smoothing)
             res = res.reshape(res.shape[0], len(self.points), len(self.kick_rates))
             return res if nodes else res @ np.asarray(self.kick_weights, float)
         return self._predict_linear(rival.effects, X, None, self.points, nodes)
@@ -849,7 +903,7 @@ class NextExperiment(_Models):
     plan : tuple of dict
         Every experiment, best first (:func:`~bikerider.gap.plan.discrimination.rank`).
     own_factor, sweep_factor : tuple of ndarray, optional
-        Per rival ``(points, 2, q)`` and ``(sweeps, 2K, q)``: its own uncertainty's factor ``F`` (``own_cov = F F^T``;
+        Per rival ``(points, 2, q)`` and ``(sweeps, 2K, q)``: its own uncertainty's factor ``F`` (``own_cov = F F^T + form_cov``;
         one set of fitted values for every experiment, so the covariance across experiments too).
     next_run : dict, optional
         The next single run (:func:`~bikerider.gap.plan.sequential.next_run`): where the Jensen-Renyi divergence
@@ -863,6 +917,10 @@ class NextExperiment(_Models):
     kick_rates : tuple of float
         The templates' initial steer rates as multiples of their roll rate
         (:func:`~bikerider.gap.plan.decays.kick_steer_rates`).
+    form_cov : ndarray, optional
+        ``(rivals, points, 2, 2)``: a friction rival's spread over the corner of its friction law
+        (:func:`~bikerider.gap.plan.decays.smoothing_nodes`; zero for the others and for tables), part of
+        ``own_cov`` (systematic: runs of one bicycle share it).
     combined : dict, optional
         Runs spread over several experiments (:func:`~bikerider.gap.plan.discrimination.combine`): the greedy
         allocation of up to :data:`MAX_REPEATS` runs and its resolution probability; ``None`` without factors.
@@ -910,6 +968,7 @@ class NextExperiment(_Models):
     combined: dict | None = None
     kick_cov: np.ndarray | None = None
     kick_rates: tuple[float, ...] = (0.0,)
+    form_cov: np.ndarray | None = None
 
     @property
     def experiments(self) -> list[Experiment | Sweep]:
@@ -1011,6 +1070,12 @@ class NextExperiment(_Models):
                                 float(math.sqrt(self.kick_cov[k, m, 1, 1])),
                             ]
                             if self.kick_cov is not None
+                            else None,
+                            "form_sigma": [
+                                float(math.sqrt(self.form_cov[k, m, 0, 0])),
+                                float(math.sqrt(self.form_cov[k, m, 1, 1])),
+                            ]
+                            if self.form_cov is not None
                             else None,
                         }
                         for k, r in enumerate(self.rivals)
@@ -1199,6 +1264,7 @@ def plan_next(
         sweep_roll=b.sweep_roll,
         kick_cov=b.kick_cov,
         kick_rates=tuple(b.kick_rates),
+        form_cov=b.form_cov,
     )
     try:
         combined = combine(unranked)
