@@ -525,11 +525,10 @@ def parameter_sensitivity(
     standard uncertainty of each parameter in ``sigmas`` (one-sided differences of that size: the
     parameters' error is a standard uncertainty, and the fit's response over it is what counts).  The
     error is common to every record, so no spread among the records or folds shows it.  Where a fitted
-    value lies on a bound the fit does not move as this says: :func:`parameter_share`.
+    value lies on a bound the fit does not move as this says: :func:`parameter_share`, which computes it
+    (its ``sensitivity``) beside the bounded share the diagnosis uses.
     """
-    theta = np.asarray(theta, dtype=float)
-    _, J, Jq = _parameter_slopes(records, values, geometry, layout, theta, sigmas)
-    return -np.linalg.pinv(J.T @ J) @ (J.T @ Jq)
+    return parameter_share(records, values, geometry, layout, theta, sigmas).sensitivity
 
 
 PARAMETER_DRAWS = 4096
