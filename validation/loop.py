@@ -68,7 +68,7 @@ from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
 from bikerider.gap.plan import allocation as A
 from bikerider.gap.plan import criteria as C
 from bikerider.gap.plan.ranking import ASSUMED_NOISE, NextExperiment, NoExperiment, plan_next, planned_rows
-from bikerider.gap.plan.sweeps import line_amplitude, response, settle_time, split
+from bikerider.gap.plan.sweeps import line_amplitude, response, split
 from validation.cases import CONTROL, CalibrationEffect, Protocol, Session, TruthSimulator, draw_truth, measure
 
 N_MAX = 20
@@ -400,8 +400,6 @@ class TruthRuns:
         self.record_fits: dict[tuple[int, int], object] = {}  # with records, each decay's RecordFit
         self.seconds = {"decay": 0.0, "sweep": 0.0}
         self.count = {"decay": 0, "sweep": 0}
-        nominal = EffectModel(plan.problem.nominal, plan.problem.geometry)
-        self._nominal = nominal
 
     def get(self, e: int, k: int):
         key = (e, k)
@@ -441,9 +439,9 @@ class TruthRuns:
                 m = e - len(plan.points)
                 s = plan.sweeps[m]
                 gains = plan.laws[s.law](s.speed)
-                ev = self._nominal.eigenvalues([s.speed], np.asarray(gains)[None, :])[0]
-                settle = settle_time(ev)  # three time constants of the slowest mode, 5-20 s (as the plan's)
-                H = multisine_run(self.simulator, s.speed, gains, s, rng, settle)
+                # the plan's settling time: until the slowest transient of the nominal loop and of every rival's
+                # has died (sweeps.settle_time)
+                H = multisine_run(self.simulator, s.speed, gains, s, rng, float(plan.sweep_settle[m]))
                 R = plan.sweep_data[m] if self.shared else plan.sweep_data[m] + plan.sweep_model[m]
                 out = None if H is None else (split(H), R)
                 kind = "sweep"

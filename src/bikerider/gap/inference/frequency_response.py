@@ -10,9 +10,10 @@ whose loop has a growing mode has no steady state; its prediction is still ``H(w
 periodic response would be), and the diagnosis leaves out records where the nominal model's loop
 grows (:func:`unstable_records`).
 
-Steer Coulomb friction is replaced by its random-input describing function at the record's own
-torque (:func:`bikerider.gap.plan.sweeps.linearised_friction`, as the plan predicts it); the
-harmonics friction makes are in the record's residual, and so in its standard errors.
+A model with steer Coulomb friction is not linear: its prediction is the record's run simulated in
+time at the recorded instants and read by the same DFT (:func:`predict_frf_friction`, as the plan
+predicts a planned run: :func:`bikerider.gap.plan.sweeps.simulated_response`); the random-input
+describing function it replaced is kept for comparison (:func:`predict_frf_describing`).
 """
 
 from __future__ import annotations
@@ -191,8 +192,7 @@ def simulate_torque(A: np.ndarray, b: np.ndarray, friction: float, outputs, fit)
 def predict_frf_describing(
     frf: FrequencyResponseData, fits: list, nominal: dict, geometry, layout, theta
 ) -> np.ndarray:
-    """What :func:`predict_frf_friction` replaced, kept for comparison (the plan predicts a planned
-    multisine so): the Coulomb friction replaced by its random-input describing function
+    """What :func:`predict_frf_friction` replaced, kept for comparison: the Coulomb friction replaced by its random-input describing function
     (:func:`describing_function_loop`) at the record's torque, the amplitude the root mean square of its
     lines' measured amplitudes; ``(2 R,)`` as :func:`predict_frf`."""
     out = np.full(2 * len(frf), np.nan)
@@ -224,8 +224,7 @@ def describing_function_loop(
     random-input describing function gives (Booton 1954): ``c s = sqrt(2 / pi) friction`` with ``s`` the
     steer rate's standard deviation under the multisine's lines ``omegas`` of ``amplitude`` each,
     ``s^2 = sum_k amplitude^2 |H_rate(w_k)|^2 / 2`` of the loop with ``c`` itself (``c s`` grows with
-    ``c``: bisection on ``log c``; :data:`STICK` where the torque cannot move the steer).  The plan
-    predicts a planned multisine the same way (:mod:`bikerider.gap.plan.sweeps`)."""
+    ``c``: bisection on ``log c``; :data:`STICK` where the torque cannot move the steer)."""
     if friction <= 0:
         return A
     e = np.zeros(A.shape[0])

@@ -131,8 +131,6 @@ from bikerider.gap.plan.sweeps import (
     RECORD,
     RUN_TIME_RANGE,
     Sweep,
-    line_amplitude,
-    linearised_friction,
     lines_for,
     noise_covariance,
     peak_roll,
@@ -195,7 +193,8 @@ class _Models:
     def _sweep_systems(self, effects, X, values=None, nonlinear=False, speeds=None):
         """Closed loops ``A (P, s, n, n)``, steer-torque columns ``b (P, s, n)`` and output states of every
         sweep for a rival's fitted-value vectors ``X (P, p)`` (or the nominal model with benchmark values
-        ``values``, a batch); friction linearised at each sweep's torque."""
+        ``values``, a batch); with ``nonlinear``, a friction rival's loop without its Coulomb friction (its runs
+        are simulated in time: :meth:`_Planner._sweep_simulated`)."""
 
         p = self.problem
         sweeps = self.sweeps
@@ -207,10 +206,7 @@ class _Models:
                 run_stand_in(Sweep(v, s.law, s.output, s.torque, s.run_time, s.lines), g, measured)
                 for v, s, g in zip(speeds, sweeps, gains)
             ]
-            A, b, outputs, friction = systems(p.nominal, p.geometry, runs, Layout.of(tuple(effects)), np.atleast_2d(X))
-            omegas = np.array([s.omegas for s in sweeps])
-            amplitude = np.array([line_amplitude(s.lines, s.torque, s.run_time) for s in sweeps])
-            A = linearised_friction(A, b, friction[:, None], outputs[3], omegas[None], amplitude[None, :])
+            A, b, outputs, _ = systems(p.nominal, p.geometry, runs, Layout.of(tuple(effects)), np.atleast_2d(X))
             return A, b, outputs
         values, config, scale, P = self._configured(effects, X, values)
         if scale is None or not measured:
@@ -685,10 +681,11 @@ class _Planner(_Models):
             return self._sweep_simulated(rival.effects, X)
         return self._sweep_response(*self._sweep_systems(rival.effects, X))
 
-    def _sweep_simulated(self, effects, X, stick: bool = False) -> np.ndarray:
+    def _sweep_simulated(self, effects, X, stick: bool = False, roll: bool = False):
         """Each sweep's frequency response ``(P, s, K)`` for a nonlinear rival's fitted-value vectors ``X (P, p)``:
         its runs simulated in time with the steer's Coulomb friction and read by the DFT
-        (:func:`bikerider.gap.plan.sweeps.simulated_response`; one run per speed and law serves both outputs)."""
+        (:func:`bikerider.gap.plan.sweeps.simulated_response`; one run per speed and law serves both outputs).
+        With ``roll``, also each run's largest lean ``(P, s)`` [rad]."""
         p = self.problem
         first: dict[tuple[float, str], int] = {}
         for m, x in enumerate(self.sweeps):
@@ -697,11 +694,14 @@ class _Planner(_Models):
         measured = self._speed_measured()
         stand_ins = [run_stand_in(x, self.laws[x.law](x.speed), measured) for x in runs]
         A, b, outputs, friction = systems(p.nominal, p.geometry, stand_ins, Layout.of(tuple(effects)), np.atleast_2d(X))
-        H = simulated_response(A, b, friction, outputs[3], (outputs[2], outputs[1]), runs, stick)  # (P, runs, 2, K)
+        out = simulated_response(
+            A, b, friction, outputs[3], (outputs[2], outputs[1]), runs, stick, outputs[0] if roll else None
+        )
+        H, peak = out if roll else (out, None)  # (P, runs, 2, K), (P, runs)
         column = {key: j for j, key in enumerate(first)}
         pick = [column[(x.speed, x.law)] for x in self.sweeps]
         part = [0 if x.output == "roll_rate" else 1 for x in self.sweeps]
-        return H[:, pick, part]
+        return (H[:, pick, part], peak[:, pick]) if roll else H[:, pick, part]
 
     def _predict_sweeps(self) -> None:
         """Every rival's frequency responses and their uncertainties (module docstring of
@@ -723,22 +723,31 @@ class _Planner(_Models):
         self.sweep_form = np.zeros((R, s, 2 * K, 2 * K))
         self.sweep_factor = [np.zeros((s, 2 * K, 0)) for _ in range(R)]
         unstable = np.zeros(s, bool)
-        # each run's settling time, from the nominal closed loop's slowest mode (sweeps.settle_time)
+        # every rival's loop (a friction rival's without its Coulomb friction, which only takes energy out)
+        loops = [
+            self._sweep_systems(rival.effects, rival.fit.values[None, :], nonlinear=rival.nonlinear)
+            for rival in self.rivals
+        ]
+        # each run settles until the slowest transient of the nominal loop and of every rival's has died
+        # (sweeps.settle_time, SETTLE_RANGE)
         with np.errstate(all="ignore"):
-            nominal_ev = np.linalg.eigvals(self._sweep_systems((), np.zeros((1, 0)))[0][0])
-        self.sweep_settle = np.array([settle_time(ev) for ev in nominal_ev])
+            eigenvalues = [np.linalg.eigvals(self._sweep_systems((), np.zeros((1, 0)))[0][0])]
+            eigenvalues += [np.linalg.eigvals(loop[0][0]) for loop in loops]
+        self.sweep_settle = np.array([max(settle_time(ev[m]) for ev in eigenvalues) for m in range(s)])
         self.sweep_roll = np.zeros((R, s))
         for k, rival in enumerate(self.rivals):
-            fit = rival.fit
-            loop = self._sweep_systems(rival.effects, fit.values[None, :], nonlinear=rival.nonlinear)
-            with np.errstate(all="ignore"):
-                # a mode that grows e-fold within the run (a slow capsize a rider or a catch holds is allowed)
-                unstable |= np.linalg.eigvals(loop[0][0]).real.max(axis=-1) >= 1.0 / self.run_time
-                # how far the run leans: a run whose lean passes MAX_ROLL is likely lost (it falls or is caught)
-                self.sweep_roll[k] = peak_roll(loop[0], loop[1], loop[2][0], self.sweeps, self.sweep_settle)[0]
-            # a nonlinear rival's response from its runs simulated in time (its describing function only
-            # judges whether the loop is stable)
-            self.sweep_mean[k] = self._sweep_rival(rival, fit.values[None, :])[0]
+            fit, loop = rival.fit, loops[k]
+            # a mode that grows e-fold within the run (a slow capsize a rider or a catch holds is allowed)
+            unstable |= np.linalg.eigvals(loop[0][0]).real.max(axis=-1) >= 1.0 / self.run_time
+            # how far the run leans: a run whose lean passes MAX_ROLL is likely lost (it falls or is caught);
+            # a friction rival's response and lean from its runs simulated in time
+            if rival.nonlinear:
+                H, lean = self._sweep_simulated(rival.effects, fit.values[None, :], roll=True)
+                self.sweep_mean[k], self.sweep_roll[k] = H[0], lean[0]
+            else:
+                with np.errstate(all="ignore"):
+                    self.sweep_roll[k] = peak_roll(loop[0], loop[1], loop[2][0], self.sweeps, self.sweep_settle)[0]
+                self.sweep_mean[k] = self._sweep_rival(rival, fit.values[None, :])[0]
             if fit.names:
                 J, cov = secants(fit, lambda X, rival=rival: split(self._sweep_rival(rival, X)).reshape(len(X), -1))
                 J = J.reshape(s, 2 * K, -1)
@@ -811,11 +820,15 @@ class _Planner(_Models):
                 )
             elif leans[m]:
                 k = int(np.argmax(np.nan_to_num(self.sweep_roll[:, m], nan=np.inf)))
+                when = (
+                    "in its run simulated in time"
+                    if self.rivals[k].nonlinear
+                    else f"during its {self.sweep_settle[m]:.0f} s settling time and the recorded period"
+                )
                 why = (
                     f"the run would likely be lost: {self.rivals[k].name} predicts a lean of "
-                    f"{self.sweep_roll[k, m]:.2g} rad during its {self.sweep_settle[m]:.0f} s settling time and the "
-                    f"recorded period (more than {MAX_ROLL:g} rad: the bicycle falls or is caught, and the run "
-                    "teaches nothing); a smaller torque (--next-torque) leans less"
+                    f"{self.sweep_roll[k, m]:.2g} rad {when} (more than {MAX_ROLL:g} rad: the bicycle falls or is "
+                    "caught, and the run teaches nothing); a smaller torque (--next-torque) leans less"
                 )
             else:
                 why = "an uncertainty cannot be evaluated there"
