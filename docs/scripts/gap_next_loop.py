@@ -269,6 +269,7 @@ def rerun(args) -> int:
         if args.strategy not in L.STRATEGIES:
             raise SystemExit(f"--strategy {args.strategy!r}: expected one of {', '.join(L.STRATEGIES)}")
         suffix = "" if args.max_roll is None else f"_max_roll_{args.max_roll:g}"
+        suffix += f"_{args.tag}" if args.tag else ""
         path = ROOT / "docs" / "scripts" / f"gap_next_loop_{args.strategy.replace(':', '_')}{suffix}.jsonl"
     else:
         path = RERUN_ALL if args.all else RERUN
@@ -1664,6 +1665,10 @@ def main() -> int:
         "--max-roll",
         type=float,
         help="with --strategy: the plan's largest lean of a multisine run [rad] (inf: the rule off), to its own file",
+    )
+    rr.add_argument(
+        "--tag",
+        help="with --strategy: appended to the file's name (the same strategy on later code, beside the stored run)",
     )
     rc = sub.add_parser("records", help="the records mode on the friction pairs (pushes among the experiments)")
     rc.add_argument("--ties", type=int, default=40, help="stop after this many ties stored")
