@@ -23,7 +23,9 @@ run, as the plan and the diagnosis count it.  Posterior model probabilities star
 :data:`DECIDED` (*resolved*), when the rival's does (*wrong*), when it has spent :data:`N_MAX` runs
 (*undecided*), or, for the plan, when it declares the tie unbreakable (no allocation of the runs
 left over the experiments, the evidence of their runs adding up, promises a resolution with probability
-:data:`HOPELESS` or more; :func:`best_chance`).
+:data:`HOPELESS` or more; :func:`best_chance`).  The first run that every rival misses beyond chance
+(:data:`NEITHER_P`) is noted (``neither``): a decision after it is between two models the data reject,
+which the diagnosis, run on the new records with every candidate, would say.
 
 One new run per step is simulated by the truth: a decay (a random kick, 6 s, the weave fitted from the
 noisy roll rate) or a multisine (:func:`multisine_run`: a Schroeder multisine of steer torque added to
@@ -59,6 +61,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.integrate import solve_ivp
+from scipy.stats import chi2 as chi2_dist
 
 from bikerider.errors import FitError, InputError
 from bikerider.gap.candidates.effect_model import EffectModel
@@ -79,6 +82,11 @@ HOPELESS = 0.05
 """The plan declares a tie unbreakable when no allocation of the runs left over the experiments (greedy,
 :func:`bikerider.gap.plan.allocation.allocate`) resolves it with at least this probability (the plan's own
 measure, ``Phi(d / 2 - ln(odds) / d)``, with ``d`` of the runs combined)."""
+NEITHER_P = 1e-3
+"""A run whose best rival's chi-square (its own uncertainty and the run's noise, :func:`misfit`) exceeds this
+upper quantile of the chi-square distribution with as many degrees of freedom as the run has numbers is one no
+rival describes: in the tables-mode multisines of a friction truth (its rival the viscous damping that acts
+as the friction at the decays' amplitude), chi-square 75 to 16000 on 18 numbers."""
 MOTOR_LIMIT = 2.0
 """Largest steer torque the steer motor gives (control plus multisine) [N m]."""
 GYRO_NOISE = 0.01
@@ -542,18 +550,24 @@ def best_chance(plan, rivals, weights, runs_left: int, groups, shared=False) -> 
     return A.allocate(hypotheses, runs_left, HOPELESS, draws=400).probability
 
 
-def lack_of_fit(rivals: list[LinearRival], e: int, y: np.ndarray, R: np.ndarray) -> float:
-    """How far the best rival misses a run beyond its noise and its own uncertainty, chi-square per
-    observed number, at least 1 (a Birge ratio): a run that every rival misses alike (the truth is none of
-    them there: parameter error, a rider's geometry, friction) is down-weighted by it, as the diagnosis
-    scales its errors by the lack of fit, instead of handing the tie to the rival whose own uncertainty
-    happens to be wider."""
+def misfit(rivals: list[LinearRival], e: int, y: np.ndarray, R: np.ndarray) -> float:
+    """The best rival's chi-square of a run: its residual against the rival's prediction weighed by the run's
+    noise ``R`` and the rival's own uncertainty."""
     chi2 = []
     for r in rivals:
         mu, W = r.predict(e)
         res = y - mu
         chi2.append(float(res @ np.linalg.solve(W + R, res)))
-    return max(1.0, min(chi2) / y.size)
+    return min(chi2)
+
+
+def lack_of_fit(chi2: float, numbers: int) -> float:
+    """How far the best rival misses a run beyond its noise and its own uncertainty, chi-square per
+    observed number, at least 1 (a Birge ratio): a run that every rival misses alike (the truth is none of
+    them there: parameter error, a rider's geometry, friction) is down-weighted by it, as the diagnosis
+    scales its errors by the lack of fit, instead of handing the tie to the rival whose own uncertainty
+    happens to be wider.  ``chi2`` is the best rival's (:func:`misfit`), ``numbers`` the run's."""
+    return max(1.0, chi2 / numbers)
 
 
 def run_strategy(name: str, plan, rivals_at_tie, runs: TruthRuns, truth_index: int, seed: int, repeat=None) -> dict:
@@ -569,6 +583,7 @@ def run_strategy(name: str, plan, rivals_at_tie, runs: TruthRuns, truth_index: i
     chosen, trajectory = [], []
     cursor = 0
     status, lost = "undecided", 0
+    neither = None  # the first run no rival describes (NEITHER_P)
     for step in range(N_MAX):
         weights = _posterior(rivals)
         if name.startswith("plan:"):
@@ -597,7 +612,10 @@ def run_strategy(name: str, plan, rivals_at_tie, runs: TruthRuns, truth_index: i
             failed.add(e)
         else:
             y, R = obs
-            R = R * lack_of_fit(rivals, e, y, R)
+            chi2 = misfit(rivals, e, y, R)
+            if neither is None and chi2 > float(chi2_dist.ppf(1.0 - NEITHER_P, y.size)):
+                neither = {"run": len(chosen), "chi2": round(chi2, 2), "numbers": int(y.size)}
+            R = R * lack_of_fit(chi2, y.size)
             for r in rivals:
                 r.update(e, y, R)
         pi = _posterior(rivals)
@@ -608,7 +626,14 @@ def run_strategy(name: str, plan, rivals_at_tie, runs: TruthRuns, truth_index: i
         if pi[1 - truth_index] >= DECIDED:
             status = "wrong"
             break
-    return {"status": status, "runs": len(chosen), "chosen": chosen, "truth_probability": trajectory, "lost": lost}
+    return {
+        "status": status,
+        "runs": len(chosen),
+        "chosen": chosen,
+        "truth_probability": trajectory,
+        "lost": lost,
+        "neither": neither,
+    }
 
 
 def run_loop_case(

@@ -48,8 +48,36 @@ def test_run_by_run_evidence_is_the_joint_marginal_likelihood():
 def test_lack_of_fit_downweights_a_run_every_rival_misses():
     rivals = [L.LinearRival([np.zeros(2)], [np.zeros((2, 1))], np.eye(1)) for _ in range(2)]
     R = np.eye(2) * 0.01
-    assert L.lack_of_fit(rivals, 0, np.array([0.05, -0.05]), R) == 1.0
-    assert L.lack_of_fit(rivals, 0, np.array([1.0, 1.0]), R) == pytest.approx(100.0)
+    assert L.lack_of_fit(L.misfit(rivals, 0, np.array([0.05, -0.05]), R), 2) == 1.0
+    assert L.lack_of_fit(L.misfit(rivals, 0, np.array([1.0, 1.0]), R), 2) == pytest.approx(100.0)
+
+
+class _Runs:
+    """The truth's runs of one experiment: a fixed observation and noise, not shared."""
+
+    shared = False
+
+    def __init__(self, y, R):
+        self.y, self.R = y, R
+
+    def get(self, e, k):
+        return self.y, self.R
+
+
+def test_a_run_no_rival_describes_is_noted_before_any_decision_it_makes():
+    # two rivals predicting 0 and 1 on two numbers with little uncertainty; a run at 30 is far beyond both
+    # (chi-square ~ 3400 on 2 numbers): the loop notes at the first run that whatever it decides is between
+    # two models the data reject (and the lack of fit down-weights such runs: here no decision in 20)
+    plan = SimpleNamespace(points=[0], sweeps=[])
+    R = np.eye(2) * 0.5
+    rivals = [
+        L.LinearRival([np.full(2, mu)], [np.zeros((2, 1))], np.eye(1) * 1e-6, extra=[None]) for mu in (0.0, 1.0)
+    ]
+    far = L.run_strategy("repeat", plan, rivals, _Runs(np.full(2, 30.0), R), truth_index=0, seed=1, repeat=0)
+    assert far["neither"] == {"run": 1, "chi2": pytest.approx(29.0**2 * 2 / 0.5, rel=1e-3), "numbers": 2}
+    assert far["status"] == "undecided" and far["runs"] == L.N_MAX
+    near = L.run_strategy("repeat", plan, rivals, _Runs(np.full(2, 0.2), R), truth_index=0, seed=1, repeat=0)
+    assert near["neither"] is None and near["status"] == "resolved"
 
 
 def test_even_order_takes_the_laws_in_turn_and_spreads_the_speeds():
