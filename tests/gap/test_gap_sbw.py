@@ -161,3 +161,35 @@ def test_records_a_candidate_shows_no_weave_over_do_not_wreck_its_held_out_error
     assert all(np.isfinite(v) and v < 3 for v in errors.values()), errors
     assert result["selected"] == ["steer_friction"]
     assert errors["steer_friction"] < errors["parameters"] < result["ranking"][0]["heldout_error_before"]
+
+
+@pytest.mark.slow
+def test_friction_equivalent_from_roll_rate_alone_infers_the_steer_amplitude(sbw):
+    # a lab that logs only a roll-rate gyro (issue 21's e-bike): the equivalent damping of the friction needs the
+    # steer rate's amplitude, which the records then do not hold.  With the SBW logs' fork encoder hidden, the
+    # friction fit's own response fitted to each record infers it, close to what the encoder gives
+    import dataclasses
+
+    from bikerider.gap.diagnosis.priors import Priors, fitted_steer_rate_amplitudes, steer_rate_amplitudes
+
+    diagnosis, result = sbw
+    records, rows = diagnosis.records, diagnosis.record_rows
+    measured = steer_rate_amplitudes(records, rows)
+    hidden = [
+        dataclasses.replace(
+            f.record, signals={k: v for k, v in f.record.signals.items() if k not in ("steer_angle", "steer_rate")}
+        )
+        for f in (records[k] for k in rows)
+    ]
+    fit = diagnosis.fits.fit_of(("steer_friction",))
+    inferred = fitted_steer_rate_amplitudes(hidden, diagnosis.problem, fit.effects, fit.values)
+    ratio = inferred / measured
+    assert inferred.shape == measured.shape and np.all(np.isfinite(inferred))
+    assert 0.9 < np.median(ratio) < 1.3 and np.percentile(ratio, 90) < 2.0
+    priors = Priors({}, np.zeros(len(hidden)), diagnosis.priors.n_folds, diagnosis.problem, tuple(hidden))
+    blind = priors.friction_equivalent(fit)
+    seen = next(r for r in result["ranking"] if r["effect"] == "steer_friction")["equivalent"]
+    assert blind["inferred"] == len(hidden) and "inferred from this fit's response" in blind["note"]
+    assert seen["inferred"] == 0
+    # the same fit's equivalent damping, within the interval the encoder's amplitudes give it
+    assert seen["ci95"][0] < blind["c_equivalent"] < seen["ci95"][1]

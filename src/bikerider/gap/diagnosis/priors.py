@@ -9,6 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from bikerider.gap.candidates.effect_model import EffectModel
 from bikerider.gap.candidates.effects import (
     COULOMB_RANGE,
     EFFECTS,
@@ -23,6 +24,15 @@ from bikerider.gap.diagnosis.fits import time_domain
 from bikerider.gap.diagnosis.statistics import ALPHA, interval_quantile
 from bikerider.gap.distributions import chi2
 from bikerider.gap.inference.problem import EffectFit, GapProblem
+from bikerider.gap.inference.timedomain import (
+    Layout,
+    closed_loop,
+    friction_states,
+    initial_states,
+    make_batches,
+    simulate_linear,
+    systems,
+)
 from bikerider.gap.measured.records import RecordFit
 
 UNDETERMINED = 1.0
@@ -48,12 +58,17 @@ class Priors:
     problem : GapProblem or None
         The fit problem (the arms' geometry, the uncertain parameters); needed to judge the arms'
         mass and the benchmark parameters' shifts.
+    unsteered : tuple of Record
+        The used records that hold no steer signal; ``amplitudes`` ends with theirs, inferred from the
+        nominal model's response fitted to them (:func:`inferred_steer_rate_amplitudes`), and a friction
+        fit's equivalent infers them from its own response (:meth:`friction_equivalent`).
     """
 
     plausible: dict
     amplitudes: np.ndarray
     n_folds: int = 0
     problem: GapProblem | None = None
+    unsteered: tuple = ()
 
     def steer_rate_amplitude(self) -> float | None:
         """Median steer-rate amplitude of the records used [rad/s] (None without steer signals)."""
@@ -106,11 +121,17 @@ class Priors:
         amplitude, with its standard error from the fit's covariance.  Records whose amplitudes span less
         than a factor :data:`AMPLITUDE_SPREAD` (10th to 90th percentile) are decays of one amplitude: they
         determine ``c_eq`` but not the split between Coulomb and viscous friction (``separable`` false).
-        ``None`` for a fit without steer friction or records without a steer signal.
+        Records without a steer signal count with the amplitude of the fit's own response fitted to them
+        (:func:`fitted_steer_rate_amplitudes`; ``inferred`` in the result: how many).  ``None`` for a fit
+        without steer friction or without any amplitude.
         """
         if STEER_FRICTION not in fit.effects or "T_coulomb" not in fit.names:
             return None
-        amplitudes = self.amplitudes[np.isfinite(self.amplitudes) & (self.amplitudes > 0)]
+        amplitudes = self.amplitudes
+        if self.unsteered and self.problem is not None:
+            own = fitted_steer_rate_amplitudes(list(self.unsteered), self.problem, fit.effects, fit.values)
+            amplitudes = np.concatenate([amplitudes[: amplitudes.size - len(self.unsteered)], own])
+        amplitudes = amplitudes[np.isfinite(amplitudes) & (amplitudes > 0)]
         if not amplitudes.size:
             return None
         a = float(np.median(amplitudes))
@@ -138,9 +159,16 @@ class Priors:
             "amplitude": a,
             "amplitude_spread": spread,
             "separable": bool(separable),
+            "inferred": len(self.unsteered),
             "note": (
                 f"the records' steer-rate amplitudes span a factor {spread:.2g} (10th-90th percentile, median "
-                f"A = {a:.3g} rad/s)"
+                f"A = {a:.3g} rad/s"
+                + (
+                    f"; {len(self.unsteered)} of {self.amplitudes.size} inferred from this fit's response "
+                    "fitted to records that hold no steer signal)"
+                    if self.unsteered
+                    else ")"
+                )
                 + (
                     ": Coulomb and viscous friction are told apart by how the damping changes with amplitude"
                     if separable
@@ -259,6 +287,53 @@ def steer_rate_amplitudes(records: list[RecordFit], record_rows: dict[int, int])
             x = r.signals["steer_angle"]
             out.append(math.sqrt(2) * float(np.std(x)) * abs(f.estimate.eigenvalue))
     return np.array(out, float)
+
+
+def unsteered_records(records: list[RecordFit], record_rows: dict[int, int]) -> list:
+    """The used records (:class:`~bikerider.gap.measured.records.Record`) that hold no usable steer signal."""
+    return [
+        records[k].record
+        for k in record_rows
+        if not any(
+            name in records[k].record.signals and np.all(np.isfinite(records[k].record.signals[name]))
+            for name in ("steer_rate", "steer_angle")
+        )
+    ]
+
+
+def fitted_steer_rate_amplitudes(records: list, problem: GapProblem, effects, values) -> np.ndarray:
+    """``sqrt(2)`` times the RMS steer rate [rad/s] of a steer-friction fit's response fitted to each record
+    (:func:`~bikerider.gap.inference.timedomain.friction_states`: the friction simulated in time from the
+    record's fitted initial state), over the window the fit reads.  On the steer-by-wire logs with their steer
+    signal hidden, these are 1.17 times the amplitudes the steer signal gives (median; 10th-90th percentile
+    0.92-1.64), where the nominal model's response gives 1.33 (0.97-3.0): the friction holds the steer back."""
+    layout = Layout.of(tuple(effects))
+    out = np.empty(len(records))
+    for idx, batch in make_batches(records):
+        A, b, outputs, T = systems(problem.nominal, problem.geometry, batch.records, layout, np.atleast_2d(values))
+        states, _ = friction_states(batch, A, b, outputs, T)
+        for j, n in enumerate(batch.length):
+            out[idx[j]] = math.sqrt(2) * float(np.std(states[0, j, :n, outputs[3]]))
+    return out
+
+
+def inferred_steer_rate_amplitudes(records: list, problem: GapProblem) -> np.ndarray:
+    """The steer-rate amplitude [rad/s] of each used record that holds no steer signal, inferred:
+    ``sqrt(2)`` times the RMS steer rate of the nominal closed loop's response fitted to the record (its
+    initial state by least squares on the signals it has, :func:`~bikerider.gap.inference.timedomain.initial_states`),
+    over the window a time-domain fit reads.  A roll-rate gyro alone sees the weave, and the weave's shape
+    carries the steer with it; friction's hold on the steer is left out (a friction fit's equivalent uses
+    :func:`fitted_steer_rate_amplitudes`).  ``records`` as :func:`unsteered_records` gives them."""
+    out = np.empty(len(records))
+    if not records:
+        return out
+    model = EffectModel(problem.nominal, problem.geometry)
+    for idx, batch in make_batches(records):
+        A, _, outputs = closed_loop(model, batch.records)
+        states = simulate_linear(A, initial_states(batch, A, outputs), batch.dt, batch.N)
+        for j, n in enumerate(batch.length):
+            out[idx[j]] = math.sqrt(2) * float(np.std(states[j, :n, outputs[3]]))
+    return out
 
 
 def parameter(name: str) -> EffectParameter:

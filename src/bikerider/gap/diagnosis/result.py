@@ -73,7 +73,12 @@ from bikerider.gap.candidates.nominal import GapModelInput
 from bikerider.gap.diagnosis.compare import compare_multisines, compare_records, not_applicable
 from bikerider.gap.diagnosis.fits import CrossValidation, Fits, obs_rows
 from bikerider.gap.diagnosis.folds import folds
-from bikerider.gap.diagnosis.priors import Priors, steer_rate_amplitudes
+from bikerider.gap.diagnosis.priors import (
+    Priors,
+    inferred_steer_rate_amplitudes,
+    steer_rate_amplitudes,
+    unsteered_records,
+)
 from bikerider.gap.diagnosis.select import select
 from bikerider.gap.diagnosis.statistics import _minima, _named_values, by_error, noise_floor_rms
 from bikerider.gap.diagnosis.where import gap_map, gap_test, whether
@@ -273,7 +278,10 @@ def diagnose(
     for e in candidates:
         fits.fit_of((e,))
     # priors
-    priors = Priors(model.plausible, steer_rate_amplitudes(compared.records, compared.record_rows), len(held), problem)
+    measured = steer_rate_amplitudes(compared.records, compared.record_rows)
+    unsteered = unsteered_records(compared.records, compared.record_rows)
+    amplitudes = np.concatenate([measured, inferred_steer_rate_amplitudes(unsteered, problem)])
+    priors = Priors(model.plausible, amplitudes, len(held), problem, tuple(unsteered))
     # selection
     progress.begin("selecting")
     chosen = select(verdict.verdict, candidates, ranking, pairs, fits, priors)
