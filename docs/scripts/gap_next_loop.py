@@ -53,6 +53,10 @@ SWEEP_SETTLED = Path(__file__).with_name("gap_next_loop_repeat_sweep_settled.jso
 """The same on later code: a friction rival's multisine judged by its run simulated in time, every run read
 after the slowest rival's transient, the first run no rival describes noted (``rerun --strategy repeat:sweep
 --tag settled``)."""
+JR_SETTLED = Path(__file__).with_name("gap_next_loop_plan_jensen_renyi_settled.jsonl")
+EVEN_SETTLED = Path(__file__).with_name("gap_next_loop_even_settled.jsonl")
+"""``plan:jensen_renyi`` and ``even`` on every stored tie on the code of :data:`SWEEP_SETTLED` (``rerun --strategy
+... --tag settled``)."""
 JR_RULE = Path(__file__).with_name("gap_next_loop_plan_jensen_renyi.jsonl")
 JR_NO_RULE = Path(__file__).with_name("gap_next_loop_plan_jensen_renyi_max_roll_inf.jsonl")
 EVEN_NOW = Path(__file__).with_name("gap_next_loop_even.jsonl")
@@ -486,6 +490,15 @@ def _rerun_lines(ties: list[dict], best: str | None, n_max: int) -> list[str]:
     return out
 
 
+def _bin_table(cases: list[dict], n_max: int) -> list[str]:
+    """The reliability of the best multisine repeated as a table: predicted probability in bins, resolved."""
+    out = ["| predicted | points (ties) | mean predicted | fraction resolved |", "|---|---|---|---|"]
+    return out + [
+        f"| {lo:.2f}-{hi:.2f} | {n} ({nc}) | {mp:.2f} | {fr:.2f} |"
+        for lo, hi, n, nc, mp, fr in _bins(_reliability(cases, "sweep", n_max))
+    ]
+
+
 def _at10(cases: list[dict], n_max: int) -> tuple[int, float, int, float]:
     """Ties with a best multisine, the plan's probabilities at 10 runs added up, how many were resolved, and the
     standard deviation of that count were the probabilities right (``sqrt(sum p (1 - p))``)."""
@@ -546,13 +559,8 @@ def _lean_lines(ties: list[dict], n_max: int) -> list[str]:
         "",
         "With the rule, the plan's best multisine repeated, binned as above:",
         "",
-        "| predicted | points (ties) | mean predicted | fraction resolved |",
-        "|---|---|---|---|",
     ]
-    out += [
-        f"| {lo:.2f}-{hi:.2f} | {n} ({nc}) | {mp:.2f} | {fr:.2f} |"
-        for lo, hi, n, nc, mp, fr in _bins(_reliability(w, "sweep", n_max))
-    ]
+    out += _bin_table(w, n_max)
     n_off, p_off, r_off, _ = rows["off"][1:]
     high10 = [c["strategies"]["repeat:sweep"]["status"] for c in w if c["predicted"]["sweep"][9] >= 0.8]
     lost_all = sum(
@@ -665,13 +673,8 @@ def _settled_lines(n_max: int) -> list[str]:
         "",
         "Today's plan, binned as above:",
         "",
-        "| predicted | points (ties) | mean predicted | fraction resolved |",
-        "|---|---|---|---|",
     ]
-    out += [
-        f"| {lo:.2f}-{hi:.2f} | {n} ({nc}) | {mp:.2f} | {fr:.2f} |"
-        for lo, hi, n, nc, mp, fr in _bins(_reliability(w, "sweep", n_max))
-    ]
+    out += _bin_table(w, n_max)
     out += [
         "",
         "* Wrong decisions by scenario: " + ", ".join(f"{k} {v}" for k, v in wrong.most_common()) + ". "
@@ -699,11 +702,7 @@ def _settled_lines(n_max: int) -> list[str]:
             + ("pessimistic" if p10 < r10 else "optimistic")
             + f" by {abs(p10 - r10) / max(sd10, 1e-9):.1f} of the scatter. By bins:"
         )
-        out += ["", "| predicted | points (ties) | mean predicted | fraction resolved |", "|---|---|---|---|"]
-        out += [
-            f"| {lo:.2f}-{hi:.2f} | {n} ({nc}) | {mp:.2f} | {fr:.2f} |"
-            for lo, hi, n, nc, mp, fr in _bins(_reliability(rest, "sweep", n_max))
-        ]
+        out += [""] + _bin_table(rest, n_max)
     out.append("")
     return out
 
@@ -720,10 +719,10 @@ def _now_lines(n_max: int) -> list[str]:
         return []
     keys = set.intersection(*({(c["scenario"], c["seed"]) for c in cs} for cs in got.values()))
     out = [
-        "### The next run `--next` names, with the lean rule, on today's code",
+        "### The next run `--next` names, with the lean rule",
         "",
         f"`plan:jensen_renyi` (the next run of `--next`) with the lean rule and without, and the even spread, on the "
-        f"{len(keys)} stored ties that still tie on today's code (`rerun --strategy plan:jensen_renyi [--max-roll inf]`, "
+        f"{len(keys)} stored ties that still tied on the code of the lean rule (`rerun --strategy plan:jensen_renyi [--max-roll inf]`, "
         "`rerun --strategy even`; the unbreakable rule of runs combined):",
         "",
         "| strategy | resolved | wrong | undecided | unbreakable | runs needed: median | 90th percentile | runs lost / spent |",
@@ -758,6 +757,67 @@ def _now_lines(n_max: int) -> list[str]:
         f"* Goal 2 with the lean rule: {len(broken)} ties declared unbreakable that the even spread breaks"
         + (": " + ", ".join(f"{a} seed {b}" for a, b in broken) if broken else "")
         + ".",
+        "",
+    ]
+    return out
+
+
+def _today_lines(n_max: int) -> list[str]:
+    """The next run's strategy against the even spread on the code of :data:`SWEEP_SETTLED` (:data:`JR_SETTLED`,
+    :data:`EVEN_SETTLED`), the runs no rival describes counted apart."""
+    from validation import loop as L
+
+    files = (("plan:jensen_renyi", JR_SETTLED), ("even", EVEN_SETTLED))
+    got = {name: {(c["scenario"], c["seed"]): c for c in _stored(path) if c.get("strategies")} for name, path in files}
+    if not all(got.values()):
+        return []
+    keys = sorted(set.intersection(*(set(cs) for cs in got.values())))
+    out = [
+        "### The next run `--next` names, on the same plan",
+        "",
+        f"`plan:jensen_renyi` and the even spread again on the {len(keys)} stored ties that tie on the code of the "
+        "previous section (friction rivals' multisines simulated, every rival's transient settled; `rerun "
+        "--strategy plan:jensen_renyi --tag settled`, `rerun --strategy even --tag settled`). *Described* are the ties "
+        "where every run of the strategy was described by a rival (`validation.loop.NEITHER_P`):",
+        "",
+        "| strategy | ties | resolved | wrong | wrong after a run no rival describes | undecided | unbreakable | "
+        "runs needed: median | 90th percentile | described: ties, resolved, wrong, median | runs lost / spent |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    merit, described = {}, {}
+    for name, _ in files:
+        st = {k: got[name][k]["strategies"][name] for k in keys}
+        med, p90 = L.figure_of_merit([x["runs"] if x["status"] == "resolved" else None for x in st.values()])
+        clean = {k: x for k, x in st.items() if x.get("neither") is None}
+        med_c, _ = L.figure_of_merit([x["runs"] if x["status"] == "resolved" else None for x in clean.values()])
+        merit[name], described[name] = (st, med, p90), (clean, med_c)
+        counts = Counter(x["status"] for x in st.values())
+        out.append(
+            f"| {name} | {len(st)} | {counts['resolved']} | {counts['wrong']} | "
+            f"{sum(x['status'] == 'wrong' and x.get('neither') is not None for x in st.values())} | "
+            f"{counts['undecided']} | {counts['unbreakable']} | {_fmt(med, n_max)} | {_fmt(p90, n_max)} | "
+            f"{len(clean)}, {sum(x['status'] == 'resolved' for x in clean.values())}, "
+            f"{sum(x['status'] == 'wrong' for x in clean.values())}, {_fmt(med_c, n_max)} | "
+            f"{sum(x['lost'] for x in st.values())} / {sum(x['runs'] for x in st.values())} |"
+        )
+    (jr, m_jr, _), (ev, m_ev, _) = merit["plan:jensen_renyi"], merit["even"]
+    both = [k for k in keys if k in described["plan:jensen_renyi"][0] and k in described["even"][0]]
+    med_jr, _ = L.figure_of_merit(
+        [jr[k]["runs"] if jr[k]["status"] == "resolved" else None for k in both]  # the same ties for both
+    )
+    med_ev, _ = L.figure_of_merit([ev[k]["runs"] if ev[k]["status"] == "resolved" else None for k in both])
+    broken = [k for k in keys if jr[k]["status"] == "unbreakable" and ev[k]["status"] == "resolved"]
+
+    def met(a, b):
+        return "**met**" if math.isfinite(a) and (not math.isfinite(b) or a <= b / 2) else "**not met**"
+
+    out += [
+        "",
+        f"* Goal 1 (the plan's median at most half the even spread's): {_fmt(m_jr, n_max)} against "
+        f"{_fmt(m_ev, n_max)} on every tie, {met(m_jr, m_ev)}; on the {len(both)} ties both strategies saw described "
+        f"throughout, {_fmt(med_jr, n_max)} against {_fmt(med_ev, n_max)}, {met(med_jr, med_ev)}.",
+        f"* Goal 2: {len(broken)} {'tie' if len(broken) == 1 else 'ties'} declared unbreakable that the even spread "
+        "breaks" + (": " + ", ".join(f"{a} seed {b}" for a, b in broken) if broken else "") + ".",
         "",
     ]
     return out
@@ -1589,8 +1649,9 @@ def report(args) -> int:
     lines += [f"![runs to a decision and reliability](figures/{FIGURE.name})", ""]
     lines += _rerun_lines(ties, best, n_max)
     lines += _lean_lines(ties, n_max)
-    lines += _settled_lines(n_max)
     lines += _now_lines(n_max)
+    lines += _settled_lines(n_max)
+    lines += _today_lines(n_max)
     lines += _records_lines(n_max)
     shared = [c for c in _stored(SHARED) if c.get("strategies")]
     if shared:
