@@ -70,9 +70,7 @@ def test_a_run_no_rival_describes_is_noted_before_any_decision_it_makes():
     # two models the data reject (and the lack of fit down-weights such runs: here no decision in 20)
     plan = SimpleNamespace(points=[0], sweeps=[])
     R = np.eye(2) * 0.5
-    rivals = [
-        L.LinearRival([np.full(2, mu)], [np.zeros((2, 1))], np.eye(1) * 1e-6, extra=[None]) for mu in (0.0, 1.0)
-    ]
+    rivals = [L.LinearRival([np.full(2, mu)], [np.zeros((2, 1))], np.eye(1) * 1e-6, extra=[None]) for mu in (0.0, 1.0)]
     far = L.run_strategy("repeat", plan, rivals, _Runs(np.full(2, 30.0), R), truth_index=0, seed=1, repeat=0)
     assert far["neither"] == {"run": 1, "chi2": pytest.approx(29.0**2 * 2 / 0.5, rel=1e-3), "numbers": 2}
     assert far["status"] == "undecided" and far["runs"] == L.N_MAX
