@@ -121,9 +121,11 @@ def _sbw_next(diagnosis):
         "The figure (`next.png` of the command's report) draws the three candidates' predictions for the best",
         "decay over speed, with bands of one standard deviation of ten decays' mean, the data as taken (each",
         "record's weave eigenvalue with its standard error), the planned speeds, and the resolution probability",
-        "against speed per law; its second row, the best multisine's frequency response per candidate (magnitude",
-        "and phase, bands of ten runs' mean) and the multisines' separation d of one run against speed (log",
-        "scale, with the d one run needs for 95 %); the star marks the next run.",
+        "against speed per law (solid: the signal and push of the law's best decay, named in the legend; dotted:",
+        "the best of any signal and push at each speed, jagged where that best switches); its second row, the best",
+        "multisine's frequency response per candidate (magnitude and phase, bands of ten runs' mean) and the",
+        "multisines' separation d of one run against speed (log scale, with the d one run needs for 95 %); the",
+        "star marks the next run.",
         "",
     ]
     return lines, plan, out

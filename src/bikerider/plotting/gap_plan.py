@@ -19,7 +19,8 @@ PLANNED_SHOWN = 5
 def plot_next(plan, result: dict | None = None):
     """Predictions of the rivals diverging over speed (the best plan item's law, signal and push), with
     one standard deviation of each for the planned decays, the data, and the resolution probability
-    against speed for every law."""
+    against speed for every law (:func:`_probability_panel`: one signal and push per law, solid, and the
+    best of any at each speed, dotted)."""
     plt = pyplot()
     result = result or plan.as_dict()
     decays = [item for item in plan.plan if item["experiment"].kind == "decay"]
@@ -80,7 +81,7 @@ def plot_next(plan, result: dict | None = None):
     axes[0].set_title(f"predicted under {best.law}" + (f",{what[1]}" if len(what) > 1 else ""), fontsize=9)
     axes[1].set_title(f"bands: 1 sd of the mean of {n} decays", fontsize=9)
     axes[0].legend(fontsize=7)
-    # resolution probability against speed, per law (the best signal and push at each speed)
+    # resolution probability against speed, per law (its best signal and push, and the best of any at each speed)
     _probability_panel(axes[2], decays, plan, colours, "decays")
     if sweeps:
         _sweep_row(grid[1], plan, sweeps, colours)
@@ -97,18 +98,40 @@ def plot_next(plan, result: dict | None = None):
 
 
 def _probability_panel(ax, items, plan, colours, what):
-    """Resolution probability against speed, per law (the best experiment of the kind at each speed)."""
+    """Resolution probability against speed, per law.
+
+    The solid curve of a law follows one signal and push over speed: those of the law's best experiment (the
+    highest probability over speed; of equals, the first in the plan's ranking), so that it moves with the
+    speed alone.  A thin dotted curve of the same colour is the best experiment of any signal and push at each
+    speed: never below the solid one, and jagged where the best signal or push changes from one speed to the
+    next (which is no numerical noise).  With a single signal and push (eigenvalue tables, or linear rivals
+    with one signal) the two are one curve, drawn solid.
+    """
     n = plan.repeats
     prob = {}
     for item in items:
         x = item["experiment"]
         key = (x.law, x.speed)
         prob[key] = max(prob.get(key, 0.0), item["resolution_probability"])
+    several = len({(item["experiment"].signal, item["experiment"].push) for item in items}) > 1
     for k, law in enumerate(plan.laws):
-        pts = sorted((s, p) for (name, s), p in prob.items() if name == law)
-        if pts:
-            s, p = zip(*pts)
-            ax.plot(s, p, "-o", ms=3, color=colours[k % len(colours)], label=law)
+        of_law = [item for item in items if item["experiment"].law == law]
+        if not of_law:
+            continue
+        colour = colours[k % len(colours)]
+        top = max(of_law, key=lambda item: item["resolution_probability"])["experiment"]  # the first of equals
+        pts = sorted(
+            (item["experiment"].speed, item["resolution_probability"])
+            for item in of_law
+            if (item["experiment"].signal, item["experiment"].push) == (top.signal, top.push)
+        )
+        s, p = zip(*pts)
+        ax.plot(s, p, "-o", ms=3, color=colour, label=_follows(top) if several else law)
+        if several:
+            s, p = zip(*sorted((v, q) for (name, v), q in prob.items() if name == law))
+            ax.plot(s, p, ":", lw=1, color=colour)
+    if several:
+        ax.plot([], [], color="0.3", ls=":", lw=1, label="best of any signal/push")
     ax.axhline(0.95, color="0.4", ls="--", lw=1)
     ax.set_ylim(0, 1.02)
     ax.set_xlabel("speed [m/s]")
@@ -116,6 +139,15 @@ def _probability_panel(ax, items, plan, colours, what):
     ax.set_title(f"{what}: smallest over the pairs of rivals", fontsize=9)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7)
+
+
+def _follows(e) -> str:
+    """The legend of a law's curve that follows the signal and push of experiment ``e``, e.g. ``"sil, roll rate,
+    push x0.5"`` (the push relative to the data's)."""
+    out = e.law
+    if e.signal != "eigenvalue":
+        out += f", {e.signal.replace('_', ' ')}"
+    return out + f", push x{e.push:g}"
 
 
 def _sweep_row(axes, plan, sweeps, colours):
