@@ -92,8 +92,11 @@ def _sbw_next(diagnosis):
             "sensor's, the speed's scatter, the data's run-to-run variation of the weave carried to the response, and",
             f"the share a linear model misses of a real run ({rho:.2f} per line, sqrt(1 - r^2) of the records' fits).",
             "`validation/multisine_check.py` simulates these runs by its own stick-slip integrator: they achieve the",
-            "planned separation (docs/gap.md). The diagnosis reads no frequency responses yet and the blind check does",
-            "not cover them; the torque must be what the motor delivers (its bandwidth is not modelled).",
+            "planned separation (docs/gap.md). The diagnosis reads the runs back (the manifest's `[multisine]` table:",
+            "the logged torque and response, `bikerider.io.multisine`), and the closed loop of docs/gap_validation.md,",
+            "part 5, runs them against hidden truths; the torque must be what the motor delivers (its bandwidth is not",
+            "modelled), and a run is planned only where no rival leans past 0.2 rad (a friction rival's lean from its",
+            "run simulated in time).",
             "",
         ]
     nxt = out["next_run"]
