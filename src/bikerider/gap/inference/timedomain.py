@@ -2,7 +2,8 @@
 
 * :func:`initial_states` fits each record's initial state (and a constant offset per signal) to the
   record's signals by linear least squares for a linear closed-loop model (the response is linear
-  in the initial state), each signal weighted by its own scatter over the record.  What the record
+  in the initial state), each signal weighted by its own scatter over the record, directions the record
+  hardly sees left out (:data:`STATE_RCOND`).  What the record
   fit finds in a model's response from that state (the record's *apparent* eigenvalue under the
   model, and the fit's bias) is :mod:`bikerider.gap.inference.indirect`'s.
 
@@ -68,6 +69,30 @@ STATE_TOLERANCE = 1e-4
 """The chord steps stop when no record's initial state would move by more than this share of its size
 (its largest component, at least 1e-3 in the state's units), or none but records where the step, cut to
 a sixteenth, still raised the residual."""
+STATE_RCOND = 3e-3
+"""Relative singular value below which a direction of a record's initial state is left out of its fit.
+
+Each record's initial state (and offsets) is the least squares of its weighted design (:func:`_stack`),
+solved by truncated SVD: a direction whose singular value is below ``STATE_RCOND`` times the design's
+largest is left at zero (:func:`_pseudo_inverse`).  A record holding the roll rate alone sees some
+directions of the state hardly at all (relative singular values 1e-4 to 2e-3 in the calibration's
+``steer_coulomb`` records: the caster mode, gone within a sample or two, and the slow capsize mode against
+the roll rate's offset); fitted, they took the gyro's noise up to states of 2 to 250 rad/s, and such a
+state then drove the nonlinear friction simulation and the fit's split (the friction read as viscous
+damping that is not there).  Records holding the steer angle too see every direction: their smallest
+relative singular value was 8.7e-3 over 270 records of the ``steer_friction_records`` trials (median
+1.0e-2), so their fits are unchanged.  Measured on the ``steer_coulomb`` trials of seeds 1000-1019 (95 %
+intervals holding the truth, median relative error of ``T_coulomb``, median interval width):
+
+* 1e-6 (as the normal equations' 1e-12 ridge before, which damped below about 4e-7): ``T_coulomb`` 17/20,
+  -36 %, 0.094 N m; ``c_viscous`` (truth 0) 14/20, median fit 0.38 N m s/rad;
+* 1e-4: 16/20, -31 %, 0.082 N m; ``c_viscous`` 14/20;
+* 1e-3: 17/20, -5 %, 0.099 N m; ``c_viscous`` 19/20;
+* 3e-3: 17/20, +5 %, 0.032 N m; ``c_viscous`` 20/20 (median 0).
+
+3e-3 is the largest of these that leaves every well-observed record's fit as it was (a factor 2.9 below
+the smallest such singular value), and it removes every noise-driven direction measured.
+"""
 THETA_STEP = 2e-3
 """Finite-difference step of the fitted values' slopes (N m, N m s/rad and the partner's units)."""
 
@@ -243,20 +268,32 @@ def _stack(batch: Batch, sensitivity: np.ndarray, outputs: tuple[int, ...]) -> t
     return design.reshape(lead + (R, S * N, n + S)), data.reshape(R, S * N)
 
 
-def _solve(design: np.ndarray, data: np.ndarray) -> np.ndarray:
-    """Least squares of every ``(..., R)`` design at once (normal equations with a tiny ridge)."""
-    gram = np.swapaxes(design, -1, -2) @ design
-    rhs = np.einsum("...mk,...m->...k", design, data)
-    scale = np.maximum(np.trace(gram, axis1=-2, axis2=-1) / gram.shape[-1], 1e-300)
-    gram = gram + 1e-12 * scale[..., None, None] * np.eye(gram.shape[-1])
-    return np.linalg.solve(gram, rhs[..., None])[..., 0]
+def _pseudo_inverse(design: np.ndarray, rcond: float | None = None) -> np.ndarray:
+    """Truncated-SVD pseudo-inverse ``(..., R, n + S, M)`` of every ``(..., R)`` design at once.
+
+    Directions whose singular value is below ``rcond`` (:data:`STATE_RCOND` when not given) times the
+    design's largest are left out (minimum-norm least squares): a state the record barely sees is not fitted
+    to its noise.  A signal the record lacks (a zero offset column) is one such direction.
+    """
+    return np.linalg.pinv(design, rcond=STATE_RCOND if rcond is None else rcond)
+
+
+def _solve(design: np.ndarray, data: np.ndarray, rcond: float | None = None) -> np.ndarray:
+    """Least squares of every ``(..., R)`` design at once, truncated at ``rcond`` (:func:`_pseudo_inverse`)."""
+    return _apply(_pseudo_inverse(design, rcond), data)
+
+
+def _apply(pinv: np.ndarray, data: np.ndarray) -> np.ndarray:
+    """``pinv (..., R, k, M)`` times data ``(..., R, M)`` (broadcast over the leading dimensions)."""
+    return np.einsum("...km,...m->...k", pinv, data)
 
 
 def initial_states(batch: Batch, A: np.ndarray, outputs: tuple[int, ...]) -> np.ndarray:
     """Initial states ``(..., R, n)`` fitted to each record for linear models ``A (..., R, n, n)``.
 
     Each signal ``s`` is modelled as ``C_s Phi(t) x0 + offset_s`` (an offset per signal, solved
-    with the state), every signal weighted by its scatter over the record.
+    with the state), every signal weighted by its scatter over the record; directions the record hardly
+    sees (relative singular value below :data:`STATE_RCOND`) are left out, not fitted to its noise.
     """
     Phi = _transitions(A, batch.dt, batch.N)  # (..., R, N, n, n)
     design, data = _stack(batch, Phi, outputs)
@@ -362,7 +399,8 @@ def friction_states(
     T = np.asarray(T_c, dtype=float).reshape(A.shape[:-3] + (1,))
     n = A.shape[-1]
     design, data = _stack(batch, _transitions(A, batch.dt, batch.N), outputs)
-    x0 = _solve(design, data)[..., :n]
+    pinv = _pseudo_inverse(design)  # once: the chord steps solve with the same design
+    x0 = _apply(pinv, data)[..., :n]
     rate = outputs[3]
     nonlinear = bool(np.any(T > 0))
     if not nonlinear:
@@ -378,7 +416,7 @@ def friction_states(
     cost = np.sum(res**2, axis=(-2, -1))
     scale = np.ones_like(cost)
     for _ in range(STATE_STEPS):
-        step = _solve(design, -res.reshape(res.shape[:-2] + (-1,)))[..., :n] * scale[..., None]
+        step = _apply(pinv, -res.reshape(res.shape[:-2] + (-1,)))[..., :n] * scale[..., None]
         size = np.maximum(np.max(np.abs(x0), axis=-1), 1e-3)
         if not np.any((np.max(np.abs(step), axis=-1) / size > STATE_TOLERANCE) & (scale >= 1 / 16)):
             break
