@@ -57,13 +57,15 @@ def test_a_roll_rate_only_records_state_is_not_its_noise_along_a_direction_it_ha
     assert np.max(np.abs(x0)) < 1.5 * TRUE_SIZE  # bounded: the state's size, not the noise's reach
     fitted, rms = _roll_rate_fit(batch, A, outputs, x0)
     assert np.all(rms < 1.1 * NOISE)  # the response still matches the record to its noise
-    # every direction fitted (rcond below the ridge's reach, as the normal equations did): the state four
-    # times its size for a residual no smaller than the noise's
-    monkeypatch.setattr(TD, "STATE_RCOND", 1e-7)
+    # every direction fitted (rcond 1e-6, about where the normal equations' 1e-12 ridge acted before): the
+    # state four times its size for a residual no smaller than the noise's
+    monkeypatch.setattr(TD, "STATE_RCOND", 1e-6)
     full = TD.initial_states(batch, A, outputs)
     assert np.max(np.abs(full)) > 3 * TRUE_SIZE
     _, rms_full = _roll_rate_fit(batch, A, outputs, full)
     np.testing.assert_allclose(rms, rms_full, rtol=0.02)  # the left-out direction bought nothing
+    with pytest.raises(ValueError, match="1e-6"):  # below that the Gram matrix cannot tell the directions
+        TD._solve(design, batch.y["roll_rate"][:, :1], rcond=1e-8)
 
 
 @pytest.mark.parametrize("speed", [3.0, 6.0])
@@ -71,6 +73,6 @@ def test_a_record_with_the_steer_angle_is_fitted_as_by_full_least_squares(speed,
     # every direction seen: the truncated solve is the full least squares
     batch, A, outputs = _batch(speed, roll_rate_only=False)
     x0 = TD.initial_states(batch, A, outputs)
-    monkeypatch.setattr(TD, "STATE_RCOND", 1e-14)
+    monkeypatch.setattr(TD, "STATE_RCOND", 1e-6)
     np.testing.assert_allclose(x0, TD.initial_states(batch, A, outputs), rtol=1e-9, atol=1e-12)
     assert np.max(np.abs(x0)) < 1.5 * TRUE_SIZE

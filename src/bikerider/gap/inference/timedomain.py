@@ -74,7 +74,7 @@ STATE_RCOND = 3e-3
 
 Each record's initial state (and offsets) is the least squares of its weighted design (:func:`_stack`),
 solved by truncated SVD: a direction whose singular value is below ``STATE_RCOND`` times the design's
-largest is left at zero (:func:`_pseudo_inverse`).  A record holding the roll rate alone sees some
+largest is left at zero (:func:`_truncated_inverse`).  A record holding the roll rate alone sees some
 directions of the state hardly at all (relative singular values 1e-4 to 2e-3 in the calibration's
 ``steer_coulomb`` records: the caster mode, gone within a sample or two, and the slow capsize mode against
 the roll rate's offset); fitted, they took the gyro's noise up to states of 2 to 250 rad/s, and such a
@@ -268,24 +268,37 @@ def _stack(batch: Batch, sensitivity: np.ndarray, outputs: tuple[int, ...]) -> t
     return design.reshape(lead + (R, S * N, n + S)), data.reshape(R, S * N)
 
 
-def _pseudo_inverse(design: np.ndarray, rcond: float | None = None) -> np.ndarray:
-    """Truncated-SVD pseudo-inverse ``(..., R, n + S, M)`` of every ``(..., R)`` design at once.
+def _truncated_inverse(design: np.ndarray, rcond: float | None = None) -> np.ndarray:
+    """The truncated inverse ``(..., R, k, k)`` of every ``(..., R)`` design's Gram matrix ``D^T D``.
 
-    Directions whose singular value is below ``rcond`` (:data:`STATE_RCOND` when not given) times the
-    design's largest are left out (minimum-norm least squares): a state the record barely sees is not fitted
-    to its noise.  A signal the record lacks (a zero offset column) is one such direction.
+    ``D^T D = V diag(s^2) V^T`` (``s`` the design's singular values, ``V`` its right singular vectors);
+    directions whose singular value is below ``rcond`` (:data:`STATE_RCOND` when not given) times the
+    largest are left out, so ``inverse @ D^T y`` is the minimum-norm least squares of the truncated SVD,
+    ``D^+ y``: a state the record hardly sees is not fitted to its noise (a signal the record lacks, a zero
+    offset column, is one such direction).  The Gram matrix's eigenvalues resolve ``rcond^2`` to the
+    double's rounding of the largest, about 1e-16 of it, so ``rcond`` must be at least 1e-6; the
+    decomposition then costs what the normal equations did (the SVD of the tall design, three times as much).
     """
-    return np.linalg.pinv(design, rcond=STATE_RCOND if rcond is None else rcond)
+    rcond = STATE_RCOND if rcond is None else float(rcond)
+    if not rcond >= 1e-6:
+        raise ValueError(f"rcond {rcond!r}: the Gram matrix resolves relative singular values down to 1e-6")
+    gram = np.swapaxes(design, -1, -2) @ design
+    w, V = np.linalg.eigh(gram)
+    keep = w > rcond**2 * np.maximum(w[..., -1:], 1e-300)
+    inverse_w = np.where(keep, 1.0 / np.where(keep, w, 1.0), 0.0)
+    return (V * inverse_w[..., None, :]) @ np.swapaxes(V, -1, -2)
+
+
+def _apply(design: np.ndarray, inverse: np.ndarray, data: np.ndarray) -> np.ndarray:
+    """``inverse @ D^T data``: the least squares of data ``(..., R, M)`` (broadcast over the leading
+    dimensions) with the truncated inverse of :func:`_truncated_inverse`."""
+    rhs = np.einsum("...mk,...m->...k", design, data)
+    return np.einsum("...kl,...l->...k", inverse, rhs)
 
 
 def _solve(design: np.ndarray, data: np.ndarray, rcond: float | None = None) -> np.ndarray:
-    """Least squares of every ``(..., R)`` design at once, truncated at ``rcond`` (:func:`_pseudo_inverse`)."""
-    return _apply(_pseudo_inverse(design, rcond), data)
-
-
-def _apply(pinv: np.ndarray, data: np.ndarray) -> np.ndarray:
-    """``pinv (..., R, k, M)`` times data ``(..., R, M)`` (broadcast over the leading dimensions)."""
-    return np.einsum("...km,...m->...k", pinv, data)
+    """Least squares of every ``(..., R)`` design at once, truncated at ``rcond`` (:func:`_truncated_inverse`)."""
+    return _apply(design, _truncated_inverse(design, rcond), data)
 
 
 def initial_states(batch: Batch, A: np.ndarray, outputs: tuple[int, ...]) -> np.ndarray:
@@ -399,8 +412,8 @@ def friction_states(
     T = np.asarray(T_c, dtype=float).reshape(A.shape[:-3] + (1,))
     n = A.shape[-1]
     design, data = _stack(batch, _transitions(A, batch.dt, batch.N), outputs)
-    pinv = _pseudo_inverse(design)  # once: the chord steps solve with the same design
-    x0 = _apply(pinv, data)[..., :n]
+    inverse = _truncated_inverse(design)  # once: the chord steps solve with the same design
+    x0 = _apply(design, inverse, data)[..., :n]
     rate = outputs[3]
     nonlinear = bool(np.any(T > 0))
     if not nonlinear:
@@ -416,7 +429,7 @@ def friction_states(
     cost = np.sum(res**2, axis=(-2, -1))
     scale = np.ones_like(cost)
     for _ in range(STATE_STEPS):
-        step = _apply(pinv, -res.reshape(res.shape[:-2] + (-1,)))[..., :n] * scale[..., None]
+        step = _apply(design, inverse, -res.reshape(res.shape[:-2] + (-1,)))[..., :n] * scale[..., None]
         size = np.maximum(np.max(np.abs(x0), axis=-1), 1e-3)
         if not np.any((np.max(np.abs(step), axis=-1) / size > STATE_TOLERANCE) & (scale >= 1 / 16)):
             break
