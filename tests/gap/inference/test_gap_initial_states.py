@@ -1,7 +1,7 @@
 """Records' initial states in the time domain (gap/inference/timedomain.py: ``initial_states``).
 
 A record holding the roll rate alone hardly sees some directions of its initial state (at 6 m/s under the
-steer-into-lean law, one at 5e-4 of the largest singular value of its design).  Solved by normal equations
+steer-into-lean law, one at 4.7e-4 of the largest singular value of its design).  Solved by normal equations
 with a 1e-12 ridge, the gyro's noise pushed the state along them to four times its true size (0.6 rad/s
 true, 1.1 to 2.3 fitted), and such states drove the nonlinear friction simulation and the friction fit's
 split in the calibration's ``steer_coulomb`` trials.  Those directions are now left out
