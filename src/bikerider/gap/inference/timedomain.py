@@ -2,7 +2,8 @@
 
 * :func:`initial_states` fits each record's initial state (and a constant offset per signal) to the
   record's signals by linear least squares for a linear closed-loop model (the response is linear
-  in the initial state), each signal weighted by its own scatter over the record.  What the record
+  in the initial state), each signal weighted by its own scatter over the record, directions the record
+  hardly sees left out (:data:`STATE_RCOND`).  What the record
   fit finds in a model's response from that state (the record's *apparent* eigenvalue under the
   model, and the fit's bias) is :mod:`bikerider.gap.inference.indirect`'s.
 
@@ -68,6 +69,41 @@ STATE_TOLERANCE = 1e-4
 """The chord steps stop when no record's initial state would move by more than this share of its size
 (its largest component, at least 1e-3 in the state's units), or none but records where the step, cut to
 a sixteenth, still raised the residual."""
+STATE_RCOND = 5e-4
+"""Relative singular value below which a direction of a record's initial state is left out of its fit.
+
+Each record's initial state (and offsets) is the least squares of its weighted design (:func:`_stack`),
+solved by truncated SVD: a direction whose singular value is below ``STATE_RCOND`` times the design's
+largest is left at zero (:func:`_truncated_inverse`).  A record holding the roll rate alone sees some
+directions of the state hardly at all (relative singular values 1e-4 to 2e-3 in the calibration's
+``steer_coulomb`` records: the fast caster mode, -8 to -27 1/s, at 1e-4 to 3e-4, 1e-3 to 3e-3 in the
+controlled runs, and the slow capsize mode, within 0.1 1/s of zero, at 5e-4 to 2.4e-3; both hardly move
+the roll rate); fitted, they took the
+gyro's noise up to states of 2 to 250 rad/s (the ridge of the normal equations before acted only below
+about 1e-6), and such a state then drove the nonlinear friction simulation and the fit's split (the
+friction read as viscous damping that is not there).  Measured on the ``steer_coulomb`` trials of seeds
+1000-1019 (95 % intervals holding the truth, median relative error of ``T_coulomb``; ``c_viscous``'s
+truth is 0):
+
+* 1e-6 (as the ridge before; the stored fits to one interval): ``T_coulomb`` 17/20, -36 %;
+  ``c_viscous`` 14/20, median fit 0.38 N m s/rad;
+* 1e-4: 16/20, -31 %; ``c_viscous`` 14/20;
+* 5e-4: 17/20, -4 %; ``c_viscous`` 17/20;
+* 1e-3: 17/20, -5 %; ``c_viscous`` 19/20;
+* 3e-3: 17/20, +5 %; ``c_viscous`` 20/20.
+
+Records holding the steer angle too see nearly every direction, and their fits must stay as they were:
+the simulated friction trials' smallest relative singular value was 8.7e-3 (270 records), but the
+steer-by-wire records of docs/gap_real_data.md reach down to 9.0e-4 (median 6.8e-3, 168 of 2915 designs
+below 3e-3).  With 3e-3 or 2e-3 their speed-sensor-and-friction pair moved (held-out error 1.14 -> 1.18,
+``T_coulomb`` interval [0.258, 0.462] -> [0.079, 0.71] N m), with 1e-3 one value's third digit; and a
+hard cut makes the fit jump where a direction crosses it as the speed changes: with 1e-3 the
+roll-rate-only plan's spread over the friction corner stepped by 0.117 rad/s between speeds 0.1 m/s apart
+(0.057 before; tests/gap/plan/test_gap_next_kick.py).  5e-4 leaves both as they were (a factor 1.8 below
+the steer-by-wire records' smallest) and takes part of the gain on the roll-rate-only records: over the
+calibration's 200 ``steer_coulomb`` trials ``T_coulomb``'s coverage 63 % -> 71 % (median error -35 % ->
+-6 %), ``c_viscous``'s 60 % -> 79 % (3e-3 gave 79 % and 90 %; docs/gap_validation.md part 4, item 11).
+"""
 THETA_STEP = 2e-3
 """Finite-difference step of the fitted values' slopes (N m, N m s/rad and the partner's units)."""
 
@@ -243,20 +279,45 @@ def _stack(batch: Batch, sensitivity: np.ndarray, outputs: tuple[int, ...]) -> t
     return design.reshape(lead + (R, S * N, n + S)), data.reshape(R, S * N)
 
 
-def _solve(design: np.ndarray, data: np.ndarray) -> np.ndarray:
-    """Least squares of every ``(..., R)`` design at once (normal equations with a tiny ridge)."""
+def _truncated_inverse(design: np.ndarray, rcond: float | None = None) -> np.ndarray:
+    """The truncated inverse ``(..., R, k, k)`` of every ``(..., R)`` design's Gram matrix ``D^T D``.
+
+    ``D^T D = V diag(s^2) V^T`` (``s`` the design's singular values, ``V`` its right singular vectors);
+    directions whose singular value is below ``rcond`` (:data:`STATE_RCOND` when not given) times the
+    largest are left out, so ``inverse @ D^T y`` is the minimum-norm least squares of the truncated SVD,
+    ``D^+ y``: a state the record hardly sees is not fitted to its noise (a signal the record lacks, a zero
+    offset column, is one such direction).  The Gram matrix's eigenvalues resolve ``rcond^2`` to the
+    double's rounding of the largest, about 1e-16 of it, so ``rcond`` must be at least 1e-6; the
+    decomposition then costs what the normal equations did (the SVD of the tall design, three times as much).
+    """
+    rcond = STATE_RCOND if rcond is None else float(rcond)
+    if not rcond >= 1e-6:
+        raise ValueError(f"rcond {rcond!r}: the Gram matrix resolves relative singular values down to 1e-6")
     gram = np.swapaxes(design, -1, -2) @ design
+    w, V = np.linalg.eigh(gram)
+    keep = w > rcond**2 * np.maximum(w[..., -1:], 1e-300)
+    inverse_w = np.where(keep, 1.0 / np.where(keep, w, 1.0), 0.0)
+    return (V * inverse_w[..., None, :]) @ np.swapaxes(V, -1, -2)
+
+
+def _apply(design: np.ndarray, inverse: np.ndarray, data: np.ndarray) -> np.ndarray:
+    """``inverse @ D^T data``: the least squares of data ``(..., R, M)`` (broadcast over the leading
+    dimensions) with the truncated inverse of :func:`_truncated_inverse`."""
     rhs = np.einsum("...mk,...m->...k", design, data)
-    scale = np.maximum(np.trace(gram, axis1=-2, axis2=-1) / gram.shape[-1], 1e-300)
-    gram = gram + 1e-12 * scale[..., None, None] * np.eye(gram.shape[-1])
-    return np.linalg.solve(gram, rhs[..., None])[..., 0]
+    return np.einsum("...kl,...l->...k", inverse, rhs)
+
+
+def _solve(design: np.ndarray, data: np.ndarray, rcond: float | None = None) -> np.ndarray:
+    """Least squares of every ``(..., R)`` design at once, truncated at ``rcond`` (:func:`_truncated_inverse`)."""
+    return _apply(design, _truncated_inverse(design, rcond), data)
 
 
 def initial_states(batch: Batch, A: np.ndarray, outputs: tuple[int, ...]) -> np.ndarray:
     """Initial states ``(..., R, n)`` fitted to each record for linear models ``A (..., R, n, n)``.
 
     Each signal ``s`` is modelled as ``C_s Phi(t) x0 + offset_s`` (an offset per signal, solved
-    with the state), every signal weighted by its scatter over the record.
+    with the state), every signal weighted by its scatter over the record; directions the record hardly
+    sees (relative singular value below :data:`STATE_RCOND`) are left out, not fitted to its noise.
     """
     Phi = _transitions(A, batch.dt, batch.N)  # (..., R, N, n, n)
     design, data = _stack(batch, Phi, outputs)
@@ -362,7 +423,8 @@ def friction_states(
     T = np.asarray(T_c, dtype=float).reshape(A.shape[:-3] + (1,))
     n = A.shape[-1]
     design, data = _stack(batch, _transitions(A, batch.dt, batch.N), outputs)
-    x0 = _solve(design, data)[..., :n]
+    inverse = _truncated_inverse(design)  # once: the chord steps solve with the same design
+    x0 = _apply(design, inverse, data)[..., :n]
     rate = outputs[3]
     nonlinear = bool(np.any(T > 0))
     if not nonlinear:
@@ -378,7 +440,7 @@ def friction_states(
     cost = np.sum(res**2, axis=(-2, -1))
     scale = np.ones_like(cost)
     for _ in range(STATE_STEPS):
-        step = _solve(design, -res.reshape(res.shape[:-2] + (-1,)))[..., :n] * scale[..., None]
+        step = _apply(design, inverse, -res.reshape(res.shape[:-2] + (-1,)))[..., :n] * scale[..., None]
         size = np.maximum(np.max(np.abs(x0), axis=-1), 1e-3)
         if not np.any((np.max(np.abs(step), axis=-1) / size > STATE_TOLERANCE) & (scale >= 1 / 16)):
             break
@@ -535,6 +597,8 @@ PARAMETER_DRAWS = 4096
 """Draws of the benchmark parameters' error over which :func:`parameter_share` averages the fit's
 bounded response (a fixed seed: the same share every run; its sampling error about 1 % of a standard
 error, and none where no draw meets a bound)."""
+PARAMETER_SEED = 20261128
+"""Seed of those draws."""
 
 
 def bounded_steps(H: np.ndarray, g: np.ndarray, low: np.ndarray, high: np.ndarray, tol: float = 1e-12) -> np.ndarray:
@@ -610,7 +674,10 @@ def parameter_share(
     held the truth in 157 with ``G G^T``, every miss low, and in 190 with this share (the same fits).
     The share is the mean square of ``d(z) - d(0)`` over :data:`PARAMETER_DRAWS` draws, computed as
     ``G G^T`` plus the draws' mean of ``(d - d0)(d - d0)^T - (G z)(G z)^T`` (zero where no draw meets a
-    bound, so it is then exactly ``G G^T``).
+    bound, so it is then exactly ``G G^T``).  That mean is a difference of mean squares and can make the
+    sum indefinite (a negative variance along some combination of the values: a NaN or too narrow an
+    interval); the share returned is the sum made positive semidefinite, negative eigenvalues clipped to
+    zero (:func:`positive_semidefinite`).
     """
     theta = np.asarray(theta, dtype=float)
     r, J, Jq = _parameter_slopes(records, values, geometry, layout, theta, sigmas)
@@ -618,7 +685,7 @@ def parameter_share(
     G = -np.linalg.pinv(H) @ (J.T @ Jq)
     low = np.asarray(layout.lower, float) - theta
     high = np.asarray(layout.upper, float) - theta
-    z = np.random.default_rng(20261128).standard_normal((PARAMETER_DRAWS, Jq.shape[1]))
+    z = np.random.default_rng(PARAMETER_SEED).standard_normal((PARAMETER_DRAWS, Jq.shape[1]))
     g0 = J.T @ r
     d = bounded_steps(H, g0[None, :] + z @ (J.T @ Jq).T, low, high)
     d0 = bounded_steps(H, g0[None, :], low, high)[0]
@@ -626,7 +693,21 @@ def parameter_share(
     moved = d - d0
     touched = np.any(np.abs(moved - free) > 1e-9 * (1.0 + np.abs(free)), axis=1)
     excess = (moved.T @ moved - free.T @ free) / PARAMETER_DRAWS
-    return ParameterShare(G @ G.T + excess, G, float(np.mean(touched)))
+    return ParameterShare(positive_semidefinite(G @ G.T + excess), G, float(np.mean(touched)))
+
+
+def positive_semidefinite(matrix: np.ndarray) -> np.ndarray:
+    """``matrix`` symmetrised, its negative eigenvalues clipped to zero (unchanged where none is negative).
+
+    :func:`parameter_share` adds to ``G G^T`` a difference of two mean squares, which rounding and the
+    draws' sampling error can leave with a negative eigenvalue; a covariance with one gives a negative
+    variance along it (a NaN or too narrow an interval for any value or combination that leans on it).
+    """
+    sym = 0.5 * (matrix + np.swapaxes(matrix, -1, -2))
+    w, V = np.linalg.eigh(sym)
+    if np.all(w >= 0):
+        return sym
+    return (V * np.clip(w, 0.0, None)[..., None, :]) @ np.swapaxes(V, -1, -2)
 
 
 def fit_time_domain(records: list[Record], values: dict, geometry, layout: Layout, start=None) -> TimeDomainFit:
