@@ -7,13 +7,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from gap_support import riderless_model
 from matplotlib.colors import to_hex
-from test_gap_next_kick import RIVALS, _records
+from test_gap_next_kick import RIVALS, friction_diagnosis
 
-from bikerider.gap.diagnosis.result import diagnose
-from bikerider.gap.measured.records import fit_records
-from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
 from bikerider.gap.plan.ranking import plan_next
 from bikerider.plotting.common import pyplot
 from bikerider.plotting.gap_plan import plot_next
@@ -23,14 +19,7 @@ from bikerider.plotting.gap_plan import plot_next
 def friction_plan():
     """Decays of a bicycle with steer friction (roll rate and steer angle logged) planned against tyre slip: four
     laws, two signals and three pushes (a friction rival), five speeds, no multisines."""
-    model = riderless_model()
-    d = diagnose(
-        model,
-        EigenvalueData.empty(),
-        CanonicalData.empty(),
-        effects=tuple(RIVALS),
-        records=fit_records(_records(model, steer=True)),
-    )
+    d = friction_diagnosis(steer=True)
     return plan_next(
         d, rivals=RIVALS, speeds=np.linspace(3.0, 5.0, 5), signals=["roll_rate", "steer_angle"], sweeps=False
     )

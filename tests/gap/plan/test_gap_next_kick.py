@@ -40,17 +40,16 @@ def _records(model, steer: bool):
     return out
 
 
+def friction_diagnosis(steer: bool):
+    """The riderless bicycle's friction decays (:func:`_records`) diagnosed with the rivals alone."""
+    model = riderless_model()
+    records = fit_records(_records(model, steer=steer))
+    return diagnose(model, EigenvalueData.empty(), CanonicalData.empty(), effects=tuple(RIVALS), records=records)
+
+
 @pytest.fixture(scope="module")
 def roll_rate_only():
-    model = riderless_model()
-    d = diagnose(
-        model,
-        EigenvalueData.empty(),
-        CanonicalData.empty(),
-        effects=tuple(RIVALS),
-        records=fit_records(_records(model, steer=False)),
-    )
-    return d
+    return friction_diagnosis(steer=False)
 
 
 def _plan(d):
