@@ -359,3 +359,19 @@ def test_a_calibration_trial_whose_records_are_all_left_out_is_scored_not_lost(m
     trial = V.run_trial(models, effect, 0)
     assert trial.verdict == "no record used" and trial.n_measured == 0 and trial.method == "records"
     assert trial.reference == {k: trial.truth[k] for k in effect.sizes} and not trial.fitted
+
+
+def test_a_record_the_amplitudes_cannot_batch_is_skipped_not_fatal():
+    # a record whose clock still jitters keeps no inferred steer-rate amplitude (NaN) and stops nothing; the
+    # others keep their places
+    from bikerider.gap.diagnosis.priors import _batches
+
+    t = np.arange(0.0, 2.0, 0.01)
+    jitter = t + np.where(np.arange(t.size) % 2, 0.002, 0.0)
+    records = [
+        SimpleNamespace(name=name, time=time, signals={"roll_rate": np.sin(7 * time)})
+        for name, time in (("a", t), ("jitter", jitter), ("b", t))
+    ]
+    batches = _batches(records)
+    assert [idx for idx, _ in batches] == [[0, 2]]
+    assert Priors({}, np.array([0.5, np.nan])).steer_rate_amplitude() == 0.5

@@ -72,7 +72,8 @@ class Priors:
 
     def steer_rate_amplitude(self) -> float | None:
         """Median steer-rate amplitude of the records used [rad/s] (None without steer signals)."""
-        return float(np.median(self.amplitudes)) if self.amplitudes.size else None
+        known = self.amplitudes[np.isfinite(self.amplitudes)]
+        return float(np.median(known)) if known.size else None
 
     def plausible_range(self, name: str) -> tuple[float, float, str]:
         """The usual range of a fitted parameter and where it comes from (a value outside it is flagged)."""
@@ -301,6 +302,17 @@ def unsteered_records(records: list[RecordFit], record_rows: dict[int, int]) -> 
     ]
 
 
+def _batches(records: list) -> list:
+    """:func:`~bikerider.gap.inference.timedomain.make_batches` of the records that are uniformly sampled (a
+    record that is not keeps no inferred amplitude, NaN, and never stops the diagnosis)."""
+    uniform = [
+        k
+        for k, r in enumerate(records)
+        if r.time.size > 1 and np.allclose(np.diff(r.time), r.time[1] - r.time[0], rtol=1e-6, atol=1e-9)
+    ]
+    return [([uniform[j] for j in idx], batch) for idx, batch in make_batches([records[k] for k in uniform])]
+
+
 def fitted_steer_rate_amplitudes(records: list, problem: GapProblem, effects, values) -> np.ndarray:
     """``sqrt(2)`` times the RMS steer rate [rad/s] of a steer-friction fit's response fitted to each record
     (:func:`~bikerider.gap.inference.timedomain.friction_states`: the friction simulated in time from the
@@ -308,8 +320,8 @@ def fitted_steer_rate_amplitudes(records: list, problem: GapProblem, effects, va
     signal hidden, these are 1.17 times the amplitudes the steer signal gives (median; 10th-90th percentile
     0.92-1.64), where the nominal model's response gives 1.33 (0.97-3.0): the friction holds the steer back."""
     layout = Layout.of(tuple(effects))
-    out = np.empty(len(records))
-    for idx, batch in make_batches(records):
+    out = np.full(len(records), np.nan)
+    for idx, batch in _batches(records):
         A, b, outputs, T = systems(problem.nominal, problem.geometry, batch.records, layout, np.atleast_2d(values))
         states, _ = friction_states(batch, A, b, outputs, T)
         for j, n in enumerate(batch.length):
@@ -324,11 +336,11 @@ def inferred_steer_rate_amplitudes(records: list, problem: GapProblem) -> np.nda
     over the window a time-domain fit reads.  A roll-rate gyro alone sees the weave, and the weave's shape
     carries the steer with it; friction's hold on the steer is left out (a friction fit's equivalent uses
     :func:`fitted_steer_rate_amplitudes`).  ``records`` as :func:`unsteered_records` gives them."""
-    out = np.empty(len(records))
+    out = np.full(len(records), np.nan)
     if not records:
         return out
     model = EffectModel(problem.nominal, problem.geometry)
-    for idx, batch in make_batches(records):
+    for idx, batch in _batches(records):
         A, _, outputs = closed_loop(model, batch.records)
         states = simulate_linear(A, initial_states(batch, A, outputs), batch.dt, batch.N)
         for j, n in enumerate(batch.length):
