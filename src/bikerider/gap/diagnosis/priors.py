@@ -5,7 +5,7 @@ of :mod:`bikerider.gap.diagnosis.result`, "Usual, and priors")."""
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -69,6 +69,7 @@ class Priors:
     n_folds: int = 0
     problem: GapProblem | None = None
     unsteered: tuple = ()
+    _fitted: dict = field(default_factory=dict, repr=False)
 
     def steer_rate_amplitude(self) -> float | None:
         """Median steer-rate amplitude of the records used [rad/s] (None without steer signals)."""
@@ -130,8 +131,12 @@ class Priors:
             return None
         amplitudes = self.amplitudes
         if self.unsteered and self.problem is not None:
-            own = fitted_steer_rate_amplitudes(list(self.unsteered), self.problem, fit.effects, fit.values)
-            amplitudes = np.concatenate([amplitudes[: amplitudes.size - len(self.unsteered)], own])
+            key = (tuple(fit.effects), tuple(np.asarray(fit.values, float)))
+            if key not in self._fitted:  # the same fit is judged in the ranking, the pairs and the selection
+                self._fitted[key] = fitted_steer_rate_amplitudes(
+                    list(self.unsteered), self.problem, fit.effects, fit.values
+                )
+            amplitudes = np.concatenate([amplitudes[: amplitudes.size - len(self.unsteered)], self._fitted[key]])
         amplitudes = amplitudes[np.isfinite(amplitudes) & (amplitudes > 0)]
         if not amplitudes.size:
             return None

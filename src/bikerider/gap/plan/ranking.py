@@ -738,7 +738,7 @@ class _Planner(_Models):
         for k, rival in enumerate(self.rivals):
             fit, loop = rival.fit, loops[k]
             # a mode that grows e-fold within the run (a slow capsize a rider or a catch holds is allowed)
-            unstable |= np.linalg.eigvals(loop[0][0]).real.max(axis=-1) >= 1.0 / self.run_time
+            unstable |= eigenvalues[1 + k].real.max(axis=-1) >= 1.0 / self.run_time
             # how far the run leans: a run whose lean passes MAX_ROLL is likely lost (it falls or is caught);
             # a friction rival's response and lean from its runs simulated in time
             if rival.nonlinear:
