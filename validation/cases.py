@@ -270,12 +270,13 @@ class TruthSimulator:
         t = self.truth.values
         gains = np.asarray(gains, dtype=float)
         c_s, T_c = t.get("c_steer", 0.0), t.get("T_coulomb", 0.0)
+        eps = t.get("eps_coulomb", FRICTION_CORNER)
         k_s, k3_s = t.get("k_steer", 0.0), t.get("k3_steer", 0.0)
         k_a, c_a = t.get("k_arm", 0.0), t.get("c_arm", 0.0)
 
         def steer_torque(phi, delta, phid, deltad):
             control = gains @ np.array([phi, phid, delta, deltad])
-            passive = -(c_s + c_a) * deltad - T_c * math.tanh(deltad / 0.02) - (k_s + k_a) * delta - k3_s * delta**3
+            passive = -(c_s + c_a) * deltad - T_c * math.tanh(deltad / eps) - (k_s + k_a) * delta - k3_s * delta**3
             return control + passive
 
         if "tyre_slip" in self.truth.effects:
@@ -1002,7 +1003,36 @@ CALIBRATION_EFFECTS: tuple[CalibrationEffect, ...] = (
 )
 """The calibrated effects.  ``steer_coulomb`` is pure Coulomb steer friction simulated nonlinearly in time,
 which a table of eigenvalues can only size as a viscous damping: its size is scored against the
-describing-function equivalent ``4 T / (pi A)`` at the runs' median steer-rate amplitude ``A``."""
+describing-function equivalent of the truth's law at the runs' median steer-rate amplitude ``A``
+(:func:`truth_equivalent`; ``4 T / (pi A)`` for a sharp corner), the corner drawn by :func:`draw_corner`."""
+
+FRICTION_CORNER = 0.02
+"""The truth's Coulomb friction corner ``eps`` of ``T tanh(deltad / eps)`` [rad/s] unless a truth draws its own
+(``eps_coulomb``: :func:`draw_corner`)."""
+
+
+def draw_corner(seed: int) -> float:
+    """A calibration truth's friction corner ``eps`` [rad/s], drawn log-uniform over the corner's range the fits
+    assume (:func:`bikerider.gap.inference.timedomain.corner_nodes`: 0.02-0.125 rad/s), from a stream of its own
+    (the sizes, bicycle and runs of a seed stay those drawn before the corner was)."""
+    from bikerider.gap.inference.timedomain import CORNER_FACTOR, SMOOTHING
+
+    low, high = math.log(SMOOTHING / CORNER_FACTOR), math.log(SMOOTHING * CORNER_FACTOR)
+    return float(math.exp(np.random.default_rng((seed, 25)).uniform(low, high)))
+
+
+def truth_equivalent(truth: Truth, amplitude: float | None) -> float:
+    """The truth's friction as the viscous damping it equals at steer-rate amplitude ``amplitude``: its own law's
+    describing function (:func:`bikerider.gap.inference.timedomain.describing_gain` at its corner; ``4 T /
+    (pi A)`` for a sharp one) plus its viscous part; NaN without an amplitude."""
+    from bikerider.gap.inference.timedomain import describing_gain
+
+    if not amplitude:
+        return math.nan
+    v = truth.values
+    eps = v.get("eps_coulomb", FRICTION_CORNER)
+    return float(v.get("c_steer", 0.0) + v.get("T_coulomb", 0.0) * describing_gain(amplitude, eps))
+
 
 CALIBRATION_DRAW = {"halfcauchy": 0.8}
 """Probability of the prior's interval the sizes are drawn from (0.95 unless named here: a half-Cauchy's
@@ -1112,6 +1142,8 @@ def run_trial(models: dict[str, GapModelInput], effect: CalibrationEffect, seed:
     model = models["rider" if rider else "riderless"]
     protocol = CALIBRATION_RIDER if rider else CALIBRATION_RIDERLESS
     truth = draw_truth(effect, rng)
+    if effect.name == "steer_coulomb":  # the friction's corner drawn over the range the fits assume
+        truth = Truth(truth.name, truth.effects, {**truth.values, "eps_coulomb": draw_corner(seed)}, truth.description)
     # the rider drawn from a stream of its own, so the sizes, bicycle and runs of a seed stay those of the
     # studies before the geometry was drawn (their stored trials compare on the same seeds)
     simulator = TruthSimulator(model, truth, rng, geometry_rng=np.random.default_rng((seed, 21)))
@@ -1122,7 +1154,7 @@ def run_trial(models: dict[str, GapModelInput], effect: CalibrationEffect, seed:
     amplitude = float(np.median(amplitudes)) if amplitudes else None
     reference = {k: truth.values[k] for k in effect.sizes}
     if effect.name == "steer_coulomb":
-        reference = {"c_steer": 4 * truth.values["T_coulomb"] / (math.pi * amplitude) if amplitude else math.nan}
+        reference = {"c_steer": truth_equivalent(truth, amplitude)}
 
     def undiagnosed(verdict: str, n_measured: int) -> Trial:
         """The trial when no diagnosis could be made (``verdict`` says why)."""
@@ -1223,20 +1255,15 @@ def run_trial(models: dict[str, GapModelInput], effect: CalibrationEffect, seed:
 
 def _friction_equivalent(diagnosis, fit, amplitude: float | None) -> dict | None:
     """The steer-friction fit as the viscous damping it equals at the runs' median steer-rate amplitude
-    ``c_viscous + 4 T_coulomb / (pi A)`` with its 95 % interval, as
+    with its 95 % interval (:func:`bikerider.gap.diagnosis.priors.equivalent_damping`, as
     :meth:`bikerider.gap.diagnosis.priors.Priors.friction_equivalent` reports it for records with a steer
-    signal (these hold the roll rate only, so the amplitude is the truth's, the one the reference uses)."""
-    from bikerider.gap.diagnosis.statistics import interval_quantile
+    signal; these hold the roll rate only, so the amplitude is the truth's, the one the reference uses)."""
+    from bikerider.gap.diagnosis.priors import equivalent_damping
 
     if not amplitude or fit.covariance is None or not np.all(np.isfinite(fit.covariance)):
         return None
-    gradient = np.zeros(len(fit.names))
-    gradient[fit.names.index("T_coulomb")] = 4 / (math.pi * amplitude)
-    gradient[fit.names.index("c_viscous")] = 1.0
-    value = float(gradient @ fit.values)
-    stderr = math.sqrt(max(float(gradient @ fit.covariance @ gradient), 0.0))
-    quantile = interval_quantile(gradient, fit.covariance, fit.jackknife_covariance, len(diagnosis.folds))
-    return {"value": value, "ci95": [max(value - quantile * stderr, 0.0), value + quantile * stderr]}
+    value, _, interval = equivalent_damping(fit, amplitude, len(diagnosis.folds))
+    return {"value": value, "ci95": list(interval)}
 
 
 def _achieved_on_records(model: GapModelInput, diagnosis, records: list) -> float | None:
@@ -1274,7 +1301,8 @@ def run_friction_trial(model: GapModelInput, seed: int, protocol: RecordProtocol
 
     The fitted split (``T_coulomb``, ``c_viscous``) is scored against the truth (``c_viscous`` 0), and the
     equivalent viscous damping (:meth:`bikerider.gap.diagnosis.priors.Priors.friction_equivalent`) against
-    ``4 T / (pi A)`` at the same median amplitude ``A``.
+    the truth's own (:func:`truth_equivalent`) at the same median amplitude ``A``.  The truth's friction corner
+    is drawn over the range the fits assume (:func:`draw_corner`).
     """
     from dataclasses import replace
 
@@ -1288,7 +1316,8 @@ def run_friction_trial(model: GapModelInput, seed: int, protocol: RecordProtocol
     effect = CALIBRATION_FRICTION
     prior = next(p for p in EFFECTS["steer_friction"].parameters if p.name == "T_coulomb").the_prior()
     T = prior.sample(rng, CALIBRATION_DRAW.get(prior.kind, 0.95))
-    truth = Truth(effect.name, ("steer_friction",), {"T_coulomb": T}, f"T_coulomb {T:.3g}")
+    eps = draw_corner(seed)
+    truth = Truth(effect.name, ("steer_friction",), {"T_coulomb": T, "eps_coulomb": eps}, f"T_coulomb {T:.3g}")
     simulator = TruthSimulator(model, truth, rng)
     fits = fit_records(measure_records(simulator, protocol, rng))
     diagnosis = diagnose(model, EigenvalueData.empty(), CanonicalData.empty(), records=fits)
@@ -1304,7 +1333,7 @@ def run_friction_trial(model: GapModelInput, seed: int, protocol: RecordProtocol
         if eq is not None:
             amplitude = eq["amplitude"]
             fitted["c_equivalent"] = {"value": eq["c_equivalent"], "ci95": eq["ci95"], "separable": eq["separable"]}
-            reference["c_equivalent"] = 4 * T / (math.pi * amplitude)
+            reference["c_equivalent"] = truth_equivalent(truth, amplitude)
     ranking = result["ranking"]
     how = result["how_far"] or {}
     return Trial(

@@ -17,6 +17,8 @@ from bikerider.gap.diagnosis.result import FEW_FOLDS_FRICTION, as_dict, diagnose
 from bikerider.gap.diagnosis.statistics import interval_quantile, jackknife_quantile
 from bikerider.gap.inference.timedomain import (
     Layout,
+    corner_nodes,
+    corner_share,
     fit_covariance,
     fit_time_domain,
     parameter_sensitivity,
@@ -139,7 +141,13 @@ def test_two_sessions_get_the_fits_own_covariance(riderless):
     records = [r.record for r in d.fits.records]
     own = fit_covariance(records, values, riderless.geometry, FRICTION, full.values)
     assert own.reduced_chi2 < 1  # the weights are the signals' scatter, not their noise: scaled down
-    assert full.covariance - own.covariance == pytest.approx(d.fits.parameter_covariance(FRICTION, full.values))
+    # and the friction corner's (refits at the corners the data do not decide)
+    assert [e for e, _, _ in full.corners] == list(corner_nodes()[0])
+    share = corner_share(records, values, riderless.geometry, FRICTION, full.values)
+    assert full.corner_covariance == pytest.approx(share.covariance)
+    assert full.covariance - own.covariance - full.corner_covariance == pytest.approx(
+        d.fits.parameter_covariance(FRICTION, full.values)
+    )
     quantile = (full.ci_high[0] - full.values[0]) / full.stderr[0]
     # Welch-Satterthwaite with hundreds of degrees of freedom for the data's share: about the normal 1.96
     assert 1.959 < quantile < 1.97
@@ -178,8 +186,19 @@ def test_three_sessions_keep_the_jackknife(riderless):
     centred = folds - folds.mean(axis=0)
     spread = 2 / 3 * centred.T @ centred
     assert full.jackknife_covariance == pytest.approx(spread, rel=1e-12)
-    assert full.covariance == pytest.approx(spread + d.fits.parameter_covariance(FRICTION, full.values), rel=1e-12)
-    assert full.stderr == pytest.approx([0.008979380751773956, 0.007491565904946665], rel=1e-4)
-    assert full.ci_low == pytest.approx([0.060560102467065835, 0.08737991698726355], rel=1e-4)
-    assert full.ci_high == pytest.approx([0.09576068854971032, 0.11674808452840804], rel=1e-4)
+    # plus the friction corner's share, known from the model as the parameters' is
+    corners = full.corner_covariance
+    assert full.covariance == pytest.approx(
+        spread + d.fits.parameter_covariance(FRICTION, full.values) + corners, rel=1e-12
+    )
+    # decays of 0.5 rad/s steer rate, ten corners: the corner moves the fit by a few per cent of its interval
+    assert np.all(np.diag(corners) > 0) and np.all(np.diag(corners) < 0.01 * np.diag(full.covariance))
+    assert np.sqrt(np.diag(full.covariance - corners)) == pytest.approx(
+        [0.008979380751773956, 0.007491565904946665], rel=1e-4
+    )
+    # the interval without the corner's share, widened by it a little (those decays' corner share is small)
+    before_low, before_high = [0.060560102467065835, 0.08737991698726355], [0.09576068854971032, 0.11674808452840804]
+    assert np.all(full.ci_low <= before_low) and np.all(full.ci_high >= before_high)
+    assert full.ci_low == pytest.approx(before_low, rel=2e-3)
+    assert full.ci_high == pytest.approx(before_high, rel=2e-3)
     assert FEW_FOLDS_FRICTION not in as_dict(d)["notes"]

@@ -18,6 +18,7 @@ from bikerider.gap.diagnosis.fits import with_parameter_uncertainty
 from bikerider.gap.diagnosis.priors import Priors, steer_rate_amplitudes
 from bikerider.gap.diagnosis.result import diagnose
 from bikerider.gap.inference.problem import EffectFit
+from bikerider.gap.inference.timedomain import describing_gain
 from bikerider.io.gap_data import read_eigenvalues
 from bikerider.io.gap_model import load_model
 
@@ -161,9 +162,12 @@ def test_decays_of_one_amplitude_report_the_equivalent_not_the_split():
     eq = d.friction_equivalent(fit)
     a = eq["amplitude"]
     assert a == pytest.approx(0.5, rel=0.02)  # sqrt(2) RMS of a sine is its amplitude
-    assert eq["c_equivalent"] == pytest.approx(0.29 + 4 * 0.02 / (math.pi * a))
-    g = np.array([4 / (math.pi * a), 1.0])
-    assert eq["stderr"] == pytest.approx(math.sqrt(g @ fit.covariance @ g))
+    # the fit's own law's describing function at 10 corners: within 2 % of a sharp corner's 4 / (pi A)
+    gain = float(describing_gain(a))
+    assert 0.98 * 4 / (math.pi * a) < gain < 4 / (math.pi * a)
+    assert eq["c_equivalent"] == pytest.approx(0.29 + gain * 0.02)
+    g = np.array([gain, 1.0])
+    assert eq["stderr"] == pytest.approx(math.sqrt(g @ fit.covariance @ g))  # no corners refitted: the fit's own
     assert not eq["separable"] and "cannot tell Coulomb from viscous" in eq["note"]
 
 
@@ -187,7 +191,11 @@ def test_a_few_calibration_trials_and_their_report(tmp_path):
     assert trial.method == "records" and not trial.rider
     assert 0 < trial.truth["T_coulomb"] <= Prior("halfcauchy", 0, 0.1, "").interval(0.8)[1]
     c_eq = trial.reference["c_steer"]
-    assert c_eq == pytest.approx(4 * trial.truth["T_coulomb"] / (math.pi * trial.amplitude))
+    # the truth's own law at its drawn corner, below a sharp corner's 4 T / (pi A)
+    eps = trial.truth["eps_coulomb"]
+    assert eps == V.draw_corner(0)
+    assert c_eq == pytest.approx(trial.truth["T_coulomb"] * describing_gain(trial.amplitude, eps))
+    assert c_eq < 4 * trial.truth["T_coulomb"] / (math.pi * trial.amplitude)
     assert "c_steer" in trial.fitted
     # the candidate's fit to all the data, for analysis offline: its chi-square over its observations and
     # the local minima its search found (from records)

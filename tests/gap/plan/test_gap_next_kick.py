@@ -11,6 +11,7 @@ import pytest
 from gap_support import SIL, riderless_model
 
 from bikerider.gap.diagnosis.result import diagnose
+from bikerider.gap.inference.timedomain import SMOOTHING
 from bikerider.gap.measured.records import Record, fit_records
 from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
 from bikerider.gap.plan import decays, ranking
@@ -137,7 +138,7 @@ def test_a_friction_rivals_decays_carry_the_corner_of_its_friction_law_at_a_push
 
     spanned = plan()
     with monkeypatch.context() as m:  # the same data, the friction law's corner taken as the fits' own
-        m.setattr(ranking, "smoothing_nodes", lambda: ((decays.SMOOTHING,), (1.0,)))
+        m.setattr(ranking, "smoothing_nodes", lambda: ((SMOOTHING,), (1.0,)))
         fixed = plan()
     assert np.all(fixed.form_cov == 0)
     friction, slip = (spanned.rivals.index(next(r for r in spanned.rivals if r.name == n)) for n in RIVALS)

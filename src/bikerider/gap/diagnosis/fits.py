@@ -28,7 +28,13 @@ from bikerider.gap.candidates.effects import EFFECTS, PARAMETERS, STEER_FRICTION
 from bikerider.gap.diagnosis.statistics import _named_values, gap_shrink, interval_quantile, rms
 from bikerider.gap.inference.frequency_response import predict_frf_friction
 from bikerider.gap.inference.problem import MINIMUM_STARTS, EffectFit, GapProblem, scale_and_quantile
-from bikerider.gap.inference.timedomain import Layout, fit_covariance, fit_time_domain, parameter_share
+from bikerider.gap.inference.timedomain import (
+    Layout,
+    corner_share,
+    fit_covariance,
+    fit_time_domain,
+    parameter_share,
+)
 from bikerider.gap.measured.multisine import MultisineFit
 from bikerider.gap.measured.records import RecordFit
 
@@ -169,9 +175,10 @@ class Fits:
 
         The fit to all the data gets its covariance as the data's share plus the benchmark parameters'
         share (:meth:`parameter_covariance`: their error is common to every record and fold, so the
-        data's spread cannot show it), and 95 % intervals from Student's t with the Welch-Satterthwaite
-        degrees of freedom of that sum (:func:`interval_quantile`, the parameters' share known).  The
-        data's share is
+        data's spread cannot show it) plus the friction corner's share (the law's corner the data do not
+        decide: :func:`bikerider.gap.inference.timedomain.corner_share`, two more fits), and 95 % intervals
+        from Student's t with the Welch-Satterthwaite degrees of freedom of that sum
+        (:func:`interval_quantile`, the parameters' and the corner's shares known).  The data's share is
 
         * with three folds or more, the jackknife over the held-out folds' fits (leave one group out;
           one degree of freedom fewer than the folds): it sees the scatter from session to session;
@@ -200,22 +207,26 @@ class Fits:
             )
             values, cost, n, success = fit.values, fit.cost, fit.n_samples, fit.success
         stderr = np.full(values.size, np.inf)
-        covariance = spread = None
+        covariance = spread = corners = None
         quantile = np.full(values.size, 1.96)
+        if mask is None and jackknife:  # the friction's corner, which no fold decides either
+            records = [self.records[k].record for k in self.record_indices(None)]
+            corners = corner_share(records, self.problem.nominal, self.problem.geometry, layout, values)
         if mask is None and jackknife and len(self.folds) >= 3:  # jackknife over the held-out folds' fits
             folds = np.array([f.values for f in self.cross_validate(effects).fits])
             g = len(folds)
             centred = folds - folds.mean(axis=0)
             spread = (g - 1) / g * centred.T @ centred
             # the benchmark parameters' error is common to every fold, so the folds' spread cannot show
-            # it: it is counted apart, as the fit's move over their error (its bounds respected)
-            covariance = spread + self.parameter_covariance(layout, values)
+            # it: it is counted apart, as the fit's move over their error (its bounds respected); so is
+            # the friction corner's
+            covariance = spread + self.parameter_covariance(layout, values) + corners.covariance
             stderr = np.sqrt(np.diag(covariance))
             quantile = np.array([interval_quantile(row, covariance, spread, g) for row in np.eye(values.size)])
         elif mask is None and jackknife:  # too few folds for a jackknife: the fit's own Gauss-Newton covariance
             records = [self.records[k].record for k in self.record_indices(None)]
             own = fit_covariance(records, self.problem.nominal, self.problem.geometry, layout, values)
-            covariance = own.covariance + self.parameter_covariance(layout, values)
+            covariance = own.covariance + self.parameter_covariance(layout, values) + corners.covariance
             stderr = np.sqrt(np.clip(np.diag(covariance), 0, None))
             # the data's share rests on a scale estimated from own.dof residuals: interval_quantile's
             # Welch-Satterthwaite sum with that many degrees of freedom (its folds less one)
@@ -247,6 +258,8 @@ class Fits:
             upper=upper,
             covariance=covariance,
             jackknife_covariance=spread,
+            corners=[] if corners is None else corners.corners,
+            corner_covariance=None if corners is None else corners.covariance,
         )
         if mask is None:
             self.time_domain_full[effects] = out

@@ -21,12 +21,14 @@ from bikerider.gap.candidates.effects import (
     prior_from_range,
 )
 from bikerider.gap.diagnosis.fits import time_domain
-from bikerider.gap.diagnosis.statistics import ALPHA, interval_quantile
+from bikerider.gap.diagnosis.statistics import ALPHA, variance_quantile
 from bikerider.gap.distributions import chi2
 from bikerider.gap.inference.problem import EffectFit, GapProblem
 from bikerider.gap.inference.timedomain import (
+    SMOOTHING,
     Layout,
     closed_loop,
+    describing_gain,
     friction_states,
     initial_states,
     make_batches,
@@ -41,6 +43,45 @@ not determined by the data (the data narrow it down less than the literature alr
 AMPLITUDE_SPREAD = 2.0
 """Records whose steer-rate amplitudes span less than this factor (10th to 90th percentile) are decays of
 one amplitude: they do not tell Coulomb from viscous friction (:meth:`Priors.friction_equivalent`)."""
+
+
+def equivalent_damping(fit: EffectFit, amplitude: float, folds: int) -> tuple[float, float, tuple[float, float]]:
+    """A steer-friction fit as the viscous damping it equals at steer-rate amplitude ``amplitude`` [rad/s]:
+    ``c_eq = c_viscous + N(A) T_coulomb``, its standard error and 95 % interval.
+
+    ``N(A)`` is the describing function of the fit's own friction law, ``tanh(deltad / eps)``
+    (:func:`bikerider.gap.inference.timedomain.describing_gain`; ``4 / (pi A)`` for a sharp corner), at
+    each corner the fit was refitted at (``fit.corners``): the data determine the damping at their
+    amplitude, whatever corner the law is given, so the corner's share of ``c_eq`` is the corner prior's
+    mean square of the move of ``c_eq`` itself, each corner's values through its own ``N(A)`` (not the
+    fit's covariance's corner share through the fit's own ``N(A)``, which counts the split's move that
+    the equivalent does not make).  The rest of the variance comes from the fit's covariance; Student's t
+    with Welch-Satterthwaite degrees of freedom over ``folds`` held-out folds where the covariance holds a
+    jackknife (:func:`bikerider.gap.diagnosis.statistics.interval_quantile`), else 1.96.
+    """
+    i, j = fit.names.index("T_coulomb"), fit.names.index("c_viscous")
+
+    def at(eps: float, values: np.ndarray) -> float:
+        return float(values[j] + describing_gain(amplitude, eps) * values[i])
+
+    gradient = np.zeros(len(fit.names))
+    gradient[i], gradient[j] = float(describing_gain(amplitude)), 1.0
+    value = at(SMOOTHING, np.asarray(fit.values, float))
+    if fit.covariance is not None and np.all(np.isfinite(fit.covariance)):
+        covariance = np.asarray(fit.covariance, float)
+        if fit.corner_covariance is not None:
+            covariance = covariance - fit.corner_covariance
+        corner = sum(w * (at(eps, v) - value) ** 2 for eps, w, v in fit.corners)
+        variance = max(float(gradient @ covariance @ gradient), 0.0) + corner
+        stderr = math.sqrt(variance)
+    else:
+        stderr = float(math.hypot(gradient[i] * fit.stderr[i], fit.stderr[j]))
+    timed = time_domain(fit.effects) and fit.covariance is not None and folds >= 3
+    if timed and fit.jackknife_covariance is not None:
+        quantile = variance_quantile(stderr**2, float(gradient @ fit.jackknife_covariance @ gradient), folds)
+    else:
+        quantile = 1.96
+    return value, stderr, (max(value - quantile * stderr, 0.0), value + quantile * stderr)
 
 
 @dataclass(frozen=True, eq=False)
@@ -119,8 +160,9 @@ class Priors:
         """Coulomb plus viscous steer friction as the viscous damping it equals at the records' amplitude.
 
         The describing function of Coulomb friction ``T`` on a sinusoidal steer rate of amplitude ``A`` is a
-        viscous damping ``4 T / (pi A)``, so ``c_eq = c_viscous + 4 T / (pi A)`` at the records' median
-        amplitude, with its standard error from the fit's covariance.  Records whose amplitudes span less
+        viscous damping ``N(A) T`` (``4 T / (pi A)`` for a sharp corner; the fit's own law's,
+        :func:`equivalent_damping`), so ``c_eq = c_viscous + N(A) T`` at the records' median amplitude, with
+        its standard error from the fit's covariance and its corners.  Records whose amplitudes span less
         than a factor :data:`AMPLITUDE_SPREAD` (10th to 90th percentile) are decays of one amplitude: they
         determine ``c_eq`` but not the split between Coulomb and viscous friction (``separable`` false).
         Records without a steer signal count with the amplitude of the fit's own response fitted to them
@@ -143,20 +185,8 @@ class Priors:
         a = float(np.median(amplitudes))
         lo, hi = np.percentile(amplitudes, [10, 90])
         spread = float(hi / lo)
-        i, j = fit.names.index("T_coulomb"), fit.names.index("c_viscous")
-        gradient = np.zeros(len(fit.names))
-        gradient[i], gradient[j] = 4 / (math.pi * a), 1.0
-        value = float(gradient @ fit.values)
-        if fit.covariance is not None and np.all(np.isfinite(fit.covariance)):
-            stderr = float(math.sqrt(max(gradient @ fit.covariance @ gradient, 0.0)))
-        else:
-            stderr = float(math.hypot(gradient[i] * fit.stderr[i], fit.stderr[j]))
+        value, stderr, (low, high) = equivalent_damping(fit, a, self.n_folds)
         separable = spread >= AMPLITUDE_SPREAD
-        timed = time_domain(fit.effects) and fit.covariance is not None and self.n_folds >= 3
-        quantile = (
-            interval_quantile(gradient, fit.covariance, fit.jackknife_covariance, self.n_folds) if timed else 1.96
-        )
-        low, high = max(value - quantile * stderr, 0.0), value + quantile * stderr
         return {
             "c_equivalent": value,
             "stderr": stderr,
@@ -180,7 +210,7 @@ class Priors:
                     if separable
                     else (
                         ": decays of one amplitude, which cannot tell Coulomb from viscous friction; what they "
-                        f"determine is the equivalent viscous damping c_eq = c_viscous + 4 T_coulomb / (pi A) = "
+                        f"determine is the equivalent viscous damping c_eq = c_viscous + N(A) T_coulomb = "
                         f"{value:.3g} [{low:.3g}, {high:.3g}] "
                         "N m s/rad, not the split"
                     )

@@ -161,7 +161,12 @@ def interval_quantile(gradient, covariance, jackknife_covariance, folds: int) ->
     total = float(g @ np.asarray(covariance, float) @ g)
     if jackknife_covariance is None:
         return 1.96
-    spread = float(g @ np.asarray(jackknife_covariance, float) @ g)
+    return variance_quantile(total, float(g @ np.asarray(jackknife_covariance, float) @ g), folds)
+
+
+def variance_quantile(total: float, spread: float, folds: int) -> float:
+    """:func:`interval_quantile` for one value whose variance ``total`` holds a jackknife's share ``spread``
+    over ``folds`` fits (the rest known)."""
     if not (np.isfinite(total) and np.isfinite(spread)) or spread <= 0 or total <= 0:
         return 1.96 if spread <= 0 else jackknife_quantile(folds)
     dof = max(folds - 1, 1) * (total / spread) ** 2

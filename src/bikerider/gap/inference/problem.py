@@ -168,6 +168,11 @@ class EffectFit:
     jackknife_covariance: np.ndarray | None = None
     """The share of ``covariance`` estimated from the spread of the held-out folds' fits (a jackknife, few
     degrees of freedom: :func:`bikerider.gap.diagnosis.statistics.interval_quantile`), where there is one."""
+    corners: list[tuple[float, float, np.ndarray]] = field(default_factory=list)
+    """A time-domain fit refitted at each friction corner ``(eps, weight, values)``, its own first; their
+    share is in ``covariance`` (:func:`bikerider.gap.inference.timedomain.corner_share`)."""
+    corner_covariance: np.ndarray | None = None
+    """That share of ``covariance``, where it was taken."""
     minima: list[tuple[np.ndarray, float]] = field(default_factory=list)
     """Other local minima of the fit's chi-square that a search from further starts found (values,
     chi-square), distinct from this one, which is the lowest found (:meth:`GapProblem.fit_apparent`)."""

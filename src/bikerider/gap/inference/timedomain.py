@@ -47,7 +47,52 @@ OBSERVED = {"roll_angle": 0, "steer_angle": 1, "roll_rate": 2, "steer_rate": 3}
 TIME_DOMAIN_SIGNALS = ("roll_rate", "steer_angle")
 """Signals the friction fit compares (those of them a record holds)."""
 SMOOTHING = 0.05
-"""``eps`` of the smoothed sign function ``tanh(deltad / eps)`` [rad/s]."""
+"""``eps`` of the smoothed sign function ``tanh(deltad / eps)`` [rad/s]: the fits' own friction corner."""
+CORNER_FACTOR = 2.5
+"""The friction law's corner the data do not decide: ``eps`` log-uniform between :data:`SMOOTHING` divided and
+multiplied by this factor (0.02-0.125 rad/s).  The steer-by-wire logs fit every corner from 0.01 to 0.1 rad/s
+with the same friction and held-out errors against the noise of 1.18, 1.12, 0.98, 0.97 (eps 0.01, 0.02, 0.05,
+0.1; docs/gap.md, *The friction law's corner*); a roll-rate-only decay with the rider moves the steer at
+0.05-0.1 rad/s, where the corner moves the fitted Coulomb level by a third (:func:`corner_share`)."""
+CORNER_NODES = (0.0, -math.sqrt(0.6), math.sqrt(0.6))
+CORNER_WEIGHTS = (4.0 / 9.0, 5.0 / 18.0, 5.0 / 18.0)
+"""Three-point Gauss-Legendre rule over the corner's uniform range in ``log eps`` (exact for a response
+quadratic in ``log eps``: mean and variance of the range): the nodes as fractions of the half range, their
+weights; the first node is the fits' own corner :data:`SMOOTHING`."""
+
+
+def corner_nodes() -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """The friction corners ``eps`` [rad/s] over which the corner's share is taken, and their weights:
+    :data:`CORNER_NODES` over ``log eps`` across :data:`CORNER_FACTOR` either way of :data:`SMOOTHING` (the
+    first node)."""
+    half = math.log(CORNER_FACTOR)
+    return tuple(SMOOTHING * math.exp(half * x) for x in CORNER_NODES), CORNER_WEIGHTS
+
+
+_SINE_NODES, _SINE_WEIGHTS = np.polynomial.legendre.leggauss(64)
+_SINE_ANGLES = 0.25 * math.pi * (_SINE_NODES + 1.0)  # (0, pi/2)
+
+
+def describing_gain(amplitude, smoothing: float | None = None) -> np.ndarray:
+    """The viscous damping per unit Coulomb level of ``T tanh(deltad / eps)`` on a sinusoidal steer rate.
+
+    Its describing function: for ``deltad = A sin(theta)`` the torque's first harmonic over ``A``,
+    ``(4 / (pi A)) int_0^(pi/2) tanh(A sin(theta) / eps) sin(theta) dtheta`` [1/(rad/s)] (64-point
+    Gauss-Legendre), which tends to ``4 / (pi A)`` for a sharp corner (``A >> eps``) and to ``1 / eps``
+    for a slow one.  ``amplitude`` ``A`` [rad/s] broadcasts; ``eps`` is ``smoothing``, :data:`SMOOTHING`
+    when not given.
+    """
+    eps = SMOOTHING if smoothing is None else float(smoothing)
+    A = np.asarray(amplitude, dtype=float)
+    if not eps > 0:
+        raise ValueError(f"the friction's smoothing eps must be positive, got {smoothing!r} rad/s")
+    if np.any(~(A > 0)):
+        raise ValueError(f"a describing function needs a positive steer-rate amplitude, got {amplitude!r} rad/s")
+    s = np.sin(_SINE_ANGLES)
+    integral = 0.25 * math.pi * np.tanh(A[..., None] * s / eps) @ (_SINE_WEIGHTS * s)
+    return 4.0 / (math.pi * A) * integral
+
+
 MAX_STEP = 0.01
 """Longest integration step of the nonlinear simulation [s]; shorter where the friction's slope at
 zero steer rate, ``T_coulomb / eps``, would make the explicit friction term stiff (step times that
@@ -481,17 +526,24 @@ class TimeDomainFit:
 
 
 def _weighted_residuals(
-    batches, values: dict, geometry, layout: Layout, thetas: np.ndarray, rows: dict[str, np.ndarray] | None = None
+    batches,
+    values: dict,
+    geometry,
+    layout: Layout,
+    thetas: np.ndarray,
+    rows: dict[str, np.ndarray] | None = None,
+    smoothing: float | None = None,
 ) -> np.ndarray:
     """Weighted residuals ``(P, M)`` of every record for parameter vectors ``thetas (P, k)``, in one
     batched simulation per sampling step (each record's initial state refitted).  ``rows`` gives
-    benchmark parameters a value per parameter vector (name to ``(P,)``)."""
+    benchmark parameters a value per parameter vector (name to ``(P,)``); ``smoothing`` is the friction's
+    corner (:data:`SMOOTHING` when not given)."""
     parts = []
     for _, batch in batches:
         R = len(batch.records)
         per_row = {k: np.repeat(np.asarray(v, float), R) for k, v in (rows or {}).items()}
         A, b, outputs, T = systems({**values, **per_row}, geometry, batch.records, layout, thetas)
-        _, res = friction_states(batch, A, b, outputs, T)
+        _, res = friction_states(batch, A, b, outputs, T, smoothing)
         parts.append(res.reshape(thetas.shape[0], -1))
     return np.concatenate(parts, axis=1)
 
@@ -710,18 +762,21 @@ def positive_semidefinite(matrix: np.ndarray) -> np.ndarray:
     return (V * np.clip(w, 0.0, None)[..., None, :]) @ np.swapaxes(V, -1, -2)
 
 
-def fit_time_domain(records: list[Record], values: dict, geometry, layout: Layout, start=None) -> TimeDomainFit:
+def fit_time_domain(
+    records: list[Record], values: dict, geometry, layout: Layout, start=None, smoothing: float | None = None
+) -> TimeDomainFit:
     """Fit a time-domain candidate (``layout``) to records (module docstring).
 
     Starts from ``start`` when given (a fit to more of the records, or the friction alone with the
     partner absent), else from the best of a small grid over the literature ranges of the friction
-    with the partner absent.
+    with the partner absent.  ``smoothing`` is the friction law's corner ``eps`` (:data:`SMOOTHING` when
+    not given).
     """
     batches = make_batches(records, min_step=FIT_STEP)
     lower, upper = np.asarray(layout.lower, float), np.asarray(layout.upper, float)
 
     def costs(thetas: np.ndarray) -> np.ndarray:
-        return _weighted_residuals(batches, values, geometry, layout, thetas)
+        return _weighted_residuals(batches, values, geometry, layout, thetas, smoothing=smoothing)
 
     steps = np.full(len(layout.names), THETA_STEP)
 
@@ -745,3 +800,49 @@ def fit_time_domain(records: list[Record], values: dict, geometry, layout: Layou
     return TimeDomainFit(
         result.x, float(np.sum(result.fun**2)), n_samples, [r.name for r in records], bool(result.success)
     )
+
+
+@dataclass
+class CornerShare:
+    """The friction corner's share of a time-domain fit's covariance (:func:`corner_share`).
+
+    Attributes
+    ----------
+    covariance : ndarray
+        ``(k, k)``: the weighted mean square of the fit's move from its own corner to each other.
+    corners : list of (float, float, ndarray)
+        ``(eps, weight, values)`` at each node of :func:`corner_nodes`, the fit's own first.
+    """
+
+    covariance: np.ndarray
+    corners: list[tuple[float, float, np.ndarray]]
+
+
+def corner_share(records: list[Record], values: dict, geometry, layout: Layout, theta: np.ndarray) -> CornerShare:
+    """The share of a time-domain fit's covariance that comes from the friction corner the data do not decide.
+
+    The fit models the sign of the steer rate as ``tanh(deltad / eps)`` at its own corner
+    :data:`SMOOTHING`; real friction's corner (a sharp stick, a soft bearing seal) is not known, and where
+    the records move the steer at rates of the order of ``eps`` it changes what the same torque does: on
+    the calibration's 3-s roll-rate decays with the rider (steer-rate amplitudes 0.05-0.1 rad/s, a truth
+    with a corner of 0.02 rad/s) the fit at 0.05 put ``T_coulomb`` a median 27 % above the truth, at 0.02
+    about 10 % below it.  So the fit is refitted at the other nodes of :func:`corner_nodes`, and the share
+    is the corner prior's mean square of the move from the fit, ``sum_k w_k (theta_k - theta)(theta_k -
+    theta)^T``: the uncertainty of reporting the fit's own corner's values when the corner lies anywhere in
+    its range.  It is known from the model, not estimated from the data, as the benchmark parameters' share
+    is (:func:`parameter_share`).
+
+    Each refit is the fit's own least squares at that corner (:func:`fit_time_domain`), started from the
+    fit's values: two more fits, about 0.8 s on the steer-by-wire logs.  Chord steps with the fit's own
+    slopes cost a fifth of that, but along the valley where Coulomb and viscous friction trade off they
+    stopped at residuals up to 25 % above the refit's (decays of 0.03-0.07 rad/s steer rate), and the
+    share would be a share of where they stopped.
+    """
+    theta = np.asarray(theta, dtype=float)
+    eps, weights = corner_nodes()
+    corners = [(eps[0], weights[0], theta)]
+    for e, w in zip(eps[1:], weights[1:]):
+        corners.append((e, w, fit_time_domain(records, values, geometry, layout, start=theta, smoothing=e).values))
+    moves = np.array([c[2] - theta for c in corners])
+    covariance = (np.asarray(weights)[:, None] * moves).T @ moves
+    return CornerShare(covariance, corners)

@@ -25,7 +25,7 @@ import numpy as np
 
 from bikerider.gap.candidates.effect_model import EffectModel
 from bikerider.gap.inference.indirect import LAMBDA_BOUNDS, levenberg_marquardt
-from bikerider.gap.inference.timedomain import SMOOTHING
+from bikerider.gap.inference.timedomain import CORNER_FACTOR, CORNER_NODES, CORNER_WEIGHTS, corner_nodes
 from bikerider.gap.measured.control import ControlLaw
 from bikerider.gap.measured.extraction import MIN_CYCLES, MIN_R2, _accept_two_mode, _two_mode, _two_mode_jacobian
 from bikerider.gap.measured.records import Record, RecordFit
@@ -40,27 +40,20 @@ KICK_STEER_RATE = 2.5
 many times its initial roll rate (a hand push on the frame or the rider moves the steer as fast as the roll
 or faster; the closed loop's truths kick the steer rate up to 0.8 rad/s either way with roll rates of
 0.2-0.4 rad/s, ratios of 2-4, docs/gap_validation.md part 5)."""
-KICK_NODES = (0.0, -math.sqrt(0.6), math.sqrt(0.6))
-KICK_WEIGHTS = (4.0 / 9.0, 5.0 / 18.0, 5.0 / 18.0)
-"""Three-point Gauss-Legendre rule over the uniform range of :data:`KICK_STEER_RATE` (exact for a response
+KICK_NODES, KICK_WEIGHTS = CORNER_NODES, CORNER_WEIGHTS
+"""The friction corner's three-point Gauss-Legendre rule, here over the uniform range of :data:`KICK_STEER_RATE` (exact for a response
 quadratic in the steer rate; mean and variance of the uniform range exactly): the nodes as fractions of the
 range, their weights; the first node is the template of the data's own state."""
-SMOOTHING_FACTOR = 2.5
-"""The friction law's corner the data do not decide: a friction rival's decays are predicted with its friction
-smoothed as ``tanh(deltad / eps)`` for ``eps`` log-uniform between :data:`~bikerider.gap.inference.timedomain.SMOOTHING`
-divided and multiplied by this factor (0.02-0.125 rad/s).  The lower end is the closed loop's independent truth
-(``tanh(deltad / 0.02)``, docs/gap_validation.md part 5); the steer-by-wire logs fit every corner from 0.01 to
-0.1 rad/s with the same friction (``T_coulomb`` 0.25-0.27 N m, selected in each) and held-out errors against
-the noise of 1.18, 1.12, 0.98, 0.97 (eps 0.01, 0.02, 0.05, 0.1): they lean to a smooth corner without ruling
-out the sharp one (docs/gap.md, *The friction law's corner*)."""
-
-
-def smoothing_nodes() -> tuple[tuple[float, ...], tuple[float, ...]]:
-    """The friction smoothings ``eps`` [rad/s] a friction rival's decays are predicted at, and their weights:
-    :data:`KICK_NODES` over ``log eps`` across :data:`SMOOTHING_FACTOR` either way of the fits' own
-    :data:`~bikerider.gap.inference.timedomain.SMOOTHING` (the first node)."""
-    half = math.log(SMOOTHING_FACTOR)
-    return tuple(SMOOTHING * math.exp(half * x) for x in KICK_NODES), KICK_WEIGHTS
+SMOOTHING_FACTOR = CORNER_FACTOR
+"""The friction law's corner the data do not decide (:data:`~bikerider.gap.inference.timedomain.CORNER_FACTOR`):
+a friction rival's decays are predicted with its friction smoothed as ``tanh(deltad / eps)`` for ``eps``
+log-uniform between :data:`~bikerider.gap.inference.timedomain.SMOOTHING` divided and multiplied by this factor
+(0.02-0.125 rad/s).  The lower end is the closed loop's independent truth (``tanh(deltad / 0.02)``,
+docs/gap_validation.md part 5); the steer-by-wire logs lean to a smooth corner without ruling out the sharp one
+(docs/gap.md, *The friction law's corner*)."""
+smoothing_nodes = corner_nodes
+"""The friction smoothings ``eps`` [rad/s] a friction rival's decays are predicted at, and their weights
+(:func:`~bikerider.gap.inference.timedomain.corner_nodes`: the fits' own corner first)."""
 
 
 @dataclass(frozen=True)
