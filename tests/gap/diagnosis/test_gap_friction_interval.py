@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 from gap_support import SIL, nominal, riderless_model
 
+from bikerider.gap import parallel
 from bikerider.gap.candidates.effect_model import EffectModel
 from bikerider.gap.diagnosis.result import FEW_FOLDS_FRICTION, as_dict, diagnose
 from bikerider.gap.diagnosis.statistics import interval_quantile, jackknife_quantile
@@ -202,3 +203,18 @@ def test_three_sessions_keep_the_jackknife(riderless):
     assert full.ci_low == pytest.approx(before_low, rel=2e-3)
     assert full.ci_high == pytest.approx(before_high, rel=2e-3)
     assert FEW_FOLDS_FRICTION not in as_dict(d)["notes"]
+
+
+def test_the_corners_worked_out_on_workers_are_those_of_one_process(riderless, monkeypatch):
+    # the friction corner's refits run on the worker that cross-validates the candidate; the parent takes
+    # them over and does not refit
+    values = nominal(riderless)
+    out = {}
+    for count in ("1", "2"):
+        monkeypatch.setenv(parallel.WORKERS_ENV, count)
+        d = _diagnosis(riderless, values, (2.5, 3.5, 4.5))
+        full = d.fits.fit_of(("steer_friction",))
+        out[count] = (full.values, full.covariance, full.corner_covariance, len(d.fits.corner_shares))
+    assert np.array_equal(out["1"][0], out["2"][0])
+    assert np.array_equal(out["1"][1], out["2"][1]) and np.array_equal(out["1"][2], out["2"][2])
+    assert out["1"][3] == out["2"][3] == 1

@@ -29,6 +29,7 @@ from bikerider.gap.diagnosis.statistics import _named_values, gap_shrink, interv
 from bikerider.gap.inference.frequency_response import predict_frf_friction
 from bikerider.gap.inference.problem import MINIMUM_STARTS, EffectFit, GapProblem, scale_and_quantile
 from bikerider.gap.inference.timedomain import (
+    CornerShare,
     Layout,
     corner_share,
     fit_covariance,
@@ -141,6 +142,10 @@ class Fits:
         the same way."""
         self.cv: dict[tuple[str, ...], CrossValidation] = {}
         """Cross-validations, by set of effects."""
+        self.corner_shares: dict[tuple, CornerShare] = {}
+        """The friction corner's shares of time-domain fits to all the data, by set of effects and values
+        (:meth:`corner_share`; worked out on the worker that cross-validates the set, where there are
+        workers)."""
         self._predictions: dict[tuple[str, ...], np.ndarray] = {}
 
     # -- fits to all the data -----------------------------------------------------------------------
@@ -210,8 +215,7 @@ class Fits:
         covariance = spread = corners = None
         quantile = np.full(values.size, 1.96)
         if mask is None and jackknife:  # the friction's corner, which no fold decides either
-            records = [self.records[k].record for k in self.record_indices(None)]
-            corners = corner_share(records, self.problem.nominal, self.problem.geometry, layout, values)
+            corners = self.corner_share(effects, values)
         if mask is None and jackknife and len(self.folds) >= 3:  # jackknife over the held-out folds' fits
             folds = np.array([f.values for f in self.cross_validate(effects).fits])
             g = len(folds)
@@ -264,6 +268,16 @@ class Fits:
         if mask is None:
             self.time_domain_full[effects] = out
         return out
+
+    def corner_share(self, effects: tuple[str, ...], values: np.ndarray) -> CornerShare:
+        """The friction corner's share of the time-domain fit of ``effects`` to all the data at ``values``
+        (cached; :func:`bikerider.gap.inference.timedomain.corner_share`)."""
+        key = (tuple(effects), tuple(np.asarray(values, float)))
+        if key not in self.corner_shares:
+            records = [self.records[k].record for k in self.record_indices(None)]
+            p = self.problem
+            self.corner_shares[key] = corner_share(records, p.nominal, p.geometry, Layout.of(effects), values)
+        return self.corner_shares[key]
 
     def parameter_covariance(self, layout: Layout, values: np.ndarray) -> np.ndarray:
         """Covariance of a time-domain fit's values from the benchmark parameters' uncertainty: the mean
