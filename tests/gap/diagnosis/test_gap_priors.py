@@ -371,8 +371,9 @@ def test_a_calibration_trial_whose_records_are_all_left_out_is_scored_not_lost(m
 
 def test_a_record_the_amplitudes_cannot_batch_is_skipped_not_fatal():
     # a record whose clock still jitters keeps no inferred steer-rate amplitude (NaN) and stops nothing; the
-    # others keep their places
-    from bikerider.gap.diagnosis.priors import _batches
+    # others keep their places; without being asked to skip, the batching names the record
+    from bikerider.errors import FitError
+    from bikerider.gap.inference.timedomain import make_batches
 
     t = np.arange(0.0, 2.0, 0.01)
     jitter = t + np.where(np.arange(t.size) % 2, 0.002, 0.0)
@@ -380,6 +381,8 @@ def test_a_record_the_amplitudes_cannot_batch_is_skipped_not_fatal():
         SimpleNamespace(name=name, time=time, signals={"roll_rate": np.sin(7 * time)})
         for name, time in (("a", t), ("jitter", jitter), ("b", t))
     ]
-    batches = _batches(records)
+    batches = make_batches(records, skip_nonuniform=True)
     assert [idx for idx, _ in batches] == [[0, 2]]
+    with pytest.raises(FitError, match="jitter: the time-domain fit needs uniformly sampled records"):
+        make_batches(records)
     assert Priors({}, np.array([0.5, np.nan])).steer_rate_amplitude() == 0.5

@@ -337,17 +337,6 @@ def unsteered_records(records: list[RecordFit], record_rows: dict[int, int]) -> 
     ]
 
 
-def _batches(records: list) -> list:
-    """:func:`~bikerider.gap.inference.timedomain.make_batches` of the records that are uniformly sampled (a
-    record that is not keeps no inferred amplitude, NaN, and never stops the diagnosis)."""
-    uniform = [
-        k
-        for k, r in enumerate(records)
-        if r.time.size > 1 and np.allclose(np.diff(r.time), r.time[1] - r.time[0], rtol=1e-6, atol=1e-9)
-    ]
-    return [([uniform[j] for j in idx], batch) for idx, batch in make_batches([records[k] for k in uniform])]
-
-
 def fitted_steer_rate_amplitudes(records: list, problem: GapProblem, effects, values) -> np.ndarray:
     """``sqrt(2)`` times the RMS steer rate [rad/s] of a steer-friction fit's response fitted to each record
     (:func:`~bikerider.gap.inference.timedomain.friction_states`: the friction simulated in time from the
@@ -356,7 +345,8 @@ def fitted_steer_rate_amplitudes(records: list, problem: GapProblem, effects, va
     0.92-1.64), where the nominal model's response gives 1.33 (0.97-3.0): the friction holds the steer back."""
     layout = Layout.of(tuple(effects))
     out = np.full(len(records), np.nan)
-    for idx, batch in _batches(records):
+    # a record that is not uniformly sampled keeps NaN and never stops the diagnosis
+    for idx, batch in make_batches(records, skip_nonuniform=True):
         A, b, outputs, T = systems(problem.nominal, problem.geometry, batch.records, layout, np.atleast_2d(values))
         states, _ = friction_states(batch, A, b, outputs, T)
         for j, n in enumerate(batch.length):
@@ -375,7 +365,8 @@ def inferred_steer_rate_amplitudes(records: list, problem: GapProblem) -> np.nda
     if not records:
         return out
     model = EffectModel(problem.nominal, problem.geometry)
-    for idx, batch in _batches(records):
+    # a record that is not uniformly sampled keeps NaN and never stops the diagnosis
+    for idx, batch in make_batches(records, skip_nonuniform=True):
         A, _, outputs = closed_loop(model, batch.records)
         states = simulate_linear(A, initial_states(batch, A, outputs), batch.dt, batch.N)
         for j, n in enumerate(batch.length):

@@ -181,17 +181,26 @@ class Batch:
 
 
 def make_batches(
-    records: list[Record], signals=TIME_DOMAIN_SIGNALS, max_duration: float = MAX_DURATION, min_step: float = 0.0
+    records: list[Record],
+    signals=TIME_DOMAIN_SIGNALS,
+    max_duration: float = MAX_DURATION,
+    min_step: float = 0.0,
+    skip_nonuniform: bool = False,
 ) -> list[tuple[list[int], Batch]]:
-    """Group records by sampling step (uniformly sampled records only); ``[(indices, batch)]``.
+    """Group records by sampling step (uniformly sampled records only); ``[(indices, batch)]``, the indices
+    into ``records``.
 
     Each record is used up to ``max_duration`` seconds, every ``k``-th sample where the sampling step
-    is shorter than ``min_step`` (the fits compare the weave, a few hertz, at 50 Hz).
+    is shorter than ``min_step`` (the fits compare the weave, a few hertz, at 50 Hz).  A record not
+    uniformly sampled raises :class:`~bikerider.errors.FitError`, or with ``skip_nonuniform`` is left out
+    of every batch.
     """
     groups: dict[float, list[int]] = {}
     for k, r in enumerate(records):
         steps = np.diff(r.time)
         if steps.size == 0 or not np.allclose(steps, steps[0], rtol=1e-6, atol=1e-9):
+            if skip_nonuniform:
+                continue
             raise FitError(f"{r.name}: the time-domain fit needs uniformly sampled records")
         groups.setdefault(round(float(steps[0]), 9), []).append(k)
     out = []
