@@ -36,6 +36,10 @@ BEFORE_STATES = Path(__file__).with_name("gap_calibration_before_states.jsonl")
 """The steer_coulomb trials before the records' initial states were solved by truncated SVD (the normal
 equations' tiny ridge let a roll-rate-only record's unseen directions take the noise) and the friction share
 was made positive semidefinite, on the same seeds."""
+BEFORE_CORNER = Path(__file__).with_name("gap_calibration_before_corner.jsonl")
+"""The friction trials (steer_coulomb and steer_friction_records) before the friction corner's share and the
+equivalent through the law's own describing function; their truths then had the corner 0.02 rad/s, now one
+drawn over the fits' range (the same sizes, bicycles and runs otherwise)."""
 WORKERS = 2
 """Worker processes the study runs (``gap_calibration.py --workers``): the time the full study needs."""
 
@@ -219,15 +223,18 @@ def section(trials: list[dict], goal: int) -> list[str]:
         "comparison under *Sizes and their 95 % intervals*.",
         "",
         "* **steer_coulomb** is pure Coulomb steer friction, simulated **nonlinearly in time**",
-        "  (`T tanh(deltad / 0.02)` in the truth's equations, which share no code with the candidates). Its",
-        "  `steer_damping` fit (the damping it acts as) is scored against the describing-function equivalent",
-        "  `c_eq = 4 T / (pi A)` at the runs' median steer-rate amplitude `A` (`sqrt(2)` times the RMS steer",
-        "  rate over the fitted window). From records Coulomb friction has a candidate of its own,",
-        "  `steer_friction` (fitted in the time domain): its equivalent `c_viscous + 4 T_coulomb / (pi A)` at the",
-        "  same `A` (the records hold the roll rate only, so `A` is the truth's) is scored against the same",
-        "  `c_eq` (`c_equivalent`), and its split against the truth (`T_coulomb`; `c_viscous` = 0).",
+        "  (`T tanh(deltad / eps)` in the truth's equations, which share no code with the candidates; the corner",
+        "  `eps` drawn log-uniform over 0.02-0.125 rad/s, the range the fits allow for, `validation.cases.draw_corner`).",
+        "  Its `steer_damping` fit (the damping it acts as) is scored against the describing-function equivalent",
+        "  of the truth's own law, `c_eq = N(A) T` (`4 T / (pi A)` for a sharp corner) at the runs' median",
+        "  steer-rate amplitude `A` (`sqrt(2)` times the RMS steer rate over the fitted window). From records",
+        "  Coulomb friction has a candidate of its own, `steer_friction` (fitted in the time domain): its",
+        "  equivalent `c_viscous + N(A) T_coulomb` (its own law's) at the same `A` (the records hold the roll rate",
+        "  only, so `A` is the truth's) is scored against the same `c_eq` (`c_equivalent`), and its split against",
+        "  the truth (`T_coulomb`; `c_viscous` = 0).",
         f"* **{V.CALIBRATION_FRICTION.name}**: pure Coulomb friction again, diagnosed from raw records",
         "  (riderless, the SBW control `sil`, three speeds of three records of 1.2-2.5 s, 0.015 rad/s gyro noise,",
+        "  the corner drawn as above,",
         "  a 13-bit steer encoder) with `steer_friction` fitted in the time domain; scored on its split",
         "  (`T_coulomb`, `c_viscous` = 0) and on the equivalent `c_eq` it reports",
         "  (`Priors.friction_equivalent` of `bikerider.gap.diagnosis.priors`). One runs every round.",
@@ -422,6 +429,16 @@ def section(trials: list[dict], goal: int) -> list[str]:
         "the steer_coulomb trials before it, after the parameters' slopes at the fit and the bounded friction share",
         sizes=STATES_SIZES,
     )
+    lines += _before_table(
+        table + friction,
+        load(BEFORE_CORNER),
+        "**Before the friction corner's share**",
+        BEFORE_CORNER,
+        "the friction trials before it, after the records' initial states by truncated SVD",
+        "the same sizes, bicycles and runs; the truth's friction corner then 0.02 rad/s, now drawn over the fits' "
+        "range (0.02-0.125 rad/s)",
+        sizes=CORNER_SIZES,
+    )
     if friction:
         sep = [t for t in friction if "c_equivalent" in t["fitted"]]
         k = sum(bool(t["fitted"]["c_equivalent"].get("separable")) for t in sep)
@@ -431,7 +448,7 @@ def section(trials: list[dict], goal: int) -> list[str]:
             "records whose steer-rate amplitudes span a factor 2 or more (10th-90th percentile), where the",
             "diagnosis reports the split; the others are decays of about one amplitude, where Coulomb and viscous",
             "friction cannot be told apart by the records: the diagnosis reports the equivalent viscous damping",
-            "only (`c_equivalent`, scored above against `4 T / (pi A)`), not a split the data do not carry (see",
+            "only (`c_equivalent`, scored above against the truth's own `N(A) T`), not a split the data do not carry (see",
             "`docs/gap.md`, Priors).",
         ]
     # shrinkage
@@ -559,6 +576,12 @@ STATES_SIZES = (
     ("steer_coulomb", "c_steer"),
 )
 """The sizes the records' initial states by truncated SVD moved (the friction fit from roll-rate-only records)."""
+CORNER_SIZES = STATES_SIZES + (
+    ("steer_friction_records", "T_coulomb"),
+    ("steer_friction_records", "c_viscous"),
+    ("steer_friction_records", "c_equivalent"),
+)
+"""The sizes the friction corner's share and the equivalent by the law's own describing function moved."""
 
 
 def _before_table(

@@ -57,6 +57,10 @@ JR_SETTLED = Path(__file__).with_name("gap_next_loop_plan_jensen_renyi_settled.j
 EVEN_SETTLED = Path(__file__).with_name("gap_next_loop_even_settled.jsonl")
 """``plan:jensen_renyi`` and ``even`` on every stored tie on the code of :data:`SWEEP_SETTLED` (``rerun --strategy
 ... --tag settled``)."""
+JR_SHARED_SETTLED = Path(__file__).with_name("gap_next_loop_plan_jensen_renyi_shared_settled.jsonl")
+EVEN_SHARED_SETTLED = Path(__file__).with_name("gap_next_loop_even_shared_settled.jsonl")
+"""The same two strategies with the nominal parameters' uncertainty shared by all runs (``rerun --strategy ...
+--shared --tag settled``)."""
 JR_RULE = Path(__file__).with_name("gap_next_loop_plan_jensen_renyi.jsonl")
 JR_NO_RULE = Path(__file__).with_name("gap_next_loop_plan_jensen_renyi_max_roll_inf.jsonl")
 EVEN_NOW = Path(__file__).with_name("gap_next_loop_even.jsonl")
@@ -240,7 +244,7 @@ def run(args) -> int:
 def _rerun_one(job):
     from validation import loop as L
 
-    k, seed, only, max_roll = job
+    k, seed, only, max_roll, shared = job
     logging.getLogger("bikerider").setLevel(logging.ERROR)
     if max_roll is not None:  # the plan's lean rule off (inf) or moved, to measure what it changes
         from bikerider.gap.plan import ranking
@@ -248,7 +252,7 @@ def _rerun_one(job):
         ranking.MAX_ROLL = max_roll
     names = (only,) if only else tuple(n for n in L.STRATEGIES if n.startswith("plan:"))
     try:
-        return L.run_loop_case(_models(), L.SCENARIOS[k], seed, strategies=names)
+        return L.run_loop_case(_models(), L.SCENARIOS[k], seed, strategies=names, shared=shared)
     except Exception as exc:  # stored with its error, not lost silently
         return {"scenario": L.SCENARIOS[k].label, "seed": seed, "tie": False, "status": f"error: {exc!r}"}
 
@@ -277,6 +281,7 @@ def rerun(args) -> int:
         if args.strategy not in L.STRATEGIES:
             raise SystemExit(f"--strategy {args.strategy!r}: expected one of {', '.join(L.STRATEGIES)}")
         suffix = "" if args.max_roll is None else f"_max_roll_{args.max_roll:g}"
+        suffix += "_shared" if args.shared else ""
         suffix += f"_{args.tag}" if args.tag else ""
         path = ROOT / "docs" / "scripts" / f"gap_next_loop_{args.strategy.replace(':', '_')}{suffix}.jsonl"
     else:
@@ -284,7 +289,12 @@ def rerun(args) -> int:
     done = {(c["scenario"], c["seed"]) for c in _stored(path)}
     every = args.all or args.strategy
     targets = [(c["scenario"], c["seed"]) for c in _stored() if c.get("strategies")] if every else _rerun_targets()
-    jobs = [(index[label], seed, args.strategy, args.max_roll) for label, seed in targets if (label, seed) not in done]
+    shared = bool(args.strategy and args.shared)
+    jobs = [
+        (index[label], seed, args.strategy, args.max_roll, shared)
+        for label, seed in targets
+        if (label, seed) not in done
+    ]
     LOG.info("%d ties to run again", len(jobs))
     with get_context("fork").Pool(args.workers) as pool, path.open("a", encoding="utf-8") as out:
         for result in pool.imap_unordered(_rerun_one, jobs):
@@ -765,20 +775,48 @@ def _now_lines(n_max: int) -> list[str]:
 def _today_lines(n_max: int) -> list[str]:
     """The next run's strategy against the even spread on the code of :data:`SWEEP_SETTLED` (:data:`JR_SETTLED`,
     :data:`EVEN_SETTLED`), the runs no rival describes counted apart."""
+    return _against_even_lines(
+        n_max,
+        (("plan:jensen_renyi", JR_SETTLED), ("even", EVEN_SETTLED)),
+        "### The next run `--next` names, on the same plan",
+        "`plan:jensen_renyi` and the even spread again on the {n} stored ties that tie on the code of the "
+        "previous section (friction rivals' multisines simulated, every rival's transient settled; `rerun "
+        "--strategy plan:jensen_renyi --tag settled`, `rerun --strategy even --tag settled`). *Described* are the ties "
+        "where every run of the strategy was described by a rival (`validation.loop.NEITHER_P`):",
+    )
+
+
+def _shared_today_lines(n_max: int) -> list[str]:
+    """:func:`_today_lines` with the nominal parameters' uncertainty shared by all runs (:data:`JR_SHARED_SETTLED`,
+    :data:`EVEN_SHARED_SETTLED`)."""
+    return _against_even_lines(
+        n_max,
+        (("plan:jensen_renyi", JR_SHARED_SETTLED), ("even", EVEN_SHARED_SETTLED)),
+        "### The next run against the even spread, the parameters' error shared by the runs",
+        "The same {n} ties and runs as the previous section, each rival's evidence counting the nominal parameters' "
+        "uncertainty once for all runs (linearised in their shifts, standard normal prior; `rerun --strategy "
+        "plan:jensen_renyi --shared --tag settled`, `rerun --strategy even --shared --tag settled`), as the diagnosis "
+        "counts it (one parameter error moves every run at once; `gap.diagnosis.fits.with_parameter_uncertainty`). Per "
+        "run, a run the truth's parameter error moves alike every time it is repeated counts that error anew, and "
+        "the rival with the more values to fit takes it: seed 7098 (steer inertia against passive arms) went to 0.94 "
+        "in five runs, then its plan repeated one decay twelve times and the hidden effect's probability fell to "
+        "0.52, where the even spread resolved it at run 13. Shared:",
+    )
+
+
+def _against_even_lines(n_max: int, files, title: str, intro: str) -> list[str]:
+    """One strategy against the even spread on the ties both files hold (``files``: ``(name, path)`` pairs, the
+    strategy first), the runs no rival describes counted apart; ``intro``'s ``{n}`` is the number of ties."""
     from validation import loop as L
 
-    files = (("plan:jensen_renyi", JR_SETTLED), ("even", EVEN_SETTLED))
     got = {name: {(c["scenario"], c["seed"]): c for c in _stored(path) if c.get("strategies")} for name, path in files}
     if not all(got.values()):
         return []
     keys = sorted(set.intersection(*(set(cs) for cs in got.values())))
     out = [
-        "### The next run `--next` names, on the same plan",
+        title,
         "",
-        f"`plan:jensen_renyi` and the even spread again on the {len(keys)} stored ties that tie on the code of the "
-        "previous section (friction rivals' multisines simulated, every rival's transient settled; `rerun "
-        "--strategy plan:jensen_renyi --tag settled`, `rerun --strategy even --tag settled`). *Described* are the ties "
-        "where every run of the strategy was described by a rival (`validation.loop.NEITHER_P`):",
+        intro.format(n=len(keys)),
         "",
         "| strategy | ties | resolved | wrong | wrong after a run no rival describes | undecided | unbreakable | "
         "runs needed: median | 90th percentile | described: ties, resolved, wrong, median | runs lost / spent |",
@@ -800,8 +838,8 @@ def _today_lines(n_max: int) -> list[str]:
             f"{sum(x['status'] == 'wrong' for x in clean.values())}, {_fmt(med_c, n_max)} | "
             f"{sum(x['lost'] for x in st.values())} / {sum(x['runs'] for x in st.values())} |"
         )
-    (jr, m_jr, _), (ev, m_ev, _) = merit["plan:jensen_renyi"], merit["even"]
-    both = [k for k in keys if k in described["plan:jensen_renyi"][0] and k in described["even"][0]]
+    (jr, m_jr, _), (ev, m_ev, _) = merit[files[0][0]], merit["even"]
+    both = [k for k in keys if k in described[files[0][0]][0] and k in described["even"][0]]
     med_jr, _ = L.figure_of_merit(
         [jr[k]["runs"] if jr[k]["status"] == "resolved" else None for k in both]  # the same ties for both
     )
@@ -1652,6 +1690,7 @@ def report(args) -> int:
     lines += _now_lines(n_max)
     lines += _settled_lines(n_max)
     lines += _today_lines(n_max)
+    lines += _shared_today_lines(n_max)
     lines += _records_lines(n_max)
     shared = [c for c in _stored(SHARED) if c.get("strategies")]
     if shared:
@@ -1836,6 +1875,11 @@ def main() -> int:
     rr.add_argument(
         "--tag",
         help="with --strategy: appended to the file's name (the same strategy on later code, beside the stored run)",
+    )
+    rr.add_argument(
+        "--shared",
+        action="store_true",
+        help="with --strategy: the nominal parameters' uncertainty shared by the runs (to a file of its own)",
     )
     rc = sub.add_parser("records", help="the records mode on the friction pairs (pushes among the experiments)")
     rc.add_argument("--ties", type=int, default=40, help="stop after this many ties stored")

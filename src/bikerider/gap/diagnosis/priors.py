@@ -210,7 +210,9 @@ class Priors:
                     if separable
                     else (
                         ": decays of one amplitude, which cannot tell Coulomb from viscous friction; what they "
-                        f"determine is the equivalent viscous damping c_eq = c_viscous + N(A) T_coulomb = "
+                        "determine is the equivalent viscous damping c_eq = c_viscous + N(A) T_coulomb (N(A) the "
+                        f"describing function of the fit's friction law, {describing_gain(a):.3g} s/rad here, "
+                        f"4/(pi A) = {4 / (math.pi * a):.3g} for a sharp one) = "
                         f"{value:.3g} [{low:.3g}, {high:.3g}] "
                         "N m s/rad, not the split"
                     )
