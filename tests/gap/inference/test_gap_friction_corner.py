@@ -163,3 +163,14 @@ def test_the_calibration_truths_corner_is_drawn_over_the_fits_range_and_sizes_it
     soft = V.Truth("t", ("steer_friction",), {"T_coulomb": 0.1, "eps_coulomb": 0.1}, "")
     assert V.truth_equivalent(soft, 0.05) < 0.6 * V.truth_equivalent(truth, 0.05)
     assert math.isnan(V.truth_equivalent(truth, None))
+
+
+def test_the_plan_leaves_the_corners_share_to_its_own_corners():
+    # the plan predicts a friction rival at each corner itself; the fit's covariance without the corner's share
+    from bikerider.gap.plan.discrimination import bounded_covariance
+
+    data_cov = np.diag([1e-6, 1e-4])
+    corner_cov = np.array([[4e-4, -1e-3], [-1e-3, 3e-3]])
+    fit = _friction_fit([0.1, 0.2], [], data_cov + corner_cov, corner_cov)
+    fit.lower, fit.upper = np.zeros(2), np.array([1.0, 5.0])
+    assert bounded_covariance(fit, np.array([10.0, 10.0])) == pytest.approx(data_cov)

@@ -128,9 +128,15 @@ def secant_slopes(pred: np.ndarray, width: np.ndarray) -> np.ndarray:
 
 def bounded_covariance(fit: EffectFit, span: np.ndarray) -> np.ndarray:
     """The fitted values' covariance (or their standard errors' squares), each value's standard deviation
-    capped at ``span`` (the spread of a value anywhere in its search range), correlations kept."""
+    capped at ``span`` (the spread of a value anywhere in its search range), correlations kept.
+
+    A friction fit's share from the law's corner (``fit.corner_covariance``) is left out: the plan predicts a
+    friction rival at each corner itself (:func:`bikerider.gap.plan.decays.smoothing_nodes`, the multisines'
+    friction form), and counting the corner's move of the fitted values as well would count it twice."""
     stderr = np.where(np.isfinite(fit.stderr), fit.stderr, np.inf)
     cov = fit.covariance
+    if cov is not None and fit.corner_covariance is not None and fit.corner_covariance.shape == cov.shape:
+        cov = cov - fit.corner_covariance
     if cov is None or cov.shape != (stderr.size, stderr.size) or not np.all(np.isfinite(cov)):
         cov = np.diag(np.where(np.isfinite(stderr), stderr, 0.0) ** 2)
     sd = np.sqrt(np.clip(np.diag(cov), 0.0, None))
