@@ -135,9 +135,9 @@ def cross_validate_all(fits, effect_sets, cost=len) -> None:
     """Cross-validate ``effect_sets`` (tuples of effect names) of a diagnosis's fits on worker processes.
 
     Fills the caches of ``fits`` (a :class:`~bikerider.gap.diagnosis.fits.Fits`: its cross-validations,
-    its fits to all the data, its time-domain fits and their friction corners' shares) as its own ``cross_validate`` would; with fewer than
-    two workers or sets to do, does nothing (the diagnosis then works them out one by one when it asks
-    for them).  ``cost`` ranks a set's expected cost (the costliest start first).
+    its fits to all the data, its time-domain fits and their friction corners' shares) as its own
+    ``cross_validate`` would; with fewer than two workers or sets to do, does nothing (the diagnosis then
+    works them out one by one when it asks for them).  ``cost`` ranks a set's expected cost (the costliest start first).
     """
     global _FITS
     todo = [tuple(e) for e in dict.fromkeys(tuple(e) for e in effect_sets) if tuple(e) not in fits.cv]

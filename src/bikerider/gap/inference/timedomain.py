@@ -14,8 +14,10 @@ its roll rate and steer angle (the signals the record holds among them) are comp
 record's, every signal weighted by its own scatter.  The simulation is an exponential integrator:
 the linear part exact (matrix exponential), the friction torque held over steps of at most
 :data:`MAX_STEP`.  The sign function is smoothed as ``tanh(deltad / eps)`` with ``eps =`` :data:`SMOOTHING`
-rad/s (the friction reaches 76 % of its full value at ``eps``, 96 % at twice it); a sharper corner
-would need shorter steps for no gain at the steer rates of these records.  Each record's initial
+rad/s (the friction reaches 76 % of its full value at ``eps``, 96 % at twice it).  Where the records move
+the steer at rates of a few ``eps`` (roll-rate decays with a rider) the corner, which the records do not
+decide, moves the fitted split: the fit to all the data carries it as a share of its covariance
+(:func:`corner_share`).  Each record's initial
 state is refitted for every trial friction (linear least squares, then chord steps on the nonlinear
 response).  The friction's prediction of a record's eigenvalue is what the record fit
 finds in the simulated response (indirect inference, as for every candidate; amplitude-dependent as

@@ -41,9 +41,9 @@ many times its initial roll rate (a hand push on the frame or the rider moves th
 or faster; the closed loop's truths kick the steer rate up to 0.8 rad/s either way with roll rates of
 0.2-0.4 rad/s, ratios of 2-4, docs/gap_validation.md part 5)."""
 KICK_NODES, KICK_WEIGHTS = CORNER_NODES, CORNER_WEIGHTS
-"""The friction corner's three-point Gauss-Legendre rule, here over the uniform range of :data:`KICK_STEER_RATE` (exact for a response
-quadratic in the steer rate; mean and variance of the uniform range exactly): the nodes as fractions of the
-range, their weights; the first node is the template of the data's own state."""
+"""The friction corner's three-point Gauss-Legendre rule, here over the uniform range of :data:`KICK_STEER_RATE`
+(exact for a response quadratic in the steer rate; mean and variance of the uniform range exactly): the nodes
+as fractions of the range, their weights; the first node is the template of the data's own state."""
 SMOOTHING_FACTOR = CORNER_FACTOR
 """The friction law's corner the data do not decide (:data:`~bikerider.gap.inference.timedomain.CORNER_FACTOR`):
 a friction rival's decays are predicted with its friction smoothed as ``tanh(deltad / eps)`` for ``eps``
