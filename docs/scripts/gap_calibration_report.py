@@ -36,6 +36,10 @@ BEFORE_STATES = Path(__file__).with_name("gap_calibration_before_states.jsonl")
 """The steer_coulomb trials before the records' initial states were solved by truncated SVD (the normal
 equations' tiny ridge let a roll-rate-only record's unseen directions take the noise) and the friction share
 was made positive semidefinite, on the same seeds."""
+BEFORE_PROFILE = Path(__file__).with_name("gap_calibration_before_profile.jsonl")
+"""The rider_lean and tyre_slip trials (and passive_arms' where rerun) before a single candidate's intervals from
+few records took the data's share from each size's profile likelihood (the interval linearised about the fit and
+the hull of the points searched before), on the same seeds."""
 WORKERS = 2
 """Worker processes the study runs (``gap_calibration.py --workers``): the time the full study needs."""
 
@@ -422,6 +426,14 @@ def section(trials: list[dict], goal: int) -> list[str]:
         "the steer_coulomb trials before it, after the parameters' slopes at the fit and the bounded friction share",
         sizes=STATES_SIZES,
     )
+    lines += _before_table(
+        table + friction,
+        load(BEFORE_PROFILE),
+        "**Before the profile-likelihood intervals**",
+        BEFORE_PROFILE,
+        "the trials of the effects rerun before them, after the records' initial states by truncated SVD",
+        sizes=PROFILE_SIZES,
+    )
     if friction:
         sep = [t for t in friction if "c_equivalent" in t["fitted"]]
         k = sum(bool(t["fitted"]["c_equivalent"].get("separable")) for t in sep)
@@ -559,6 +571,19 @@ STATES_SIZES = (
     ("steer_coulomb", "c_steer"),
 )
 """The sizes the records' initial states by truncated SVD moved (the friction fit from roll-rate-only records)."""
+PROFILE_SIZES = (
+    ("rider_lean", "k_lean"),
+    ("rider_lean", "c_lean"),
+    ("tyre_slip", "c_alpha"),
+    ("tyre_slip", "sigma_t"),
+    ("tyre_slip", "t_p"),
+    ("passive_arms", "m_arm"),
+    ("passive_arms", "I_arm_steer"),
+    ("passive_arms", "k_arm"),
+    ("passive_arms", "c_arm"),
+)
+"""The sizes of the effects rerun with the profile-likelihood intervals (every fit of theirs is a single candidate's
+on at most 20 records)."""
 
 
 def _before_table(
