@@ -27,7 +27,13 @@ from bikerider.gap.candidates.effect_model import geometry_keys
 from bikerider.gap.candidates.effects import EFFECTS, PARAMETERS, STEER_FRICTION, TIME_DOMAIN_EFFECTS
 from bikerider.gap.diagnosis.statistics import _named_values, gap_shrink, interval_quantile, rms
 from bikerider.gap.inference.frequency_response import predict_frf_friction
-from bikerider.gap.inference.problem import MINIMUM_STARTS, EffectFit, GapProblem, scale_and_quantile
+from bikerider.gap.inference.problem import (
+    MINIMUM_STARTS,
+    PROFILE_MAX_RECORDS,
+    EffectFit,
+    GapProblem,
+    scale_and_quantile,
+)
 from bikerider.gap.inference.timedomain import (
     CornerShare,
     Layout,
@@ -164,7 +170,12 @@ class Fits:
                 # linearised about the polished fit)
                 starts = MINIMUM_STARTS if len(effects) == 1 else 0
                 polished = self.problem.fit_apparent(corrected, starts=starts)
-                self.full[effects] = with_parameter_uncertainty(self.problem, polished, at_fit=len(effects) == 1)
+                # and its intervals are profile-likelihood intervals where that is affordable (few records)
+                records = self.problem.records is not None and len(self.problem.record_obs)
+                profile = len(effects) == 1 and bool(records) and len(self.problem.record_obs) <= PROFILE_MAX_RECORDS
+                self.full[effects] = with_parameter_uncertainty(
+                    self.problem, polished, at_fit=len(effects) == 1, profile=profile
+                )
         return self.full[effects]
 
     def record_indices(self, mask: np.ndarray | None) -> list[int]:
@@ -410,7 +421,7 @@ PARAMETER_TAIL = 0.01
 their nominal slopes in :func:`with_parameter_uncertainty`; the others are taken at the fit."""
 
 
-def with_parameter_uncertainty(p: GapProblem, fit: EffectFit, at_fit: bool = True) -> EffectFit:
+def with_parameter_uncertainty(p: GapProblem, fit: EffectFit, at_fit: bool = True, profile: bool = False) -> EffectFit:
     """A linear fit's covariance and 95 % intervals with the benchmark parameters' uncertainty as the
     systematic error it is, holding every local minimum the data cannot tell from the fit.
 
@@ -461,6 +472,29 @@ def with_parameter_uncertainty(p: GapProblem, fit: EffectFit, at_fit: bool = Tru
     With rows from records the fit to all the data is the least squares of the apparent eigenvalues
     (indirect inference, :meth:`GapProblem.fit_apparent`), so ``A`` holds the apparent eigenvalues'
     slopes, not the weave eigenvalues'.
+
+    The profile (``profile``; :meth:`Fits.fit_of` asks for it for a single candidate's fit on at most
+    :data:`bikerider.gap.inference.problem.PROFILE_MAX_RECORDS` records).  The interval linearised about the
+    fit, and the hull of the points searched, hold the chi-square's valley only as far as its linearisation
+    and the searches reach (the tyres' relaxation length and the rider's lean damping, whose valleys are long
+    and curved, were missed on the far side).  With ``profile`` the data's share of each size's interval is
+    its profile-likelihood interval instead: where the profile chi-square (the chi-square minimised over the
+    other sizes at each value of this one, :meth:`GapProblem.profile_apparent`) rises ``q^2 max(1, s^2)
+    D_kk / B_kk`` above the fit's, on each side.  ``B = (A^T A)^-1`` is the inverse of the chi-square's own
+    curvature and ``D = B A^T diag(var_data / var_total) A B`` the sandwich's data share: the chi-square
+    weighs each row by the data's and the parameters' variance together, as if the parameters' error were
+    independent from row to row, so its curvature is not the data's share, and a profile to the plain
+    threshold ``q^2 max(1, s^2)`` would count the parameters' share once as row-wise noise and again below.
+    Scaled so, the rise is the data's own likelihood-ratio statistic (the magnitude adjustment of a
+    misspecified likelihood's ratio test for one size: Kent 1982, Biometrika 69, 19-27; Varin, Reid and Firth
+    2011, Statistica Sinica 21, 5-42), and where the chi-square is quadratic the profile's reach is exactly
+    the data share's ``q sqrt(max(1, s^2) D_kk)``.  The shares the chi-square cannot see, the benchmark
+    parameters' and the rider geometry's (``S - D``, common to every row: a systematic shift of the fit,
+    linearised as above), are added to each side's reach in quadrature: ``x - sqrt((x - low)^2 + q^2 max(1,
+    s^2) (S - D)_kk)`` and its mirror, ``S`` the sandwich.  Each share is so counted once, the interval is the
+    sandwich interval where the chi-square is quadratic, and it follows the valley's own shape where it is
+    not.  Other minima and visited points within ``q^2 max(1, s^2)`` widen it as above.  A size whose profile
+    ends are not found keeps the linearised interval; ``EffectFit.profiled`` names the sizes profiled.
     """
     if PARAMETERS in fit.effects or not fit.names or not len(p.obs):
         return fit
@@ -470,16 +504,31 @@ def with_parameter_uncertainty(p: GapProblem, fit: EffectFit, at_fit: bool = Tru
         return fit
     x = np.asarray(fit.values, float)
     lower, upper = np.asarray(fit.lower, float), np.asarray(fit.upper, float)
-    cov = _sandwich(p, lay, x, lower, upper, geometric, at_fit)
+    cov, bread, data = _sandwich(p, lay, x, lower, upper, geometric, at_fit, bread=True)
     if cov is None:
         return fit
     factor, quantile = scale_and_quantile(fit.chi2, fit.n, x.size)
-    cov = cov * factor
+    threshold = quantile**2 * factor
     known = np.isfinite(fit.stderr)  # a value the data do not move stays so
-    stderr = np.where(known, np.sqrt(np.clip(np.diag(cov), 0, None)), np.inf)
+    stderr = np.where(known, np.sqrt(np.clip(np.diag(cov) * factor, 0, None)), np.inf)
     low = np.clip(x - quantile * stderr, lower, upper)
     high = np.clip(x + quantile * stderr, lower, upper)
-    threshold = quantile**2 * factor
+    profiled = np.zeros(x.size, bool)
+    if profile:
+        # the data's share by the profile, its threshold scaled by the data's variance over the chi-square's
+        # own (D_kk / B_kk); the parameters' and the geometry's shares, which the chi-square cannot see, added
+        # to each side's reach in quadrature
+        with np.errstate(all="ignore"):
+            targets = np.where(known, threshold * np.diag(data) / np.diag(bread), np.nan)
+        ends = p.profile_apparent(fit, targets, bread)
+        profiled = known & np.isfinite(ends.low) & np.isfinite(ends.high)
+        systematic = threshold * np.clip(np.diag(cov) - np.diag(data), 0, None)
+        with np.errstate(invalid="ignore"):
+            reach_low = np.sqrt((x - ends.low) ** 2 + systematic)
+            reach_high = np.sqrt((ends.high - x) ** 2 + systematic)
+        low = np.where(profiled, np.clip(x - reach_low, lower, upper), low)
+        high = np.where(profiled, np.clip(x + reach_high, lower, upper), high)
+    cov = cov * factor
     held = [chi2 - fit.chi2 <= threshold for _values, chi2 in fit.minima]
     within = [m for m, ok in zip(fit.minima, held) if ok]
     for values, _chi2 in within:
@@ -495,7 +544,14 @@ def with_parameter_uncertainty(p: GapProblem, fit: EffectFit, at_fit: bool = Tru
         low, high = np.minimum(low, np.min(near, axis=0)), np.maximum(high, np.max(near, axis=0))
     minima = within + [m for m, ok in zip(fit.minima, held) if not ok]
     return replace(
-        fit, stderr=stderr, ci_low=low, ci_high=high, covariance=cov, minima=minima, minima_within=len(within)
+        fit,
+        stderr=stderr,
+        ci_low=low,
+        ci_high=high,
+        covariance=cov,
+        minima=minima,
+        minima_within=len(within),
+        profiled=[n for n, ok in zip(fit.names, profiled) if ok],
     )
 
 
@@ -507,10 +563,14 @@ def _sandwich(
     upper: np.ndarray,
     geometric: bool = False,
     at_fit: bool = True,
-) -> np.ndarray | None:
+    bread: bool = False,
+):
     """The sandwich covariance of :func:`with_parameter_uncertainty` at values ``x``, before the reduced
     chi-square's scale (``None`` where a slope cannot be evaluated); with ``geometric``, the rider
-    geometry's share included; with ``at_fit``, the parameters' slopes taken at ``x``."""
+    geometry's share included; with ``at_fit``, the parameters' slopes taken at ``x``.  With ``bread``,
+    ``(covariance, B, data)``: ``B = (A^T A)^-1`` the inverse of the fit's chi-square's own Gauss-Newton
+    curvature, ``data`` the data's share of the covariance (``(None, None, None)`` where a slope cannot be
+    evaluated)."""
     span = np.maximum(upper - lower, 1e-9)
     h = 1e-5 * np.minimum(span, 10.0)
     X = [x]
@@ -533,7 +593,7 @@ def _sandwich(
     records = p.records is not None and len(p.record_obs)
     A = slopes(bool(records)) / w[:, None]
     if not np.all(np.isfinite(A)):
-        return None
+        return (None, None, None) if bread else None
     B = np.linalg.pinv(A.T @ A)
     # the parameters' slopes at these values (an effect that moves the bicycle far from the nominal model
     # changes how each parameter moves the predictions: steer inertia of the steer assembly's own size made
@@ -548,7 +608,8 @@ def _sandwich(
         if count:
             Jp = p.parameter_jacobian_at(lay, x, indirect=bool(records), columns=np.sort(order[:count])) / w[:, None]
     AC = A.T * (p.var_data / p.var_total)
-    meat = AC @ A + (A.T @ Jp) @ (Jp.T @ A)
+    data = AC @ A
+    meat = data + (A.T @ Jp) @ (Jp.T @ A)
     if geometric:  # the rider geometry's uncertainty: its slopes at these values, per sigma
         Jg = p.geometry_jacobian(lay, x, indirect=bool(records)) / w[:, None]
         bad = ~np.all(np.isfinite(Jg), axis=0)
@@ -557,4 +618,4 @@ def _sandwich(
             logger.warning("%s: no slope in the rider geometry's %s; left out of the interval", lay.effects, names)
             Jg = Jg[:, ~bad]
         meat = meat + (A.T @ Jg) @ (Jg.T @ A)
-    return B @ meat @ B.T
+    return (B @ meat @ B.T, B, B @ data @ B.T) if bread else B @ meat @ B.T
