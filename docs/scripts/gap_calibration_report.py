@@ -930,7 +930,7 @@ READING = [
     "     parameters' and the geometry's shares to each side in quadrature; the fitted values are unchanged. On",
     "     the same seeds (the table *Before the profile-likelihood intervals*): `sigma_t` 87 % -> 97 %, `c_lean`",
     "     89 % -> 91 %, `c_alpha` 94 % -> 96 %, `t_p` 94 % -> 92 %; the arms' `k_arm` and inertia 99 % -> 98 %.",
-    "     The steer-by-wire logs (54 records) keep the linearised interval.",
+    "     The steer-by-wire logs (55 records used) keep the linearised interval.",
     "* **steer_coulomb**: as the viscous damping it acts as, Coulomb friction is sized against a describing",
     "  function of a sustained oscillation, which a decay is not (its amplitude falls within each run): the",
     "  stand-in's bias says how far that equivalent stretches. From records the `steer_friction` candidate",

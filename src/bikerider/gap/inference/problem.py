@@ -114,7 +114,7 @@ its last point (clipped to the bounds) would lower the chi-square by less than t
 PROFILE_MAX_RECORDS = 20
 """Most records of a single candidate's fit whose 95 % intervals are profile-likelihood intervals
 (:meth:`GapProblem.profile_apparent`; every profile point simulates every record, so its cost grows with
-them: on the calibration's record sets of 3-9 records a profile adds 0.1-0.3 s to a fit, on the 54 of the
+them: on the calibration's record sets of 3-9 records a profile adds 0.1-0.3 s to a fit, on the 55 used of the
 steer-by-wire logs it would add seconds to a diagnosis at its time goal).  Fits on more keep the linearised
 intervals and the hull of the points searched."""
 PROFILE_POINTS = 8
