@@ -121,21 +121,20 @@ def _pool(count: int):
 
 def _work(effects: tuple[str, ...]):
     fits = _FITS
-    known_full, known_timed, known_corners = set(fits.full), set(fits.time_domain_full), set(fits.corner_shares)
+    caches = (fits.full, fits.bias_corrected, fits.time_domain_full, fits.corner_shares)
+    known = [set(cache) for cache in caches]
     result = fits.cross_validate(effects)
     if effects in fits.time_domain_full:  # its interval's friction corner: refits of its own, on this worker too
         fits.corner_share(effects, fits.time_domain_full[effects].values)
-    full = {k: v for k, v in fits.full.items() if k not in known_full}
-    timed = {k: v for k, v in fits.time_domain_full.items() if k not in known_timed}
-    corners = {k: v for k, v in fits.corner_shares.items() if k not in known_corners}
-    return effects, result, full, timed, corners
+    return effects, result, [{k: v for k, v in cache.items() if k not in old} for cache, old in zip(caches, known)]
 
 
 def cross_validate_all(fits, effect_sets, cost=len) -> None:
     """Cross-validate ``effect_sets`` (tuples of effect names) of a diagnosis's fits on worker processes.
 
     Fills the caches of ``fits`` (a :class:`~bikerider.gap.diagnosis.fits.Fits`: its cross-validations,
-    its fits to all the data, its time-domain fits and their friction corners' shares) as its own
+    its fits to all the data and their bias-corrected starts, its time-domain fits and their friction
+    corners' shares) as its own
     ``cross_validate`` would; with fewer than two workers or sets to do, does nothing (the diagnosis then
     works them out one by one when it asks for them).  ``cost`` ranks a set's expected cost (the costliest start first).
     """
@@ -153,15 +152,13 @@ def cross_validate_all(fits, effect_sets, cost=len) -> None:
         if pool is None:
             return
         with pool:
-            for effects, result, full, timed, corners in pool.imap_unordered(_work, todo):
+            caches = (fits.full, fits.bias_corrected, fits.time_domain_full, fits.corner_shares)
+            for effects, result, made in pool.imap_unordered(_work, todo):
                 fits.cv[effects] = result
                 progress.advance(len(result.folds))  # in the parent: the workers' own counts are not seen
-                for key, fit in full.items():
-                    fits.full.setdefault(key, fit)
-                for key, fit in timed.items():
-                    fits.time_domain_full.setdefault(key, fit)
-                for key, share in corners.items():
-                    fits.corner_shares.setdefault(key, share)
+                for cache, new in zip(caches, made):
+                    for key, value in new.items():
+                        cache.setdefault(key, value)
     finally:
         _FITS = None
         gc.unfreeze()

@@ -209,3 +209,37 @@ def test_the_fit_to_all_the_data_is_the_least_squares_of_the_apparent_eigenvalue
     assert polished.values[0] == pytest.approx(full.x, abs=0.002 * polished.stderr[0])
     # its interval is the sandwich of that least squares (the apparent eigenvalues' slopes)
     assert polished.ci_low[0] < 0.4 < polished.ci_high[0]
+
+
+@pytest.mark.parametrize("kind", ["plain", "two-mode"])
+def test_an_alias_above_the_nyquist_frequency_is_no_weave(kind):
+    """A damped 6 rad/s oscillation sampled at 100 Hz is matched exactly by its alias 6 + 2 pi / 0.01 rad/s:
+    the batched extraction started there finds it, and refuses it as no weave (the record fit does too),
+    while started near 6 rad/s it finds the weave."""
+    from bikerider.gap.measured.extraction import nyquist_frequency
+
+    dt, n = 0.01, 300
+    tau = np.arange(n) * dt
+    y = np.exp(-0.8 * tau) * np.sin(6.0 * tau) + 0.05
+    alias = 6.0 + 2 * np.pi / dt
+    assert nyquist_frequency(tau[-1], n) == pytest.approx(np.pi / dt)
+    assert alias > nyquist_frequency(tau[-1], n)
+    if kind == "plain":
+        starts = np.array([[alias, 0.8, 0.05, 1.0, 0.0, 0.0], [6.2, 0.7, 0.0, 0.8, 0.1, 0.0]])
+    else:
+        starts = np.array([[alias, 0.8, 1.0, 0.0, 0.05, 0.0, -1.0], [6.2, 0.7, 0.8, 0.1, 0.0, 0.01, -1.0]])
+    beta, _ = levenberg_marquardt(kind, starts, np.tile(y, (2, 1)), np.ones((2, n), bool), tau)
+    eig = eigenvalue_of(beta)
+    assert np.isnan(eig[0])
+    assert eig[1] == pytest.approx(complex(-0.8, 6.0), abs=1e-6)
+
+
+def test_the_record_fit_refuses_an_alias_too():
+    from types import SimpleNamespace
+
+    from bikerider.gap.measured.extraction import _accept_two_mode
+
+    tau = np.arange(300) * 0.01
+    alias = SimpleNamespace(x=np.array([6.0 + 2 * np.pi / 0.01, 0.8, 1.0, 0.0, 0.05, 0.01, -1.0]), cost=0.5, jac=None)
+    estimate, reason = _accept_two_mode(alias, tau.size, tau, 10.0, 0.5)
+    assert estimate is None and "Nyquist" in reason

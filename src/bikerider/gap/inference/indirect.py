@@ -40,7 +40,7 @@ from bikerider.benchmark.simulation import expm
 from bikerider.errors import FitError
 from bikerider.gap.candidates.effect_model import EffectModel
 from bikerider.gap.inference.timedomain import Batch, friction_states, systems
-from bikerider.gap.measured.extraction import EXTRA_MODE_RANGE, MIN_CYCLES
+from bikerider.gap.measured.extraction import EXTRA_MODE_RANGE, MIN_CYCLES, nyquist_frequency
 from bikerider.gap.measured.records import RecordFit
 
 OBSERVED = {"roll_angle": 0, "steer_angle": 1, "roll_rate": 2, "steer_rate": 3}
@@ -229,7 +229,9 @@ def levenberg_marquardt(
             active[idx[done]] = False
     beta[:, nl] = theta
     beta[:, lin] = coef
-    beta[theta[:, 0] * span < 2 * math.pi * MIN_CYCLES] = np.nan
+    # no weave either above the samples' Nyquist frequency: an alias (the record fit refuses it too)
+    alias = theta[:, 0] >= nyquist_frequency(span, np.sum(mask, axis=1))
+    beta[(theta[:, 0] * span < 2 * math.pi * MIN_CYCLES) | alias] = np.nan
     return beta, cost
 
 
@@ -471,6 +473,27 @@ class RecordSimulator:
         out = self._apparent(values, config, scale, P)
         for key, row in zip(keys, out):  # each model's rows are computed as alone: the same from any batch
             self.known[key] = row.copy()
+        while len(self.known) > MAX_KNOWN:
+            del self.known[next(iter(self.known))]
+        return out
+
+    def apparent_on_workers(self, values: dict) -> np.ndarray:
+        """:meth:`apparent` of a batch of models of benchmark values alone, the models shared among the
+        worker processes (:func:`bikerider.gap.parallel.map_forked`; each model's rows are computed as
+        alone, so they are the same), and kept in :attr:`known` as :meth:`apparent` keeps them."""
+        from bikerider.gap.parallel import MIN_RECORDS, map_forked, workers
+
+        P = _batch_size(values, {}, None)
+        parts = [part for part in np.array_split(np.arange(P), max(1, min(workers(), P // 8))) if part.size]
+        if len(parts) < 2 or len(self.fits) < MIN_RECORDS:  # too little to pay for starting the workers
+            return self.apparent(values)
+
+        def models(part: np.ndarray) -> dict:
+            return {k: v if np.ndim(v) == 0 or np.size(v) == 1 else np.asarray(v)[part] for k, v in values.items()}
+
+        out = np.concatenate(map_forked(lambda part: self.apparent(models(part)), parts))
+        for p, row in enumerate(out):
+            self.known[_values_key(values, p)] = row.copy()
         while len(self.known) > MAX_KNOWN:
             del self.known[next(iter(self.known))]
         return out

@@ -38,6 +38,10 @@ OMEGAS = np.linspace(2 * np.pi * 0.2, 2 * np.pi * 2.0, 12)
 """Angular frequencies of the identification band [rad/s] (0.2-2 Hz: the weave and rider-control band)."""
 _MODE_INDEX = {"weave": 0, "capsize": 2, "castor": 3}
 _PENALTY = 1e6
+MAX_EIGEN_CONDITION = 1e6
+"""Largest condition ``|w| |v|`` (left and right eigenvectors, ``w^T v = 1``) of a matched eigenvalue
+whose derivative :meth:`Predictor.eigen_derivatives` takes to first order (beyond it, near a double
+root, the eigenvalues are differenced instead)."""
 
 
 @dataclass
@@ -227,8 +231,49 @@ class Predictor:
         speeds = self.eigen.speed if speed_scale is None else self.eigen.speed * np.asarray(speed_scale, dtype=float)
         return self._match(model.eigenvalues(speeds, self.eigen.gains))  # (..., S, n)
 
+    def eigen_derivatives(self, model: EffectModel, steps: np.ndarray) -> np.ndarray | None:
+        """Derivatives ``(p, n_obs_eigen)`` of the eigenvalue observations in ``p`` parameters, by
+        first-order perturbation of each row's matched eigenvalue, or ``None`` where that does not hold.
+
+        ``model`` holds ``1 + p`` models: the point, then the point with one parameter moved by its
+        step (``steps``, ``(p,)``, signed).  The state matrices are differenced (forward, as the fits'
+        Jacobians are), the eigenvalue's derivative taken from its left and right eigenvectors at the
+        point, ``d lambda = w^T dA v`` with ``w^T v = 1``: one eigendecomposition per row instead of
+        one per row and parameter.  ``None`` (the caller then differences the eigenvalues themselves)
+        when a matrix is not finite, a row's matched eigenvalue is not an allowed one (no weave where
+        one is measured), or it is ill-conditioned (``|w| |v|`` above :data:`MAX_EIGEN_CONDITION`:
+        near a double root, where a first-order derivative says little).
+        """
+        A = model.state_space(self.eigen.speed).closed_loop(self.eigen.gains)  # (1 + p, S, n, n)
+        if A.ndim != 4 or A.shape[0] != steps.size + 1 or not np.all(np.isfinite(A)):
+            return None
+        try:
+            lam, V = np.linalg.eig(A[0])
+            W = np.linalg.inv(V)  # its rows: the left eigenvectors, scaled to w^T v = 1
+        except np.linalg.LinAlgError:
+            return None
+        pick, allowed = self._match_index(lam)
+        rows = np.arange(lam.shape[0])
+        v, w = V[rows, :, pick], W[rows, pick, :]  # (S, n)
+        condition = np.linalg.norm(v, axis=-1) * np.linalg.norm(w, axis=-1)
+        if not np.all(allowed) or not np.all(condition <= MAX_EIGEN_CONDITION):
+            return None
+        dA = (A[1:] - A[0]) / steps[:, None, None, None]
+        dlam = np.einsum("si,psij,sj->ps", w, dA, v)  # (p, S)
+        # the observation is the matched eigenvalue with its imaginary part made positive (:meth:`_match`)
+        sign = np.where(lam[rows, pick].imag < 0, -1.0, 1.0)
+        out = self._stack_eigen(dlam.real + 1j * sign * dlam.imag)
+        return out if np.all(np.isfinite(out)) else None
+
     def _match(self, ev: np.ndarray) -> np.ndarray:
         """The eigenvalue of each row's mode among a model's eigenvalues ``(..., S, n)``."""
+        pick, _ = self._match_index(ev)
+        matched = np.take_along_axis(ev, pick[..., None], axis=-1)[..., 0]
+        return matched.real + 1j * np.abs(matched.imag)
+
+    def _match_index(self, ev: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Position of each row's mode among a model's eigenvalues ``(..., S, n)``, and whether it is an
+        allowed one (in the upper half plane, oscillating where the row is a weave)."""
         ref, want_complex = self._match_reference()
         scale = 1e-9 * np.maximum(1.0, np.abs(ev).max(axis=-1, keepdims=True))
         upper = ev.imag > -scale
@@ -236,8 +281,8 @@ class Predictor:
         allowed = np.where(want_complex, oscillating, upper)
         distance = np.abs(ev - ref[:, None]) + _PENALTY * ~allowed + _PENALTY * ~upper
         pick = np.argmin(distance, axis=-1)
-        matched = np.take_along_axis(ev, pick[..., None], axis=-1)[..., 0]
-        return matched.real + 1j * np.abs(matched.imag)
+        ok = np.take_along_axis(allowed & upper, pick[..., None], axis=-1)[..., 0]
+        return pick, ok
 
     def _match_reference(self) -> tuple[np.ndarray, np.ndarray]:
         """Each row's reference eigenvalue ``(S,)`` and whether an oscillating one is wanted ``(S, 1)``

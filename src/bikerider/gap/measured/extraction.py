@@ -269,6 +269,17 @@ MIN_R2 = 0.5
 else (a disturbance, a second perturbation) and the fit is refused."""
 
 
+def nyquist_frequency(span, samples):
+    """The Nyquist frequency ``pi / dt`` [rad/s] of ``samples`` over ``span`` seconds (``dt`` the mean
+    step; infinite without a span), for numbers or arrays: a fitted frequency above it is an alias of a
+    slower one, never a weave (the record fit and its indirect-inference refits of a model's response
+    both refuse it)."""
+    span, samples = np.asarray(span, dtype=float), np.asarray(samples, dtype=float)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        out = np.where(span > 0, np.pi * (samples - 1) / np.where(span > 0, span, 1.0), np.inf)
+    return float(out) if out.ndim == 0 else out
+
+
 def weave_eigenvalue(time, signal, *, min_cycles: float = MIN_CYCLES) -> WeaveEstimate:
     """Fit the weave eigenvalue to a rate (or angle) signal (see the module docstring).
 
@@ -427,12 +438,17 @@ def _accept_two_mode(
     rss = 2 * res.cost
     if not (omega > 0 and abs(lam + sigma) > 0.05 * max(abs(sigma), 0.1) and c != 0):
         return None, "no oscillation found: the fitted modes are not a damped oscillation and a distinct real mode"
+    span = float(tau[-1] - tau[0])
+    if omega >= nyquist_frequency(span, n):
+        return None, (
+            f"no oscillation found: the fitted frequency {omega:.3g} rad/s lies above the samples' Nyquist "
+            f"frequency {nyquist_frequency(span, n):.3g} rad/s (an alias, not a weave)"
+        )
     if not EXTRA_MODE_RANGE[0] < lam < EXTRA_MODE_RANGE[1]:
         return None, (
             f"no oscillation found: the extra real mode ({lam:.3g} 1/s) lies outside "
             f"{EXTRA_MODE_RANGE[0]:g} to {EXTRA_MODE_RANGE[1]:g} 1/s"
         )
-    span = float(tau[-1] - tau[0])
     cycles = omega * span / (2 * math.pi)
     s2 = rss / (n - 7)
     try:
