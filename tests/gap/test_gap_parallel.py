@@ -83,3 +83,42 @@ def test_the_diagnosis_on_worker_processes_equals_the_one_in_one_process(monkeyp
         out[count] = result
     assert out["1"] == out["2"]
     assert out["1"]["selected"] == ["steer_damping"]
+
+
+class _FakeFits:
+    """What :func:`parallel.cross_validate_all` uses of a diagnosis's fits: a set's result names the process
+    that made it and the single fits it found in its caches."""
+
+    def __init__(self):
+        self.cv, self.full, self.bias_corrected, self.time_domain_full, self.corner_shares = {}, {}, {}, {}, {}
+        self.record_rows = {0: 0}
+        self.problem = type("P", (), {"obs": []})()
+
+    def cross_validate(self, effects):
+        from types import SimpleNamespace
+
+        if len(effects) == 1:
+            self.full[effects] = f"fit of {effects[0]}"
+        seen = sorted(k[0] for k in self.full if len(k) == 1 and k[0] in effects)
+        self.cv[effects] = SimpleNamespace(folds=[1, 2], pid=os.getpid(), singles_seen=seen)
+        return self.cv[effects]
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="worker processes are forked on Linux only")
+def test_sets_found_while_the_candidates_run_are_done_on_the_same_workers_with_their_singles(monkeypatch):
+    """The pairs of two candidates done start on a free worker before the candidates' stage ends, each
+    handed its singles' fits (the worker need not fit them again)."""
+    monkeypatch.setenv(parallel.WORKERS_ENV, "2")
+    fits = _FakeFits()
+    singles = [("a",), ("b",), ("c",)]
+
+    def ready():
+        done = [e for (e,) in singles if (e,) in fits.cv]
+        return [(x, y) for i, x in enumerate(done) for y in done[i + 1 :]]
+
+    parallel.cross_validate_all(fits, singles, then=ready)
+    assert set(fits.cv) == {("a",), ("b",), ("c",), ("a", "b"), ("a", "c"), ("b", "c")}
+    assert {fits.cv[s].pid for s in fits.cv} != {os.getpid()}
+    for pair in [("a", "b"), ("a", "c"), ("b", "c")]:
+        assert fits.cv[pair].singles_seen == list(pair)  # given by the parent, not fitted on the worker
+    assert fits.full[("a",)] == "fit of a"

@@ -23,6 +23,7 @@ import gc
 import logging
 import multiprocessing
 import os
+import queue
 import signal
 import sys
 
@@ -119,9 +120,18 @@ def _pool(count: int):
         return None
 
 
-def _work(effects: tuple[str, ...]):
+def _caches(fits) -> tuple[dict, ...]:
+    """The caches of a diagnosis's fits a worker fills and hands back."""
+    return fits.full, fits.bias_corrected, fits.time_domain_full, fits.corner_shares
+
+
+def _work(task):
+    effects, given = task
     fits = _FITS
-    caches = (fits.full, fits.bias_corrected, fits.time_domain_full, fits.corner_shares)
+    caches = _caches(fits)
+    for cache, entries in zip(caches, given):  # what the parent has learnt since this worker was forked
+        for key, value in entries.items():
+            cache.setdefault(key, value)
     known = [set(cache) for cache in caches]
     result = fits.cross_validate(effects)
     if effects in fits.time_domain_full:  # its interval's friction corner: refits of its own, on this worker too
@@ -129,14 +139,27 @@ def _work(effects: tuple[str, ...]):
     return effects, result, [{k: v for k, v in cache.items() if k not in old} for cache, old in zip(caches, known)]
 
 
-def cross_validate_all(fits, effect_sets, cost=len) -> None:
+def _given(fits, effects: tuple[str, ...]) -> list[dict]:
+    """The parent's cache entries of a set's single effects (a pair's fit starts from its singles' fits):
+    handed to the worker with the task, so it need not fit them again."""
+    singles = {(e,) for e in effects} if len(effects) > 1 else set()
+    return [{k: v for k, v in cache.items() if k in singles} for cache in _caches(fits)]
+
+
+def cross_validate_all(fits, effect_sets, cost=len, then=None) -> None:
     """Cross-validate ``effect_sets`` (tuples of effect names) of a diagnosis's fits on worker processes.
 
     Fills the caches of ``fits`` (a :class:`~bikerider.gap.diagnosis.fits.Fits`: its cross-validations,
     its fits to all the data and their bias-corrected starts, its time-domain fits and their friction
-    corners' shares) as its own
-    ``cross_validate`` would; with fewer than two workers or sets to do, does nothing (the diagnosis then
-    works them out one by one when it asks for them).  ``cost`` ranks a set's expected cost (the costliest start first).
+    corners' shares) as its own ``cross_validate`` would; with fewer than two workers or sets to do, does
+    nothing (the diagnosis then works them out one by one when it asks for them).  ``cost`` ranks a set's
+    expected cost (the costliest start first).
+
+    Each worker gets one set at a time, the costliest waiting.  ``then()``, called in this process after
+    each set is done, may name further sets (those whose inputs are now known, e.g. the pairs of two
+    candidates done): they wait with the rest for the same workers, so no worker idles while the last of
+    ``effect_sets`` finish, and are cross-validated as well (not counted in the progress: their own stage
+    counts them when it asks for them).
     """
     global _FITS
     todo = [tuple(e) for e in dict.fromkeys(tuple(e) for e in effect_sets) if tuple(e) not in fits.cv]
@@ -152,13 +175,36 @@ def cross_validate_all(fits, effect_sets, cost=len) -> None:
         if pool is None:
             return
         with pool:
-            caches = (fits.full, fits.bias_corrected, fits.time_domain_full, fits.corner_shares)
-            for effects, result, made in pool.imap_unordered(_work, todo):
+            done: queue.SimpleQueue = queue.SimpleQueue()
+            waiting, running, counted = list(todo), set(), set(todo)
+
+            def dispatch() -> None:
+                # one set per free worker, the costliest waiting first (so a costly set found late starts
+                # before cheap ones found early: the workers end together)
+                while waiting and len(running) < count:
+                    effects = max(waiting, key=cost)
+                    waiting.remove(effects)
+                    running.add(effects)
+                    task = ((effects, _given(fits, effects)),)
+                    pool.apply_async(_work, task, callback=done.put, error_callback=done.put)
+
+            dispatch()
+            while running:
+                item = done.get()
+                if isinstance(item, BaseException):  # a worker's error reaches the caller, as in one process
+                    raise item
+                effects, result, made = item
+                running.discard(effects)
                 fits.cv[effects] = result
-                progress.advance(len(result.folds))  # in the parent: the workers' own counts are not seen
-                for cache, new in zip(caches, made):
+                if effects in counted:  # in the parent: the workers' own counts are not seen
+                    progress.advance(len(result.folds))
+                for cache, new in zip(_caches(fits), made):
                     for key, value in new.items():
                         cache.setdefault(key, value)
+                if then is not None:
+                    known = set(fits.cv) | running | set(waiting)
+                    waiting += [e for e in dict.fromkeys(tuple(e) for e in then()) if e not in known]
+                dispatch()
     finally:
         _FITS = None
         gc.unfreeze()

@@ -244,7 +244,9 @@ class EffectModel:
             Ad = Ad[..., keep, :][..., :, keep]
             Bd = Bd[..., keep, :]
             names = tuple(names[k] for k in keep)
-        return StateSpace.of_states(speeds, np.linalg.solve(E, Ad), np.linalg.solve(E, Bd), names)
+        n = Ad.shape[-1]
+        AB = np.linalg.solve(E, np.concatenate([Ad, np.broadcast_to(Bd, Ad.shape[:-1] + Bd.shape[-1:])], axis=-1))
+        return StateSpace.of_states(speeds, AB[..., :n], AB[..., n:], names)  # one factorisation of E for both
 
     # -- analyses --------------------------------------------------------------------------------
     def eigenvalues(self, speeds, gains=None) -> np.ndarray:

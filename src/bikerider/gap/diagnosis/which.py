@@ -46,7 +46,11 @@ def order(results: list[CrossValidation], problem: GapProblem) -> list[tuple[Cro
 def rank(fits: Fits, candidates: list[str]) -> list[dict]:
     """Every candidate cross-validated (on every core; the same results) and ranked: one entry each."""
     progress.begin("candidates", len(candidates) * len(fits.folds), "fold fits")
-    cross_validate_all(fits, [(e,) for e in candidates], fit_cost)
+
+    def ready_pairs() -> list[tuple[str, str]]:  # pairs of candidates done: a free worker starts on them
+        return pair_candidates([e for e in candidates if (e,) in fits.cv], fits.cv)
+
+    cross_validate_all(fits, [(e,) for e in candidates], fit_cost, then=ready_pairs)
     results = [fits.cross_validate((e,)) for e in candidates]
     return [
         {
@@ -82,6 +86,7 @@ def search_pairs(fits: Fits, candidates: list[str]) -> list[CrossValidation]:
     """The pairs of :func:`pair_candidates` cross-validated (on every core; the same results)."""
     pairs = pair_candidates(candidates, fits.cv)
     progress.begin("pairs", len(pairs) * len(fits.folds), "fold fits")
+    progress.advance(sum(len(fits.folds) for pair in pairs if pair in fits.cv))  # begun with the candidates
     cross_validate_all(fits, pairs, fit_cost)
     return [fits.cross_validate(pair) for pair in pairs]
 
