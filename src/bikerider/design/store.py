@@ -19,6 +19,7 @@ or chunk size is an error, never a silent mix.  Without a folder the store lives
 from __future__ import annotations
 
 import json
+import logging
 import math
 import os
 import shutil
@@ -34,6 +35,8 @@ from bikerider.design.engine import FIELDS
 from bikerider.design.space import DesignSpace
 from bikerider.design.validity import REASONS
 from bikerider.errors import InputError
+
+LOG = logging.getLogger(__name__)
 
 FORMAT = "bikerider design store 1"
 
@@ -157,15 +160,20 @@ class DesignStore:
                     "; remove the folder or give --restart to start again)",
                 )
         store = cls(_open_group(path, spec, "a"), spec, path)
-        store.verify()
+        store.verify(recompute_unchecked=True)
         return store
 
     def expected_arrays(self) -> dict[str, tuple[tuple[int, ...], tuple[int, ...], str]]:
         """Every array of the run: ``name -> (shape, chunks, dtype)``."""
         return _expected_arrays(self.spec)
 
-    def verify(self) -> None:
+    def verify(self, recompute_unchecked: bool = False) -> None:
         """Check that every finished chunk reads back to what the run wrote (its marker's checksums).
+
+        A chunk whose marker holds no checksums (written before markers held them, or emptied since) is
+        only checked to decode; with ``recompute_unchecked`` (a run resuming the store) its marker is
+        removed, so the run computes the chunk again (a changed value in it would otherwise go unseen),
+        otherwise (a reader) it is read as it is, with a warning.
 
         Raises
         ------
@@ -190,7 +198,13 @@ class DesignStore:
                     return [self.read(n, start, stop) for n in self.expected_arrays()]
                 return self.read(name, start, stop)
 
-            store_check.verify_chunk(self.path, k, read)
+            if store_check.verify_chunk(self.path, k, read):
+                continue
+            if recompute_unchecked:
+                marker.unlink()
+                LOG.info("%s: chunk %d has a marker without checksums: computed again", self.path, k)
+            else:
+                LOG.warning("%s: chunk %d has a marker without checksums: its values cannot be checked", self.path, k)
 
     def close(self) -> None:
         """Release the store's lock (another run may then open it)."""
