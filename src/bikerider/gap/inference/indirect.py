@@ -42,6 +42,7 @@ from bikerider.gap.candidates.effect_model import EffectModel
 from bikerider.gap.inference.timedomain import Batch, friction_states, systems
 from bikerider.gap.measured.extraction import EXTRA_MODE_RANGE, MIN_CYCLES, nyquist_frequency
 from bikerider.gap.measured.records import RecordFit
+from bikerider.gap.parallel import MIN_RECORDS, map_forked, workers
 
 OBSERVED = {"roll_angle": 0, "steer_angle": 1, "roll_rate": 2, "steer_rate": 3}
 """Record signals and the index of their state among ``(phi, delta, phid, deltad)``."""
@@ -481,8 +482,6 @@ class RecordSimulator:
         """:meth:`apparent` of a batch of models of benchmark values alone, the models shared among the
         worker processes (:func:`bikerider.gap.parallel.map_forked`; each model's rows are computed as
         alone, so they are the same), and kept in :attr:`known` as :meth:`apparent` keeps them."""
-        from bikerider.gap.parallel import MIN_RECORDS, map_forked, workers
-
         P = _batch_size(values, {}, None)
         parts = [part for part in np.array_split(np.arange(P), max(1, min(workers(), P // 8))) if part.size]
         if len(parts) < 2 or len(self.fits) < MIN_RECORDS:  # too little to pay for starting the workers
