@@ -12,31 +12,15 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from gap_support import weave_table
 
 import bikerider
-from bikerider.gap.candidates.effect_model import BENCH_ARGS, EffectModel
 from bikerider.gap.diagnosis.fits import with_parameter_uncertainty
-from bikerider.gap.inference.predict import Predictor
 from bikerider.gap.inference.problem import GapProblem
-from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
+from bikerider.gap.measured.tables import CanonicalData
 from bikerider.io.gap_model import load_model
 
 BP = Path(bikerider.__file__).parent / "data" / "bicycleparameters"
-
-
-def _table(model, speeds: np.ndarray, effects: dict) -> EigenvalueData:
-    """Weave eigenvalues of ``model`` with ``effects`` at ``speeds`` (no noise), standard errors 0.05."""
-    nominal = {k: float(model.parameters.values[k]) for k in BENCH_ARGS + ("g",)}
-
-    def table(values):
-        n = speeds.size
-        return EigenvalueData(
-            speeds, values, np.full(n, 0.05), np.full(n, 0.05), np.zeros(n), ["weave"] * n, ["a"] * n,
-            np.zeros((n, 4)), [f"run {k}" for k in range(n)],
-        )  # fmt: skip
-
-    weave = Predictor(table(np.zeros(speeds.size, complex)), CanonicalData.empty(), nominal, model.geometry)
-    return table(weave.eigenvalues(EffectModel(nominal, model.geometry, effects)))
 
 
 @pytest.fixture(scope="module")
@@ -47,7 +31,7 @@ def riderless():
 def test_slopes_at_the_effects_zero_are_the_nominal_slopes(davis):
     """At an effect's neutral value the model is the nominal one: the slopes at the fit agree with the
     nominal Jacobian (a one-sided secant against a central one: to the parameters' curvature)."""
-    problem = GapProblem(davis, _table(davis, np.linspace(5.0, 9.0, 6), {}), CanonicalData.empty())
+    problem = GapProblem(davis, weave_table(davis, np.linspace(5.0, 9.0, 6), {}), CanonicalData.empty())
     lay = problem.layout(("steer_damping",))
     at_zero = problem.parameter_jacobian_at(lay, np.array([0.0]), indirect=False)
     nominal = problem.jacobian
@@ -77,7 +61,7 @@ def test_a_large_steer_inertia_interval_holds_its_truth(riderless):
 def test_the_share_moves_with_the_effect_and_the_nominal_slopes_stay_on_request(davis):
     """A steer damping of 2 N m s/rad moves the parameters' slopes, so the standard error taken at the fit
     differs from the nominal slopes' (what a pair's fit keeps, ``at_fit=False``)."""
-    data = _table(davis, np.linspace(5.0, 9.0, 6), {"steer_damping": {"c_steer": 2.0}})
+    data = weave_table(davis, np.linspace(5.0, 9.0, 6), {"steer_damping": {"c_steer": 2.0}})
     problem = GapProblem(davis, data, CanonicalData.empty())
     fit = problem.fit(("steer_damping",))
     assert fit.values[0] == pytest.approx(2.0, rel=1e-3)

@@ -6,40 +6,21 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from gap_support import weave_table
 
-from bikerider.gap.candidates.effect_model import BENCH_ARGS, EffectModel
 from bikerider.gap.inference import predict
 from bikerider.gap.inference.differences import forward_jacobian
 from bikerider.gap.inference.problem import GapProblem
-from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
+from bikerider.gap.measured.tables import CanonicalData
 
 TYRES = {"tyre_slip": {"c_alpha": 12.0, "sigma_t": 0.2, "t_p": 0.03, "c_gamma": 0.8}}
 """A hidden tyre: cornering stiffness 12 1/rad, relaxation length 0.2 m, pneumatic trail 3 cm (camber
 stiffness the candidate's fixed 0.8)."""
 
 
-def _table(model, speeds: np.ndarray, effects: dict) -> EigenvalueData:
-    """Weave eigenvalues of ``model`` with ``effects`` at ``speeds`` (no noise), standard errors 0.05."""
-    nominal = {k: float(model.parameters.values[k]) for k in BENCH_ARGS + ("g",)}
-
-    def table(values):
-        n = speeds.size
-        return EigenvalueData(
-            speeds, values, np.full(n, 0.05), np.full(n, 0.05), np.zeros(n), ["weave"] * n, ["a"] * n,
-            np.zeros((n, 4)), [f"run {k}" for k in range(n)],
-        )  # fmt: skip
-
-    weave = Predictor_of(table(np.zeros(speeds.size, complex)), nominal, model)
-    return table(weave.eigenvalues(EffectModel(nominal, model.geometry, effects)))
-
-
-def Predictor_of(table, nominal, model):
-    return predict.Predictor(table, CanonicalData.empty(), nominal, model.geometry)
-
-
 @pytest.fixture(scope="module")
 def tyred(davis):
-    return GapProblem(davis, _table(davis, np.linspace(4.0, 8.0, 7), TYRES), CanonicalData.empty())
+    return GapProblem(davis, weave_table(davis, np.linspace(4.0, 8.0, 7), TYRES), CanonicalData.empty())
 
 
 def _jacobians(problem: GapProblem, effects: tuple[str, ...], x: np.ndarray):
