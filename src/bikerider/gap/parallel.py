@@ -125,13 +125,18 @@ def _caches(fits) -> tuple[dict, ...]:
     return fits.full, fits.bias_corrected, fits.time_domain_full, fits.corner_shares
 
 
+def _merge(fits, entries: list[dict]) -> None:
+    """Cache entries made elsewhere (one dictionary per cache of :func:`_caches`) added to ``fits``'s."""
+    for cache, new in zip(_caches(fits), entries):
+        for key, value in new.items():
+            cache.setdefault(key, value)
+
+
 def _work(task):
     effects, given = task
     fits = _FITS
+    _merge(fits, given)  # what the parent has learnt since this worker was forked
     caches = _caches(fits)
-    for cache, entries in zip(caches, given):  # what the parent has learnt since this worker was forked
-        for key, value in entries.items():
-            cache.setdefault(key, value)
     known = [set(cache) for cache in caches]
     result = fits.cross_validate(effects)
     if effects in fits.time_domain_full:  # its interval's friction corner: refits of its own, on this worker too
@@ -198,9 +203,7 @@ def cross_validate_all(fits, effect_sets, cost=len, then=None) -> None:
                 fits.cv[effects] = result
                 if effects in counted:  # in the parent: the workers' own counts are not seen
                     progress.advance(len(result.folds))
-                for cache, new in zip(_caches(fits), made):
-                    for key, value in new.items():
-                        cache.setdefault(key, value)
+                _merge(fits, made)
                 if then is not None:
                     known = set(fits.cv) | running | set(waiting)
                     waiting += [e for e in dict.fromkeys(tuple(e) for e in then()) if e not in known]

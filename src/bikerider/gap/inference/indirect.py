@@ -472,11 +472,16 @@ class RecordSimulator:
         if keys and all(key in self.known for key in keys):
             return np.array([self.known[key] for key in keys])
         out = self._apparent(values, config, scale, P)
-        for key, row in zip(keys, out):  # each model's rows are computed as alone: the same from any batch
+        self._keep(keys, out)
+        return out
+
+    def _keep(self, keys: list[bytes], rows: np.ndarray) -> None:
+        """Models' apparent eigenvalues kept by key (each model's rows are computed as alone: the same from
+        any batch), the oldest dropped beyond :data:`MAX_KNOWN`."""
+        for key, row in zip(keys, rows):
             self.known[key] = row.copy()
         while len(self.known) > MAX_KNOWN:
             del self.known[next(iter(self.known))]
-        return out
 
     def apparent_on_workers(self, values: dict) -> np.ndarray:
         """:meth:`apparent` of a batch of models of benchmark values alone, the models shared among the
@@ -491,10 +496,7 @@ class RecordSimulator:
             return {k: v if np.ndim(v) == 0 or np.size(v) == 1 else np.asarray(v)[part] for k, v in values.items()}
 
         out = np.concatenate(map_forked(lambda part: self.apparent(models(part)), parts))
-        for p, row in enumerate(out):
-            self.known[_values_key(values, p)] = row.copy()
-        while len(self.known) > MAX_KNOWN:
-            del self.known[next(iter(self.known))]
+        self._keep([_values_key(values, p) for p in range(P)], out)
         return out
 
     def _apparent(self, values: dict, config: dict, scale, P: int) -> np.ndarray:

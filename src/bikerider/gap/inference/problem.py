@@ -1004,12 +1004,10 @@ class GapProblem:
         starts = np.clip(starts, lower + margin, upper - margin)
         costs = np.sum(residuals_batch(starts) ** 2, axis=1)
         x0 = starts[int(np.argmin(costs))]
-        scale = np.array([max(hi - lo, 1e-6) for lo, hi in zip(lay.lower, lay.upper)] + [1.0] * lay.n_shift)
-        steps = np.concatenate([1e-5 * np.minimum(scale[:n_struct], 10.0), np.full(lay.n_shift, 1e-3)])
+        scale, steps = _scale_and_steps(lay)
 
         def jac(x: np.ndarray) -> np.ndarray:
-            J = self._perturbation_jacobian(lay, mask, x, steps, upper, offset) if self._perturbable(lay) else None
-            return forward_jacobian(residuals_batch, x, steps, upper) if J is None else J
+            return self._jacobian(lay, mask, x, steps, upper, offset, residuals_batch)
 
         def fun(x: np.ndarray) -> np.ndarray:
             return residuals_batch(x[None, :])[0]
@@ -1058,15 +1056,27 @@ class GapProblem:
         mask = np.ones(len(self.obs), bool) if mask is None else np.asarray(mask, bool)
         x = np.asarray(x, dtype=float)
         lower, upper = self.bounds(lay)
-        scale = np.array([max(hi - lo, 1e-6) for lo, hi in zip(lay.lower, lay.upper)] + [1.0] * lay.n_shift)
-        n_struct = len(lay.structural)
-        steps = np.concatenate([1e-5 * np.minimum(scale[:n_struct], 10.0), np.full(lay.n_shift, 1e-3)])
-        J = self._perturbation_jacobian(lay, mask, x, steps, upper, bias) if self._perturbable(lay) else None
-        if J is None:
-            J = forward_jacobian(lambda X: self._residuals_batch(lay, mask, X, bias), x, steps, upper)
+        _, steps = _scale_and_steps(lay)
+        J = self._jacobian(lay, mask, x, steps, upper, bias, lambda X: self._residuals_batch(lay, mask, X, bias))
         out = self._finish(lay, mask, x, self._residuals(lay, mask, x, bias), J, True, message)
         out.bias, out.bias_iterations = np.asarray(bias, dtype=float), 0
         return out
+
+    def _jacobian(
+        self,
+        lay: _Layout,
+        mask: np.ndarray,
+        x: np.ndarray,
+        steps: np.ndarray,
+        upper: np.ndarray,
+        offset: np.ndarray | None,
+        residuals_batch,
+    ) -> np.ndarray:
+        """The weighted residuals' Jacobian at ``x`` of a fit of weave eigenvalues plus ``offset``: by
+        eigenvalue perturbation where it holds (:meth:`_perturbation_jacobian`), else by forward differences
+        of ``residuals_batch``."""
+        J = self._perturbation_jacobian(lay, mask, x, steps, upper, offset) if self._perturbable(lay) else None
+        return forward_jacobian(residuals_batch, x, steps, upper) if J is None else J
 
     def _perturbable(self, lay: _Layout) -> bool:
         """Whether a fit of ``lay`` takes its Jacobian by eigenvalue perturbation
@@ -1215,8 +1225,7 @@ class GapProblem:
         n_struct = len(lay.structural)
         p = n_struct + lay.n_shift
         lower, upper = self.bounds(lay)
-        scale = np.array([max(hi - lo, 1e-6) for lo, hi in zip(lay.lower, lay.upper)] + [1.0] * lay.n_shift)
-        steps = np.concatenate([1e-5 * np.minimum(scale[:n_struct], 10.0), np.full(lay.n_shift, 1e-3)])
+        _, steps = _scale_and_steps(lay)
         residuals_batch = self._apparent_residuals(lay)
 
         began = time.perf_counter()
@@ -1338,8 +1347,7 @@ class GapProblem:
         lower, upper = self.bounds(lay)
         x0 = np.asarray(fit.values, float)
         p = x0.size
-        scale = np.array([max(hi - lo, 1e-6) for lo, hi in zip(lay.lower, lay.upper)] + [1.0] * lay.n_shift)
-        steps = np.concatenate([1e-5 * np.minimum(scale[: len(lay.structural)], 10.0), np.full(lay.n_shift, 1e-3)])
+        _, steps = _scale_and_steps(lay)
         targets = np.asarray(targets, float)
         out = Profile(np.full(p, np.nan), np.full(p, np.nan), np.full(p, np.nan), np.full(p, np.nan))
 
@@ -1576,6 +1584,14 @@ class GapProblem:
         for name, delta in fit.shift.items():
             values[name] = self.nominal[name] + delta
         return EffectModel(values, self.geometry, {e: p for e, p in fit.config.items() if e not in OBSERVATION_EFFECTS})
+
+
+def _scale_and_steps(lay: _Layout) -> tuple[np.ndarray, np.ndarray]:
+    """A layout's values' search ranges (1 for the parameters' shifts, in sigmas) and the forward-difference
+    steps of its fits' Jacobians (1e-5 of a range, at most 1e-4; 1e-3 sigma for a shift)."""
+    scale = np.array([max(hi - lo, 1e-6) for lo, hi in zip(lay.lower, lay.upper)] + [1.0] * lay.n_shift)
+    steps = np.concatenate([1e-5 * np.minimum(scale[: len(lay.structural)], 10.0), np.full(lay.n_shift, 1e-3)])
+    return scale, steps
 
 
 class _Together:

@@ -439,10 +439,11 @@ def _accept_two_mode(
     if not (omega > 0 and abs(lam + sigma) > 0.05 * max(abs(sigma), 0.1) and c != 0):
         return None, "no oscillation found: the fitted modes are not a damped oscillation and a distinct real mode"
     span = float(tau[-1] - tau[0])
-    if omega >= nyquist_frequency(span, n):
+    nyquist = nyquist_frequency(span, n)
+    if omega >= nyquist:
         return None, (
             f"no oscillation found: the fitted frequency {omega:.3g} rad/s lies above the samples' Nyquist "
-            f"frequency {nyquist_frequency(span, n):.3g} rad/s (an alias, not a weave)"
+            f"frequency {nyquist:.3g} rad/s (an alias, not a weave)"
         )
     if not EXTRA_MODE_RANGE[0] < lam < EXTRA_MODE_RANGE[1]:
         return None, (
