@@ -61,6 +61,14 @@ JR_SHARED_SETTLED = Path(__file__).with_name("gap_next_loop_plan_jensen_renyi_sh
 EVEN_SHARED_SETTLED = Path(__file__).with_name("gap_next_loop_even_shared_settled.jsonl")
 """The same two strategies with the nominal parameters' uncertainty shared by all runs (``rerun --strategy ...
 --shared --tag settled``)."""
+SWEEP_TODAY = Path(__file__).with_name("gap_next_loop_repeat_sweep_today.jsonl")
+SWEEP_SHARED_TODAY = Path(__file__).with_name("gap_next_loop_repeat_sweep_shared_today.jsonl")
+DECAY_TODAY = Path(__file__).with_name("gap_next_loop_repeat_decay_today.jsonl")
+DECAY_SHARED_TODAY = Path(__file__).with_name("gap_next_loop_repeat_decay_shared_today.jsonl")
+"""The plan's best decay and best multisine repeated on every stored tie, on the code of 2026-11-29 (commit
+f47fb70), with the loop's evidence counting the nominal parameters' uncertainty per run (``rerun --strategy
+repeat:decay --tag today``, ``rerun --strategy repeat:sweep --tag today``) and shared by all runs (the same with
+``--shared``): the plan's odds against the loop's outcomes under either evidence model."""
 JR_RULE = Path(__file__).with_name("gap_next_loop_plan_jensen_renyi.jsonl")
 JR_NO_RULE = Path(__file__).with_name("gap_next_loop_plan_jensen_renyi_max_roll_inf.jsonl")
 EVEN_NOW = Path(__file__).with_name("gap_next_loop_even.jsonl")
@@ -802,6 +810,83 @@ def _shared_today_lines(n_max: int) -> list[str]:
         "in five runs, then its plan repeated one decay twelve times and the hidden effect's probability fell to "
         "0.52, where the even spread resolved it at run 13. Shared:",
     )
+
+
+def _shared_odds_lines(n_max: int) -> list[str]:
+    """The plan's resolution probabilities against the loop's outcomes on today's code, per run and shared
+    (:data:`DECAY_TODAY`, :data:`DECAY_SHARED_TODAY`, :data:`SWEEP_TODAY`, :data:`SWEEP_SHARED_TODAY`)."""
+    files = {
+        "decay": (DECAY_TODAY, DECAY_SHARED_TODAY),
+        "sweep": (SWEEP_TODAY, SWEEP_SHARED_TODAY),
+    }
+    stored = {
+        kind: [[c for c in _stored(path) if c.get("strategies")] for path in pair] for kind, pair in files.items()
+    }
+    if not all(all(got) for got in stored.values()):
+        return []
+    out = [
+        "### Honest odds on today's code, the parameters' error per run and shared",
+        "",
+        "The plan's best decay and its best multisine, each repeated `k` times (k = 1-20) on every stored tie, on "
+        "the code of 2026-11-29 (`rerun --strategy repeat:decay|repeat:sweep [--shared] --tag today`): the plan's "
+        "probability that `k` runs favour the true rival by 19 to 1, binned, against the fraction the loop resolved "
+        "by `k` runs, with the loop's evidence counting the nominal parameters' uncertainty per run and shared by "
+        "all runs (one tie's points at different `k` are not independent; *described*: the ties whose every run a "
+        "rival describes, `validation.loop.NEITHER_P`).",
+        "",
+    ]
+    names = {"decay": "decays", "sweep": "multisines"}
+    for kind, (per_run, shared) in stored.items():
+        rows = {}
+        for label, cases in (("per run", per_run), ("shared", shared)):
+            every = _bins(_reliability(cases, kind, n_max))
+            described = [c for c in cases if (c["strategies"].get(f"repeat:{kind}") or {}).get("neither") is None]
+            rows[label] = ({r[0]: r for r in every}, {r[0]: r for r in _bins(_reliability(described, kind, n_max))})
+            at10 = [(p, r) for p, r, _ in _reliability(cases, kind, n_max)[9::n_max]]
+            rows[label] += (len(at10), sum(p for p, _ in at10), sum(r for _, r in at10),
+                            math.sqrt(sum(p * (1 - p) for p, _ in at10)))  # fmt: skip
+        out += [
+            f"The plan's best {names[kind][:-1]} repeated:",
+            "",
+            "| predicted | points (ties), per run | mean predicted | resolved, per run | described | points (ties), "
+            "shared | resolved, shared | described |",
+            "|---|---|---|---|---|---|---|---|",
+        ]
+        for lo in sorted(set(rows["per run"][0]) | set(rows["shared"][0])):
+            a, b = rows["per run"][0].get(lo), rows["shared"][0].get(lo)
+            da, db = rows["per run"][1].get(lo), rows["shared"][1].get(lo)
+            ref = a or b
+            out.append(
+                f"| {ref[0]:.2f}-{ref[1]:.2f} | {f'{a[2]} ({a[3]})' if a else '-'} | {ref[4]:.2f} | "
+                f"{f'{a[5]:.2f}' if a else '-'} | {f'{da[5]:.2f}' if da else '-'} | "
+                f"{f'{b[2]} ({b[3]})' if b else '-'} | {f'{b[5]:.2f}' if b else '-'} | "
+                f"{f'{db[5]:.2f}' if db else '-'} |"
+            )
+        for label in ("per run", "shared"):
+            off = []
+            for lo, hi, _, ties, mean, fraction in rows[label][0].values():
+                scatter = math.sqrt(max(mean * (1 - mean), 0.01) / ties)  # the ties as the count: points of one
+                if abs(fraction - mean) > 2 * scatter:  # tie at different k are not independent
+                    off.append(f"{lo:.2f}-{hi:.2f} ({'under' if fraction > mean else 'over'}confident: {mean:.2f} "
+                               f"predicted, {fraction:.2f} resolved)")  # fmt: skip
+            out.append("")
+            out.append(
+                f"* {label.capitalize()}, bins beyond twice their scatter (the ties as the count): "
+                + ("; ".join(off) if off else "none")
+                + "."
+            )
+        for label in ("per run", "shared"):
+            n10, p10, r10, sd10 = rows[label][2:]
+            out.append("")
+            out.append(
+                f"* {label.capitalize()}, at the plan's default of 10 runs ({n10} ties, one point each): predicted "
+                f"probabilities add up to {p10:.1f} (scatter {sd10:.1f} were they right), {r10} were resolved "
+                f"({(r10 - p10) / sd10:+.1f} scatters)."
+                if sd10 > 0
+                else f"* {label.capitalize()}: no ties."
+            )
+        out.append("")
+    return out
 
 
 def _shared_reading_lines() -> list[str]:
@@ -1720,6 +1805,7 @@ def report(args) -> int:
     lines += _settled_lines(n_max)
     lines += _today_lines(n_max)
     lines += _shared_today_lines(n_max)
+    lines += _shared_odds_lines(n_max)
     lines += _records_lines(n_max)
     shared = [c for c in _stored(SHARED) if c.get("strategies")]
     if shared:
