@@ -328,6 +328,13 @@ def _weave_eigenvalue(time, signal, min_cycles: float) -> WeaveEstimate:
             pass
     tau = t - t[0]
     n = t.size
+    nyquist = nyquist_frequency(float(tau[-1]), n)
+    if base is not None and base.omega_d >= nyquist:  # the plain fit's bound lets it reach twice that
+        refusal = FitError(
+            f"no oscillation found: the fitted frequency {base.omega_d:.3g} rad/s lies above the samples' Nyquist "
+            f"frequency {nyquist:.3g} rad/s (an alias, not a weave)"
+        )
+        base = None
     starts = [start]
     if base is not None:
         starts += [
