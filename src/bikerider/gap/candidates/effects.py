@@ -194,6 +194,11 @@ class Effect:
     adds_lean, adds_tyres : bool
         It needs the model with the rider's lean degree of freedom (``rider_lean_matrices``), or with
         the tyres' lateral forces (``tyre_slip_descriptor``), of ``derive/gap_effects.py``.
+    nests : dict
+        The simpler candidates this effect holds as a special case: simpler effect name to the values of
+        this effect's own parameters that make it that effect (``steer_friction`` with ``T_coulomb = 0``
+        is ``steer_damping``).  Where the data do not exclude those values, the ranking takes the
+        simpler one first (:func:`bikerider.gap.diagnosis.which.order`).
     """
 
     name: str
@@ -207,6 +212,7 @@ class Effect:
     observation: bool = False
     adds_lean: bool = False
     adds_tyres: bool = False
+    nests: dict[str, dict[str, float]] = field(default_factory=dict)
 
 
 _TABLE = "data/gap/README.md literature table"
@@ -493,6 +499,8 @@ EFFECTS: dict[str, Effect] = {
         needs_records=True,
         # a steer motor's rotor inertia, a spring, and an error of the speed sensor
         partners=(STEER_INERTIA, STEER_STIFFNESS, SPEED_SENSOR),
+        # without its Coulomb part it is the viscous steer damping (c_viscous as c_steer)
+        nests={STEER_DAMPING: {"T_coulomb": 0.0}},
     ),
 }
 """The candidates.  ``tyre_slip`` holds the camber stiffness at 0.8 per rad (mid of the 0.6-0.95

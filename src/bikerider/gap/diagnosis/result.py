@@ -22,7 +22,9 @@ folds and scored on the held-out fold; the held-out error is the root mean squar
 residuals over all held-out points.  Candidates are ranked by it; a candidate within
 :data:`~bikerider.gap.diagnosis.statistics.TIE_RELATIVE` of a better one, or not significantly better at
 :data:`~bikerider.gap.diagnosis.statistics.TIE_P`, is tied with it, and within a tie the candidate with
-fewer fitted parameters ranks first (Occam). "Better" is a paired bootstrap of the held-out points' RMS
+fewer fitted parameters ranks first (Occam); a candidate that holds a simpler one as a special case is
+tied with it when its fit does not exclude the values that make it so
+(:func:`~bikerider.gap.diagnosis.which.undetermined_extra`). "Better" is a paired bootstrap of the held-out points' RMS
 error (:func:`~bikerider.gap.diagnosis.statistics.significantly_better`). Pairs are cross-validated as
 well (fitted jointly on the same folds): every pair of candidates that each, alone, predict the held-out
 folds better than the nominal model (by more than 1 %; an effect that makes the held-out predictions

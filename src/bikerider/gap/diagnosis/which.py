@@ -9,7 +9,6 @@ from bikerider import progress
 from bikerider.gap.candidates.effects import EFFECT_NAMES, EFFECTS, PARAMETERS, TIME_DOMAIN_EFFECTS
 from bikerider.gap.diagnosis.fits import CrossValidation, Fits
 from bikerider.gap.diagnosis.statistics import _n_params, by_error, significantly_better
-from bikerider.gap.inference.problem import GapProblem
 from bikerider.gap.parallel import cross_validate_all
 
 HELPFUL = 0.01
@@ -18,17 +17,27 @@ when its held-out error is lower by more than this fraction (a fit that stays at
 changes nothing and pairs nothing)."""
 
 
-def order(results: list[CrossValidation], problem: GapProblem) -> list[tuple[CrossValidation, list[str]]]:
+def order(results: list[CrossValidation], fits: Fits) -> list[tuple[CrossValidation, list[str]]]:
     """Sort by held-out error; ties (see the module docstring of :mod:`~bikerider.gap.diagnosis.result`)
     go to the simpler candidate; errors equal to the fits' tolerance in a fixed order
-    (:func:`~bikerider.gap.diagnosis.statistics.by_error`).  Each with the candidates it is tied with."""
+    (:func:`~bikerider.gap.diagnosis.statistics.by_error`).  Each with the candidates it is tied with.
+
+    A candidate that holds a simpler one as a special case (:attr:`~bikerider.gap.candidates.effects.Effect.nests`)
+    is tied with it, whatever their held-out errors, when its fit to all the data does not exclude the values
+    that make it the simpler one (each such value inside its 95 % interval): the data do not determine what
+    it adds."""
+    problem = fits.problem
     results = by_error(results, problem)
     ordered: list[CrossValidation] = list(results)
     ties: dict[tuple, list[str]] = {r.effects: [] for r in results}
     for i, a in enumerate(results):
         for b in results[i + 1 :]:
             better, _ = significantly_better(a.z_after, b.z_after)
-            if not better:
+            if (
+                not better
+                or undetermined_extra(fits, a.effects, b.effects)
+                or undetermined_extra(fits, b.effects, a.effects)
+            ):
                 ties[a.effects].append("+".join(b.effects))
                 ties[b.effects].append("+".join(a.effects))
     # bubble simpler candidates ahead of tied, better-scoring but more complex ones
@@ -65,8 +74,26 @@ def rank(fits: Fits, candidates: list[str]) -> list[dict]:
             "data_error_after": r.data_after,
             "data_shrink": r.data_shrink,
         }
-        for position, (r, ties) in enumerate(order(results, fits.problem), start=1)
+        for position, (r, ties) in enumerate(order(results, fits), start=1)
     ]
+
+
+def undetermined_extra(fits: Fits, general: tuple[str, ...], simpler: tuple[str, ...]) -> bool:
+    """Whether single candidate ``general`` holds ``simpler`` as a special case
+    (:attr:`~bikerider.gap.candidates.effects.Effect.nests`) and its fit to all the data leaves every value
+    that makes it so inside that parameter's 95 % interval (``steer_friction`` whose ``T_coulomb`` interval
+    reaches 0 is not told from ``steer_damping``)."""
+    if len(general) != 1 or len(simpler) != 1 or general[0] not in EFFECTS:
+        return False
+    neutral = EFFECTS[general[0]].nests.get(simpler[0])
+    if not neutral:
+        return False
+    fit = fits.fit_of(general)
+    index = {name: k for k, name in enumerate(fit.names)}
+    return all(
+        name in index and fit.ci_low[index[name]] <= value <= fit.ci_high[index[name]]
+        for name, value in neutral.items()
+    )
 
 
 def pair_candidates(candidates: list[str], cv: dict[tuple[str, ...], CrossValidation]) -> list[tuple[str, str]]:
