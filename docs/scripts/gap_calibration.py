@@ -23,6 +23,10 @@ the friction fit::
 
     nice -n 10 .venv/bin/python docs/scripts/gap_calibration.py --fresh --effects steer_friction_records \
         --trials 200 --workers 1 --max-minutes 0 --results /tmp/friction.jsonl
+
+``--seeds-of FILE`` (a JSON object, effect name to a list of seeds) keeps, of the effects it names, only the
+trials at those seeds: a rerun of the trials a change can touch (those whose ranking or selection held the
+candidates it reorders), the other trials of those effects being unchanged by it.
 """
 
 from __future__ import annotations
@@ -137,14 +141,18 @@ def run(
     workers: int = 2,
     compare_rounds: int = 0,
     effects: list[str] | None = None,
+    seeds_of: dict[str, list[int]] | None = None,
 ) -> int:
     """Run the study's trials not yet in ``out`` (resumable), ``workers`` at a time; each trial's result is
     appended to ``out`` by this process as soon as it finishes.  Stops starting trials after
-    ``max_minutes`` (0: no limit) and on Ctrl-C / SIGTERM, keeping every finished trial."""
+    ``max_minutes`` (0: no limit) and on Ctrl-C / SIGTERM, keeping every finished trial.  ``seeds_of`` keeps,
+    of the effects it names, only the trials at its seeds."""
     from gap_calibration_report import load  # the report beside this script
 
     done_keys = {_key(t) for t in load(out)}
     todo = [j for j in jobs(trials, friction_every, compare_rounds, seed0, effects) if j not in done_keys]
+    if seeds_of:
+        todo = [j for j in todo if j[0] not in seeds_of or j[1] in seeds_of[j[0]]]
     total = len(todo)
     print(f"{total} trials to run ({len(done_keys)} already in {out.name}), {workers} at a time", file=sys.stderr)
     start = time.perf_counter()
@@ -224,6 +232,11 @@ def main(argv: list[str] | None = None) -> int:
         help="run only these effects' trials (comma-separated names as stored, e.g. steer_friction_records; "
         "the same seeds as the whole study) and print their coverage instead of writing the doc",
     )
+    parser.add_argument(
+        "--seeds-of",
+        type=Path,
+        help="JSON file, effect name to seeds: of the effects it names run only those seeds (with --effects)",
+    )
     parser.add_argument("--report-only", action="store_true", help="write the doc from the stored trials")
     parser.add_argument("--doc", type=Path, default=DOC, help="the document whose part 4 is written")
     args = parser.parse_args(argv)
@@ -235,6 +248,8 @@ def main(argv: list[str] | None = None) -> int:
             parser.error(f"--effects {args.effects!r}: unknown {unknown}; the study's effects are {effect_names()}")
         if args.results == RESULTS:
             parser.error("--effects writes a part of the study: give it its own --results file")
+    if args.seeds_of and not args.effects:
+        parser.error("--seeds-of reruns a part of the study: give --effects (and its own --results file) too")
     if not args.report_only:
         if args.fresh and args.results.exists():
             args.results.unlink()
@@ -248,6 +263,7 @@ def main(argv: list[str] | None = None) -> int:
             args.workers,
             args.compare_rounds,
             effects,
+            _seeds_of(args.seeds_of, parser) if args.seeds_of else None,
         )
         minutes = (time.perf_counter() - start) / 60
         print(f"trials done in {minutes:.1f} min", file=sys.stderr)
@@ -258,6 +274,22 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     write_report(args.results, args.doc, args.trials)
     return 0
+
+
+def _seeds_of(path: Path, parser: argparse.ArgumentParser) -> dict[str, list[int]]:
+    """The ``--seeds-of`` file read and checked (a usage error names what is wrong)."""
+    try:
+        seeds = json.loads(path.read_text())
+    except (OSError, ValueError) as exc:
+        parser.error(f"--seeds-of {path}: cannot read a JSON object of effect to seeds ({exc})")
+    if not isinstance(seeds, dict) or not all(
+        isinstance(v, list) and all(isinstance(x, int) for x in v) for v in seeds.values()
+    ):
+        parser.error(f"--seeds-of {path}: expected a JSON object of effect name to a list of integer seeds")
+    unknown = [e for e in seeds if e not in effect_names()]
+    if unknown:
+        parser.error(f"--seeds-of {path}: unknown effects {unknown}; the study's effects are {effect_names()}")
+    return seeds
 
 
 def print_summary(results: Path, effects: list[str]) -> None:
