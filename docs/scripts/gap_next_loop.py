@@ -889,6 +889,103 @@ def _shared_odds_lines(n_max: int) -> list[str]:
     return out
 
 
+RECALIBRATION_SPLITS = 50
+"""Random halves of the ties (seeded) on which :func:`_recalibration_lines` fits a map and scores it on the rest."""
+
+
+def _platt(predicted: np.ndarray, resolved: np.ndarray) -> np.ndarray:
+    """A logistic map of the predicted probability's log odds, ``(a, b)`` of ``logit q = a + b logit p``, fitted by
+    maximum likelihood to the loop's outcomes (Platt 1999)."""
+    from scipy.optimize import minimize
+
+    x = _logit(predicted)
+
+    def loss(w: np.ndarray) -> tuple[float, np.ndarray]:
+        z = w[0] + w[1] * x
+        residual = 1 / (1 + np.exp(-z)) - resolved  # the loss's slope in z
+        return float(np.sum(np.logaddexp(0.0, z) - resolved * z)), np.array([residual.sum(), residual @ x])
+
+    fit = minimize(loss, np.array([0.0, 1.0]), jac=True, method="BFGS")
+    if not fit.success:
+        raise RuntimeError(f"the logistic map of the plan's probabilities did not converge: {fit.message}")
+    return fit.x
+
+
+def _logit(p: np.ndarray) -> np.ndarray:
+    p = np.clip(p, 1e-4, 1 - 1e-4)  # the plan rounds to five digits: 0 and 1 stand for beyond 1e-4 of them
+    return np.log(p / (1 - p))
+
+
+def _isotonic(predicted: np.ndarray, resolved: np.ndarray):
+    """A non-decreasing map of the predicted probability fitted to the outcomes (pool-adjacent-violators), as a
+    function interpolating between the training points."""
+    from scipy.optimize import isotonic_regression
+
+    order = np.argsort(predicted, kind="stable")
+    x, y = predicted[order], isotonic_regression(resolved[order].astype(float)).x
+    return lambda p: np.interp(p, x, y)
+
+
+def _recalibration_lines(n_max: int) -> list[str]:
+    """Whether a map of the plan's probabilities fitted to the loop's outcomes would predict other ties' outcomes
+    better (:data:`DECAY_TODAY`, :data:`SWEEP_TODAY`): fitted on a random half of the ties, scored on the
+    other half (Brier score, the count resolved at 10 runs), :data:`RECALIBRATION_SPLITS` times."""
+    out = [
+        "A map of the plan's probabilities fitted to these outcomes, scored on ties it was not fitted to (per run; "
+        f"fitted on a random half of the ties, scored on the other half, {RECALIBRATION_SPLITS} halvings; Brier "
+        "score: the mean squared difference of probability and outcome, lower is better; a logistic map of the "
+        "log odds, Platt 1999, and a non-decreasing one, pool-adjacent-violators):",
+        "",
+        "| experiment | ties | Brier: plan | logistic map | non-decreasing map | at 10 runs: plan | logistic map "
+        "| non-decreasing map | resolved | logistic map on all ties |",
+        "|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    names = {"decay": "decays", "sweep": "multisines"}
+    verdicts = []
+    for kind, path in (("decay", DECAY_TODAY), ("sweep", SWEEP_TODAY)):
+        cases = [c for c in _stored(path) if c.get("strategies")]
+        points = _reliability(cases, kind, n_max)
+        if not points:
+            return []
+        p = np.array([q for q, _, _ in points])
+        y = np.array([r for _, r, _ in points], dtype=float)
+        seed = np.array([s for _, _, s in points])
+        k = np.tile(np.arange(1, n_max + 1), len(points) // n_max)
+        ties = np.unique(seed)
+        rng = np.random.default_rng(0)
+        scores = []
+        for _ in range(RECALIBRATION_SPLITS):
+            test = np.isin(seed, rng.choice(ties, ties.size // 2, replace=False))
+            a, b = _platt(p[~test], y[~test])
+            logistic = 1 / (1 + np.exp(-(a + b * _logit(p[test]))))
+            isotonic = _isotonic(p[~test], y[~test])(p[test])
+            at10 = k[test] == 10
+            scores.append(
+                [np.mean((q - y[test]) ** 2) for q in (p[test], logistic, isotonic)]
+                + [q[at10].sum() for q in (p[test], logistic, isotonic, y[test])]
+            )
+        m = np.mean(scores, axis=0)
+        a, b = _platt(p, y)
+        out.append(
+            f"| {names[kind]} | {ties.size} (halves of {ties.size // 2}) | {m[0]:.3f} | {m[1]:.3f} | {m[2]:.3f} | "
+            f"{m[3]:.1f} | {m[4]:.1f} | {m[5]:.1f} | {m[6]:.1f} | logit q = {a:+.2f} + {b:.2f} logit p |"
+        )
+        best = min((m[1], "logistic"), (m[2], "non-decreasing"))
+        verdicts.append(
+            f"{names[kind]}: the {best[1]} map lowers the held-out Brier score {m[0]:.3f} -> {best[0]:.3f}"
+            if best[0] < m[0]
+            else f"{names[kind]}: neither map lowers the held-out Brier score ({m[0]:.3f} -> {m[1]:.3f}, {m[2]:.3f})"
+        )
+    out += [
+        "",
+        "* " + "; ".join(verdicts) + ". No map is applied to the plan's output: it would be learned from the "
+        "simulated loop, whose runs scatter as the truth's simulator makes them, and tell a researcher's real runs "
+        "the simulation's odds (docs/gap.md, *What to measure next*).",
+        "",
+    ]
+    return out
+
+
 def _shared_reading_lines() -> list[str]:
     """The reading of :func:`_shared_today_lines` against :func:`_today_lines`: how the evidence's model of the
     parameters' error moves the decisions (empty without both pairs of files)."""
@@ -1806,6 +1903,7 @@ def report(args) -> int:
     lines += _today_lines(n_max)
     lines += _shared_today_lines(n_max)
     lines += _shared_odds_lines(n_max)
+    lines += _recalibration_lines(n_max)
     lines += _records_lines(n_max)
     shared = [c for c in _stored(SHARED) if c.get("strategies")]
     if shared:
