@@ -9,10 +9,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bikerider.gap.candidates.effects import PARAMETERS, STEER_FRICTION
+from bikerider.gap.candidates.effects import EFFECTS, PARAMETERS, STEER_FRICTION
 from bikerider.gap.diagnosis.fits import CrossValidation, Fits
 from bikerider.gap.diagnosis.priors import Priors, implausible_reasons
 from bikerider.gap.diagnosis.statistics import at_noise_floor, by_error, significantly_better
+from bikerider.gap.diagnosis.which import undetermined_extra
 
 MAX_SELECTED = 2
 """Most effects selected together (pairs are searched on the held-out folds)."""
@@ -161,11 +162,38 @@ def select(
         equivalent = priors.friction_equivalent(fits.fit_of(chosen.effects))
         if equivalent is not None and not equivalent["separable"]:
             selection["flags"] = selection["flags"] + [f"{STEER_FRICTION}: " + equivalent["note"]]
+        selection["flags"] = selection["flags"] + _nested_flags(chosen.effects, candidates, fits)
     if parameters_note:
         selection["note"] = parameters_note
     return Selection(
         list(chosen.effects) if chosen is not None else [], selection, best_implausible, best_single_implausible
     )
+
+
+def _nested_flags(chosen: tuple[str, ...], candidates: list[str], fits: Fits) -> list[str]:
+    """A flag for each simpler candidate the selected one holds as a special case and whose values its fit
+    does not exclude (:func:`~bikerider.gap.diagnosis.which.undetermined_extra`): the selection is then
+    that simpler model, fitted by the selected candidate's route (``steer_friction`` whose ``T_coulomb``
+    interval reaches 0 is viscous steer damping, fitted in the time domain)."""
+    if len(chosen) != 1 or chosen[0] not in EFFECTS:
+        return []
+    fit = fits.fit_of(chosen)
+    index = {name: k for k, name in enumerate(fit.names)}
+    flags = []
+    for simpler, neutral in EFFECTS[chosen[0]].nests.items():
+        if simpler not in candidates or not undetermined_extra(fits, chosen, (simpler,)):
+            continue
+        held = ", ".join(
+            f"{name} = {fit.values[index[name]]:.3g} [{fit.ci_low[index[name]]:.3g}, {fit.ci_high[index[name]]:.3g}]"
+            f" reaches {value:g}"
+            for name, value in neutral.items()
+        )
+        rest = ", ".join(f"{n} = {fit.values[k]:.3g}" for n, k in index.items() if n not in neutral)
+        flags.append(
+            f"{chosen[0]}: {held}: the data do not tell it from {simpler}, the special case it holds; read the "
+            f"selection as {simpler} fitted as {chosen[0]} ({rest})"
+        )
+    return flags
 
 
 def _parameters_note(checks: list[dict] | None) -> str:
