@@ -1206,6 +1206,11 @@ def run_trial(models: dict[str, GapModelInput], effect: CalibrationEffect, seed:
         reference["c_viscous"] = 0.0
         equivalent = _friction_equivalent(diagnosis, friction, amplitude)
         if equivalent is not None:
+            # whether the diagnosis itself, from the amplitudes it infers (the records hold no steer),
+            # says the records carry the split
+            judged = diagnosis.priors.friction_equivalent(friction)
+            if judged is not None:
+                equivalent.update(separable=judged["separable"], amplitude_spread=judged["amplitude_spread"])
             fitted["c_equivalent"] = equivalent
             reference["c_equivalent"] = reference["c_steer"]
     predicted = achieved = None

@@ -18,8 +18,8 @@ rad/s (the friction reaches 76 % of its full value at ``eps``, 96 % at twice it)
 the steer at rates of a few ``eps`` (roll-rate decays with a rider) the corner, which the records do not
 decide, moves the fitted split: the fit to all the data carries it as a share of its covariance
 (:func:`corner_share`).  Each record's initial
-state is refitted for every trial friction (linear least squares, then chord steps on the nonlinear
-response).  The friction's prediction of a record's eigenvalue is what the record fit
+state is refitted for every trial friction (the best of a few starts, then Gauss-Newton steps on the
+nonlinear response: :func:`friction_states`).  The friction's prediction of a record's eigenvalue is what the record fit
 finds in the simulated response (indirect inference, as for every candidate; amplitude-dependent as
 friction is: :meth:`bikerider.gap.inference.indirect.RecordSimulator.apparent_time_domain`).
 """
@@ -104,18 +104,31 @@ MAX_DURATION = 2.5
 FIT_STEP = 0.02
 """Sampling step of the time-domain fits [s]: records sampled faster are compared at every k-th sample."""
 STATE_STEPS = 4
-"""Most chord steps refining each record's initial state under friction (:func:`friction_states`).  One
-Gauss-Newton step left the state off the nonlinear response's least squares, and the fit made up for
-it in the friction's split (own noise-free decays of 0.08 N m and 0.1 N m s/rad fitted as 0.113 and
-0.059); two steps still did so where the friction holds the steer (the independent truth's noise-free
-decays of 0.264 N m Coulomb friction, calibration seed 1143 with the nominal parameters: fitted as
-0.226 N m plus 0.034 N m s/rad viscous; three steps 0.258, four 0.264), which biased the calibration's
-``T_coulomb`` low in every one of its misses.  Each step costs a simulation; they stop early at
-:data:`STATE_TOLERANCE`."""
+"""Most Gauss-Newton steps refining each record's initial state under friction (:func:`friction_states`),
+each on the nonlinear response's own slopes in the state (one batched simulation of the state and its
+``n`` probes) and kept only where it lowers the record's residual.  Chord steps on the linear part's slopes
+did this before and did not converge where the friction holds the steer: on the calibration's
+``steer_coulomb`` records (roll rate only) with the truth's own parameters, corner and no noise (seed 1028,
+``T_coulomb`` 0.2025 N m), the truth's own initial states reproduced the records to a weighted residual of
+0.04-2.1 per record, the chord steps' states missed them by 5-119 (one at a roll angle of -30 rad), and the
+fit made up for it in the split: 0.105 N m Coulomb plus 0.93 N m s/rad viscous friction that is not there
+(docs/gap_validation.md part 4, item 16).  Each step costs two simulations (the probes and the trial);
+they stop early at :data:`STATE_TOLERANCE`."""
+STATE_STANDINS = (1.0, 0.3, 0.01)
+"""Steer-rate amplitudes [rad/s] of the viscous stand-ins of the friction whose linear least squares start
+each record's initial state under friction (:func:`friction_states`): a steer damper of ``N(A) T_coulomb``,
+``N`` the describing function of the fit's own law (:func:`describing_gain`: ``4 / (pi A)`` for a fast
+steer, the slope at rest ``1 / eps`` for a slow one).  With a start from the linear part alone and one
+from the records' first samples (the rest of the state at rest), the start whose nonlinear residual is
+smallest begins the Gauss-Newton steps: the linear part alone starts far off where the friction holds the
+steer."""
 STATE_TOLERANCE = 1e-4
-"""The chord steps stop when no record's initial state would move by more than this share of its size
+"""The Gauss-Newton steps stop when no record's initial state would move by more than this share of its size
 (its largest component, at least 1e-3 in the state's units), or none but records where the step, cut to
 a sixteenth, still raised the residual."""
+STATE_PROBE = 1e-4
+"""Finite-difference step of the nonlinear response's slopes in the initial state, relative to the state's
+largest component (at least 0.1 in its units)."""
 STATE_RCOND = 5e-4
 """Relative singular value below which a direction of a record's initial state is left out of its fit.
 
@@ -471,32 +484,33 @@ def friction_states(
     """Each record's response to ``A (P, R, n, n)`` plus Coulomb friction ``T_c (P,)`` through ``b``
     (smoothed by ``smoothing``, :data:`SMOOTHING` when not given: :func:`simulate_friction`).
 
-    The initial states are fitted to the records: linear least squares for the linear part, then
-    :data:`STATE_STEPS` chord steps on the nonlinear response, each kept only where it lowers the record's
-    residual.  Returns the states
+    The initial states are fitted to the records: for a linear model (no Coulomb friction) by linear least
+    squares; under friction from the best of several starts (:func:`_friction_start`; the best two for
+    records of the roll rate alone, whose residual has more than one valley), each refined by up to
+    :data:`STATE_STEPS` Gauss-Newton steps on the nonlinear response's own slopes in the state, each kept
+    only where it lowers the record's residual (and halved for that record where it did not), directions
+    the record hardly sees left out as in the linear fit (:data:`STATE_RCOND`); the better end is kept.  Returns the states
     ``(P, R, N, n)`` and the weighted residuals ``(P, R, S, N)``.
     """
     T = np.asarray(T_c, dtype=float).reshape(A.shape[:-3] + (1,))
     n = A.shape[-1]
-    design, data = _stack(batch, _transitions(A, batch.dt, batch.N), outputs)
-    inverse = _truncated_inverse(design)  # once: the chord steps solve with the same design
-    x0 = _apply(design, inverse, data)[..., :n]
-    rate = outputs[3]
-    nonlinear = bool(np.any(T > 0))
-    if not nonlinear:
+    if not np.any(T > 0):
+        design, data = _stack(batch, _transitions(A, batch.dt, batch.N), outputs)
+        x0 = _apply(design, _truncated_inverse(design), data)[..., :n]
         states = simulate_linear(A, x0, batch.dt, batch.N)
         return states, _residuals(batch, states, outputs)[0]
-    # chord steps: the nonlinear residual corrected through the linear response's slopes in the initial
-    # state (one simulation a step), until the state is the nonlinear response's own least squares.  Where
-    # the friction holds the steer those slopes are far from the nonlinear response's and a full step can
-    # overshoot (records of the SBW logs: the state moved by its own size at every step), so a step is kept
-    # only where it lowers the record's residual, and halved for that record where it did not
-    states = simulate_friction(A, b, x0, T, batch.dt, batch.N, rate, smoothing)
-    res, _ = _residuals(batch, states, outputs)
+    rate = outputs[3]
+    x0, states, res = _friction_start(batch, A, b, outputs, T, smoothing)  # (K, P, R, ...): K starts each
     cost = np.sum(res**2, axis=(-2, -1))
     scale = np.ones_like(cost)
+    probes = np.eye(n)[:, None, None, None, :]  # (n, 1, 1, 1, n): one probe per state component
     for _ in range(STATE_STEPS):
-        step = _apply(design, inverse, -res.reshape(res.shape[:-2] + (-1,)))[..., :n] * scale[..., None]
+        h = STATE_PROBE * np.maximum(np.max(np.abs(x0), axis=-1), 0.1)  # (K, P, R)
+        probed = simulate_friction(A, b, x0[None] + probes * h[None, ..., None], T, batch.dt, batch.N, rate, smoothing)
+        slopes = (_residuals(batch, probed, outputs)[0] - res[None]) / h[None, ..., None, None]
+        J = np.moveaxis(slopes.reshape(slopes.shape[:-2] + (-1,)), 0, -1)  # (K, P, R, M, n)
+        r = res.reshape(res.shape[:-2] + (-1,))
+        step = -_apply(J, _truncated_inverse(J), r) * scale[..., None]
         size = np.maximum(np.max(np.abs(x0), axis=-1), 1e-3)
         if not np.any((np.max(np.abs(step), axis=-1) / size > STATE_TOLERANCE) & (scale >= 1 / 16)):
             break
@@ -510,7 +524,47 @@ def friction_states(
         res = np.where(better[..., None, None], trial_res, res)
         cost = np.where(better, trial_cost, cost)
         scale = np.where(better, np.minimum(1.0, 2.0 * scale), 0.5 * scale)
-    return states, res
+    best = np.argmin(cost, axis=0)[None]  # (1, P, R): the better of the starts' ends
+    states = np.take_along_axis(states, best[..., None, None], axis=0)[0]
+    return states, np.take_along_axis(res, best[..., None, None], axis=0)[0]
+
+
+def _friction_start(
+    batch: Batch, A: np.ndarray, b: np.ndarray, outputs: tuple[int, ...], T: np.ndarray, smoothing: float | None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Each record's starting initial states under friction ``T (P, 1)``: the best, by the nonlinear
+    response's residual, of the linear least squares of the linear part alone and under each viscous stand-in
+    of :data:`STATE_STANDINS`, and of the records' first samples with the rest of the state at rest (the best
+    two for records of the roll rate alone).  Returns the states ``(K, P, R, n)``, their responses
+    ``(K, P, R, N, n)`` and weighted residuals ``(K, P, R, S, N)``, ``K`` the starts kept."""
+    n = A.shape[-1]
+    rate = outputs[3]
+    unit = np.zeros(n)
+    unit[rate] = 1.0
+    starts = []
+    # records holding the steer angle see every direction of the state: the linear part's start is near
+    # (the steer-by-wire logs); the stand-ins are for records of the roll rate alone
+    steered = "steer_angle" in batch.y and bool(np.all(batch.weight["steer_angle"] > 0))
+    for gain in (0.0,) if steered else (0.0, *describing_gain(np.array(STATE_STANDINS), smoothing)):
+        c = T[..., None] * gain  # (P, 1, 1): a steer damper of c on the steer rate
+        A_eq = A - (b * c)[..., :, None] * unit
+        design, data = _stack(batch, _transitions(A_eq, batch.dt, batch.N), outputs)
+        starts.append(_apply(design, _truncated_inverse(design), data)[..., :n])
+    rest = np.zeros_like(starts[0])
+    for name, index in (("roll_rate", outputs[2]), ("steer_angle", outputs[1])):
+        if name in batch.y:
+            rest[..., index] = np.nan_to_num(batch.y[name][:, 0])
+    starts.append(rest)
+    X = np.stack(starts)  # (C, P, R, n)
+    states = simulate_friction(A, b, X, T, batch.dt, batch.N, rate, smoothing)
+    res, _ = _residuals(batch, states, outputs)
+    keep = 1 if steered else 2
+    best = np.argsort(np.sum(res**2, axis=(-2, -1)), axis=0, kind="stable")[:keep]  # (K, P, R)
+
+    def pick(Z: np.ndarray) -> np.ndarray:
+        return np.take_along_axis(Z, best.reshape(best.shape + (1,) * (Z.ndim - 3)), axis=0)
+
+    return pick(X), pick(states), pick(res)
 
 
 @dataclass
