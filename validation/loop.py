@@ -40,7 +40,10 @@ has updated them; ``plan:jensen_renyi``'s first run is the next run ``--next`` n
 :mod:`bikerider.gap.plan.sequential`), ``even`` (decays under the laws in turn at speeds spread evenly over the feasible
 range, a van der Corput order), ``random`` (any feasible experiment), ``repeat:decay`` and
 ``repeat:sweep`` (the plan's best decay, or best multisine, repeated: what ``--next`` recommends,
-whose predicted resolution probability after ``k`` runs is stored for the reliability diagrams).
+whose predicted resolution probability after ``k`` runs is stored for the reliability diagrams, ``predicted``,
+the probability the plan states, beside its Gaussian approximation, ``predicted_gaussian``; these two run on
+past their decision to :data:`N_MAX` runs and store the hidden effect's probability after every run,
+``posterior``, so that the plan's probability of ``k`` runs is scored at ``k`` runs).
 
 The records mode (``run_loop_case(..., records=True)``, :data:`RECORD_SCENARIOS`: the friction pairs): the
 tie's data are records (:data:`RECORD_NARROW`, the truth's noisy roll rate of each kicked run, fitted by the
@@ -70,6 +73,7 @@ from bikerider.gap.inference.predict import Predictor
 from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
 from bikerider.gap.plan import allocation as A
 from bikerider.gap.plan import criteria as C
+from bikerider.gap.plan.discrimination import gaussian_probability
 from bikerider.gap.plan.ranking import ASSUMED_NOISE, NextExperiment, NoExperiment, plan_next, planned_rows
 from bikerider.gap.plan.sweeps import line_amplitude, response, split
 from validation.cases import CONTROL, CalibrationEffect, Protocol, Session, TruthSimulator, draw_truth, measure
@@ -580,11 +584,21 @@ def run_strategy(name: str, plan, rivals_at_tie, runs: TruthRuns, truth_index: i
     even = _even_order(plan, 4 * N_MAX) if name == "even" else None
     used: dict[int, int] = {}
     failed: set[int] = set()  # experiments whose run fell or gave no weave: not tried again (but by repeat:)
-    chosen, trajectory = [], []
+    chosen, trajectory, posterior = [], [], []
     cursor = 0
     status, lost = "undecided", 0
     neither = None  # the first run no rival describes (NEITHER_P)
     for step in range(N_MAX):
+        if status != "undecided":  # a repeat strategy runs on after its decision (``posterior``)
+            obs = runs.get(repeat, used.get(repeat, 0))
+            used[repeat] = used.get(repeat, 0) + 1
+            if obs is not None:
+                y, R = obs
+                R = R * lack_of_fit(misfit(rivals, repeat, y, R), y.size)
+                for r in rivals:
+                    r.update(repeat, y, R)
+            posterior.append(round(float(_posterior(rivals)[truth_index]), 5))
+            continue
         weights = _posterior(rivals)
         if name.startswith("plan:"):
             if best_chance(plan, rivals, weights, N_MAX - step, groups, shared) < HOPELESS:
@@ -622,11 +636,13 @@ def run_strategy(name: str, plan, rivals_at_tie, runs: TruthRuns, truth_index: i
         trajectory.append(round(float(pi[truth_index]), 5))
         if pi[truth_index] >= DECIDED:
             status = "resolved"
-            break
-        if pi[1 - truth_index] >= DECIDED:
+        elif pi[1 - truth_index] >= DECIDED:
             status = "wrong"
-            break
-    return {
+        if status != "undecided":
+            if repeat is None:
+                break
+            posterior = list(trajectory)
+    out = {
         "status": status,
         "runs": len(chosen),
         "chosen": chosen,
@@ -634,6 +650,9 @@ def run_strategy(name: str, plan, rivals_at_tie, runs: TruthRuns, truth_index: i
         "lost": lost,
         "neither": neither,
     }
+    if repeat is not None:  # the hidden effect's probability after each of N_MAX runs, on past a decision
+        out["posterior"] = posterior if status != "undecided" else list(trajectory)
+    return out
 
 
 def run_loop_case(
@@ -723,10 +742,13 @@ def run_loop_case(
         kind = item["experiment"].kind
         if best[kind] is None:
             best[kind] = plan.experiments.index(item["experiment"])
-    predicted = {}
+    predicted, gaussian = {}, {}
     for kind, m in best.items():
         if m is not None:
             predicted[kind] = [round(float(plan.probability(float(k)).min(axis=0)[m]), 5) for k in range(1, N_MAX + 1)]
+            gaussian[kind] = [
+                round(float(gaussian_probability(plan, float(k)).min(axis=0)[m]), 5) for k in range(1, N_MAX + 1)
+            ]
     out.update(
         status="loop",
         experiments={"decays": n_points, "sweeps": len(plan.sweeps)},
@@ -734,6 +756,7 @@ def run_loop_case(
         plan_top_probability=plan.plan[0]["resolution_probability"],
         best={k: (None if m is None else plan.experiments[m].describe()) for k, m in best.items()},
         predicted=predicted,
+        predicted_gaussian=gaussian,
         linearisation_error=max(check) if check else None,
         sweeps_left_out_lean=sum("would likely be lost" in x["reason"] for x in plan.left_out),
         truth_index=truth_index,

@@ -155,6 +155,12 @@ def simulated_probability(hypotheses: list[Hypothesis], counts, draws: int = DRA
     """The worst pair's resolution probability of the runs ``counts``, by simulation: under each rival taken
     true, its fitted values and the runs' noise drawn (the runs' means, stacked over the experiments), the
     exact log Bayes factor against the other rival's predictive distribution counted against ``need``."""
+    return float(simulated_pairs(hypotheses, counts, draws, seed).min())
+
+
+def simulated_pairs(hypotheses: list[Hypothesis], counts, draws: int = DRAWS, seed: int = 0) -> np.ndarray:
+    """Every pair's resolution probability of the runs ``counts`` by simulation, ``(pairs,)``
+    (:func:`simulated_probability` is the smallest)."""
     counts = np.asarray(counts, float)
     rng = np.random.default_rng(seed)
     pairs = 1 + max(h.pair for h in hypotheses)
@@ -188,7 +194,76 @@ def simulated_probability(hypotheses: list[Hypothesis], counts, draws: int = DRA
         logdet = 2 * (np.sum(np.log(np.diag(Lo))) - np.sum(np.log(np.diag(Lt))))
         llr = 0.5 * (qo - qt + logdet)
         chance[h.pair] += h.weight * float(np.mean(llr >= h.need))
-    return float(chance.min())
+    return chance
+
+
+def repeated_probability(hypotheses: list[Hypothesis], repeats, draws: int = DRAWS, seed: int = 0) -> np.ndarray:
+    """Every pair's resolution probability of ``repeats`` runs of each experiment alone, by simulation,
+    ``(pairs, experiments)``: for experiment ``e`` what :func:`simulated_pairs` gives for ``counts`` holding
+    ``repeats[e]`` at ``e`` and none elsewhere, the same draws (the seed's stream, hypothesis after hypothesis),
+    batched over the experiments.
+
+    Parameters
+    ----------
+    hypotheses : list of Hypothesis
+        Every pair's rivals, each taken true (:func:`bikerider.gap.plan.discrimination.hypotheses`).
+    repeats : float or array_like
+        Runs of each experiment (global index; one number for all), ``math.inf`` for endless runs (the limit
+        the rivals' own uncertainty and the systematic part set).
+    draws, seed : int
+        Simulated outcomes per rival taken true, and the seed: every experiment is simulated with the same
+        standard normal draws (common random numbers), so the probability is the same on every call and moves
+        smoothly with an experiment's speed, as its covariances do.
+
+    Returns
+    -------
+    ndarray
+        ``(pairs, experiments)``: with each rival of a pair taken true (its weight), the share of outcomes whose
+        exact log Bayes factor, the true rival's predictive density of the runs' mean against the other's, reaches
+        the hypothesis's ``need``.
+    """
+    n_exp = sum(len(g[0]) for g in hypotheses[0].groups)
+    pairs = 1 + max(h.pair for h in hypotheses)
+    reps = np.broadcast_to(np.asarray(repeats, float), (n_exp,))
+    chance = np.zeros((pairs, n_exp))
+    start = 0
+    for g in range(len(hypotheses[0].groups)):
+        rng = np.random.default_rng(seed)  # the stream simulated_probability draws for one experiment of group g
+        n = len(hypotheses[0].groups[g][0])
+        for h in hypotheses:
+            if h.weight <= 0:
+                continue
+            delta, true, other, noise, systematic = h.groups[g]
+            M = delta.shape[-1]
+            z = rng.standard_normal((M, draws))
+            qt = np.sum(z**2, axis=0)  # |Lt^-1 x|^2 with x = Lt z
+            step = max(1, 2_000_000 // (M * draws))
+            for lo in range(0, n, step):
+                hi = min(n, lo + step)
+                k = reps[start + lo : start + hi]
+                D = systematic[lo:hi] + noise[lo:hi] / k[:, None, None]
+                size = np.trace(D, axis1=-2, axis2=-1)[:, None, None]
+                D = D + (1e-12 * size / M + 1e-300) * np.eye(M)
+                Ct = true[lo:hi] @ np.swapaxes(true[lo:hi], -1, -2)
+                Co = other[lo:hi] @ np.swapaxes(other[lo:hi], -1, -2)
+                if not np.all(np.isfinite(k)):  # endless runs: the rivals' own covariances may be singular
+                    own = np.trace(Ct + Co, axis1=-2, axis2=-1)[:, None, None]
+                    D = D + np.where(np.isfinite(k)[:, None, None], 0.0, 1e-9 * own / M) * np.eye(M)
+                St, So = D + Ct, D + Co
+                Lt, Lo = np.linalg.cholesky(St), np.linalg.cholesky(So)
+                # |Lo^-1 (Lt z + delta)|^2 as one product over the experiments: (Lo^-1 Lt) z + Lo^-1 delta
+                inv = np.linalg.inv(Lo)
+                A = (inv @ Lt).reshape(-1, M)
+                w = (A @ z).reshape(hi - lo, M, draws) + (inv @ delta[lo:hi, :, None])
+                qo = np.einsum("nmd,nmd->nd", w, w)
+                logdet = 2 * (
+                    np.sum(np.log(np.diagonal(Lo, axis1=-2, axis2=-1)), axis=-1)
+                    - np.sum(np.log(np.diagonal(Lt, axis1=-2, axis2=-1)), axis=-1)
+                )
+                llr = 0.5 * (qo - qt + logdet[:, None])
+                chance[h.pair, start + lo : start + hi] += h.weight * np.mean(llr >= h.need, axis=1)
+        start += n
+    return chance
 
 
 def _one(h: Hypothesis, e: int, count: float):

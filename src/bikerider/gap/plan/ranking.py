@@ -57,13 +57,25 @@ question is, whether new data favour one structure over the other, where the Fis
 the effects' parameters measures how precisely one candidate's own values would be pinned down: tied
 candidates may each be well determined and still predict the same thing at the measured speeds.  The
 probability that the new decays favour the true rival by odds of :data:`ODDS` to 1 or more (95 %
-posterior probability from even odds) is ``Phi(d_T / 2 - ln(ODDS) / d_T)``; averaged over which of the
+posterior probability from even odds) is then ``Phi(d_T / 2 - ln(ODDS) / d_T)``; averaged over which of the
 two is true (even prior odds) it is the pair's *resolution probability*.  Experiments are ranked by
 their smallest resolution probability over the pairs of rivals (all pairs of a tie; the first against
 each runner-up otherwise) at the given number of decays, then by the smallest ``d``; each states the
 decays it needs for 95 % (at most :data:`MAX_REPEATS`), and the limit the rivals' own uncertainty
 sets with endless decays.  Experiments where a rival's weave grows (no free decay to record) are left
 out.
+
+``d_T`` weighs the difference of means by the true rival's covariance alone, so it cannot see a rival much
+vaguer than the other, told apart by a run near the sharp rival's prediction even where their means coincide
+(the closed loop's seed 7050: 0.006 for one decay, the loop's posterior 0.984 after it).  The plan's
+measure of runs combined (:mod:`bikerider.gap.plan.allocation`) compares both rivals' predictive
+distributions; for the runs of one experiment it is
+:func:`~bikerider.gap.plan.discrimination.combined_probability` (the runs' mean simulated under each rival
+taken true, the exact log Bayes factor counted, a fixed seed: the same value on every call).  Which of the two
+an experiment states, with the runs it needs for 95 % and its limit, is
+:data:`~bikerider.gap.plan.discrimination.STATED`: the combined measure for decays, the approximation for
+multisines, as the closed loop, scoring the probability of ``k`` runs at ``k`` runs, found them better
+calibrated (docs/gap_validation.md part 5); the order stays the approximation's.
 """
 
 from __future__ import annotations
@@ -87,7 +99,8 @@ from bikerider.gap.measured.control import NO_CONTROL, ControlLaw
 from bikerider.gap.measured.records import SIGNALS, RecordFit, eigenvalues_of
 from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
 from bikerider.gap.parallel import map_forked, workers
-from bikerider.gap.plan import sequential
+from bikerider.gap.plan import discrimination, sequential
+from bikerider.gap.plan.allocation import DRAWS
 from bikerider.gap.plan.decays import (
     KICK_NODES,
     Experiment,
@@ -108,6 +121,7 @@ from bikerider.gap.plan.discrimination import (  # noqa: F401  (ODDS, MAX_REPEAT
     secant_slopes,
     secants,
     separation,
+    stated_probability,
 )
 from bikerider.gap.plan.noise import (  # noqa: F401  (fit_residual, signal_noise, ...: the plan's face)
     ASSUMED_NOISE,
@@ -994,9 +1008,11 @@ class NextExperiment(_Models):
         return separation(self, repeats)
 
     def probability(self, repeats: float) -> np.ndarray:
-        """Resolution probability of every pair at every experiment, ``(n_pairs, n_points)``: the mean over
-        which of the two is true (even prior odds)."""
-        return resolution_probability(self.separation(repeats)).mean(axis=1)
+        """Resolution probability of every pair at every experiment for ``repeats`` runs of it, ``(n_pairs,
+        n_points)``: the probability the plan states
+        (:func:`~bikerider.gap.plan.discrimination.stated_probability`), the mean over which of the two is true
+        (even prior odds)."""
+        return stated_probability(self, repeats)
 
     def as_dict(self, top: int = 10) -> dict:
         """The plan and every experiment's numbers, JSON-ready."""
@@ -1022,8 +1038,18 @@ class NextExperiment(_Models):
             "measure": (
                 "expected log-likelihood ratio between the rivals' Gaussian predictive distributions of the mean "
                 "weave eigenvalue of the new decays, or of the mean frequency response of the new steer-torque "
-                f"multisines (d^2 / 2); resolution probability Phi(d / 2 - ln {ODDS:g} / d): "
-                f"the new runs favour the true rival by odds of {ODDS:g} to 1 or more"
+                f"multisines (d^2 / 2), which ranks the experiments by Phi(d / 2 - ln {ODDS:g} / d); resolution "
+                f"probability: the new runs favour the true rival by odds of {ODDS:g} to 1 or more"
+                + "".join(
+                    f"; for {name} "
+                    + (
+                        f"both rivals' predictive distributions compared ({DRAWS} simulated outcomes per rival taken "
+                        "true, a fixed seed)"
+                        if discrimination.STATED.get(kind) == "combined"
+                        else f"Phi(d / 2 - ln {ODDS:g} / d)"
+                    )
+                    for kind, name in (("decay", "decays"), ("sweep", "multisines"))
+                )
             ),
             "rivals_rule": (
                 "named"
