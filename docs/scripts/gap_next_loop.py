@@ -69,6 +69,16 @@ DECAY_SHARED_TODAY = Path(__file__).with_name("gap_next_loop_repeat_decay_shared
 f47fb70), with the loop's evidence counting the nominal parameters' uncertainty per run (``rerun --strategy
 repeat:decay --tag today``, ``rerun --strategy repeat:sweep --tag today``) and shared by all runs (the same with
 ``--shared``): the plan's odds against the loop's outcomes under either evidence model."""
+SWEEP_ODDS = Path(__file__).with_name("gap_next_loop_repeat_sweep_odds.jsonl")
+SWEEP_SHARED_ODDS = Path(__file__).with_name("gap_next_loop_repeat_sweep_shared_odds.jsonl")
+DECAY_ODDS = Path(__file__).with_name("gap_next_loop_repeat_decay_odds.jsonl")
+DECAY_SHARED_ODDS = Path(__file__).with_name("gap_next_loop_repeat_decay_shared_odds.jsonl")
+"""The same four runs on the code of issue 25 item 3 (``rerun --strategy repeat:decay|repeat:sweep [--shared]
+--stated combined --tag odds``): the plan stating the probability of its measure of runs combined, both rivals'
+predictive distributions simulated (``predicted``), beside its Gaussian approximation (``predicted_gaussian``,
+the probability it states by default, reproduced), and the repeat strategies run on past their decision
+(``posterior``), so the plan's probability of ``k`` runs is scored at ``k`` runs.  The ties, experiments and
+runs are those of :data:`DECAY_TODAY` and the others (the plan ranks by the Gaussian approximation either way)."""
 JR_RULE = Path(__file__).with_name("gap_next_loop_plan_jensen_renyi.jsonl")
 JR_NO_RULE = Path(__file__).with_name("gap_next_loop_plan_jensen_renyi_max_roll_inf.jsonl")
 EVEN_NOW = Path(__file__).with_name("gap_next_loop_even.jsonl")
@@ -252,8 +262,12 @@ def run(args) -> int:
 def _rerun_one(job):
     from validation import loop as L
 
-    k, seed, only, max_roll, shared = job
+    k, seed, only, max_roll, shared, stated = job
     logging.getLogger("bikerider").setLevel(logging.ERROR)
+    if stated is not None:  # the probability the plan states (bikerider.gap.plan.discrimination.STATED)
+        from bikerider.gap.plan import discrimination
+
+        discrimination.STATED = {"decay": stated, "sweep": stated}
     if max_roll is not None:  # the plan's lean rule off (inf) or moved, to measure what it changes
         from bikerider.gap.plan import ranking
 
@@ -299,7 +313,7 @@ def rerun(args) -> int:
     targets = [(c["scenario"], c["seed"]) for c in _stored() if c.get("strategies")] if every else _rerun_targets()
     shared = bool(args.strategy and args.shared)
     jobs = [
-        (index[label], seed, args.strategy, args.max_roll, shared)
+        (index[label], seed, args.strategy, args.max_roll, shared, args.stated)
         for label, seed in targets
         if (label, seed) not in done
     ]
@@ -352,16 +366,26 @@ def _fmt(x: float, n_max: int) -> str:
     return f"> {n_max}" if not math.isfinite(x) else f"{x:g}"
 
 
-def _reliability(cases, kind: str, n_max: int):
-    """(predicted, resolved) for every tie with a best experiment of ``kind`` and every number of its runs."""
+def _reliability(cases, kind: str, n_max: int, at: bool = False, key: str = "predicted"):
+    """(predicted, resolved, seed) for every tie with a best experiment of ``kind`` and every number ``k`` of its
+    runs: resolved *by* ``k`` runs (the loop's decision for the hidden effect at any run up to ``k``) or, with
+    ``at``, *at* ``k`` runs (the hidden effect's probability after run ``k`` at :data:`validation.loop.DECIDED` or
+    more, the loop run on past its decision: ``posterior``), what the plan's probability of ``k`` runs states;
+    ``key`` the stored prediction (``predicted``: the plan's stated probability; ``predicted_gaussian``: its
+    Gaussian approximation, the plan's probability before issue 25 item 3)."""
+    from validation.loop import DECIDED
+
     pairs = []
     for c in cases:
         s = c["strategies"].get(f"repeat:{kind}")
-        p = c.get("predicted", {}).get(kind)
-        if s is None or p is None:
+        p = (c.get(key) or {}).get(kind)
+        if s is None or p is None or (at and "posterior" not in s):
             continue
         for k in range(1, n_max + 1):
-            resolved = s["status"] == "resolved" and s["runs"] <= k
+            if at:
+                resolved = s["posterior"][k - 1] >= DECIDED
+            else:
+                resolved = s["status"] == "resolved" and s["runs"] <= k
             pairs.append((p[k - 1], resolved, c["seed"]))
     return pairs
 
@@ -829,8 +853,10 @@ def _shared_odds_lines(n_max: int) -> list[str]:
         "",
         "The plan's best decay and its best multisine, each repeated `k` times (k = 1-20) on every stored tie, on "
         "the code of 2026-11-29 (`rerun --strategy repeat:decay|repeat:sweep [--shared] --tag today`): the plan's "
-        "probability that `k` runs favour the true rival by 19 to 1, binned, against the fraction the loop resolved "
-        "by `k` runs, with the loop's evidence counting the nominal parameters' uncertainty per run and shared by "
+        "probability that `k` runs favour the true rival by 19 to 1 (`Phi(d / 2 - ln 19 / d)`, the Gaussian "
+        "approximation, which the plan still states for multisines; the next section sets the measure of runs "
+        "combined beside it, both scored at `k` runs), "
+        "binned, against the fraction the loop resolved by `k` runs, with the loop's evidence counting the nominal parameters' uncertainty per run and shared by "
         "all runs (one tie's points at different `k` are not independent; *described*: the ties whose every run a "
         "rival describes, `validation.loop.NEITHER_P`).",
         "",
@@ -889,26 +915,173 @@ def _shared_odds_lines(n_max: int) -> list[str]:
     return out
 
 
+def _brier(points) -> float:
+    """The Brier score of ``(predicted, resolved, seed)`` points: the mean squared difference, lower is better."""
+    return float(np.mean([(p - r) ** 2 for p, r, _ in points])) if points else math.nan
+
+
+def _off_bins(rows) -> list[str]:
+    """The bins of :func:`_bins` whose fraction resolved is beyond twice its scatter (the ties as the count)."""
+    off = []
+    for lo, hi, _, ties, mean, fraction in rows:
+        scatter = math.sqrt(max(mean * (1 - mean), 0.01) / ties)
+        if abs(fraction - mean) > 2 * scatter:
+            off.append(f"{lo:.2f}-{hi:.2f} ({'under' if fraction > mean else 'over'}confident: {mean:.2f} "
+                       f"predicted, {fraction:.2f} resolved)")  # fmt: skip
+    return off
+
+
+def _odds_fixed_lines(n_max: int) -> list[str]:
+    """The plan's stated probability after issue 25 item 3 against its Gaussian approximation (the probability
+    it stated before), both scored at ``k`` runs on the same ties and runs (:data:`DECAY_ODDS`,
+    :data:`SWEEP_ODDS`, and with the parameters' error shared :data:`DECAY_SHARED_ODDS`,
+    :data:`SWEEP_SHARED_ODDS`); empty without the per-run files."""
+    files = {"decay": (DECAY_ODDS, DECAY_SHARED_ODDS), "sweep": (SWEEP_ODDS, SWEEP_SHARED_ODDS)}
+    stored = {
+        kind: [[c for c in _stored(path) if c.get("strategies")] for path in pair] for kind, pair in files.items()
+    }
+    if not all(pair[0] for pair in stored.values()):
+        return []
+    example = ""
+    for c in stored["decay"][0]:
+        if c["seed"] == 7050 and c.get("predicted_gaussian"):
+            s = c["strategies"]["repeat:decay"]
+            example = (
+                f" (seed 7050, {c['scenario']}: one decay {c['predicted_gaussian']['decay'][0]:.3f} by the Gaussian "
+                f"approximation, {c['predicted']['decay'][0]:.3f} by the combined measure; the loop's probability "
+                f"of the hidden effect after it {s['posterior'][0]:.3f})"
+            )
+    undone = {}
+    for kind in ("decay", "sweep"):
+        runs = [c["strategies"][f"repeat:{kind}"] for c in stored[kind][0] if f"repeat:{kind}" in c["strategies"]]
+        early = [s for s in runs if "posterior" in s and s["status"] == "resolved" and s["runs"] <= 10]
+        undone[kind] = (sum(s["posterior"][9] < 0.95 for s in early), len(early))
+    out = [
+        "### Honest odds with both rivals' distributions: the measure of runs combined, scored at `k` runs",
+        "",
+        "The probability above is `Phi(d / 2 - ln 19 / d)`, `d` the rivals' difference of means weighed by the "
+        "true rival's covariance alone: a rival much vaguer than the other, whose means nearly coincide, is told "
+        "apart by a run near the sharp rival's prediction, which the difference of means cannot see" + example + ". "
+        "The plan's own measure of runs combined compares both rivals' predictive distributions; for `k` runs of "
+        "the one experiment (`gap.plan.discrimination.combined_probability`): under each rival taken true the "
+        "runs' mean drawn from its predictive distribution (its fitted values' uncertainty, the runs' noise, its "
+        "held-out misfit systematic), the exact log Bayes factor against the other rival's predictive "
+        "distribution counted against ln 19 (2000 draws per rival, a fixed seed). The same ties, experiments and "
+        "runs as the previous section, the plan made to state this measure (`rerun --strategy "
+        "repeat:decay|repeat:sweep [--shared] --stated combined --tag odds`; the ranking, by the Gaussian "
+        "approximation, is the same, and each case stores both probabilities). Scored *at* `k` runs, as the plan "
+        "states its probability: resolved is the hidden effect's probability at 0.95 or more after run `k`, the "
+        "loop run on past its decision (the previous section scored *by* `k` runs, a decision at any run up to "
+        "`k`, which later runs may undo: of the ties the loop resolved within 10 runs, "
+        f"{undone['decay'][0]} of {undone['decay'][1]} by decays and {undone['sweep'][0]} of {undone['sweep'][1]} "
+        "by multisines stood below 0.95 at run 10). Before: the Gaussian approximation; after: the combined "
+        "measure; the loop's evidence counting the nominal parameters' uncertainty per run:",
+        "",
+    ]
+    briers, shared_briers = {}, {}
+    names = {"decay": "decays", "sweep": "multisines"}
+    for kind, (per_run, shared) in stored.items():
+        before = _reliability(per_run, kind, n_max, at=True, key="predicted_gaussian")
+        after = _reliability(per_run, kind, n_max, at=True)
+        rows_b, rows_a = {r[0]: r for r in _bins(before)}, {r[0]: r for r in _bins(after)}
+        out += [
+            f"The plan's best {names[kind][:-1]} repeated:",
+            "",
+            "| predicted | before: points (ties) | mean predicted | resolved at `k` | after: points (ties) | "
+            "mean predicted | resolved at `k` |",
+            "|---|---|---|---|---|---|---|",
+        ]
+        for lo in sorted(set(rows_b) | set(rows_a)):
+            b, a = rows_b.get(lo), rows_a.get(lo)
+            ref = a or b
+            cells = [f"{x[2]} ({x[3]}) | {x[4]:.2f} | {x[5]:.2f}" if x else "- | - | -" for x in (b, a)]
+            out.append(f"| {ref[0]:.2f}-{ref[1]:.2f} | {cells[0]} | {cells[1]} |")
+        out.append("")
+        briers[kind] = (_brier(before), _brier(after))
+        by_k = [_reliability(per_run, kind, n_max, key=key) for key in ("predicted_gaussian", "predicted")]
+        out.append(
+            f"* Brier score at `k` runs, per run: before {_brier(before):.3f}, after {_brier(after):.3f} (scored by "
+            f"`k` runs, as the previous section: before {_brier(by_k[0]):.3f}, after {_brier(by_k[1]):.3f})."
+        )
+        off = {label: _off_bins(_bins(x)) for label, x in (("before", before), ("after", after))}
+        out.append("")
+        out.append(
+            "* Bins beyond twice their scatter (the ties as the count), per run: before "
+            + ("; ".join(off["before"]) if off["before"] else "none")
+            + "; after "
+            + ("; ".join(off["after"]) if off["after"] else "none")
+            + "."
+        )
+        for label, cases in (("per run", per_run), ("shared", shared)):
+            if not cases:
+                continue
+            b = _reliability(cases, kind, n_max, at=True, key="predicted_gaussian")
+            a = _reliability(cases, kind, n_max, at=True)
+            b10, a10 = b[9::n_max], a[9::n_max]
+            resolved = sum(r for _, r, _ in a10)
+            by10 = sum(r for _, r, _ in _reliability(cases, kind, n_max)[9::n_max])
+            sd = math.sqrt(sum(p * (1 - p) for p, _, _ in a10))
+            shared_brier = (
+                f"; Brier score at `k` runs: before {_brier(b):.3f}, after {_brier(a):.3f}" if label == "shared" else ""
+            )
+            if label == "shared":
+                shared_briers[kind] = (_brier(b), _brier(a))
+            out.append("")
+            out.append(
+                f"* {label.capitalize()}, at the plan's default of 10 runs ({len(a10)} ties, one point each): "
+                f"probabilities before add up to {sum(p for p, _, _ in b10):.1f}, after to "
+                f"{sum(p for p, _, _ in a10):.1f} (scatter {sd:.1f} were they right); {resolved} at 0.95 or more at "
+                f"run 10 ({by10} resolved by run 10){shared_brier}."
+            )
+        out.append("")
+    from bikerider.gap.plan.discrimination import STATED
+
+    out += [
+        "* Which the plan states (`gap.plan.discrimination.STATED`): "
+        + "; ".join(
+            f"for {names[k]} "
+            + ("the combined measure" if STATED.get(k) == "combined" else "the Gaussian approximation")
+            + f" (Brier score at `k` runs, per run, {b:.3f} -> {a:.3f}"
+            + (f"; shared {shared_briers[k][0]:.3f} -> {shared_briers[k][1]:.3f}" if k in shared_briers else "")
+            + ")"
+            for k, (b, a) in briers.items()
+        )
+        + ". The evidence with the parameters' error shared by the runs is the diagnosis's own (one parameter "
+        "error moves every run at once); counted per run, a decision the runs' shared error made is undone by "
+        "later runs.",
+        "",
+    ]
+    return out
+
+
 RECALIBRATION_SPLITS = 50
 """Random halves of the ties (seeded) on which :func:`_recalibration_lines` fits a map and scores it on the rest."""
 
 
 def _platt(predicted: np.ndarray, resolved: np.ndarray) -> np.ndarray:
     """A logistic map of the predicted probability's log odds, ``(a, b)`` of ``logit q = a + b logit p``, fitted by
-    maximum likelihood to the loop's outcomes (Platt 1999)."""
-    from scipy.optimize import minimize
-
+    maximum likelihood to the loop's outcomes (Platt 1999), by Newton's method (iteratively reweighted least
+    squares; the log-likelihood is concave in ``(a, b)``)."""
     x = _logit(predicted)
+    X = np.stack([np.ones_like(x), x], axis=1)
+    y = np.asarray(resolved, float)
 
-    def loss(w: np.ndarray) -> tuple[float, np.ndarray]:
-        z = w[0] + w[1] * x
-        residual = 1 / (1 + np.exp(-z)) - resolved  # the loss's slope in z
-        return float(np.sum(np.logaddexp(0.0, z) - resolved * z)), np.array([residual.sum(), residual @ x])
+    def loss(w: np.ndarray) -> float:
+        z = X @ w
+        return float(np.sum(np.logaddexp(0.0, z) - y * z))
 
-    fit = minimize(loss, np.array([0.0, 1.0]), jac=True, method="BFGS")
-    if not fit.success:
-        raise RuntimeError(f"the logistic map of the plan's probabilities did not converge: {fit.message}")
-    return fit.x
+    w = np.array([0.0, 1.0])
+    for _ in range(200):
+        q = 1 / (1 + np.exp(-(X @ w)))
+        gradient = X.T @ (q - y)
+        if np.max(np.abs(gradient)) < 1e-8 * max(1, y.size):
+            return w
+        H = X.T @ (X * (q * (1 - q))[:, None]) + 1e-9 * np.eye(2)
+        step, t = np.linalg.solve(H, gradient), 1.0
+        while loss(w - t * step) > loss(w) and t > 1e-12:  # backtracking: the loss never rises
+            t /= 2
+        w = w - t * step
+    raise RuntimeError("the logistic map of the plan's probabilities did not converge")
 
 
 def _logit(p: np.ndarray) -> np.ndarray:
@@ -928,10 +1101,24 @@ def _isotonic(predicted: np.ndarray, resolved: np.ndarray):
 
 def _recalibration_lines(n_max: int) -> list[str]:
     """Whether a map of the plan's probabilities fitted to the loop's outcomes would predict other ties' outcomes
-    better (:data:`DECAY_TODAY`, :data:`SWEEP_TODAY`): fitted on a random half of the ties, scored on the
-    other half (Brier score, the count resolved at 10 runs), :data:`RECALIBRATION_SPLITS` times."""
+    better: the probabilities the plan states (:data:`bikerider.gap.plan.discrimination.STATED`) scored at ``k``
+    runs (:data:`DECAY_ODDS`, :data:`SWEEP_ODDS`), else, without those files, the ones stored in
+    :data:`DECAY_TODAY`, :data:`SWEEP_TODAY` scored by ``k`` runs; fitted on a random half of the ties, scored on the other half (Brier score, the count
+    resolved at 10 runs), :data:`RECALIBRATION_SPLITS` times."""
+    from bikerider.gap.plan.discrimination import STATED
+
+    now = all(any(c.get("strategies") for c in _stored(path)) for path in (DECAY_ODDS, SWEEP_ODDS))
     out = [
-        "A map of the plan's probabilities fitted to these outcomes, scored on ties it was not fitted to (per run; "
+        (
+            "A map of the probabilities the plan states (for decays "
+            + ("the combined measure" if STATED.get("decay") == "combined" else "the Gaussian approximation")
+            + ", for multisines "
+            + ("the combined measure" if STATED.get("sweep") == "combined" else "the Gaussian approximation")
+            + "), fitted to the outcomes at `k` runs of the previous section, scored on ties it was not fitted to"
+            if now
+            else "A map of the plan's probabilities fitted to these outcomes, scored on ties it was not fitted to"
+        )
+        + " (per run; "
         f"fitted on a random half of the ties, scored on the other half, {RECALIBRATION_SPLITS} halvings; Brier "
         "score: the mean squared difference of probability and outcome, lower is better; a logistic map of the "
         "log odds, Platt 1999, and a non-decreasing one, pool-adjacent-violators):",
@@ -942,9 +1129,10 @@ def _recalibration_lines(n_max: int) -> list[str]:
     ]
     names = {"decay": "decays", "sweep": "multisines"}
     verdicts = []
-    for kind, path in (("decay", DECAY_TODAY), ("sweep", SWEEP_TODAY)):
+    for kind, path in (("decay", DECAY_ODDS if now else DECAY_TODAY), ("sweep", SWEEP_ODDS if now else SWEEP_TODAY)):
         cases = [c for c in _stored(path) if c.get("strategies")]
-        points = _reliability(cases, kind, n_max)
+        key = "predicted" if STATED.get(kind) == "combined" or not now else "predicted_gaussian"
+        points = _reliability(cases, kind, n_max, at=now, key=key)
         if not points:
             return []
         p = np.array([q for q, _, _ in points])
@@ -1903,6 +2091,7 @@ def report(args) -> int:
     lines += _today_lines(n_max)
     lines += _shared_today_lines(n_max)
     lines += _shared_odds_lines(n_max)
+    lines += _odds_fixed_lines(n_max)
     lines += _recalibration_lines(n_max)
     lines += _records_lines(n_max)
     shared = [c for c in _stored(SHARED) if c.get("strategies")]
@@ -2089,6 +2278,11 @@ def main() -> int:
     rr.add_argument(
         "--tag",
         help="with --strategy: appended to the file's name (the same strategy on later code, beside the stored run)",
+    )
+    rr.add_argument(
+        "--stated",
+        choices=("gaussian", "combined"),
+        help="the probability the plan states (bikerider.gap.plan.discrimination.STATED; default: the code's)",
     )
     rr.add_argument(
         "--shared",
