@@ -185,7 +185,7 @@ def test_records_mode_plans_pushes_and_the_loop_runs_them():
     choice is the next run ``--next`` names, and a push run is the truth's record read by the record fit."""
     models = {"riderless": load_model(BP / "bicycles/Rigid/Parameters/RigidBenchmark.txt")}
     scenario = next(s for s in L.RECORD_SCENARIOS if s.label == "steer_friction vs tyre_slip (riderless)")
-    for seed in (9008, 9005, 9038):
+    for seed in (9029, 9074, 9008):  # ties under the friction fits of issue 21 item 16 (9005, 9038 before)
         case = L.run_loop_case(models, scenario, seed, records=True, keep=True, strategies=("plan:jensen_renyi",))
         if case["status"] == "loop":
             break
