@@ -44,7 +44,9 @@ def _fits(t_coulomb_interval: tuple[float, float]) -> SimpleNamespace:
         ci_low=np.array([t_coulomb_interval[0], 0.58]),
         ci_high=np.array([t_coulomb_interval[1], 1.45]),
     )
-    damping = SimpleNamespace(names=["c_steer"], values=np.array([1.1]), ci_low=np.array([1.04]), ci_high=np.array([1.17]))
+    damping = SimpleNamespace(
+        names=["c_steer"], values=np.array([1.1]), ci_low=np.array([1.04]), ci_high=np.array([1.17])
+    )
     fit = {(STEER_FRICTION,): friction, (STEER_DAMPING,): damping}
     return SimpleNamespace(problem=SimpleNamespace(free=[]), fit_of=lambda effects: fit[tuple(effects)])
 

@@ -512,8 +512,8 @@ def friction_states(
     records of the roll rate alone, whose residual has more than one valley), each refined by up to
     :data:`STATE_STEPS` Gauss-Newton steps on the nonlinear response's own slopes in the state, each kept
     only where it lowers the record's residual (and halved for that record where it did not), directions
-    the record hardly sees left out as in the linear fit (:data:`STATE_RCOND`); the better end is kept.  Returns the states
-    ``(P, R, N, n)`` and the weighted residuals ``(P, R, S, N)``.
+    the record hardly sees left out as in the linear fit (:data:`STATE_RCOND`); the better end is kept.
+    Returns the states ``(P, R, N, n)`` and the weighted residuals ``(P, R, S, N)``.
     """
     T = np.asarray(T_c, dtype=float).reshape(A.shape[:-3] + (1,))
     n = A.shape[-1]
@@ -872,8 +872,8 @@ def fit_time_domain(
 
     Starts from ``start`` when given (a fit to more of the records, or the friction alone with the
     partner absent), else from the best :data:`FIT_STARTS` points of a small grid over the friction's
-    range (:data:`FIT_GRID`, the partner absent), keeping the lowest of their local least squares.  ``smoothing`` is the friction law's corner ``eps`` (:data:`SMOOTHING` when
-    not given).
+    range (:data:`FIT_GRID`, the partner absent), keeping the lowest of their local least squares.
+    ``smoothing`` is the friction law's corner ``eps`` (:data:`SMOOTHING` when not given).
     """
     batches = make_batches(records, min_step=FIT_STEP)
     lower, upper = np.asarray(layout.lower, float), np.asarray(layout.upper, float)
