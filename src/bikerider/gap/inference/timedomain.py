@@ -528,25 +528,46 @@ def friction_states(
     cost = np.sum(res**2, axis=(-2, -1))
     scale = np.ones_like(cost)
     probes = np.eye(n)[:, None, None, None, :]  # (n, 1, 1, 1, n): one probe per state component
-    for _ in range(STATE_STEPS):
-        h = STATE_PROBE * np.maximum(np.max(np.abs(x0), axis=-1), 0.1)  # (K, P, R)
-        probed = simulate_friction(A, b, x0[None] + probes * h[None, ..., None], T, batch.dt, batch.N, rate, smoothing)
-        slopes = (_residuals(batch, probed, outputs)[0] - res[None]) / h[None, ..., None, None]
-        J = np.moveaxis(slopes.reshape(slopes.shape[:-2] + (-1,)), 0, -1)  # (K, P, R, M, n)
+
+    def responses(x: np.ndarray, slopes: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+        # the response from x (K, P, R, n), its weighted residuals and, when asked, their slopes in x
+        # (K, P, R, M, n), the probes simulated in the same pass as x itself (one pass of the loop
+        # over the samples instead of two: the loop's cost is mostly per pass on the records' sizes)
+        if not slopes:
+            states = simulate_friction(A, b, x, T, batch.dt, batch.N, rate, smoothing)
+            return states, _residuals(batch, states, outputs)[0], None
+        h = STATE_PROBE * np.maximum(np.max(np.abs(x), axis=-1), 0.1)  # (K, P, R)
+        both = simulate_friction(
+            A,
+            b,
+            np.concatenate([x[None], x[None] + probes * h[None, ..., None]]),
+            T,
+            batch.dt,
+            batch.N,
+            rate,
+            smoothing,
+        )
+        res = _residuals(batch, both, outputs)[0]
+        J = (res[1:] - res[:1]) / h[None, ..., None, None]
+        return both[0], res[0], np.moveaxis(J.reshape(J.shape[:-2] + (-1,)), 0, -1)
+
+    J = responses(x0, True)[2]
+    for step_index in range(STATE_STEPS):
         r = res.reshape(res.shape[:-2] + (-1,))
         step = -_apply(J, _truncated_inverse(J), r) * scale[..., None]
         size = np.maximum(np.max(np.abs(x0), axis=-1), 1e-3)
         if not np.any((np.max(np.abs(step), axis=-1) / size > STATE_TOLERANCE) & (scale >= 1 / 16)):
             break
         trial = x0 + step
-        trial_states = simulate_friction(A, b, trial, T, batch.dt, batch.N, rate, smoothing)
-        trial_res, _ = _residuals(batch, trial_states, outputs)
+        trial_states, trial_res, trial_J = responses(trial, step_index < STATE_STEPS - 1)
         trial_cost = np.sum(trial_res**2, axis=(-2, -1))
         better = (trial_cost < cost) & _within_limits(trial, outputs)
         gain = np.sum(np.where(better, cost - trial_cost, 0.0))
         x0 = np.where(better[..., None], trial, x0)
         states = np.where(better[..., None, None], trial_states, states)
         res = np.where(better[..., None, None], trial_res, res)
+        if trial_J is not None:
+            J = np.where(better[..., None, None], trial_J, J)
         cost = np.where(better, trial_cost, cost)
         scale = np.where(better, np.minimum(1.0, 2.0 * scale), 0.5 * scale)
         if gain <= STATE_GAIN * np.sum(np.min(cost, axis=0)):  # the residuals no longer fall
