@@ -574,6 +574,20 @@ def lack_of_fit(chi2: float, numbers: int) -> float:
     return max(1.0, chi2 / numbers)
 
 
+def _learn(rivals: list, e: int, obs) -> float | None:
+    """Every rival updated with a run ``obs`` ``(y, R)`` of experiment ``e``, its noise ``R`` inflated by the
+    rivals' lack of fit to it (:func:`lack_of_fit`); returns that misfit's chi-square (:func:`misfit`), or
+    ``None`` where the run gave nothing (the bicycle fell, no weave fitted)."""
+    if obs is None:
+        return None
+    y, R = obs
+    chi2 = misfit(rivals, e, y, R)
+    R = R * lack_of_fit(chi2, y.size)
+    for r in rivals:
+        r.update(e, y, R)
+    return chi2
+
+
 def run_strategy(name: str, plan, rivals_at_tie, runs: TruthRuns, truth_index: int, seed: int, repeat=None) -> dict:
     """One strategy's loop (module docstring): its runs, the hidden effect's probability after each."""
     rivals = [LinearRival(r.mean, r.jac, r.P, r.own, r.extra) for r in rivals_at_tie]
@@ -590,13 +604,8 @@ def run_strategy(name: str, plan, rivals_at_tie, runs: TruthRuns, truth_index: i
     neither = None  # the first run no rival describes (NEITHER_P)
     for step in range(N_MAX):
         if status != "undecided":  # a repeat strategy runs on after its decision (``posterior``)
-            obs = runs.get(repeat, used.get(repeat, 0))
+            _learn(rivals, repeat, runs.get(repeat, used.get(repeat, 0)))
             used[repeat] = used.get(repeat, 0) + 1
-            if obs is not None:
-                y, R = obs
-                R = R * lack_of_fit(misfit(rivals, repeat, y, R), y.size)
-                for r in rivals:
-                    r.update(repeat, y, R)
             posterior.append(round(float(_posterior(rivals)[truth_index]), 5))
             continue
         weights = _posterior(rivals)
@@ -621,17 +630,12 @@ def run_strategy(name: str, plan, rivals_at_tie, runs: TruthRuns, truth_index: i
         used[e] = k + 1
         obs = runs.get(e, k)
         chosen.append(e)
-        if obs is None:  # the bicycle fell or no weave was fitted: a run spent, nothing learnt
+        chi2 = _learn(rivals, e, obs)
+        if chi2 is None:  # the bicycle fell or no weave was fitted: a run spent, nothing learnt
             lost += 1
             failed.add(e)
-        else:
-            y, R = obs
-            chi2 = misfit(rivals, e, y, R)
-            if neither is None and chi2 > float(chi2_dist.ppf(1.0 - NEITHER_P, y.size)):
-                neither = {"run": len(chosen), "chi2": round(chi2, 2), "numbers": int(y.size)}
-            R = R * lack_of_fit(chi2, y.size)
-            for r in rivals:
-                r.update(e, y, R)
+        elif neither is None and chi2 > float(chi2_dist.ppf(1.0 - NEITHER_P, obs[0].size)):
+            neither = {"run": len(chosen), "chi2": round(chi2, 2), "numbers": int(obs[0].size)}
         pi = _posterior(rivals)
         trajectory.append(round(float(pi[truth_index]), 5))
         if pi[truth_index] >= DECIDED:

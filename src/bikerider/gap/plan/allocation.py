@@ -185,16 +185,42 @@ def simulated_pairs(hypotheses: list[Hypothesis], counts, draws: int = DRAWS, se
                 k = block.shape[-1]
                 D[at : at + k, at : at + k] = block
                 at += k
-        D = D + (1e-12 * np.trace(D) / M + 1e-300) * np.eye(M)
-        St, So = D + Ut @ Ut.T, D + Uo @ Uo.T
-        Lt, Lo = np.linalg.cholesky(St), np.linalg.cholesky(So)
-        x = Lt @ rng.standard_normal((M, draws))  # the runs' means less the true rival's prediction
-        qt = np.sum(np.linalg.solve(Lt, x) ** 2, axis=0)
-        qo = np.sum(np.linalg.solve(Lo, x + delta[:, None]) ** 2, axis=0)
-        logdet = 2 * (np.sum(np.log(np.diag(Lo))) - np.sum(np.log(np.diag(Lt))))
-        llr = 0.5 * (qo - qt + logdet)
+        z = rng.standard_normal((M, draws))
+        llr = _log_bayes_factors(delta, Ut @ Ut.T, Uo @ Uo.T, D, z)
         chance[h.pair] += h.weight * float(np.mean(llr >= h.need))
     return chance
+
+
+def _log_bayes_factors(
+    delta: np.ndarray, Ct: np.ndarray, Co: np.ndarray, D: np.ndarray, z: np.ndarray, endless: np.ndarray | None = None
+) -> np.ndarray:
+    """Simulated log Bayes factors ``(..., draws)`` of a true rival against the other from the runs' mean.
+
+    The runs' mean less the true rival's prediction is ``Lt z`` (``z (M, draws)`` standard normal, ``Lt`` the
+    Cholesky factor of the true rival's predictive covariance ``D + Ct``: the runs' covariance ``D`` and its
+    own ``Ct``); the other predicts ``delta`` less, with ``D + Co``.  The log Bayes factor is half the
+    difference of the two Mahalanobis squares plus the log ratio of the determinants; ``|Lt^-1 Lt z|^2`` is
+    ``|z|^2``.  ``D`` gets a jitter of ``1e-12`` of its mean diagonal, and where ``endless`` (runs without end:
+    no noise left, the rivals' own covariances may be singular) ``1e-9`` of the rivals' own.  Leading
+    dimensions ``...`` of ``delta (..., M)`` and the ``(..., M, M)`` matrices broadcast (the experiments)."""
+    M = delta.shape[-1]
+    eye = np.eye(M)
+    size = np.trace(D, axis1=-2, axis2=-1)[..., None, None]
+    D = D + (1e-12 * size / M + 1e-300) * eye
+    if endless is not None and np.any(endless):
+        own = np.trace(Ct + Co, axis1=-2, axis2=-1)[..., None, None]
+        D = D + np.where(np.asarray(endless)[..., None, None], 1e-9 * own / M, 0.0) * eye
+    Lt, Lo = np.linalg.cholesky(D + Ct), np.linalg.cholesky(D + Co)
+    inv = np.linalg.inv(Lo)
+    # |Lo^-1 (Lt z + delta)|^2, as one product over the leading dimensions: (Lo^-1 Lt) z + Lo^-1 delta
+    w = (inv @ Lt).reshape(-1, M) @ z
+    w = w.reshape(Lt.shape[:-1] + (z.shape[-1],)) + inv @ delta[..., None]
+    qo = np.sum(w * w, axis=-2)
+    logdet = 2 * (
+        np.sum(np.log(np.diagonal(Lo, axis1=-2, axis2=-1)), axis=-1)
+        - np.sum(np.log(np.diagonal(Lt, axis1=-2, axis2=-1)), axis=-1)
+    )
+    return 0.5 * (qo - np.sum(z * z, axis=0) + logdet[..., None])
 
 
 def repeated_probability(hypotheses: list[Hypothesis], repeats, draws: int = DRAWS, seed: int = 0) -> np.ndarray:
@@ -236,31 +262,14 @@ def repeated_probability(hypotheses: list[Hypothesis], repeats, draws: int = DRA
             delta, true, other, noise, systematic = h.groups[g]
             M = delta.shape[-1]
             z = rng.standard_normal((M, draws))
-            qt = np.sum(z**2, axis=0)  # |Lt^-1 x|^2 with x = Lt z
             step = max(1, 2_000_000 // (M * draws))
             for lo in range(0, n, step):
                 hi = min(n, lo + step)
                 k = reps[start + lo : start + hi]
                 D = systematic[lo:hi] + noise[lo:hi] / k[:, None, None]
-                size = np.trace(D, axis1=-2, axis2=-1)[:, None, None]
-                D = D + (1e-12 * size / M + 1e-300) * np.eye(M)
                 Ct = true[lo:hi] @ np.swapaxes(true[lo:hi], -1, -2)
                 Co = other[lo:hi] @ np.swapaxes(other[lo:hi], -1, -2)
-                if not np.all(np.isfinite(k)):  # endless runs: the rivals' own covariances may be singular
-                    own = np.trace(Ct + Co, axis1=-2, axis2=-1)[:, None, None]
-                    D = D + np.where(np.isfinite(k)[:, None, None], 0.0, 1e-9 * own / M) * np.eye(M)
-                St, So = D + Ct, D + Co
-                Lt, Lo = np.linalg.cholesky(St), np.linalg.cholesky(So)
-                # |Lo^-1 (Lt z + delta)|^2 as one product over the experiments: (Lo^-1 Lt) z + Lo^-1 delta
-                inv = np.linalg.inv(Lo)
-                A = (inv @ Lt).reshape(-1, M)
-                w = (A @ z).reshape(hi - lo, M, draws) + (inv @ delta[lo:hi, :, None])
-                qo = np.einsum("nmd,nmd->nd", w, w)
-                logdet = 2 * (
-                    np.sum(np.log(np.diagonal(Lo, axis1=-2, axis2=-1)), axis=-1)
-                    - np.sum(np.log(np.diagonal(Lt, axis1=-2, axis2=-1)), axis=-1)
-                )
-                llr = 0.5 * (qo - qt + logdet[:, None])
+                llr = _log_bayes_factors(delta[lo:hi], Ct, Co, D, z, endless=~np.isfinite(k))
                 chance[h.pair, start + lo : start + hi] += h.weight * np.mean(llr >= h.need, axis=1)
         start += n
     return chance

@@ -176,15 +176,15 @@ def gaussian_probability(plan, repeats: float) -> np.ndarray:
     return resolution_probability(separation(plan, repeats)).mean(axis=1)
 
 
-def stated_probability(plan, repeats: float) -> np.ndarray:
+def stated_probability(plan, repeats: float, found: list[Hypothesis] | None = None) -> np.ndarray:
     """The probability the plan states that ``repeats`` runs of one experiment favour the true rival by
     :data:`ODDS` to 1 or more, for every pair at every experiment, ``(n_pairs, n_points)``: by :data:`STATED`
     for the experiment's kind, :func:`combined_probability` (decays) or :func:`gaussian_probability`
-    (multisines)."""
+    (multisines); ``found``: the plan's :func:`hypotheses`, when already built."""
     out = gaussian_probability(plan, repeats)
     combined = _combined_columns(plan)
     if combined.any():
-        out = np.where(combined[None, :], combined_probability(plan, repeats), out)
+        out = np.where(combined[None, :], combined_probability(plan, repeats, found), out)
     return out
 
 
@@ -193,7 +193,7 @@ def _combined_columns(plan) -> np.ndarray:
     return np.array([STATED.get(e.kind) == "combined" for e in plan.experiments], dtype=bool)
 
 
-def combined_probability(plan, repeats: float) -> np.ndarray:
+def combined_probability(plan, repeats: float, found: list[Hypothesis] | None = None) -> np.ndarray:
     """The probability that ``repeats`` runs of one experiment favour the true rival by :data:`ODDS` to 1 or
     more by the plan's measure of runs combined, for every pair at every experiment, ``(n_pairs, n_points)``.
 
@@ -223,31 +223,35 @@ def combined_probability(plan, repeats: float) -> np.ndarray:
         :func:`gaussian_probability`, is returned).
     repeats : float
         Runs of each experiment; ``math.inf`` for the limit of endless runs.
+    found : list of Hypothesis, optional
+        The plan's :func:`hypotheses`, when already built (else built here).
 
     Returns
     -------
     ndarray
         ``(n_pairs, n_points)``, the experiments in the order of ``plan.experiments``.
     """
-    found = hypotheses(plan)
-    if found is None or not found or not found[0].groups:
+    found = hypotheses(plan) if found is None else found
+    if not found or not found[0].groups:
         return gaussian_probability(plan, repeats)
     return repeated_probability(found, repeats)
 
 
-def runs_for(plan, target: float = 0.95) -> np.ndarray:
+def runs_for(plan, target: float = 0.95, found: list[Hypothesis] | None = None) -> np.ndarray:
     """The fewest runs of each experiment alone (at most :data:`MAX_REPEATS`) whose :func:`stated_probability`,
     the smallest over the pairs, reaches ``target``, ``(n_points,)``; 0 where :data:`MAX_REPEATS` do not.
 
     The Gaussian approximation at every count; the combined measure by bisection over the number of runs (the
-    probability rises with the runs; the returned count reaches the target and one run fewer does not)."""
+    probability rises with the runs; the returned count reaches the target and one run fewer does not).
+    ``found``: the plan's :func:`hypotheses`, when already built."""
     each = np.stack([gaussian_probability(plan, float(k)).min(axis=0) for k in range(1, MAX_REPEATS + 1)])
     reached = each >= target
     gaussian = np.where(reached.any(axis=0), np.argmax(reached, axis=0) + 1, 0)
     combined = _combined_columns(plan)
-    found = hypotheses(plan) if combined.any() else None
+    if combined.any() and found is None:
+        found = hypotheses(plan)
     n = len(plan.experiments)
-    if found is None or not found or not found[0].groups:
+    if not combined.any() or not found or not found[0].groups:
         return gaussian
 
     def worst(k):
@@ -275,10 +279,11 @@ def rank(plan) -> list[dict]:
     (:data:`STATED`), so a list ordered by the approximation may state a higher probability below a lower one."""
     d_at = plan.separation(float(plan.repeats))  # (pairs, 2, points)
     gauss = resolution_probability(d_at).mean(axis=1).min(axis=0)
-    stated = stated_probability(plan, float(plan.repeats))  # (pairs, points)
+    found = hypotheses(plan) if _combined_columns(plan).any() else None  # built once for the three below
+    stated = stated_probability(plan, float(plan.repeats), found)  # (pairs, points)
     worst = stated.min(axis=0)
-    limit = stated_probability(plan, math.inf).min(axis=0)
-    need = runs_for(plan)
+    limit = stated_probability(plan, math.inf, found).min(axis=0)
+    need = runs_for(plan, found=found)
     order = np.lexsort((-d_at.min(axis=(0, 1)), -gauss))
     ranked = []
     for m in order:
