@@ -71,6 +71,10 @@ BEFORE_NEWTON = Path(__file__).with_name("gap_calibration_before_newton.jsonl")
 friction was fitted by Gauss-Newton steps on the nonlinear response's own slopes from the best of several
 starts (chord steps on the linear part's slopes from the linear part's least squares before), as they were
 after item 15, on the same seeds."""
+BEFORE_HELD = Path(__file__).with_name("gap_calibration_before_held.jsonl")
+"""Every trial before the time-domain fits' slopes in the friction's values held each record's initial state at
+its fit (variable projection; each state refitted per difference before), as they were after item 16 (the other
+six effects' trials from the code of item 15)."""
 WORKERS = 2
 """Worker processes the study runs (``gap_calibration.py --workers``): the time the full study needs."""
 
@@ -501,6 +505,14 @@ def section(trials: list[dict], goal: int) -> list[str]:
         BEFORE_NEWTON,
         "the friction trials as they were after item 15: see item 16",
         sizes=CORNER_SIZES,
+    )
+    lines += _before_table(
+        table + friction,
+        load(BEFORE_HELD),
+        "**Before the held-state slopes of the time-domain fits**",
+        BEFORE_HELD,
+        "every trial as it was after item 16, the other six effects' from the code of item 15: see item 17",
+        sizes=TODAY_SIZES,
     )
     if friction:
         sep = [t for t in friction if "c_equivalent" in t["fitted"]]
