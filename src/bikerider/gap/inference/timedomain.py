@@ -120,8 +120,8 @@ did this before and did not converge where the friction holds the steer: on the 
 ``T_coulomb`` 0.2025 N m), the truth's own initial states reproduced the records to a weighted residual of
 0.04-2.1 per record, the chord steps' states missed them by 5-119 (one at a roll angle of -30 rad), and the
 fit made up for it in the split: 0.105 N m Coulomb plus 0.93 N m s/rad viscous friction that is not there
-(docs/gap_validation.md part 4, item 16).  Each step costs two simulations (the probes and the trial);
-they stop early at :data:`STATE_TOLERANCE` or when a step no longer lowers the residuals by
+(docs/gap_validation.md part 4, item 16).  Each step costs one batched simulation of the trial and its
+``n`` probes (the last step's trial alone where no slopes are asked for); they stop early at :data:`STATE_TOLERANCE` or when a step no longer lowers the residuals by
 :data:`STATE_GAIN` of them (on the steer-by-wire logs most calls still take all eight)."""
 STATE_STANDINS = (1.0, 0.3, 0.01)
 """Steer-rate amplitudes [rad/s] of the viscous stand-ins of the friction whose linear least squares start
