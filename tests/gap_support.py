@@ -78,6 +78,30 @@ def decay_record(
     )
 
 
+def friction_decay_record(
+    values: dict, geometry, speed: float, group: str, seed: int, T_coulomb: float, c_viscous: float, noise: float = 0.01
+) -> Record:
+    """A decay under :data:`SIL` of a bicycle with Coulomb and viscous steer friction simulated by the time-domain
+    fit's own law (``timedomain.simulate_friction``): roll rate with noise and the steer angle, 100 Hz, 2 s."""
+    from bikerider.gap.inference.timedomain import simulate_friction
+
+    rng = np.random.default_rng(seed)
+    t = np.arange(0.0, 2.0, 0.01)
+    ss = EffectModel(values, geometry, {"steer_damping": {"c_steer": c_viscous}}).state_space([speed])
+    A = ss.closed_loop(np.array([SIL(speed)]))[0]
+    outputs = ss.output_states
+    x0 = np.zeros(A.shape[-1])
+    x0[outputs[2]], x0[outputs[3]], x0[outputs[1]] = 0.6 * (-1) ** seed, 0.5, 0.02
+    states = simulate_friction(A, ss.B[0, :, 1], x0, T_coulomb, 0.01, t.size, outputs[3])
+    signals = {
+        "roll_rate": states[:, outputs[2]] + noise * rng.standard_normal(t.size),
+        "steer_angle": states[:, outputs[1]],
+    }
+    return Record(
+        f"{group}[{seed}]", "test", t, signals, speed, 0.01, group, SIL, speed, None, None, ("roll_rate",), False
+    )
+
+
 def weave_table(model, speeds: np.ndarray, effects: dict) -> EigenvalueData:
     """Weave eigenvalues of ``model`` with ``effects`` at ``speeds`` (no noise), standard errors 0.05."""
     values = nominal(model)

@@ -10,10 +10,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from gap_support import SIL, nominal, riderless_model
+from gap_support import friction_decay_record, nominal, riderless_model
 
 from bikerider.gap import parallel
-from bikerider.gap.candidates.effect_model import EffectModel
 from bikerider.gap.diagnosis.result import FEW_FOLDS_FRICTION, as_dict, diagnose
 from bikerider.gap.diagnosis.statistics import interval_quantile, jackknife_quantile
 from bikerider.gap.inference.timedomain import (
@@ -23,7 +22,6 @@ from bikerider.gap.inference.timedomain import (
     fit_covariance,
     fit_time_domain,
     parameter_sensitivity,
-    simulate_friction,
 )
 from bikerider.gap.measured.records import Record, fit_records
 from bikerider.gap.measured.tables import CanonicalData, EigenvalueData
@@ -34,23 +32,8 @@ FRICTION = Layout.of(("steer_friction",))
 
 
 def _friction_record(values, geometry, speed, group, seed, noise=0.01) -> Record:
-    """A decay under :data:`SIL` of a bicycle with Coulomb and viscous steer friction (the time-domain
-    fit's own simulation), roll rate with noise and the steer angle, 100 Hz, 2 s."""
-    rng = np.random.default_rng(seed)
-    t = np.arange(0.0, 2.0, 0.01)
-    ss = EffectModel(values, geometry, {"steer_damping": {"c_steer": C_TRUE}}).state_space([speed])
-    A = ss.closed_loop(np.array([SIL(speed)]))[0]
-    outputs = ss.output_states
-    x0 = np.zeros(A.shape[-1])
-    x0[outputs[2]], x0[outputs[3]], x0[outputs[1]] = 0.6 * (-1) ** seed, 0.5, 0.02
-    states = simulate_friction(A, ss.B[0, :, 1], x0, T_TRUE, 0.01, t.size, outputs[3])
-    signals = {
-        "roll_rate": states[:, outputs[2]] + noise * rng.standard_normal(t.size),
-        "steer_angle": states[:, outputs[1]],
-    }
-    return Record(
-        f"{group}[{seed}]", "test", t, signals, speed, 0.01, group, SIL, speed, None, None, ("roll_rate",), False
-    )
+    """A decay of the bicycle with :data:`T_TRUE` and :data:`C_TRUE` (``gap_support.friction_decay_record``)."""
+    return friction_decay_record(values, geometry, speed, group, seed, T_TRUE, C_TRUE, noise)
 
 
 @pytest.fixture(scope="module")

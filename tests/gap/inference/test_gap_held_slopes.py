@@ -11,40 +11,25 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from gap_support import SIL, nominal, riderless_model
+from gap_support import friction_decay_record, nominal, riderless_model
 
-from bikerider.gap.candidates.effect_model import EffectModel
 from bikerider.gap.inference import timedomain
 from bikerider.gap.inference.timedomain import Layout, make_batches, simulate_friction
-from bikerider.gap.measured.records import Record
 
 T_TRUE, C_TRUE = 0.15, 0.1
 """The friction of the simulated bicycle: Coulomb [N m] and viscous [N m s/rad]."""
 FRICTION = Layout.of(("steer_friction",))
 
 
-def _record(values, geometry, speed: float, seed: int) -> Record:
-    """A noise-free decay under :data:`SIL` simulated by the fit's own friction law: roll rate and steer angle,
-    100 Hz, 2 s."""
-    t = np.arange(0.0, 2.0, 0.01)
-    ss = EffectModel(values, geometry, {"steer_damping": {"c_steer": C_TRUE}}).state_space([speed])
-    A = ss.closed_loop(np.array([SIL(speed)]))[0]
-    outputs = ss.output_states
-    x0 = np.zeros(A.shape[-1])
-    x0[outputs[2]], x0[outputs[3]], x0[outputs[1]] = 0.6 * (-1) ** seed, 0.5, 0.02
-    states = simulate_friction(A, ss.B[0, :, 1], x0, T_TRUE, 0.01, t.size, outputs[3])
-    signals = {"roll_rate": states[:, outputs[2]], "steer_angle": states[:, outputs[1]]}
-    group = f"{speed} m/s"
-    return Record(
-        f"{group}[{seed}]", "test", t, signals, speed, 0.01, group, SIL, speed, None, None, ("roll_rate",), False
-    )
-
-
 @pytest.fixture(scope="module")
 def setting():
     model = riderless_model()
     values = nominal(model)
-    records = [_record(values, model.geometry, v, k) for v in (2.5, 4.0) for k in range(2)]
+    records = [
+        friction_decay_record(values, model.geometry, v, f"{v} m/s", k, T_TRUE, C_TRUE, noise=0.0)
+        for v in (2.5, 4.0)
+        for k in range(2)
+    ]
     return values, model.geometry, make_batches(records, min_step=timedomain.FIT_STEP)
 
 
