@@ -144,3 +144,14 @@ def test_the_stated_odds_are_the_same_on_every_call_and_the_ranking_states_them(
     assert ranked[0]["pairs"][0]["resolution_probability"] == ranked[0]["resolution_probability"]
     assert ranked[0]["pairs"][0]["separation"] == pytest.approx(d.tolist())  # the Gaussian d, as it was
     assert ranked[0]["decays_for_95"] is not None and ranked[0]["limit"] >= ranked[0]["resolution_probability"]
+
+
+def test_an_experiment_simulated_alone_states_what_it_states_among_all():
+    # only the experiments that state this measure are simulated (--next: the decays, not the multisines);
+    # each one's value does not depend on which others are
+    plan = _with_separation(_plan((-1.0, 3.0), (-1.05, 3.02), (0.02, 0.01), (0.05, 0.08), misfit=(0.5, 2.0)))
+    found = hypotheses(plan)
+    every = A.repeated_probability(found, 3.0)
+    some = A.repeated_probability(found, 3.0, only=np.array([True, False, True]))
+    assert np.array_equal(some[:, [0, 2]], every[:, [0, 2]])
+    assert np.all(some[:, 1] == 0.0) and np.all(every[:, 1] > 0.0)

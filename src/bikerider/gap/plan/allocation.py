@@ -223,7 +223,9 @@ def _log_bayes_factors(
     return 0.5 * (qo - np.sum(z * z, axis=0) + logdet[..., None])
 
 
-def repeated_probability(hypotheses: list[Hypothesis], repeats, draws: int = DRAWS, seed: int = 0) -> np.ndarray:
+def repeated_probability(
+    hypotheses: list[Hypothesis], repeats, draws: int = DRAWS, seed: int = 0, only: np.ndarray | None = None
+) -> np.ndarray:
     """Every pair's resolution probability of ``repeats`` runs of each experiment alone, by simulation,
     ``(pairs, experiments)``: for experiment ``e`` what :func:`simulated_pairs` gives for ``counts`` holding
     ``repeats[e]`` at ``e`` and none elsewhere, the same draws (the seed's stream, hypothesis after hypothesis),
@@ -240,6 +242,9 @@ def repeated_probability(hypotheses: list[Hypothesis], repeats, draws: int = DRA
         Simulated outcomes per rival taken true, and the seed: every experiment is simulated with the same
         standard normal draws (common random numbers), so the probability is the same on every call and moves
         smoothly with an experiment's speed, as its covariances do.
+    only : array_like of bool, optional
+        The experiments to simulate (global index); the others are left at 0 (the same draws: an experiment's
+        value does not depend on which others are simulated).
 
     Returns
     -------
@@ -251,26 +256,28 @@ def repeated_probability(hypotheses: list[Hypothesis], repeats, draws: int = DRA
     n_exp = sum(len(g[0]) for g in hypotheses[0].groups)
     pairs = 1 + max(h.pair for h in hypotheses)
     reps = np.broadcast_to(np.asarray(repeats, float), (n_exp,))
+    wanted = np.ones(n_exp, bool) if only is None else np.broadcast_to(np.asarray(only, bool), (n_exp,))
     chance = np.zeros((pairs, n_exp))
     start = 0
     for g in range(len(hypotheses[0].groups)):
         rng = np.random.default_rng(seed)  # the stream simulated_probability draws for one experiment of group g
         n = len(hypotheses[0].groups[g][0])
+        chosen = np.flatnonzero(wanted[start : start + n])  # within the group
         for h in hypotheses:
-            if h.weight <= 0:
+            if h.weight <= 0 or not chosen.size:
                 continue
             delta, true, other, noise, systematic = h.groups[g]
             M = delta.shape[-1]
             z = rng.standard_normal((M, draws))
             step = max(1, 2_000_000 // (M * draws))
-            for lo in range(0, n, step):
-                hi = min(n, lo + step)
-                k = reps[start + lo : start + hi]
-                D = systematic[lo:hi] + noise[lo:hi] / k[:, None, None]
-                Ct = true[lo:hi] @ np.swapaxes(true[lo:hi], -1, -2)
-                Co = other[lo:hi] @ np.swapaxes(other[lo:hi], -1, -2)
-                llr = _log_bayes_factors(delta[lo:hi], Ct, Co, D, z, endless=~np.isfinite(k))
-                chance[h.pair, start + lo : start + hi] += h.weight * np.mean(llr >= h.need, axis=1)
+            for lo in range(0, chosen.size, step):
+                e = chosen[lo : lo + step]
+                k = reps[start + e]
+                D = systematic[e] + noise[e] / k[:, None, None]
+                Ct = true[e] @ np.swapaxes(true[e], -1, -2)
+                Co = other[e] @ np.swapaxes(other[e], -1, -2)
+                llr = _log_bayes_factors(delta[e], Ct, Co, D, z, endless=~np.isfinite(k))
+                chance[h.pair, start + e] += h.weight * np.mean(llr >= h.need, axis=1)
         start += n
     return chance
 

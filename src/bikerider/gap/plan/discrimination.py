@@ -184,7 +184,7 @@ def stated_probability(plan, repeats: float, found: list[Hypothesis] | None = No
     out = gaussian_probability(plan, repeats)
     combined = _combined_columns(plan)
     if combined.any():
-        out = np.where(combined[None, :], combined_probability(plan, repeats, found), out)
+        out = np.where(combined[None, :], combined_probability(plan, repeats, found, only=combined), out)
     return out
 
 
@@ -193,7 +193,9 @@ def _combined_columns(plan) -> np.ndarray:
     return np.array([STATED.get(e.kind) == "combined" for e in plan.experiments], dtype=bool)
 
 
-def combined_probability(plan, repeats: float, found: list[Hypothesis] | None = None) -> np.ndarray:
+def combined_probability(
+    plan, repeats: float, found: list[Hypothesis] | None = None, only: np.ndarray | None = None
+) -> np.ndarray:
     """The probability that ``repeats`` runs of one experiment favour the true rival by :data:`ODDS` to 1 or
     more by the plan's measure of runs combined, for every pair at every experiment, ``(n_pairs, n_points)``.
 
@@ -225,6 +227,8 @@ def combined_probability(plan, repeats: float, found: list[Hypothesis] | None = 
         Runs of each experiment; ``math.inf`` for the limit of endless runs.
     found : list of Hypothesis, optional
         The plan's :func:`hypotheses`, when already built (else built here).
+    only : ndarray of bool, optional
+        The experiments to simulate (``(n_points,)``; the others 0): those that state this measure.
 
     Returns
     -------
@@ -234,7 +238,7 @@ def combined_probability(plan, repeats: float, found: list[Hypothesis] | None = 
     found = hypotheses(plan) if found is None else found
     if not found or not found[0].groups:
         return gaussian_probability(plan, repeats)
-    return repeated_probability(found, repeats)
+    return repeated_probability(found, repeats, only=only)
 
 
 def runs_for(plan, target: float = 0.95, found: list[Hypothesis] | None = None) -> np.ndarray:
@@ -255,7 +259,7 @@ def runs_for(plan, target: float = 0.95, found: list[Hypothesis] | None = None) 
         return gaussian
 
     def worst(k):
-        return repeated_probability(found, k).min(axis=0)
+        return repeated_probability(found, k, only=combined).min(axis=0)
 
     hi = np.full(n, MAX_REPEATS)
     ok = worst(hi.astype(float)) >= target
