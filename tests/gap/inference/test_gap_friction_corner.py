@@ -21,7 +21,9 @@ from bikerider.gap.diagnosis.priors import equivalent_damping
 from bikerider.gap.inference.problem import EffectFit
 from bikerider.gap.inference.timedomain import (
     CORNER_FACTOR,
+    CORNER_NODES,
     SMOOTHING,
+    CornerShare,
     Layout,
     corner_nodes,
     corner_share,
@@ -174,3 +176,40 @@ def test_the_plan_leaves_the_corners_share_to_its_own_corners():
     fit = _friction_fit([0.1, 0.2], [], data_cov + corner_cov, corner_cov)
     fit.lower, fit.upper = np.zeros(2), np.array([1.0, 5.0])
     assert bounded_covariance(fit, np.array([10.0, 10.0])) == pytest.approx(data_cov)
+
+
+def _share(at_nodes) -> CornerShare:
+    """A corner share whose one value is ``at_nodes`` at the nodes of :func:`corner_nodes` (own corner first)."""
+    eps, weights = corner_nodes()
+    return CornerShare(np.zeros((1, 1)), [(e, w, np.array([v])) for e, w, v in zip(eps, weights, at_nodes)])
+
+
+def test_without_a_corner_effect_the_interval_is_the_fits_own():
+    low, high = _share([0.05, 0.05, 0.05]).interval(0, 0.02, 0.0, 1.0)
+    assert (low, high) == pytest.approx((0.03, 0.07), rel=1e-6)
+    assert _share([0.05, 0.05, 0.05]).interval(0, 0.02, 0.04, 0.065) == pytest.approx((0.04, 0.065))
+
+
+def test_the_interval_spans_the_values_over_the_corners_whole_range():
+    # a value linear in log eps, known exactly at each corner: the central 95 % of its uniform spread over
+    # the range u in [-1, 1] (the nodes at 0 and -/+ sqrt(0.6) of the half range), u = -/+ 0.95
+    nodes = np.array(CORNER_NODES)
+    low, high = _share(0.05 + 0.02 * nodes).interval(0, 0.0, 0.0, 1.0)
+    assert (low, high) == pytest.approx((0.05 - 0.95 * 0.02, 0.05 + 0.95 * 0.02), rel=1e-6)
+    # T_coulomb of steer_coulomb seed 1000 at the three corners (0.025, 0.05, 0.10 rad/s: 0.019, 0.028,
+    # 0.053 N m; the truth 0.066 at a corner of 0.10): rising ever faster with the corner, the interval
+    # reaches further up than down, and further up than the symmetric one of the same corner share
+    at_nodes = [0.028, 0.019, 0.053]
+    share = _share(at_nodes)
+    low, high = share.interval(0, 0.01, 0.0, 1.0)
+    assert high - 0.028 > 2 * (0.028 - low) > 0
+    eps, weights = corner_nodes()
+    corner_variance = sum(w * (v - 0.028) ** 2 for w, v in zip(weights, at_nodes))
+    symmetric = 1.96 * math.sqrt((0.01 / 1.96) ** 2 + corner_variance)
+    assert high > 0.028 + symmetric + 0.005
+    # wider where each corner's fit is less certain
+    assert share.interval(0, 0.02, 0.0, 1.0)[1] > high
+
+
+def test_a_corner_whose_fit_failed_leaves_the_symmetric_interval():
+    assert _share([0.05, np.nan, 0.06]).interval(0, 0.01, 0.0, 1.0) == pytest.approx((0.04, 0.06))

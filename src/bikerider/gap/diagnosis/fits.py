@@ -18,6 +18,7 @@ order, so the results do not depend on which worker process computed what
 from __future__ import annotations
 
 import logging
+import math
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -228,9 +229,12 @@ class Fits:
         The fit to all the data gets its covariance as the data's share plus the benchmark parameters'
         share (:meth:`parameter_covariance`: their error is common to every record and fold, so the
         data's spread cannot show it) plus the friction corner's share (the law's corner the data do not
-        decide: :func:`bikerider.gap.inference.timedomain.corner_share`, two more fits), and 95 % intervals
-        from Student's t with the Welch-Satterthwaite degrees of freedom of that sum
-        (:func:`interval_quantile`, the parameters' and the corner's shares known).  The data's share is
+        decide: :func:`bikerider.gap.inference.timedomain.corner_share`, two more fits).  The 95 % intervals
+        hold each corner's fit within Student's t of the data's and the parameters' shares (the
+        Welch-Satterthwaite degrees of freedom of their sum, :func:`interval_quantile`, the parameters'
+        share known), mixed over the corner's range (``CornerShare.interval`` of
+        :mod:`bikerider.gap.inference.timedomain`: the values move with the corner, seldom linearly).  The
+        data's share is
 
         * with three folds or more, the jackknife over the held-out folds' fits (leave one group out;
           one degree of freedom fewer than the folds): it sees the scatter from session to session;
@@ -259,7 +263,7 @@ class Fits:
             )
             values, cost, n, success = fit.values, fit.cost, fit.n_samples, fit.success
         stderr = np.full(values.size, np.inf)
-        covariance = spread = corners = None
+        covariance = spread = corners = known = None
         quantile = np.full(values.size, 1.96)
         if mask is None and jackknife:  # the friction's corner, which no fold decides either
             corners = self.corner_share(effects, values)
@@ -271,21 +275,32 @@ class Fits:
             # the benchmark parameters' error is common to every fold, so the folds' spread cannot show
             # it: it is counted apart, as the fit's move over their error (its bounds respected); so is
             # the friction corner's
-            covariance = spread + self.parameter_covariance(layout, values) + corners.covariance
+            known = self.parameter_covariance(layout, values)
+            covariance = spread + known + corners.covariance
             stderr = np.sqrt(np.diag(covariance))
             quantile = np.array([interval_quantile(row, covariance, spread, g) for row in np.eye(values.size)])
+            data_share, data_dof = spread, g
         elif mask is None and jackknife:  # too few folds for a jackknife: the fit's own Gauss-Newton covariance
             records = [self.records[k].record for k in self.record_indices(None)]
             own = fit_covariance(records, self.problem.nominal, self.problem.geometry, layout, values)
-            covariance = own.covariance + self.parameter_covariance(layout, values) + corners.covariance
+            known = self.parameter_covariance(layout, values)
+            covariance = own.covariance + known + corners.covariance
             stderr = np.sqrt(np.clip(np.diag(covariance), 0, None))
             # the data's share rests on a scale estimated from own.dof residuals: interval_quantile's
             # Welch-Satterthwaite sum with that many degrees of freedom (its folds less one)
             quantile = np.array(
                 [interval_quantile(row, covariance, own.covariance, own.dof + 1) for row in np.eye(values.size)]
             )
+            data_share, data_dof = own.covariance, own.dof + 1
         ci_low = np.clip(values - quantile * stderr, lower, upper)
         ci_high = np.clip(values + quantile * stderr, lower, upper)
+        if known is not None:
+            # over the corner's whole range: each corner's fit within the data's and the parameters' shares
+            # (Student's t of their Welch-Satterthwaite sum), mixed over the corner (CornerShare.interval)
+            base = data_share + known
+            for k, row in enumerate(np.eye(values.size)):
+                half = interval_quantile(row, base, data_share, data_dof) * math.sqrt(max(base[k, k], 0.0))
+                ci_low[k], ci_high[k] = corners.interval(k, half, lower[k], upper[k])
         config: dict[str, dict[str, float]] = {}
         for (effect, param), value in zip(layout.names, values):
             config.setdefault(effect, {})[param] = float(value)
