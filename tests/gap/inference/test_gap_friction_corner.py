@@ -196,8 +196,8 @@ def test_the_interval_spans_the_values_over_the_corners_whole_range():
     nodes = np.array(CORNER_NODES)
     low, high = _share(0.05 + 0.02 * nodes).interval(0, 0.0, 0.0, 1.0)
     assert (low, high) == pytest.approx((0.05 - 0.95 * 0.02, 0.05 + 0.95 * 0.02), rel=1e-6)
-    # T_coulomb of steer_coulomb seed 1000 at the three corners (0.025, 0.05, 0.10 rad/s: 0.019, 0.028,
-    # 0.053 N m; the truth 0.066 at a corner of 0.10): rising ever faster with the corner, the interval
+    # about T_coulomb of steer_coulomb seed 1000 at the three corners (refitted at 0.02, 0.05, 0.10 rad/s:
+    # 0.018, 0.028, 0.052 N m; the truth 0.066 at a corner of 0.10): rising ever faster with the corner, the interval
     # reaches further up than down, and further up than the symmetric one of the same corner share
     at_nodes = [0.028, 0.019, 0.053]
     share = _share(at_nodes)

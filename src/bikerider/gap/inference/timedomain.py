@@ -1053,8 +1053,8 @@ class CornerShare:
         the central 95 % of the mixture over the corner's log-uniform prior of normal distributions
         centred there (each scaled so its own 95 % half-width is ``half_width``).  The fit's own corner
         lies at the middle of the range, and the values are seldom linear in ``log eps``: on 3-s
-        roll-rate decays ``T_coulomb`` rises ever faster with the corner (0.018, 0.028, 0.053 N m at
-        0.025, 0.05, 0.10 rad/s, steer_coulomb seed 1000, truth 0.066 at 0.10), so a symmetric interval
+        roll-rate decays ``T_coulomb`` rises ever faster with the corner (0.018, 0.028, 0.052, 0.066 N m at
+        0.02, 0.05, 0.10, 0.125 rad/s; steer_coulomb seed 1000, truth 0.066 at 0.10), so a symmetric interval
         about the middle corner's fit (the covariance's mean square of the moves) left the soft corners'
         truths above it: 20 of the 21 misses of docs/gap_validation.md item 17 lay low.
         """
