@@ -211,5 +211,5 @@ def test_the_interval_spans_the_values_over_the_corners_whole_range():
     assert share.interval(0, 0.02, 0.0, 1.0)[1] > high
 
 
-def test_a_corner_whose_fit_failed_leaves_the_symmetric_interval():
+def test_a_corner_whose_refit_has_no_value_leaves_the_fits_own_interval():
     assert _share([0.05, np.nan, 0.06]).interval(0, 0.01, 0.0, 1.0) == pytest.approx((0.04, 0.06))

@@ -1056,7 +1056,8 @@ class CornerShare:
         roll-rate decays ``T_coulomb`` rises ever faster with the corner (0.018, 0.028, 0.052, 0.066 N m at
         0.02, 0.05, 0.10, 0.125 rad/s; steer_coulomb seed 1000, truth 0.066 at 0.10), so a symmetric interval
         about the middle corner's fit (the covariance's mean square of the moves) left the soft corners'
-        truths above it: 20 of the 21 misses of docs/gap_validation.md item 17 lay low.
+        truths above it: 20 of the 21 misses of docs/gap_validation.md item 17 lay low.  Where a corner's
+        refit has no value, the interval is the fit's own corner's, ``+/- half_width``.
         """
         nodes = np.asarray(CORNER_NODES, float)
         at_nodes = np.array([c[2][k] for c in self.corners], float)
