@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from matplotlib.ticker import NullFormatter, ScalarFormatter
+from matplotlib.ticker import FormatStrFormatter, LogLocator, NullFormatter
 from scipy.optimize import brentq
 from scipy.special import ndtri
 
@@ -217,13 +217,17 @@ def _separation_panel(ax, items, plan, colours):
         _mark_next(ax, plan, items, lambda item: float(worst[index[id(item["experiment"])]]))
     ax.axhline(D_95, color="0.4", ls="--", lw=1, label=f"d for 95 % from one run ({D_95:.1f})")
     ax.set_yscale("log")
-    ax.yaxis.set_major_formatter(ScalarFormatter())
-    ax.yaxis.set_minor_formatter(ScalarFormatter())
+    # labels at 1, 1.5, 2, 3, 5 and 7 of every decade the separations span (a log axis labels only its decades)
+    ax.yaxis.set_major_locator(LogLocator(base=10.0, subs=(1.0, 1.5, 2.0, 3.0, 5.0, 7.0)))
+    ax.yaxis.set_major_formatter(FormatStrFormatter("%g"))
+    ax.yaxis.set_minor_formatter(NullFormatter())
     ax.set_xlabel("speed [m/s]")
     ax.set_ylabel("separation d of one multisine run")
     ax.set_title("multisines: one run's separation, smallest over the pairs", fontsize=9)
     ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=7)
+    # beside the panel: the separations fill it from the 95 % line up, and the next run's star may sit
+    # anywhere in it (at its speed, often below every law's best)
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
 
 
 def _mark_next(ax, plan, items, value) -> None:
