@@ -88,6 +88,10 @@ RECORDS = Path(__file__).with_name("gap_next_loop_records.jsonl")
 """The records mode (``records``): the friction pairs, the tie's data records, pushes among the experiments."""
 RECORDS_PUSH = Path(__file__).with_name("gap_next_loop_records_push.jsonl")
 """The records mode's ties again, the truth's runs at every push against the rivals' predictions (``push-check``)."""
+RECORDS_BEFORE_FRICTION = Path(__file__).with_name("gap_next_loop_records_before_friction.jsonl")
+"""The records mode as it was run on the code of commit 0ec9c83, before issue 21 changed the friction candidate's fits
+(each record's initial state under friction by Gauss-Newton steps from several starts, the slopes with the states
+held at their fits, the intervals over the friction corner's range): the study before it was run again."""
 RECORDS_BEFORE = Path(__file__).with_name("gap_next_loop_records_before_kick.jsonl")
 """The records mode as it was run before the plan spanned the kick's initial steer rate."""
 RECORDS_PUSH_BEFORE = Path(__file__).with_name("gap_next_loop_records_push_before_kick.jsonl")
@@ -1441,7 +1445,8 @@ def _push_lines() -> list[str]:
     n_before, rows_before, moves_before, odds_before = _push_stats(RECORDS_PUSH_BEFORE, checked)
     pushes = sorted({r[0] for r in rows} | {r[0] for r in rows_before})
     out = [
-        f"How the truth's decay moves with the push ({n_checked} of the ties again, `push-check`: at up to four "
+        f"How the truth's decay moves with the push ({n_checked} of the ties of the run before the friction fits "
+        f"changed, `{RECORDS_BEFORE_FRICTION.name}`, again, on the code of their time, `push-check`: at up to four "
         "speeds and laws where the plan holds a decay at every push, the truth's first run at each push, as the "
         "loop runs it, against the rivals' predictions, each with its spread over the kick's initial steer rate; "
         "the friction truths' candidate `steer_friction` first). z: the truth's run minus the rival's prediction "
@@ -1568,17 +1573,19 @@ def _push_lines() -> list[str]:
         "`..._corner_first90.jsonl`) the candidate's z RMS of the frequency at half the push fell from 4.20 to "
         "2.74, and the runs predicted at 0.95 or more that reached 19:1 rose from 0.67 to 0.82; the loop on them "
         "(`gap_next_loop_records_main_38ties.jsonl`, `..._corner_38ties.jsonl`): plan 26 resolved / 10 wrong "
-        "then, 28 / 8 now, the even spread 30 / 2 both. The tables above are the study before it."
+        "then, 28 / 8 now, the even spread 30 / 2 both. The push checks above are from before it; the records mode's tables, "
+        "run again on the code of 2026-11-29, carry it."
     )
     out += _seed_lines(9311)
     out.append("")
     return out
 
 
-def _before_lines(stored: list[dict], names: list[str], n_max: int) -> list[str]:
-    """The same seeds as the plan ran them before it spanned the kick's steer rate (:data:`RECORDS_BEFORE`)."""
+def _before_lines(stored: list[dict], names: list[str], n_max: int, path: Path, what: str, why: str) -> list[str]:
+    """The same seeds as an earlier run of the records mode (``path``) ran them: ``what`` came after it, ``why``
+    says what else differs."""
     seeds = {(c["scenario"], c["seed"]) for c in stored}
-    before = [c for c in _stored(RECORDS_BEFORE) if (c["scenario"], c["seed"]) in seeds]
+    before = [c for c in _stored(path) if (c["scenario"], c["seed"]) in seeds]
     ties_before = [c for c in before if c.get("strategies")]
     ties_now = [c for c in stored if c.get("strategies")]
     if not ties_before:
@@ -1586,12 +1593,8 @@ def _before_lines(stored: list[dict], names: list[str], n_max: int) -> list[str]
     now, then = _merit(ties_now, names), _merit(ties_before, names)
     both = {(c["scenario"], c["seed"]) for c in ties_now} & {(c["scenario"], c["seed"]) for c in ties_before}
     out = [
-        f"Before the plan spanned the kick's steer rate (`{RECORDS_BEFORE.name}`, the same {len(before)} cases: "
-        f"{len(ties_before)} ties then, {len(ties_now)} now, {len(both)} both; a tie is the diagnosis's, which "
-        "the change does not touch, so the ties differ only where a plan failed), now / before. The stored results "
-        "came from the code of commit 0ec9c83; main changed since in other ways too (the friction fit's covariance, "
-        "the linear fits' search for other minima), so not every difference is the kick's: on seed 9311 today's "
-        "code without the kick's span plans 36 decays where the stored run planned 13.",
+        f"Before {what} (`{path.name}`, the same {len(before)} cases: {len(ties_before)} ties then, "
+        f"{len(ties_now)} now, {len(both)} both), now / before. {why}",
         "",
         "| strategy | ties | resolved | wrong | undecided | unbreakable | runs needed: median | 90th percentile | "
         "runs lost / spent |",
@@ -1748,11 +1751,13 @@ def _records_lines(n_max: int) -> list[str]:
         "(`validation.cases.measure` with records; Coulomb friction simulated in time by the truth's own simulator,",
         "nine runs near one speed in three sessions, `RECORD_NARROW`: the steer friction fitted in time has",
         "standard errors from the jackknife over three or more sessions, which sees the scatter between sessions;",
-        "this study was run when two sessions gave it none, and the fallback for fewer than three, the fit's own",
-        "covariance, does not see that scatter). The study ran before the friction fit's chord steps on the",
-        "records' initial states were safeguarded (`gap.inference.timedomain.STATE_STEPS`, issue 21), when",
-        "the friction candidate's fits split Coulomb friction into too little Coulomb and some viscous part where",
-        "the friction holds the steer; it was not run again. The friction truths' candidate",
+        "the fallback for fewer than three, the fit's own covariance, does not see that scatter; the first run of",
+        "this study was made when two sessions gave none). It was run again on the code of 2026-11-29, after issue 21",
+        "changed the friction candidate's fits (each record's initial state under friction by Gauss-Newton steps",
+        "from several starts, the slopes with the states held at their fits, intervals over the friction corner's",
+        "range: part 4, items 16-18); the run before, whose friction fits split Coulomb friction into too little",
+        "Coulomb and some viscous part where the friction holds the steer, is compared below. The friction truths'",
+        "candidate",
         "is `steer_friction` (viscous and Coulomb, fitted in time), nonlinear, so the plan (`NextExperiment`,",
         "roll-rate decays) plans each decay at "
         + ", ".join(f"{x:g}" for x in PUSHES)
@@ -1804,7 +1809,26 @@ def _records_lines(n_max: int) -> list[str]:
         f"{np.mean([b for _, b in both]) if both else math.nan:.2f}); fewer runs for the plan in "
         f"{sum(a < b for a, b in both)}, more in {sum(a > b for a, b in both)}.",
         "",
-        *_before_lines(stored, names, n_max),
+        *_before_lines(
+            stored,
+            names,
+            n_max,
+            RECORDS_BEFORE_FRICTION,
+            "issue 21 changed the friction candidate's fits",
+            "A tie is the diagnosis's: with the friction fits it changes too (the friction candidate ranks and "
+            "sizes otherwise), so the ties differ beyond where a plan failed.",
+        ),
+        *_before_lines(
+            stored,
+            names,
+            n_max,
+            RECORDS_BEFORE,
+            "the plan spanned the kick's steer rate",
+            "That run came from an earlier commit than 0ec9c83, and main has changed since in other ways too (the "
+            "friction fit's covariance, the linear fits' search for other minima, and the friction fits above), so "
+            "not every difference is the kick's: on seed 9311 the code of that time without the kick's span planned 36 "
+            "decays where the stored run planned 13.",
+        ),
         "| pair | cases | ties | plan resolved | plan wrong | even resolved | even wrong | first run differs from the table loop's |",
         "|---|---|---|---|---|---|---|---|",
     ]
