@@ -94,8 +94,14 @@ def test_the_report_shows_the_records_and_one_curve_per_law(sbw, tmp_path):
     pages = sorted(p.name for p in (tmp_path / "rep").glob("records*.png"))
     assert pages == ["records.png", "records_2.png", "records_3.png"]
     assert all(f"]({name})" in text for name in pages)
-    labels = plot_eigenvalues(diagnosis).axes[0].get_legend_handles_labels()[1]
+    fig = plot_eigenvalues(diagnosis)
+    labels = fig.axes[0].get_legend_handles_labels()[1]
     assert [lab for lab in labels if "nominal model" in lab] == ["sil: nominal model"]
+    # the legend lies below both panels, clear of every measured point (inside a panel it hid the 1.5 m/s decays)
+    (legend,) = fig.legends
+    assert fig.axes[0].get_legend() is None
+    top = legend.get_window_extent().y1
+    assert all(top < ax.get_window_extent().y0 for ax in fig.axes)
 
 
 @pytest.mark.slow

@@ -195,13 +195,18 @@ def plot_eigenvalues(diagnosis):
     for ax in axes:
         ax.set_xlabel("speed [m/s]")
         ax.grid(alpha=0.3)
-    axes[0].legend(fontsize=7, loc="best")
     verdict = f"verdict {diagnosis.verdict}; selected: {'+'.join(diagnosis.selected) or 'nothing'}"
     fig.suptitle(
         f"Weave eigenvalue against speed, measured (points, 1 sigma) and predicted per control law ({verdict})",
         fontsize=9,
     )
-    fig.tight_layout()
+    # the legend below both panels: inside one (loc="best") it hid measured points wherever they filled the panel
+    # (the steer-by-wire decays at 1.5 m/s)
+    handles, labels = axes[0].get_legend_handles_labels()
+    legend = fig.legend(handles, labels, loc="lower center", ncol=2, fontsize=7, frameon=False)
+    fig.canvas.draw()
+    below = legend.get_window_extent().height / fig.bbox.height
+    fig.tight_layout(rect=(0.0, below + 0.01, 1.0, 1.0))
     return fig
 
 
