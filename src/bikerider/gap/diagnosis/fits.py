@@ -264,7 +264,6 @@ class Fits:
             values, cost, n, success = fit.values, fit.cost, fit.n_samples, fit.success
         stderr = np.full(values.size, np.inf)
         covariance = spread = corners = known = None
-        quantile = np.full(values.size, 1.96)
         if mask is None and jackknife:  # the friction's corner, which no fold decides either
             corners = self.corner_share(effects, values)
         if mask is None and jackknife and len(self.folds) >= 3:  # jackknife over the held-out folds' fits
@@ -278,7 +277,6 @@ class Fits:
             known = self.parameter_covariance(layout, values)
             covariance = spread + known + corners.covariance
             stderr = np.sqrt(np.diag(covariance))
-            quantile = np.array([interval_quantile(row, covariance, spread, g) for row in np.eye(values.size)])
             data_share, data_dof = spread, g
         elif mask is None and jackknife:  # too few folds for a jackknife: the fit's own Gauss-Newton covariance
             records = [self.records[k].record for k in self.record_indices(None)]
@@ -288,12 +286,8 @@ class Fits:
             stderr = np.sqrt(np.clip(np.diag(covariance), 0, None))
             # the data's share rests on a scale estimated from own.dof residuals: interval_quantile's
             # Welch-Satterthwaite sum with that many degrees of freedom (its folds less one)
-            quantile = np.array(
-                [interval_quantile(row, covariance, own.covariance, own.dof + 1) for row in np.eye(values.size)]
-            )
             data_share, data_dof = own.covariance, own.dof + 1
-        ci_low = np.clip(values - quantile * stderr, lower, upper)
-        ci_high = np.clip(values + quantile * stderr, lower, upper)
+        ci_low, ci_high = lower.astype(float), upper.astype(float)  # a held-out fold's fit: no interval
         if known is not None:
             # over the corner's whole range: each corner's fit within the data's and the parameters' shares
             # (Student's t of their Welch-Satterthwaite sum), mixed over the corner (CornerShare.interval)
