@@ -204,8 +204,7 @@ def plot_eigenvalues(diagnosis):
     # (the steer-by-wire decays at 1.5 m/s)
     handles, labels = axes[0].get_legend_handles_labels()
     legend = fig.legend(handles, labels, loc="lower center", ncol=2, fontsize=7, frameon=False)
-    fig.canvas.draw()
-    below = legend.get_window_extent().height / fig.bbox.height
+    below = legend.get_window_extent().height / fig.bbox.height  # measured by the figure's renderer, no drawing
     fig.tight_layout(rect=(0.0, below + 0.01, 1.0, 1.0))
     return fig
 
