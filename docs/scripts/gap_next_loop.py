@@ -152,10 +152,14 @@ def records(args) -> int:
 
     done = {(c["scenario"], c["seed"]) for c in _stored(RECORDS)}
     ties = sum(bool(c.get("strategies")) for c in _stored(RECORDS))
+    only = None
+    if args.ties_of:  # the cases that tied in a stored run (the diagnosis unchanged, the plan changed)
+        only = {(c["scenario"], c["seed"]) for c in _stored(Path(args.ties_of)) if c.get("strategies")}
     jobs = []
     for i in range(args.attempts):
         k = i % len(L.RECORD_SCENARIOS)
-        if (L.RECORD_SCENARIOS[k].label, FIRST_RECORD_SEED + i) not in done:
+        case = (L.RECORD_SCENARIOS[k].label, FIRST_RECORD_SEED + i)
+        if case not in done and (only is None or case in only):
             jobs.append((k, FIRST_RECORD_SEED + i))
     return _run_pool(
         _one_record,
@@ -2318,6 +2322,7 @@ def main() -> int:
     rc.add_argument("--attempts", type=int, default=300, help="cases to try at most (the friction pairs in turn)")
     rc.add_argument("--workers", type=int, default=1)
     rc.add_argument("--until", help="stop at this UTC time, HH:MM")
+    rc.add_argument("--ties-of", help="only the cases that tied in this stored run (JSON lines)")
     pc = sub.add_parser("push-check", help="the records ties again: the truth's runs at every push against the rivals'")
     pc.add_argument("--max", type=int, default=200, help="ties to check at most")
     pc.add_argument("--until", help="stop at this UTC time, HH:MM")

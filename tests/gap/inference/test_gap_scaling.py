@@ -99,6 +99,6 @@ def test_the_scan_accumulated_in_blocks_is_the_scan_at_once(monkeypatch):
     t = 0.3 + np.arange(1500) / 100.0
     y = 0.3 * np.exp(-0.8 * (t - 0.3)) * np.sin(4.5 * t) + 0.05 * np.exp(0.05 * t)
     y = y + 0.01 * np.random.default_rng(3).standard_normal(t.size)
-    whole = extraction._scan_start(t, y)
+    whole = extraction.scan_start(t, y)
     monkeypatch.setattr(extraction, "SCAN_CHUNK", 97)
-    np.testing.assert_allclose(extraction._scan_start(t, y), whole, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(extraction.scan_start(t, y), whole, rtol=1e-9, atol=1e-12)

@@ -76,8 +76,11 @@ def test_a_friction_rivals_prediction_widens_with_the_unknown_kick_and_a_linear_
     with monkeypatch.context() as m:  # the same data, the template's steer rate taken as known (the old plan)
         m.setattr(ranking, "kick_steer_rates", lambda used: ((0.0,), (1.0,)))
         known = _plan(roll_rate_only)
-    assert known.kick_rates == (0.0,) and np.all(known.kick_cov == 0)
     friction, slip = (spanned.rivals.index(next(r for r in spanned.rivals if r.name == n)) for n in RIVALS)
+    # with the kick known a linear rival has no per-run spread; a friction rival keeps that of the record fit's
+    # valleys alone (RecordSimulator.time_domain_runs)
+    assert known.kick_rates == (0.0,) and np.all(known.kick_cov[slip] == 0)
+    assert np.all(np.linalg.eigvalsh(known.kick_cov[friction]) >= -1e-12)
     assert spanned.rivals[friction].nonlinear and not spanned.rivals[slip].nonlinear
     common = [e for e in spanned.points if e in known.points]
     assert {e.push for e in common} == set(ranking.PUSHES)
@@ -125,7 +128,7 @@ def test_a_friction_rivals_prediction_widens_with_the_unknown_kick_and_a_linear_
     # and the friction rival's variance at a push grows against the plan that took the steer rate as known (the
     # kick's part alone: each plan's spread over its friction law's corner, form_cov, left out of both)
     own_new = spanned.own_cov[friction, m_new] - spanned.form_cov[friction, m_new] + spanned.kick_cov[friction, m_new]
-    own_old = known.own_cov[friction, m_old] - known.form_cov[friction, m_old]
+    own_old = known.own_cov[friction, m_old] - known.form_cov[friction, m_old] + known.kick_cov[friction, m_old]
     assert np.median(own_new[:, 1, 1] / own_old[:, 1, 1]) > 1.0
 
 

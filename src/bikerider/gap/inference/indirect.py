@@ -35,12 +35,19 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.special import ndtr
 
 from bikerider.benchmark.simulation import expm
 from bikerider.errors import FitError
 from bikerider.gap.candidates.effect_model import EffectModel
-from bikerider.gap.inference.timedomain import Batch, friction_states, systems
-from bikerider.gap.measured.extraction import EXTRA_MODE_RANGE, MIN_CYCLES, nyquist_frequency
+from bikerider.gap.inference.timedomain import Batch, friction_states, simulate_friction, systems
+from bikerider.gap.measured.extraction import (
+    EXTRA_MODE_RANGE,
+    MIN_CYCLES,
+    SCAN_VALLEYS,
+    nyquist_frequency,
+    scan_valleys,
+)
 from bikerider.gap.measured.records import RecordFit
 from bikerider.gap.parallel import MIN_RECORDS, map_forked, workers
 
@@ -53,6 +60,9 @@ MAX_ELEMENTS = 3_000_000
 MAX_RELATIVE_BIAS = 0.2
 """Largest extraction bias under the nominal model, as a fraction of its weave eigenvalue, for which a
 record's eigenvalue is compared with models at all (:func:`comparable`)."""
+SAME_VALLEY = 1e-3
+"""Two ends of the record fit from different starts are one valley when their eigenvalues differ by less than
+this share of their size (:func:`extract_runs`)."""
 MAX_KNOWN = 4096
 """Most models whose apparent eigenvalues a :class:`RecordSimulator` keeps (the oldest dropped first)."""
 LM_ITERATIONS = 60
@@ -339,8 +349,12 @@ class RecordSimulator:
         geometry,
         starts: list[dict] | None = None,
         known: dict[bytes, np.ndarray] | None = None,
+        kicks: np.ndarray | None = None,
     ):
         self.fits = list(fits)
+        self.kicks = None if kicks is None else np.asarray(kicks, float).reshape(len(self.fits), 4)
+        """The records' known initial states ``(R, 4)``: roll and steer angle and rate (a plan's templates, each
+        the nominal model's response from a kick), or ``None`` (measured records: fitted under each model)."""
         self.values = dict(values)
         self.geometry = geometry
         records = [f.record for f in self.fits]
@@ -370,6 +384,7 @@ class RecordSimulator:
             self.geometry,
             [self.starts[k] for k in positions],
             {key: value[positions] for key, value in self.known.items()},
+            None if self.kicks is None else self.kicks[positions],
         )
 
     def settle(self) -> np.ndarray:
@@ -518,19 +533,58 @@ class RecordSimulator:
         the fits' own :data:`~bikerider.gap.inference.timedomain.SMOOTHING` when not given), the extraction is
         :func:`extract`, as for every linear model.
         """
-
         theta = np.atleast_2d(np.asarray(theta, dtype=float))
         out = np.full((theta.shape[0], len(self.fits)), np.nan + 1j * np.nan)
-        for batch in self.batches:
-            records = [self.fits[k].record for k in batch.index]
-            state = [m for m, s in enumerate(batch.signals) if np.any(batch.weight[:, m] > 0)]
-            y = {batch.signals[m]: np.where(batch.mask, batch.y[..., m], np.nan) for m in state}
-            weight = {batch.signals[m]: batch.weight[:, m] for m in state}
-            A, b, outputs, T = systems(self.values, self.geometry, records, layout, theta)
-            states, _ = friction_states(Batch(records, batch.dt, batch.length, y, weight), A, b, outputs, T, smoothing)
-            sim = states[..., [outputs[OBSERVED[s]] for s in batch.signals]]
+        for batch, sim in self._friction_responses(layout, theta, smoothing):
             out[:, batch.index] = extract(batch, sim)[0]
         return out
+
+    def time_domain_runs(
+        self, layout, theta, noise: dict[str, float], smoothing: float | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """What the record fit finds in new records of a time-domain candidate, each signal with sample noise
+        ``noise[signal]``: the mean ``(P, R)`` and the per-run covariance ``(P, R, 2, 2)`` over the fit's
+        valleys (:func:`extract_runs`).
+
+        A new record is the candidate's own response from the kick that starts it: with :attr:`kicks` (a plan's
+        templates) the candidate's response from each template's own kick, which is what a run would record
+        were the candidate true; else (measured records) from the initial state fitted under it, as
+        :meth:`apparent_time_domain`.  The kick moves continuously with the speed, the law and the push; a state
+        fitted under friction to the nominal model's template has more than one valley and jumped."""
+        theta = np.atleast_2d(np.asarray(theta, dtype=float))
+        mean = np.full((theta.shape[0], len(self.fits)), np.nan + 1j * np.nan)
+        cov = np.full((theta.shape[0], len(self.fits), 2, 2), np.nan)
+        for batch, sim in self._friction_responses(layout, theta, smoothing, kicked=self.kicks is not None):
+            s = np.array([float(noise.get(name, 0.0)) for name in batch.signals])
+            mean[:, batch.index], cov[:, batch.index] = extract_runs(batch, sim, s)
+        return mean, cov
+
+    def _friction_responses(self, layout, theta: np.ndarray, smoothing: float | None, kicked: bool = False):
+        """Each batch and its records' simulated signals ``(P, R, N, S)`` under a time-domain candidate, from
+        each record's initial state fitted under it, or with ``kicked`` from :attr:`kicks`."""
+        for batch in self.batches:
+            records = [self.fits[k].record for k in batch.index]
+            A, b, outputs, T = systems(self.values, self.geometry, records, layout, theta)
+            if kicked:
+                x0 = np.zeros(A.shape[:-1])  # (P, R, n): the kick's four states, the others (if any) at rest
+                x0[..., list(outputs[:4])] = self.kicks[batch.index]
+                states = simulate_friction(
+                    A,
+                    b,
+                    x0,
+                    np.asarray(T, float).reshape(A.shape[:-3] + (1,)),
+                    batch.dt,
+                    batch.N,
+                    outputs[3],
+                    smoothing,
+                )
+            else:
+                state = [m for m, s in enumerate(batch.signals) if np.any(batch.weight[:, m] > 0)]
+                y = {batch.signals[m]: np.where(batch.mask, batch.y[..., m], np.nan) for m in state}
+                weight = {batch.signals[m]: batch.weight[:, m] for m in state}
+                batched = Batch(records, batch.dt, batch.length, y, weight)
+                states, _ = friction_states(batched, A, b, outputs, T, smoothing)
+            yield batch, states[..., [outputs[OBSERVED[s]] for s in batch.signals]]
 
 
 def _values_key(values: dict, p: int) -> bytes:
@@ -668,6 +722,102 @@ def extract(batch: RecordBatch, sim: np.ndarray, keep: bool = False):
             for m, j in enumerate(chosen):
                 betas[j] = beta[:, m]
     return out, (betas if keep else None)
+
+
+def extract_runs(batch: RecordBatch, sim: np.ndarray, noise: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """What the record fit finds in new, noisy records of the simulated signals ``sim (P, R, N, S)``: the mean
+    eigenvalue ``(P, R)`` and its per-run covariance ``(P, R, 2, 2)`` (real and imaginary part), for signals
+    of sample noise ``noise (S,)``.
+
+    The two-mode fit of a response that is no sum of modes (Coulomb friction) can have more than one valley,
+    and a refit from the template's own fit alone (:func:`extract`) ends in the one nearest it, which jumps
+    over speed where another grows deeper.  A record's own fit takes the deepest it finds from its grid scan;
+    so each signal is refitted from the batch's start and from the valleys of the scan
+    (:func:`~bikerider.gap.measured.extraction.scan_valleys`), and the distinct ends are its valleys (a fit
+    that finds no weave is none).  Noise decides between them: to first order in the noise ``e`` the residuals
+    of valleys ``1`` (the deepest) and ``i`` differ by ``c_i - c_1 + 2 e.(m_1 - m_i)``, ``m`` the fitted curves,
+    so ``i`` is the deeper with probability ``w_i = Phi((c_1 - c_i) / (2 s |m_1 - m_i|))`` (``w_1 = 1``).  The
+    valleys weighed by ``w`` (normalised) give the mean and the per-run covariance: continuous where valleys
+    trade places (two of equal depth weigh alike from either side).  Signals combine with the records'
+    weights, as in :func:`extract`, their valleys taken as independent.
+    """
+    P, R = sim.shape[:2]
+    tau = np.arange(batch.N) * batch.dt
+    mean = np.zeros((P, R), complex)
+    cov = np.zeros((P, R, 2, 2))
+    for kind in ("two-mode", "plain"):
+        chosen = [j for j, it in enumerate(batch.items) if it.kind == kind]
+        if not chosen:
+            continue
+        items = [batch.items[j] for j in chosen]
+        rec = np.array([it.record for it in items])
+        sig = np.array([it.signal for it in items])
+        y = np.moveaxis(sim[:, rec, :, sig], 0, 1).reshape(P * len(items), batch.N)
+        mask = np.tile(batch.mask[rec], (P, 1))
+        start = np.tile(np.array([it.start for it in items]), (P, 1))
+        starts = np.stack([start] + _valley_starts(kind, start, y, mask, tau))  # (M, B, k)
+        M, B = starts.shape[:2]
+        Y, W = np.tile(y, (M, 1)), np.tile(mask, (M, 1))
+        with np.errstate(all="ignore"):
+            beta, cost = levenberg_marquardt(kind, starts.reshape(M * B, -1), Y, W, tau)
+            eig = eigenvalue_of(beta)
+            found = np.isfinite(eig) & np.isfinite(cost)
+            nl = list(NONLINEAR[kind])
+            theta = np.where(found[:, None], beta[:, nl], np.tile(start[:, nl], (M, 1)))  # finite where no weave
+            _, r, _, _ = _project(kind, theta, Y, W.astype(float), tau, jacobian=False)
+        order = np.argsort(np.where(found, cost, np.inf).reshape(M, B), axis=0, kind="stable")  # the deepest first
+        rows = np.arange(B)
+        eig, cost, r, found = eig.reshape(M, B), cost.reshape(M, B), r.reshape(M, B, -1), found.reshape(M, B)
+        s = np.tile(np.asarray(noise, float)[sig], P)
+        deepest = order[0]
+        weights = np.zeros((M, B))
+        valleys = np.zeros((M, B), complex)
+        kept: list[np.ndarray] = []
+        for a in range(M):
+            here = order[a]
+            lam = eig[here, rows]
+            new = found[here, rows].copy()
+            for other in kept:  # the same valley from another start is one (their ends differ by the tolerance)
+                new &= ~(np.abs(lam - other) <= SAME_VALLEY * np.abs(other))
+            kept.append(np.where(new, lam, np.nan))
+            if a == 0:
+                w = np.where(new, 1.0, 0.0)
+            else:
+                gap = np.sqrt(np.sum((r[deepest, rows] - r[here, rows]) ** 2, axis=1))  # |m_1 - m_i|: they share y
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    z = (cost[deepest, rows] - cost[here, rows]) / (2 * s * gap)
+                w = np.where(new & (gap > 0) & np.isfinite(z), ndtr(np.nan_to_num(z, neginf=-np.inf)), 0.0)
+            weights[a], valleys[a] = w, np.where(new, lam, 0)
+        total = weights.sum(axis=0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            weights = weights / total
+        item_mean = np.where(total > 0, np.sum(weights * valleys, axis=0), np.nan + 1j * np.nan)
+        dev = valleys - item_mean
+        d = np.stack([dev.real, dev.imag], axis=-1)  # (M, B, 2)
+        item_cov = np.einsum("mb,mbi,mbj->bij", np.where(weights > 0, weights, 0.0), d, d)
+        item_cov = np.where((total > 0)[:, None, None], item_cov, np.nan)
+        weight = np.array([it.weight for it in items])
+        wr = np.stack([weight.real, weight.imag], axis=-1)  # (I, 2)
+        item_mean = item_mean.reshape(P, len(items))
+        np.add.at(mean, (slice(None), rec), item_mean.real * weight.real + 1j * item_mean.imag * weight.imag)
+        np.add.at(cov, (slice(None), rec), item_cov.reshape(P, len(items), 2, 2) * wr[:, :, None] * wr[:, None, :])
+    return mean, cov
+
+
+def _valley_starts(kind: str, start: np.ndarray, y: np.ndarray, mask: np.ndarray, tau: np.ndarray) -> list[np.ndarray]:
+    """Copies of ``start``, one per start of the record fit's grid scan of each row's own signal ``y``
+    (:func:`~bikerider.gap.measured.extraction.scan_valleys`): its frequency, decay and (two-mode) extra mode,
+    the amplitudes following by projection in the fit; rows without two finite samples keep ``start``."""
+    out = [start.copy() for _ in range(SCAN_VALLEYS)]
+    for j in range(y.shape[0]):
+        seen = mask[j]
+        if np.count_nonzero(seen) < 2 or not np.all(np.isfinite(y[j, seen])):
+            continue
+        for m, grid in enumerate(scan_valleys(tau[seen], y[j, seen])):
+            out[m][j, 0], out[m][j, 1] = grid[0], grid[1]
+            if kind == "two-mode":
+                out[m][j, 6] = grid[6]
+    return out
 
 
 @dataclass

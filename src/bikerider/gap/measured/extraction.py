@@ -125,19 +125,65 @@ clearly determined to be preferred."""
 
 
 SCAN_CHUNK = 2048
-"""Samples per block when :func:`_scan_start` accumulates its normal equations (bounds its memory)."""
+"""Samples per block when :func:`scan_grid` accumulates its normal equations (bounds its memory)."""
 
 
-def _scan_start(t: np.ndarray, y: np.ndarray) -> np.ndarray:
+def scan_start(t: np.ndarray, y: np.ndarray) -> np.ndarray:
     """Start ``[omega, sigma, A, B, offset, C, lambda_c]`` of the two-mode fit from a grid scan.
 
     For each (frequency, decay, extra-mode) grid point the model is linear in its amplitudes; the
     point with the smallest residual is the start.  Unlike the FFT peak this is not taken in by
-    the slow capsize mode's leakage.  The normal equations of every grid point are sums over the
-    samples of products of the three one-dimensional families of basis functions (oscillation,
-    decay, extra mode); they are accumulated over blocks of :data:`SCAN_CHUNK` samples, so the
-    memory stays bounded however long the record (the grid's basis functions are never stored
-    for every sample at once).
+    the slow capsize mode's leakage (:func:`scan_grid`).
+    """
+    rss, coef = scan_grid(t, y)
+    k = int(np.argmin(rss))
+    return _grid_point(k, coef[k])
+
+
+SCAN_VALLEYS = 4
+"""Starts :func:`scan_valleys` gives."""
+
+
+def scan_valleys(t: np.ndarray, y: np.ndarray) -> list[np.ndarray]:
+    """:data:`SCAN_VALLEYS` starts of the two-mode fit in the valleys of its grid scan (grid points as
+    :func:`scan_start`'s): the best with a decaying extra mode and the best with a growing one (where the signal
+    is no sum of modes, Coulomb friction, the fit can settle with its extra mode either way), then the best of
+    the other frequencies where the scan's residual is lower than at both neighbouring ones, the lowest first
+    (a signal holding two oscillations has a valley at each); the deepest repeated where there are fewer."""
+    rss, coef = scan_grid(t, y)
+    shape = (SCAN_OMEGAS.size, SCAN_DECAYS.size, len(SCAN_MODES))
+    modes = np.broadcast_to(np.asarray(SCAN_MODES), shape).ravel()
+    picks = [int(np.flatnonzero(side)[np.argmin(rss[side])]) for side in (modes < 0, modes > 0)]
+    per = rss.reshape(shape[0], -1)
+    best = np.argmin(per, axis=1)
+    profile = per[np.arange(shape[0]), best]
+    padded = np.concatenate([[np.inf], profile, [np.inf]])
+    low = np.flatnonzero((padded[1:-1] < padded[:-2]) & (padded[1:-1] <= padded[2:]))
+    taken = {np.unravel_index(k, shape)[0] for k in picks}
+    for w in low[np.argsort(profile[low], kind="stable")]:
+        if len(picks) == SCAN_VALLEYS:
+            break
+        if w not in taken:
+            picks.append(int(w * per.shape[1] + best[w]))
+    picks += [picks[0]] * (SCAN_VALLEYS - len(picks))
+    return [_grid_point(k, coef[k]) for k in picks]
+
+
+def _grid_point(k: int, coef: np.ndarray) -> np.ndarray:
+    w, d, l_ = np.unravel_index(k, (SCAN_OMEGAS.size, SCAN_DECAYS.size, len(SCAN_MODES)))
+    a, b, offset, c = coef
+    return np.array([SCAN_OMEGAS[w], SCAN_DECAYS[d], a, b, offset, c, SCAN_MODES[l_]])
+
+
+def scan_grid(t: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The grid scan of the two-mode model: its residual sum of squares at every (frequency, decay, extra-mode)
+    point of :data:`SCAN_OMEGAS`, :data:`SCAN_DECAYS`, :data:`SCAN_MODES` (flattened in that order) and the
+    amplitudes ``(A, B, offset, C)`` solved there.
+
+    The normal equations of every grid point are sums over the samples of products of the three
+    one-dimensional families of basis functions (oscillation, decay, extra mode); they are accumulated over
+    blocks of :data:`SCAN_CHUNK` samples, so the memory stays bounded however long the record (the grid's
+    basis functions are never stored for every sample at once).
     """
     W, D, L = SCAN_OMEGAS.size, SCAN_DECAYS.size, len(SCAN_MODES)
     modes = np.asarray(SCAN_MODES)
@@ -181,10 +227,7 @@ def _scan_start(t: np.ndarray, y: np.ndarray) -> np.ndarray:
     rhs = rhs.reshape(-1, 4)
     coef = np.linalg.solve(gram, rhs[..., None])[..., 0]
     rss = yy - np.einsum("gk,gk->g", coef, rhs)  # residual of the least-squares solution
-    k = int(np.argmin(rss))
-    w, d, l_ = np.unravel_index(k, (W, D, L))
-    a, b, offset, c = coef[k]
-    return np.array([SCAN_OMEGAS[w], SCAN_DECAYS[d], a, b, offset, c, SCAN_MODES[l_]])
+    return rss, coef
 
 
 def _correlation_inflation(residual: np.ndarray) -> float:
@@ -316,7 +359,7 @@ def _weave_eigenvalue(time, signal, min_cycles: float) -> WeaveEstimate:
         raise FitError(f"too few samples to fit a damped oscillation: {t.size}, need at least {MIN_SAMPLES}")
     if np.any(np.diff(t) <= 0):
         raise FitError("time is not strictly increasing")
-    start = _scan_start(t, y)
+    start = scan_start(t, y)
     base, refusal = None, None
     try:
         base = fit_damped_oscillation(t, y, drift=True, guess_frequency=float(start[0]))

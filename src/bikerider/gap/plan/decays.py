@@ -113,9 +113,9 @@ def template_records(
     laws: dict[str, ControlLaw],
     noise: dict[str, float],
     steer_rates: list[float] | None = None,
-) -> tuple[list[Record], list[dict[str, np.ndarray]]]:
-    """Each experiment's template decay as a record (the nominal model's response with the signals' noise)
-    and its noise-free signals.
+) -> tuple[list[Record], list[dict[str, np.ndarray]], list[tuple[float, float, float, float]]]:
+    """Each experiment's template decay as a record (the nominal model's response with the signals' noise),
+    its noise-free signals and its initial state ``(phi, delta, phid, deltad)`` (the kick it starts from).
 
     One window for every template (the records' median length and sampling step) and one noise pattern
     (:data:`NOISE_SEED`: the same samples scaled by each signal's noise), the push the data's as a
@@ -132,12 +132,14 @@ def template_records(
     measured = any(r.speed_measured for r in used)
     records: list[Record] = []
     clean: list[dict[str, np.ndarray]] = []
+    kicks: list[tuple[float, float, float, float]] = []
     for j, e in enumerate(experiments):
         law = laws[e.law]
         initial = {k: e.push * v for k, v in push(e.speed).items()}
         if steer_rates is not None and steer_rates[j]:
             initial["deltad"] = initial.get("deltad", 0.0) + steer_rates[j] * initial.get("phid", 0.0)
         out = nominal.simulate(e.speed, t, initial=initial, gains=law(e.speed))
+        kicks.append(tuple(float(initial.get(name, 0.0)) for name in ("phi", "delta", "phid", "deltad")))
         clean.append({name: out[state] for name, state in TEMPLATE_STATES.items()})
         signals = {name: clean[-1][name] + noise[name] * pattern[i] for i, name in enumerate(TEMPLATE_STATES)}
         records.append(
@@ -157,7 +159,7 @@ def template_records(
                 measured,
             )
         )
-    return records, clean
+    return records, clean, kicks
 
 
 def fit_templates(nominal: EffectModel, records: list[Record]) -> list[RecordFit]:

@@ -19,8 +19,10 @@ samples, scaled), with each signal's noise (the larger of its records' sample-to
 :func:`signal_noise`, and what their own fits leave, :func:`fit_residual`), and fitted as a record is fitted
 (the record fit's two-mode function, started from the nominal model's eigenvalues, judged by the record
 fit's acceptance rules); every rival predicts it by indirect inference (the same
-fit applied to the rival's own response over the template, :mod:`bikerider.gap.inference.indirect`; the
-nonlinear friction by its simulated response).  A template the record fit cannot fit, or whose fit
+fit applied to the rival's own response over the template, :mod:`bikerider.gap.inference.indirect`).  A friction
+rival's response is simulated from the template's own kick and refitted as a new record's fit would find it,
+from the record fit's scan as well, over the fit's valleys (their spread a variance of one run:
+:meth:`~bikerider.gap.inference.indirect.RecordSimulator.time_domain_runs`).  A template the record fit cannot fit, or whose fit
 the nominal model's own response bends by more than 20 %, is not a measurement the diagnosis could
 use, and is left out of the plan with its reason.
 
@@ -37,8 +39,8 @@ own uncertainty ``C``: its fitted values' covariance (each value's spread capped
 anywhere in its search range) through secants over one standard deviation inside the search bounds.
 With records that log no steer, the kick's unknown initial steer rate: each rival's prediction is its mean
 over templates from three steer rates (:func:`~bikerider.gap.plan.decays.kick_steer_rates`) and their spread
-``K_T`` a per-run variance of rival ``T``'s prediction (``kick_cov``), added to ``D + V`` wherever rival ``T``
-is true.
+``K_T`` a per-run variance of rival ``T``'s prediction (``kick_cov``, with a friction rival's spread over the record
+fit's valleys), added to ``D + V`` wherever rival ``T`` is true.
 A friction rival's decays likewise over the corner of its friction law, which the data do not decide: the
 mean over its friction smoothed at three ``eps`` (:func:`~bikerider.gap.plan.decays.smoothing_nodes`), each
 taken as a move from the decay at the data's push, and their spread ``F_T`` (``form_cov``) part of its own
@@ -371,10 +373,11 @@ class _Planner(_Models):
         nominal = EffectModel(self.problem.nominal, self.problem.geometry)
         self.kick_rates, self.kick_weights = kick_steer_rates(used)
         K = len(self.kick_rates)
-        records, clean = template_records(nominal, used, experiments, self.laws, self.sample_noise)
+        records, clean, kicks = template_records(nominal, used, experiments, self.laws, self.sample_noise)
         fits = fit_templates(nominal, records)
         left = [{"experiment": e.describe(), "reason": f.reason} for e, f in zip(experiments, fits) if not f.used]
         kept = [(e, f, c) for e, f, c in zip(experiments, fits, clean) if f.used]
+        kicks = [x for x, f in zip(kicks, fits) if f.used]
         if not kept:
             return {}, left
         rows = eigenvalues_of([f for _, f, _ in kept])
@@ -383,7 +386,7 @@ class _Planner(_Models):
         # standard errors): a prediction is then a smooth function of the experiment, not of a noise draw
         smooth = [RecordFit(replace(f.record, signals=c), f.estimate, f.fits) for _, f, c in kept]
         if K > 1:  # every experiment's templates from the other initial steer rates, after its own
-            _, others = template_records(
+            _, others, other_kicks = template_records(
                 nominal,
                 used,
                 [e for e, _, _ in kept for _ in self.kick_rates[1:]],
@@ -400,8 +403,9 @@ class _Planner(_Models):
                     for c in others[j * (K - 1) : (j + 1) * (K - 1)]
                 ]
             ]
+            kicks = [x for j in range(len(kept)) for x in [kicks[j]] + other_kicks[j * (K - 1) : (j + 1) * (K - 1)]]
             matched = np.repeat(matched, K)
-        simulator = RecordSimulator(smooth, self.problem.nominal, self.problem.geometry)
+        simulator = RecordSimulator(smooth, self.problem.nominal, self.problem.geometry, kicks=np.array(kicks))
         _, reasons = comparable(simulator.settle(), matched)
         out = {}
         keep = []
@@ -437,7 +441,7 @@ class _Planner(_Models):
         secants = {}
         corners = self._corners()
         for k, rival in enumerate(self.rivals):
-            jobs.append((k, rival.fit.values[None, :], None))
+            jobs.append((k, rival.fit.values[None, :], None))  # its first: with a friction rival's per-run spread
             if rival.fit.names:
                 X, width, cov = secant_points(rival.fit)
                 secants[k] = (width, cov, len(jobs))
@@ -448,8 +452,13 @@ class _Planner(_Models):
         if p.free:
             jobs.append((-1, None, None))
 
-        def task(job):
-            k, X, eps = job
+        firsts = {job[0]: j for j, job in reversed(list(enumerate(jobs)))}
+
+        def task(j: int):
+            k, X, eps = jobs[j]
+            if k >= 0 and self.rivals[k].nonlinear and self.records:
+                mean, runs = self._friction_runs(self.rivals[k], X, eps)
+                return (mean, runs) if j == firsts[k] else mean
             if k >= 0:
                 return self._predict_rival(self.rivals[k], X, nodes=True, smoothing=eps)
             stage = DifferencedStage(
@@ -464,18 +473,21 @@ class _Planner(_Models):
             return np.einsum("anj,bnj->nab", J, J)
 
         order = sorted(range(len(jobs)), key=lambda j: -(0 if jobs[j][1] is None else len(jobs[j][1])))
-        done = dict(zip(order, map_forked(task, [jobs[j] for j in order])))
+        done = dict(zip(order, map_forked(task, order)))
         results = [done[j] for j in range(len(jobs))]
         w = np.asarray(self.kick_weights, float)
         spread = np.zeros((len(self.rivals), n, 2, 2))
         self.form_cov = np.zeros((len(self.rivals), n, 2, 2))
         for k, rival in enumerate(self.rivals):
-            first = next(j for j, job in enumerate(jobs) if job[0] == k)
-            nodes = results[first][0]  # (n, K): the prediction from each initial steer rate
+            first = results[firsts[k]]
+            valleys = 0.0
+            if isinstance(first, tuple):  # a friction rival: the spread of a new record's fit over its valleys
+                first, valleys = first[0], first[1][0]
+            nodes = first[0]  # (n, K): the prediction from each initial steer rate
             self.mean[k] = nodes @ w
             dev = nodes - self.mean[k][:, None]
             dev = np.stack([dev.real, dev.imag])  # (2, n, K)
-            spread[k] = np.einsum("ank,k,bnk->nab", dev, w, dev)
+            spread[k] = np.einsum("ank,k,bnk->nab", dev, w, dev) + valleys
             others = [results[j][0] @ w for j, job in enumerate(jobs) if job[0] == k and job[2] is not None]
             if others:
                 self.mean[k], self.form_cov[k] = self._over_corners(self.mean[k], others, corners[1])
@@ -585,10 +597,22 @@ class _Planner(_Models):
         ``(P, n_points, K)``: from each template's initial steer rate (:meth:`_templates`), not yet averaged.
         ``smoothing``: a friction rival's friction smoothed so (the fits' own when not given)."""
         if rival.nonlinear:
-            res = self.simulator.apparent_time_domain(Layout.of(rival.effects), X, smoothing)
-            res = res.reshape(res.shape[0], len(self.points), len(self.kick_rates))
+            res, _ = self._friction_runs(rival, X, smoothing)
             return res if nodes else res @ np.asarray(self.kick_weights, float)
         return self._predict_linear(rival.effects, X, None, self.points, nodes)
+
+    def _friction_runs(self, rival: Rival, X: np.ndarray, smoothing: float | None) -> tuple[np.ndarray, np.ndarray]:
+        """A friction rival's decays as a new record's fit finds them (:meth:`~bikerider.gap.inference.indirect.
+        RecordSimulator.time_domain_runs`, the template's fit and the record fit's own scan of the response as
+        starts): the mean ``(P, n_points, K)`` from each template's initial steer rate, and the per-run
+        covariance ``(P, n_points, 2, 2)`` where the fit's valleys trade places, averaged over the templates.
+        The friction's response is no sum of modes: a refit from the template's fit alone (the nominal
+        model's) can end in another valley than a record's own fit would, and jumped over speed."""
+        mean, cov = self.simulator.time_domain_runs(Layout.of(rival.effects), X, self.sample_noise, smoothing)
+        K = len(self.kick_rates)
+        mean = mean.reshape(mean.shape[0], len(self.points), K)
+        cov = np.einsum("pnkab,k->pnab", cov.reshape(cov.shape[0], len(self.points), K, 2, 2), self.kick_weights)
+        return mean, cov
 
     def _predict_linear(self, effects, X, values=None, points=None, nodes: bool = False) -> np.ndarray:
         """Predicted eigenvalue ``(P, len(points))`` of linear effects at fitted values ``X``, or of the
@@ -940,7 +964,8 @@ class NextExperiment(_Models):
         ``(rivals, sweeps)`` the largest lean each rival predicts for it [rad] (:func:`~bikerider.gap.plan.sweeps.peak_roll`).
     kick_cov : ndarray, optional
         ``(rivals, points, 2, 2)``: per run, the spread of each rival's prediction over the kick's initial steer
-        rate where the records do not log it (``kick_rates``; zero otherwise), added to one run's noise.
+        rate where the records do not log it (``kick_rates``; zero otherwise), and a friction rival's over the
+        record fit's valleys in its response; added to one run's noise.
     kick_rates : tuple of float
         The templates' initial steer rates as multiples of their roll rate
         (:func:`~bikerider.gap.plan.decays.kick_steer_rates`).
