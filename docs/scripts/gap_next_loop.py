@@ -92,6 +92,12 @@ RECORDS_BEFORE_FRICTION = Path(__file__).with_name("gap_next_loop_records_before
 """The records mode as it was run on the code of commit 0ec9c83, before issue 21 changed the friction candidate's fits
 (each record's initial state under friction by Gauss-Newton steps from several starts, the slopes with the states
 held at their fits, the intervals over the friction corner's range): the study before it was run again."""
+RECORDS_BEFORE_VALLEYS = Path(__file__).with_name("gap_next_loop_records_before_valleys.jsonl")
+"""The records mode as it was run on the code of commit 0ce6cac, before the plan predicted a friction rival's decays
+from its template's kick and over the record fit's valleys (the diagnosis, so the ties, the same): its ties were run
+again (``records --ties-of``), the other cases kept."""
+RECORDS_PUSH_BEFORE_FRICTION = Path(__file__).with_name("gap_next_loop_records_push_before_friction.jsonl")
+"""The push check of :data:`RECORDS_BEFORE_FRICTION`'s ties, on the code of their time (commit a2973b2)."""
 RECORDS_BEFORE = Path(__file__).with_name("gap_next_loop_records_before_kick.jsonl")
 """The records mode as it was run before the plan spanned the kick's initial steer rate."""
 RECORDS_PUSH_BEFORE = Path(__file__).with_name("gap_next_loop_records_push_before_kick.jsonl")
@@ -1348,14 +1354,15 @@ def _control_lines() -> list[str]:
     control = {(c["scenario"], c["seed"]) for c in _stored(RECORDS_PUSH_NO_KICK) if c.get("runs")}
     if not control:
         return []
-    common = control & {(c["scenario"], c["seed"]) for c in _stored(RECORDS_PUSH) if c.get("runs")}
-    _, rows, moves, odds = _push_stats(RECORDS_PUSH, common)
+    spanned = RECORDS_PUSH_BEFORE_FRICTION  # the control ran beside this check, on the code of its time
+    common = control & {(c["scenario"], c["seed"]) for c in _stored(spanned) if c.get("runs")}
+    _, rows, moves, odds = _push_stats(spanned, common)
     _, rows_off, moves_off, odds_off = _push_stats(RECORDS_PUSH_NO_KICK, common)
     out = [
         "",
-        f"The kick's span alone: the same {len(common)} ties on today's code with the span off (`push-check "
-        f"--no-kick`, `{RECORDS_PUSH_NO_KICK.name}`: templates from the data's steer state, the steer rate 0), "
-        "z mean (RMS), spanned / off:",
+        f"The kick's span alone (the check before, `{spanned.name}`): the same {len(common)} ties on the code of its "
+        f"time with the span off (`push-check --no-kick`, `{RECORDS_PUSH_NO_KICK.name}`: templates from the data's "
+        "steer state, the steer rate 0), z mean (RMS), spanned / off:",
         "",
         "| push | runs | candidate: z of the decay rate | z of the frequency | rival: z of the decay rate | "
         "z of the frequency | candidate's sd of the frequency, median [rad/s] | its predicted move of the frequency |",
@@ -1364,7 +1371,7 @@ def _control_lines() -> list[str]:
     for push in sorted({r[0] for r in rows}):
         now, off = _z_cells(rows, push), _z_cells(rows_off, push)
         n_now, n_off = sum(r[0] == push for r in rows), sum(r[0] == push for r in rows_off)
-        sd = f"{_median_sd(RECORDS_PUSH, push, common):.3f} / {_median_sd(RECORDS_PUSH_NO_KICK, push, common):.3f}"
+        sd = f"{_median_sd(spanned, push, common):.3f} / {_median_sd(RECORDS_PUSH_NO_KICK, push, common):.3f}"
         move = "-"
         if push in moves and push in moves_off:
             move = (
@@ -1441,22 +1448,25 @@ def _z_cells(rows: list, push: float) -> list[str]:
 
 def _push_lines() -> list[str]:
     """How the truth's decay moves with the push against how the rivals predict it (:data:`RECORDS_PUSH`), and
-    against the plan before it spanned the kick's steer rate (:data:`RECORDS_PUSH_BEFORE`)."""
+    the same check of the run before (:data:`RECORDS_PUSH_BEFORE_FRICTION`, on its own ties)."""
     n_checked, rows, moves, odds = _push_stats(RECORDS_PUSH)
     if not n_checked:
         return []
     checked = {(c["scenario"], c["seed"]) for c in _stored(RECORDS_PUSH) if c.get("runs")}
-    n_before, rows_before, moves_before, odds_before = _push_stats(RECORDS_PUSH_BEFORE, checked)
+    n_before, rows_before, moves_before, odds_before = _push_stats(RECORDS_PUSH_BEFORE_FRICTION)
+    checked_before = {(c["scenario"], c["seed"]) for c in _stored(RECORDS_PUSH_BEFORE_FRICTION) if c.get("runs")}
     pushes = sorted({r[0] for r in rows} | {r[0] for r in rows_before})
     out = [
-        f"How the truth's decay moves with the push ({n_checked} of the ties of the run before the friction fits "
-        f"changed, `{RECORDS_BEFORE_FRICTION.name}`, again, on the code of their time, `push-check`: at up to four "
+        f"How the truth's decay moves with the push ({n_checked} ties of the run above, `push-check`: at up to four "
         "speeds and laws where the plan holds a decay at every push, the truth's first run at each push, as the "
-        "loop runs it, against the rivals' predictions, each with its spread over the kick's initial steer rate; "
-        "the friction truths' candidate `steer_friction` first). z: the truth's run minus the rival's prediction "
-        "over their standard deviations combined (a rival that foresees the truth has z of mean 0 and RMS about 1); "
-        f"before: the same check of the plan before it spanned the kick's steer rate, on the same ties where it "
-        f"checked them ({n_before} ties, `{RECORDS_PUSH_BEFORE.name}`):",
+        "loop runs it, against the rivals' predictions, each with its spread over the kick's initial steer rate, "
+        "a friction rival's over its friction law's corner and over the record fit's valleys; the friction truths' "
+        "candidate `steer_friction` first). z: the truth's run minus the rival's prediction over their standard "
+        "deviations combined (a rival that foresees the truth has z of mean 0 and RMS about 1); before: the same "
+        f"check of the run before the friction fits changed, on its own ties ({n_before} ties, "
+        f"`{RECORDS_PUSH_BEFORE_FRICTION.name}`, code of commit a2973b2: templates over the kick's steer rate, no "
+        f"friction corners, the friction rival's initial state fitted to the nominal template; "
+        f"{len(checked & checked_before)} ties in both):",
         "",
         "| push | runs (before) | candidate: z of the decay rate, mean (RMS) | before | z of the frequency | before | "
         "rival: z of the decay rate | before | z of the frequency | before |",
@@ -1471,8 +1481,7 @@ def _push_lines() -> list[str]:
     out += [
         "",
         "The move from the data's push: the truth's run at the push minus its run at the data's push (the same "
-        "draws, the kick scaled), against the move the candidate predicts (before: the plan before it spanned the "
-        "kick's steer rate):",
+        "draws, the kick scaled), against the move the candidate predicts (before: the check before):",
         "",
         "| push | pairs of runs | truth's move of the frequency: median abs [rad/s] | candidate's predicted move | "
         "before | same sign | truth's move of the decay rate: median abs [1/s] | candidate's predicted move | before | "
@@ -1550,11 +1559,12 @@ def _push_lines() -> list[str]:
             f"* The truth's weave frequency moves with the push about {ratio:.0f} times as far as the friction candidate "
             f"predicts (median over {len(every)} pairs of runs; {ratio_before:.0f} times before), in the direction it "
             f"predicts in {np.mean(np.sign(truth[:, 1]) == np.sign(cand[:, 1])):.0%}.",
-            "* The candidate's predictive standard deviation of one run's frequency (its own uncertainty and, now, "
-            "its spread over the kick's steer rate; median), now / before: "
+            "* The candidate's predictive standard deviation of one run's frequency (its own uncertainty and its "
+            "spread over the kick's steer rate; now also over its friction law's corner and the record fit's valleys; "
+            "median), now / before: "
             + "; ".join(
                 f"{push:g} times {_median_sd(RECORDS_PUSH, push, checked):.3f} / "
-                f"{_median_sd(RECORDS_PUSH_BEFORE, push, checked):.3f} rad/s"
+                f"{_median_sd(RECORDS_PUSH_BEFORE_FRICTION, push, checked_before):.3f} rad/s"
                 for push in pushes
             )
             + ".",
@@ -1577,8 +1587,7 @@ def _push_lines() -> list[str]:
         "`..._corner_first90.jsonl`) the candidate's z RMS of the frequency at half the push fell from 4.20 to "
         "2.74, and the runs predicted at 0.95 or more that reached 19:1 rose from 0.67 to 0.82; the loop on them "
         "(`gap_next_loop_records_main_38ties.jsonl`, `..._corner_38ties.jsonl`): plan 26 resolved / 10 wrong "
-        "then, 28 / 8 now, the even spread 30 / 2 both. The push checks above are from before it; the records mode's tables, "
-        "run again on the code of 2026-11-29, carry it."
+        "then, 28 / 8 now, the even spread 30 / 2 both. The records mode's tables and the push checks above carry it."
     )
     out += _seed_lines(9311)
     out.append("")
@@ -1760,8 +1769,10 @@ def _records_lines(n_max: int) -> list[str]:
         "changed the friction candidate's fits (each record's initial state under friction by Gauss-Newton steps",
         "from several starts, the slopes with the states held at their fits, intervals over the friction corner's",
         "range: part 4, items 16-18); the run before, whose friction fits split Coulomb friction into too little",
-        "Coulomb and some viscous part where the friction holds the steer, is compared below. The friction truths'",
-        "candidate",
+        "Coulomb and some viscous part where the friction holds the steer, is compared below. Its ties were run",
+        "once more after the plan predicted a friction rival's decays from its template's kick and over the record",
+        "fit's valleys (docs/gap.md, *A friction rival's decays*; `records --ties-of`): the diagnosis is the same, so",
+        "the cases that do not tie are kept from that run. The friction truths' candidate",
         "is `steer_friction` (viscous and Coulomb, fitted in time), nonlinear, so the plan (`NextExperiment`,",
         "roll-rate decays) plans each decay at "
         + ", ".join(f"{x:g}" for x in PUSHES)
@@ -1813,6 +1824,15 @@ def _records_lines(n_max: int) -> list[str]:
         f"{np.mean([b for _, b in both]) if both else math.nan:.2f}); fewer runs for the plan in "
         f"{sum(a < b for a, b in both)}, more in {sum(a > b for a, b in both)}.",
         "",
+        *_before_lines(
+            stored,
+            names,
+            n_max,
+            RECORDS_BEFORE_VALLEYS,
+            "the plan predicted a friction rival's decays from its template's kick and over the record fit's valleys",
+            "The diagnosis is the same, so are the ties: what differs is the plan alone (its choices, its stated "
+            "odds and the rivals' predictions the loop weighs the truth's runs by).",
+        ),
         *_before_lines(
             stored,
             names,

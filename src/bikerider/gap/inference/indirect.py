@@ -736,10 +736,11 @@ def extract_runs(batch: RecordBatch, sim: np.ndarray, noise: np.ndarray) -> tupl
     (:func:`~bikerider.gap.measured.extraction.scan_valleys`), and the distinct ends are its valleys (a fit
     that finds no weave is none).  Noise decides between them: to first order in the noise ``e`` the residuals
     of valleys ``1`` (the deepest) and ``i`` differ by ``c_i - c_1 + 2 e.(m_1 - m_i)``, ``m`` the fitted curves,
-    so ``i`` is the deeper with probability ``w_i = Phi((c_1 - c_i) / (2 s |m_1 - m_i|))`` (``w_1 = 1``).  The
-    valleys weighed by ``w`` (normalised) give the mean and the per-run covariance: continuous where valleys
-    trade places (two of equal depth weigh alike from either side).  Signals combine with the records'
-    weights, as in :func:`extract`, their valleys taken as independent.
+    so ``i`` is the deeper with probability ``p_i = Phi((c_1 - c_i) / (2 s |m_1 - m_i|))``; the deepest stays
+    so with ``p_1 = prod (1 - p_i)`` (each other valley's chance taken apart).  The valleys weighed by ``p``
+    (normalised) give the mean and the per-run covariance: continuous where two valleys trade places (at equal
+    depth each weighs one half, from either side).  Signals combine with the records' weights, as in
+    :func:`extract`, their valleys taken as independent.
     """
     P, R = sim.shape[:2]
     tau = np.arange(batch.N) * batch.dt
@@ -788,6 +789,7 @@ def extract_runs(batch: RecordBatch, sim: np.ndarray, noise: np.ndarray) -> tupl
                     z = (cost[deepest, rows] - cost[here, rows]) / (2 * s * gap)
                 w = np.where(new & (gap > 0) & np.isfinite(z), ndtr(np.nan_to_num(z, neginf=-np.inf)), 0.0)
             weights[a], valleys[a] = w, np.where(new, lam, 0)
+        weights[0] *= np.prod(1.0 - weights[1:], axis=0)  # the deepest stays the deepest
         total = weights.sum(axis=0)
         with np.errstate(divide="ignore", invalid="ignore"):
             weights = weights / total
