@@ -702,16 +702,8 @@ def extract(batch: RecordBatch, sim: np.ndarray, keep: bool = False):
     tau = np.arange(batch.N) * batch.dt
     out = np.zeros((P, R), complex)
     betas: list = [None] * len(batch.items)
-    for kind in ("two-mode", "plain"):
-        chosen = [j for j, it in enumerate(batch.items) if it.kind == kind]
-        if not chosen:
-            continue
+    for kind, chosen, rec, sig, y, mask, start in _refits(batch, sim):
         items = [batch.items[j] for j in chosen]
-        rec = np.array([it.record for it in items])
-        sig = np.array([it.signal for it in items])
-        y = np.moveaxis(sim[:, rec, :, sig], 0, 1).reshape(P * len(items), batch.N)  # (P * I, N)
-        mask = np.tile(batch.mask[rec], (P, 1))
-        start = np.tile(np.array([it.start for it in items]), (P, 1))
         beta, _ = levenberg_marquardt(kind, start, y, mask, tau)
         eig = eigenvalue_of(beta).reshape(P, len(items))
         weight = np.array([it.weight for it in items])
@@ -722,6 +714,22 @@ def extract(batch: RecordBatch, sim: np.ndarray, keep: bool = False):
             for m, j in enumerate(chosen):
                 betas[j] = beta[:, m]
     return out, (betas if keep else None)
+
+
+def _refits(batch: RecordBatch, sim: np.ndarray):
+    """Per kind of fit (two-mode, plain) with items in ``batch``: the kind, the items' positions, their records
+    and signals, and their rows of ``sim (P, R, N, S)`` to refit ``(P * I, N)`` with masks and starts alike."""
+    P = sim.shape[0]
+    for kind in ("two-mode", "plain"):
+        chosen = [j for j, it in enumerate(batch.items) if it.kind == kind]
+        if not chosen:
+            continue
+        rec = np.array([batch.items[j].record for j in chosen])
+        sig = np.array([batch.items[j].signal for j in chosen])
+        y = np.moveaxis(sim[:, rec, :, sig], 0, 1).reshape(P * len(chosen), batch.N)  # (P * I, N)
+        mask = np.tile(batch.mask[rec], (P, 1))
+        start = np.tile(np.array([batch.items[j].start for j in chosen]), (P, 1))
+        yield kind, chosen, rec, sig, y, mask, start
 
 
 def extract_runs(batch: RecordBatch, sim: np.ndarray, noise: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -746,16 +754,8 @@ def extract_runs(batch: RecordBatch, sim: np.ndarray, noise: np.ndarray) -> tupl
     tau = np.arange(batch.N) * batch.dt
     mean = np.zeros((P, R), complex)
     cov = np.zeros((P, R, 2, 2))
-    for kind in ("two-mode", "plain"):
-        chosen = [j for j, it in enumerate(batch.items) if it.kind == kind]
-        if not chosen:
-            continue
+    for kind, chosen, rec, sig, y, mask, start in _refits(batch, sim):
         items = [batch.items[j] for j in chosen]
-        rec = np.array([it.record for it in items])
-        sig = np.array([it.signal for it in items])
-        y = np.moveaxis(sim[:, rec, :, sig], 0, 1).reshape(P * len(items), batch.N)
-        mask = np.tile(batch.mask[rec], (P, 1))
-        start = np.tile(np.array([it.start for it in items]), (P, 1))
         starts = np.stack([start] + _valley_starts(kind, start, y, mask, tau))  # (M, B, k)
         M, B = starts.shape[:2]
         Y, W = np.tile(y, (M, 1)), np.tile(mask, (M, 1))
