@@ -193,7 +193,11 @@ def push_check(args) -> int:
     index = {s.label: k for k, s in enumerate(L.RECORD_SCENARIOS)}
     done = {(c["scenario"], c["seed"]) for c in _stored(path)}
     todo = [(c["scenario"], c["seed"]) for c in _stored(RECORDS) if c.get("strategies")]
-    todo = [t for t in todo if t not in done][: args.max]
+    todo = [t for t in todo if t not in done]
+    if args.part:  # "i/n": every n-th tie from the i-th (1-based), for n processes side by side
+        i, n = (int(x) for x in args.part.split("/"))
+        todo = todo[i - 1 :: n]
+    todo = todo[: args.max]
     deadline = _deadline(args.until)
     logging.getLogger("bikerider").setLevel(logging.ERROR)
     for label, seed in todo:
@@ -2350,6 +2354,7 @@ def main() -> int:
         "--no-kick", action="store_true", help="the control: templates from the data's steer state alone (own file)"
     )
     pc.add_argument("--out", help="write to this JSON lines file instead of the stored one (a subset, a trial)")
+    pc.add_argument("--part", help="i/n: every n-th tie from the i-th, for n processes (each with its own --out)")
     sub.add_parser("report", help="write part 5 of docs/gap_validation.md and the figure")
     args = parser.parse_args()
     commands = {"run": run, "check": check, "rerun": rerun, "records": records, "push-check": push_check}
