@@ -1574,7 +1574,7 @@ def _push_lines() -> list[str]:
             + ".",
         ]
     out.append(
-        "* Why the spread stays small: the candidate's friction is smoothed as `tanh(deltad / 0.05)` "
+        "* Why the spread stayed small before (the check before): the candidate's friction is smoothed as `tanh(deltad / 0.05)` "
         "(`bikerider.gap.inference.timedomain.SMOOTHING`, 0.05 rad/s), the truth's as `tanh(deltad / 0.02)`, so "
         "near a standstill of the steer the candidate's friction acts as a viscous damper of `T_coulomb / 0.05` "
         "and the truth's sticks two and a half times as hard. Checked on seed 9311 (the candidate's fitted "
