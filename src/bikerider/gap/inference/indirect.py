@@ -760,7 +760,7 @@ def extract_runs(batch: RecordBatch, sim: np.ndarray, noise: np.ndarray) -> tupl
         M, B = starts.shape[:2]
         Y, W = np.tile(y, (M, 1)), np.tile(mask, (M, 1))
         with np.errstate(all="ignore"):
-            beta, cost = levenberg_marquardt(kind, starts.reshape(M * B, -1), Y, W, tau)
+            beta, cost = _fit_distinct(kind, starts, Y, W, tau)
             eig = eigenvalue_of(beta)
             found = np.isfinite(eig) & np.isfinite(cost)
             nl = list(NONLINEAR[kind])
@@ -804,6 +804,23 @@ def extract_runs(batch: RecordBatch, sim: np.ndarray, noise: np.ndarray) -> tupl
         np.add.at(mean, (slice(None), rec), item_mean.real * weight.real + 1j * item_mean.imag * weight.imag)
         np.add.at(cov, (slice(None), rec), item_cov.reshape(P, len(items), 2, 2) * wr[:, :, None] * wr[:, None, :])
     return mean, cov
+
+
+def _fit_distinct(kind: str, starts: np.ndarray, Y: np.ndarray, W: np.ndarray, tau: np.ndarray):
+    """:func:`levenberg_marquardt` of rows ``Y (M * B, N)`` from ``starts (M, B, k)``, each row's fit computed
+    once where its start repeats an earlier one of the same row (the scan gives fewer valleys than starts)."""
+    M, B = starts.shape[:2]
+    flat = starts.reshape(M * B, -1)
+    source = np.arange(M * B)
+    for m in range(1, M):
+        for earlier in range(m):
+            same = np.all(starts[m] == starts[earlier], axis=1) & (source[m * B : (m + 1) * B] == m * B + np.arange(B))
+            source[m * B : (m + 1) * B][same] = earlier * B + np.flatnonzero(same)
+    own = np.flatnonzero(source == np.arange(M * B))
+    beta = np.empty_like(flat)
+    cost = np.empty(M * B)
+    beta[own], cost[own] = levenberg_marquardt(kind, flat[own], Y[own], W[own], tau)
+    return beta[source], cost[source]
 
 
 def _valley_starts(kind: str, start: np.ndarray, y: np.ndarray, mask: np.ndarray, tau: np.ndarray) -> list[np.ndarray]:
