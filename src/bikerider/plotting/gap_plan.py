@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import textwrap
 
 import numpy as np
 from matplotlib.ticker import FormatStrFormatter, LogLocator, NullFormatter
@@ -78,7 +79,8 @@ def plot_next(plan, result: dict | None = None):
     what = best.describe().replace("decays at", "").split(",", 1)
     axes[0].set_ylabel("weave real part [1/s]")
     axes[1].set_ylabel("weave imaginary part [rad/s]")
-    axes[0].set_title(f"predicted under {best.law}" + (f",{what[1]}" if len(what) > 1 else ""), fontsize=9)
+    title = f"predicted under {best.law}" + (f",{what[1]}" if len(what) > 1 else "")
+    axes[0].set_title(textwrap.fill(title, 60), fontsize=9)  # a long law's name and push: two lines, not past the edge
     axes[1].set_title(f"bands: 1 sd of the mean of {n} decays", fontsize=9)
     axes[0].legend(fontsize=7)
     # resolution probability against speed, per law (its best signal and push, and the best of any at each speed)
