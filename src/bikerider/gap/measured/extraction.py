@@ -124,6 +124,8 @@ errors above zero (the rule of :mod:`bikerider.fitting.damped_oscillation`): the
 clearly determined to be preferred."""
 
 
+_GRID = (SCAN_OMEGAS.size, SCAN_DECAYS.size, len(SCAN_MODES))
+"""The scan's grid: frequencies, decays, extra modes (:func:`scan_grid` flattens it in this order)."""
 SCAN_CHUNK = 2048
 """Samples per block when :func:`scan_grid` accumulates its normal equations (bounds its memory)."""
 
@@ -151,7 +153,7 @@ def scan_valleys(t: np.ndarray, y: np.ndarray) -> list[np.ndarray]:
     the other frequencies where the scan's residual is lower than at both neighbouring ones, the lowest first
     (a signal holding two oscillations has a valley at each); the deepest repeated where there are fewer."""
     rss, coef = scan_grid(t, y)
-    shape = (SCAN_OMEGAS.size, SCAN_DECAYS.size, len(SCAN_MODES))
+    shape = _GRID
     modes = np.broadcast_to(np.asarray(SCAN_MODES), shape).ravel()
     picks = [int(np.flatnonzero(side)[np.argmin(rss[side])]) for side in (modes < 0, modes > 0)]
     per = rss.reshape(shape[0], -1)
@@ -170,7 +172,7 @@ def scan_valleys(t: np.ndarray, y: np.ndarray) -> list[np.ndarray]:
 
 
 def _grid_point(k: int, coef: np.ndarray) -> np.ndarray:
-    w, d, l_ = np.unravel_index(k, (SCAN_OMEGAS.size, SCAN_DECAYS.size, len(SCAN_MODES)))
+    w, d, l_ = np.unravel_index(k, _GRID)
     a, b, offset, c = coef
     return np.array([SCAN_OMEGAS[w], SCAN_DECAYS[d], a, b, offset, c, SCAN_MODES[l_]])
 
@@ -185,7 +187,7 @@ def scan_grid(t: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     blocks of :data:`SCAN_CHUNK` samples, so the memory stays bounded however long the record (the grid's
     basis functions are never stored for every sample at once).
     """
-    W, D, L = SCAN_OMEGAS.size, SCAN_DECAYS.size, len(SCAN_MODES)
+    W, D, L = _GRID
     modes = np.asarray(SCAN_MODES)
     gram = np.zeros((W, D, L, 4, 4))
     rhs = np.zeros((W, D, L, 4))

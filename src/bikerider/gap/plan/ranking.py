@@ -456,11 +456,11 @@ class _Planner(_Models):
 
         def task(j: int):
             k, X, eps = jobs[j]
-            if k >= 0 and self.rivals[k].nonlinear and self.records:
+            if k >= 0 and self.rivals[k].nonlinear:  # a friction rival (records): its decays over the corners
                 mean, runs = self._friction_runs(self.rivals[k], X, eps)
                 return (mean, runs) if j == firsts[k] else mean
-            if k >= 0:
-                return self._predict_rival(self.rivals[k], X, nodes=True, smoothing=eps)
+            if k >= 0:  # (P, n, K): from each template's initial steer rate, not yet averaged
+                return self._predict_linear(self.rivals[k].effects, X, None, self.points, nodes=True)
             stage = DifferencedStage(
                 "nominal parameters",
                 lambda v: _split(self._predict_linear((), np.zeros((np.size(next(iter(v.values()))), 0)), v, base)),
@@ -589,17 +589,6 @@ class _Planner(_Models):
             if best is None or (e.push == 1.0 and e.signal == "roll_rate"):
                 out[key] = e
         return list(out.values())
-
-    def _predict_rival(
-        self, rival: Rival, X: np.ndarray, nodes: bool = False, smoothing: float | None = None
-    ) -> np.ndarray:
-        """Predicted eigenvalue ``(P, n_points)`` of a rival for fitted-value vectors ``X (P, p)``; with ``nodes``,
-        ``(P, n_points, K)``: from each template's initial steer rate (:meth:`_templates`), not yet averaged.
-        ``smoothing``: a friction rival's friction smoothed so (the fits' own when not given)."""
-        if rival.nonlinear:
-            res, _ = self._friction_runs(rival, X, smoothing)
-            return res if nodes else res @ np.asarray(self.kick_weights, float)
-        return self._predict_linear(rival.effects, X, None, self.points, nodes)
 
     def _friction_runs(self, rival: Rival, X: np.ndarray, smoothing: float | None) -> tuple[np.ndarray, np.ndarray]:
         """A friction rival's decays as a new record's fit finds them (:meth:`~bikerider.gap.inference.indirect.
